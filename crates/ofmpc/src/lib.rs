@@ -11,3 +11,5 @@
 #![warn(missing_docs)]
 
 pub mod dynamics;
+pub mod robot;
+pub mod spatial;

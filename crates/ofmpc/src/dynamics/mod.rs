@@ -1,5 +1,31 @@
-//! Rigid-body dynamics of a serial robot: `H(q) q̈ + C(q, q̇) q̇ + g(q) = τ`.
+//! Rigid-body algorithms for a serial [`Robot`]: `H(q) q̈ + C(q, q̇) q̇ + g(q) = τ`.
+//!
+//! One algorithm per file, Pinocchio's layout: the [`Robot`] is constant, a
+//! [`Workspace`] sized once by [`Workspace::new`] receives the results, and no
+//! algorithm allocates. Every entry point checks the lengths and finiteness of
+//! its vectors and returns a [`ModelError`] instead of panicking.
+//!
+//! | algorithm | file | result |
+//! |---|---|---|
+//! | forward kinematics | `kinematics.rs` | body poses, flange pose |
+//! | geometric Jacobian | `kinematics.rs` | 6×n flange Jacobian |
+//! | inverse dynamics (RNEA) | `rnea.rs` | τ |
+//! | joint-space inertia (CRBA), Coriolis matrix, gravity | `terms.rs` | H, C, g |
+//! | forward dynamics (Cholesky of H) | `forward.rs` | q̈ |
 
+mod forward;
+mod kinematics;
+mod rnea;
+mod terms;
+mod workspace;
+
+pub use forward::{forward_dynamics, kinetic_energy, potential_energy};
+pub use kinematics::{flange_jacobian, forward_kinematics};
+pub use rnea::rnea;
+pub use terms::{coriolis_matrix, crba, gravity, joint_space_terms};
+pub use workspace::Workspace;
+
+use crate::robot::{ModelError, Robot};
 use nalgebra::{DMatrix, DVector};
 
 /// What a controller or a simulator needs of a robot model: the terms of the
@@ -22,4 +48,70 @@ pub trait JointSpaceDynamics {
         c: &mut DMatrix<f64>,
         g: &mut DVector<f64>,
     );
+}
+
+/// A robot together with its workspace: the object a controller or a
+/// simulator owns.
+#[derive(Debug, Clone)]
+pub struct RobotDynamics {
+    robot: Robot,
+    ws: Workspace,
+}
+
+impl RobotDynamics {
+    /// Sizes a workspace for `robot`.
+    pub fn new(robot: Robot) -> Self {
+        let ws = Workspace::new(&robot);
+        Self { robot, ws }
+    }
+    /// The robot.
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+    /// The robot, to change its payload or gravity (the workspace stays valid:
+    /// the number of joints cannot change).
+    pub fn robot_mut(&mut self) -> &mut Robot {
+        &mut self.robot
+    }
+    /// The robot and the workspace, to call the algorithms directly.
+    pub fn parts(&mut self) -> (&Robot, &mut Workspace) {
+        (&self.robot, &mut self.ws)
+    }
+}
+
+impl JointSpaceDynamics for RobotDynamics {
+    fn dof(&self) -> usize {
+        self.robot.dof()
+    }
+    /// On a wrong length or non-finite input, writes NaN everywhere so that the
+    /// caller's own finiteness check reports it.
+    fn terms(
+        &mut self,
+        q: &[f64],
+        qd: &[f64],
+        h: &mut DMatrix<f64>,
+        c: &mut DMatrix<f64>,
+        g: &mut DVector<f64>,
+    ) {
+        match joint_space_terms(&self.robot, &mut self.ws, q, qd) {
+            Ok(())
+                if h.shape() == self.ws.h.shape()
+                    && c.shape() == self.ws.c.shape()
+                    && g.len() == self.ws.g.len() =>
+            {
+                h.copy_from(&self.ws.h);
+                c.copy_from(&self.ws.c);
+                g.copy_from(&self.ws.g);
+            }
+            _ => {
+                h.fill(f64::NAN);
+                c.fill(f64::NAN);
+                g.fill(f64::NAN);
+            }
+        }
+    }
+}
+
+pub(crate) fn check(robot: &Robot, what: &str, v: &[f64]) -> Result<(), ModelError> {
+    robot.check_vector(what, v)
 }

@@ -1,0 +1,318 @@
+//! Robot description: a serial chain of revolute and prismatic joints with
+//! limits, inertials, drives (armature) and an optional payload at the flange.
+//!
+//! [`Robot`] holds constants only (Pinocchio's `Model`); the algorithms in
+//! [`crate::dynamics`] write into a [`crate::dynamics::Workspace`] sized once
+//! from it.
+
+mod drives;
+mod error;
+mod urdf;
+
+pub use drives::{DriveData, Drives};
+pub use error::ModelError;
+
+use crate::spatial::{Inertia, Transform};
+use nalgebra::{Matrix3, Vector3};
+
+/// The built-in ABB IRB 140 URDF (copied from `shared/robots/irb140`; every
+/// number and its source: `robots/irb140/PARAMETERS.md` in this crate).
+pub const IRB140_URDF: &str = include_str!("../../robots/irb140/irb140.urdf");
+/// The built-in IRB 140 drive data: armature, torque and speed limits.
+pub const IRB140_DRIVES: &str = include_str!("../../robots/irb140/drives.toml");
+
+/// Standard gravity (m/s²).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Kind of a moving joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the joint axis (rad).
+    Revolute,
+    /// Translation along the joint axis (m).
+    Prismatic,
+}
+
+/// Limits of one joint. Position limits may be infinite (continuous joints).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointLimits {
+    /// Lower position limit (rad or m).
+    pub lower: f64,
+    /// Upper position limit (rad or m).
+    pub upper: f64,
+    /// Speed limit, symmetric (rad/s or m/s); infinite when unknown.
+    pub velocity: f64,
+    /// Torque or force limit, symmetric (N·m or N); infinite when unknown.
+    pub effort: f64,
+}
+
+/// One moving joint and the rigid body it moves.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Joint {
+    /// Joint name (URDF).
+    pub name: String,
+    /// Name of the link it moves (URDF child link).
+    pub link: String,
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Pose of the joint frame in the previous body's frame at q = 0 (fixed
+    /// joints in between are folded in).
+    pub placement: Transform,
+    /// Unit joint axis in the joint frame.
+    pub axis: Vector3<f64>,
+    /// Inertia of the moved body in the joint frame, links rigidly attached
+    /// through fixed joints included, payload excluded.
+    pub body: Inertia,
+    /// Position, speed and effort limits.
+    pub limits: JointLimits,
+    /// Reflected rotor inertia of the drive (kg·m²), added to `H[i][i]`.
+    pub armature: f64,
+}
+
+/// A rigid payload attached at the flange: mass, centre of mass and inertia
+/// about the centre of mass, both in flange coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Payload {
+    /// Mass (kg).
+    pub mass: f64,
+    /// Centre of mass in the flange frame (m).
+    pub com: Vector3<f64>,
+    /// Inertia tensor about the centre of mass, flange axes (kg·m²).
+    pub inertia: Matrix3<f64>,
+}
+
+impl Payload {
+    /// A point mass at the centre of the flange (the paper's 0.25 kg load).
+    pub fn point_mass(mass: f64) -> Self {
+        Self {
+            mass,
+            com: Vector3::zeros(),
+            inertia: Matrix3::zeros(),
+        }
+    }
+    /// Checks the payload is physical: finite, mass ≥ 0, inertia symmetric
+    /// positive semi-definite and satisfying the triangle inequalities.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let finite = self.mass.is_finite()
+            && self.com.iter().all(|v| v.is_finite())
+            && self.inertia.iter().all(|v| v.is_finite());
+        if !finite || self.mass < 0.0 {
+            return Err(ModelError::InvalidPayload(format!(
+                "mass {} kg, com {:?}: mass must be finite and ≥ 0, com finite",
+                self.mass,
+                self.com.as_slice()
+            )));
+        }
+        check_inertia_tensor(&self.inertia).map_err(ModelError::InvalidPayload)
+    }
+}
+
+/// Checks a rotational inertia about the centre of mass: symmetric, principal
+/// moments ≥ 0 and satisfying the triangle inequality.
+pub(crate) fn check_inertia_tensor(i: &Matrix3<f64>) -> Result<(), String> {
+    let asym = (i - i.transpose()).abs().max();
+    let scale = i.abs().max().max(1e-300);
+    if asym > 1e-9 * scale {
+        return Err(format!(
+            "inertia tensor is not symmetric (asymmetry {asym:e})"
+        ));
+    }
+    let eig = i.symmetric_eigenvalues();
+    let tol = 1e-9 * scale;
+    if eig.iter().any(|&e| e < -tol) {
+        return Err(format!(
+            "inertia tensor has a negative principal moment ({:?})",
+            eig.as_slice()
+        ));
+    }
+    let (a, b, c) = (eig[0], eig[1], eig[2]);
+    if a + b < c - tol || a + c < b - tol || b + c < a - tol {
+        return Err(format!(
+            "principal moments {:?} violate the triangle inequality",
+            eig.as_slice()
+        ));
+    }
+    Ok(())
+}
+
+/// A fixed-base serial robot: the constants every algorithm reads.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Robot {
+    name: String,
+    joints: Vec<Joint>,
+    /// Flange frame in the last body's frame.
+    flange: Transform,
+    flange_name: String,
+    gravity: Vector3<f64>,
+    payload: Option<Payload>,
+    /// Inertia of each body in its joint frame, payload included on the last one.
+    bodies: Vec<Inertia>,
+}
+
+impl Robot {
+    /// The built-in ABB IRB 140 with its drives (armature, torque and speed limits).
+    pub fn irb140() -> Self {
+        let mut r = Self::from_urdf_str(IRB140_URDF).expect("the built-in IRB 140 URDF is valid");
+        let d = Drives::from_toml_str(IRB140_DRIVES)
+            .expect("the built-in IRB 140 drives file is valid");
+        r.apply_drives(&d)
+            .expect("the built-in drives match the built-in URDF");
+        r
+    }
+
+    /// A built-in robot by name (`irb140`).
+    pub fn builtin(name: &str) -> Result<Self, ModelError> {
+        match name.to_ascii_lowercase().as_str() {
+            "irb140" | "irb-140" | "abb_irb140" => Ok(Self::irb140()),
+            _ => Err(ModelError::UnknownRobot(name.to_string())),
+        }
+    }
+
+    /// Loads a URDF text (see [`ModelError`] for what is rejected). No drives:
+    /// armature zero, limits from the URDF.
+    pub fn from_urdf_str(text: &str) -> Result<Self, ModelError> {
+        urdf::parse(text)
+    }
+
+    /// Loads a URDF file.
+    pub fn from_urdf_file(path: &std::path::Path) -> Result<Self, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        urdf::parse(&text).map_err(|e| e.in_file(path))
+    }
+
+    pub(crate) fn assemble(
+        name: String,
+        joints: Vec<Joint>,
+        flange: Transform,
+        flange_name: String,
+    ) -> Self {
+        let bodies = joints.iter().map(|j| j.body).collect();
+        Self {
+            name,
+            joints,
+            flange,
+            flange_name,
+            gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
+            payload: None,
+            bodies,
+        }
+    }
+
+    /// Applies a drives file: armature and, where given, speed and torque limits
+    /// (they replace the URDF's). Every joint named in the file must exist.
+    pub fn apply_drives(&mut self, drives: &Drives) -> Result<(), ModelError> {
+        for (name, d) in &drives.joints {
+            let j = self
+                .joints
+                .iter_mut()
+                .find(|j| &j.name == name)
+                .ok_or_else(|| {
+                    ModelError::Drives(format!(
+                        "joint '{name}' of the drives file is not a moving joint of the robot"
+                    ))
+                })?;
+            if let Some(a) = d.armature_kgm2 {
+                j.armature = a;
+            }
+            if let Some(t) = d.max_torque_nm {
+                j.limits.effort = t;
+            }
+            if let Some(v) = d.max_speed_rad_s {
+                j.limits.velocity = v;
+            }
+        }
+        Ok(())
+    }
+
+    /// Robot name (URDF `<robot name>`).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    /// Number of moving joints `n`.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+    /// The moving joints, base to tip.
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+    /// Name of the flange frame (`tool0`, `flange` or the last link).
+    pub fn flange_name(&self) -> &str {
+        &self.flange_name
+    }
+    /// Pose of the flange frame in the last body's frame.
+    pub fn flange_offset(&self) -> &Transform {
+        &self.flange
+    }
+    /// Gravity acceleration in the base frame (default (0, 0, −9.80665) m/s²).
+    pub fn gravity(&self) -> Vector3<f64> {
+        self.gravity
+    }
+    /// Sets the gravity vector (base frame).
+    pub fn set_gravity(&mut self, g: Vector3<f64>) {
+        self.gravity = g;
+    }
+    /// The payload attached at the flange, if any.
+    pub fn payload(&self) -> Option<&Payload> {
+        self.payload.as_ref()
+    }
+    /// Attaches (or with `None`, removes) a payload at the flange.
+    pub fn set_payload(&mut self, payload: Option<Payload>) -> Result<(), ModelError> {
+        if let Some(p) = &payload {
+            p.validate()?;
+        }
+        self.payload = payload;
+        let last = self.joints.len() - 1;
+        for (b, j) in self.bodies.iter_mut().zip(&self.joints) {
+            *b = j.body;
+        }
+        if let Some(p) = &self.payload {
+            let in_flange = Inertia::from_com(p.mass, p.com, p.inertia);
+            self.bodies[last] = self.bodies[last] + in_flange.to_parent(&self.flange);
+        }
+        Ok(())
+    }
+    /// Inertia of body `i` in its joint frame, payload included.
+    pub fn body_inertia(&self, i: usize) -> &Inertia {
+        &self.bodies[i]
+    }
+    /// Armature of every joint.
+    pub fn armature(&self) -> impl Iterator<Item = f64> + '_ {
+        self.joints.iter().map(|j| j.armature)
+    }
+    /// Lower position limits.
+    pub fn lower_limits(&self) -> Vec<f64> {
+        self.joints.iter().map(|j| j.limits.lower).collect()
+    }
+    /// Upper position limits.
+    pub fn upper_limits(&self) -> Vec<f64> {
+        self.joints.iter().map(|j| j.limits.upper).collect()
+    }
+    /// Total moving mass (kg), payload included.
+    pub fn moving_mass(&self) -> f64 {
+        self.bodies.iter().map(|b| b.mass).sum()
+    }
+
+    /// Checks a joint vector: length `n` and finite values. `what` names it in
+    /// the error ("q", "qd", ...).
+    pub fn check_vector(&self, what: &str, v: &[f64]) -> Result<(), ModelError> {
+        if v.len() != self.dof() {
+            return Err(ModelError::Dimension {
+                what: what.to_string(),
+                expected: self.dof(),
+                got: v.len(),
+            });
+        }
+        if let Some((i, x)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(ModelError::NonFinite {
+                what: what.to_string(),
+                index: i,
+                value: *x,
+            });
+        }
+        Ok(())
+    }
+}
