@@ -1,1 +1,19 @@
-fn main() {}
+//! `ofmpc`: inspect robot models, plan trajectories from G-code, run and
+//! reproduce the paper's closed-loop experiments.
+
+mod cli;
+mod commands;
+
+use clap::Parser;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = cli::Cli::parse();
+    match commands::run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,53 @@
+//! `ofmpc inspect dynamics`: the model's quantities at one state, as JSON, so
+//! that any peer implementation can be checked against this one.
+
+use super::{load_robot, parse_vector};
+use crate::cli::InspectDynamics;
+use nalgebra::DMatrix;
+use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
+use serde_json::json;
+
+fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|r| m.row(r).iter().copied().collect()).collect()
+}
+
+/// Prints `{"robot", "dof", "q", "qd", "qdd", "H", "C", "g", "tau", "flange": {"position", "rotation"}}`.
+pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
+    let robot = load_robot(&a.robot, a.payload)?;
+    let n = robot.dof();
+    let q = parse_vector("--q", &a.q, Some(n))?;
+    let zeros = vec![0.0; n];
+    let qd = match &a.qd {
+        Some(t) => parse_vector("--qd", t, Some(n))?,
+        None => zeros.clone(),
+    };
+    let qdd = match &a.qdd {
+        Some(t) => parse_vector("--qdd", t, Some(n))?,
+        None => zeros,
+    };
+    let mut ws = Workspace::new(&robot);
+    let tau: Vec<f64> = rnea(&robot, &mut ws, &q, &qd, &qdd)?.iter().copied().collect();
+    joint_space_terms(&robot, &mut ws, &q, &qd)?;
+    let flange = *forward_kinematics(&robot, &mut ws, &q)?;
+    let rot: Vec<Vec<f64>> = (0..3).map(|r| (0..3).map(|c| flange.rot[(r, c)]).collect()).collect();
+    let out = json!({
+        "robot": robot.name(),
+        "dof": n,
+        "joints": robot.joints().iter().map(|j| j.name.clone()).collect::<Vec<_>>(),
+        "payload_kg": a.payload,
+        "q": q,
+        "qd": qd,
+        "qdd": qdd,
+        "H": rows(&ws.h),
+        "C": rows(&ws.c),
+        "g": ws.g.iter().copied().collect::<Vec<_>>(),
+        "tau": tau,
+        "flange": {
+            "frame": robot.flange_name(),
+            "position": [flange.pos.x, flange.pos.y, flange.pos.z],
+            "rotation": rot,
+        },
+    });
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}

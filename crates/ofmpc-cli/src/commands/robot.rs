@@ -1,0 +1,50 @@
+//! Robot selection shared by the commands: `--robot`, `--drives`, `--payload`.
+
+use crate::cli::RobotArgs;
+use anyhow::{bail, Context};
+use ofmpc::robot::{Drives, Payload, Robot};
+use std::path::Path;
+
+/// Loads the robot named by `--robot` (built-in name or URDF path), applies
+/// `--drives` and a point-mass payload at the flange.
+pub fn load_robot(args: &RobotArgs, payload_kg: f64) -> anyhow::Result<Robot> {
+    let path = Path::new(&args.robot);
+    let mut robot = if args.robot.ends_with(".urdf") || path.exists() {
+        Robot::from_urdf_file(path)?
+    } else {
+        Robot::builtin(&args.robot)?
+    };
+    if let Some(d) = &args.drives {
+        let drives = Drives::from_file(d)?;
+        robot.apply_drives(&drives).with_context(|| format!("applying {}", d.display()))?;
+    }
+    if !payload_kg.is_finite() || payload_kg < 0.0 {
+        bail!("--payload {payload_kg}: the payload must be a finite mass ≥ 0 kg");
+    }
+    if payload_kg > 0.0 {
+        robot.set_payload(Some(Payload::point_mass(payload_kg)))?;
+    }
+    Ok(robot)
+}
+
+/// Parses a comma-separated vector of numbers for option `name`, checking its
+/// length against `n` when given.
+pub fn parse_vector(name: &str, text: &str, n: Option<usize>) -> anyhow::Result<Vec<f64>> {
+    let mut v = Vec::new();
+    for (i, part) in text.split(',').enumerate() {
+        let p = part.trim();
+        let x: f64 = p
+            .parse()
+            .map_err(|_| anyhow::anyhow!("{name}: value {} '{p}' is not a number (expected e.g. {name} 0.1,-0.2,0.3)", i + 1))?;
+        if !x.is_finite() {
+            bail!("{name}: value {} is {x}: every value must be finite", i + 1);
+        }
+        v.push(x);
+    }
+    if let Some(n) = n {
+        if v.len() != n {
+            bail!("{name} has {} values but the robot has {n} joints: give one value per joint, comma-separated", v.len());
+        }
+    }
+    Ok(v)
+}

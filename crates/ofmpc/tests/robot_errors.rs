@@ -1,0 +1,110 @@
+//! Bad robot descriptions get clear errors, never panics.
+
+mod common;
+
+use ofmpc::dynamics::{crba, rnea, Workspace};
+use ofmpc::robot::{Drives, ModelError, Payload, Robot};
+
+fn err(text: &str) -> String {
+    Robot::from_urdf_str(text).expect_err("must be rejected").to_string()
+}
+
+const LINK: &str = "<inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial>";
+
+fn joint(name: &str, kind: &str, parent: &str, child: &str) -> String {
+    format!("<joint name=\"{name}\" type=\"{kind}\"><parent link=\"{parent}\"/><child link=\"{child}\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"1\"/></joint>")
+}
+
+#[test]
+fn branching_tree_is_not_a_serial_chain() {
+    let t = format!(
+        "<robot name=\"y\"><link name=\"b\"/><link name=\"l\">{LINK}</link><link name=\"r\">{LINK}</link>{}{}</robot>",
+        joint("jl", "revolute", "b", "l"),
+        joint("jr", "revolute", "b", "r")
+    );
+    let e = err(&t);
+    assert!(e.contains("not a serial chain") && e.contains("'b'") && e.contains("jl") && e.contains("jr"), "{e}");
+}
+
+#[test]
+fn fixed_side_branches_are_allowed_and_add_their_mass() {
+    let t = format!(
+        "<robot name=\"y\"><link name=\"b\"/><link name=\"l\">{LINK}</link><link name=\"cam\">{LINK}</link>{}{}</robot>",
+        joint("jl", "revolute", "b", "l"),
+        joint("jc", "fixed", "l", "cam")
+    );
+    let r = Robot::from_urdf_str(&t).unwrap();
+    assert_eq!(r.dof(), 1);
+    assert!((r.moving_mass() - 2.0).abs() < 1e-12);
+}
+
+#[test]
+fn missing_inertial_is_named() {
+    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\"/>{}</robot>", joint("j", "revolute", "b", "l"));
+    let e = err(&t);
+    assert!(e.contains("link 'l'") && e.contains("no inertial") && e.contains("joint 'j'"), "{e}");
+}
+
+#[test]
+fn unsupported_joint_types_and_bad_numbers_are_rejected() {
+    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>", joint("j", "floating", "b", "l"));
+    assert!(err(&t).contains("floating") || err(&t).contains("Floating"));
+    let bad_inertia = LINK.replace("ixx=\"0.01\"", "ixx=\"-1\"");
+    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{bad_inertia}</link>{}</robot>", joint("j", "revolute", "b", "l"));
+    assert!(err(&t).contains("link 'l'"), "{}", err(&t));
+    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>", joint("j", "revolute", "b", "l").replace("0 0 1", "0 0 0"));
+    assert!(err(&t).contains("axis"));
+    assert!(err("<robot name=\"x\"><link name=\"a\"").contains("invalid URDF"));
+    assert!(err("<robot name=\"x\"><link name=\"a\"/></robot>").contains("no revolute or prismatic"));
+    let loop_ = format!(
+        "<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}{}</robot>",
+        joint("j", "revolute", "b", "l"),
+        joint("k", "revolute", "l", "b")
+    );
+    assert!(err(&loop_).contains("root"), "{}", err(&loop_));
+}
+
+#[test]
+fn wrong_lengths_and_nan_are_errors() {
+    let robot = Robot::irb140();
+    let mut ws = Workspace::new(&robot);
+    let e = crba(&robot, &mut ws, &[0.0; 5]).unwrap_err();
+    assert!(matches!(e, ModelError::Dimension { expected: 6, got: 5, .. }), "{e}");
+    let e = rnea(&robot, &mut ws, &[0.0; 6], &[0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0], &[0.0; 6]).unwrap_err();
+    assert!(e.to_string().contains("qd[1] (joint 2) is NaN"), "{e}");
+}
+
+#[test]
+fn bad_drives_and_payloads_are_errors() {
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = -1.0\n").unwrap_err().to_string();
+    assert!(e.contains("armature_kgm2") && e.contains("≥ 0"), "{e}");
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = \n").unwrap_err().to_string();
+    assert!(e.contains("line 2"), "{e}");
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature = 1.0\n").unwrap_err().to_string();
+    assert!(e.contains("unknown key 'armature'"), "{e}");
+    let mut robot = Robot::irb140();
+    let e = robot.apply_drives(&Drives::from_toml_str("[joints.joint_9]\narmature_kgm2 = 1.0\n").unwrap()).unwrap_err();
+    assert!(e.to_string().contains("joint_9"));
+    assert!(robot.set_payload(Some(Payload::point_mass(-1.0))).is_err());
+    assert!(robot.set_payload(Some(Payload::point_mass(f64::NAN))).is_err());
+    assert!(Robot::builtin("puma").unwrap_err().to_string().contains("irb140"));
+}
+
+#[test]
+fn random_garbage_urdf_never_panics() {
+    let mut rng = common::Rng(11);
+    let base = common::random_urdf(&mut rng, 4, true);
+    let bytes = base.as_bytes();
+    for _ in 0..300 {
+        let mut b = bytes.to_vec();
+        for _ in 0..5 {
+            let i = (rng.uniform() * b.len() as f64) as usize % b.len();
+            b[i] = b"<>/\"= 0-.e9xyz"[(rng.uniform() * 14.0) as usize % 14];
+        }
+        let text = String::from_utf8_lossy(&b);
+        if let Ok(r) = Robot::from_urdf_str(&text) {
+            let mut ws = Workspace::new(&r);
+            let _ = crba(&r, &mut ws, &vec![0.1; r.dof()]);
+        }
+    }
+}
