@@ -12,15 +12,49 @@ fn bench(c: &mut Criterion) {
     let qdd = [1.0, -0.5, 0.3, 2.0, -1.0, 0.5];
     let tau = [10.0, 50.0, 20.0, 1.0, 2.0, 0.5];
     let mut g = c.benchmark_group("irb140");
-    g.bench_function("forward_kinematics", |b| b.iter(|| forward_kinematics(&robot, &mut ws, black_box(&q)).map(|f| f.pos.x)));
-    g.bench_function("jacobian", |b| b.iter(|| flange_jacobian(&robot, &mut ws, black_box(&q)).map(|j| j[(0, 0)])));
-    g.bench_function("rnea", |b| b.iter(|| rnea(&robot, &mut ws, black_box(&q), black_box(&qd), black_box(&qdd)).map(|t| t[0])));
-    g.bench_function("crba", |b| b.iter(|| crba(&robot, &mut ws, black_box(&q)).map(|h| h[(0, 0)])));
-    g.bench_function("coriolis_matrix", |b| b.iter(|| coriolis_matrix(&robot, &mut ws, black_box(&q), black_box(&qd)).map(|m| m[(0, 1)])));
-    g.bench_function("gravity", |b| b.iter(|| gravity(&robot, &mut ws, black_box(&q)).map(|m| m[1])));
-    g.bench_function("joint_space_terms (H, C, g)", |b| b.iter(|| joint_space_terms(&robot, &mut ws, black_box(&q), black_box(&qd))));
+    g.bench_function("forward_kinematics", |b| {
+        b.iter(|| forward_kinematics(&robot, &mut ws, black_box(&q)).map(|f| f.pos.x))
+    });
+    g.bench_function("jacobian", |b| {
+        b.iter(|| flange_jacobian(&robot, &mut ws, black_box(&q)).map(|j| j[(0, 0)]))
+    });
+    g.bench_function("rnea", |b| {
+        b.iter(|| {
+            rnea(
+                &robot,
+                &mut ws,
+                black_box(&q),
+                black_box(&qd),
+                black_box(&qdd),
+            )
+            .map(|t| t[0])
+        })
+    });
+    g.bench_function("crba", |b| {
+        b.iter(|| crba(&robot, &mut ws, black_box(&q)).map(|h| h[(0, 0)]))
+    });
+    g.bench_function("coriolis_matrix", |b| {
+        b.iter(|| {
+            coriolis_matrix(&robot, &mut ws, black_box(&q), black_box(&qd)).map(|m| m[(0, 1)])
+        })
+    });
+    g.bench_function("gravity", |b| {
+        b.iter(|| gravity(&robot, &mut ws, black_box(&q)).map(|m| m[1]))
+    });
+    g.bench_function("joint_space_terms (H, C, g)", |b| {
+        b.iter(|| joint_space_terms(&robot, &mut ws, black_box(&q), black_box(&qd)))
+    });
     g.bench_function("forward_dynamics", |b| {
-        b.iter(|| forward_dynamics(&robot, &mut ws, black_box(&q), black_box(&qd), black_box(&tau)).map(|a| a[0]))
+        b.iter(|| {
+            forward_dynamics(
+                &robot,
+                &mut ws,
+                black_box(&q),
+                black_box(&qd),
+                black_box(&tau),
+            )
+            .map(|a| a[0])
+        })
     });
     g.finish();
 }

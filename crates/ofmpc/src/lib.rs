@@ -12,4 +12,5 @@
 
 pub mod dynamics;
 pub mod robot;
+pub mod sim;
 pub mod spatial;

@@ -6,7 +6,9 @@ use ofmpc::dynamics::{crba, rnea, Workspace};
 use ofmpc::robot::{Drives, ModelError, Payload, Robot};
 
 fn err(text: &str) -> String {
-    Robot::from_urdf_str(text).expect_err("must be rejected").to_string()
+    Robot::from_urdf_str(text)
+        .expect_err("must be rejected")
+        .to_string()
 }
 
 const LINK: &str = "<inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial>";
@@ -23,7 +25,13 @@ fn branching_tree_is_not_a_serial_chain() {
         joint("jr", "revolute", "b", "r")
     );
     let e = err(&t);
-    assert!(e.contains("not a serial chain") && e.contains("'b'") && e.contains("jl") && e.contains("jr"), "{e}");
+    assert!(
+        e.contains("not a serial chain")
+            && e.contains("'b'")
+            && e.contains("jl")
+            && e.contains("jr"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -40,22 +48,39 @@ fn fixed_side_branches_are_allowed_and_add_their_mass() {
 
 #[test]
 fn missing_inertial_is_named() {
-    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\"/>{}</robot>", joint("j", "revolute", "b", "l"));
+    let t = format!(
+        "<robot name=\"m\"><link name=\"b\"/><link name=\"l\"/>{}</robot>",
+        joint("j", "revolute", "b", "l")
+    );
     let e = err(&t);
-    assert!(e.contains("link 'l'") && e.contains("no inertial") && e.contains("joint 'j'"), "{e}");
+    assert!(
+        e.contains("link 'l'") && e.contains("no inertial") && e.contains("joint 'j'"),
+        "{e}"
+    );
 }
 
 #[test]
 fn unsupported_joint_types_and_bad_numbers_are_rejected() {
-    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>", joint("j", "floating", "b", "l"));
+    let t = format!(
+        "<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>",
+        joint("j", "floating", "b", "l")
+    );
     assert!(err(&t).contains("floating") || err(&t).contains("Floating"));
     let bad_inertia = LINK.replace("ixx=\"0.01\"", "ixx=\"-1\"");
-    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{bad_inertia}</link>{}</robot>", joint("j", "revolute", "b", "l"));
+    let t = format!(
+        "<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{bad_inertia}</link>{}</robot>",
+        joint("j", "revolute", "b", "l")
+    );
     assert!(err(&t).contains("link 'l'"), "{}", err(&t));
-    let t = format!("<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>", joint("j", "revolute", "b", "l").replace("0 0 1", "0 0 0"));
+    let t = format!(
+        "<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}</robot>",
+        joint("j", "revolute", "b", "l").replace("0 0 1", "0 0 0")
+    );
     assert!(err(&t).contains("axis"));
     assert!(err("<robot name=\"x\"><link name=\"a\"").contains("invalid URDF"));
-    assert!(err("<robot name=\"x\"><link name=\"a\"/></robot>").contains("no revolute or prismatic"));
+    assert!(
+        err("<robot name=\"x\"><link name=\"a\"/></robot>").contains("no revolute or prismatic")
+    );
     let loop_ = format!(
         "<robot name=\"m\"><link name=\"b\"/><link name=\"l\">{LINK}</link>{}{}</robot>",
         joint("j", "revolute", "b", "l"),
@@ -69,25 +94,55 @@ fn wrong_lengths_and_nan_are_errors() {
     let robot = Robot::irb140();
     let mut ws = Workspace::new(&robot);
     let e = crba(&robot, &mut ws, &[0.0; 5]).unwrap_err();
-    assert!(matches!(e, ModelError::Dimension { expected: 6, got: 5, .. }), "{e}");
-    let e = rnea(&robot, &mut ws, &[0.0; 6], &[0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0], &[0.0; 6]).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ModelError::Dimension {
+                expected: 6,
+                got: 5,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = rnea(
+        &robot,
+        &mut ws,
+        &[0.0; 6],
+        &[0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0],
+        &[0.0; 6],
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("qd[1] (joint 2) is NaN"), "{e}");
 }
 
 #[test]
 fn bad_drives_and_payloads_are_errors() {
-    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = -1.0\n").unwrap_err().to_string();
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = -1.0\n")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("armature_kgm2") && e.contains("≥ 0"), "{e}");
-    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = \n").unwrap_err().to_string();
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature_kgm2 = \n")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("line 2"), "{e}");
-    let e = Drives::from_toml_str("[joints.joint_1]\narmature = 1.0\n").unwrap_err().to_string();
+    let e = Drives::from_toml_str("[joints.joint_1]\narmature = 1.0\n")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("unknown key 'armature'"), "{e}");
     let mut robot = Robot::irb140();
-    let e = robot.apply_drives(&Drives::from_toml_str("[joints.joint_9]\narmature_kgm2 = 1.0\n").unwrap()).unwrap_err();
+    let e = robot
+        .apply_drives(&Drives::from_toml_str("[joints.joint_9]\narmature_kgm2 = 1.0\n").unwrap())
+        .unwrap_err();
     assert!(e.to_string().contains("joint_9"));
     assert!(robot.set_payload(Some(Payload::point_mass(-1.0))).is_err());
-    assert!(robot.set_payload(Some(Payload::point_mass(f64::NAN))).is_err());
-    assert!(Robot::builtin("puma").unwrap_err().to_string().contains("irb140"));
+    assert!(robot
+        .set_payload(Some(Payload::point_mass(f64::NAN)))
+        .is_err());
+    assert!(Robot::builtin("puma")
+        .unwrap_err()
+        .to_string()
+        .contains("irb140"));
 }
 
 #[test]

@@ -8,7 +8,9 @@ use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
 use serde_json::json;
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|r| m.row(r).iter().copied().collect()).collect()
+    (0..m.nrows())
+        .map(|r| m.row(r).iter().copied().collect())
+        .collect()
 }
 
 /// Prints `{"robot", "dof", "q", "qd", "qdd", "H", "C", "g", "tau", "flange": {"position", "rotation"}}`.
@@ -26,10 +28,15 @@ pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
         None => zeros,
     };
     let mut ws = Workspace::new(&robot);
-    let tau: Vec<f64> = rnea(&robot, &mut ws, &q, &qd, &qdd)?.iter().copied().collect();
+    let tau: Vec<f64> = rnea(&robot, &mut ws, &q, &qd, &qdd)?
+        .iter()
+        .copied()
+        .collect();
     joint_space_terms(&robot, &mut ws, &q, &qd)?;
     let flange = *forward_kinematics(&robot, &mut ws, &q)?;
-    let rot: Vec<Vec<f64>> = (0..3).map(|r| (0..3).map(|c| flange.rot[(r, c)]).collect()).collect();
+    let rot: Vec<Vec<f64>> = (0..3)
+        .map(|r| (0..3).map(|c| flange.rot[(r, c)]).collect())
+        .collect();
     let out = json!({
         "robot": robot.name(),
         "dof": n,

@@ -16,7 +16,9 @@ pub fn load_robot(args: &RobotArgs, payload_kg: f64) -> anyhow::Result<Robot> {
     };
     if let Some(d) = &args.drives {
         let drives = Drives::from_file(d)?;
-        robot.apply_drives(&drives).with_context(|| format!("applying {}", d.display()))?;
+        robot
+            .apply_drives(&drives)
+            .with_context(|| format!("applying {}", d.display()))?;
     }
     if !payload_kg.is_finite() || payload_kg < 0.0 {
         bail!("--payload {payload_kg}: the payload must be a finite mass ≥ 0 kg");
@@ -33,9 +35,12 @@ pub fn parse_vector(name: &str, text: &str, n: Option<usize>) -> anyhow::Result<
     let mut v = Vec::new();
     for (i, part) in text.split(',').enumerate() {
         let p = part.trim();
-        let x: f64 = p
-            .parse()
-            .map_err(|_| anyhow::anyhow!("{name}: value {} '{p}' is not a number (expected e.g. {name} 0.1,-0.2,0.3)", i + 1))?;
+        let x: f64 = p.parse().map_err(|_| {
+            anyhow::anyhow!(
+                "{name}: value {} '{p}' is not a number (expected e.g. {name} 0.1,-0.2,0.3)",
+                i + 1
+            )
+        })?;
         if !x.is_finite() {
             bail!("{name}: value {} is {x}: every value must be finite", i + 1);
         }

@@ -1,0 +1,418 @@
+//! The simulated robot: the full nonlinear model, with the payload the
+//! controller does not know, integrated by RK4 under zero-order-hold torque.
+
+use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
+use crate::robot::{ModelError, Robot};
+use serde::{Deserialize, Serialize};
+
+/// Options of the plant; every effect is off by default.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PlantSettings {
+    /// RK4 substep (s); the control period is split into ⌈Ts / substep⌉ equal steps.
+    pub substep: f64,
+    /// Viscous friction per joint (N·m·s/rad); one value for all joints or one per joint.
+    pub viscous_friction: Vec<f64>,
+    /// Coulomb friction per joint (N·m), smoothed by `tanh(q̇ / coulomb_velocity)`.
+    pub coulomb_friction: Vec<f64>,
+    /// Velocity scale of the smoothed Coulomb friction (rad/s).
+    pub coulomb_velocity: f64,
+    /// Saturate the commanded torque at the robot's effort limits.
+    pub torque_limits: bool,
+    /// Standard deviation of Gaussian noise on measured positions (rad).
+    pub position_noise: f64,
+    /// Standard deviation of Gaussian noise on measured velocities (rad/s).
+    pub velocity_noise: f64,
+    /// Encoder resolution (counts per joint revolution); 0 = ideal.
+    pub encoder_counts: u64,
+    /// Seed of the measurement noise.
+    pub seed: u64,
+}
+
+impl Default for PlantSettings {
+    fn default() -> Self {
+        Self {
+            substep: 1e-3,
+            viscous_friction: Vec::new(),
+            coulomb_friction: Vec::new(),
+            coulomb_velocity: 1e-3,
+            torque_limits: false,
+            position_noise: 0.0,
+            velocity_noise: 0.0,
+            encoder_counts: 0,
+            seed: 1,
+        }
+    }
+}
+
+impl PlantSettings {
+    /// Checks the settings against a robot with `n` joints.
+    pub fn validate(&self, n: usize) -> Result<(), String> {
+        if !(self.substep.is_finite() && self.substep > 0.0) {
+            return Err(format!(
+                "plant.substep = {}: must be a positive time in seconds",
+                self.substep
+            ));
+        }
+        for (name, v) in [
+            ("viscous_friction", &self.viscous_friction),
+            ("coulomb_friction", &self.coulomb_friction),
+        ] {
+            if !(v.is_empty() || v.len() == 1 || v.len() == n) {
+                return Err(format!(
+                    "plant.{name} has {} values: give none, one for all joints, or {n}",
+                    v.len()
+                ));
+            }
+            if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
+                return Err(format!(
+                    "plant.{name} = {v:?}: values must be finite and ≥ 0"
+                ));
+            }
+        }
+        for (name, v) in [
+            ("coulomb_velocity", self.coulomb_velocity),
+            ("position_noise", self.position_noise),
+            ("velocity_noise", self.velocity_noise),
+        ] {
+            if !v.is_finite() || v < 0.0 || (name == "coulomb_velocity" && v == 0.0) {
+                return Err(format!(
+                    "plant.{name} = {v}: must be finite and {}",
+                    if name == "coulomb_velocity" {
+                        "> 0"
+                    } else {
+                        "≥ 0"
+                    }
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
+    match v.len() {
+        0 => vec![0.0; n],
+        1 => vec![v[0]; n],
+        _ => v.to_vec(),
+    }
+}
+
+/// A small deterministic Gaussian generator (xorshift + Box–Muller), so that
+/// noisy runs are reproducible from their seed.
+#[derive(Debug, Clone)]
+struct Gauss {
+    s: u64,
+    spare: Option<f64>,
+}
+
+impl Gauss {
+    fn uniform(&mut self) -> f64 {
+        self.s ^= self.s << 13;
+        self.s ^= self.s >> 7;
+        self.s ^= self.s << 17;
+        ((self.s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+    fn next(&mut self) -> f64 {
+        if let Some(z) = self.spare.take() {
+            return z;
+        }
+        let (u1, u2) = (self.uniform(), self.uniform());
+        let r = (-2.0 * u1.ln()).sqrt();
+        let (s, c) = (2.0 * std::f64::consts::PI * u2).sin_cos();
+        self.spare = Some(r * s);
+        r * c
+    }
+}
+
+/// The plant: state, model and effects. No allocation after construction.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    robot: Robot,
+    ws: Workspace,
+    settings: PlantSettings,
+    viscous: Vec<f64>,
+    coulomb: Vec<f64>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    t: f64,
+    // RK4 stages and the applied torque.
+    tau: Vec<f64>,
+    k: [Vec<f64>; 8],
+    tmp_q: Vec<f64>,
+    tmp_v: Vec<f64>,
+    backup: Vec<f64>,
+    rng: Gauss,
+}
+
+impl Plant {
+    /// A plant at rest at `q0`.
+    pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, ModelError> {
+        let n = robot.dof();
+        robot.check_vector("q0", q0)?;
+        settings.validate(n).map_err(ModelError::structure)?;
+        let ws = Workspace::new(&robot);
+        let z = vec![0.0; n];
+        Ok(Self {
+            viscous: per_joint(&settings.viscous_friction, n),
+            coulomb: per_joint(&settings.coulomb_friction, n),
+            rng: Gauss {
+                s: settings.seed.max(1).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
+                spare: None,
+            },
+            robot,
+            ws,
+            settings,
+            q: q0.to_vec(),
+            qd: z.clone(),
+            t: 0.0,
+            tau: z.clone(),
+            k: std::array::from_fn(|_| z.clone()),
+            tmp_q: z.clone(),
+            backup: vec![0.0; 2 * n],
+            tmp_v: z,
+        })
+    }
+
+    /// The plant's robot (with its payload).
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+    /// True joint positions.
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+    /// True joint velocities.
+    pub fn qd(&self) -> &[f64] {
+        &self.qd
+    }
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+    /// The torque actually applied over the last period (after saturation).
+    pub fn applied_torque(&self) -> &[f64] {
+        &self.tau
+    }
+
+    /// The measured state `x = [q, q̇]` (noise and encoder quantization applied)
+    /// written into `x` (2n).
+    pub fn measure(&mut self, x: &mut [f64]) {
+        let n = self.q.len();
+        let res = if self.settings.encoder_counts > 0 {
+            2.0 * std::f64::consts::PI / self.settings.encoder_counts as f64
+        } else {
+            0.0
+        };
+        for i in 0..n {
+            let mut q = self.q[i];
+            if self.settings.position_noise > 0.0 {
+                q += self.settings.position_noise * self.rng.next();
+            }
+            if res > 0.0 {
+                q = (q / res).round() * res;
+            }
+            x[i] = q;
+            let mut v = self.qd[i];
+            if self.settings.velocity_noise > 0.0 {
+                v += self.settings.velocity_noise * self.rng.next();
+            }
+            x[n + i] = v;
+        }
+    }
+
+    /// Friction torque at velocity `v` of joint `i` (opposes motion).
+    #[inline]
+    fn friction(&self, i: usize, v: f64) -> f64 {
+        self.viscous[i] * v + self.coulomb[i] * (v / self.settings.coulomb_velocity).tanh()
+    }
+
+    fn accel(&mut self, q_from_tmp: bool, out: usize) -> Result<(), ModelError> {
+        let n = self.q.len();
+        // k[7] holds the net torque (applied minus friction).
+        let (q, v) = if q_from_tmp {
+            (&self.tmp_q, &self.tmp_v)
+        } else {
+            (&self.q, &self.qd)
+        };
+        for i in 0..n {
+            self.k[7][i] = self.tau[i] - self.friction(i, v[i]);
+        }
+        let a = forward_dynamics(&self.robot, &mut self.ws, q, v, &self.k[7])?;
+        self.k[out].copy_from_slice(a.as_slice());
+        Ok(())
+    }
+
+    /// Advances the plant by `ts` seconds under the constant torque `tau`
+    /// (zero-order hold), by RK4 substeps. Returns an error (and leaves the
+    /// state as it was) when the state or torque stops being finite.
+    pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), ModelError> {
+        let n = self.q.len();
+        self.robot.check_vector("tau", tau)?;
+        for i in 0..n {
+            let lim = self.robot.joints()[i].limits.effort;
+            self.tau[i] = if self.settings.torque_limits && lim.is_finite() {
+                tau[i].clamp(-lim, lim)
+            } else {
+                tau[i]
+            };
+        }
+        let steps = (ts / self.settings.substep).ceil().max(1.0) as usize;
+        let h = ts / steps as f64;
+        self.backup[..n].copy_from_slice(&self.q);
+        self.backup[n..].copy_from_slice(&self.qd);
+        let r = self.integrate(steps, h);
+        if r.is_err() {
+            self.q.copy_from_slice(&self.backup[..n]);
+            self.qd.copy_from_slice(&self.backup[n..]);
+            return r;
+        }
+        self.t += ts;
+        Ok(())
+    }
+
+    fn integrate(&mut self, steps: usize, h: f64) -> Result<(), ModelError> {
+        let n = self.q.len();
+        for _ in 0..steps {
+            // k[0..4]: accelerations of the 4 stages; velocities are the stage states.
+            self.accel(false, 0)?;
+            for i in 0..n {
+                self.tmp_q[i] = self.q[i] + 0.5 * h * self.qd[i];
+                self.tmp_v[i] = self.qd[i] + 0.5 * h * self.k[0][i];
+                self.k[4][i] = self.tmp_v[i];
+            }
+            self.accel(true, 1)?;
+            for i in 0..n {
+                self.tmp_q[i] = self.q[i] + 0.5 * h * self.k[4][i];
+                self.tmp_v[i] = self.qd[i] + 0.5 * h * self.k[1][i];
+                self.k[5][i] = self.tmp_v[i];
+            }
+            self.accel(true, 2)?;
+            for i in 0..n {
+                self.tmp_q[i] = self.q[i] + h * self.k[5][i];
+                self.tmp_v[i] = self.qd[i] + h * self.k[2][i];
+                self.k[6][i] = self.tmp_v[i];
+            }
+            self.accel(true, 3)?;
+            for i in 0..n {
+                let dq =
+                    h / 6.0 * (self.qd[i] + 2.0 * self.k[4][i] + 2.0 * self.k[5][i] + self.k[6][i]);
+                let dv = h / 6.0
+                    * (self.k[0][i] + 2.0 * self.k[1][i] + 2.0 * self.k[2][i] + self.k[3][i]);
+                self.q[i] += dq;
+                self.qd[i] += dv;
+            }
+            if self.q.iter().chain(&self.qd).any(|x| !x.is_finite()) {
+                return Err(ModelError::NonFinite {
+                    what: "plant state".into(),
+                    index: 0,
+                    value: f64::NAN,
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Flange position of the true robot at its current state (base frame, m).
+    pub fn flange_position(&mut self) -> [f64; 3] {
+        match forward_kinematics(&self.robot, &mut self.ws, &self.q) {
+            Ok(f) => [f.pos.x, f.pos.y, f.pos.z],
+            Err(_) => [f64::NAN; 3],
+        }
+    }
+
+    /// Friction torque the plant would apply at velocities `qd` (for reports).
+    pub fn friction_torque(&self, i: usize, v: f64) -> f64 {
+        self.friction(i, v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::{gravity, kinetic_energy, potential_energy};
+
+    #[test]
+    fn gravity_compensated_robot_stays_at_rest() {
+        let robot = Robot::irb140();
+        let q0 = [0.2, 0.3, -0.2, 0.5, 0.6, 0.1];
+        let mut ws = Workspace::new(&robot);
+        let g: Vec<f64> = gravity(&robot, &mut ws, &q0)
+            .unwrap()
+            .iter()
+            .copied()
+            .collect();
+        let mut p = Plant::new(robot, PlantSettings::default(), &q0).unwrap();
+        for _ in 0..100 {
+            p.step(&g, 0.01).unwrap();
+        }
+        let drift = p
+            .q()
+            .iter()
+            .zip(&q0)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(drift < 1e-10, "drift {drift:e}");
+    }
+
+    #[test]
+    fn unforced_plant_conserves_energy_and_friction_dissipates_it() {
+        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
+        let energy = |p: &Plant| {
+            let mut ws = Workspace::new(p.robot());
+            kinetic_energy(p.robot(), &mut ws, p.q(), p.qd()).unwrap()
+                + potential_energy(p.robot(), &mut ws, p.q()).unwrap()
+        };
+        let mut free = Plant::new(Robot::irb140(), PlantSettings::default(), &q0).unwrap();
+        let settings = PlantSettings {
+            viscous_friction: vec![2.0],
+            coulomb_friction: vec![1.0],
+            ..Default::default()
+        };
+        let mut damped = Plant::new(Robot::irb140(), settings, &q0).unwrap();
+        let e0 = energy(&free);
+        let zero = [0.0; 6];
+        for _ in 0..100 {
+            free.step(&zero, 0.01).unwrap();
+            damped.step(&zero, 0.01).unwrap();
+        }
+        let (e_free, e_damped) = (energy(&free), energy(&damped));
+        assert!(
+            (e_free - e0).abs() < 1e-6 * e0.abs().max(1.0),
+            "{e0} → {e_free}"
+        );
+        assert!(
+            e_damped < e0 - 1.0,
+            "friction must dissipate: {e0} → {e_damped}"
+        );
+    }
+
+    #[test]
+    fn torque_saturation_and_measurement_effects() {
+        let q0 = [0.0; 6];
+        let s = PlantSettings {
+            torque_limits: true,
+            encoder_counts: 1000,
+            position_noise: 1e-3,
+            ..Default::default()
+        };
+        let mut p = Plant::new(Robot::irb140(), s, &q0).unwrap();
+        p.step(&[1e4, -1e4, 0.0, 0.0, 0.0, 100.0], 0.01).unwrap();
+        assert_eq!(p.applied_torque()[0], 290.0);
+        assert_eq!(p.applied_torque()[1], -500.0);
+        assert_eq!(p.applied_torque()[5], 16.0);
+        let mut x = [0.0; 12];
+        p.measure(&mut x);
+        let res = 2.0 * std::f64::consts::PI / 1000.0;
+        for v in &x[..6] {
+            assert!(((v / res).round() * res - v).abs() < 1e-12, "quantized");
+        }
+        assert!(p.step(&[f64::NAN; 6], 0.01).is_err());
+        assert!(PlantSettings {
+            viscous_friction: vec![1.0, 2.0],
+            ..Default::default()
+        }
+        .validate(6)
+        .is_err());
+    }
+}
