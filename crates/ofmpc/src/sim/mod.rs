@@ -1,6 +1,8 @@
 //! Closed-loop simulation: the plant (nonlinear robot with an unknown payload)
 //! and, later, the loop that runs a controller against it.
 
+mod metrics;
 mod plant;
 
+pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use plant::{Plant, PlantSettings};

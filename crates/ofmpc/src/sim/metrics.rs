@@ -1,0 +1,220 @@
+//! What a closed-loop run is judged by: tracking errors (joint and
+//! Cartesian), torques, step times, divergence.
+
+use serde::Serialize;
+
+/// The recorded time series of one run. Row `k` holds the state measured at
+/// `t_k` and the torque applied over `[t_k, t_k + Ts)`; vectors are stored
+/// row-major (`k·n + i`).
+#[derive(Debug, Clone, Default)]
+pub struct Record {
+    /// Number of joints.
+    pub n: usize,
+    /// Sample times (s).
+    pub t: Vec<f64>,
+    /// Measured joint positions (rad).
+    pub q: Vec<f64>,
+    /// Measured joint velocities (rad/s).
+    pub qd: Vec<f64>,
+    /// Torque applied over the sample period (N·m), after saturation.
+    pub tau: Vec<f64>,
+    /// Joint reference w_k (rad).
+    pub q_ref: Vec<f64>,
+    /// True flange position (m, base frame).
+    pub flange: Vec<[f64; 3]>,
+    /// Reference flange position (m, base frame).
+    pub flange_ref: Vec<[f64; 3]>,
+    /// Wall time of each controller step (µs).
+    pub step_us: Vec<f64>,
+}
+
+impl Record {
+    /// An empty record for `n` joints with room for `capacity` samples.
+    pub fn with_capacity(n: usize, capacity: usize) -> Self {
+        Self {
+            n,
+            t: Vec::with_capacity(capacity),
+            q: Vec::with_capacity(capacity * n),
+            qd: Vec::with_capacity(capacity * n),
+            tau: Vec::with_capacity(capacity * n),
+            q_ref: Vec::with_capacity(capacity * n),
+            flange: Vec::with_capacity(capacity),
+            flange_ref: Vec::with_capacity(capacity),
+            step_us: Vec::with_capacity(capacity),
+        }
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// True when nothing was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+    /// Joint error `w_k − q_k` of joint `i` at sample `k` (rad).
+    pub fn joint_error(&self, k: usize, i: usize) -> f64 {
+        self.q_ref[k * self.n + i] - self.q[k * self.n + i]
+    }
+    /// Cartesian error `p_ref − p` at sample `k` (m).
+    pub fn cartesian_error(&self, k: usize) -> [f64; 3] {
+        let (r, p) = (self.flange_ref[k], self.flange[k]);
+        [r[0] - p[0], r[1] - p[1], r[2] - p[2]]
+    }
+}
+
+/// Median, 99th percentile and maximum of the controller's step time (µs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepTime {
+    /// Median (µs).
+    pub median: f64,
+    /// 99th percentile (µs).
+    pub p99: f64,
+    /// Maximum (µs).
+    pub max: f64,
+}
+
+/// Summary of one run, as in `metrics.json`. Non-finite numbers serialize as
+/// `null`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunMetrics {
+    /// Run name (its folder): `<controller>_m<payload>`.
+    pub name: String,
+    /// "usual", "first" or "second".
+    pub controller: String,
+    /// Payload the controller does not know (kg).
+    pub payload_kg: f64,
+    /// RMS joint error per joint over the whole run (rad).
+    pub joint_error_rms_rad: Vec<f64>,
+    /// Maximum absolute joint error per joint (rad).
+    pub joint_error_max_rad: Vec<f64>,
+    /// Maximum absolute joint error per joint over the last 0.5 s of the hold (rad).
+    pub steady_joint_error_max_rad: Vec<f64>,
+    /// RMS of the Cartesian error norm (mm).
+    pub cartesian_error_rms_mm: f64,
+    /// Maximum Cartesian error norm (mm).
+    pub cartesian_error_max_mm: f64,
+    /// Maximum Cartesian error norm over the last 0.5 s of the hold (mm).
+    pub steady_cartesian_error_mm: f64,
+    /// Maximum absolute torque per joint (N·m).
+    pub torque_max_nm: Vec<f64>,
+    /// Controller step time.
+    pub step_time_us: StepTime,
+    /// Wall time of the run (s).
+    pub wall_s: f64,
+    /// True when the run stopped because the joint error passed the threshold.
+    pub diverged: bool,
+    /// Time of the divergence (s), `None` when it did not diverge.
+    pub diverged_at_s: Option<f64>,
+}
+
+/// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
+pub fn quantile(v: &[f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let mut s: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    if s.is_empty() {
+        return f64::NAN;
+    }
+    s.sort_by(f64::total_cmp);
+    let pos = p.clamp(0.0, 1.0) * (s.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    s[lo] + (s[hi] - s[lo]) * (pos - lo as f64)
+}
+
+/// Computes the metrics of a record. `steady_window` (s) is the final window
+/// ("steady": the last 0.5 s of the hold).
+pub fn compute(
+    name: &str,
+    controller: &str,
+    payload_kg: f64,
+    rec: &Record,
+    steady_window: f64,
+    wall_s: f64,
+    diverged_at_s: Option<f64>,
+) -> RunMetrics {
+    let n = rec.n;
+    let len = rec.len();
+    let t_end = rec.t.last().copied().unwrap_or(0.0);
+    let steady_from = rec.t.iter().position(|&t| t >= t_end - steady_window + 1e-9).unwrap_or(len);
+    let mut rms = vec![0.0; n];
+    let mut max = vec![0.0f64; n];
+    let mut steady = vec![0.0f64; n];
+    let mut tmax = vec![0.0f64; n];
+    let (mut c_sq, mut c_max, mut c_steady) = (0.0, 0.0f64, 0.0f64);
+    for k in 0..len {
+        for i in 0..n {
+            let e = rec.joint_error(k, i);
+            rms[i] += e * e;
+            max[i] = max[i].max(e.abs());
+            if k >= steady_from {
+                steady[i] = steady[i].max(e.abs());
+            }
+            tmax[i] = tmax[i].max(rec.tau[k * n + i].abs());
+        }
+        let c = rec.cartesian_error(k);
+        let norm = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
+        c_sq += norm * norm;
+        c_max = c_max.max(norm);
+        if k >= steady_from {
+            c_steady = c_steady.max(norm);
+        }
+    }
+    let denom = len.max(1) as f64;
+    let diverged = diverged_at_s.is_some();
+    let steady_or_nan = |v: f64| if diverged || steady_from >= len { f64::NAN } else { v };
+    RunMetrics {
+        name: name.to_string(),
+        controller: controller.to_string(),
+        payload_kg,
+        joint_error_rms_rad: rms.iter().map(|s| (s / denom).sqrt()).collect(),
+        joint_error_max_rad: max,
+        steady_joint_error_max_rad: steady.into_iter().map(steady_or_nan).collect(),
+        cartesian_error_rms_mm: (c_sq / denom).sqrt(),
+        cartesian_error_max_mm: c_max,
+        steady_cartesian_error_mm: steady_or_nan(c_steady),
+        torque_max_nm: tmax,
+        step_time_us: StepTime {
+            median: quantile(&rec.step_us, 0.5),
+            p99: quantile(&rec.step_us, 0.99),
+            max: rec.step_us.iter().copied().fold(f64::NAN, f64::max),
+        },
+        wall_s,
+        diverged,
+        diverged_at_s,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metrics_of_a_known_record() {
+        // One joint, error 1 rad for t < 1 s then 0.1 rad; Cartesian error 3-4-0 mm.
+        let mut r = Record::with_capacity(1, 200);
+        for k in 0..200 {
+            let t = k as f64 * 0.01;
+            r.t.push(t);
+            r.q.push(0.0);
+            r.qd.push(0.0);
+            r.q_ref.push(if t < 1.0 { 1.0 } else { 0.1 });
+            r.tau.push(-(k as f64));
+            r.flange.push([0.0; 3]);
+            r.flange_ref.push([0.003, 0.004, 0.0]);
+            r.step_us.push(k as f64);
+        }
+        let m = compute("x", "first", 0.25, &r, 0.5, 1.0, None);
+        let rms = ((100.0 * 1.0 + 100.0 * 0.01) / 200.0f64).sqrt();
+        assert!((m.joint_error_rms_rad[0] - rms).abs() < 1e-12);
+        assert_eq!(m.joint_error_max_rad[0], 1.0);
+        assert!((m.steady_joint_error_max_rad[0] - 0.1).abs() < 1e-15);
+        assert!((m.cartesian_error_rms_mm - 5.0).abs() < 1e-9);
+        assert!((m.steady_cartesian_error_mm - 5.0).abs() < 1e-9);
+        assert_eq!(m.torque_max_nm[0], 199.0);
+        assert!((m.step_time_us.median - 99.5).abs() < 1e-12);
+        assert_eq!(m.step_time_us.max, 199.0);
+        let d = compute("x", "first", 0.25, &r, 0.5, 1.0, Some(1.5));
+        assert!(d.diverged && d.steady_cartesian_error_mm.is_nan());
+    }
+}
