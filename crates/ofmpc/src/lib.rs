@@ -11,3 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod dynamics;
+pub mod gcode;
+pub mod path;
+pub mod timelaw;
+pub mod trajectory;
