@@ -10,7 +10,14 @@
 
 #![warn(missing_docs)]
 
+pub mod control;
 pub mod dynamics;
+pub mod gcode;
+pub mod ik;
+pub mod path;
+pub mod reference;
 pub mod robot;
 pub mod sim;
 pub mod spatial;
+pub mod timelaw;
+pub mod trajectory;
