@@ -4,58 +4,10 @@
 
 mod common;
 
-use common::{zoh_reference, CoupledModel, Plant, Rng};
+use common::{brute, zoh_reference, Brute, CoupledModel, Plant, Rng};
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, Weight};
 use ofmpc::dynamics::JointSpaceDynamics;
-
-struct Brute {
-    f1: DMatrix<f64>,
-    f2: DMatrix<f64>,
-    f3: DMatrix<f64>,
-    g1: DMatrix<f64>,
-    g2: DMatrix<f64>,
-    g3: DMatrix<f64>,
-}
-
-/// Block formulas of NOTES.md with explicit matrix powers.
-fn brute(ad: &DMatrix<f64>, bd: &DMatrix<f64>, n: usize, nh: usize) -> Brute {
-    let nx = 2 * n;
-    let mut c = DMatrix::<f64>::zeros(n, nx);
-    c.view_mut((0, 0), (n, n)).fill_with_identity();
-    let pow = |k: usize| (0..k).fold(DMatrix::<f64>::identity(nx, nx), |acc, _| &acc * ad);
-    let ca = |k: usize| &c * pow(k);
-    let cab = |k: usize| &c * pow(k) * bd;
-    let mut r = Brute {
-        f1: DMatrix::<f64>::zeros(nh * n, nx),
-        f2: DMatrix::<f64>::zeros(nh * n, nx),
-        f3: DMatrix::<f64>::zeros(nh * n, nx),
-        g1: DMatrix::<f64>::zeros(nh * n, nh * n),
-        g2: DMatrix::<f64>::zeros(nh * n, nh * n),
-        g3: DMatrix::<f64>::zeros(nh * n, nh * n),
-    };
-    for j in 1..=nh {
-        let o = (j - 1) * n;
-        r.f1.view_mut((o, 0), (n, nx)).copy_from(&ca(j));
-        let f2 = (1..=j).fold(DMatrix::<f64>::zeros(n, nx), |s, i| s + ca(i));
-        r.f2.view_mut((o, 0), (n, nx)).copy_from(&f2);
-        let f3 = (1..j).fold(DMatrix::<f64>::zeros(n, nx), |s, i| {
-            s + ca(i) * ((j - i) as f64)
-        });
-        r.f3.view_mut((o, 0), (n, nx)).copy_from(&f3);
-        for l in 1..=j {
-            let ol = (l - 1) * n;
-            r.g1.view_mut((o, ol), (n, n)).copy_from(&cab(j - l));
-            let g2 = (l..=j).fold(DMatrix::<f64>::zeros(n, n), |s, m| s + cab(m - l));
-            r.g2.view_mut((o, ol), (n, n)).copy_from(&g2);
-            let g3 = (l..j).fold(DMatrix::<f64>::zeros(n, n), |s, m| {
-                s + cab(m - l) * ((j - m) as f64)
-            });
-            r.g3.view_mut((o, ol), (n, n)).copy_from(&g3);
-        }
-    }
-    r
-}
 
 fn block_diag(d: &[f64], nh: usize) -> DMatrix<f64> {
     DMatrix::from_diagonal(&DVector::from_fn(nh * d.len(), |i, _| d[i % d.len()]))

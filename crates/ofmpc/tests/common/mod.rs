@@ -1,5 +1,5 @@
 //! Test models for the controller tests and benches (not part of the library).
-#![allow(dead_code)]
+#![allow(dead_code, clippy::needless_range_loop)]
 
 use nalgebra::{DMatrix, DVector};
 use ofmpc::dynamics::JointSpaceDynamics;
@@ -312,4 +312,54 @@ impl LinearPlant {
         let u = &self.h_inv * (DVector::from_column_slice(tau) + &self.d - &self.g);
         *x = &self.ad * &*x + &self.bd * u;
     }
+}
+
+/// Prediction matrices by the block formulas of NOTES.md with explicit
+/// matrix powers of `(Ad, Bd)` and `C = [I, 0]` (full G matrices).
+pub struct Brute {
+    pub f1: DMatrix<f64>,
+    pub f2: DMatrix<f64>,
+    pub f3: DMatrix<f64>,
+    pub g1: DMatrix<f64>,
+    pub g2: DMatrix<f64>,
+    pub g3: DMatrix<f64>,
+}
+
+/// Block formulas of NOTES.md with explicit matrix powers.
+pub fn brute(ad: &DMatrix<f64>, bd: &DMatrix<f64>, n: usize, nh: usize) -> Brute {
+    let nx = 2 * n;
+    let mut c = DMatrix::<f64>::zeros(n, nx);
+    c.view_mut((0, 0), (n, n)).fill_with_identity();
+    let pow = |k: usize| (0..k).fold(DMatrix::<f64>::identity(nx, nx), |acc, _| &acc * ad);
+    let ca = |k: usize| &c * pow(k);
+    let cab = |k: usize| &c * pow(k) * bd;
+    let mut r = Brute {
+        f1: DMatrix::<f64>::zeros(nh * n, nx),
+        f2: DMatrix::<f64>::zeros(nh * n, nx),
+        f3: DMatrix::<f64>::zeros(nh * n, nx),
+        g1: DMatrix::<f64>::zeros(nh * n, nh * n),
+        g2: DMatrix::<f64>::zeros(nh * n, nh * n),
+        g3: DMatrix::<f64>::zeros(nh * n, nh * n),
+    };
+    for j in 1..=nh {
+        let o = (j - 1) * n;
+        r.f1.view_mut((o, 0), (n, nx)).copy_from(&ca(j));
+        let f2 = (1..=j).fold(DMatrix::<f64>::zeros(n, nx), |s, i| s + ca(i));
+        r.f2.view_mut((o, 0), (n, nx)).copy_from(&f2);
+        let f3 = (1..j).fold(DMatrix::<f64>::zeros(n, nx), |s, i| {
+            s + ca(i) * ((j - i) as f64)
+        });
+        r.f3.view_mut((o, 0), (n, nx)).copy_from(&f3);
+        for l in 1..=j {
+            let ol = (l - 1) * n;
+            r.g1.view_mut((o, ol), (n, n)).copy_from(&cab(j - l));
+            let g2 = (l..=j).fold(DMatrix::<f64>::zeros(n, n), |s, m| s + cab(m - l));
+            r.g2.view_mut((o, ol), (n, n)).copy_from(&g2);
+            let g3 = (l..j).fold(DMatrix::<f64>::zeros(n, n), |s, m| {
+                s + cab(m - l) * ((j - m) as f64)
+            });
+            r.g3.view_mut((o, ol), (n, n)).copy_from(&g3);
+        }
+    }
+    r
 }
