@@ -1,7 +1,8 @@
 //! Properties of the rigid-body algorithms on random states of the IRB 140 and
 //! of random serial chains (revolute and prismatic joints, fixed frames).
 
-mod common;
+mod robot_common;
+use robot_common as common;
 
 use common::{robots, Rng};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};

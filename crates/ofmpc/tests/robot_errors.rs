@@ -1,6 +1,7 @@
 //! Bad robot descriptions get clear errors, never panics.
 
-mod common;
+mod robot_common;
+use robot_common as common;
 
 use ofmpc::dynamics::{crba, rnea, Workspace};
 use ofmpc::robot::{Drives, ModelError, Payload, Robot};

@@ -1,0 +1,299 @@
+//! Parts shared by the three controllers: buffers sized once, the per-sample
+//! model pipeline (terms → `f0` → ZOH → predictions), the layout of the
+//! least-squares system and the final `u`, `τ` update.
+//!
+//! # Layout of `𝒜 ΔU = b`
+//!
+//! The paper stacks `𝒜 = [Q_YW G; Q_ΔY G1; Q_ΔU]` by cost term (Eq. (37),
+//! (39)); the usual controller has `[Q_YW G1; Q_U]`. All `G` are block
+//! lower-triangular. The rows and unknowns are permuted (which changes neither
+//! the minimizer nor `J_min`) so that the matrix gets a block upper-triangular
+//! profile that [`LsqWorkspace`] exploits:
+//!
+//! * unknown block `t' = 1..N` is `Δu_{k+N−t'}` (reversed order: `Δu_k`, the
+//!   one applied, is the last block);
+//! * row "level" `t = 1..N` holds, in this order, the `Q_YW` rows of block row
+//!   `j = N+1−t`, the `Q_ΔY` rows of block row `j` (incremental only), and the
+//!   `Q_ΔU` (or `Q_U`) rows of unknown block `t`.
+//!
+//! Block `(t, t')` is then `[Q_YW G[t'−t]; Q_ΔY G1[t'−t]; δ_{tt'} Q_ΔU]` for
+//! `t ≤ t'` and zero below: column block `t'` ends at row `g·n·t'` with `g`
+//! groups of rows per level.
+
+use super::dense::gemm;
+use super::lsq::{LsqInfo, LsqWorkspace};
+use super::model::LinearLikeModel;
+use super::prediction::Predictions;
+use super::settings::{MpcSettings, SettingsError};
+use super::zoh::Zoh;
+use super::{StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+/// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
+const MAX_ENTRIES: usize = 1 << 26;
+
+/// Which generator multiplies `Q_YW` in the first row group of `𝒜`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum TopBlocks {
+    /// `G1` (usual controller, positional `G` of Eq. (43)).
+    G1,
+    /// `G2` (first algorithm, Eq. (37)).
+    G2,
+    /// `G2 + G3` (second algorithm, Eq. (39)).
+    G2PlusG3,
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct Core {
+    pub n: usize,
+    pub nh: usize,
+    pub ts: f64,
+    /// Row groups per level: 3 (incremental) or 2 (usual).
+    pub groups: usize,
+    pub settings: MpcSettings,
+    /// Diagonals of the square-root weights: Q_YW, Q_ΔY, Q_ΔU (or Q_U).
+    pub w_top: Vec<f64>,
+    pub w_mid: Vec<f64>,
+    pub w_bot: Vec<f64>,
+    pub model: LinearLikeModel,
+    pub zoh: Zoh,
+    pub pred: Predictions,
+    pub lsq: LsqWorkspace,
+    /// Generator of G2 + G3 (N·n × n), second algorithm only.
+    pub g23: Vec<f64>,
+    pub x_prev: Vec<f64>,
+    pub u_prev: Vec<f64>,
+    pub ebar: Vec<f64>,
+    pub dx: Vec<f64>,
+    pub u_new: Vec<f64>,
+    pub ebar_new: Vec<f64>,
+    pub tau_new: Vec<f64>,
+    /// N·n work vectors for F·Δx products.
+    pub v1: Vec<f64>,
+    pub v2: Vec<f64>,
+}
+
+impl Core {
+    pub fn new(n: usize, settings: &MpcSettings, incremental: bool) -> Result<Self, SettingsError> {
+        settings.validate_for_dof(n)?;
+        let nh = settings.horizon;
+        let groups = if incremental { 3 } else { 2 };
+        let p = nh * n;
+        let m = groups * p;
+        if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
+            return Err(SettingsError::TooLarge {
+                rows: m,
+                cols: p,
+                limit: MAX_ENTRIES,
+            });
+        }
+        let row_end: Vec<usize> = (0..p).map(|c| groups * n * (c / n + 1)).collect();
+        let lsq =
+            LsqWorkspace::with_profile(m, p, row_end).map_err(|_| SettingsError::TooLarge {
+                rows: m,
+                cols: p,
+                limit: MAX_ENTRIES,
+            })?;
+        let diag = |w: &super::settings::Weight| {
+            let mut v = vec![0.0; n];
+            w.fill(&mut v);
+            v
+        };
+        Ok(Self {
+            n,
+            nh,
+            ts: settings.ts,
+            groups,
+            settings: settings.clone(),
+            w_top: diag(&settings.q_yw),
+            w_mid: diag(&settings.q_dy),
+            w_bot: if incremental {
+                diag(&settings.q_du)
+            } else {
+                diag(&settings.q_u)
+            },
+            model: LinearLikeModel::new(n),
+            zoh: Zoh::new(n),
+            pred: Predictions::new(2 * n, n, n, nh),
+            lsq,
+            g23: if incremental {
+                vec![0.0; p * n]
+            } else {
+                Vec::new()
+            },
+            x_prev: vec![0.0; 2 * n],
+            u_prev: vec![0.0; n],
+            ebar: vec![0.0; n],
+            dx: vec![0.0; 2 * n],
+            u_new: vec![0.0; n],
+            ebar_new: vec![0.0; n],
+            tau_new: vec![0.0; n],
+            v1: vec![0.0; p],
+            v2: vec![0.0; p],
+        })
+    }
+
+    /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
+    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        check_len("x0", x0.len(), 2 * self.n)?;
+        check_finite("x0", x0)?;
+        self.x_prev.copy_from_slice(x0);
+        self.u_prev.fill(0.0);
+        self.ebar.fill(0.0);
+        Ok(())
+    }
+
+    /// Input checks, model terms, `f0`, ZOH, predictions and `Δx_k`.
+    pub fn prepare(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau_len: usize,
+    ) -> Result<(), StepError> {
+        let n = self.n;
+        check_len("x", x.len(), 2 * n)?;
+        check_len("w_k", w_k.len(), n)?;
+        check_len("preview", preview.len(), self.nh * n)?;
+        check_len("tau", tau_len, n)?;
+        check_finite("x", x)?;
+        check_finite("w_k", w_k)?;
+        check_finite("preview", preview)?;
+        self.model.update(model, &x[..n], &x[n..])?;
+        self.zoh.discretize(self.model.f0(), self.ts)?;
+        self.pred
+            .update_from_zoh(&self.zoh)
+            .map_err(|_| StepError::Internal("prediction shapes"))?;
+        for ((d, a), b) in self.dx.iter_mut().zip(x).zip(&self.x_prev) {
+            *d = a - b;
+        }
+        Ok(())
+    }
+
+    /// Writes `𝒜` in the permuted layout (module docs).
+    pub fn build_matrix(&mut self, top: TopBlocks) {
+        let (n, nh, g) = (self.n, self.nh, self.groups);
+        let p = nh * n;
+        if top == TopBlocks::G2PlusG3 {
+            for ((s, a), b) in self
+                .g23
+                .iter_mut()
+                .zip(self.pred.g2_gen().as_slice())
+                .zip(self.pred.g3_gen().as_slice())
+            {
+                *s = a + b;
+            }
+        }
+        let top_gen: &[f64] = match top {
+            TopBlocks::G1 => self.pred.g1_gen().as_slice(),
+            TopBlocks::G2 => self.pred.g2_gen().as_slice(),
+            TopBlocks::G2PlusG3 => &self.g23,
+        };
+        let mid_gen = self.pred.g1_gen().as_slice();
+        let m = self.lsq.rows();
+        let a = self.lsq.matrix_mut();
+        for tp in 1..=nh {
+            for jj in 0..n {
+                let c = (tp - 1) * n + jj;
+                let col = &mut a[c * m..c * m + g * n * tp];
+                let top_src = &top_gen[jj * p..jj * p + p];
+                let mid_src = &mid_gen[jj * p..jj * p + p];
+                for (t, level) in col.chunks_exact_mut(g * n).enumerate() {
+                    let d = tp - 1 - t; // lag t' − t
+                    let (top_rows, rest) = level.split_at_mut(n);
+                    for ((r, s), w) in top_rows
+                        .iter_mut()
+                        .zip(&top_src[d * n..d * n + n])
+                        .zip(&self.w_top)
+                    {
+                        *r = w * s;
+                    }
+                    let bot_rows = if g == 3 {
+                        let (mid_rows, bot) = rest.split_at_mut(n);
+                        for ((r, s), w) in mid_rows
+                            .iter_mut()
+                            .zip(&mid_src[d * n..d * n + n])
+                            .zip(&self.w_mid)
+                        {
+                            *r = w * s;
+                        }
+                        bot
+                    } else {
+                        rest
+                    };
+                    bot_rows.fill(0.0);
+                    if d == 0 {
+                        bot_rows[jj] = self.w_bot[jj];
+                    }
+                }
+            }
+        }
+    }
+
+    /// `out = F·v` for an N·n × 2n prediction matrix `F`.
+    pub fn f_times(f: &[f64], v: &[f64], rows: usize, out: &mut [f64]) {
+        gemm(rows, v.len(), 1, 1.0, f, v, 0.0, out);
+    }
+
+    /// Solves the least-squares system.
+    pub fn solve(&mut self) -> Result<LsqInfo, StepError> {
+        Ok(self.lsq.solve()?)
+    }
+
+    /// `u_k` from the solution, `τ_k = H u_k + g` (Eq. (15)); checks the
+    /// result and commits `x_{k−1} ← x_k`, `u_{k−1} ← u_k`.
+    pub fn finish(
+        &mut self,
+        x: &[f64],
+        incremental: bool,
+        info: LsqInfo,
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let n = self.n;
+        let p = self.nh * n;
+        let first = &self.lsq.solution()[p - n..p];
+        for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
+            *u = if incremental { prev + d } else { *d };
+        }
+        self.model.torque(&self.u_new, &mut self.tau_new);
+        if let Some(index) = self
+            .u_new
+            .iter()
+            .chain(&self.tau_new)
+            .position(|v| !v.is_finite())
+        {
+            return Err(StepError::NonFiniteResult {
+                what: if index < n { "u" } else { "tau" },
+                index: index % n,
+            });
+        }
+        tau.copy_from_slice(&self.tau_new);
+        self.x_prev.copy_from_slice(x);
+        self.u_prev.copy_from_slice(&self.u_new);
+        Ok(StepInfo {
+            cost: info.residual_sq,
+            r_diag_ratio: info.r_diag_ratio,
+            zoh_squarings: self.zoh.squarings(),
+        })
+    }
+}
+
+pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), StepError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(StepError::WrongLength {
+            what,
+            expected,
+            got,
+        })
+    }
+}
+
+pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), StepError> {
+    match v.iter().position(|e| !e.is_finite()) {
+        Some(index) => Err(StepError::NonFiniteInput { what, index }),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,114 @@
+//! Small dense kernels on column-major slices, used in the real-time step.
+//! They never allocate; the caller sizes every slice.
+
+/// `c = alpha·a·b + beta·c` with `a` m×k, `b` k×p, `c` m×p, all column-major.
+/// `beta == 0` overwrites `c` (it may hold anything, even NaN).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn gemm(
+    m: usize,
+    k: usize,
+    p: usize,
+    alpha: f64,
+    a: &[f64],
+    b: &[f64],
+    beta: f64,
+    c: &mut [f64],
+) {
+    debug_assert!(a.len() >= m * k && b.len() >= k * p && c.len() >= m * p);
+    for (j, cj) in c.chunks_exact_mut(m).take(p).enumerate() {
+        if beta == 0.0 {
+            cj.fill(0.0);
+        } else if beta != 1.0 {
+            cj.iter_mut().for_each(|v| *v *= beta);
+        }
+        let bj = &b[j * k..j * k + k];
+        for (l, &blj) in bj.iter().enumerate() {
+            let s = alpha * blj;
+            if s != 0.0 {
+                axpy(s, &a[l * m..l * m + m], cj);
+            }
+        }
+    }
+}
+
+/// `y += s·x` over the common length.
+#[inline(always)]
+pub(crate) fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
+    for (yi, xi) in y.iter_mut().zip(x) {
+        *yi += s * xi;
+    }
+}
+
+/// Dot product with eight independent accumulators so that it vectorizes.
+#[inline(always)]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let len = a.len().min(b.len());
+    let (a, b) = (&a[..len], &b[..len]);
+    let ca = a.chunks_exact(8);
+    let cb = b.chunks_exact(8);
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    let mut acc = [0.0f64; 8];
+    for (x, y) in ca.zip(cb) {
+        for q in 0..8 {
+            acc[q] += x[q] * y[q];
+        }
+    }
+    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
+    for (x, y) in ra.iter().zip(rb) {
+        s += x * y;
+    }
+    s
+}
+
+/// Induced 1-norm (largest absolute column sum) of an m×p column-major
+/// matrix; NaN if any entry is NaN.
+pub(crate) fn norm1(m: usize, a: &[f64]) -> f64 {
+    let mut best = 0.0f64;
+    for c in a.chunks_exact(m) {
+        let s = c.iter().map(|v| v.abs()).sum::<f64>();
+        if s.is_nan() {
+            return f64::NAN;
+        }
+        best = best.max(s);
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::DMatrix;
+
+    #[test]
+    fn gemm_matches_nalgebra() {
+        let a = DMatrix::<f64>::from_fn(5, 3, |i, j| (i as f64 + 1.0) * 0.3 - j as f64);
+        let b = DMatrix::<f64>::from_fn(3, 4, |i, j| (i * j) as f64 * 0.7 - 1.1);
+        let c0 = DMatrix::<f64>::from_fn(5, 4, |i, j| i as f64 - 0.5 * j as f64);
+        for (alpha, beta) in [(1.0, 0.0), (-2.0, 1.0), (0.5, -3.0)] {
+            let mut c = c0.clone();
+            gemm(
+                5,
+                3,
+                4,
+                alpha,
+                a.as_slice(),
+                b.as_slice(),
+                beta,
+                c.as_mut_slice(),
+            );
+            let want = &a * &b * alpha + &c0 * beta;
+            assert!((c - want).norm() < 1e-13);
+        }
+    }
+
+    #[test]
+    fn dot_matches_naive_for_all_remainders() {
+        for len in 0..40 {
+            let a: Vec<f64> = (0..len).map(|i| (i as f64 * 0.37).sin()).collect();
+            let b: Vec<f64> = (0..len).map(|i| (i as f64 * 0.11).cos()).collect();
+            let naive: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            assert!((dot(&a, &b) - naive).abs() < 1e-13);
+        }
+    }
+}

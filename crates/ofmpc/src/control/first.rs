@@ -1,0 +1,88 @@
+//! The first incremental algorithm, Eq. (30)–(32) and (37): one integrator
+//! (`u_k = u_{k−1} + Δu_k`), cost
+//! `Σ ‖Q_yw (ŷ − w)‖² + ‖Q_Δy Δŷ‖² + ‖Q_Δu Δu‖²`, solved as
+//!
+//! ```text
+//! [Q_YW G2; Q_ΔY G1; Q_ΔU] ΔU = [Q_YW (W − F_I y_k − F2 Δx_k); −Q_ΔY F1 Δx_k; 0].
+//! ```
+//!
+//! It removes the steady error for constant references.
+
+use super::core::{Core, TopBlocks};
+use super::settings::{MpcSettings, SettingsError};
+use super::{Controller, ControllerKind, StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+/// The first algorithm, Eq. (32)/(37). Allocation-free [`Controller::step`].
+#[derive(Debug, Clone)]
+pub struct FirstMpc {
+    core: Core,
+}
+
+impl FirstMpc {
+    /// A controller for `n` joints (buffers sized once).
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        Ok(Self {
+            core: Core::new(n, settings, true)?,
+        })
+    }
+}
+
+impl Controller for FirstMpc {
+    fn kind(&self) -> ControllerKind {
+        ControllerKind::First
+    }
+
+    fn dof(&self) -> usize {
+        self.core.n
+    }
+
+    fn horizon(&self) -> usize {
+        self.core.nh
+    }
+
+    fn settings(&self) -> &MpcSettings {
+        &self.core.settings
+    }
+
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        self.core.reset(x0)
+    }
+
+    fn input(&self) -> &[f64] {
+        &self.core.u_prev
+    }
+
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let c = &mut self.core;
+        c.prepare(model, x, w_k, preview, tau.len())?;
+        c.build_matrix(TopBlocks::G2);
+        let (n, nh, g) = (c.n, c.nh, c.groups);
+        let rows = nh * n;
+        Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
+        Core::f_times(c.pred.f2().as_slice(), &c.dx, rows, &mut c.v2);
+        let y = &x[..n];
+        let b = c.lsq.rhs_mut();
+        for j in 1..=nh {
+            let base = (nh - j) * g * n;
+            let o = (j - 1) * n;
+            for i in 0..n {
+                // Eq. (37), first row: Q_YW (W − F_I y_k − F2 Δx_k)
+                b[base + i] = c.w_top[i] * (preview[o + i] - y[i] - c.v2[o + i]);
+                // second row: Q_ΔY (−F1 Δx_k)
+                b[base + n + i] = -c.w_mid[i] * c.v1[o + i];
+                // third row: 0
+                b[base + 2 * n + i] = 0.0;
+            }
+        }
+        let info = c.solve()?;
+        c.finish(x, true, info, tau)
+    }
+}

@@ -1,0 +1,206 @@
+//! Predictive controllers of Section III: the usual MPC (Eq. (43)) and the
+//! two offset-free incremental algorithms (Eq. (32)/(37) and (34)/(39)).
+//!
+//! Per sample every controller
+//! 1. evaluates the robot model `H, C, g` at the measured state and forms
+//!    `f0 = −H⁻¹C` ([`model`], Eq. (6)–(12)),
+//! 2. discretizes `A = [[0, I], [0, f0]]`, `B = [[0], [I]]` by exact
+//!    zero-order hold ([`zoh`], Eq. (13)),
+//! 3. builds the prediction matrices ([`prediction`], Eq. (20)–(29)),
+//! 4. stacks the over-determined system `𝒜 ΔU = b` and solves it by
+//!    Householder QR ([`lsq`], Eq. (40)–(42)),
+//! 5. applies the first block and returns `τ_k = H u_k + g` (Eq. (15)).
+//!
+//! All buffers are sized at construction; [`Controller::step`] allocates
+//! nothing, never panics and reports a failed sample as a [`StepError`],
+//! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
+
+pub(crate) mod core;
+pub(crate) mod dense;
+pub mod first;
+pub mod lsq;
+pub mod model;
+pub mod prediction;
+pub mod second;
+pub mod settings;
+pub mod usual;
+pub mod zoh;
+
+use std::fmt;
+use std::str::FromStr;
+
+use serde::Deserialize;
+
+use crate::dynamics::JointSpaceDynamics;
+
+pub use first::FirstMpc;
+pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
+pub use model::{LinearLikeModel, ModelError};
+pub use prediction::Predictions;
+pub use second::SecondMpc;
+pub use settings::{MpcSettings, SettingsError, Weight};
+pub use usual::UsualMpc;
+pub use zoh::{Zoh, ZohError};
+
+/// Which of the paper's three controllers. Serde names: `"usual"`, `"first"`,
+/// `"second"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ControllerKind {
+    /// Usual positional MPC, Eq. (43): no integrator, steady offset under mismatch.
+    Usual,
+    /// First incremental algorithm, Eq. (32)/(37): one integrator.
+    First,
+    /// Second incremental algorithm, Eq. (34)/(39): two integrators.
+    Second,
+}
+
+impl ControllerKind {
+    /// All kinds, in the paper's order of comparison.
+    pub const ALL: [ControllerKind; 3] = [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+    ];
+
+    /// The lowercase name (`"usual"`, `"first"`, `"second"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::Usual => "usual",
+            ControllerKind::First => "first",
+            ControllerKind::Second => "second",
+        }
+    }
+}
+
+impl fmt::Display for ControllerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown controller name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\"")]
+pub struct UnknownControllerKind(pub String);
+
+impl FromStr for ControllerKind {
+    type Err = UnknownControllerKind;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        ControllerKind::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| UnknownControllerKind(s.to_string()))
+    }
+}
+
+/// Diagnostics of one successful control step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepInfo {
+    /// Minimum of the cost, `J_min = c2ᵀ c2` (Eq. (42)).
+    pub cost: f64,
+    /// `max|R_ii| / min|R_ii|` of the QR factor, a lower bound of the
+    /// condition number of `𝒜`.
+    pub r_diag_ratio: f64,
+    /// Doublings used by the ZOH discretization (grows with `‖f0‖·Ts`).
+    pub zoh_squarings: u32,
+}
+
+/// Why a control step failed. The controller's state is as before the call;
+/// the caller may retry, hold the last torque, or stop.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// A slice has the wrong length.
+    #[error(
+        "{what} has {got} values but {expected} are needed (x: 2n, w_k: n, preview: N·n, tau: n)"
+    )]
+    WrongLength {
+        /// Which argument.
+        what: &'static str,
+        /// Needed length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// An input holds NaN or ±∞.
+    #[error("{what}[{index}] is not finite: check the measurement and the reference")]
+    NonFiniteInput {
+        /// Which argument.
+        what: &'static str,
+        /// Index of the first bad value.
+        index: usize,
+    },
+    /// The robot model is unusable at this state (dof, non-finite, H not SPD).
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The discretization failed (`f0·Ts` too large or overflow).
+    #[error(transparent)]
+    Discretization(#[from] ZohError),
+    /// The least-squares solve failed (rank loss, non-finite numbers).
+    #[error(transparent)]
+    Solve(#[from] LsqError),
+    /// The computed input or torque is not finite.
+    #[error("the computed {what}[{index}] is not finite: the problem is badly scaled or the model is wrong")]
+    NonFiniteResult {
+        /// `"u"` or `"tau"`.
+        what: &'static str,
+        /// Joint index.
+        index: usize,
+    },
+    /// An internal invariant failed (a bug: please report).
+    #[error("internal error in the controller: {0} (please report this bug)")]
+    Internal(&'static str),
+}
+
+/// A predictive controller: measured state and reference preview in, torque
+/// out. Object safe: hold it as `Box<dyn Controller + Send>`.
+pub trait Controller {
+    /// Which algorithm this is.
+    fn kind(&self) -> ControllerKind;
+    /// Number of joints `n`.
+    fn dof(&self) -> usize;
+    /// Prediction horizon `N`.
+    fn horizon(&self) -> usize;
+    /// The settings it was built with.
+    fn settings(&self) -> &MpcSettings;
+    /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
+    /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError>;
+    /// The input `u` of the last successful step (`u_{k−1}` of the next one),
+    /// `n` values; zero after [`Controller::reset`].
+    fn input(&self) -> &[f64];
+    /// One control step at sample `k`.
+    ///
+    /// * `model`: the controller's robot model (its `dof()` must be `n`);
+    /// * `x`: measured state `x_k = [q_k; q̇_k]` (2n values);
+    /// * `w_k`: current reference `w_k` (n values; used by the second algorithm,
+    ///   checked by all);
+    /// * `preview`: `w_{k+1}, …, w_{k+N}` (N·n values, block `j−1` is `w_{k+j}`;
+    ///   past the end of a path repeat its last value);
+    /// * `tau`: receives `τ_k = H u_k + g` (n values, Eq. (15)), written only
+    ///   on success.
+    ///
+    /// Allocates nothing and never panics.
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError>;
+}
+
+/// Builds the controller `kind` for `n` joints after
+/// [`MpcSettings::validate_for_dof`].
+pub fn new_controller(
+    kind: ControllerKind,
+    n: usize,
+    settings: &MpcSettings,
+) -> Result<Box<dyn Controller + Send>, SettingsError> {
+    Ok(match kind {
+        ControllerKind::Usual => Box::new(UsualMpc::new(n, settings)?),
+        ControllerKind::First => Box::new(FirstMpc::new(n, settings)?),
+        ControllerKind::Second => Box::new(SecondMpc::new(n, settings)?),
+    })
+}

@@ -1,0 +1,272 @@
+//! The linear-like time-varying model of Section II: `f0 = −H⁻¹C` (Eq. (6)),
+//! `u = H⁻¹(τ − g)` (Eq. (7)), the state-space form (9)–(12) and the way back
+//! to torques `τ = H u + g` (Eq. (15)).
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::dynamics::JointSpaceDynamics;
+
+/// Why the model terms of one sample cannot be used.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// The robot model has another number of joints than the controller.
+    #[error("the robot model has {got} joints but the controller was built for {expected}: build the controller with the model's dof()")]
+    DofMismatch {
+        /// Joints of the controller.
+        expected: usize,
+        /// Joints of the model.
+        got: usize,
+    },
+    /// `H`, `C` or `g` returned by the robot model contain NaN or ±∞.
+    #[error("the robot model returned a non-finite entry in {term}[{index}] (column-major): check the state passed to it and the model parameters")]
+    NonFiniteTerm {
+        /// `"H"`, `"C"` or `"g"`.
+        term: &'static str,
+        /// Column-major index of the first bad entry.
+        index: usize,
+    },
+    /// `H` is not symmetric positive definite (Cholesky pivot ≤ 0).
+    #[error("the inertia matrix H is not positive definite (Cholesky pivot {pivot} = {value:e}): check the model's masses, inertias and armature")]
+    InertiaNotPositiveDefinite {
+        /// Index of the failing pivot.
+        pivot: usize,
+        /// The pivot value `H_jj − Σ L_jk²`.
+        value: f64,
+    },
+}
+
+/// The terms `H, C, g` of one sample and the derived `f0 = −H⁻¹C`, in
+/// preallocated n×n buffers. [`LinearLikeModel::update`] allocates nothing.
+#[derive(Debug, Clone)]
+pub struct LinearLikeModel {
+    n: usize,
+    h: DMatrix<f64>,
+    c: DMatrix<f64>,
+    g: DVector<f64>,
+    /// Cholesky factor `L` (lower triangle used), `H = L Lᵀ`.
+    chol: DMatrix<f64>,
+    f0: DMatrix<f64>,
+}
+
+impl LinearLikeModel {
+    /// Buffers for an `n`-joint robot.
+    pub fn new(n: usize) -> Self {
+        Self {
+            n,
+            h: DMatrix::zeros(n, n),
+            c: DMatrix::zeros(n, n),
+            g: DVector::zeros(n),
+            chol: DMatrix::zeros(n, n),
+            f0: DMatrix::zeros(n, n),
+        }
+    }
+
+    /// Number of joints `n`.
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+
+    /// Evaluates `H, C, g` at `(q, q̇)` and computes `f0 = −H⁻¹C` (Eq. (6),
+    /// with `½Ḣ + S = C`, the Christoffel Coriolis matrix) through an in-place
+    /// Cholesky factorization of `H`. `q` and `qd` must have `n` entries.
+    pub fn update(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        q: &[f64],
+        qd: &[f64],
+    ) -> Result<(), ModelError> {
+        if model.dof() != self.n {
+            return Err(ModelError::DofMismatch {
+                expected: self.n,
+                got: model.dof(),
+            });
+        }
+        model.terms(q, qd, &mut self.h, &mut self.c, &mut self.g);
+        self.set_f0_from_terms()
+    }
+
+    /// Sets `H, C, g` directly (n×n, n×n, n) and computes `f0`. Allocation-free.
+    /// For tests and callers that evaluate the model themselves.
+    pub fn set_terms(
+        &mut self,
+        h: &DMatrix<f64>,
+        c: &DMatrix<f64>,
+        g: &DVector<f64>,
+    ) -> Result<(), ModelError> {
+        let n = self.n;
+        if h.shape() != (n, n) || c.shape() != (n, n) || g.len() != n {
+            return Err(ModelError::DofMismatch {
+                expected: n,
+                got: h.nrows(),
+            });
+        }
+        self.h.copy_from(h);
+        self.c.copy_from(c);
+        self.g.copy_from(g);
+        self.set_f0_from_terms()
+    }
+
+    fn set_f0_from_terms(&mut self) -> Result<(), ModelError> {
+        for (term, s) in [
+            ("H", self.h.as_slice()),
+            ("C", self.c.as_slice()),
+            ("g", self.g.as_slice()),
+        ] {
+            if let Some(index) = s.iter().position(|v| !v.is_finite()) {
+                return Err(ModelError::NonFiniteTerm { term, index });
+            }
+        }
+        cholesky_in_place(self.n, self.h.as_slice(), self.chol.as_mut_slice())?;
+        // f0 = −H⁻¹ C: solve L Lᵀ f0 = −C column by column.
+        self.f0.copy_from(&self.c);
+        let n = self.n;
+        let l = self.chol.as_slice();
+        for col in self.f0.as_mut_slice().chunks_exact_mut(n) {
+            col.iter_mut().for_each(|v| *v = -*v);
+            cholesky_solve_in_place(n, l, col);
+        }
+        Ok(())
+    }
+
+    /// `f0 = −H⁻¹C` of the last update (Eq. (6)).
+    pub fn f0(&self) -> &DMatrix<f64> {
+        &self.f0
+    }
+
+    /// Inertia `H` of the last update (with armature).
+    pub fn h(&self) -> &DMatrix<f64> {
+        &self.h
+    }
+
+    /// Coriolis matrix `C` of the last update.
+    pub fn c(&self) -> &DMatrix<f64> {
+        &self.c
+    }
+
+    /// Gravity `g` of the last update.
+    pub fn g(&self) -> &DVector<f64> {
+        &self.g
+    }
+
+    /// Torques from the acceleration-like input: `τ = H u + g` (Eq. (15)),
+    /// with the `H`, `g` of the last update. Slices of length `n`.
+    pub fn torque(&self, u: &[f64], tau: &mut [f64]) {
+        let n = self.n;
+        tau.copy_from_slice(self.g.as_slice());
+        for (j, &uj) in u.iter().enumerate().take(n) {
+            super::dense::axpy(uj, &self.h.as_slice()[j * n..j * n + n], tau);
+        }
+    }
+
+    /// The input `u = H⁻¹(τ − g)` of Eq. (7) for given torques (inverse of
+    /// [`LinearLikeModel::torque`]). Slices of length `n`.
+    pub fn input_from_torque(&self, tau: &[f64], u: &mut [f64]) {
+        for ((ui, ti), gi) in u.iter_mut().zip(tau).zip(self.g.iter()) {
+            *ui = ti - gi;
+        }
+        cholesky_solve_in_place(self.n, self.chol.as_slice(), u);
+    }
+}
+
+/// Cholesky factorization `H = L Lᵀ` of an n×n SPD matrix (column-major,
+/// lower triangle read), written into the lower triangle of `l`.
+pub(crate) fn cholesky_in_place(n: usize, h: &[f64], l: &mut [f64]) -> Result<(), ModelError> {
+    l[..n * n].copy_from_slice(&h[..n * n]);
+    for j in 0..n {
+        // Column j: l_jj = sqrt(h_jj − Σ_k<j l_jk²), l_ij = (h_ij − Σ_k<j l_ik l_jk)/l_jj.
+        for k in 0..j {
+            let ljk = l[k * n + j];
+            let (left, right) = l.split_at_mut(j * n);
+            let colk = &left[k * n..k * n + n];
+            let colj = &mut right[..n];
+            for i in j..n {
+                colj[i] -= ljk * colk[i];
+            }
+        }
+        let d = l[j * n + j];
+        // Also catches NaN.
+        if d.is_nan() || d <= 0.0 || d.is_infinite() {
+            return Err(ModelError::InertiaNotPositiveDefinite { pivot: j, value: d });
+        }
+        let d = d.sqrt();
+        l[j * n + j] = d;
+        for v in &mut l[j * n + j + 1..j * n + n] {
+            *v /= d;
+        }
+    }
+    Ok(())
+}
+
+/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`].
+pub(crate) fn cholesky_solve_in_place(n: usize, l: &[f64], b: &mut [f64]) {
+    // Forward: L z = b (column-oriented).
+    for j in 0..n {
+        let zj = b[j] / l[j * n + j];
+        b[j] = zj;
+        for i in j + 1..n {
+            b[i] -= l[j * n + i] * zj;
+        }
+    }
+    // Backward: Lᵀ x = z (row i of Lᵀ is column i of L).
+    for i in (0..n).rev() {
+        let s = super::dense::dot(&l[i * n + i + 1..i * n + n], &b[i + 1..n]);
+        b[i] = (b[i] - s) / l[i * n + i];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spd(n: usize, seed: u64) -> DMatrix<f64> {
+        let mut s = seed;
+        let m = DMatrix::<f64>::from_fn(n, n, |_, _| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        });
+        &m * m.transpose() + DMatrix::identity(n, n) * 0.1
+    }
+
+    #[test]
+    fn f0_is_minus_h_inverse_c_and_torque_roundtrips() {
+        for n in [1, 2, 6, 7] {
+            let h = spd(n, 3 + n as u64);
+            let c = DMatrix::<f64>::from_fn(n, n, |i, j| (i as f64 - 2.0 * j as f64) * 0.3);
+            let g = DVector::<f64>::from_fn(n, |i, _| i as f64 - 1.5);
+            let mut m = LinearLikeModel::new(n);
+            m.set_terms(&h, &c, &g).unwrap();
+            let want = -h.clone().lu().solve(&c).unwrap();
+            assert!((m.f0() - &want).norm() <= 1e-12 * want.norm().max(1.0));
+            // τ = H u + g and back.
+            let u: Vec<f64> = (0..n).map(|i| 0.3 * i as f64 - 0.7).collect();
+            let mut tau = vec![0.0; n];
+            m.torque(&u, &mut tau);
+            let want_tau = &h * DVector::from_column_slice(&u) + &g;
+            assert!((DVector::from_column_slice(&tau) - want_tau).norm() < 1e-12);
+            let mut u2 = vec![0.0; n];
+            m.input_from_torque(&tau, &mut u2);
+            for (a, b) in u.iter().zip(&u2) {
+                assert!((a - b).abs() < 1e-10);
+            }
+        }
+    }
+
+    #[test]
+    fn rejects_indefinite_and_non_finite_inertia() {
+        let mut m = LinearLikeModel::new(2);
+        let c = DMatrix::zeros(2, 2);
+        let g = DVector::zeros(2);
+        let h = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
+        assert!(matches!(
+            m.set_terms(&h, &c, &g),
+            Err(ModelError::InertiaNotPositiveDefinite { pivot: 1, .. })
+        ));
+        let h = DMatrix::from_row_slice(2, 2, &[1.0, f64::NAN, f64::NAN, 1.0]);
+        assert!(matches!(
+            m.set_terms(&h, &c, &g),
+            Err(ModelError::NonFiniteTerm { term: "H", .. })
+        ));
+    }
+}

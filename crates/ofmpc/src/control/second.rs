@@ -1,0 +1,120 @@
+//! The second incremental algorithm, Eq. (33)–(34) and (39): two integrators
+//! (`u_k = u_{k−1} + Δu_k` and the aggregated error
+//! `ē_k = ē_{k−1} + (w_k − y_k)`, Eq. (17)), cost
+//! `Σ ‖Q_yw (ŷ_{k+j} − w_{k+j} − ê_{k+j−1})‖² + ‖Q_Δy Δŷ‖² + ‖Q_Δu Δu‖²`,
+//! solved as
+//!
+//! ```text
+//! [Q_YW (G2 + G3); Q_ΔY G1; Q_ΔU] ΔU =
+//!     [Q_YW (W + W_s + F_I ē_k − (F_I + F_II) y_k − (F2 + F3) Δx_k); −Q_ΔY F1 Δx_k; 0].
+//! ```
+//!
+//! It removes the steady error for constant and ramp references.
+
+use super::core::{Core, TopBlocks};
+use super::dense::gemm;
+use super::settings::{MpcSettings, SettingsError};
+use super::{Controller, ControllerKind, StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+/// The second algorithm, Eq. (34)/(39). Allocation-free [`Controller::step`].
+#[derive(Debug, Clone)]
+pub struct SecondMpc {
+    core: Core,
+    ws: Vec<f64>,
+}
+
+impl SecondMpc {
+    /// A controller for `n` joints (buffers sized once).
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        Ok(Self {
+            core: Core::new(n, settings, true)?,
+            ws: vec![0.0; n],
+        })
+    }
+
+    /// The aggregated error `ē_{k}` of the last successful step (Eq. (17)).
+    pub fn aggregated_error(&self) -> &[f64] {
+        &self.core.ebar
+    }
+}
+
+impl Controller for SecondMpc {
+    fn kind(&self) -> ControllerKind {
+        ControllerKind::Second
+    }
+
+    fn dof(&self) -> usize {
+        self.core.n
+    }
+
+    fn horizon(&self) -> usize {
+        self.core.nh
+    }
+
+    fn settings(&self) -> &MpcSettings {
+        &self.core.settings
+    }
+
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        self.core.reset(x0)
+    }
+
+    fn input(&self) -> &[f64] {
+        &self.core.u_prev
+    }
+
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let c = &mut self.core;
+        c.prepare(model, x, w_k, preview, tau.len())?;
+        c.build_matrix(TopBlocks::G2PlusG3);
+        let (n, nh, g) = (c.n, c.nh, c.groups);
+        let rows = nh * n;
+        let y = &x[..n];
+        // Eq. (34): e_k = w_k − y_k, ē_k = ē_{k−1} + e_k (committed on success).
+        for (((e, prev), w), yi) in c.ebar_new.iter_mut().zip(&c.ebar).zip(w_k).zip(y) {
+            *e = prev + (w - yi);
+        }
+        // v1 = F1 Δx, v2 = (F2 + F3) Δx.
+        Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
+        Core::f_times(c.pred.f2().as_slice(), &c.dx, rows, &mut c.v2);
+        gemm(
+            rows,
+            2 * n,
+            1,
+            1.0,
+            c.pred.f3().as_slice(),
+            &c.dx,
+            1.0,
+            &mut c.v2,
+        );
+        // W_s block j = Σ_{i<j} w_{k+i}: running sum.
+        self.ws.fill(0.0);
+        let b = c.lsq.rhs_mut();
+        for j in 1..=nh {
+            let base = (nh - j) * g * n;
+            let o = (j - 1) * n;
+            let jf = j as f64; // F_I + F_II has block j = j·I
+            for i in 0..n {
+                b[base + i] = c.w_top[i]
+                    * (preview[o + i] + self.ws[i] + c.ebar_new[i] - jf * y[i] - c.v2[o + i]);
+                b[base + n + i] = -c.w_mid[i] * c.v1[o + i];
+                b[base + 2 * n + i] = 0.0;
+            }
+            for (s, w) in self.ws.iter_mut().zip(&preview[o..o + n]) {
+                *s += w;
+            }
+        }
+        let info = c.solve()?;
+        let out = c.finish(x, true, info, tau)?;
+        c.ebar.copy_from_slice(&c.ebar_new);
+        Ok(out)
+    }
+}

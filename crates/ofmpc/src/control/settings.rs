@@ -1,0 +1,235 @@
+//! Tuning of the predictive controllers: sampling period, horizon and the
+//! square-root weights `Q` of the cost functions (30), (33) and (43).
+
+use serde::Deserialize;
+
+/// Largest prediction horizon accepted by [`MpcSettings::validate`].
+pub const MAX_HORIZON: usize = 1000;
+
+/// A square-root weight `Q` of the cost (the cost uses `QᵀQ`, Eq. (31)).
+///
+/// Either a scalar `s` meaning `s·I` for any number of joints, or a per-joint
+/// diagonal `diag(q_1, …, q_n)`. In TOML/JSON: a number (`q_yw = 1.0`) or an
+/// array (`q_yw = [1.0, 1.0, 2.0, 1.0, 1.0, 1.0]`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Weight {
+    /// `s·I`, any number of joints.
+    Scalar(f64),
+    /// `diag(q_1, …, q_n)`, one entry per joint.
+    Diagonal(Vec<f64>),
+}
+
+impl Weight {
+    /// Entry `i` of the diagonal (the scalar for every `i` in the scalar case).
+    /// Returns `None` for a diagonal shorter than `i + 1`.
+    pub fn get(&self, i: usize) -> Option<f64> {
+        match self {
+            Weight::Scalar(s) => Some(*s),
+            Weight::Diagonal(d) => d.get(i).copied(),
+        }
+    }
+
+    /// Checks the entries (finite, `≥ 0`, or `> 0` when `positive`) and, for a
+    /// diagonal, its length when `dof` is given.
+    fn check(
+        &self,
+        name: &'static str,
+        positive: bool,
+        dof: Option<usize>,
+    ) -> Result<(), SettingsError> {
+        let entries: &[f64] = match self {
+            Weight::Scalar(s) => std::slice::from_ref(s),
+            Weight::Diagonal(d) => {
+                if d.is_empty() {
+                    return Err(SettingsError::EmptyWeight { name });
+                }
+                if let Some(n) = dof {
+                    if d.len() != n {
+                        return Err(SettingsError::WeightLength {
+                            name,
+                            expected: n,
+                            got: d.len(),
+                        });
+                    }
+                }
+                d
+            }
+        };
+        for (index, &value) in entries.iter().enumerate() {
+            let bad = !value.is_finite() || value < 0.0 || (positive && value == 0.0);
+            if bad {
+                return Err(SettingsError::BadWeight {
+                    name,
+                    index,
+                    value,
+                    requirement: if positive {
+                        "finite and > 0 (it keeps the least-squares system of full column rank)"
+                    } else {
+                        "finite and >= 0"
+                    },
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the diagonal for `n` joints into `out` (length `n`).
+    pub(crate) fn fill(&self, out: &mut [f64]) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.get(i).unwrap_or(0.0);
+        }
+    }
+}
+
+/// Settings shared by the three controllers. Defaults are the paper's tuning
+/// (Section IV): `Ts = 0.01 s`, `N = 10`, `Q_yw = I`, `Q_Δy = 0.5 I`,
+/// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
+///
+/// All `Q` are square roots: the cost uses `QᵀQ` (Eq. (31)).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MpcSettings {
+    /// Sampling period `Ts` in seconds (default 0.01).
+    pub ts: f64,
+    /// Prediction horizon `N` in samples (default 10).
+    pub horizon: usize,
+    /// Output-error weight `Q_yw` of Eq. (30), (33) and (43) (default `1·I`).
+    pub q_yw: Weight,
+    /// Output-increment weight `Q_Δy` of Eq. (30) and (33) (default `0.5·I`).
+    pub q_dy: Weight,
+    /// Input-increment weight `Q_Δu` of Eq. (30) and (33) (default `1e-5·I`).
+    pub q_du: Weight,
+    /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
+    pub q_u: Weight,
+}
+
+impl Default for MpcSettings {
+    fn default() -> Self {
+        Self {
+            ts: 0.01,
+            horizon: 10,
+            q_yw: Weight::Scalar(1.0),
+            q_dy: Weight::Scalar(0.5),
+            q_du: Weight::Scalar(1e-5),
+            q_u: Weight::Scalar(1e-4),
+        }
+    }
+}
+
+impl MpcSettings {
+    /// Checks the settings independently of the number of joints: `ts` finite
+    /// and `> 0`, `1 ≤ horizon ≤` [`MAX_HORIZON`], weights finite and `≥ 0`,
+    /// `q_du` and `q_u` `> 0`, diagonals non-empty and of one common length.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        self.check(None)
+    }
+
+    /// [`MpcSettings::validate`] plus: every diagonal weight has `dof` entries.
+    pub fn validate_for_dof(&self, dof: usize) -> Result<(), SettingsError> {
+        if dof == 0 {
+            return Err(SettingsError::ZeroDof);
+        }
+        self.check(Some(dof))
+    }
+
+    fn check(&self, dof: Option<usize>) -> Result<(), SettingsError> {
+        if !self.ts.is_finite() || self.ts <= 0.0 {
+            return Err(SettingsError::BadSamplingPeriod(self.ts));
+        }
+        if self.horizon == 0 || self.horizon > MAX_HORIZON {
+            return Err(SettingsError::BadHorizon(self.horizon));
+        }
+        // Diagonals must agree among themselves even when n is not known yet.
+        let mut common: Option<(&'static str, usize)> = None;
+        for (name, w, positive) in [
+            ("q_yw", &self.q_yw, false),
+            ("q_dy", &self.q_dy, false),
+            ("q_du", &self.q_du, true),
+            ("q_u", &self.q_u, true),
+        ] {
+            w.check(name, positive, dof)?;
+            if let Weight::Diagonal(d) = w {
+                match common {
+                    None => common = Some((name, d.len())),
+                    Some((first, len)) if len != d.len() => {
+                        return Err(SettingsError::InconsistentDiagonals {
+                            first,
+                            first_len: len,
+                            second: name,
+                            second_len: d.len(),
+                        })
+                    }
+                    Some(_) => {}
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A setting that cannot be used, with what to change.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SettingsError {
+    /// `ts` is not a finite positive number.
+    #[error(
+        "sampling period ts = {0} s is invalid: it must be finite and > 0 (the paper uses 0.01)"
+    )]
+    BadSamplingPeriod(f64),
+    /// `horizon` is 0 or too large.
+    #[error("prediction horizon {0} is invalid: it must be between 1 and {MAX_HORIZON} samples (the paper uses 10)")]
+    BadHorizon(usize),
+    /// A weight entry is negative, zero where it must be positive, or not finite.
+    #[error("weight {name}[{index}] = {value} is invalid: it must be {requirement}")]
+    BadWeight {
+        /// Setting name (`q_yw`, `q_dy`, `q_du`, `q_u`).
+        name: &'static str,
+        /// Index of the entry (0 for a scalar).
+        index: usize,
+        /// The offending value.
+        value: f64,
+        /// What the value must satisfy.
+        requirement: &'static str,
+    },
+    /// A diagonal weight has no entry.
+    #[error("weight {name} is an empty array: give a number (times I) or one entry per joint")]
+    EmptyWeight {
+        /// Setting name.
+        name: &'static str,
+    },
+    /// A diagonal weight has the wrong number of entries.
+    #[error("weight {name} has {got} entries but the robot has {expected} joints: give one entry per joint or a single number")]
+    WeightLength {
+        /// Setting name.
+        name: &'static str,
+        /// Number of joints.
+        expected: usize,
+        /// Number of entries given.
+        got: usize,
+    },
+    /// Two diagonal weights have different lengths.
+    #[error("weights {first} ({first_len} entries) and {second} ({second_len} entries) disagree on the number of joints")]
+    InconsistentDiagonals {
+        /// First diagonal weight.
+        first: &'static str,
+        /// Its length.
+        first_len: usize,
+        /// Second diagonal weight.
+        second: &'static str,
+        /// Its length.
+        second_len: usize,
+    },
+    /// A controller for zero joints was requested.
+    #[error("the robot has 0 joints: a controller needs at least one")]
+    ZeroDof,
+    /// The least-squares system would be too large to allocate.
+    #[error("the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: reduce the horizon")]
+    TooLarge {
+        /// Rows of 𝒜.
+        rows: usize,
+        /// Columns of 𝒜.
+        cols: usize,
+        /// Largest accepted rows·cols.
+        limit: usize,
+    },
+}

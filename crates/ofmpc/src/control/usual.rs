@@ -1,0 +1,79 @@
+//! The usual (positional) predictive controller of Eq. (43), the paper's
+//! baseline: `min ‖Q_YW (F x_k + G U − W)‖² + ‖Q_U U‖²`, solved as the
+//! least-squares system `[Q_YW G; Q_U] U = [Q_YW (W − F x_k); 0]` with
+//! `F = [CA; …; CA^N]`, `G[j,l] = C A^{j−l} B`. It has no integrator and keeps
+//! a steady offset under a model mismatch.
+
+use super::core::{Core, TopBlocks};
+use super::settings::{MpcSettings, SettingsError};
+use super::{Controller, ControllerKind, StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+/// The usual MPC of Eq. (43). Allocation-free [`Controller::step`].
+#[derive(Debug, Clone)]
+pub struct UsualMpc {
+    core: Core,
+}
+
+impl UsualMpc {
+    /// A controller for `n` joints (buffers sized once).
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        Ok(Self {
+            core: Core::new(n, settings, false)?,
+        })
+    }
+}
+
+impl Controller for UsualMpc {
+    fn kind(&self) -> ControllerKind {
+        ControllerKind::Usual
+    }
+
+    fn dof(&self) -> usize {
+        self.core.n
+    }
+
+    fn horizon(&self) -> usize {
+        self.core.nh
+    }
+
+    fn settings(&self) -> &MpcSettings {
+        &self.core.settings
+    }
+
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        self.core.reset(x0)
+    }
+
+    fn input(&self) -> &[f64] {
+        &self.core.u_prev
+    }
+
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let c = &mut self.core;
+        c.prepare(model, x, w_k, preview, tau.len())?;
+        c.build_matrix(TopBlocks::G1);
+        let (n, nh, g) = (c.n, c.nh, c.groups);
+        let rows = nh * n;
+        // v1 = F x_k (positional prediction from the full state).
+        Core::f_times(c.pred.f1().as_slice(), x, rows, &mut c.v1);
+        let b = c.lsq.rhs_mut();
+        b.fill(0.0);
+        for j in 1..=nh {
+            let base = (nh - j) * g * n;
+            let o = (j - 1) * n;
+            for i in 0..n {
+                b[base + i] = c.w_top[i] * (preview[o + i] - c.v1[o + i]);
+            }
+        }
+        let info = c.solve()?;
+        c.finish(x, false, info, tau)
+    }
+}
