@@ -15,6 +15,21 @@
 //! Conventions: SI units and radians; poses are the flange frame expressed in the
 //! robot base frame (`base_link`); rotation errors are measured with the SO(3) log
 //! map ([`rotation_log`]) in the base frame.
+//!
+//! ```
+//! use ofmpc::ik::{IkSolver, OpwParameters};
+//!
+//! let opw = OpwParameters::irb140();
+//! let q = [0.3, -0.4, 0.5, 1.0, -0.6, 2.0];
+//! let pose = opw.forward(&q); // URDF `flange` pose
+//! assert!(!opw.inverse(&pose).is_empty()); // all configurations, no allocation
+//!
+//! let mut ik = IkSolver::irb140(); // data-sheet joint limits
+//! ik.set_previous(&[0.31, -0.41, 0.5, 1.0, -0.6, 2.0])?; // e.g. the measured start
+//! let sol = ik.solve(&pose)?; // closest to the previous sample
+//! assert!(sol.iter().zip(&q).all(|(a, b)| (a - b).abs() < 1e-9));
+//! # Ok::<(), ofmpc::ik::IkError>(())
+//! ```
 
 use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 

@@ -279,7 +279,7 @@ impl NumericIk {
                 self.err.fixed_rows_mut::<3>(3).copy_from(&er);
                 self.grad.gemv_tr(1.0, &self.jac, &self.err, 0.0);
                 if lambda.is_nan() {
-                    let max_diag = self.jtj.diagonal().max();
+                    let max_diag = (0..n).map(|i| self.jtj[(i, i)]).fold(0.0, f64::max);
                     lambda = (s.initial_damping * max_diag).max(s.min_damping);
                 }
                 need_jacobian = false;
