@@ -144,6 +144,11 @@ impl Transform {
             pos: -(rt * self.pos),
         }
     }
+    /// As a nalgebra isometry (rotation re-orthonormalized through a quaternion).
+    pub fn to_isometry(&self) -> nalgebra::Isometry3<f64> {
+        let r = nalgebra::UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(self.rot));
+        nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(self.pos), r)
+    }
     /// Maps a point from child to parent coordinates.
     #[inline]
     pub fn apply_point(&self, p: &Vector3<f64>) -> Vector3<f64> {

@@ -115,3 +115,25 @@ impl JointSpaceDynamics for RobotDynamics {
 pub(crate) fn check(robot: &Robot, what: &str, v: &[f64]) -> Result<(), ModelError> {
     robot.check_vector(what, v)
 }
+
+impl crate::ik::ForwardKinematics for RobotDynamics {
+    fn dof(&self) -> usize {
+        self.robot.dof()
+    }
+    /// NaN pose on a wrong length or non-finite `q`.
+    fn flange_pose(&mut self, q: &[f64]) -> nalgebra::Isometry3<f64> {
+        match forward_kinematics(&self.robot, &mut self.ws, q) {
+            Ok(f) => f.to_isometry(),
+            Err(_) => nalgebra::Isometry3::from_parts(
+                nalgebra::Translation3::new(f64::NAN, f64::NAN, f64::NAN),
+                nalgebra::UnitQuaternion::identity(),
+            ),
+        }
+    }
+    fn flange_jacobian(&mut self, q: &[f64], j: &mut DMatrix<f64>) {
+        match flange_jacobian(&self.robot, &mut self.ws, q) {
+            Ok(jac) if jac.shape() == j.shape() => j.copy_from(jac),
+            _ => j.fill(f64::NAN),
+        }
+    }
+}
