@@ -9,7 +9,9 @@
 //! else numeric (damped least squares seeded by the previous sample).
 
 use crate::dynamics::RobotDynamics;
-use crate::ik::{ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings, OpwParameters};
+use crate::ik::{
+    ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings, OpwParameters,
+};
 use crate::robot::Robot;
 use crate::trajectory::CartesianTrajectory;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -58,12 +60,15 @@ fn opw_matches(robot: &Robot, opw: &OpwParameters) -> bool {
     let mut s = 12345u64;
     (0..50).all(|_| {
         let q: [f64; 6] = std::array::from_fn(|_| {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 11) as f64 / (1u64 << 53) as f64) * 6.0 - 3.0
         });
         let a = d.flange_pose(&q);
         let b = opw.forward(&q);
-        (a.translation.vector - b.translation.vector).norm() < 1e-9 && a.rotation.angle_to(&b.rotation) < 1e-9
+        (a.translation.vector - b.translation.vector).norm() < 1e-9
+            && a.rotation.angle_to(&b.rotation) < 1e-9
     })
 }
 
@@ -105,19 +110,30 @@ pub fn build_reference(
 ) -> Result<JointReference, ReferenceError> {
     let n = robot.dof();
     let rotation = match orientation {
-        Orientation::AtZero => RobotDynamics::new(robot.clone()).flange_pose(&vec![0.0; n]).rotation,
+        Orientation::AtZero => {
+            RobotDynamics::new(robot.clone())
+                .flange_pose(&vec![0.0; n])
+                .rotation
+        }
         Orientation::Fixed(r) => r,
     };
-    let fail = |line: usize, time: f64, p: Vector3<f64>, message: String, hint: &str| ReferenceError {
-        line,
-        time,
-        position: [p.x, p.y, p.z],
-        message,
-        hint: hint.to_string(),
-    };
+    let fail =
+        |line: usize, time: f64, p: Vector3<f64>, message: String, hint: &str| ReferenceError {
+            line,
+            time,
+            position: [p.x, p.y, p.z],
+            message,
+            hint: hint.to_string(),
+        };
     let offset_hint = "move the part into the workspace with a work offset (a G10 L2 P1 X.. Y.. Z.. line, or --origin X,Y,Z in mm), or change the orientation";
     if !(ts.is_finite() && ts > 0.0) {
-        return Err(fail(trajectory.sample(0.0).line, 0.0, trajectory.start(), format!("sample period {ts} s"), "give a positive Ts"));
+        return Err(fail(
+            trajectory.sample(0.0).line,
+            0.0,
+            trajectory.start(),
+            format!("sample period {ts} s"),
+            "give a positive Ts",
+        ));
     }
     let lower = robot.lower_limits();
     let upper = robot.upper_limits();
@@ -125,13 +141,31 @@ pub fn build_reference(
     let mut ik = if opw_matches(robot, &opw) {
         let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
         let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
-        Ik::Analytic(IkSolver::new(opw, lo, up).map_err(|e| fail(0, 0.0, trajectory.start(), e.to_string(), "check the joint limits"))?)
+        Ik::Analytic(IkSolver::new(opw, lo, up).map_err(|e| {
+            fail(
+                0,
+                0.0,
+                trajectory.start(),
+                e.to_string(),
+                "check the joint limits",
+            )
+        })?)
     } else {
         let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
         let up: Vec<f64> = upper.iter().map(|v| v.min(1e6)).collect();
-        let numeric = NumericIk::new(n, &lo, &up, NumericIkSettings::default())
-            .map_err(|e| fail(0, 0.0, trajectory.start(), e.to_string(), "check the joint limits"))?;
-        Ik::Numeric(Box::new(numeric), Box::new(RobotDynamics::new(robot.clone())))
+        let numeric = NumericIk::new(n, &lo, &up, NumericIkSettings::default()).map_err(|e| {
+            fail(
+                0,
+                0.0,
+                trajectory.start(),
+                e.to_string(),
+                "check the joint limits",
+            )
+        })?;
+        Ik::Numeric(
+            Box::new(numeric),
+            Box::new(RobotDynamics::new(robot.clone())),
+        )
     };
     let steps = (trajectory.duration() / ts - 1e-9).ceil().max(0.0) as usize + 1;
     let mut q = Vec::with_capacity(steps * n);
@@ -182,8 +216,15 @@ pub fn build_reference(
         lines.push(sample.line);
         prev.copy_from_slice(&sol);
     }
-    JointReference::from_samples(n, ts, q, position, lines)
-        .ok_or_else(|| fail(0, 0.0, trajectory.start(), "empty reference".into(), "check the program"))
+    JointReference::from_samples(n, ts, q, position, lines).ok_or_else(|| {
+        fail(
+            0,
+            0.0,
+            trajectory.start(),
+            "empty reference".into(),
+            "check the program",
+        )
+    })
 }
 /// A joint reference sampled at `ts`. Vectors are stored row-major (`k·n + i`).
 #[derive(Debug, Clone, PartialEq)]
@@ -204,9 +245,16 @@ impl JointReference {
     /// where the path is at rest).
     ///
     /// Returns `None` when the sizes disagree, `K = 0` or `ts ≤ 0`.
-    pub fn from_samples(n: usize, ts: f64, q: Vec<f64>, position: Vec<[f64; 3]>, line: Vec<usize>) -> Option<Self> {
+    pub fn from_samples(
+        n: usize,
+        ts: f64,
+        q: Vec<f64>,
+        position: Vec<[f64; 3]>,
+        line: Vec<usize>,
+    ) -> Option<Self> {
         let k = position.len();
-        if n == 0 || k == 0 || q.len() != k * n || line.len() != k || !(ts > 0.0 && ts.is_finite()) {
+        if n == 0 || k == 0 || q.len() != k * n || line.len() != k || !(ts > 0.0 && ts.is_finite())
+        {
             return None;
         }
         let mut qd = vec![0.0; k * n];
@@ -218,7 +266,15 @@ impl JointReference {
                 qdd[s * n + i] = (c - 2.0 * b + a) / (ts * ts);
             }
         }
-        Some(Self { n, ts, q, qd, qdd, position, line })
+        Some(Self {
+            n,
+            ts,
+            q,
+            qd,
+            qdd,
+            position,
+            line,
+        })
     }
     /// Number of joints.
     pub fn dof(&self) -> usize {
@@ -292,18 +348,27 @@ mod tests {
     fn preview_holds_the_last_value_and_differences_are_exact_for_parabolas() {
         let ts = 0.1;
         let k = 11;
-        let q: Vec<f64> = (0..k).flat_map(|s| {
-            let t = s as f64 * ts;
-            [t * t, -t]
-        }).collect();
+        let q: Vec<f64> = (0..k)
+            .flat_map(|s| {
+                let t = s as f64 * ts;
+                [t * t, -t]
+            })
+            .collect();
         let r = JointReference::from_samples(2, ts, q, vec![[0.0; 3]; k], vec![1; k]).unwrap();
-        assert!((r.qd(5)[0] - 1.0).abs() < 1e-12 && (r.qdd(5)[0] - 2.0).abs() < 1e-9 && (r.qd(5)[1] + 1.0).abs() < 1e-12);
+        assert!(
+            (r.qd(5)[0] - 1.0).abs() < 1e-12
+                && (r.qdd(5)[0] - 2.0).abs() < 1e-9
+                && (r.qd(5)[1] + 1.0).abs() < 1e-12
+        );
         let mut p = vec![0.0; 6];
         r.preview(9, 3, &mut p);
         assert_eq!(&p[0..2], r.q(10));
         assert_eq!(&p[2..4], r.q(10));
         assert_eq!(&p[4..6], r.q(10));
         assert!((r.duration() - 1.0).abs() < 1e-12);
-        assert!(JointReference::from_samples(2, ts, vec![0.0; 3], vec![[0.0; 3]; 2], vec![1; 2]).is_none());
+        assert!(
+            JointReference::from_samples(2, ts, vec![0.0; 3], vec![[0.0; 3]; 2], vec![1; 2])
+                .is_none()
+        );
     }
 }

@@ -146,7 +146,9 @@ impl Transform {
     }
     /// As a nalgebra isometry (rotation re-orthonormalized through a quaternion).
     pub fn to_isometry(&self) -> nalgebra::Isometry3<f64> {
-        let r = nalgebra::UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(self.rot));
+        let r = nalgebra::UnitQuaternion::from_rotation_matrix(
+            &nalgebra::Rotation3::from_matrix_unchecked(self.rot),
+        );
         nalgebra::Isometry3::from_parts(nalgebra::Translation3::from(self.pos), r)
     }
     /// Maps a point from child to parent coordinates.

@@ -26,10 +26,18 @@ fn ik_along_the_paper_path_is_exact_within_limits_and_speed() {
         for (i, j) in robot.joints().iter().enumerate() {
             // Every joint well inside its limits (NOTES.md: at least 10°).
             let margin = (q[i] - j.limits.lower).min(j.limits.upper - q[i]);
-            assert!(margin > 10f64.to_radians() - 1e-6, "joint {} margin {margin} at k = {k}", i + 1);
+            assert!(
+                margin > 10f64.to_radians() - 1e-6,
+                "joint {} margin {margin} at k = {k}",
+                i + 1
+            );
             if k > 0 {
                 let step = (q[i] - r.q(k - 1)[i]).abs();
-                assert!(step <= j.limits.velocity * ts, "joint {} step {step} at k = {k}", i + 1);
+                assert!(
+                    step <= j.limits.velocity * ts,
+                    "joint {} step {step} at k = {k}",
+                    i + 1
+                );
             }
         }
         // Clear of the wrist singularity.
@@ -39,8 +47,13 @@ fn ik_along_the_paper_path_is_exact_within_limits_and_speed() {
     assert!(max_r < 1e-9, "FK(IK) rotation error {max_r:e}");
     // The path in the base frame: x 380..780 mm, z 150 mm.
     let xs: Vec<f64> = (0..r.len()).map(|k| r.position(k)[0]).collect();
-    let (lo, hi) = xs.iter().fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
-    assert!((lo - 0.380).abs() < 1e-4 && (hi - 0.780).abs() < 1e-9, "x range {lo}..{hi}");
+    let (lo, hi) = xs
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(
+        (lo - 0.380).abs() < 1e-4 && (hi - 0.780).abs() < 1e-9,
+        "x range {lo}..{hi}"
+    );
     assert!((0..r.len()).all(|k| (r.position(k)[2] - 0.150).abs() < 1e-12));
 }
 
@@ -53,7 +66,10 @@ fn the_paper_program_read_in_the_base_frame_is_rejected_with_a_work_offset_hint(
     let e = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap_err();
     let msg = e.to_string();
     eprintln!("{msg}");
-    assert!(msg.contains("program line") && msg.contains("work offset"), "{msg}");
+    assert!(
+        msg.contains("program line") && msg.contains("work offset"),
+        "{msg}"
+    );
     assert!(msg.contains("joint 3") && msg.contains("50.0°"), "{msg}");
 }
 

@@ -22,7 +22,11 @@ pub struct LoopSettings {
 
 impl Default for LoopSettings {
     fn default() -> Self {
-        Self { hold_s: 2.0, divergence_threshold_rad: 0.2, steady_window_s: 0.5 }
+        Self {
+            hold_s: 2.0,
+            divergence_threshold_rad: 0.2,
+            steady_window_s: 0.5,
+        }
     }
 }
 
@@ -30,12 +34,21 @@ impl LoopSettings {
     /// Checks the values.
     pub fn validate(&self) -> Result<(), String> {
         if !(self.hold_s.is_finite() && self.hold_s >= 0.0) {
-            return Err(format!("simulation.hold_s = {}: must be ≥ 0 s", self.hold_s));
+            return Err(format!(
+                "simulation.hold_s = {}: must be ≥ 0 s",
+                self.hold_s
+            ));
         }
         if !(self.divergence_threshold_rad.is_finite() && self.divergence_threshold_rad > 0.0) {
-            return Err(format!("simulation.divergence_threshold_rad = {}: must be > 0", self.divergence_threshold_rad));
+            return Err(format!(
+                "simulation.divergence_threshold_rad = {}: must be > 0",
+                self.divergence_threshold_rad
+            ));
         }
-        if !(self.steady_window_s.is_finite() && self.steady_window_s > 0.0 && self.steady_window_s <= self.hold_s.max(1e-9)) {
+        if !(self.steady_window_s.is_finite()
+            && self.steady_window_s > 0.0
+            && self.steady_window_s <= self.hold_s.max(1e-9))
+        {
             return Err(format!(
                 "simulation.steady_window_s = {}: must be > 0 and not longer than the hold ({} s)",
                 self.steady_window_s, self.hold_s
@@ -86,7 +99,12 @@ pub fn run_closed_loop(
     let mut reason = None;
     plant.measure(&mut x);
     if let Err(e) = controller.reset(&x) {
-        return RunResult { record: rec, diverged_at: Some(0.0), reason: Some(format!("reset failed: {e}")), wall_s: 0.0 };
+        return RunResult {
+            record: rec,
+            diverged_at: Some(0.0),
+            reason: Some(format!("reset failed: {e}")),
+            wall_s: 0.0,
+        };
     }
     for k in 0..total {
         let t = k as f64 * ts;
@@ -117,7 +135,9 @@ pub fn run_closed_loop(
         rec.flange_ref.push(reference.position(k));
         rec.step_us.push(us);
         rec.flange.push(flange);
-        if let Some(i) = (0..n).find(|&i| !(rec.joint_error(k, i).abs() <= settings.divergence_threshold_rad)) {
+        if let Some(i) =
+            (0..n).find(|&i| !(rec.joint_error(k, i).abs() <= settings.divergence_threshold_rad))
+        {
             diverged_at = Some(t);
             reason = Some(format!(
                 "joint {} error {:.4} rad passed the divergence threshold {} rad at t = {t:.3} s",
@@ -132,5 +152,10 @@ pub fn run_closed_loop(
         }
     }
     progress(total, total);
-    RunResult { record: rec, diverged_at, reason, wall_s: start.elapsed().as_secs_f64() }
+    RunResult {
+        record: rec,
+        diverged_at,
+        reason,
+        wall_s: start.elapsed().as_secs_f64(),
+    }
 }

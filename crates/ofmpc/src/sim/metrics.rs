@@ -136,7 +136,11 @@ pub fn compute(
     let n = rec.n;
     let len = rec.len();
     let t_end = rec.t.last().copied().unwrap_or(0.0);
-    let steady_from = rec.t.iter().position(|&t| t >= t_end - steady_window + 1e-9).unwrap_or(len);
+    let steady_from = rec
+        .t
+        .iter()
+        .position(|&t| t >= t_end - steady_window + 1e-9)
+        .unwrap_or(len);
     let mut rms = vec![0.0; n];
     let mut max = vec![0.0f64; n];
     let mut steady = vec![0.0f64; n];
@@ -162,7 +166,13 @@ pub fn compute(
     }
     let denom = len.max(1) as f64;
     let diverged = diverged_at_s.is_some();
-    let steady_or_nan = |v: f64| if diverged || steady_from >= len { f64::NAN } else { v };
+    let steady_or_nan = |v: f64| {
+        if diverged || steady_from >= len {
+            f64::NAN
+        } else {
+            v
+        }
+    };
     RunMetrics {
         name: name.to_string(),
         controller: controller.to_string(),
