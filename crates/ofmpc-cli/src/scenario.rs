@@ -1,0 +1,258 @@
+//! Scenario files (TOML): what `ofmpc run` reads and what `ofmpc reproduce`
+//! builds from its defaults. Two stages, as in ripgrep: [`ScenarioFile`] is
+//! what the user wrote (serde, defaults filled in), [`Scenario`] is the
+//! resolved experiment (robot loaded, program parsed and timed, reference
+//! built). `examples/scenario.toml` documents every key.
+
+use anyhow::{bail, Context};
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::sim::{Experiment, LoopSettings, PlantSettings};
+use ofmpc::timelaw::Profile;
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+/// `[robot]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RobotSection {
+    /// `"irb140"` or a URDF path (relative to the scenario file).
+    pub model: String,
+    /// Drives file (TOML) for a URDF; the built-in IRB 140 has its own.
+    pub drives: Option<PathBuf>,
+}
+
+impl Default for RobotSection {
+    fn default() -> Self {
+        Self { model: "irb140".into(), drives: None }
+    }
+}
+
+/// `[payload]`: the rigid body at the flange that the controllers do not know.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PayloadSection {
+    /// One run per mass and controller (kg).
+    pub masses_kg: Vec<f64>,
+    /// Centre of mass in the flange frame (m); default the flange centre.
+    pub com_m: [f64; 3],
+    /// Inertia about the centre of mass, flange axes: `[ixx, iyy, izz, ixy, ixz, iyz]` (kg·m²);
+    /// default zero (a point mass).
+    pub inertia_kgm2: [f64; 6],
+}
+
+impl Default for PayloadSection {
+    fn default() -> Self {
+        Self { masses_kg: vec![0.0, 0.25], com_m: [0.0; 3], inertia_kgm2: [0.0; 6] }
+    }
+}
+
+/// `[program]`
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ProgramSection {
+    /// G-code file (relative to the scenario file); default the paper's Table I program.
+    pub file: Option<PathBuf>,
+    /// G54 work offset (mm) for programs that set none.
+    pub origin_mm: Option<[f64; 3]>,
+}
+
+/// `[timing]`
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TimingSection {
+    /// `"septic"` (the paper's: acceleration a 5th-order polynomial) or `"quintic"`.
+    pub profile: String,
+    /// Path speed limit (m/s) of moves without an F word.
+    pub max_speed_m_s: f64,
+    /// Path acceleration limit (m/s²).
+    pub max_accel_m_s2: f64,
+}
+
+impl Default for TimingSection {
+    fn default() -> Self {
+        let d = TimingOptions::default();
+        Self { profile: "septic".into(), max_speed_m_s: d.max_speed, max_accel_m_s2: d.max_accel }
+    }
+}
+
+/// `[orientation]`
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OrientationSection {
+    /// Fixed flange orientation as roll, pitch, yaw (degrees, base frame, R = Rz Ry Rx);
+    /// default: the flange orientation at q = 0 (tool axis along base +x).
+    pub rpy_deg: Option<[f64; 3]>,
+}
+
+/// A scenario file as written, defaults filled in.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// A title for the report.
+    pub title: String,
+    /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`.
+    pub controllers: Vec<ControllerKind>,
+    /// `[robot]`
+    pub robot: RobotSection,
+    /// `[payload]`
+    pub payload: PayloadSection,
+    /// `[program]`
+    pub program: ProgramSection,
+    /// `[timing]`
+    pub timing: TimingSection,
+    /// `[orientation]`
+    pub orientation: OrientationSection,
+    /// `[mpc]`: the controllers' tuning (shared).
+    pub mpc: MpcSettings,
+    /// `[simulation]`: hold, divergence threshold, steady window.
+    pub simulation: LoopSettings,
+    /// `[plant]`: integration and the effects the model leaves out.
+    pub plant: PlantSettings,
+}
+
+impl Default for ScenarioFile {
+    fn default() -> Self {
+        Self {
+            title: "Offset-free MPC of the ABB IRB 140 on the paper's path".into(),
+            controllers: ControllerKind::ALL.to_vec(),
+            robot: RobotSection::default(),
+            payload: PayloadSection::default(),
+            program: ProgramSection::default(),
+            timing: TimingSection::default(),
+            orientation: OrientationSection::default(),
+            mpc: MpcSettings::default(),
+            simulation: LoopSettings::default(),
+            plant: PlantSettings::default(),
+        }
+    }
+}
+
+impl ScenarioFile {
+    /// Reads a scenario; relative paths inside are resolved against its folder.
+    pub fn from_file(path: &Path) -> anyhow::Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read scenario {}", path.display()))?;
+        let mut s: ScenarioFile = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let resolve = |p: &Path| if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
+        if s.robot.model.ends_with(".urdf") {
+            s.robot.model = resolve(Path::new(&s.robot.model)).display().to_string();
+        }
+        s.robot.drives = s.robot.drives.as_deref().map(resolve);
+        s.program.file = s.program.file.as_deref().map(resolve);
+        Ok(s)
+    }
+}
+
+/// A resolved scenario: the experiment and what to run.
+pub struct Scenario {
+    /// Report title.
+    pub title: String,
+    /// The program text and its name.
+    pub program_name: String,
+    /// Controllers × payloads.
+    pub controllers: Vec<ControllerKind>,
+    /// The payloads.
+    pub payloads: Vec<Payload>,
+    /// Everything but controller and payload.
+    pub experiment: Experiment,
+    /// The timed Cartesian path.
+    pub trajectory: CartesianTrajectory,
+    /// Parser warnings, to print.
+    pub warnings: Vec<String>,
+}
+
+/// Loads a robot by name or URDF path, with an optional drives file.
+pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
+    let path = Path::new(model);
+    let mut robot = if model.ends_with(".urdf") || path.is_file() {
+        Robot::from_urdf_file(path)?
+    } else {
+        Robot::builtin(model)?
+    };
+    if let Some(d) = drives {
+        let drives = Drives::from_file(d)?;
+        robot.apply_drives(&drives).with_context(|| format!("applying {}", d.display()))?;
+    }
+    Ok(robot)
+}
+
+/// Parses `septic` / `quintic`.
+pub fn parse_profile(s: &str) -> anyhow::Result<Profile> {
+    match s.to_ascii_lowercase().as_str() {
+        "septic" | "paper" => Ok(Profile::Septic),
+        "quintic" => Ok(Profile::Quintic),
+        _ => bail!("profile '{s}': use 'septic' (the paper's) or 'quintic'"),
+    }
+}
+
+/// Reads a program: a file, or the built-in paper program when `None`.
+pub fn read_program(file: Option<&Path>) -> anyhow::Result<(String, String)> {
+    match file {
+        None => Ok(("paper-table1.gcode (built in)".into(), PAPER_TABLE1.to_string())),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| format!("cannot read program {}", p.display()))?;
+            Ok((p.display().to_string(), text))
+        }
+    }
+}
+
+impl Scenario {
+    /// Resolves a scenario file: loads, parses, times and maps to joint space.
+    pub fn resolve(f: &ScenarioFile) -> anyhow::Result<Self> {
+        if f.controllers.is_empty() {
+            bail!("controllers = []: name at least one of \"usual\", \"first\", \"second\"");
+        }
+        if f.payload.masses_kg.is_empty() {
+            bail!("payload.masses_kg = []: give at least one mass (0 for none)");
+        }
+        let robot = load_robot(&f.robot.model, f.robot.drives.as_deref())?;
+        let n = robot.dof();
+        f.mpc.validate_for_dof(n).map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
+        f.simulation.validate().map_err(|e| anyhow::anyhow!("[simulation] {e}"))?;
+        f.plant.validate(n).map_err(|e| anyhow::anyhow!("[plant] {e}"))?;
+        let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
+        let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
+        let mut payloads = Vec::new();
+        for &m in &f.payload.masses_kg {
+            let p = Payload { mass: m, com: Vector3::from(f.payload.com_m), inertia };
+            p.validate().map_err(|e| anyhow::anyhow!("[payload] mass {m} kg: {e}"))?;
+            payloads.push(p);
+        }
+        let (program_name, text) = read_program(f.program.file.as_deref())?;
+        let origin = f.program.origin_mm.map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
+        let program = parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        let warnings = program.warnings.iter().map(|w| format!("{program_name}: {w}")).collect();
+        let timing = TimingOptions {
+            profile: parse_profile(&f.timing.profile)?,
+            max_speed: f.timing.max_speed_m_s,
+            max_accel: f.timing.max_accel_m_s2,
+        };
+        let trajectory = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("[timing] {e}"))?;
+        let orientation = match f.orientation.rpy_deg {
+            None => Orientation::AtZero,
+            Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(r.to_radians(), p.to_radians(), y.to_radians())),
+        };
+        let reference =
+            build_reference(&robot, &trajectory, orientation, f.mpc.ts).map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        Ok(Self {
+            title: f.title.clone(),
+            program_name,
+            controllers: f.controllers.clone(),
+            payloads,
+            experiment: Experiment {
+                robot,
+                reference,
+                mpc: f.mpc.clone(),
+                plant: f.plant.clone(),
+                loop_settings: f.simulation.clone(),
+            },
+            trajectory,
+            warnings,
+        })
+    }
+}
