@@ -352,6 +352,10 @@ fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> {
                 let next = chars.get(j).map(|&(_, ch)| ch);
                 let hint = if matches!(next, Some('O' | 'o')) {
                     format!("the letter O where the digit 0 was meant? write {letter}0")
+                } else if next == Some('#') {
+                    "parameters (`#`) are not supported: write plain numbers".to_string()
+                } else if next == Some('[') {
+                    "expressions (`[ ]`) are not supported: write plain numbers".to_string()
                 } else {
                     format!("write a number after {letter}, e.g. {letter}10.5")
                 };
