@@ -260,3 +260,170 @@ fn piece_state(piece: &TimedSegment, t: f64) -> (Vector3<f64>, Vector3<f64>, Vec
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::{parse, ParseOptions, PAPER_TABLE1};
+
+    fn traj(text: &str, options: &TimingOptions) -> CartesianTrajectory {
+        let program = parse(text, &ParseOptions::default()).unwrap();
+        CartesianTrajectory::new(&program, options).unwrap()
+    }
+
+    /// Velocity and acceleration are the time derivatives of position and velocity (central
+    /// differences), path speed and tangential acceleration stay within the limits, and the
+    /// motion is continuous at every join (at rest there).
+    fn check_consistency(tr: &CartesianTrajectory, speed_limits: &[f64], max_accel: f64) {
+        let h = 1e-6;
+        let n = 20_000;
+        for i in 0..=n {
+            let t = tr.duration() * i as f64 / n as f64;
+            let s = tr.sample(t);
+            let (a, b) = (tr.sample(t - h), tr.sample(t + h));
+            let fd_v = (b.position - a.position) / (2.0 * h);
+            let fd_a = (b.velocity - a.velocity) / (2.0 * h);
+            assert!(
+                (fd_v - s.velocity).norm() < 1e-7,
+                "t {t}: v {} vs {fd_v}",
+                s.velocity
+            );
+            assert!((fd_a - s.acceleration).norm() < 1e-5, "t {t}");
+            let k = s.segment.unwrap();
+            let speed = s.velocity.norm();
+            assert!(speed <= speed_limits[k] * (1.0 + 1e-9), "t {t}: {speed}");
+            if speed > 1e-9 {
+                let tangential = s.acceleration.dot(&s.velocity) / speed;
+                assert!(tangential.abs() <= max_accel * (1.0 + 1e-9), "t {t}");
+            }
+        }
+        for (k, piece) in tr.segments().iter().enumerate() {
+            for t in [piece.start_time, piece.end_time] {
+                let s = tr.sample(t);
+                assert!(
+                    s.velocity.norm() < 1e-12 && s.acceleration.norm() < 1e-9,
+                    "{k}"
+                );
+            }
+            if let Some(next) = tr.segments().get(k + 1) {
+                let end = piece_state(piece, piece.end_time).0;
+                let start = piece_state(next, next.start_time).0;
+                assert!(
+                    (end - start).norm() < 1e-15,
+                    "gap at join {k}: {}",
+                    (end - start).norm()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn paper_program_is_continuous_and_within_limits() {
+        for profile in [Profile::Septic, Profile::Quintic] {
+            let opts = TimingOptions {
+                profile,
+                ..TimingOptions::default()
+            };
+            let tr = traj(PAPER_TABLE1, &opts);
+            assert_eq!(tr.segments().len(), 8);
+            let limits = vec![opts.max_speed; 8];
+            check_consistency(&tr, &limits, opts.max_accel);
+            // Duration: the sum of the shortest segment durations (lines 0.4, 0.2, 0.2, 0.4, 0.2 m;
+            // arcs a quarter, a half and a quarter of a 0.2 m circle).
+            let lengths = [
+                0.4,
+                0.2,
+                0.1 * std::f64::consts::PI,
+                0.2 * std::f64::consts::PI,
+            ];
+            let d = |l: f64| profile.min_duration(l, 0.5, 2.5);
+            let expected =
+                d(lengths[0]) * 2.0 + d(lengths[1]) * 3.0 + d(lengths[2]) * 2.0 + d(lengths[3]);
+            assert!((tr.duration() - expected).abs() < 1e-12);
+            assert!((tr.end() - Vector3::new(0.78, 0.0, 0.15)).norm() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn feeds_override_the_speed_limit_and_dwells_hold() {
+        // F6000 mm/min = 0.1 m/s; F60000 = 1 m/s (above max_speed, accel-limited here);
+        // G00 ignores F.
+        let text = "G0 X0 Y0 Z0\nG1 X100 F6000\nG4 P0.25\nG1 X500 F60000\nG0 X0\n";
+        let opts = TimingOptions::default();
+        let tr = traj(text, &opts);
+        let limits = [0.1, f64::INFINITY, 1.0, 0.5];
+        check_consistency(&tr, &limits, opts.max_accel);
+        let segs = tr.segments();
+        assert_eq!(segs.len(), 4);
+        // First move speed-limited at 0.1 m/s: T = (35/16)·0.1/0.1.
+        assert!((segs[0].end_time - 35.0 / 16.0).abs() < 1e-12);
+        // The dwell holds the end of the first move for 0.25 s.
+        assert!((segs[1].end_time - segs[1].start_time - 0.25).abs() < 1e-15);
+        for f in [0.0, 0.3, 0.7, 1.0] {
+            let s = tr.sample(segs[1].start_time + 0.25 * f);
+            assert!((s.position - Vector3::new(0.1, 0.0, 0.0)).norm() < 1e-15);
+            assert_eq!(s.velocity, Vector3::zeros());
+        }
+        // 0.4 m at 1 m/s peak would take 0.875 s, the accel limit needs √(7.51·0.4/2.5) s.
+        let t2 = segs[2].end_time - segs[2].start_time;
+        assert!((t2 - Profile::Septic.min_duration(0.4, 1.0, 2.5)).abs() < 1e-15);
+        assert!(t2 > 35.0 / 16.0 * 0.4);
+        let t3 = segs[3].end_time - segs[3].start_time;
+        assert!((t3 - Profile::Septic.min_duration(0.5, 0.5, 2.5)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn sampling_outside_the_program() {
+        let tr = traj("G0 X1 Y2 Z3\nG1 X10\n", &TimingOptions::default());
+        let start = Vector3::new(0.001, 0.002, 0.003);
+        let end = Vector3::new(0.010, 0.002, 0.003);
+        for t in [-1.0, 0.0, f64::NAN, f64::NEG_INFINITY] {
+            let s = tr.sample(t);
+            assert_eq!(
+                (s.position, s.velocity, s.segment, s.line),
+                (start, Vector3::zeros(), Some(0), 2)
+            );
+        }
+        for t in [tr.duration(), tr.duration() + 5.0, f64::INFINITY] {
+            let s = tr.sample(t);
+            assert!((s.position - end).norm() < 1e-18);
+            assert_eq!(
+                (s.velocity, s.acceleration),
+                (Vector3::zeros(), Vector3::zeros())
+            );
+        }
+        // A program that only sets its start point.
+        let tr = traj("G0 X1 Y2 Z3\n", &TimingOptions::default());
+        assert_eq!(tr.duration(), 0.0);
+        let s = tr.sample(0.5);
+        assert_eq!((s.position, s.segment, s.line), (start, None, 1));
+        assert_eq!(tr.end(), start);
+    }
+
+    #[test]
+    fn invalid_options_and_moves() {
+        let p = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
+        for (speed, accel, name) in [
+            (0.0, 1.0, "max_speed"),
+            (f64::NAN, 1.0, "max_speed"),
+            (1.0, -2.0, "max_accel"),
+            (1.0, f64::INFINITY, "max_accel"),
+        ] {
+            let opts = TimingOptions {
+                max_speed: speed,
+                max_accel: accel,
+                ..TimingOptions::default()
+            };
+            match CartesianTrajectory::new(&p, &opts) {
+                Err(TrajectoryError::InvalidLimit { name: n, .. }) => assert_eq!(n, name),
+                other => panic!("{other:?}"),
+            }
+        }
+        let mut bad = p.clone();
+        if let Some(MoveKind::Path { feed, .. }) = bad.moves.get_mut(0).map(|m| &mut m.kind) {
+            *feed = Some(-1.0);
+        }
+        let e = CartesianTrajectory::new(&bad, &TimingOptions::default()).unwrap_err();
+        assert!(e.to_string().contains("program line 17"), "{e}");
+    }
+}

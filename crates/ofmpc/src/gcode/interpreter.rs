@@ -1,0 +1,631 @@
+//! Interpreter: modal state (units, plane, distance mode, work offsets, motion mode, feed,
+//! position) and the execution of one line's words.
+
+use super::codes::{classify_g, classify_m, letter_index, Args, GCode, MCode, Motion, ARG_LETTERS};
+use super::lexer::Word;
+use super::{
+    err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, Program,
+    MIN_MOVE_LENGTH,
+};
+use crate::path::{ArcDirection, Plane, Segment};
+use nalgebra::Vector3;
+
+/// Modal state of the reader while it walks the program, and the moves produced so far.
+pub(super) struct Interpreter {
+    pub(super) inch: bool,
+    pub(super) absolute: bool,
+    pub(super) plane: Plane,
+    pub(super) wcs: usize,
+    /// Work offsets G54..G59 (m).
+    pub(super) offsets: [[f64; 3]; 6],
+    /// The G54 offset still comes from `ParseOptions::origin`.
+    pub(super) p1_from_options: bool,
+    pub(super) origin_given: bool,
+    pub(super) motion: Option<Motion>,
+    /// Modal feed as written (program units per minute).
+    pub(super) feed: Option<f64>,
+    pub(super) pos: Option<Vector3<f64>>,
+    pub(super) start: Vector3<f64>,
+    pub(super) start_line: usize,
+    pub(super) moves: Vec<Move>,
+    pub(super) warnings: Vec<GcodeWarning>,
+    pub(super) ended: bool,
+    pub(super) seen_content: bool,
+    pub(super) warned_ignored: bool,
+}
+
+impl Interpreter {
+    pub(super) fn new(options: &ParseOptions) -> Result<Self, GcodeError> {
+        let mut offsets = [[0.0; 3]; 6];
+        if let Some(o) = options.origin {
+            if !o.iter().all(|x| x.is_finite()) {
+                return Err(err(
+                    0,
+                    0,
+                    GcodeErrorKind::InvalidOption,
+                    "",
+                    format!("ParseOptions::origin must be finite, got {o:?}"),
+                    "give the part origin in metres",
+                ));
+            }
+            offsets[0] = o;
+        }
+        Ok(Interpreter {
+            inch: false,
+            absolute: true,
+            plane: Plane::XY,
+            wcs: 0,
+            offsets,
+            p1_from_options: true,
+            origin_given: options.origin.is_some(),
+            motion: None,
+            feed: None,
+            pos: None,
+            start: Vector3::zeros(),
+            start_line: 0,
+            moves: Vec::new(),
+            warnings: Vec::new(),
+            ended: false,
+            seen_content: false,
+            warned_ignored: false,
+        })
+    }
+
+    pub(super) fn scale(&self) -> f64 {
+        if self.inch {
+            0.0254
+        } else {
+            1e-3
+        }
+    }
+
+    pub(super) fn warn(&mut self, line: usize, column: usize, message: impl Into<String>) {
+        self.warnings.push(GcodeWarning {
+            line,
+            column,
+            message: message.into(),
+        });
+    }
+
+    pub(super) fn note_ignored(&mut self, line: usize, raw: &str) {
+        let t = raw.trim_start();
+        if self.warned_ignored || t.is_empty() || t.starts_with(['%', '(', ';']) {
+            return;
+        }
+        self.warned_ignored = true;
+        let col = raw.chars().take_while(|c| c.is_whitespace()).count() + 1;
+        self.warn(
+            line,
+            col,
+            "text after the end of the program (M02/M30/%) ignored",
+        );
+    }
+
+    pub(super) fn finish(self) -> Result<Program, GcodeError> {
+        if self.pos.is_none() {
+            return Err(err(
+                0,
+                0,
+                GcodeErrorKind::NoMotion,
+                "",
+                "the program has no motion",
+                "start with G00 X.. Y.. Z.., which sets the start point",
+            ));
+        }
+        Ok(Program {
+            start: self.start,
+            start_line: self.start_line,
+            moves: self.moves,
+            warnings: self.warnings,
+        })
+    }
+
+    pub(super) fn line(
+        &mut self,
+        line: usize,
+        raw: &str,
+        words: &[Word<'_>],
+    ) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let line_text = raw.trim();
+        // N label: first word, non-negative integer.
+        for (i, w) in words.iter().enumerate() {
+            if w.letter == 'N' {
+                if i != 0 {
+                    return Err(err(
+                        line,
+                        w.col,
+                        Syntax,
+                        w.text,
+                        "an N label must be the first word of the line",
+                        "move it to the front or remove it",
+                    ));
+                }
+                if w.value < 0.0 || w.value.fract() != 0.0 {
+                    return Err(err(
+                        line,
+                        w.col,
+                        InvalidValue,
+                        w.text,
+                        "an N label must be a non-negative integer",
+                        "write e.g. N010",
+                    ));
+                }
+            }
+        }
+        // Sort words.
+        let mut gcodes: Vec<(GCode, &Word<'_>)> = Vec::new();
+        let mut mcodes: Vec<(MCode, &Word<'_>)> = Vec::new();
+        let mut args: [Option<&Word<'_>>; 13] = [None; 13];
+        for w in words {
+            match w.letter {
+                'N' => {}
+                'G' => {
+                    let g = classify_g(w, line)?;
+                    if g.group() != 255 {
+                        if let Some((_, prev)) = gcodes.iter().find(|(o, _)| o.group() == g.group())
+                        {
+                            return Err(err(
+                                line,
+                                w.col,
+                                Duplicate,
+                                w.text,
+                                format!("{} and {} on one line", prev.text, w.text),
+                                "they exclude each other: keep one, or split the line",
+                            ));
+                        }
+                    }
+                    gcodes.push((g, w));
+                }
+                'M' => mcodes.push((classify_m(w, line)?, w)),
+                c => match letter_index(c) {
+                    Some(k) => {
+                        if let Some(prev) = args[k] {
+                            return Err(err(
+                                line,
+                                w.col,
+                                Duplicate,
+                                w.text,
+                                format!("{c} given twice on one line (first as {})", prev.text),
+                                "give each letter once per line; split the line in two",
+                            ));
+                        }
+                        args[k] = Some(w);
+                    }
+                    None => {
+                        let (message, hint) = match c {
+                            'A' | 'B' | 'C' => (
+                                format!("rotary axis word {c} is not supported"),
+                                "the tool orientation is constant; remove the word",
+                            ),
+                            'U' | 'V' | 'W' => (
+                                format!("axis word {c} is not supported"),
+                                "only X, Y and Z are robot path axes",
+                            ),
+                            'E' => (
+                                "E (extruder) words are not supported".to_string(),
+                                "this looks like 3D-printer G-code; remove the E words",
+                            ),
+                            'D' | 'H' => (
+                                format!("tool offset word {c} is not supported"),
+                                "program the tool centre point; remove the word",
+                            ),
+                            _ => (
+                                format!("the word {c} is not supported"),
+                                "supported letters: G M N X Y Z I J K R F P L S T O",
+                            ),
+                        };
+                        return Err(err(line, w.col, Unsupported, w.text, message, hint));
+                    }
+                },
+            }
+        }
+        let args = Args(args);
+        let arg = |c: char| args.get(c);
+
+        // Harmless words.
+        for (c, what) in [
+            ('S', "spindle speed"),
+            ('T', "tool"),
+            ('O', "program number"),
+        ] {
+            if let Some(w) = arg(c) {
+                self.warn(
+                    line,
+                    w.col,
+                    format!("{} ({what}) ignored: no effect on the path", w.text),
+                );
+            }
+        }
+        for (m, w) in &mcodes {
+            if let MCode::Warn(msg) = m {
+                self.warn(line, w.col, msg.clone());
+            }
+        }
+        for (g, w) in &gcodes {
+            if let GCode::Ignored(msg) = g {
+                self.warn(line, w.col, format!("{}: {msg}", w.text));
+            }
+        }
+
+        // Modal settings, in LinuxCNC's order: units, plane, distance mode, feed.
+        let mut explicit_motion = None;
+        let mut dwell = None;
+        let mut set_offset = None;
+        let mut wcs = None;
+        for &(g, w) in &gcodes {
+            match g {
+                GCode::Inch(b) => self.inch = b,
+                GCode::Plane(p) => self.plane = p,
+                GCode::Absolute(b) => self.absolute = b,
+                GCode::Motion(m) => explicit_motion = Some((m, w)),
+                GCode::Dwell => dwell = Some(w),
+                GCode::SetOffset => set_offset = Some(w),
+                GCode::Wcs(k) => wcs = Some(k),
+                GCode::NoOp | GCode::Ignored(_) => {}
+            }
+        }
+        if let Some(f) = arg('F') {
+            if f.value <= 0.0 {
+                return Err(err(
+                    line,
+                    f.col,
+                    InvalidValue,
+                    f.text,
+                    "the feed must be positive",
+                    "give F in mm/min (G21) or in/min (G20), e.g. F3000",
+                ));
+            }
+            self.feed = Some(f.value);
+        }
+        let non_modal = dwell.or(set_offset);
+        if let (Some(nm), Some((_, mw))) = (non_modal, explicit_motion) {
+            return Err(err(
+                line,
+                mw.col,
+                Conflict,
+                line_text,
+                format!("{} and {} on one line", nm.text, mw.text),
+                "put the motion on its own line",
+            ));
+        }
+
+        // Which argument letters this line's command uses.
+        let mut used = [false; 13];
+        for c in ['F', 'S', 'T', 'O'] {
+            if let Some(k) = letter_index(c) {
+                used[k] = true;
+            }
+        }
+        let mut use_letters = |letters: &str| {
+            for c in letters.chars() {
+                if let Some(k) = letter_index(c) {
+                    used[k] = true;
+                }
+            }
+        };
+        let motion_mode = explicit_motion.map(|(m, _)| m).or(self.motion);
+        if dwell.is_some() {
+            use_letters("PX");
+        } else if set_offset.is_some() {
+            use_letters("LPXYZ");
+        } else if let Some(m) = motion_mode {
+            use_letters("XYZ");
+            if matches!(m, Motion::Cw | Motion::Ccw) {
+                use_letters("IJKR");
+            }
+        }
+        for (k, c) in ARG_LETTERS.chars().enumerate() {
+            if let (Some(w), false) = (args.0[k], used[k]) {
+                let (message, hint) = match c {
+                    'X' | 'Y' | 'Z' if dwell.is_some() => (
+                        format!("{c} is not used by G04"),
+                        "G04 takes the dwell time as P (or X) seconds only",
+                    ),
+                    'X' | 'Y' | 'Z' => (
+                        "coordinates without a motion mode".to_string(),
+                        "add G00 or G01 (the first motion gives X, Y and Z of the start point)",
+                    ),
+                    'I' | 'J' | 'K' | 'R' => (
+                        format!("{c} is only used by arcs (G02/G03) here"),
+                        "add G02 or G03, or remove the word",
+                    ),
+                    'P' => (
+                        "P is only used by G04 (dwell) and G10 here".to_string(),
+                        "remove P (arcs with several turns are not supported: program each turn)",
+                    ),
+                    'L' => ("L is only used by G10 L2".to_string(), "remove the L word"),
+                    _ => (format!("{c} is not used here"), "remove the word"),
+                };
+                return Err(err(line, w.col, Conflict, w.text, message, hint));
+            }
+        }
+
+        if let Some(g10) = set_offset {
+            self.set_offset(line, g10, &args)?;
+        }
+        if let Some(k) = wcs {
+            self.wcs = k;
+        }
+        if let Some(g4) = dwell {
+            let (p, x) = (arg('P'), arg('X'));
+            let w = match (p, x) {
+                (Some(p), None) => p,
+                (None, Some(x)) => x,
+                (Some(_), Some(x)) => {
+                    return Err(err(
+                        line,
+                        x.col,
+                        Conflict,
+                        line_text,
+                        "G04 with both P and X",
+                        "give the dwell time once, as P seconds",
+                    ))
+                }
+                (None, None) => {
+                    return Err(err(
+                        line,
+                        g4.col,
+                        Missing,
+                        line_text,
+                        "G04 without a time",
+                        "give the dwell time in seconds, e.g. G04 P0.5",
+                    ))
+                }
+            };
+            if w.value < 0.0 {
+                return Err(err(
+                    line,
+                    w.col,
+                    InvalidValue,
+                    w.text,
+                    "negative dwell time",
+                    "give the dwell time in seconds, >= 0",
+                ));
+            }
+            if w.value > 0.0 {
+                if self.pos.is_none() {
+                    return Err(err(
+                        line,
+                        g4.col,
+                        StartPoint,
+                        line_text,
+                        "dwell before the start point is known",
+                        "start the program with G00 X.. Y.. Z..",
+                    ));
+                }
+                self.moves.push(Move {
+                    line,
+                    kind: MoveKind::Dwell { seconds: w.value },
+                });
+            }
+        }
+        if let Some(m) = explicit_motion {
+            self.motion = Some(m.0);
+        }
+        if dwell.is_none() && set_offset.is_none() {
+            let has = |c| arg(c).is_some();
+            let axes = has('X') || has('Y') || has('Z');
+            let centre = has('I') || has('J') || has('K') || has('R');
+            if let Some(m) = motion_mode {
+                let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
+                if axes || (is_arc && centre) {
+                    let anchor = explicit_motion
+                        .map(|(_, w)| w.col)
+                        .or_else(|| {
+                            words
+                                .iter()
+                                .find(|w| "XYZIJKR".contains(w.letter))
+                                .map(|w| w.col)
+                        })
+                        .unwrap_or(1);
+                    self.motion(line, anchor, line_text, m, &args)?;
+                }
+            }
+        }
+        if mcodes.iter().any(|(m, _)| matches!(m, MCode::End)) {
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    pub(super) fn set_offset(
+        &mut self,
+        line: usize,
+        g10: &Word<'_>,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let arg = |c| args.get(c);
+        match arg('L') {
+            None => {
+                return Err(err(
+                    line,
+                    g10.col,
+                    Missing,
+                    g10.text,
+                    "G10 without L",
+                    "set a work offset with G10 L2 P1 X.. Y.. Z..",
+                ))
+            }
+            Some(l) if l.value != 2.0 => {
+                return Err(err(
+                    line,
+                    l.col,
+                    Unsupported,
+                    l.text,
+                    format!("G10 {} is not supported", l.text),
+                    "only G10 L2 Pn X Y Z (work offset of G54..G59) is supported",
+                ))
+            }
+            Some(_) => {}
+        }
+        let p = arg('P').ok_or_else(|| {
+            err(
+                line,
+                g10.col,
+                Missing,
+                g10.text,
+                "G10 L2 without P",
+                "P1..P6 selects the work offset of G54..G59",
+            )
+        })?;
+        if !(1.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
+            return Err(err(
+                line,
+                p.col,
+                InvalidValue,
+                p.text,
+                "G10 L2 needs P1..P6",
+                "P1..P6 selects the work offset of G54..G59",
+            ));
+        }
+        let k = p.value as usize - 1;
+        if k == 0 && self.p1_from_options {
+            self.p1_from_options = false;
+            if self.origin_given {
+                self.warn(
+                    line,
+                    g10.col,
+                    "the program sets the G54 offset: ParseOptions::origin is not used",
+                );
+            }
+            self.offsets[0] = [0.0; 3];
+        }
+        let scale = self.scale();
+        for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+            if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
+                o[axis] = w.value * scale;
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn motion(
+        &mut self,
+        line: usize,
+        col: usize,
+        line_text: &str,
+        mode: Motion,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let arg = |c| args.get(c);
+        let scale = self.scale();
+        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let xyz = [arg('X'), arg('Y'), arg('Z')];
+        let Some(pos) = self.pos else {
+            // The first motion defines the start point.
+            if matches!(mode, Motion::Cw | Motion::Ccw) {
+                return Err(err(
+                    line,
+                    col,
+                    StartPoint,
+                    line_text,
+                    "the first motion is an arc, but the start point is not known yet",
+                    "start with G00 X.. Y.. Z.., which sets the start point",
+                ));
+            }
+            if !self.absolute {
+                return Err(err(
+                    line,
+                    col,
+                    StartPoint,
+                    line_text,
+                    "the first motion is incremental (G91), but the start point is not known yet",
+                    "give the start point in absolute coordinates (G90)",
+                ));
+            }
+            let missing: Vec<&str> = ["X", "Y", "Z"]
+                .iter()
+                .zip(xyz)
+                .filter(|(_, w)| w.is_none())
+                .map(|(n, _)| *n)
+                .collect();
+            if !missing.is_empty() {
+                return Err(err(
+                    line,
+                    col,
+                    StartPoint,
+                    line_text,
+                    format!(
+                        "the first motion sets the start point and must give X, Y and Z (missing: {})",
+                        missing.join(", ")
+                    ),
+                    "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
+                ));
+            }
+            let mut p = Vector3::zeros();
+            for (a, w) in xyz.iter().enumerate() {
+                p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
+            }
+            self.pos = Some(p);
+            self.start = p;
+            self.start_line = line;
+            return Ok(());
+        };
+        let mut target = pos;
+        for (a, w) in xyz.iter().enumerate() {
+            if let Some(w) = w {
+                target[a] = if self.absolute {
+                    w.value * scale + offset[a]
+                } else {
+                    pos[a] + w.value * scale
+                };
+            }
+        }
+        let feed = match (mode, self.feed) {
+            (Motion::Rapid, _) | (_, None) => None,
+            (_, Some(f)) => Some(f * scale / 60.0),
+        };
+        let segment = match mode {
+            Motion::Rapid | Motion::Linear => {
+                if (target - pos).norm() <= MIN_MOVE_LENGTH {
+                    self.warn(line, col, "zero-length move skipped");
+                    return Ok(());
+                }
+                Segment::line(pos, target)
+            }
+            Motion::Cw | Motion::Ccw => {
+                let dir = if mode == Motion::Cw {
+                    ArcDirection::Clockwise
+                } else {
+                    ArcDirection::CounterClockwise
+                };
+                let seg = if let Some(r) = arg('R') {
+                    if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
+                        return Err(err(
+                            line,
+                            w.col,
+                            Conflict,
+                            line_text,
+                            "an arc with both R and I/J/K",
+                            "give the centre either by R or by I/J/K offsets",
+                        ));
+                    }
+                    self.arc_by_radius(line, col, line_text, mode, pos, target, r, dir)?
+                } else {
+                    self.arc_by_centre(line, col, line_text, mode, pos, target, args, dir)?
+                };
+                let shift = (seg.end() - target).norm();
+                if shift > 1e-9 {
+                    self.warn(
+                        line,
+                        col,
+                        format!(
+                            "arc end placed on the circle, {:.6} mm from the programmed end",
+                            shift * 1e3
+                        ),
+                    );
+                }
+                seg
+            }
+        };
+        self.pos = Some(segment.end());
+        self.moves.push(Move {
+            line,
+            kind: MoveKind::Path { segment, feed },
+        });
+        Ok(())
+    }
+}

@@ -1,0 +1,275 @@
+//! G-code reader: program text → start point and a list of moves in the robot base frame (SI).
+//!
+//! # Language
+//!
+//! A line holds words, a letter followed by a number (`G1`, `X-12.5`, `x.5`); letters are
+//! case-insensitive and spaces are optional (`G1X10Y0`) and allowed between letter and number.
+//! Comments run in parentheses `( … )` or from `;` to the end of the line. A line holding only
+//! `%` delimits the program: the first opens it, a later one ends it. `N` labels must be the
+//! first word; they are labels, not keys (repeats allowed). Each letter may appear once per
+//! line, except `G` and `M` (one code per modal group).
+//!
+//! | word | meaning |
+//! |---|---|
+//! | `G00` | linear move at the path speed limit; a *planned* straight line like `G01` (not an uncoordinated rapid); ignores `F` |
+//! | `G01` | linear move, at the modal feed `F` if one was given, else at the speed limit |
+//! | `G02` / `G03` | clockwise / counter-clockwise arc (seen from the positive plane normal), centre by `I J K` offsets from the start point, or by `R` (`R < 0`: the long way, more than 180°); a move along the plane normal makes a helix; end = start with `I J K` is a full circle; an arc line without `X Y Z` is a full circle |
+//! | `G04 P…` / `G04 X…` | dwell, in seconds (both `P` and `X` are seconds) |
+//! | `G10 L2 Pn X Y Z` | set the work offset of `G54 … G59` (`n = 1 … 6`) in the current units; always absolute; omitted axes keep their value |
+//! | `G17` `G18` `G19` | arc plane XY (default), ZX, YZ |
+//! | `G20` / `G21` | inch / millimetre (default) |
+//! | `G54 … G59` | select a work offset (default `G54`); base-frame point = program point + offset |
+//! | `G90` / `G91` | absolute (default) / incremental coordinates |
+//! | `G91.1` | arc centres relative to the start point (the default and only mode) |
+//! | `G40` `G49` `G80` `G94` | cancel / default modes: accepted, no effect |
+//! | `G61` `G61.1` `G64` | blending modes: warning, every segment runs rest to rest anyway |
+//! | `F` | feed (mm/min or in/min, in the units active at each move), the peak path speed of `G01 G02 G03` moves |
+//! | `M02` `M30` | end of program; anything after it is ignored (with a warning) |
+//! | other `M`, `S`, `T`, `O` | warning, no effect on the path |
+//!
+//! Modal motion: a line with only coordinates repeats the last `G00 … G03`.
+//!
+//! The first motion defines the start point, where the robot rests: it must be `G00`/`G01` in
+//! absolute mode with all of `X`, `Y`, `Z`, and it produces no move.
+//!
+//! # Arcs
+//!
+//! Offsets use the plane's letters (`G17`: `I J`, `G18`: `K I`, `G19`: `J K`); the offset
+//! along the plane normal must be 0 or absent. The start and end radii must agree within
+//! [`arc_tolerance`] (0.002 mm in `G21`, 0.0002 in in `G20`, LinuxCNC's absolute tolerances;
+//! no relative slack): beyond that the program is wrong and the reader says so, and if the
+//! offsets would fit another plane it names it (the paper's Table I program has `G19` but
+//! XY-plane offsets). Within the tolerance the arc keeps the start radius and ends on its
+//! circle at the programmed end's angle; the next move starts exactly there (a shift of more
+//! than 1 nm is reported as a warning).
+//!
+//! # Errors
+//!
+//! Anything the reader cannot honour is a [`GcodeError`] with the line and column (1-based),
+//! the offending text and a hint. Harmless things are [`GcodeWarning`]s.
+//!
+//! The reader is written by hand: the `gcode` crate (0.6) stores values as `f32`, reports byte
+//! spans and, by design, skips over malformed input, and it has no modal semantics.
+
+mod arcs;
+mod codes;
+mod interpreter;
+mod lexer;
+
+use crate::path::Segment;
+use interpreter::Interpreter;
+use lexer::{lex_line, Lexed};
+use nalgebra::Vector3;
+use std::fmt;
+
+/// The paper's Table I test program (section IV), corrected to `G17` and placed with a work
+/// offset; see the comments in the file `examples/paper-table1.gcode`.
+pub const PAPER_TABLE1: &str = include_str!("../../../../examples/paper-table1.gcode");
+
+/// Largest magnitude accepted for any number in a program.
+pub const MAX_WORD_VALUE: f64 = 1e9;
+
+/// Moves shorter than this (m) are skipped with a warning.
+pub const MIN_MOVE_LENGTH: f64 = 1e-12;
+
+/// Options of [`parse`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ParseOptions {
+    /// Initial `G54` work offset (m, base frame), used when the program does not set the G54
+    /// offset itself with `G10 L2 P1`. `None`: zero.
+    pub origin: Option<[f64; 3]>,
+}
+
+/// A parsed program: where the robot starts and what it does from there.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Program {
+    /// Start point (m, base frame): the target of the first motion; the robot rests there.
+    pub start: Vector3<f64>,
+    /// Source line (1-based) of the first motion.
+    pub start_line: usize,
+    /// Moves after the start point, in program order.
+    pub moves: Vec<Move>,
+    /// Harmless things the reader ignored.
+    pub warnings: Vec<GcodeWarning>,
+}
+
+impl Program {
+    /// Point where the program ends (the start point if it has no path moves).
+    pub fn end(&self) -> Vector3<f64> {
+        self.moves
+            .iter()
+            .rev()
+            .find_map(|m| match &m.kind {
+                MoveKind::Path { segment, .. } => Some(segment.end()),
+                MoveKind::Dwell { .. } => None,
+            })
+            .unwrap_or(self.start)
+    }
+}
+
+/// One move of a program.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Move {
+    /// Source line (1-based) of the block that commanded the move.
+    pub line: usize,
+    /// What the move does.
+    pub kind: MoveKind,
+}
+
+/// The kinds of move.
+#[derive(Debug, Clone, PartialEq)]
+pub enum MoveKind {
+    /// Travel along a path segment (base frame, m).
+    Path {
+        /// The geometry.
+        segment: Segment,
+        /// Peak path speed from the `F` word (m/s); `None` for `G00` and when no `F` was given
+        /// (then the trajectory's speed limit applies).
+        feed: Option<f64>,
+    },
+    /// Hold the position.
+    Dwell {
+        /// Duration (s), > 0.
+        seconds: f64,
+    },
+}
+
+/// A harmless thing the reader ignored.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GcodeWarning {
+    /// Line (1-based).
+    pub line: usize,
+    /// Column (1-based, in characters).
+    pub column: usize,
+    /// What was ignored and why.
+    pub message: String,
+}
+
+impl fmt::Display for GcodeWarning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "line {}, column {}: {}",
+            self.line, self.column, self.message
+        )
+    }
+}
+
+/// Category of a [`GcodeError`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum GcodeErrorKind {
+    /// Malformed text: unexpected character, missing or unparsable number, unclosed comment.
+    Syntax,
+    /// A G or M code that is not part of the language.
+    UnknownCode,
+    /// A known word or feature that this reader does not support.
+    Unsupported,
+    /// A letter given twice on one line, or two codes of one modal group.
+    Duplicate,
+    /// Words that do not go together or are not used by the line's command.
+    Conflict,
+    /// A command lacks a word it needs.
+    Missing,
+    /// A number outside its allowed range.
+    InvalidValue,
+    /// The first motion does not define a start point.
+    StartPoint,
+    /// Inconsistent arc geometry.
+    Arc,
+    /// The program contains no motion.
+    NoMotion,
+    /// Invalid [`ParseOptions`].
+    InvalidOption,
+}
+
+/// An error in a program, with its position and a hint how to fix it.
+///
+/// `line == 0` means the error concerns the whole program or the options.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GcodeError {
+    /// Line (1-based).
+    pub line: usize,
+    /// Column (1-based, in characters).
+    pub column: usize,
+    /// Category.
+    pub kind: GcodeErrorKind,
+    /// The offending text (a word or the line).
+    pub text: String,
+    /// What is wrong.
+    pub message: String,
+    /// What to do.
+    pub hint: String,
+}
+
+impl fmt::Display for GcodeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.line > 0 {
+            write!(f, "line {}, column {}: ", self.line, self.column)?;
+        }
+        write!(f, "{}", self.message)?;
+        if !self.text.is_empty() {
+            write!(f, " in `{}`", self.text)?;
+        }
+        if !self.hint.is_empty() {
+            write!(f, " ({})", self.hint)?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for GcodeError {}
+
+/// Radius tolerance of arcs (m): 0.002 mm for `G21`, 0.0002 in for `G20`.
+pub fn arc_tolerance(inch: bool) -> f64 {
+    if inch {
+        0.0002 * 0.0254
+    } else {
+        0.002e-3
+    }
+}
+
+/// Parse a program text. See the module documentation for the language.
+pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> {
+    let mut it = Interpreter::new(options)?;
+    for (i, raw) in text.lines().enumerate() {
+        let line_no = i + 1;
+        if it.ended {
+            it.note_ignored(line_no, raw);
+            continue;
+        }
+        match lex_line(raw, line_no)? {
+            Lexed::Percent => {
+                if it.seen_content {
+                    it.ended = true;
+                } else {
+                    it.seen_content = true;
+                }
+            }
+            Lexed::Words(words) if words.is_empty() => {}
+            Lexed::Words(words) => {
+                it.seen_content = true;
+                it.line(line_no, raw, &words)?;
+            }
+        }
+    }
+    it.finish()
+}
+
+/// A [`GcodeError`] (shared by the submodules).
+fn err(
+    line: usize,
+    column: usize,
+    kind: GcodeErrorKind,
+    text: &str,
+    message: impl Into<String>,
+    hint: impl Into<String>,
+) -> GcodeError {
+    GcodeError {
+        line,
+        column,
+        kind,
+        text: text.to_string(),
+        message: message.into(),
+        hint: hint.into(),
+    }
+}
