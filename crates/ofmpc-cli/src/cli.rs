@@ -18,6 +18,69 @@ pub enum Command {
     /// Print model quantities as JSON.
     #[command(subcommand)]
     Inspect(Inspect),
+    /// Plan a program: the timed path and its joint reference, as CSV and figures.
+    Trajectory(TrajectoryArgs),
+    /// Run a scenario file (TOML; see examples/scenario.toml).
+    Run(RunArgs),
+    /// Reproduce the paper's experiment (section IV): all three controllers,
+    /// with and without a payload the model does not know.
+    Reproduce(ReproduceArgs),
+}
+
+/// `ofmpc trajectory`
+#[derive(Debug, Args)]
+pub struct TrajectoryArgs {
+    /// G-code program file, or `paper` for the built-in Table I program.
+    pub program: String,
+    /// `irb140` (built in) or the path of a .urdf file.
+    #[arg(long, default_value = "irb140")]
+    pub robot: String,
+    /// Drives file for a URDF robot.
+    #[arg(long)]
+    pub drives: Option<PathBuf>,
+    /// G54 work offset X,Y,Z in mm, for programs that set none.
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Sample period (s).
+    #[arg(long, default_value_t = 0.01)]
+    pub ts: f64,
+    /// Time law of each segment: `septic` (the paper's) or `quintic`.
+    #[arg(long, default_value = "septic")]
+    pub profile: String,
+    /// Path speed limit (m/s) of moves without an F word.
+    #[arg(long, default_value_t = 0.5)]
+    pub speed: f64,
+    /// Path acceleration limit (m/s²).
+    #[arg(long, default_value_t = 2.5)]
+    pub accel: f64,
+    /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figure goes beside it as
+    /// `<stem>_path.png` and `<stem>_path.svg`.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// `ofmpc run`
+#[derive(Debug, Args)]
+pub struct RunArgs {
+    /// Scenario file (TOML).
+    pub scenario: PathBuf,
+    /// Output directory.
+    #[arg(long, default_value = "ofmpc-out")]
+    pub out: PathBuf,
+}
+
+/// `ofmpc reproduce`
+#[derive(Debug, Args)]
+pub struct ReproduceArgs {
+    /// G-code program (default: the paper's Table I, built in).
+    #[arg(long)]
+    pub program: Option<PathBuf>,
+    /// Payloads in kg, comma-separated; e.g. 0,0.25,0.5,1,2,4,6 for a sweep.
+    #[arg(long, default_value = "0,0.25")]
+    pub payload: String,
+    /// Output directory.
+    #[arg(long, default_value = "ofmpc-out")]
+    pub out: PathBuf,
 }
 
 /// `ofmpc inspect ...`

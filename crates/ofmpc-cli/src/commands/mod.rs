@@ -1,9 +1,12 @@
 //! The commands. Each returns `anyhow::Result`; `main` prints the error chain.
 
+mod experiment;
 mod inspect;
 mod robot;
+mod trajectory;
 
 use crate::cli::{Cli, Command, Inspect};
+use crate::scenario::{Scenario, ScenarioFile};
 
 pub use robot::{load_robot, parse_vector};
 
@@ -11,5 +14,18 @@ pub use robot::{load_robot, parse_vector};
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(Inspect::Dynamics(a)) => inspect::dynamics(&a),
+        Command::Trajectory(a) => trajectory::trajectory(&a),
+        Command::Run(a) => {
+            let file = ScenarioFile::from_file(&a.scenario)?;
+            let scenario = Scenario::resolve(&file).map_err(|e| anyhow::anyhow!("{}: {e:#}", a.scenario.display()))?;
+            experiment::execute(&scenario, &a.out)
+        }
+        Command::Reproduce(a) => {
+            let mut file = ScenarioFile::default();
+            file.program.file = a.program.clone();
+            file.payload.masses_kg = parse_vector("--payload", &a.payload, None)?;
+            let scenario = Scenario::resolve(&file)?;
+            experiment::execute(&scenario, &a.out)
+        }
     }
 }

@@ -1,0 +1,53 @@
+//! `ofmpc trajectory`: a program's timed path and joint reference.
+
+use super::parse_vector;
+use crate::cli::TrajectoryArgs;
+use crate::figures;
+use crate::output::atomic::write_atomic;
+use crate::output::plot::render_both;
+use crate::scenario::{load_robot, parse_profile, read_program};
+use crate::tables::reference_csv;
+use anyhow::Context;
+use ofmpc::gcode::{parse, ParseOptions};
+use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use std::path::Path;
+
+/// Parses, times and maps the program; writes the CSV and the figure.
+pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
+    let robot = load_robot(&a.robot, a.drives.as_deref())?;
+    let file = (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
+    let (name, text) = read_program(file)?;
+    let origin = match &a.origin {
+        Some(o) => {
+            let v = parse_vector("--origin", o, Some(3))?;
+            Some([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3])
+        }
+        None => None,
+    };
+    let program = parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    for w in &program.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    let timing = TimingOptions { profile: parse_profile(&a.profile)?, max_speed: a.speed, max_accel: a.accel };
+    let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, a.ts).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    write_atomic(&a.out, reference_csv(&reference, &traj).as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    let stem = a.out.with_extension("");
+    let fig = render_both(&figures::path(&format!("{name}: path and joint reference"), &reference))?;
+    let png = stem.with_file_name(format!("{}_path.png", stem.file_name().map(|s| s.to_string_lossy()).unwrap_or_default()));
+    let svg = png.with_extension("svg");
+    write_atomic(&png, &fig.png).with_context(|| format!("writing {}", png.display()))?;
+    write_atomic(&svg, fig.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
+    println!(
+        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {}, {})",
+        traj.segments().len(),
+        traj.duration(),
+        reference.len(),
+        a.ts,
+        a.out.display(),
+        png.display(),
+        svg.display()
+    );
+    Ok(())
+}

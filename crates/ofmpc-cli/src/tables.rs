@@ -1,0 +1,140 @@
+//! Text outputs: CSV time series and the summary table.
+
+use ofmpc::reference::JointReference;
+use ofmpc::sim::{Record, RunMetrics};
+use ofmpc::trajectory::CartesianTrajectory;
+use std::fmt::Write as _;
+
+/// `timeseries.csv` of a run: `t`, `q1..qn`, `qd1..qdn`, `tau1..taun`,
+/// `qref1..qrefn`, `e1..en` (= qref − q), `x,y,z` (true flange), `xref,yref,zref`,
+/// `ex,ey,ez` (= ref − true). SI units (s, rad, rad/s, N·m, m). Row k holds
+/// the state measured at t_k and the torque applied over [t_k, t_k + Ts).
+/// Numbers are printed at full precision (shortest round-trip form).
+pub fn timeseries_csv(rec: &Record) -> String {
+    let n = rec.n;
+    let mut s = String::with_capacity(rec.len() * (6 * n + 9) * 20 + 256);
+    s.push('t');
+    for prefix in ["q", "qd", "tau", "qref", "e"] {
+        for i in 1..=n {
+            let _ = write!(s, ",{prefix}{i}");
+        }
+    }
+    s.push_str(",x,y,z,xref,yref,zref,ex,ey,ez\n");
+    for k in 0..rec.len() {
+        let _ = write!(s, "{}", rec.t[k]);
+        for v in [&rec.q, &rec.qd, &rec.tau, &rec.q_ref] {
+            for x in &v[k * n..(k + 1) * n] {
+                let _ = write!(s, ",{x}");
+            }
+        }
+        for i in 0..n {
+            let _ = write!(s, ",{}", rec.joint_error(k, i));
+        }
+        let (p, r, e) = (rec.flange[k], rec.flange_ref[k], rec.cartesian_error(k));
+        for x in p.iter().chain(&r).chain(&e) {
+            let _ = write!(s, ",{x}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// The reference CSV of `ofmpc trajectory`: `t,x,y,z,q1..qn,qd1..qdn`
+/// (s; flange position in the base frame, m; rad; rad/s).
+pub fn reference_csv(reference: &JointReference, trajectory: &CartesianTrajectory) -> String {
+    let n = reference.dof();
+    let mut s = String::from("t,x,y,z");
+    for prefix in ["q", "qd"] {
+        for i in 1..=n {
+            let _ = write!(s, ",{prefix}{i}");
+        }
+    }
+    s.push('\n');
+    let _ = trajectory;
+    for k in 0..reference.len() {
+        let p = reference.position(k);
+        let _ = write!(s, "{},{},{},{}", k as f64 * reference.ts(), p[0], p[1], p[2]);
+        for x in reference.q(k).iter().chain(reference.qd(k)) {
+            let _ = write!(s, ",{x}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn fmt_opt(v: f64, prec: usize) -> String {
+    if v.is_finite() {
+        if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+            format!("{v:.2e}")
+        } else {
+            format!("{v:.prec$}")
+        }
+    } else {
+        "—".to_string()
+    }
+}
+
+/// Header of the summary table.
+pub const SUMMARY_HEADER: [&str; 9] = [
+    "run",
+    "controller",
+    "payload (kg)",
+    "Cart. RMS (mm)",
+    "Cart. max (mm)",
+    "steady Cart. (mm)",
+    "steady joint max (rad)",
+    "step median (µs)",
+    "status",
+];
+
+/// One row per run, as strings.
+pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
+    runs.iter()
+        .map(|m| {
+            let steady_joint = m.steady_joint_error_max_rad.iter().copied().fold(f64::NAN, f64::max);
+            vec![
+                m.name.clone(),
+                m.controller.clone(),
+                format!("{}", m.payload_kg),
+                fmt_opt(m.cartesian_error_rms_mm, 4),
+                fmt_opt(m.cartesian_error_max_mm, 4),
+                fmt_opt(m.steady_cartesian_error_mm, 4),
+                fmt_opt(steady_joint, 4),
+                fmt_opt(m.step_time_us.median, 1),
+                match m.diverged_at_s {
+                    Some(t) => format!("DIVERGED at {t:.2} s"),
+                    None => "ok".into(),
+                },
+            ]
+        })
+        .collect()
+}
+
+/// The summary table as aligned text for the terminal.
+pub fn summary_text(runs: &[RunMetrics]) -> String {
+    let rows = summary_rows(runs);
+    let mut widths: Vec<usize> = SUMMARY_HEADER.iter().map(|h| h.chars().count()).collect();
+    for r in &rows {
+        for (w, c) in widths.iter_mut().zip(r) {
+            *w = (*w).max(c.chars().count());
+        }
+    }
+    let mut s = String::new();
+    let line = |cells: Vec<String>, s: &mut String| {
+        for (i, (c, w)) in cells.iter().zip(&widths).enumerate() {
+            let pad = w - c.chars().count();
+            if i < 2 || i == 8 {
+                let _ = write!(s, "{c}{}  ", " ".repeat(pad));
+            } else {
+                let _ = write!(s, "{}{c}  ", " ".repeat(pad));
+            }
+        }
+        s.truncate(s.trim_end().len());
+        s.push('\n');
+    };
+    line(SUMMARY_HEADER.iter().map(|h| h.to_string()).collect(), &mut s);
+    for r in rows {
+        line(r, &mut s);
+    }
+    s
+}
