@@ -543,7 +543,7 @@ pub struct TickFormat {
 
 impl TickFormat {
     /// Chooses one format for all `ticks` (the axis key points): plain notation for magnitudes
-    /// in [1e-3, 1e5), otherwise mantissa·10^E with E of the largest tick; the fewest decimals
+    /// in [0.01, 1e5), otherwise mantissa·10^E with E of the largest tick; the fewest decimals
     /// that print every tick distinctly and within 1 ‰ of the tick step.
     pub fn for_ticks(ticks: &[f64]) -> Self {
         let finite: Vec<f64> = ticks.iter().copied().filter(|v| v.is_finite()).collect();
@@ -562,7 +562,7 @@ impl TickFormat {
             .filter(|d| *d > 0.0)
             .fold(f64::INFINITY, f64::min);
         let step = if step.is_finite() { step } else { mag };
-        let exponent = if (1e-3..1e5).contains(&mag) {
+        let exponent = if (1e-2..1e5).contains(&mag) {
             0
         } else {
             mag.log10().floor() as i32
@@ -858,9 +858,10 @@ where
         any_label |= !s.label.is_empty();
     }
     if any_label {
+        let position = legend_position(chart, prepared);
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
+            .position(position)
             .background_style(WHITE.mix(0.85))
             .border_style(RGBColor(190, 190, 190))
             .label_font((FONT_FAMILY, 12))
@@ -868,6 +869,68 @@ where
             .map_err(err)?;
     }
     Ok(())
+}
+
+/// The legend corner covering the fewest data points (ties: upper right, upper left, lower
+/// right, lower left, upper middle, lower middle). The legend box size is estimated like
+/// plotters lays it out (text block + 30 px sample + 10 px margins, 5 px from the edges).
+fn legend_position<DB, Y>(
+    chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, Y>>,
+    prepared: &[Prepared],
+) -> SeriesLabelPosition
+where
+    DB: DrawingBackend,
+    Y: Ranged<ValueType = f64>,
+{
+    let area = chart.plotting_area();
+    let style = TextStyle::from((FONT_FAMILY, 12).into_font());
+    let labelled: Vec<&Prepared> = prepared
+        .iter()
+        .filter(|p| !p.series.label.is_empty())
+        .collect();
+    let text_w = labelled
+        .iter()
+        .map(|p| {
+            let text = format!("{} (no data)", p.series.label);
+            area.estimate_text_size(&text, &style)
+                .map(|(w, _)| w)
+                .unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0) as i32;
+    let (bw, bh) = (text_w + 50, 16 * labelled.len() as i32 + 20);
+    let (x0, y0) = area.get_base_pixel();
+    let (w, h) = area.dim_in_pixel();
+    let (w, h) = (w as i32, h as i32);
+    let left = (x0 + 5, x0 + 5 + bw);
+    let right = (x0 + w - 5 - bw, x0 + w - 5);
+    let middle = (x0 + (w - bw) / 2, x0 + (w + bw) / 2);
+    let top = (y0 + 5, y0 + 5 + bh);
+    let bottom = (y0 + h - 5 - bh, y0 + h - 5);
+    let candidates = [
+        (SeriesLabelPosition::UpperRight, right, top),
+        (SeriesLabelPosition::UpperLeft, left, top),
+        (SeriesLabelPosition::LowerRight, right, bottom),
+        (SeriesLabelPosition::LowerLeft, left, bottom),
+        (SeriesLabelPosition::UpperMiddle, middle, top),
+        (SeriesLabelPosition::LowerMiddle, middle, bottom),
+    ];
+    let mut counts = [0usize; 6];
+    for pt in prepared.iter().flat_map(|p| p.runs.iter().flatten()) {
+        let (px, py) = chart.backend_coord(pt);
+        for (k, (_, (xa, xb), (ya, yb))) in candidates.iter().enumerate() {
+            if (*xa..=*xb).contains(&px) && (*ya..=*yb).contains(&py) {
+                counts[k] += 1;
+            }
+        }
+    }
+    let best = (0..candidates.len())
+        .min_by_key(|&k| (counts[k], k))
+        .unwrap_or(0);
+    match candidates.get(best) {
+        Some((pos, _, _)) => pos.clone(),
+        None => SeriesLabelPosition::UpperRight,
+    }
 }
 
 /// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs are
@@ -970,6 +1033,11 @@ mod tests {
         let f = TickFormat::for_ticks(&[0.0, 2.0, 4.0]);
         assert_eq!(f.format(4.0), "4");
         assert_eq!(f.format(-1e-17), "0");
+        let f = TickFormat::for_ticks(&[-5e-4, 0.0, 5e-4, 1e-3]);
+        assert_eq!(f.format(-5e-4), "-0.5e-3");
+        assert_eq!(f.format(1e-3), "1.0e-3");
+        let f = TickFormat::for_ticks(&[0.0, 2e5, 4e5]);
+        assert_eq!(f.format(4e5), "4e5");
     }
 
     #[test]
