@@ -3,6 +3,10 @@
 
 mod cli;
 mod commands;
+mod figures;
+mod output;
+mod scenario;
+mod tables;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -1,0 +1,9 @@
+//! Output layer of the `ofmpc` binary: atomic files, figures and the HTML report.
+//!
+//! * [`atomic`]: files and output directories that are never left half-written.
+//! * [`plot`]: figures (grids of panels) rendered to PNG and SVG with an embedded font.
+//! * [`report`]: one self-contained HTML page with tables and figures.
+
+pub mod atomic;
+pub mod plot;
+pub mod report;

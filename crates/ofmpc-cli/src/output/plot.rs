@@ -1,0 +1,1162 @@
+//! Figures: a grid of panels with line or marker series, rendered to PNG and SVG.
+//!
+//! Text is drawn with DejaVu Sans embedded in the binary (`assets/fonts/`), registered with
+//! plotters' `ab_glyph` backend before the first drawing; plotters is built without system font
+//! support, so figures look the same on every machine, including one with no fonts at all.
+//! (The SVG names the family `sans-serif` and is laid out with DejaVu metrics; a viewer draws its
+//! own sans-serif font.)
+//!
+//! Data handling: points with a NaN or infinite coordinate are skipped and break a line into
+//! separate pieces (a diverged run ends its line instead of drawing a spike); on a logarithmic
+//! axis points with y ≤ 0 are skipped too. Long lines with non-decreasing x are reduced to the
+//! first, lowest, highest and last point of each pixel column (M4 reduction), which draws
+//! the same pixels with far fewer points and keeps the SVG small. Markers that land on the same
+//! pixel are drawn once.
+//!
+//! Colours come from a fixed colour-blind-safe palette (Okabe–Ito), indexed by
+//! [`Series::color`]; the named indices [`COLOR_USUAL`], [`COLOR_FIRST`], [`COLOR_SECOND`] and
+//! [`COLOR_REFERENCE`] keep each controller in the same colour in every figure.
+
+use std::collections::HashSet;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::backend::RGBPixel;
+use plotters::chart::SeriesAnno;
+use plotters::coord::ranged1d::Ranged;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters::style::{register_font, FontStyle};
+
+use super::atomic::write_atomic;
+
+/// Font family name under which the embedded font is registered (plotters' default family).
+pub const FONT_FAMILY: &str = "sans-serif";
+
+/// DejaVu Sans 2.37 (license: `assets/fonts/LICENSE`).
+static FONT_BYTES: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Default size of one panel in pixels (width, height).
+pub const DEFAULT_PANEL_SIZE: (u32, u32) = (560, 340);
+
+/// Smallest accepted panel size in pixels; below it axis labels overlap the plot.
+pub const MIN_PANEL_SIZE: (u32, u32) = (200, 150);
+
+/// Largest accepted canvas (width × height pixels): 40 megapixels, 120 MB of RGB buffer.
+pub const MAX_CANVAS_PIXELS: u64 = 40_000_000;
+
+/// Height of the figure title band in pixels (0 when the title is empty).
+const TITLE_HEIGHT: u32 = 44;
+
+/// The palette: Okabe & Ito, "Color Universal Design" (2008), distinguishable with the common
+/// colour-vision deficiencies. Index with [`color`].
+pub const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 0, 0),       // black
+    RGBColor(213, 94, 0),    // vermillion
+    RGBColor(0, 114, 178),   // blue
+    RGBColor(0, 158, 115),   // bluish green
+    RGBColor(230, 159, 0),   // orange
+    RGBColor(86, 180, 233),  // sky blue
+    RGBColor(204, 121, 167), // reddish purple
+    RGBColor(240, 228, 66),  // yellow
+];
+
+/// Palette index of reference signals (black).
+pub const COLOR_REFERENCE: usize = 0;
+/// Palette index of the usual (positional) predictive controller, Eq. (43) (vermillion).
+pub const COLOR_USUAL: usize = 1;
+/// Palette index of the first incremental predictive algorithm (blue).
+pub const COLOR_FIRST: usize = 2;
+/// Palette index of the second incremental predictive algorithm (bluish green).
+pub const COLOR_SECOND: usize = 3;
+
+/// The palette colour for index `i` (wraps around after [`PALETTE`]`.len()`).
+pub fn color(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// How a series is drawn.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SeriesStyle {
+    /// Solid line; NaN/inf points break it. An isolated finite point is drawn as a dot.
+    Line,
+    /// Dashed line (e.g. a reference signal).
+    Dashed,
+    /// One filled circle per point, no line (e.g. the samples of a diverged run).
+    Markers,
+}
+
+/// One data series of a panel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend text; an empty label gives no legend entry.
+    pub label: String,
+    /// Abscissae (same length as `y`).
+    pub x: Vec<f64>,
+    /// Ordinates (same length as `x`).
+    pub y: Vec<f64>,
+    /// Line, dashed line or markers.
+    pub style: SeriesStyle,
+    /// Palette index, see [`color`] and the `COLOR_*` constants.
+    pub color: usize,
+}
+
+impl Series {
+    /// A solid line.
+    pub fn line(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, color: usize) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            style: SeriesStyle::Line,
+            color,
+        }
+    }
+
+    /// A dashed line.
+    pub fn dashed(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, color: usize) -> Self {
+        Self {
+            style: SeriesStyle::Dashed,
+            ..Self::line(label, x, y, color)
+        }
+    }
+
+    /// Markers only.
+    pub fn markers(label: impl Into<String>, x: Vec<f64>, y: Vec<f64>, color: usize) -> Self {
+        Self {
+            style: SeriesStyle::Markers,
+            ..Self::line(label, x, y, color)
+        }
+    }
+}
+
+/// One plot (axes, series, legend) in the figure grid.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Panel {
+    /// Title above the plot (may be empty).
+    pub title: String,
+    /// X axis label with unit, e.g. `"t (s)"`.
+    pub x_label: String,
+    /// Y axis label with unit, e.g. `"e₂ (rad)"`.
+    pub y_label: String,
+    /// Series drawn in order (later ones on top).
+    pub series: Vec<Series>,
+    /// Logarithmic y axis (points with y ≤ 0 are skipped).
+    pub log_y: bool,
+}
+
+impl Panel {
+    /// An empty linear panel.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+            log_y: false,
+        }
+    }
+}
+
+/// A titled grid of panels, filled row by row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Figure {
+    /// Title across the top (may be empty).
+    pub title: String,
+    /// Panels in reading order.
+    pub panels: Vec<Panel>,
+    /// Panels per row (≥ 1; more columns than panels is reduced to the number of panels).
+    pub columns: usize,
+    /// Size of one panel in pixels (width, height); at least [`MIN_PANEL_SIZE`].
+    pub panel_size: (u32, u32),
+}
+
+impl Figure {
+    /// An empty figure with [`DEFAULT_PANEL_SIZE`] panels.
+    pub fn new(title: impl Into<String>, columns: usize) -> Self {
+        Self {
+            title: title.into(),
+            panels: Vec::new(),
+            columns,
+            panel_size: DEFAULT_PANEL_SIZE,
+        }
+    }
+
+    /// Grid shape (rows, columns) actually used.
+    pub fn grid(&self) -> (usize, usize) {
+        let cols = self.columns.clamp(1, self.panels.len().max(1));
+        (self.panels.len().div_ceil(cols), cols)
+    }
+
+    /// Canvas size in pixels (width, height).
+    pub fn canvas_size(&self) -> (u32, u32) {
+        let (rows, cols) = self.grid();
+        let title = if self.title.is_empty() {
+            0
+        } else {
+            TITLE_HEIGHT
+        };
+        let w = (cols as u64 * u64::from(self.panel_size.0)).min(u64::from(u32::MAX)) as u32;
+        let h = (rows as u64 * u64::from(self.panel_size.1) + u64::from(title))
+            .min(u64::from(u32::MAX)) as u32;
+        (w, h)
+    }
+}
+
+/// Why a figure could not be rendered or written.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// The figure has no panels.
+    #[error("figure {figure:?} has no panels; add at least one Panel")]
+    NoPanels {
+        /// Figure title.
+        figure: String,
+    },
+    /// `columns` is 0.
+    #[error("figure {figure:?}: columns is 0; use at least 1 panel per row")]
+    ZeroColumns {
+        /// Figure title.
+        figure: String,
+    },
+    /// Panel or canvas size out of bounds.
+    #[error(
+        "figure {figure:?}: panel size {width}x{height} px gives an unusable canvas; \
+         panels must be at least {}x{} px and the whole figure at most {} megapixels",
+        MIN_PANEL_SIZE.0, MIN_PANEL_SIZE.1, MAX_CANVAS_PIXELS / 1_000_000
+    )]
+    BadSize {
+        /// Figure title.
+        figure: String,
+        /// Requested panel width.
+        width: u32,
+        /// Requested panel height.
+        height: u32,
+    },
+    /// A series has different numbers of x and y values.
+    #[error(
+        "figure {figure:?}, panel {panel:?}, series {series:?}: x has {x_len} values but y has \
+         {y_len}; give exactly one y value per x value"
+    )]
+    LengthMismatch {
+        /// Figure title.
+        figure: String,
+        /// Panel title.
+        panel: String,
+        /// Series label.
+        series: String,
+        /// Length of `x`.
+        x_len: usize,
+        /// Length of `y`.
+        y_len: usize,
+    },
+    /// The embedded font could not be registered (a corrupt build).
+    #[error(
+        "the embedded DejaVu Sans font could not be loaded; the binary is damaged, rebuild it"
+    )]
+    Font,
+    /// plotters reported a drawing error.
+    #[error("drawing figure {figure:?} failed: {message}")]
+    Draw {
+        /// Figure title.
+        figure: String,
+        /// plotters' message.
+        message: String,
+    },
+    /// PNG encoding failed.
+    #[error("encoding figure {figure:?} as PNG failed: {message}")]
+    Png {
+        /// Figure title.
+        figure: String,
+        /// Encoder message.
+        message: String,
+    },
+    /// Writing an output file failed.
+    #[error("writing figure to {}: {source}", path.display())]
+    Io {
+        /// The file that could not be written.
+        path: PathBuf,
+        /// The I/O error.
+        source: io::Error,
+    },
+}
+
+/// A figure rendered in memory in both formats.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// PNG file contents (8-bit RGB).
+    pub png: Vec<u8>,
+    /// SVG document.
+    pub svg: String,
+    /// Canvas size in pixels (width, height).
+    pub size: (u32, u32),
+}
+
+/// Registers the embedded font with plotters exactly once per process.
+pub fn ensure_font() -> Result<(), PlotError> {
+    static REGISTERED: OnceLock<bool> = OnceLock::new();
+    let ok = *REGISTERED
+        .get_or_init(|| register_font(FONT_FAMILY, FontStyle::Normal, FONT_BYTES).is_ok());
+    if ok {
+        Ok(())
+    } else {
+        Err(PlotError::Font)
+    }
+}
+
+/// Checks the figure before any drawing.
+pub fn validate(fig: &Figure) -> Result<(), PlotError> {
+    if fig.panels.is_empty() {
+        return Err(PlotError::NoPanels {
+            figure: fig.title.clone(),
+        });
+    }
+    if fig.columns == 0 {
+        return Err(PlotError::ZeroColumns {
+            figure: fig.title.clone(),
+        });
+    }
+    let (w, h) = fig.canvas_size();
+    if fig.panel_size.0 < MIN_PANEL_SIZE.0
+        || fig.panel_size.1 < MIN_PANEL_SIZE.1
+        || u64::from(w) * u64::from(h) > MAX_CANVAS_PIXELS
+    {
+        return Err(PlotError::BadSize {
+            figure: fig.title.clone(),
+            width: fig.panel_size.0,
+            height: fig.panel_size.1,
+        });
+    }
+    for p in &fig.panels {
+        for s in &p.series {
+            if s.x.len() != s.y.len() {
+                return Err(PlotError::LengthMismatch {
+                    figure: fig.title.clone(),
+                    panel: p.title.clone(),
+                    series: s.label.clone(),
+                    x_len: s.x.len(),
+                    y_len: s.y.len(),
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Renders `fig` to PNG bytes.
+pub fn render_png(fig: &Figure) -> Result<Vec<u8>, PlotError> {
+    validate(fig)?;
+    ensure_font()?;
+    let (w, h) = fig.canvas_size();
+    let mut buf = vec![255u8; w as usize * h as usize * 3];
+    {
+        let backend = BitMapBackend::<RGBPixel>::with_buffer_and_format(&mut buf, (w, h))
+            .map_err(|e| draw_error(fig, e))?;
+        let root = backend.into_drawing_area();
+        draw_figure(&root, fig)?;
+        root.present().map_err(|e| draw_error(fig, e))?;
+    }
+    encode_png(&buf, w, h).map_err(|e| PlotError::Png {
+        figure: fig.title.clone(),
+        message: e.to_string(),
+    })
+}
+
+/// Renders `fig` to an SVG document.
+pub fn render_svg(fig: &Figure) -> Result<String, PlotError> {
+    validate(fig)?;
+    ensure_font()?;
+    let size = fig.canvas_size();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        draw_figure(&root, fig)?;
+        root.present().map_err(|e| draw_error(fig, e))?;
+    }
+    Ok(svg)
+}
+
+/// Renders `fig` in both formats (in memory).
+pub fn render_both(fig: &Figure) -> Result<Rendered, PlotError> {
+    Ok(Rendered {
+        png: render_png(fig)?,
+        svg: render_svg(fig)?,
+        size: fig.canvas_size(),
+    })
+}
+
+/// Renders `fig` and writes `png_path` and `svg_path`, each atomically (see
+/// [`super::atomic::write_atomic`]): nothing is written unless both renderings succeeded, and
+/// no file is ever left half-written.
+pub fn render(fig: &Figure, png_path: &Path, svg_path: &Path) -> Result<Rendered, PlotError> {
+    let r = render_both(fig)?;
+    write_atomic(png_path, &r.png).map_err(|source| PlotError::Io {
+        path: png_path.to_path_buf(),
+        source,
+    })?;
+    write_atomic(svg_path, r.svg.as_bytes()).map_err(|source| PlotError::Io {
+        path: svg_path.to_path_buf(),
+        source,
+    })?;
+    Ok(r)
+}
+
+/// Encodes an 8-bit RGB buffer (row-major, `w·h·3` bytes) as PNG.
+pub fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, png::EncodingError> {
+    let mut out = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut out, w, h);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Best);
+        let mut writer = enc.write_header()?;
+        writer.write_image_data(rgb)?;
+        writer.finish()?;
+    }
+    Ok(out)
+}
+
+fn draw_error(fig: &Figure, e: impl std::fmt::Display) -> PlotError {
+    PlotError::Draw {
+        figure: fig.title.clone(),
+        message: e.to_string(),
+    }
+}
+
+/// Draws title and panel grid.
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    fig: &Figure,
+) -> Result<(), PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    root.fill(&WHITE).map_err(err)?;
+    let body = if fig.title.is_empty() {
+        root.clone()
+    } else {
+        let (top, body) = root.split_vertically(TITLE_HEIGHT);
+        let (w, h) = top.dim_in_pixel();
+        let style = TextStyle::from((FONT_FAMILY, 22).into_font())
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        top.draw(&Text::new(
+            fig.title.as_str(),
+            (w as i32 / 2, h as i32 / 2),
+            style,
+        ))
+        .map_err(err)?;
+        body
+    };
+    let (rows, cols) = fig.grid();
+    let cells = body.split_evenly((rows, cols));
+    for (panel, cell) in fig.panels.iter().zip(cells.iter()) {
+        draw_panel(cell, panel, fig)?;
+    }
+    Ok(())
+}
+
+/// A series reduced to drawable pieces.
+struct Prepared<'a> {
+    series: &'a Series,
+    /// Runs of consecutive valid points (a line is drawn through each run).
+    runs: Vec<Vec<(f64, f64)>>,
+}
+
+/// Whether (x, y) can be drawn on this panel.
+fn valid(x: f64, y: f64, log_y: bool) -> bool {
+    x.is_finite() && y.is_finite() && (!log_y || y > 0.0)
+}
+
+/// Splits a series into runs of valid points.
+fn split_runs(s: &Series, log_y: bool) -> Vec<Vec<(f64, f64)>> {
+    let mut runs = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    for (&x, &y) in s.x.iter().zip(&s.y) {
+        if valid(x, y, log_y) {
+            cur.push((x, y));
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        runs.push(cur);
+    }
+    runs
+}
+
+/// Finite (min, max) of the values, or `None` if there are none.
+fn min_max(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    values.fold(None, |acc, v| match acc {
+        None => Some((v, v)),
+        Some((lo, hi)) => Some((lo.min(v), hi.max(v))),
+    })
+}
+
+/// A non-degenerate linear axis range containing `data`, padded by `pad` of the span on each
+/// side. An empty range gives [0, 1]; a (nearly) constant one is widened to ±10 % of the value
+/// (±1 around 0). Spans below 1e-9 of the magnitude count as constant: plotting them would
+/// only show floating-point noise.
+pub fn linear_range(data: Option<(f64, f64)>, pad: f64) -> (f64, f64) {
+    let Some((lo, hi)) = data else {
+        return (0.0, 1.0);
+    };
+    let mag = lo.abs().max(hi.abs());
+    let span = hi - lo;
+    if span <= 1e-9 * mag || span == 0.0 {
+        let mid = 0.5 * (lo + hi);
+        let half = if mid == 0.0 { 1.0 } else { 0.1 * mid.abs() };
+        return (mid - half, mid + half);
+    }
+    if !span.is_finite() {
+        // lo and hi are finite but their difference overflows: no room for padding.
+        return (lo, hi);
+    }
+    (lo - pad * span, hi + pad * span)
+}
+
+/// A non-degenerate logarithmic range containing positive `data`, padded by 5 % of its width
+/// in decades on each side; a constant value v gives [v/2, 2v], no data [1, 10].
+pub fn log_range(data: Option<(f64, f64)>) -> (f64, f64) {
+    let Some((lo, hi)) = data else {
+        return (1.0, 10.0);
+    };
+    if hi <= lo * (1.0 + 1e-9) {
+        return (lo / 2.0, hi * 2.0);
+    }
+    let f = (hi / lo).powf(0.05);
+    (lo / f, hi * f)
+}
+
+/// Shared precision for the tick labels of one linear axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TickFormat {
+    /// Common power of ten (0 = plain decimal notation).
+    pub exponent: i32,
+    /// Digits after the decimal point of the mantissa.
+    pub decimals: usize,
+}
+
+impl TickFormat {
+    /// Chooses one format for all `ticks` (the axis key points): plain notation for magnitudes
+    /// in [0.01, 1e5), otherwise mantissa·10^E with E of the largest tick; the fewest decimals
+    /// that print every tick distinctly and within 1 ‰ of the tick step.
+    pub fn for_ticks(ticks: &[f64]) -> Self {
+        let finite: Vec<f64> = ticks.iter().copied().filter(|v| v.is_finite()).collect();
+        let mag = finite.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if mag == 0.0 {
+            return Self {
+                exponent: 0,
+                decimals: 0,
+            };
+        }
+        let mut sorted = finite.clone();
+        sorted.sort_by(f64::total_cmp);
+        let step = sorted
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let step = if step.is_finite() { step } else { mag };
+        let exponent = if (1e-2..1e5).contains(&mag) {
+            0
+        } else {
+            mag.log10().floor() as i32
+        };
+        let scale = 10f64.powi(exponent);
+        let base = (-((step / scale).log10() + 1e-9).floor()).max(0.0) as usize;
+        for decimals in base..base + 4 {
+            let f = Self { exponent, decimals };
+            let texts: Vec<String> = sorted.iter().map(|&v| f.format(v)).collect();
+            let distinct = texts.windows(2).all(|w| w[0] != w[1]);
+            let accurate = sorted.iter().all(|&v| {
+                let m: f64 = format!("{:.*}", decimals, v / scale)
+                    .parse()
+                    .unwrap_or(f64::NAN);
+                (m * scale - v).abs() <= 1e-3 * step
+            });
+            if distinct && accurate {
+                return f;
+            }
+        }
+        Self {
+            exponent,
+            decimals: base + 4,
+        }
+    }
+
+    /// Formats one value (zero is always `"0"`, never `"-0.00"`).
+    pub fn format(&self, v: f64) -> String {
+        let scale = 10f64.powi(self.exponent);
+        let m = format!("{:.*}", self.decimals, v / scale);
+        if m.parse::<f64>().map(|p| p == 0.0).unwrap_or(false) {
+            return "0".to_string();
+        }
+        if self.exponent == 0 {
+            m
+        } else {
+            format!("{m}e{}", self.exponent)
+        }
+    }
+}
+
+/// A compact label for one value with ≤ 3 significant digits (used on logarithmic axes):
+/// `"0.02"`, `"150"`, `"1e-6"`, `"2.5e7"`.
+pub fn format_general(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return if v == 0.0 {
+            "0".to_string()
+        } else {
+            v.to_string()
+        };
+    }
+    let e = v.abs().log10().floor() as i32;
+    let trim = |s: String| -> String {
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    };
+    if (-3..5).contains(&e) {
+        let decimals = (2 - e).max(0) as usize;
+        trim(format!("{:.*}", decimals, v))
+    } else {
+        let mut m = v / 10f64.powi(e);
+        let mut e = e;
+        // Rounding 9.996 to two decimals gives 10.00: renormalize.
+        if (m.abs() * 100.0).round() >= 1000.0 {
+            m /= 10.0;
+            e += 1;
+        }
+        format!("{}e{}", trim(format!("{:.2}", m)), e)
+    }
+}
+
+/// Indices kept by M4 reduction: within each run of consecutive points with the same pixel
+/// column, the first, the lowest, the highest and the last point, in their original order.
+/// `columns` must be non-decreasing; `columns.len() == ys.len()`.
+pub fn m4_indices(columns: &[i32], ys: &[f64]) -> Vec<usize> {
+    let n = columns.len().min(ys.len());
+    let mut keep = Vec::new();
+    let mut start = 0;
+    while start < n {
+        let mut end = start;
+        let (mut imin, mut imax) = (start, start);
+        while end < n && columns[end] == columns[start] {
+            if ys[end] < ys[imin] {
+                imin = end;
+            }
+            if ys[end] > ys[imax] {
+                imax = end;
+            }
+            end += 1;
+        }
+        let mut group = [start, imin, imax, end - 1];
+        group.sort_unstable();
+        for (k, &i) in group.iter().enumerate() {
+            if k == 0 || group[k - 1] != i {
+                keep.push(i);
+            }
+        }
+        start = end;
+    }
+    keep
+}
+
+/// Pixel width estimate of the widest tick label, for the y label area.
+fn label_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, labels: &[String]) -> u32 {
+    let font = TextStyle::from((FONT_FAMILY, 12).into_font());
+    labels
+        .iter()
+        .map(|l| {
+            area.estimate_text_size(l, &font)
+                .map(|(w, _)| w)
+                .unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0)
+}
+
+/// Draws one panel.
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+    fig: &Figure,
+) -> Result<(), PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    let prepared: Vec<Prepared> = panel
+        .series
+        .iter()
+        .map(|s| Prepared {
+            series: s,
+            runs: split_runs(s, panel.log_y),
+        })
+        .collect();
+    let points = || prepared.iter().flat_map(|p| p.runs.iter().flatten());
+    let x_range = linear_range(min_max(points().map(|p| p.0)), 0.0);
+    let y_data = min_max(points().map(|p| p.1));
+
+    let mut builder = ChartBuilder::on(area);
+    builder.margin(10).margin_right(18).x_label_area_size(44);
+    if !panel.title.is_empty() {
+        builder.caption(panel.title.as_str(), (FONT_FAMILY, 16));
+    }
+    const N_LABELS: usize = 6;
+    let x_fmt =
+        TickFormat::for_ticks(&RangedCoordf64::from(x_range.0..x_range.1).key_points(N_LABELS));
+    let x_formatter = |v: &f64| x_fmt.format(*v);
+
+    if panel.log_y {
+        let y_range = log_range(y_data);
+        let y_coord = (y_range.0..y_range.1).log_scale();
+        // Labels are decades and their 2x/5x multiples between the ends; the ends bound the width.
+        let labels = [format_general(y_range.0), format_general(y_range.1)];
+        builder.y_label_area_size(label_width(area, &labels) + 40);
+        let mut chart = builder
+            .build_cartesian_2d(x_range.0..x_range.1, y_coord)
+            .map_err(err)?;
+        let y_formatter = |v: &f64| format_general(*v);
+        chart
+            .configure_mesh()
+            .x_desc(panel.x_label.as_str())
+            .y_desc(panel.y_label.as_str())
+            .x_labels(N_LABELS)
+            .y_labels(N_LABELS)
+            .x_label_formatter(&x_formatter)
+            .y_label_formatter(&y_formatter)
+            .label_style((FONT_FAMILY, 12))
+            .axis_desc_style((FONT_FAMILY, 13))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .light_line_style(RGBColor(242, 242, 242))
+            .draw()
+            .map_err(err)?;
+        draw_series(&mut chart, &prepared, fig)
+    } else {
+        let y_range = linear_range(y_data, 0.05);
+        let y_keys = RangedCoordf64::from(y_range.0..y_range.1).key_points(N_LABELS);
+        let y_fmt = TickFormat::for_ticks(&y_keys);
+        let labels: Vec<String> = y_keys.iter().map(|v| y_fmt.format(*v)).collect();
+        builder.y_label_area_size(label_width(area, &labels) + 40);
+        let mut chart = builder
+            .build_cartesian_2d(x_range.0..x_range.1, y_range.0..y_range.1)
+            .map_err(err)?;
+        let y_formatter = |v: &f64| y_fmt.format(*v);
+        chart
+            .configure_mesh()
+            .x_desc(panel.x_label.as_str())
+            .y_desc(panel.y_label.as_str())
+            .x_labels(N_LABELS)
+            .y_labels(N_LABELS)
+            .x_label_formatter(&x_formatter)
+            .y_label_formatter(&y_formatter)
+            .label_style((FONT_FAMILY, 12))
+            .axis_desc_style((FONT_FAMILY, 13))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .light_line_style(RGBColor(242, 242, 242))
+            .draw()
+            .map_err(err)?;
+        draw_series(&mut chart, &prepared, fig)
+    }
+}
+
+/// Draws the prepared series and the legend into a chart with an f64 x axis.
+fn draw_series<'a, DB, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    prepared: &[Prepared],
+    fig: &Figure,
+) -> Result<(), PlotError>
+where
+    DB: DrawingBackend + 'a,
+    Y: Ranged<ValueType = f64>,
+{
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    let mut any_label = false;
+    for p in prepared {
+        let s = p.series;
+        let c = color(s.color);
+        let line = c.stroke_width(2);
+        let fill = c.filled();
+        let has_data = p.runs.iter().any(|r| !r.is_empty());
+        let label = if has_data {
+            s.label.clone()
+        } else {
+            format!("{} (no data)", s.label)
+        };
+        // Every element is drawn through `draw_series`; the annotation of the first call carries
+        // the legend entry.
+        let mut labelled = false;
+        let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
+            if !labelled && !s.label.is_empty() {
+                anno.label(label.clone());
+                match s.style {
+                    SeriesStyle::Markers => {
+                        anno.legend(move |(x, y)| Circle::new((x + 10, y), 3, fill));
+                    }
+                    SeriesStyle::Line => {
+                        anno.legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], line)
+                        });
+                    }
+                    SeriesStyle::Dashed => {
+                        anno.legend(move |(x, y)| {
+                            EmptyElement::at((x, y))
+                                + PathElement::new(vec![(0, 0), (8, 0)], line)
+                                + PathElement::new(vec![(12, 0), (20, 0)], line)
+                        });
+                    }
+                }
+                labelled = true;
+            }
+        };
+        match s.style {
+            SeriesStyle::Markers => {
+                let mut seen = HashSet::new();
+                let pts: Vec<(f64, f64)> = p
+                    .runs
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|pt| seen.insert(chart.backend_coord(pt)))
+                    .collect();
+                let anno = chart
+                    .draw_series(pts.into_iter().map(|pt| Circle::new(pt, 3, fill)))
+                    .map_err(err)?;
+                annotate(anno);
+            }
+            SeriesStyle::Line | SeriesStyle::Dashed => {
+                if p.runs.is_empty() {
+                    let anno = chart
+                        .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                        .map_err(err)?;
+                    annotate(anno);
+                }
+                for run in &p.runs {
+                    if run.len() == 1 {
+                        let anno = chart
+                            .draw_series(run.iter().map(|&pt| Circle::new(pt, 2, fill)))
+                            .map_err(err)?;
+                        annotate(anno);
+                        continue;
+                    }
+                    let run = reduce_run(chart, run);
+                    let anno = if s.style == SeriesStyle::Line {
+                        chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                    } else {
+                        chart
+                            .draw_series(DashedLineSeries::new(run, 8, 5, line))
+                            .map_err(err)?
+                    };
+                    annotate(anno);
+                }
+            }
+        }
+        any_label |= !s.label.is_empty();
+    }
+    if any_label {
+        let position = legend_position(chart, prepared);
+        chart
+            .configure_series_labels()
+            .position(position)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(190, 190, 190))
+            .label_font((FONT_FAMILY, 12))
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// The legend corner covering the fewest data points (ties: upper right, upper left, lower
+/// right, lower left, upper middle, lower middle). The legend box size is estimated like
+/// plotters lays it out (text block + 30 px sample + 10 px margins, 5 px from the edges).
+fn legend_position<DB, Y>(
+    chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, Y>>,
+    prepared: &[Prepared],
+) -> SeriesLabelPosition
+where
+    DB: DrawingBackend,
+    Y: Ranged<ValueType = f64>,
+{
+    let area = chart.plotting_area();
+    let style = TextStyle::from((FONT_FAMILY, 12).into_font());
+    let labelled: Vec<&Prepared> = prepared
+        .iter()
+        .filter(|p| !p.series.label.is_empty())
+        .collect();
+    let text_w = labelled
+        .iter()
+        .map(|p| {
+            let text = format!("{} (no data)", p.series.label);
+            area.estimate_text_size(&text, &style)
+                .map(|(w, _)| w)
+                .unwrap_or(0)
+        })
+        .max()
+        .unwrap_or(0) as i32;
+    let (bw, bh) = (text_w + 50, 16 * labelled.len() as i32 + 20);
+    let (x0, y0) = area.get_base_pixel();
+    let (w, h) = area.dim_in_pixel();
+    let (w, h) = (w as i32, h as i32);
+    let left = (x0 + 5, x0 + 5 + bw);
+    let right = (x0 + w - 5 - bw, x0 + w - 5);
+    let middle = (x0 + (w - bw) / 2, x0 + (w + bw) / 2);
+    let top = (y0 + 5, y0 + 5 + bh);
+    let bottom = (y0 + h - 5 - bh, y0 + h - 5);
+    let candidates = [
+        (SeriesLabelPosition::UpperRight, right, top),
+        (SeriesLabelPosition::UpperLeft, left, top),
+        (SeriesLabelPosition::LowerRight, right, bottom),
+        (SeriesLabelPosition::LowerLeft, left, bottom),
+        (SeriesLabelPosition::UpperMiddle, middle, top),
+        (SeriesLabelPosition::LowerMiddle, middle, bottom),
+    ];
+    let mut counts = [0usize; 6];
+    for pt in prepared.iter().flat_map(|p| p.runs.iter().flatten()) {
+        let (px, py) = chart.backend_coord(pt);
+        for (k, (_, (xa, xb), (ya, yb))) in candidates.iter().enumerate() {
+            if (*xa..=*xb).contains(&px) && (*ya..=*yb).contains(&py) {
+                counts[k] += 1;
+            }
+        }
+    }
+    let best = (0..candidates.len())
+        .min_by_key(|&k| (counts[k], k))
+        .unwrap_or(0);
+    match candidates.get(best) {
+        Some((pos, _, _)) => pos.clone(),
+        None => SeriesLabelPosition::UpperRight,
+    }
+}
+
+/// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs are
+/// returned unchanged.
+fn reduce_run<DB, Y>(
+    chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, Y>>,
+    run: &[(f64, f64)],
+) -> Vec<(f64, f64)>
+where
+    DB: DrawingBackend,
+    Y: Ranged<ValueType = f64>,
+{
+    let monotone = run.windows(2).all(|w| w[0].0 <= w[1].0);
+    let (w, _) = chart.plotting_area().dim_in_pixel();
+    if !monotone || run.len() <= 4 * w as usize {
+        return run.to_vec();
+    }
+    let cols: Vec<i32> = run.iter().map(|pt| chart.backend_coord(pt).0).collect();
+    let ys: Vec<f64> = run.iter().map(|pt| pt.1).collect();
+    m4_indices(&cols, &ys).into_iter().map(|i| run[i]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp(n: usize) -> Vec<f64> {
+        (0..n).map(|i| i as f64 / (n - 1) as f64).collect()
+    }
+
+    #[test]
+    fn linear_range_is_never_degenerate() {
+        assert_eq!(linear_range(None, 0.05), (0.0, 1.0));
+        assert_eq!(linear_range(Some((0.0, 0.0)), 0.05), (-1.0, 1.0));
+        let (lo, hi) = linear_range(Some((2.0, 2.0)), 0.05);
+        assert!((lo - 1.8).abs() < 1e-12 && (hi - 2.2).abs() < 1e-12);
+        let (lo, hi) = linear_range(Some((-3.0, -3.0)), 0.05);
+        assert!(lo < -3.0 && hi > -3.0);
+        // Floating-point noise on a constant counts as constant.
+        let (lo, hi) = linear_range(Some((1.0, 1.0 + 1e-15)), 0.05);
+        assert!(hi - lo > 0.1);
+        let (lo, hi) = linear_range(Some((1e-300, 1e-300)), 0.0);
+        assert!(lo < hi && lo.is_finite() && hi.is_finite());
+        // Normal data: padded by the given fraction.
+        let (lo, hi) = linear_range(Some((0.0, 10.0)), 0.05);
+        assert!((lo + 0.5).abs() < 1e-12 && (hi - 10.5).abs() < 1e-12);
+        let (lo, hi) = linear_range(Some((-f64::MAX, f64::MAX)), 0.05);
+        assert!(lo.is_finite() && hi.is_finite() && lo < hi);
+    }
+
+    #[test]
+    fn log_range_is_never_degenerate() {
+        assert_eq!(log_range(None), (1.0, 10.0));
+        assert_eq!(log_range(Some((1e-6, 1e-6))), (5e-7, 2e-6));
+        let (lo, hi) = log_range(Some((1e-6, 1e-2)));
+        assert!(lo < 1e-6 && hi > 1e-2 && lo > 0.0);
+    }
+
+    #[test]
+    fn tick_format_prints_plotters_key_points_distinctly_and_accurately() {
+        // For many ranges, the labels of plotters' own key points must be distinct, short and
+        // parse back to the tick value within 1 ‰ of the step.
+        let ranges = [
+            (0.0, 1.0),
+            (0.0, 10.0),
+            (-1.2e-4, 3.3e-4),
+            (1.5, 1.50001),
+            (0.0, 12_000.0),
+            (-2.0e6, 5.0e6),
+            (3.0e-7, 9.0e-7),
+            (-0.05, 0.05),
+            (99.9, 100.4),
+        ];
+        for (lo, hi) in ranges {
+            let keys = RangedCoordf64::from(lo..hi).key_points(6);
+            assert!(keys.len() >= 2, "{lo}..{hi}: {keys:?}");
+            let f = TickFormat::for_ticks(&keys);
+            let texts: Vec<String> = keys.iter().map(|&v| f.format(v)).collect();
+            for w in texts.windows(2) {
+                assert_ne!(w[0], w[1], "{lo}..{hi}: {texts:?}");
+            }
+            let step = keys[1] - keys[0];
+            for (t, &v) in texts.iter().zip(&keys) {
+                let parsed: f64 = t.parse().unwrap();
+                assert!((parsed - v).abs() <= 1e-3 * step, "{t} vs {v}");
+                assert!(t.len() <= 9, "label too long: {t} ({lo}..{hi})");
+                assert!(!t.starts_with("-0") || t.starts_with("-0."), "{t}");
+            }
+        }
+    }
+
+    #[test]
+    fn tick_format_examples() {
+        let f = TickFormat::for_ticks(&[0.0, 0.5, 1.0, 1.5]);
+        assert_eq!(f.format(1.0), "1.0");
+        assert_eq!(f.format(0.0), "0");
+        let f = TickFormat::for_ticks(&[-2e-4, 0.0, 2e-4, 4e-4]);
+        assert_eq!(f.format(-2e-4), "-2e-4");
+        assert_eq!(f.format(4e-4), "4e-4");
+        let f = TickFormat::for_ticks(&[0.0, 2.0, 4.0]);
+        assert_eq!(f.format(4.0), "4");
+        assert_eq!(f.format(-1e-17), "0");
+        let f = TickFormat::for_ticks(&[-5e-4, 0.0, 5e-4, 1e-3]);
+        assert_eq!(f.format(-5e-4), "-0.5e-3");
+        assert_eq!(f.format(1e-3), "1.0e-3");
+        let f = TickFormat::for_ticks(&[0.0, 2e5, 4e5]);
+        assert_eq!(f.format(4e5), "4e5");
+    }
+
+    #[test]
+    fn format_general_examples() {
+        assert_eq!(format_general(1e-6), "1e-6");
+        assert_eq!(format_general(2.5e7), "2.5e7");
+        assert_eq!(format_general(0.02), "0.02");
+        assert_eq!(format_general(150.0), "150");
+        assert_eq!(format_general(1.0), "1");
+        assert_eq!(format_general(9.999e-5), "1e-4");
+        assert_eq!(format_general(0.0), "0");
+    }
+
+    #[test]
+    fn m4_keeps_extremes_and_ends_of_every_column() {
+        // Pseudo-random data (LCG) over 37 columns of varying width.
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let n = 2000;
+        let cols: Vec<i32> = (0..n).map(|i| (i * 37 / n) as i32).collect();
+        let ys: Vec<f64> = (0..n).map(|_| rnd() * 2.0 - 1.0).collect();
+        let keep = m4_indices(&cols, &ys);
+        assert!(keep.windows(2).all(|w| w[0] < w[1]), "sorted, unique");
+        assert!(keep.len() <= 4 * 37);
+        for c in 0..37 {
+            let all: Vec<usize> = (0..n).filter(|&i| cols[i] == c).collect();
+            let kept: Vec<usize> = keep.iter().copied().filter(|&i| cols[i] == c).collect();
+            assert_eq!(kept.first(), all.first());
+            assert_eq!(kept.last(), all.last());
+            let mm = |v: &[usize]| min_max(v.iter().map(|&i| ys[i])).unwrap();
+            assert_eq!(mm(&kept), mm(&all));
+        }
+        // Fewer points than columns: nothing dropped.
+        assert_eq!(m4_indices(&[0, 1, 2], &[3.0, 1.0, 2.0]), vec![0, 1, 2]);
+        assert!(m4_indices(&[], &[]).is_empty());
+    }
+
+    #[test]
+    fn runs_split_at_invalid_points() {
+        let s = Series::line(
+            "a",
+            vec![0.0, 1.0, 2.0, 3.0, 4.0, 5.0, f64::NAN],
+            vec![1.0, f64::NAN, 2.0, -3.0, f64::INFINITY, 4.0, 1.0],
+            COLOR_FIRST,
+        );
+        assert_eq!(
+            split_runs(&s, false),
+            vec![
+                vec![(0.0, 1.0)],
+                vec![(2.0, 2.0), (3.0, -3.0)],
+                vec![(5.0, 4.0)]
+            ]
+        );
+        assert_eq!(
+            split_runs(&s, true),
+            vec![vec![(0.0, 1.0)], vec![(2.0, 2.0)], vec![(5.0, 4.0)]]
+        );
+    }
+
+    #[test]
+    fn validation_errors_name_the_problem() {
+        let mut fig = Figure::new("Fig. 6", 2);
+        assert!(matches!(validate(&fig), Err(PlotError::NoPanels { .. })));
+        let mut p = Panel::new("q1", "t (s)", "e (rad)");
+        p.series
+            .push(Series::line("first", ramp(5), ramp(4), COLOR_FIRST));
+        fig.panels.push(p);
+        let e = validate(&fig).unwrap_err();
+        assert!(matches!(
+            e,
+            PlotError::LengthMismatch {
+                x_len: 5,
+                y_len: 4,
+                ..
+            }
+        ));
+        let msg = e.to_string();
+        assert!(
+            msg.contains("q1") && msg.contains("first") && msg.contains("Fig. 6"),
+            "{msg}"
+        );
+        fig.panels[0].series[0].y = ramp(5);
+        assert!(validate(&fig).is_ok());
+        fig.columns = 0;
+        assert!(matches!(validate(&fig), Err(PlotError::ZeroColumns { .. })));
+        fig.columns = 1;
+        fig.panel_size = (50, 50);
+        assert!(matches!(validate(&fig), Err(PlotError::BadSize { .. })));
+        fig.panel_size = (100_000, 100_000);
+        assert!(matches!(validate(&fig), Err(PlotError::BadSize { .. })));
+    }
+
+    #[test]
+    fn grid_shape() {
+        let mut fig = Figure::new("", 3);
+        fig.panels = vec![Panel::new("", "", ""); 6];
+        assert_eq!(fig.grid(), (2, 3));
+        assert_eq!(fig.canvas_size(), (3 * 560, 2 * 340));
+        fig.columns = 4;
+        assert_eq!(fig.grid(), (2, 4));
+        fig.columns = 10;
+        assert_eq!(fig.grid(), (1, 6));
+        fig.title = "T".into();
+        assert_eq!(fig.canvas_size().1, 340 + TITLE_HEIGHT);
+    }
+
+    #[test]
+    fn palette_roles_are_distinct() {
+        let roles = [COLOR_REFERENCE, COLOR_USUAL, COLOR_FIRST, COLOR_SECOND];
+        for (i, a) in roles.iter().enumerate() {
+            for b in &roles[i + 1..] {
+                assert_ne!(color(*a), color(*b));
+            }
+        }
+        assert_eq!(color(PALETTE.len() + 2), color(2));
+    }
+}

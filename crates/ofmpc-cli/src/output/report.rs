@@ -1,0 +1,574 @@
+//! A single self-contained HTML report: headings, paragraphs, tables and figures.
+//!
+//! The page loads nothing from outside: SVG figures are inlined, PNG figures are `data:` URIs,
+//! styles and the script are inline, and a Content-Security-Policy forbids any other source,
+//! so the file can be mailed or archived and still shows everything. All text is HTML-escaped.
+//!
+//! A small inline script runs on `load` and checks that each figure was really drawn (an `<img>`
+//! is complete with a non-zero natural width, an inline `<svg>` has a non-empty bounding box).
+//! It writes the result into `<p id="figure-check" data-ok="…" data-total="…">`, so a person sees
+//! it and a headless browser (`chromium --headless --dump-dom`) can assert it.
+
+use std::fmt::Write as _;
+use std::hash::{Hash, Hasher};
+use std::io;
+use std::path::{Path, PathBuf};
+
+use super::atomic::write_atomic;
+
+/// One table: caption, header row and body rows (each row as long as the header).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Table {
+    /// Caption shown above the table.
+    pub caption: String,
+    /// Column titles (with units, e.g. `"RMS e₂ (mrad)"`).
+    pub header: Vec<String>,
+    /// Body rows; cells that parse as numbers are right-aligned.
+    pub rows: Vec<Vec<String>>,
+}
+
+/// The picture of a report figure.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Image {
+    /// An SVG document (e.g. from [`super::plot::render_svg`]), inlined into the page.
+    Svg(String),
+    /// PNG file bytes (e.g. from [`super::plot::render_png`]), embedded as a base64 data URI.
+    Png(Vec<u8>),
+}
+
+/// A figure: picture and caption.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReportFigure {
+    /// Caption below the picture (also the PNG's alt text).
+    pub caption: String,
+    /// The picture.
+    pub image: Image,
+}
+
+/// One piece of the report, rendered in order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Block {
+    /// A section heading (`<h2>`).
+    Heading(String),
+    /// A paragraph of plain text.
+    Paragraph(String),
+    /// Preformatted text, e.g. the scenario file or the command line (`<pre>`).
+    Code(String),
+    /// A table.
+    Table(Table),
+    /// A figure.
+    Figure(ReportFigure),
+}
+
+/// A report page: title and blocks in reading order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Report {
+    /// Page title (`<title>` and `<h1>`).
+    pub title: String,
+    /// Content in order.
+    pub blocks: Vec<Block>,
+}
+
+/// Why a report could not be built or written.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    /// A table row has a different number of cells than the header.
+    #[error(
+        "table {caption:?}: row {row} has {len} cells but the header has {expected}; \
+         give every row one cell per column"
+    )]
+    RaggedTable {
+        /// Table caption.
+        caption: String,
+        /// Row index (0-based).
+        row: usize,
+        /// Cells in that row.
+        len: usize,
+        /// Cells in the header.
+        expected: usize,
+    },
+    /// An SVG figure is not a plain `<svg>…</svg>` document (or contains a script).
+    #[error("figure {caption:?}: the SVG must be one <svg>…</svg> element without scripts")]
+    BadSvg {
+        /// Figure caption.
+        caption: String,
+    },
+    /// A PNG figure does not start with the PNG signature.
+    #[error("figure {caption:?}: the image bytes are not a PNG file")]
+    BadPng {
+        /// Figure caption.
+        caption: String,
+    },
+    /// Writing the HTML file failed.
+    #[error("writing report to {}: {source}", path.display())]
+    Io {
+        /// The file that could not be written.
+        path: PathBuf,
+        /// The I/O error.
+        source: io::Error,
+    },
+}
+
+impl Report {
+    /// An empty report.
+    pub fn new(title: impl Into<String>) -> Self {
+        Self {
+            title: title.into(),
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Appends a heading.
+    pub fn heading(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Heading(text.into()));
+        self
+    }
+
+    /// Appends a paragraph.
+    pub fn paragraph(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Paragraph(text.into()));
+        self
+    }
+
+    /// Appends preformatted text.
+    pub fn code(&mut self, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Code(text.into()));
+        self
+    }
+
+    /// Appends a table.
+    pub fn table(&mut self, table: Table) -> &mut Self {
+        self.blocks.push(Block::Table(table));
+        self
+    }
+
+    /// Appends a figure.
+    pub fn figure(&mut self, caption: impl Into<String>, image: Image) -> &mut Self {
+        self.blocks.push(Block::Figure(ReportFigure {
+            caption: caption.into(),
+            image,
+        }));
+        self
+    }
+
+    /// Number of figures (the `data-total` of the figure check).
+    pub fn figure_count(&self) -> usize {
+        self.blocks
+            .iter()
+            .filter(|b| matches!(b, Block::Figure(_)))
+            .count()
+    }
+
+    /// Renders the page.
+    ///
+    /// The Content-Security-Policy allows only `data:` images, inline styles and the one
+    /// checker script (by nonce), so inline event handlers inside figures cannot run either.
+    /// The nonce is a hash of the page body: the output is deterministic.
+    pub fn to_html(&self) -> Result<String, ReportError> {
+        let total = self.figure_count();
+        let title = escape(&self.title);
+        let mut body = String::with_capacity(64 * 1024);
+        let _ = writeln!(body, "<h1>{title}</h1>");
+        let _ = writeln!(
+            body,
+            "<p id=\"figure-check\" class=\"pending\" data-ok=\"0\" data-total=\"{total}\">\
+             Figure check has not run (JavaScript is disabled?).</p>"
+        );
+        let mut fig_no = 0;
+        for block in &self.blocks {
+            match block {
+                Block::Heading(t) => {
+                    let _ = writeln!(body, "<h2>{}</h2>", escape(t));
+                }
+                Block::Paragraph(t) => {
+                    let _ = writeln!(body, "<p>{}</p>", escape(t));
+                }
+                Block::Code(t) => {
+                    let _ = writeln!(body, "<pre>{}</pre>", escape(t));
+                }
+                Block::Table(t) => table_html(&mut body, t)?,
+                Block::Figure(f) => {
+                    fig_no += 1;
+                    figure_html(&mut body, f, fig_no)?;
+                }
+            }
+        }
+        let nonce = {
+            let mut hasher = std::collections::hash_map::DefaultHasher::new();
+            body.hash(&mut hasher);
+            format!("{:016x}", hasher.finish())
+        };
+        let mut h = String::with_capacity(body.len() + 8 * 1024);
+        h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+        let _ = writeln!(
+            h,
+            "<meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; \
+             img-src data:; style-src 'unsafe-inline'; script-src 'nonce-{nonce}'\">"
+        );
+        h.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+        h.push_str("<meta name=\"generator\" content=\"ofmpc\">\n");
+        let _ = writeln!(h, "<title>{title}</title>");
+        let _ = writeln!(h, "<style>{CSS}</style>\n</head>\n<body>\n<main>");
+        h.push_str(&body);
+        let _ = writeln!(
+            h,
+            "</main>\n<script nonce=\"{nonce}\">{SCRIPT}</script>\n</body>\n</html>"
+        );
+        Ok(h)
+    }
+
+    /// Renders the page and writes it to `path` atomically.
+    pub fn write(&self, path: &Path) -> Result<(), ReportError> {
+        let html = self.to_html()?;
+        write_atomic(path, html.as_bytes()).map_err(|source| ReportError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
+    }
+}
+
+/// Escapes text for HTML element content and attribute values.
+pub fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// Standard base64 (RFC 4648 §4, with `=` padding).
+pub fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(char::from(ALPHABET[((n >> (18 - 6 * k)) & 63) as usize]));
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// Whether a cell reads as a number (right-aligned).
+fn is_numeric(cell: &str) -> bool {
+    let t = cell.trim();
+    !t.is_empty() && t.replace('\u{2212}', "-").parse::<f64>().is_ok()
+}
+
+fn table_html(h: &mut String, t: &Table) -> Result<(), ReportError> {
+    for (i, row) in t.rows.iter().enumerate() {
+        if row.len() != t.header.len() {
+            return Err(ReportError::RaggedTable {
+                caption: t.caption.clone(),
+                row: i,
+                len: row.len(),
+                expected: t.header.len(),
+            });
+        }
+    }
+    h.push_str("<table>\n");
+    if !t.caption.is_empty() {
+        let _ = writeln!(h, "<caption>{}</caption>", escape(&t.caption));
+    }
+    h.push_str("<thead><tr>");
+    for c in &t.header {
+        let _ = write!(h, "<th>{}</th>", escape(c));
+    }
+    h.push_str("</tr></thead>\n<tbody>\n");
+    for row in &t.rows {
+        h.push_str("<tr>");
+        for c in row {
+            if is_numeric(c) {
+                let _ = write!(h, "<td class=\"num\">{}</td>", escape(c));
+            } else {
+                let _ = write!(h, "<td>{}</td>", escape(c));
+            }
+        }
+        h.push_str("</tr>\n");
+    }
+    h.push_str("</tbody>\n</table>\n");
+    Ok(())
+}
+
+/// The `<svg …>…</svg>` element of an SVG document (XML declaration and comments before it
+/// dropped), or `None` if it is not one or contains a script.
+fn svg_element(svg: &str) -> Option<&str> {
+    let mut s = svg.trim();
+    if s.starts_with("<?xml") {
+        s = s[s.find("?>")? + 2..].trim_start();
+    }
+    while s.starts_with("<!--") {
+        s = s[s.find("-->")? + 3..].trim_start();
+    }
+    let lower = s.to_ascii_lowercase();
+    let ok = lower.starts_with("<svg")
+        && lower.ends_with("</svg>")
+        && !lower.contains("<script")
+        && !lower.contains("<foreignobject");
+    ok.then_some(s)
+}
+
+fn figure_html(h: &mut String, f: &ReportFigure, no: usize) -> Result<(), ReportError> {
+    let caption = escape(&f.caption);
+    match &f.image {
+        Image::Svg(svg) => {
+            let el = svg_element(svg).ok_or_else(|| ReportError::BadSvg {
+                caption: f.caption.clone(),
+            })?;
+            let _ = writeln!(
+                h,
+                "<figure class=\"report-figure\" id=\"figure-{no}\" data-kind=\"svg\">\n{el}"
+            );
+        }
+        Image::Png(png) => {
+            if !png.starts_with(b"\x89PNG\r\n\x1a\n") {
+                return Err(ReportError::BadPng {
+                    caption: f.caption.clone(),
+                });
+            }
+            let _ = writeln!(
+                h,
+                "<figure class=\"report-figure\" id=\"figure-{no}\" data-kind=\"png\">\n\
+                 <img alt=\"{caption}\" src=\"data:image/png;base64,{}\">",
+                base64(png)
+            );
+        }
+    }
+    let _ = writeln!(h, "<figcaption>{caption}</figcaption>\n</figure>");
+    Ok(())
+}
+
+const CSS: &str = "
+body{margin:0;background:#fff;color:#1a1a1a;font:16px/1.5 'DejaVu Sans',Verdana,sans-serif}
+main{max-width:1180px;margin:0 auto;padding:1.5em}
+h1{font-size:1.6em;margin:.2em 0 .6em}h2{font-size:1.25em;margin:1.6em 0 .5em;border-bottom:1px solid #ddd}
+pre{background:#f6f6f6;padding:.8em;overflow-x:auto;font-size:.85em}
+table{border-collapse:collapse;margin:1em 0;font-size:.9em}
+caption{text-align:left;font-weight:bold;padding:.3em 0}
+th,td{border:1px solid #ccc;padding:.25em .6em}th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}
+figure{margin:1.2em 0}figure svg,figure img{display:block;max-width:100%;height:auto}
+figcaption{font-size:.9em;color:#444;margin-top:.4em}
+#figure-check{font-size:.85em;padding:.3em .6em;border-radius:3px}
+#figure-check.ok{background:#e6f4ea;color:#1e5631}#figure-check.bad,#figure-check.pending{background:#fdecea;color:#8a1c1c}
+";
+
+const SCRIPT: &str = "
+(function () {
+  function drawn(fig) {
+    var img = fig.querySelector('img');
+    if (img) { return img.complete && img.naturalWidth > 0 && img.naturalHeight > 0; }
+    var svg = fig.querySelector('svg');
+    if (!svg) { return false; }
+    var r = svg.getBoundingClientRect();
+    var b;
+    try { b = svg.getBBox(); } catch (e) { return false; }
+    return r.width > 0 && r.height > 0 && b.width > 0 && b.height > 0;
+  }
+  function check() {
+    var figs = document.querySelectorAll('figure.report-figure');
+    var ok = 0;
+    for (var i = 0; i < figs.length; i++) {
+      var good = drawn(figs[i]);
+      figs[i].setAttribute('data-rendered', good ? 'yes' : 'no');
+      if (good) { ok++; }
+    }
+    var el = document.getElementById('figure-check');
+    el.setAttribute('data-ok', String(ok));
+    el.setAttribute('data-total', String(figs.length));
+    el.className = ok === figs.length ? 'ok' : 'bad';
+    el.textContent = ok === figs.length
+      ? 'All ' + figs.length + ' figures rendered.'
+      : ok + ' of ' + figs.length + ' figures rendered; the others are broken.';
+  }
+  if (document.readyState === 'complete') { check(); } else { window.addEventListener('load', check); }
+})();
+";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_rfc4648_vectors() {
+        // RFC 4648 section 10.
+        let cases = [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ];
+        for (plain, enc) in cases {
+            assert_eq!(base64(plain.as_bytes()), enc, "{plain:?}");
+        }
+        // All byte values: decode back with an independent table-free decoder.
+        let all: Vec<u8> = (0..=255u8).collect();
+        let enc = base64(&all);
+        let val = |c: u8| -> u32 {
+            match c {
+                b'A'..=b'Z' => u32::from(c - b'A'),
+                b'a'..=b'z' => u32::from(c - b'a') + 26,
+                b'0'..=b'9' => u32::from(c - b'0') + 52,
+                b'+' => 62,
+                b'/' => 63,
+                _ => panic!("bad char {c}"),
+            }
+        };
+        let mut dec = Vec::new();
+        for q in enc.as_bytes().chunks(4) {
+            let n = q
+                .iter()
+                .take_while(|&&c| c != b'=')
+                .fold((0u32, 0), |(n, k), &c| {
+                    (n | (val(c) << (18 - 6 * k)), k + 1)
+                });
+            let bytes = [(n.0 >> 16) as u8, (n.0 >> 8) as u8, n.0 as u8];
+            dec.extend_from_slice(&bytes[..n.1 - 1]);
+        }
+        assert_eq!(dec, all);
+    }
+
+    #[test]
+    fn escape_covers_markup_characters() {
+        assert_eq!(
+            escape(r#"<b>"a" & 'b'</b>"#),
+            "&lt;b&gt;&quot;a&quot; &amp; &#39;b&#39;&lt;/b&gt;"
+        );
+        assert_eq!(escape("q₂ (rad·s⁻¹)"), "q₂ (rad·s⁻¹)");
+    }
+
+    #[test]
+    fn text_is_escaped_everywhere() {
+        let mut r = Report::new("<script>alert(1)</script>");
+        r.heading("a<b").paragraph("x & y").code("<pre>");
+        r.table(Table {
+            caption: "<i>".into(),
+            header: vec!["<h>".into()],
+            rows: vec![vec!["<c>".into()]],
+        });
+        r.figure("<cap>", Image::Png(b"\x89PNG\r\n\x1a\nrest".to_vec()));
+        let html = r.to_html().unwrap();
+        for raw in [
+            "<script>alert",
+            "a<b",
+            "x & y",
+            "<pre><pre>",
+            "<i>",
+            "<h>",
+            "<c>",
+            "<cap>",
+        ] {
+            assert!(!html.contains(raw), "unescaped {raw}");
+        }
+        assert_eq!(
+            html.matches("<script").count(),
+            1,
+            "only the checker script"
+        );
+    }
+
+    #[test]
+    fn ragged_table_is_an_error() {
+        let mut r = Report::new("t");
+        r.table(Table {
+            caption: "Table I".into(),
+            header: vec!["a".into(), "b".into()],
+            rows: vec![vec!["1".into(), "2".into()], vec!["3".into()]],
+        });
+        let e = r.to_html().unwrap_err();
+        assert!(matches!(
+            e,
+            ReportError::RaggedTable {
+                row: 1,
+                len: 1,
+                expected: 2,
+                ..
+            }
+        ));
+        assert!(e.to_string().contains("Table I"));
+    }
+
+    #[test]
+    fn bad_images_are_errors() {
+        let mut r = Report::new("t");
+        r.figure("f", Image::Png(b"GIF89a".to_vec()));
+        assert!(matches!(r.to_html(), Err(ReportError::BadPng { .. })));
+        for bad in [
+            "<div/>",
+            "<svg><script>x()</script></svg>",
+            "<svg></svg><img src=x>",
+            "<svg><foreignObject/></svg>",
+        ] {
+            let mut r = Report::new("t");
+            r.figure("f", Image::Svg(bad.into()));
+            assert!(
+                matches!(r.to_html(), Err(ReportError::BadSvg { .. })),
+                "{bad}"
+            );
+        }
+        assert_eq!(
+            svg_element("<?xml version=\"1.0\"?>\n<!-- c -->\n<svg a=\"1\"></svg>\n"),
+            Some("<svg a=\"1\"></svg>")
+        );
+    }
+
+    #[test]
+    fn structure_and_numeric_cells() {
+        let mut r = Report::new("Run");
+        r.table(Table {
+            caption: "Errors".into(),
+            header: vec!["controller".into(), "RMS (mrad)".into()],
+            rows: vec![
+                vec!["first".into(), "0.125".into()],
+                vec!["usual".into(), "−3".into()],
+            ],
+        });
+        r.figure(
+            "A",
+            Image::Svg("<svg width=\"1\" height=\"1\"></svg>".into()),
+        );
+        r.figure("B", Image::Png(b"\x89PNG\r\n\x1a\n".to_vec()));
+        let html = r.to_html().unwrap();
+        assert!(html.contains("data-total=\"2\""));
+        assert!(html.contains("<td>first</td><td class=\"num\">0.125</td>"));
+        assert!(html.contains("<td class=\"num\">−3</td>"));
+        assert!(html.contains("id=\"figure-1\" data-kind=\"svg\""));
+        assert!(html.contains("id=\"figure-2\" data-kind=\"png\""));
+        assert!(html.contains("src=\"data:image/png;base64,iVBORw0KGgo=\""));
+        // Nothing is loaded from elsewhere.
+        for ext in ["src=\"http", "href=", "url(", "<link", "@import"] {
+            assert!(!html.contains(ext), "{ext}");
+        }
+    }
+
+    #[test]
+    fn write_is_atomic_and_reports_path() {
+        let tmp = tempfile::tempdir().unwrap();
+        let p = tmp.path().join("report.html");
+        Report::new("x").write(&p).unwrap();
+        assert!(std::fs::read_to_string(&p)
+            .unwrap()
+            .starts_with("<!DOCTYPE html>"));
+        let bad = tmp.path().join("missing/report.html");
+        let e = Report::new("x").write(&bad).unwrap_err();
+        assert!(e.to_string().contains("missing"), "{e}");
+    }
+}
