@@ -2,7 +2,9 @@
 //! Fig. 6/7 (joint errors of the three controllers, without and with
 //! payload), the Cartesian errors, the path, and the payload sweep.
 
-use crate::output::plot::{Figure, Panel, Series, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL};
+use crate::output::plot::{
+    Figure, Panel, Series, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
+};
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
 
@@ -24,12 +26,35 @@ fn column(rec: &Record, v: &[f64], i: usize) -> Vec<f64> {
 pub fn joints_and_torques(title: &str, rec: &Record) -> Figure {
     let mut f = Figure::new(title, 2);
     for i in 0..rec.n {
-        let mut p = Panel::new(format!("joint {}", i + 1), "t (s)", format!("q{} (rad)", i + 1));
-        p.series.push(Series::dashed("reference", rec.t.clone(), column(rec, &rec.q_ref, i), COLOR_REFERENCE));
-        p.series.push(Series::line("q", rec.t.clone(), column(rec, &rec.q, i), COLOR_SECOND));
+        let mut p = Panel::new(
+            format!("joint {}", i + 1),
+            "t (s)",
+            format!("q{} (rad)", i + 1),
+        );
+        p.series.push(Series::dashed(
+            "reference",
+            rec.t.clone(),
+            column(rec, &rec.q_ref, i),
+            COLOR_REFERENCE,
+        ));
+        p.series.push(Series::line(
+            "q",
+            rec.t.clone(),
+            column(rec, &rec.q, i),
+            COLOR_SECOND,
+        ));
         f.panels.push(p);
-        let mut p = Panel::new(format!("joint {}", i + 1), "t (s)", format!("τ{} (N·m)", i + 1));
-        p.series.push(Series::line("τ", rec.t.clone(), column(rec, &rec.tau, i), COLOR_USUAL));
+        let mut p = Panel::new(
+            format!("joint {}", i + 1),
+            "t (s)",
+            format!("τ{} (N·m)", i + 1),
+        );
+        p.series.push(Series::line(
+            "τ",
+            rec.t.clone(),
+            column(rec, &rec.tau, i),
+            COLOR_USUAL,
+        ));
         f.panels.push(p);
     }
     f
@@ -40,10 +65,19 @@ pub fn joint_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
     let n = runs.first().map_or(0, |(_, r)| r.n);
     let mut f = Figure::new(title, 2);
     for i in 0..n {
-        let mut p = Panel::new(format!("joint {}", i + 1), "t (s)", format!("e{} (rad)", i + 1));
+        let mut p = Panel::new(
+            format!("joint {}", i + 1),
+            "t (s)",
+            format!("e{} (rad)", i + 1),
+        );
         for (name, rec) in runs {
             let e = (0..rec.len()).map(|k| rec.joint_error(k, i)).collect();
-            p.series.push(Series::line(*name, rec.t.clone(), e, controller_color(name)));
+            p.series.push(Series::line(
+                *name,
+                rec.t.clone(),
+                e,
+                controller_color(name),
+            ));
         }
         f.panels.push(p);
     }
@@ -56,8 +90,15 @@ pub fn cartesian_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
     for (c, axis) in ["x", "y", "z"].iter().enumerate() {
         let mut p = Panel::new(format!("{axis} error"), "t (s)", format!("e_{axis} (mm)"));
         for (name, rec) in runs {
-            let e = (0..rec.len()).map(|k| rec.cartesian_error(k)[c] * 1e3).collect();
-            p.series.push(Series::line(*name, rec.t.clone(), e, controller_color(name)));
+            let e = (0..rec.len())
+                .map(|k| rec.cartesian_error(k)[c] * 1e3)
+                .collect();
+            p.series.push(Series::line(
+                *name,
+                rec.t.clone(),
+                e,
+                controller_color(name),
+            ));
         }
         f.panels.push(p);
     }
@@ -71,21 +112,50 @@ pub fn path(title: &str, reference: &JointReference) -> Figure {
     let mm = |f: &dyn Fn(&[f64; 3]) -> f64| p.iter().map(|q| f(q) * 1e3).collect::<Vec<f64>>();
     let mut f = Figure::new(title, 2);
     let mut xy = Panel::new("top view (XY)", "x (mm)", "y (mm)");
-    xy.series.push(Series::line("flange path", mm(&|q| q[0]), mm(&|q| q[1]), COLOR_REFERENCE));
-    xy.series.push(Series::markers("start", vec![p[0][0] * 1e3], vec![p[0][1] * 1e3], COLOR_USUAL));
+    xy.series.push(Series::line(
+        "flange path",
+        mm(&|q| q[0]),
+        mm(&|q| q[1]),
+        COLOR_REFERENCE,
+    ));
+    xy.series.push(Series::markers(
+        "start",
+        vec![p[0][0] * 1e3],
+        vec![p[0][1] * 1e3],
+        COLOR_USUAL,
+    ));
     f.panels.push(xy);
     // Isometric projection: u = (x − y) cos 30°, v = z + (x + y) sin 30°.
     let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-    let mut iso = Panel::new("3-D view (isometric projection)", "(x − y)·cos30° (mm)", "z + (x + y)·sin30° (mm)");
-    iso.series.push(Series::line("flange path", mm(&|q| (q[0] - q[1]) * c), mm(&|q| q[2] + (q[0] + q[1]) * s), COLOR_REFERENCE));
+    let mut iso = Panel::new(
+        "3-D view (isometric projection)",
+        "(x − y)·cos30° (mm)",
+        "z + (x + y)·sin30° (mm)",
+    );
+    iso.series.push(Series::line(
+        "flange path",
+        mm(&|q| (q[0] - q[1]) * c),
+        mm(&|q| q[2] + (q[0] + q[1]) * s),
+        COLOR_REFERENCE,
+    ));
     f.panels.push(iso);
     let mut xz = Panel::new("side view (XZ)", "x (mm)", "z (mm)");
-    xz.series.push(Series::line("flange path", mm(&|q| q[0]), mm(&|q| q[2]), COLOR_REFERENCE));
+    xz.series.push(Series::line(
+        "flange path",
+        mm(&|q| q[0]),
+        mm(&|q| q[2]),
+        COLOR_REFERENCE,
+    ));
     f.panels.push(xz);
     let t: Vec<f64> = (0..k).map(|s| s as f64 * reference.ts()).collect();
     let mut qp = Panel::new("joint reference", "t (s)", "q (rad)");
     for i in 0..reference.dof() {
-        qp.series.push(Series::line(format!("q{}", i + 1), t.clone(), (0..k).map(|s| reference.q(s)[i]).collect(), 4 + i));
+        qp.series.push(Series::line(
+            format!("q{}", i + 1),
+            t.clone(),
+            (0..k).map(|s| reference.q(s)[i]).collect(),
+            4 + i,
+        ));
     }
     f.panels.push(qp);
     f
@@ -95,7 +165,11 @@ pub fn path(title: &str, reference: &JointReference) -> Figure {
 /// runs as markers at the error they had reached when stopped.
 pub fn payload_sweep(title: &str, runs: &[RunMetrics]) -> Figure {
     let mut f = Figure::new(title, 2);
-    let mut steady = Panel::new("steady Cartesian error (last 0.5 s of the hold)", "payload (kg)", "error (mm)");
+    let mut steady = Panel::new(
+        "steady Cartesian error (last 0.5 s of the hold)",
+        "payload (kg)",
+        "error (mm)",
+    );
     let mut rms = Panel::new("RMS Cartesian error", "payload (kg)", "error (mm)");
     steady.log_y = true;
     rms.log_y = true;
@@ -112,15 +186,32 @@ pub fn payload_sweep(title: &str, runs: &[RunMetrics]) -> Figure {
         steady.series.push(Series::line(
             name,
             ok.iter().map(|m| m.payload_kg).collect(),
-            ok.iter().map(|m| m.steady_cartesian_error_mm.max(1e-12)).collect(),
+            ok.iter()
+                .map(|m| m.steady_cartesian_error_mm.max(1e-12))
+                .collect(),
             color,
         ));
-        rms.series.push(Series::line(name, ok.iter().map(|m| m.payload_kg).collect(), ok.iter().map(|m| m.cartesian_error_rms_mm).collect(), color));
+        rms.series.push(Series::line(
+            name,
+            ok.iter().map(|m| m.payload_kg).collect(),
+            ok.iter().map(|m| m.cartesian_error_rms_mm).collect(),
+            color,
+        ));
         if !bad.is_empty() {
             let x: Vec<f64> = bad.iter().map(|m| m.payload_kg).collect();
             let y: Vec<f64> = bad.iter().map(|m| m.cartesian_error_max_mm).collect();
-            steady.series.push(Series::markers(format!("{name} diverged (error at stop)"), x.clone(), y.clone(), color));
-            rms.series.push(Series::markers(format!("{name} diverged (error at stop)"), x, y, color));
+            steady.series.push(Series::markers(
+                format!("{name} diverged (error at stop)"),
+                x.clone(),
+                y.clone(),
+                color,
+            ));
+            rms.series.push(Series::markers(
+                format!("{name} diverged (error at stop)"),
+                x,
+                y,
+                color,
+            ));
         }
     }
     f.panels.push(steady);

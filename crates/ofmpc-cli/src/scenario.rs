@@ -28,7 +28,10 @@ pub struct RobotSection {
 
 impl Default for RobotSection {
     fn default() -> Self {
-        Self { model: "irb140".into(), drives: None }
+        Self {
+            model: "irb140".into(),
+            drives: None,
+        }
     }
 }
 
@@ -47,7 +50,11 @@ pub struct PayloadSection {
 
 impl Default for PayloadSection {
     fn default() -> Self {
-        Self { masses_kg: vec![0.0, 0.25], com_m: [0.0; 3], inertia_kgm2: [0.0; 6] }
+        Self {
+            masses_kg: vec![0.0, 0.25],
+            com_m: [0.0; 3],
+            inertia_kgm2: [0.0; 6],
+        }
     }
 }
 
@@ -76,7 +83,11 @@ pub struct TimingSection {
 impl Default for TimingSection {
     fn default() -> Self {
         let d = TimingOptions::default();
-        Self { profile: "septic".into(), max_speed_m_s: d.max_speed, max_accel_m_s2: d.max_accel }
+        Self {
+            profile: "septic".into(),
+            max_speed_m_s: d.max_speed,
+            max_accel_m_s2: d.max_accel,
+        }
     }
 }
 
@@ -135,10 +146,18 @@ impl Default for ScenarioFile {
 impl ScenarioFile {
     /// Reads a scenario; relative paths inside are resolved against its folder.
     pub fn from_file(path: &Path) -> anyhow::Result<Self> {
-        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read scenario {}", path.display()))?;
-        let mut s: ScenarioFile = toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read scenario {}", path.display()))?;
+        let mut s: ScenarioFile =
+            toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        let resolve = |p: &Path| if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
+        let resolve = |p: &Path| {
+            if p.is_absolute() {
+                p.to_path_buf()
+            } else {
+                dir.join(p)
+            }
+        };
         if s.robot.model.ends_with(".urdf") {
             s.robot.model = resolve(Path::new(&s.robot.model)).display().to_string();
         }
@@ -176,7 +195,9 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     };
     if let Some(d) = drives {
         let drives = Drives::from_file(d)?;
-        robot.apply_drives(&drives).with_context(|| format!("applying {}", d.display()))?;
+        robot
+            .apply_drives(&drives)
+            .with_context(|| format!("applying {}", d.display()))?;
     }
     Ok(robot)
 }
@@ -193,9 +214,13 @@ pub fn parse_profile(s: &str) -> anyhow::Result<Profile> {
 /// Reads a program: a file, or the built-in paper program when `None`.
 pub fn read_program(file: Option<&Path>) -> anyhow::Result<(String, String)> {
     match file {
-        None => Ok(("paper-table1.gcode (built in)".into(), PAPER_TABLE1.to_string())),
+        None => Ok((
+            "paper-table1.gcode (built in)".into(),
+            PAPER_TABLE1.to_string(),
+        )),
         Some(p) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("cannot read program {}", p.display()))?;
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("cannot read program {}", p.display()))?;
             Ok((p.display().to_string(), text))
         }
     }
@@ -212,33 +237,57 @@ impl Scenario {
         }
         let robot = load_robot(&f.robot.model, f.robot.drives.as_deref())?;
         let n = robot.dof();
-        f.mpc.validate_for_dof(n).map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
-        f.simulation.validate().map_err(|e| anyhow::anyhow!("[simulation] {e}"))?;
-        f.plant.validate(n).map_err(|e| anyhow::anyhow!("[plant] {e}"))?;
+        f.mpc
+            .validate_for_dof(n)
+            .map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
+        f.simulation
+            .validate()
+            .map_err(|e| anyhow::anyhow!("[simulation] {e}"))?;
+        f.plant
+            .validate(n)
+            .map_err(|e| anyhow::anyhow!("[plant] {e}"))?;
         let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
         let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let mut payloads = Vec::new();
         for &m in &f.payload.masses_kg {
-            let p = Payload { mass: m, com: Vector3::from(f.payload.com_m), inertia };
-            p.validate().map_err(|e| anyhow::anyhow!("[payload] mass {m} kg: {e}"))?;
+            let p = Payload {
+                mass: m,
+                com: Vector3::from(f.payload.com_m),
+                inertia,
+            };
+            p.validate()
+                .map_err(|e| anyhow::anyhow!("[payload] mass {m} kg: {e}"))?;
             payloads.push(p);
         }
         let (program_name, text) = read_program(f.program.file.as_deref())?;
-        let origin = f.program.origin_mm.map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
-        let program = parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
-        let warnings = program.warnings.iter().map(|w| format!("{program_name}: {w}")).collect();
+        let origin = f
+            .program
+            .origin_mm
+            .map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
+        let program = parse(&text, &ParseOptions { origin })
+            .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        let warnings = program
+            .warnings
+            .iter()
+            .map(|w| format!("{program_name}: {w}"))
+            .collect();
         let timing = TimingOptions {
             profile: parse_profile(&f.timing.profile)?,
             max_speed: f.timing.max_speed_m_s,
             max_accel: f.timing.max_accel_m_s2,
         };
-        let trajectory = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("[timing] {e}"))?;
+        let trajectory = CartesianTrajectory::new(&program, &timing)
+            .map_err(|e| anyhow::anyhow!("[timing] {e}"))?;
         let orientation = match f.orientation.rpy_deg {
             None => Orientation::AtZero,
-            Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(r.to_radians(), p.to_radians(), y.to_radians())),
+            Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
+                r.to_radians(),
+                p.to_radians(),
+                y.to_radians(),
+            )),
         };
-        let reference =
-            build_reference(&robot, &trajectory, orientation, f.mpc.ts).map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        let reference = build_reference(&robot, &trajectory, orientation, f.mpc.ts)
+            .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
         Ok(Self {
             title: f.title.clone(),
             program_name,

@@ -53,7 +53,14 @@ pub fn reference_csv(reference: &JointReference, trajectory: &CartesianTrajector
     let _ = trajectory;
     for k in 0..reference.len() {
         let p = reference.position(k);
-        let _ = write!(s, "{},{},{},{}", k as f64 * reference.ts(), p[0], p[1], p[2]);
+        let _ = write!(
+            s,
+            "{},{},{},{}",
+            k as f64 * reference.ts(),
+            p[0],
+            p[1],
+            p[2]
+        );
         for x in reference.q(k).iter().chain(reference.qd(k)) {
             let _ = write!(s, ",{x}");
         }
@@ -91,7 +98,11 @@ pub const SUMMARY_HEADER: [&str; 9] = [
 pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
     runs.iter()
         .map(|m| {
-            let steady_joint = m.steady_joint_error_max_rad.iter().copied().fold(f64::NAN, f64::max);
+            let steady_joint = m
+                .steady_joint_error_max_rad
+                .iter()
+                .copied()
+                .fold(f64::NAN, f64::max);
             vec![
                 m.name.clone(),
                 m.controller.clone(),
@@ -132,7 +143,10 @@ pub fn summary_text(runs: &[RunMetrics]) -> String {
         s.truncate(s.trim_end().len());
         s.push('\n');
     };
-    line(SUMMARY_HEADER.iter().map(|h| h.to_string()).collect(), &mut s);
+    line(
+        SUMMARY_HEADER.iter().map(|h| h.to_string()).collect(),
+        &mut s,
+    );
     for r in rows {
         line(r, &mut s);
     }

@@ -28,7 +28,13 @@ struct Run {
 
 /// Renders `fig` into the staged directory as `<rel>.png` and `<rel>.svg`,
 /// and adds the PNG to the report.
-fn figure(dir: &mut StagedDir, report: &mut Report, rel: &str, caption: &str, fig: &Figure) -> anyhow::Result<()> {
+fn figure(
+    dir: &mut StagedDir,
+    report: &mut Report,
+    rel: &str,
+    caption: &str,
+    fig: &Figure,
+) -> anyhow::Result<()> {
     let r = render_both(fig).with_context(|| format!("rendering {rel}"))?;
     dir.write(format!("{rel}.png"), &r.png)?;
     dir.write(format!("{rel}.svg"), r.svg.as_bytes())?;
@@ -44,14 +50,21 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         eprintln!("warning: {w}");
     }
     let exp = &scenario.experiment;
-    let jobs: Vec<(ControllerKind, Payload)> =
-        scenario.payloads.iter().flat_map(|p| scenario.controllers.iter().map(move |k| (*k, *p))).collect();
-    let steps_per_run = (exp.reference.len() + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize) as u64;
+    let jobs: Vec<(ControllerKind, Payload)> = scenario
+        .payloads
+        .iter()
+        .flat_map(|p| scenario.controllers.iter().map(move |k| (*k, *p)))
+        .collect();
+    let steps_per_run = (exp.reference.len()
+        + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize)
+        as u64;
     let bar = ProgressBar::new(steps_per_run * jobs.len() as u64);
     if std::io::stderr().is_terminal() {
         bar.set_style(
-            ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} samples ({eta})")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} samples ({eta})",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
     } else {
         bar.set_draw_target(ProgressDrawTarget::hidden());
@@ -66,14 +79,20 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
                     last = k;
                 })
                 .map_err(|e| anyhow::anyhow!("{}: {e}", run_name(kind, &payload)))?;
-            Ok(Run { kind, payload, result, metrics })
+            Ok(Run {
+                kind,
+                payload,
+                result,
+                metrics,
+            })
         })
         .collect();
     bar.finish_and_clear();
     let runs: Vec<Run> = runs.into_iter().collect::<anyhow::Result<_>>()?;
     let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
 
-    let mut dir = StagedDir::new(out).with_context(|| format!("preparing the output directory {}", out.display()))?;
+    let mut dir = StagedDir::new(out)
+        .with_context(|| format!("preparing the output directory {}", out.display()))?;
     let mut report = Report::new(&scenario.title);
     let robot = &exp.robot;
     report.paragraph(format!(
@@ -101,14 +120,24 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         }
     }
 
-    figure(&mut dir, &mut report, "path", "The path: top, isometric and side views, and the joint reference", &figures::path("Path and joint reference", &exp.reference))?;
+    figure(
+        &mut dir,
+        &mut report,
+        "path",
+        "The path: top, isometric and side views, and the joint reference",
+        &figures::path("Path and joint reference", &exp.reference),
+    )?;
     for (i, p) in scenario.payloads.iter().enumerate() {
         let these: Vec<(&str, &ofmpc::sim::Record)> = runs
             .iter()
             .filter(|r| r.payload.mass == p.mass)
             .map(|r| (kind_name(r.kind), &r.result.record))
             .collect();
-        let label = if p.mass == 0.0 { "exact model (no payload)".to_string() } else { format!("payload {} kg unknown to the model", p.mass) };
+        let label = if p.mass == 0.0 {
+            "exact model (no payload)".to_string()
+        } else {
+            format!("payload {} kg unknown to the model", p.mass)
+        };
         let fig_no = if p.mass == 0.0 { "Fig. 6" } else { "Fig. 7" };
         let _ = i;
         figure(
@@ -123,7 +152,10 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
             &mut report,
             &format!("cartesian_errors_m{}", p.mass),
             &format!("Cartesian errors, {label}"),
-            &figures::cartesian_errors(&format!("Cartesian errors (reference − flange), {label}"), &these),
+            &figures::cartesian_errors(
+                &format!("Cartesian errors (reference − flange), {label}"),
+                &these,
+            ),
         )?;
     }
     if scenario.payloads.len() >= 3 {
@@ -137,7 +169,10 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     }
     for r in &runs {
         let name = &r.metrics.name;
-        dir.write(format!("{name}/timeseries.csv"), timeseries_csv(&r.result.record).as_bytes())?;
+        dir.write(
+            format!("{name}/timeseries.csv"),
+            timeseries_csv(&r.result.record).as_bytes(),
+        )?;
         figure(
             &mut dir,
             &mut report,
@@ -150,13 +185,17 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
             &mut report,
             &format!("{name}/cartesian_error"),
             &format!("{name}: Cartesian error"),
-            &figures::cartesian_errors(&format!("{name}: Cartesian error"), &[(kind_name(r.kind), &r.result.record)]),
+            &figures::cartesian_errors(
+                &format!("{name}: Cartesian error"),
+                &[(kind_name(r.kind), &r.result.record)],
+            ),
         )?;
     }
     let json = serde_json::to_string_pretty(&serde_json::json!({ "runs": metrics }))?;
     dir.write("metrics.json", json.as_bytes())?;
-    dir.write("report.html", report.to_html().as_bytes())?;
-    dir.commit().with_context(|| format!("moving the results into {}", out.display()))?;
+    dir.write("report.html", report.to_html()?.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", out.display()))?;
 
     print!("{}", summary_text(&metrics));
     println!(

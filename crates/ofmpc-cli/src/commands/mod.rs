@@ -17,7 +17,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Trajectory(a) => trajectory::trajectory(&a),
         Command::Run(a) => {
             let file = ScenarioFile::from_file(&a.scenario)?;
-            let scenario = Scenario::resolve(&file).map_err(|e| anyhow::anyhow!("{}: {e:#}", a.scenario.display()))?;
+            let scenario = Scenario::resolve(&file)
+                .map_err(|e| anyhow::anyhow!("{}: {e:#}", a.scenario.display()))?;
             experiment::execute(&scenario, &a.out)
         }
         Command::Reproduce(a) => {

@@ -16,7 +16,8 @@ use std::path::Path;
 /// Parses, times and maps the program; writes the CSV and the figure.
 pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let robot = load_robot(&a.robot, a.drives.as_deref())?;
-    let file = (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
+    let file =
+        (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
     let (name, text) = read_program(file)?;
     let origin = match &a.origin {
         Some(o) => {
@@ -25,17 +26,32 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let program = parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    let program =
+        parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     for w in &program.warnings {
         eprintln!("warning: {name}: {w}");
     }
-    let timing = TimingOptions { profile: parse_profile(&a.profile)?, max_speed: a.speed, max_accel: a.accel };
+    let timing = TimingOptions {
+        profile: parse_profile(&a.profile)?,
+        max_speed: a.speed,
+        max_accel: a.accel,
+    };
     let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, a.ts).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    write_atomic(&a.out, reference_csv(&reference, &traj).as_bytes()).with_context(|| format!("writing {}", a.out.display()))?;
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, a.ts)
+        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    write_atomic(&a.out, reference_csv(&reference, &traj).as_bytes())
+        .with_context(|| format!("writing {}", a.out.display()))?;
     let stem = a.out.with_extension("");
-    let fig = render_both(&figures::path(&format!("{name}: path and joint reference"), &reference))?;
-    let png = stem.with_file_name(format!("{}_path.png", stem.file_name().map(|s| s.to_string_lossy()).unwrap_or_default()));
+    let fig = render_both(&figures::path(
+        &format!("{name}: path and joint reference"),
+        &reference,
+    ))?;
+    let png = stem.with_file_name(format!(
+        "{}_path.png",
+        stem.file_name()
+            .map(|s| s.to_string_lossy())
+            .unwrap_or_default()
+    ));
     let svg = png.with_extension("svg");
     write_atomic(&png, &fig.png).with_context(|| format!("writing {}", png.display()))?;
     write_atomic(&svg, fig.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
