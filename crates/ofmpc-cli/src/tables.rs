@@ -2,8 +2,18 @@
 
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
-use ofmpc::trajectory::CartesianTrajectory;
 use std::fmt::Write as _;
+
+/// Writes `x` at full precision (it parses back to the same bits): plain
+/// decimals for 1e-4 ≤ |x| < 1e15, exponent form otherwise.
+fn num(s: &mut String, x: f64) {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
+        let _ = write!(s, "{x}");
+    } else {
+        let _ = write!(s, "{x:e}");
+    }
+}
 
 /// `timeseries.csv` of a run: `t`, `q1..qn`, `qd1..qdn`, `tau1..taun`,
 /// `qref1..qrefn`, `e1..en` (= qref − q), `x,y,z` (true flange), `xref,yref,zref`,
@@ -21,18 +31,21 @@ pub fn timeseries_csv(rec: &Record) -> String {
     }
     s.push_str(",x,y,z,xref,yref,zref,ex,ey,ez\n");
     for k in 0..rec.len() {
-        let _ = write!(s, "{}", rec.t[k]);
+        num(&mut s, rec.t[k]);
         for v in [&rec.q, &rec.qd, &rec.tau, &rec.q_ref] {
             for x in &v[k * n..(k + 1) * n] {
-                let _ = write!(s, ",{x}");
+                s.push(',');
+                num(&mut s, *x);
             }
         }
         for i in 0..n {
-            let _ = write!(s, ",{}", rec.joint_error(k, i));
+            s.push(',');
+            num(&mut s, rec.joint_error(k, i));
         }
         let (p, r, e) = (rec.flange[k], rec.flange_ref[k], rec.cartesian_error(k));
         for x in p.iter().chain(&r).chain(&e) {
-            let _ = write!(s, ",{x}");
+            s.push(',');
+            num(&mut s, *x);
         }
         s.push('\n');
     }
@@ -41,7 +54,7 @@ pub fn timeseries_csv(rec: &Record) -> String {
 
 /// The reference CSV of `ofmpc trajectory`: `t,x,y,z,q1..qn,qd1..qdn`
 /// (s; flange position in the base frame, m; rad; rad/s).
-pub fn reference_csv(reference: &JointReference, trajectory: &CartesianTrajectory) -> String {
+pub fn reference_csv(reference: &JointReference) -> String {
     let n = reference.dof();
     let mut s = String::from("t,x,y,z");
     for prefix in ["q", "qd"] {
@@ -50,7 +63,6 @@ pub fn reference_csv(reference: &JointReference, trajectory: &CartesianTrajector
         }
     }
     s.push('\n');
-    let _ = trajectory;
     for k in 0..reference.len() {
         let p = reference.position(k);
         let _ = write!(
@@ -151,4 +163,18 @@ pub fn summary_text(runs: &[RunMetrics]) -> String {
         line(r, &mut s);
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_round_trip_exactly() {
+        for x in [0.0, 1.0, -0.1, 1.0 / 3.0, 3.0531133177191805e-16, 1e300, -2.5e-5, 123456.789, f64::MIN_POSITIVE] {
+            let mut s = String::new();
+            num(&mut s, x);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+        }
+    }
 }

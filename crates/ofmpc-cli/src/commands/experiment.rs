@@ -191,7 +191,11 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
             ),
         )?;
     }
-    let json = serde_json::to_string_pretty(&serde_json::json!({ "runs": metrics }))?;
+    #[derive(serde::Serialize)]
+    struct MetricsFile<'a> {
+        runs: &'a [RunMetrics],
+    }
+    let json = serde_json::to_string_pretty(&MetricsFile { runs: &metrics })?;
     dir.write("metrics.json", json.as_bytes())?;
     dir.write("report.html", report.to_html()?.as_bytes())?;
     dir.commit()

@@ -39,7 +39,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
     let reference = build_reference(&robot, &traj, Orientation::AtZero, a.ts)
         .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    write_atomic(&a.out, reference_csv(&reference, &traj).as_bytes())
+    write_atomic(&a.out, reference_csv(&reference).as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;
     let stem = a.out.with_extension("");
     let fig = render_both(&figures::path(
