@@ -76,7 +76,7 @@ pub struct ReproduceArgs {
     #[arg(long)]
     pub program: Option<PathBuf>,
     /// Payloads in kg, comma-separated; e.g. 0,0.25,0.5,1,2,4,6 for a sweep.
-    #[arg(long, default_value = "0,0.25")]
+    #[arg(long, default_value = "0,0.25", allow_hyphen_values = true)]
     pub payload: String,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]

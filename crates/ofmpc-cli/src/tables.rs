@@ -171,7 +171,17 @@ mod tests {
 
     #[test]
     fn numbers_round_trip_exactly() {
-        for x in [0.0, 1.0, -0.1, 1.0 / 3.0, 3.0531133177191805e-16, 1e300, -2.5e-5, 123456.789, f64::MIN_POSITIVE] {
+        for x in [
+            0.0,
+            1.0,
+            -0.1,
+            1.0 / 3.0,
+            3.0531133177191805e-16,
+            1e300,
+            -2.5e-5,
+            123456.789,
+            f64::MIN_POSITIVE,
+        ] {
             let mut s = String::new();
             num(&mut s, x);
             assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");

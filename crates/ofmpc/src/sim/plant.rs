@@ -178,6 +178,14 @@ impl Plant {
     pub fn robot(&self) -> &Robot {
         &self.robot
     }
+    /// Sets the true state (for replays and tests); lengths must be `n`.
+    pub fn set_state(&mut self, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
+        self.robot.check_vector("q", q)?;
+        self.robot.check_vector("qd", qd)?;
+        self.q.copy_from_slice(q);
+        self.qd.copy_from_slice(qd);
+        Ok(())
+    }
     /// True joint positions.
     pub fn q(&self) -> &[f64] {
         &self.q

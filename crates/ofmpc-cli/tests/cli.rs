@@ -1,0 +1,455 @@
+//! The `ofmpc` binary end to end: the paper's claims as numbers from
+//! `metrics.json`, the time series contract (an independent replay), the
+//! report in a real browser, and clear errors on bad input.
+
+use ofmpc::robot::{Payload, Robot};
+use ofmpc::sim::{Plant, PlantSettings};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn ofmpc(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ofmpc"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run ofmpc")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = ofmpc(args);
+    assert!(
+        o.status.success(),
+        "ofmpc {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn fails(args: &[&str]) -> String {
+    let o = ofmpc(args);
+    assert!(!o.status.success(), "ofmpc {args:?} should fail");
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!err.contains("panicked"), "{err}");
+    err
+}
+
+fn run<'a>(metrics: &'a Value, name: &str) -> &'a Value {
+    metrics["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["name"] == name)
+        .unwrap_or_else(|| panic!("no run {name}"))
+}
+
+fn max_of(v: &Value) -> f64 {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .fold(0.0, f64::max)
+}
+
+fn parse_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// The paper's claims (section IV) on the IRB 140 and the paper's program,
+/// with 0.25 kg and with 1 kg unknown to the controllers.
+#[test]
+fn reproduce_confirms_the_papers_claims_and_writes_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let stdout = ok(&[
+        "reproduce",
+        "--payload",
+        "0,0.25,1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        stdout.contains("second_m0.25") && stdout.contains("9 runs"),
+        "{stdout}"
+    );
+    let metrics: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(metrics["runs"].as_array().unwrap().len(), 9);
+    for m in ["0", "0.25", "1"] {
+        let usual = run(&metrics, &format!("usual_m{m}"));
+        let first = run(&metrics, &format!("first_m{m}"));
+        let second = run(&metrics, &format!("second_m{m}"));
+        for r in [usual, first, second] {
+            assert_eq!(r["diverged"], false, "{r}");
+            assert!(r["diverged_at_s"].is_null());
+            for key in [
+                "joint_error_rms_rad",
+                "joint_error_max_rad",
+                "steady_joint_error_max_rad",
+                "torque_max_nm",
+            ] {
+                assert_eq!(r[key].as_array().unwrap().len(), 6, "{key}");
+            }
+            assert!(r["step_time_us"]["median"].as_f64().unwrap() > 0.0);
+            assert!(r["wall_s"].as_f64().unwrap() > 0.0);
+        }
+        if m == "0" {
+            // Exact model: all three track (sub-0.1 mm) and settle exactly.
+            for r in [usual, first, second] {
+                assert!(r["cartesian_error_max_mm"].as_f64().unwrap() < 0.1, "{r}");
+                assert!(
+                    r["steady_cartesian_error_mm"].as_f64().unwrap() < 1e-6,
+                    "{r}"
+                );
+            }
+        } else {
+            // Usual MPC: a clear steady offset under the unknown payload.
+            assert!(
+                usual["steady_cartesian_error_mm"].as_f64().unwrap() > 0.05,
+                "{usual}"
+            );
+            // Both incremental algorithms: no steady error.
+            assert!(
+                max_of(&first["steady_joint_error_max_rad"]) < 1e-6,
+                "{first}"
+            );
+            assert!(
+                max_of(&second["steady_joint_error_max_rad"]) < 1e-6,
+                "{second}"
+            );
+            // The second algorithm has the smallest RMS Cartesian error.
+            let rms = |r: &Value| r["cartesian_error_rms_mm"].as_f64().unwrap();
+            assert!(
+                rms(second) < rms(first) && rms(second) < rms(usual),
+                "{} {} {}",
+                rms(usual),
+                rms(first),
+                rms(second)
+            );
+        }
+    }
+    // The usual offset grows with the payload.
+    let offset = |m: &str| {
+        run(&metrics, &format!("usual_m{m}"))["steady_cartesian_error_mm"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(offset("1") > 3.0 * offset("0.25"));
+
+    for f in [
+        "report.html",
+        "path.png",
+        "path.svg",
+        "joint_errors_m0.png",
+        "joint_errors_m0.25.svg",
+        "cartesian_errors_m1.png",
+        "payload_sweep.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    for r in ["usual_m0", "second_m0.25", "first_m1"] {
+        for f in [
+            "timeseries.csv",
+            "joints_torques.png",
+            "joints_torques.svg",
+            "cartesian_error.png",
+            "cartesian_error.svg",
+        ] {
+            assert!(out.join(r).join(f).is_file(), "{r}/{f} missing");
+        }
+    }
+    // No staging leftovers.
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.starts_with('.'), "leftover {name}");
+    }
+    replay_matches_the_recorded_states(&out.join("second_m0.25/timeseries.csv"), 0.25);
+    report_renders_in_chromium(&out.join("report.html"));
+}
+
+/// An independent replay: from each row's state, apply its torque over one
+/// period (Ts = t_1 − t_0), and compare with the next row's state. (A free
+/// open-loop replay of 14 s would drift: the robot under recorded torques
+/// amplifies round-off.)
+fn replay_matches_the_recorded_states(csv: &Path, payload: f64) {
+    let (header, rows) = parse_csv(csv);
+    let mut expect = vec!["t".to_string()];
+    for p in ["q", "qd", "tau", "qref", "e"] {
+        expect.extend((1..=6).map(|i| format!("{p}{i}")));
+    }
+    expect.extend(["x", "y", "z", "xref", "yref", "zref", "ex", "ey", "ez"].map(String::from));
+    assert_eq!(header, expect);
+    let mut robot = Robot::irb140();
+    robot
+        .set_payload(Some(Payload::point_mass(payload)))
+        .unwrap();
+    let mut plant = Plant::new(robot, PlantSettings::default(), &rows[0][1..7]).unwrap();
+    let mut worst = 0.0f64;
+    let ts = rows[1][0] - rows[0][0];
+    for k in 0..rows.len() - 1 {
+        plant.set_state(&rows[k][1..7], &rows[k][7..13]).unwrap();
+        plant.step(&rows[k][13..19], ts).unwrap();
+        for i in 0..6 {
+            worst = worst.max((plant.q()[i] - rows[k + 1][1 + i]).abs());
+            worst = worst.max((plant.qd()[i] - rows[k + 1][7 + i]).abs() * ts);
+        }
+    }
+    assert!(
+        worst < 1e-12,
+        "replay drifts from the recorded states by {worst:e} rad"
+    );
+}
+
+fn find_chromium() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    std::iter::once(PathBuf::from("/usr/bin"))
+        .chain(std::env::split_paths(&path))
+        .find_map(|d| {
+            ["chromium", "chromium-browser", "google-chrome"]
+                .iter()
+                .map(|n| d.join(n))
+                .find(|p| p.is_file())
+        })
+}
+
+/// Opens the report in headless Chromium: every figure must have rendered
+/// (the page's own check), and a screenshot must not be blank.
+fn report_renders_in_chromium(report: &Path) {
+    let Some(bin) = find_chromium() else {
+        eprintln!("note: Chromium not installed; report.html not rendered (CI installs it)");
+        return;
+    };
+    let profile = tempfile::tempdir().unwrap();
+    let shot = profile.path().join("shot.png");
+    let base = [
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+    ];
+    let go = |extra: &[String]| {
+        let o = Command::new(&bin)
+            .args(base)
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .args(extra)
+            .arg(format!("file://{}", report.display()))
+            .stdin(Stdio::null())
+            .output()
+            .expect("start chromium");
+        assert!(
+            o.status.success(),
+            "chromium: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let dom = go(&["--virtual-time-budget=10000".into(), "--dump-dom".into()]);
+    let at = dom
+        .find("id=\"figure-check\"")
+        .expect("the report has its figure check");
+    let tag = &dom[dom[..at].rfind('<').unwrap()..at + dom[at..].find('>').unwrap()];
+    let attr = |name: &str| -> usize {
+        let k = format!("{name}=\"");
+        let v = &tag[tag.find(&k).unwrap_or_else(|| panic!("{name} in {tag}")) + k.len()..];
+        v[..v.find('"').unwrap()].parse().unwrap()
+    };
+    let figures = std::fs::read_to_string(report)
+        .unwrap()
+        .matches("<figure")
+        .count();
+    assert!(figures >= 10, "only {figures} figures in the report");
+    assert_eq!(attr("data-total"), figures, "{tag}");
+    assert_eq!(attr("data-ok"), figures, "not every figure rendered: {tag}");
+    go(&[
+        format!("--screenshot={}", shot.display()),
+        "--window-size=1200,2400".into(),
+    ]);
+    let png = std::fs::read(&shot).expect("screenshot written");
+    assert!(
+        png.len() > 20_000,
+        "screenshot suspiciously small ({} bytes)",
+        png.len()
+    );
+}
+
+#[test]
+fn run_reads_the_annotated_example_scenario() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenario.toml");
+    // The example, shortened to one controller and one payload for speed.
+    let text = std::fs::read_to_string(&scenario).unwrap().replace(
+        "controllers = [\"usual\", \"first\", \"second\"]",
+        "controllers = [\"second\"]",
+    );
+    let text = text.replace("masses_kg = [0.0, 0.25]", "masses_kg = [0.5]");
+    let path = dir.path().join("s.toml");
+    std::fs::write(&path, text).unwrap();
+    let out = dir.path().join("o");
+    ok(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(out.join("second_m0.5/timeseries.csv").is_file());
+}
+
+#[test]
+fn bad_input_gets_clear_errors_and_a_nonzero_exit() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("bad.toml");
+    std::fs::write(&s, "[mpc]\nhorizon = 10\nq_yww = 1.0\n").unwrap();
+    let e = fails(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        dir.path().join("o").to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("bad.toml") && e.contains("line 3") && e.contains("q_yww"),
+        "{e}"
+    );
+    assert!(
+        !dir.path().join("o").exists(),
+        "no output directory for a failed run"
+    );
+
+    let g = dir.path().join("p.gcode");
+    std::fs::write(
+        &g,
+        "G17\nG01 X700 Y0 Z300\nG02 X600 Y100 Z300 I-100 J0 Q5\n",
+    )
+    .unwrap();
+    let e = fails(&[
+        "reproduce",
+        "--program",
+        g.to_str().unwrap(),
+        "--out",
+        dir.path().join("o2").to_str().unwrap(),
+    ]);
+    assert!(e.contains("p.gcode") && e.contains("line 3"), "{e}");
+
+    let e = fails(&[
+        "reproduce",
+        "--payload",
+        "0,abc",
+        "--out",
+        dir.path().join("o3").to_str().unwrap(),
+    ]);
+    assert!(e.contains("--payload") && e.contains("abc"), "{e}");
+    let e = fails(&[
+        "reproduce",
+        "--payload",
+        "-1",
+        "--out",
+        dir.path().join("o4").to_str().unwrap(),
+    ]);
+    assert!(e.contains("mass"), "{e}");
+    let e = fails(&["inspect", "dynamics", "--q", "0,0,0"]);
+    assert!(e.contains("6 joints"), "{e}");
+    let e = fails(&["inspect", "dynamics", "--robot", "nope.urdf", "--q", "0"]);
+    assert!(e.contains("nope.urdf"), "{e}");
+}
+
+#[test]
+fn inspect_dynamics_prints_the_documented_json() {
+    let out = ok(&[
+        "inspect",
+        "dynamics",
+        "--payload",
+        "0.25",
+        "--q",
+        "0.1,-0.2,0.3,0.4,-0.5,0.6",
+        "--qd",
+        "0.1,0.2,0.3,0.4,0.5,0.6",
+        "--qdd",
+        "1,0,0,0,0,0",
+    ]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["H"].as_array().unwrap().len(), 6);
+    assert_eq!(v["H"][0].as_array().unwrap().len(), 6);
+    assert_eq!(v["C"].as_array().unwrap().len(), 6);
+    assert_eq!(v["g"].as_array().unwrap().len(), 6);
+    assert_eq!(v["tau"].as_array().unwrap().len(), 6);
+    assert_eq!(v["flange"]["position"].as_array().unwrap().len(), 3);
+    assert_eq!(v["flange"]["rotation"].as_array().unwrap().len(), 3);
+    // tau = H qdd + C qd + g with qdd = e1: column 0 of H plus C qd plus g.
+    let qd = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+    for i in 0..6 {
+        let h = v["H"][i][0].as_f64().unwrap();
+        let cqd: f64 = (0..6).map(|j| v["C"][i][j].as_f64().unwrap() * qd[j]).sum();
+        let g = v["g"][i].as_f64().unwrap();
+        let tau = v["tau"][i].as_f64().unwrap();
+        assert!(
+            (h + cqd + g - tau).abs() < 1e-10 * tau.abs().max(1.0),
+            "row {i}"
+        );
+    }
+}
+
+#[test]
+fn trajectory_writes_the_reference_csv_and_figures() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("ref.csv");
+    ok(&[
+        "trajectory",
+        "paper",
+        "--ts",
+        "0.02",
+        "--profile",
+        "quintic",
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    let (header, rows) = parse_csv(&csv);
+    let mut expect: Vec<String> = ["t", "x", "y", "z"].map(String::from).to_vec();
+    expect.extend((1..=6).map(|i| format!("q{i}")));
+    expect.extend((1..=6).map(|i| format!("qd{i}")));
+    assert_eq!(header, expect);
+    assert!(
+        (rows[0][1] - 0.78).abs() < 1e-12
+            && (rows[0][2] + 0.2).abs() < 1e-12
+            && (rows[0][3] - 0.15).abs() < 1e-12
+    );
+    assert!((rows[1][0] - 0.02).abs() < 1e-15);
+    assert!(dir.path().join("ref_path.png").is_file() && dir.path().join("ref_path.svg").is_file());
+    // Read in the base frame (no work offset), the paper's path is out of range:
+    // the error names the program line, joint 3 and the work offset to use.
+    let g = dir.path().join("base.gcode");
+    std::fs::write(
+        &g,
+        ofmpc::gcode::PAPER_TABLE1.replace("G10 L2 P1 X150 Y0 Z-250", ""),
+    )
+    .unwrap();
+    let e = fails(&[
+        "trajectory",
+        g.to_str().unwrap(),
+        "--out",
+        dir.path().join("x.csv").to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("line") && e.contains("joint 3") && e.contains("work offset"),
+        "{e}"
+    );
+    // --origin moves a program that sets no offset.
+    let shifted = ofmpc::gcode::PAPER_TABLE1.replace("G10 L2 P1 X150 Y0 Z-250", "");
+    std::fs::write(&g, shifted).unwrap();
+    ok(&[
+        "trajectory",
+        g.to_str().unwrap(),
+        "--origin",
+        "150,0,-250",
+        "--out",
+        dir.path().join("y.csv").to_str().unwrap(),
+    ]);
+}
