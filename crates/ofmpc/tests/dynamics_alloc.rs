@@ -1,0 +1,128 @@
+//! The rigid-body algorithms and the plant allocate nothing after construction.
+
+use ofmpc::dynamics::*;
+use ofmpc::robot::{Payload, Robot};
+use ofmpc::sim::{Plant, PlantSettings};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+struct Counting;
+static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        unsafe { System.realloc(p, l, n) }
+    }
+}
+
+#[global_allocator]
+static A: Counting = Counting;
+
+#[test]
+fn algorithms_and_plant_do_not_allocate() {
+    let mut robot = Robot::irb140();
+    robot.set_payload(Some(Payload::point_mass(1.0))).unwrap();
+    let mut ws = Workspace::new(&robot);
+    let mut plant = Plant::new(
+        robot.clone(),
+        PlantSettings {
+            position_noise: 1e-6,
+            ..Default::default()
+        },
+        &[0.1; 6],
+    )
+    .unwrap();
+    let mut d = RobotDynamics::new(robot.clone());
+    let (mut h, mut c, mut g) = (
+        nalgebra::DMatrix::zeros(6, 6),
+        nalgebra::DMatrix::zeros(6, 6),
+        nalgebra::DVector::zeros(6),
+    );
+    let mut x = [0.0; 12];
+    let q = [0.1, 0.4, -0.3, 0.7, 0.5, -0.2];
+    let qd = [0.3, -0.2, 0.4, 0.5, -0.6, 0.7];
+    let count = |f: &mut dyn FnMut()| {
+        let b = ALLOCS.load(Ordering::SeqCst);
+        f();
+        ALLOCS.load(Ordering::SeqCst) - b
+    };
+    assert_eq!(
+        count(&mut || {
+            forward_kinematics(&robot, &mut ws, &q).unwrap();
+        }),
+        0,
+        "fk"
+    );
+    assert_eq!(
+        count(&mut || {
+            flange_jacobian(&robot, &mut ws, &q).unwrap();
+        }),
+        0,
+        "jac"
+    );
+    assert_eq!(
+        count(&mut || {
+            rnea(&robot, &mut ws, &q, &qd, &qd).unwrap();
+        }),
+        0,
+        "rnea"
+    );
+    assert_eq!(
+        count(&mut || {
+            joint_space_terms(&robot, &mut ws, &q, &qd).unwrap();
+        }),
+        0,
+        "terms"
+    );
+    assert_eq!(
+        count(&mut || {
+            forward_dynamics(&robot, &mut ws, &q, &qd, &qd).unwrap();
+        }),
+        0,
+        "fd"
+    );
+    assert_eq!(
+        count(&mut || {
+            d.terms(&q, &qd, &mut h, &mut c, &mut g);
+        }),
+        0,
+        "d.terms"
+    );
+    assert_eq!(
+        count(&mut || {
+            plant.measure(&mut x);
+        }),
+        0,
+        "measure"
+    );
+    assert_eq!(
+        count(&mut || {
+            plant.step(&[1.0; 6], 0.01).unwrap();
+        }),
+        0,
+        "pstep"
+    );
+    let before = ALLOCS.load(Ordering::SeqCst);
+    for _ in 0..100 {
+        forward_kinematics(&robot, &mut ws, &q).unwrap();
+        flange_jacobian(&robot, &mut ws, &q).unwrap();
+        rnea(&robot, &mut ws, &q, &qd, &qd).unwrap();
+        crba(&robot, &mut ws, &q).unwrap();
+        coriolis_matrix(&robot, &mut ws, &q, &qd).unwrap();
+        gravity(&robot, &mut ws, &q).unwrap();
+        joint_space_terms(&robot, &mut ws, &q, &qd).unwrap();
+        forward_dynamics(&robot, &mut ws, &q, &qd, &qd).unwrap();
+        d.terms(&q, &qd, &mut h, &mut c, &mut g);
+        plant.measure(&mut x);
+        plant.step(&[1.0; 6], 0.01).unwrap();
+    }
+    assert_eq!(ALLOCS.load(Ordering::SeqCst) - before, 0);
+}
