@@ -179,8 +179,6 @@ pub struct Scenario {
     pub payloads: Vec<Payload>,
     /// Everything but controller and payload.
     pub experiment: Experiment,
-    /// The timed Cartesian path.
-    pub trajectory: CartesianTrajectory,
     /// Parser warnings, to print.
     pub warnings: Vec<String>,
 }
@@ -300,7 +298,6 @@ impl Scenario {
                 plant: f.plant.clone(),
                 loop_settings: f.simulation.clone(),
             },
-            trajectory,
             warnings,
         })
     }

@@ -9,6 +9,9 @@
 //! Motion of Industrial Articulated Robots"), e.g. *Eq. (39)*.
 
 #![warn(missing_docs)]
+// Index loops mirror the equations' subscripts (H_ij, C_ij, q_i); iterator
+// chains over several parallel arrays would read worse.
+#![allow(clippy::needless_range_loop)]
 
 pub mod control;
 pub mod dynamics;

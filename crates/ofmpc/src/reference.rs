@@ -46,7 +46,7 @@ pub enum Orientation {
 }
 
 enum Ik {
-    Analytic(IkSolver),
+    Analytic(Box<IkSolver>),
     Numeric(Box<NumericIk>, Box<RobotDynamics>),
 }
 
@@ -141,7 +141,7 @@ pub fn build_reference(
     let mut ik = if opw_matches(robot, &opw) {
         let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
         let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
-        Ik::Analytic(IkSolver::new(opw, lo, up).map_err(|e| {
+        Ik::Analytic(Box::new(IkSolver::new(opw, lo, up).map_err(|e| {
             fail(
                 0,
                 0.0,
@@ -149,7 +149,7 @@ pub fn build_reference(
                 e.to_string(),
                 "check the joint limits",
             )
-        })?)
+        })?))
     } else {
         let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
         let up: Vec<f64> = upper.iter().map(|v| v.min(1e6)).collect();

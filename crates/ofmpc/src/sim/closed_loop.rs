@@ -135,9 +135,10 @@ pub fn run_closed_loop(
         rec.flange_ref.push(reference.position(k));
         rec.step_us.push(us);
         rec.flange.push(flange);
-        if let Some(i) =
-            (0..n).find(|&i| !(rec.joint_error(k, i).abs() <= settings.divergence_threshold_rad))
-        {
+        if let Some(i) = (0..n).find(|&i| {
+            let e = rec.joint_error(k, i).abs();
+            e.is_nan() || e > settings.divergence_threshold_rad
+        }) {
             diverged_at = Some(t);
             reason = Some(format!(
                 "joint {} error {:.4} rad passed the divergence threshold {} rad at t = {t:.3} s",
