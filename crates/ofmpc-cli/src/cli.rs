@@ -44,6 +44,10 @@ pub struct TrajectoryArgs {
     /// Sample period (s).
     #[arg(long, default_value_t = 0.01)]
     pub ts: f64,
+    /// Constant flange orientation as roll,pitch,yaw in degrees (base frame,
+    /// R = Rz·Ry·Rx); default: the flange orientation at q = 0.
+    #[arg(long, allow_hyphen_values = true)]
+    pub rpy: Option<String>,
     /// Time law of each segment: `septic` (the paper's) or `quintic`.
     #[arg(long, default_value = "septic")]
     pub profile: String,

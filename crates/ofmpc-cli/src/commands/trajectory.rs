@@ -37,7 +37,14 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         max_accel: a.accel,
     };
     let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, a.ts)
+    let orientation = match &a.rpy {
+        Some(t) => {
+            let v = parse_vector("--rpy", t, Some(3))?;
+            Orientation::Fixed(nalgebra::UnitQuaternion::from_euler_angles(v[0].to_radians(), v[1].to_radians(), v[2].to_radians()))
+        }
+        None => Orientation::AtZero,
+    };
+    let reference = build_reference(&robot, &traj, orientation, a.ts)
         .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     write_atomic(&a.out, reference_csv(&reference).as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;
