@@ -342,6 +342,18 @@ fn factor_generic<const FMA: bool>(
                 }
             }
         }
+        // AVX2+FMA: blocked (compact WY) application of the panel's
+        // reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the trailing columns.
+        #[cfg(target_arch = "x86_64")]
+        if FMA {
+            let (left, right) = a.split_at_mut(c1 * m);
+            let tmat = triangular_factor(left, m, c0, c1, end, tau);
+            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
+            // only where AVX2 and FMA were detected.
+            unsafe { avx::apply_block(left, m, c0, c1 - c0, end, &tmat, right) };
+            c0 = c1;
+            continue;
+        }
         // Trailing columns c1..p−1 and b, four at a time.
         let (left, right) = a.split_at_mut(c1 * m);
         let mut quads = right.chunks_exact_mut(4 * m);
@@ -359,13 +371,6 @@ fn factor_generic<const FMA: bool>(
                         &mut q2[c..end],
                         &mut q3[c..end],
                     ];
-                    #[cfg(target_arch = "x86_64")]
-                    if FMA {
-                        // SAFETY: FMA = true only inside `factor_avx2_fma`,
-                        // which runs only where AVX2 and FMA were detected.
-                        unsafe { avx::apply4(t, vt, quad) };
-                        continue;
-                    }
                     apply4::<FMA>(t, vt, quad);
                 }
             }
@@ -381,6 +386,43 @@ fn factor_generic<const FMA: bool>(
         c0 = c1;
     }
     rmax
+}
+
+/// The upper-triangular `T` of the compact WY form `H_1 ⋯ H_k = I − V T Vᵀ`
+/// of the panel's reflectors (LAPACK `dlarft`, forward, columnwise).
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::needless_range_loop)]
+fn triangular_factor(
+    left: &[f64],
+    m: usize,
+    c0: usize,
+    c1: usize,
+    end: usize,
+    tau: &[f64],
+) -> [[f64; PANEL]; PANEL] {
+    let k = c1 - c0;
+    let mut t = [[0.0f64; PANEL]; PANEL];
+    for r in 0..k {
+        let tr = tau[c0 + r];
+        t[r][r] = tr;
+        let row0 = c0 + r;
+        let vr = &left[(c0 + r) * m + row0 + 1..(c0 + r) * m + end];
+        // z_j = −τ_r v_jᵀ v_r (v_r is zero above row0 and 1 at row0).
+        let mut z = [0.0f64; PANEL];
+        for (j, zj) in z.iter_mut().enumerate().take(r) {
+            let col = (c0 + j) * m;
+            let s = left[col + row0] + dot(&left[col + row0 + 1..col + end], vr);
+            *zj = -tr * s;
+        }
+        for i in 0..r {
+            let mut s = 0.0;
+            for j in i..r {
+                s += t[i][j] * z[j];
+            }
+            t[i][r] = s;
+        }
+    }
+    t
 }
 
 /// Dot product with four independent 4-wide accumulators.
@@ -476,9 +518,10 @@ fn apply4<const FMA: bool>(tau: f64, vt: &[f64], quad: [&mut [f64]; 4]) {
     }
 }
 
-/// Explicit AVX2+FMA kernel for [`apply4`] (same arithmetic, explicit
-/// 4-wide vectors along the rows, two accumulators per column).
+/// Explicit AVX2+FMA kernels: blocked application of a panel's reflectors in
+/// compact WY form, 4-wide vectors along the rows, two columns at a time.
 #[cfg(target_arch = "x86_64")]
+#[allow(clippy::needless_range_loop)] // index loops read like the matrix formulas
 mod avx {
     use std::arch::x86_64::*;
 
@@ -492,111 +535,168 @@ mod avx {
         _mm_cvtsd_f64(_mm_add_sd(s, h))
     }
 
-    /// `seg_q ← (I − τ v vᵀ) seg_q` for four columns, `v = [1; vt]`, each
-    /// `seg_q` at least `vt.len() + 1` long.
+    /// `A ← (I − V Tᵀ Vᵀ) A` for all trailing columns in `right` (each `m`
+    /// long), `V` the `k` reflectors of the panel starting at column `c0` of
+    /// `left` (unit diagonal implicit, rows `c0..end`), `T` from
+    /// `triangular_factor`.
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn apply4(tau: f64, vt: &[f64], quad: [&mut [f64]; 4]) {
-        let len = vt.len();
-        let [s0, s1, s2, s3] = quad;
-        // Bounds established here once; the loops below stay inside them.
-        let (s0, s1, s2, s3) = (
-            &mut s0[..len + 1],
-            &mut s1[..len + 1],
-            &mut s2[..len + 1],
-            &mut s3[..len + 1],
-        );
-        let v = vt.as_ptr();
-        let (p0, p1, p2, p3) = (
-            s0.as_mut_ptr().add(1),
-            s1.as_mut_ptr().add(1),
-            s2.as_mut_ptr().add(1),
-            s3.as_mut_ptr().add(1),
-        );
-        let z = _mm256_setzero_pd();
-        let (mut a0, mut a1, mut a2, mut a3) = (z, z, z, z);
-        let (mut b0, mut b1, mut b2, mut b3) = (z, z, z, z);
-        let mut i = 0;
-        while i + 8 <= len {
-            let va = _mm256_loadu_pd(v.add(i));
-            let vb = _mm256_loadu_pd(v.add(i + 4));
-            a0 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p0.add(i)), a0);
-            a1 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p1.add(i)), a1);
-            a2 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p2.add(i)), a2);
-            a3 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p3.add(i)), a3);
-            b0 = _mm256_fmadd_pd(vb, _mm256_loadu_pd(p0.add(i + 4)), b0);
-            b1 = _mm256_fmadd_pd(vb, _mm256_loadu_pd(p1.add(i + 4)), b1);
-            b2 = _mm256_fmadd_pd(vb, _mm256_loadu_pd(p2.add(i + 4)), b2);
-            b3 = _mm256_fmadd_pd(vb, _mm256_loadu_pd(p3.add(i + 4)), b3);
-            i += 8;
+    pub(super) unsafe fn apply_block(
+        left: &[f64],
+        m: usize,
+        c0: usize,
+        k: usize,
+        end: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+    ) {
+        match k {
+            1 => apply_block_k::<1>(left, m, c0, end, t, right),
+            2 => apply_block_k::<2>(left, m, c0, end, t, right),
+            3 => apply_block_k::<3>(left, m, c0, end, t, right),
+            4 => apply_block_k::<4>(left, m, c0, end, t, right),
+            5 => apply_block_k::<5>(left, m, c0, end, t, right),
+            6 => apply_block_k::<6>(left, m, c0, end, t, right),
+            7 => apply_block_k::<7>(left, m, c0, end, t, right),
+            _ => apply_block_k::<8>(left, m, c0, end, t, right),
         }
-        if i + 4 <= len {
-            let va = _mm256_loadu_pd(v.add(i));
-            a0 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p0.add(i)), a0);
-            a1 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p1.add(i)), a1);
-            a2 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p2.add(i)), a2);
-            a3 = _mm256_fmadd_pd(va, _mm256_loadu_pd(p3.add(i)), a3);
-            i += 4;
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn apply_block_k<const K: usize>(
+        left: &[f64],
+        m: usize,
+        c0: usize,
+        end: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+    ) {
+        // The panel's columns c0..c0+K, rows up to `end`, lie inside `left`.
+        assert!(K <= super::PANEL && (c0 + K) * m <= left.len() && end <= m && c0 + K <= end);
+        let v = left.as_ptr();
+        let mut pairs = right.chunks_exact_mut(2 * m);
+        for pair in &mut pairs {
+            let (a0, a1) = pair.split_at_mut(m);
+            block::<K, 2>(v, m, c0, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]);
         }
-        let mut d = [
-            hsum(_mm256_add_pd(a0, b0)),
-            hsum(_mm256_add_pd(a1, b1)),
-            hsum(_mm256_add_pd(a2, b2)),
-            hsum(_mm256_add_pd(a3, b3)),
-        ];
-        while i < len {
-            let vi = *v.add(i);
-            d[0] = vi.mul_add(*p0.add(i), d[0]);
-            d[1] = vi.mul_add(*p1.add(i), d[1]);
-            d[2] = vi.mul_add(*p2.add(i), d[2]);
-            d[3] = vi.mul_add(*p3.add(i), d[3]);
-            i += 1;
+        for col in pairs.into_remainder().chunks_exact_mut(m) {
+            block::<K, 1>(v, m, c0, end, t, [col.as_mut_ptr()]);
         }
-        let sc = [
-            tau * (s0[0] + d[0]),
-            tau * (s1[0] + d[1]),
-            tau * (s2[0] + d[2]),
-            tau * (s3[0] + d[3]),
-        ];
-        s0[0] -= sc[0];
-        s1[0] -= sc[1];
-        s2[0] -= sc[2];
-        s3[0] -= sc[3];
-        let (n0, n1, n2, n3) = (
-            _mm256_set1_pd(-sc[0]),
-            _mm256_set1_pd(-sc[1]),
-            _mm256_set1_pd(-sc[2]),
-            _mm256_set1_pd(-sc[3]),
-        );
+    }
+
+    /// One group of `Q` columns (each `m` long, rows `c0..end` touched).
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn block<const K: usize, const Q: usize>(
+        v: *const f64,
+        m: usize,
+        c0: usize,
+        end: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        cols: [*mut f64; Q],
+    ) {
+        // V[i, r] for i > c0 + r.
+        let vat = |i: usize, r: usize| *v.add((c0 + r) * m + i);
+        // Y = Vᵀ A: triangle rows c0..c0+K first.
+        let mut y = [[0.0f64; Q]; K];
+        for rr in 0..K {
+            for q in 0..Q {
+                let a = *cols[q].add(c0 + rr);
+                for r in 0..rr {
+                    y[r][q] = vat(c0 + rr, r).mul_add(a, y[r][q]);
+                }
+                y[rr][q] += a;
+            }
+        }
+        let start = c0 + K;
+        let len = end - start;
+        let mut acc = [[_mm256_setzero_pd(); Q]; K];
         let mut i = 0;
         while i + 4 <= len {
-            let vv = _mm256_loadu_pd(v.add(i));
-            _mm256_storeu_pd(
-                p0.add(i),
-                _mm256_fmadd_pd(n0, vv, _mm256_loadu_pd(p0.add(i))),
-            );
-            _mm256_storeu_pd(
-                p1.add(i),
-                _mm256_fmadd_pd(n1, vv, _mm256_loadu_pd(p1.add(i))),
-            );
-            _mm256_storeu_pd(
-                p2.add(i),
-                _mm256_fmadd_pd(n2, vv, _mm256_loadu_pd(p2.add(i))),
-            );
-            _mm256_storeu_pd(
-                p3.add(i),
-                _mm256_fmadd_pd(n3, vv, _mm256_loadu_pd(p3.add(i))),
-            );
+            let row = start + i;
+            let mut av = [_mm256_setzero_pd(); Q];
+            for q in 0..Q {
+                av[q] = _mm256_loadu_pd(cols[q].add(row));
+            }
+            for r in 0..K {
+                let vv = _mm256_loadu_pd(v.add((c0 + r) * m + row));
+                for q in 0..Q {
+                    acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
+                }
+            }
+            i += 4;
+        }
+        for r in 0..K {
+            for q in 0..Q {
+                y[r][q] += hsum(acc[r][q]);
+            }
+        }
+        while i < len {
+            let row = start + i;
+            for r in 0..K {
+                let vr = vat(row, r);
+                for q in 0..Q {
+                    y[r][q] = vr.mul_add(*cols[q].add(row), y[r][q]);
+                }
+            }
+            i += 1;
+        }
+        // W = Tᵀ Y.
+        let mut w = [[0.0f64; Q]; K];
+        for r in 0..K {
+            for j in 0..=r {
+                for q in 0..Q {
+                    w[r][q] = t[j][r].mul_add(y[j][q], w[r][q]);
+                }
+            }
+        }
+        // A −= V W: triangle rows.
+        for rr in 0..K {
+            for q in 0..Q {
+                let mut s = w[rr][q];
+                for r in 0..rr {
+                    s = vat(c0 + rr, r).mul_add(w[r][q], s);
+                }
+                *cols[q].add(c0 + rr) -= s;
+            }
+        }
+        // Full rows.
+        let mut wb = [[_mm256_setzero_pd(); Q]; K];
+        for r in 0..K {
+            for q in 0..Q {
+                wb[r][q] = _mm256_set1_pd(-w[r][q]);
+            }
+        }
+        let mut i = 0;
+        while i + 4 <= len {
+            let row = start + i;
+            let mut av = [_mm256_setzero_pd(); Q];
+            for q in 0..Q {
+                av[q] = _mm256_loadu_pd(cols[q].add(row));
+            }
+            for r in 0..K {
+                let vv = _mm256_loadu_pd(v.add((c0 + r) * m + row));
+                for q in 0..Q {
+                    av[q] = _mm256_fmadd_pd(wb[r][q], vv, av[q]);
+                }
+            }
+            for q in 0..Q {
+                _mm256_storeu_pd(cols[q].add(row), av[q]);
+            }
             i += 4;
         }
         while i < len {
-            let vi = *v.add(i);
-            *p0.add(i) = (-sc[0]).mul_add(vi, *p0.add(i));
-            *p1.add(i) = (-sc[1]).mul_add(vi, *p1.add(i));
-            *p2.add(i) = (-sc[2]).mul_add(vi, *p2.add(i));
-            *p3.add(i) = (-sc[3]).mul_add(vi, *p3.add(i));
+            let row = start + i;
+            for q in 0..Q {
+                let mut a = *cols[q].add(row);
+                for r in 0..K {
+                    a = (-w[r][q]).mul_add(vat(row, r), a);
+                }
+                *cols[q].add(row) = a;
+            }
             i += 1;
         }
     }
