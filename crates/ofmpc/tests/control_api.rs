@@ -78,6 +78,9 @@ fn settings_parse_from_toml_with_scalars_diagonals_and_defaults() {
             got: 3
         })
     );
+    // Round trip through TOML.
+    let back: MpcSettings = toml::from_str(&toml::to_string(&s).unwrap()).unwrap();
+    assert_eq!(back, s);
     let e = toml::from_str::<MpcSettings>("horizont = 5").unwrap_err();
     assert!(e.to_string().contains("horizont"), "{e}");
     assert!(toml::from_str::<MpcSettings>("q_yw = \"big\"").is_err());
