@@ -67,7 +67,6 @@ fn incremental_and_positional_predictions_match_rollouts() {
                 let dx = rng.vector(nx);
                 let du = rng.vector(nh * nu);
                 let xk = rng.vector(nx);
-                let xk1 = &xk - &dx; // x_{k-1}
                 let yk = &c * &xk;
                 let ebar = rng.vector(ny);
                 let w = rng.vector(nh * ny); // w_{k+1..k+N}
@@ -120,7 +119,6 @@ fn incremental_and_positional_predictions_match_rollouts() {
                     rel(&ypos_p, &ypos, scale(&ypos)) < 1e-12,
                     "Y positional nx={nx} N={nh}"
                 );
-                let _ = xk1;
             }
         }
     }

@@ -184,3 +184,36 @@ fn steps_solve_the_papers_least_squares_systems() {
         }
     }
 }
+
+/// The test models are valid robot models: `H` SPD and `Ḣ − 2C` skew
+/// (finite differences of `H` along `q̇`).
+#[test]
+fn test_models_are_christoffel_consistent() {
+    let mut models: Vec<Box<dyn JointSpaceDynamics>> = vec![
+        Box::new(CoupledModel::new(4, 3)),
+        Box::new(common::TwoLinkArm::new()),
+    ];
+    for model in &mut models {
+        let n = model.dof();
+        let mut rng = Rng(8);
+        let q: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let qd: Vec<f64> = (0..n).map(|_| rng.next()).collect();
+        let (mut h, mut c, mut g) = (
+            DMatrix::<f64>::zeros(n, n),
+            DMatrix::<f64>::zeros(n, n),
+            DVector::<f64>::zeros(n),
+        );
+        let (mut hp, mut hm) = (h.clone(), h.clone());
+        let eps = 1e-6;
+        let qp: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a + eps * b).collect();
+        let qm: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a - eps * b).collect();
+        model.terms(&qp, &qd, &mut hp, &mut c, &mut g);
+        model.terms(&qm, &qd, &mut hm, &mut c, &mut g);
+        model.terms(&q, &qd, &mut h, &mut c, &mut g);
+        let hdot = (hp - hm) / (2.0 * eps);
+        let n_mat = &hdot - &c * 2.0;
+        assert!((&n_mat + n_mat.transpose()).norm() < 1e-8 * hdot.norm().max(1.0));
+        assert!(h.clone().cholesky().is_some());
+        assert!(c.norm() > 0.0);
+    }
+}

@@ -256,7 +256,7 @@ impl Core {
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
             *u = if incremental { prev + d } else { *d };
         }
-        self.model.torque(&self.u_new, &mut self.tau_new);
+        self.model.torque(&self.u_new, &mut self.tau_new)?;
         if let Some(index) = self
             .u_new
             .iter()

@@ -29,7 +29,7 @@ pub mod zoh;
 use std::fmt;
 use std::str::FromStr;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::dynamics::JointSpaceDynamics;
 
@@ -44,7 +44,7 @@ pub use zoh::{Zoh, ZohError};
 
 /// Which of the paper's three controllers. Serde names: `"usual"`, `"first"`,
 /// `"second"`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ControllerKind {
     /// Usual positional MPC, Eq. (43): no integrator, steady offset under mismatch.

@@ -25,6 +25,16 @@ pub enum ModelError {
         /// Column-major index of the first bad entry.
         index: usize,
     },
+    /// A slice or matrix passed in has the wrong size.
+    #[error("{what} has {got} entries but the model has {expected} joints (n for q, q̇, u, τ; n×n for H and C)")]
+    WrongLength {
+        /// Which argument.
+        what: &'static str,
+        /// Needed length (`n`, or `n·n` for matrices).
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
     /// `H` is not symmetric positive definite (Cholesky pivot ≤ 0).
     #[error("the inertia matrix H is not positive definite (Cholesky pivot {pivot} = {value:e}): check the model's masses, inertias and armature")]
     InertiaNotPositiveDefinite {
@@ -81,6 +91,8 @@ impl LinearLikeModel {
                 got: model.dof(),
             });
         }
+        check_len("q", q.len(), self.n)?;
+        check_len("qd", qd.len(), self.n)?;
         model.terms(q, qd, &mut self.h, &mut self.c, &mut self.g);
         self.set_f0_from_terms()
     }
@@ -94,11 +106,18 @@ impl LinearLikeModel {
         g: &DVector<f64>,
     ) -> Result<(), ModelError> {
         let n = self.n;
-        if h.shape() != (n, n) || c.shape() != (n, n) || g.len() != n {
-            return Err(ModelError::DofMismatch {
-                expected: n,
-                got: h.nrows(),
-            });
+        for (what, shape, want) in [
+            ("H", h.shape(), (n, n)),
+            ("C", c.shape(), (n, n)),
+            ("g", (g.len(), 1), (n, 1)),
+        ] {
+            if shape != want {
+                return Err(ModelError::WrongLength {
+                    what,
+                    expected: want.0 * want.1,
+                    got: shape.0 * shape.1,
+                });
+            }
         }
         self.h.copy_from(h);
         self.c.copy_from(c);
@@ -150,21 +169,39 @@ impl LinearLikeModel {
 
     /// Torques from the acceleration-like input: `τ = H u + g` (Eq. (15)),
     /// with the `H`, `g` of the last update. Slices of length `n`.
-    pub fn torque(&self, u: &[f64], tau: &mut [f64]) {
+    pub fn torque(&self, u: &[f64], tau: &mut [f64]) -> Result<(), ModelError> {
         let n = self.n;
+        check_len("u", u.len(), n)?;
+        check_len("tau", tau.len(), n)?;
         tau.copy_from_slice(self.g.as_slice());
-        for (j, &uj) in u.iter().enumerate().take(n) {
-            super::dense::axpy(uj, &self.h.as_slice()[j * n..j * n + n], tau);
+        for (&uj, hj) in u.iter().zip(self.h.as_slice().chunks_exact(n.max(1))) {
+            super::dense::axpy(uj, hj, tau);
         }
+        Ok(())
     }
 
     /// The input `u = H⁻¹(τ − g)` of Eq. (7) for given torques (inverse of
     /// [`LinearLikeModel::torque`]). Slices of length `n`.
-    pub fn input_from_torque(&self, tau: &[f64], u: &mut [f64]) {
+    pub fn input_from_torque(&self, tau: &[f64], u: &mut [f64]) -> Result<(), ModelError> {
+        check_len("tau", tau.len(), self.n)?;
+        check_len("u", u.len(), self.n)?;
         for ((ui, ti), gi) in u.iter_mut().zip(tau).zip(self.g.iter()) {
             *ui = ti - gi;
         }
         cholesky_solve_in_place(self.n, self.chol.as_slice(), u);
+        Ok(())
+    }
+}
+
+fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), ModelError> {
+    if got == expected {
+        Ok(())
+    } else {
+        Err(ModelError::WrongLength {
+            what,
+            expected,
+            got,
+        })
     }
 }
 
@@ -242,11 +279,12 @@ mod tests {
             // τ = H u + g and back.
             let u: Vec<f64> = (0..n).map(|i| 0.3 * i as f64 - 0.7).collect();
             let mut tau = vec![0.0; n];
-            m.torque(&u, &mut tau);
+            m.torque(&u, &mut tau).unwrap();
             let want_tau = &h * DVector::from_column_slice(&u) + &g;
             assert!((DVector::from_column_slice(&tau) - want_tau).norm() < 1e-12);
             let mut u2 = vec![0.0; n];
-            m.input_from_torque(&tau, &mut u2);
+            m.input_from_torque(&tau, &mut u2).unwrap();
+            assert!(m.torque(&u[..n - 1], &mut tau).is_err());
             for (a, b) in u.iter().zip(&u2) {
                 assert!((a - b).abs() < 1e-10);
             }

@@ -1,7 +1,7 @@
 //! Tuning of the predictive controllers: sampling period, horizon and the
 //! square-root weights `Q` of the cost functions (30), (33) and (43).
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
@@ -11,7 +11,7 @@ pub const MAX_HORIZON: usize = 1000;
 /// Either a scalar `s` meaning `s·I` for any number of joints, or a per-joint
 /// diagonal `diag(q_1, …, q_n)`. In TOML/JSON: a number (`q_yw = 1.0`) or an
 /// array (`q_yw = [1.0, 1.0, 2.0, 1.0, 1.0, 1.0]`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Weight {
     /// `s·I`, any number of joints.
@@ -87,7 +87,7 @@ impl Weight {
 /// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
 ///
 /// All `Q` are square roots: the cost uses `QᵀQ` (Eq. (31)).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MpcSettings {
     /// Sampling period `Ts` in seconds (default 0.01).

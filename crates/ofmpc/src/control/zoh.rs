@@ -40,6 +40,14 @@ pub enum ZohError {
         /// The 1-norm of `f0·Ts`.
         norm: f64,
     },
+    /// `f0` (or an output matrix) has the wrong shape.
+    #[error("a matrix has shape {got:?} but the discretization was built for n = {n} (f0 n×n, Ad 2n×2n, Bd 2n×n)")]
+    WrongShape {
+        /// Joints the `Zoh` was built for.
+        n: usize,
+        /// Shape of the given `f0`.
+        got: (usize, usize),
+    },
     /// The result overflowed.
     #[error("the zero-order-hold matrices overflowed (e^(f0·Ts) too large): the model is violently unstable over one sample")]
     Overflow,
@@ -83,7 +91,9 @@ impl Zoh {
     /// Discretizes with sampling period `ts` (Eq. (13)). `f0` is n×n.
     pub fn discretize(&mut self, f0: &DMatrix<f64>, ts: f64) -> Result<(), ZohError> {
         let n = self.n;
-        debug_assert_eq!(f0.shape(), (n, n));
+        if f0.shape() != (n, n) {
+            return Err(ZohError::WrongShape { n, got: f0.shape() });
+        }
         // X = f0·Ts / 2^s
         for (x, f) in self.x.as_mut_slice().iter_mut().zip(f0.as_slice()) {
             *x = f * ts;
@@ -225,8 +235,17 @@ impl Zoh {
     }
 
     /// Writes the full `Ad` (2n×2n) and `Bd` (2n×n) of Eq. (13).
-    pub fn fill_discrete(&self, ad: &mut DMatrix<f64>, bd: &mut DMatrix<f64>) {
+    pub fn fill_discrete(
+        &self,
+        ad: &mut DMatrix<f64>,
+        bd: &mut DMatrix<f64>,
+    ) -> Result<(), ZohError> {
         let n = self.n;
+        for (shape, want) in [(ad.shape(), (2 * n, 2 * n)), (bd.shape(), (2 * n, n))] {
+            if shape != want {
+                return Err(ZohError::WrongShape { n, got: shape });
+            }
+        }
         ad.fill(0.0);
         for i in 0..n {
             ad[(i, i)] = 1.0;
@@ -235,6 +254,7 @@ impl Zoh {
         ad.view_mut((n, n), (n, n)).copy_from(&self.e);
         bd.view_mut((0, 0), (n, n)).copy_from(&self.phi2);
         bd.view_mut((n, 0), (n, n)).copy_from(&self.phi1);
+        Ok(())
     }
 }
 
@@ -285,7 +305,7 @@ mod tests {
                     z.discretize(&f0, ts).unwrap();
                     let mut ad = DMatrix::zeros(2 * n, 2 * n);
                     let mut bd = DMatrix::zeros(2 * n, n);
-                    z.fill_discrete(&mut ad, &mut bd);
+                    z.fill_discrete(&mut ad, &mut bd).unwrap();
                     let (ad_ref, bd_ref) = reference(&f0, ts);
                     let (ea, eb) = (rel(&ad, &ad_ref), rel(&bd, &bd_ref));
                     assert!(

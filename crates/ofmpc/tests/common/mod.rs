@@ -69,6 +69,8 @@ pub struct CoupledModel {
     pub a: Vec<f64>,
     pub s: Vec<DMatrix<f64>>,
     pub gamma: Vec<f64>,
+    /// d_k = −a_k sin q_k of the current call (buffer, no allocation in terms).
+    dk: Vec<f64>,
 }
 
 impl CoupledModel {
@@ -87,11 +89,13 @@ impl CoupledModel {
         let gamma = (0..n)
             .map(|i| 5.0 * (1.0 + 0.3 * rng.next()) / (1.0 + i as f64))
             .collect();
-        Self { h0, a, s, gamma }
-    }
-
-    fn dk(&self, k: usize, q: &[f64]) -> f64 {
-        -self.a[k] * q[k].sin()
+        Self {
+            h0,
+            a,
+            s,
+            gamma,
+            dk: vec![0.0; n],
+        }
     }
 }
 
@@ -118,15 +122,19 @@ impl JointSpaceDynamics for CoupledModel {
             }
         }
         // C_ij = ½ Σ_k (∂H_ij/∂q_k + ∂H_ik/∂q_j − ∂H_jk/∂q_i) q̇_k, ∂H/∂q_k = d_k S_k.
+        for k in 0..n {
+            self.dk[k] = -self.a[k] * q[k].sin();
+        }
         for j in 0..n {
-            let dj = self.dk(j, q);
+            let dj = self.dk[j];
             for i in 0..n {
-                let di = self.dk(i, q);
+                let di = self.dk[i];
+                let (sj, si) = (self.s[j].as_slice(), self.s[i].as_slice());
                 let mut sum = 0.0;
                 for k in 0..n {
-                    let dk = self.dk(k, q);
-                    sum += (dk * self.s[k][(i, j)] + dj * self.s[j][(i, k)]
-                        - di * self.s[i][(j, k)])
+                    // S symmetric, column-major: S_k[i,j] = [j*n+i], S_j[i,k] = [k*n+i], S_i[j,k] = [k*n+j].
+                    let sk = self.s[k].as_slice();
+                    sum += (self.dk[k] * sk[j * n + i] + dj * sj[k * n + i] - di * si[k * n + j])
                         * qd[k];
                 }
                 c[(i, j)] = 0.5 * sum;
