@@ -1,26 +1,23 @@
 //! Per-step cost of the three controllers (model terms, f0, ZOH, predictions,
-//! building 𝒜 and b, QR solve) with a 6-joint test model, N = 5 … 100, and
-//! the least-squares solve alone.
+//! building 𝒜 and b, QR solve) on the IRB 140 model, N = 5 … 100, and the
+//! least-squares solve alone.
 //!
 //! Run: `cargo bench -p ofmpc --bench control`.
 
-#[path = "../tests/common/mod.rs"]
-mod common;
-
-use common::CoupledModel;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::lsq::lsq_flops;
 use ofmpc::control::{
     new_controller, ControllerKind, LinearLikeModel, LsqWorkspace, MpcSettings, Predictions, Zoh,
 };
-use ofmpc::dynamics::JointSpaceDynamics;
+use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
+use ofmpc::robot::Robot;
 use std::hint::black_box;
 use std::time::Duration;
 
 fn steps(c: &mut Criterion) {
     let n = 6;
-    let mut group = c.benchmark_group("step_n6");
+    let mut group = c.benchmark_group("step_irb140");
     group.warm_up_time(Duration::from_millis(300));
     group.measurement_time(Duration::from_secs(1));
     group.sample_size(20);
@@ -31,11 +28,16 @@ fn steps(c: &mut Criterion) {
         };
         for kind in ControllerKind::ALL {
             let mut ctrl = new_controller(kind, n, &s).unwrap();
-            let mut model = CoupledModel::new(n, 1);
-            let x: Vec<f64> = (0..2 * n).map(|i| 0.1 * i as f64 - 0.3).collect();
+            let mut model = RobotDynamics::new(Robot::irb140());
+            // A state on the paper's path (moving), and a reference near it.
+            let x = vec![
+                -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
+            ];
             ctrl.reset(&x).unwrap();
-            let wk = vec![0.2; n];
-            let preview = vec![0.2; n * nh];
+            let wk: Vec<f64> = x[..n].iter().map(|q| q + 1e-3).collect();
+            let preview: Vec<f64> = (0..nh)
+                .flat_map(|j| x[..n].iter().map(move |q| q + 1e-3 * (j + 2) as f64))
+                .collect();
             let mut tau = vec![0.0; n];
             group.bench_with_input(BenchmarkId::new(kind.name(), nh), &nh, |b, _| {
                 b.iter(|| {
@@ -90,12 +92,14 @@ fn solve(c: &mut Criterion) {
 fn parts(c: &mut Criterion) {
     let n = 6;
     let nh = 10;
-    let mut group = c.benchmark_group("parts_n6_N10");
+    let mut group = c.benchmark_group("parts_irb140_N10");
     group.warm_up_time(Duration::from_millis(300));
     group.measurement_time(Duration::from_secs(1));
     group.sample_size(20);
-    let mut model = CoupledModel::new(n, 1);
-    let x: Vec<f64> = (0..2 * n).map(|i| 0.1 * i as f64 - 0.3).collect();
+    let mut model = RobotDynamics::new(Robot::irb140());
+    let x = vec![
+        -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
+    ];
     let (mut h, mut cc, mut g) = (
         DMatrix::zeros(n, n),
         DMatrix::zeros(n, n),

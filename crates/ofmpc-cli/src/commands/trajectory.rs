@@ -40,7 +40,11 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let orientation = match &a.rpy {
         Some(t) => {
             let v = parse_vector("--rpy", t, Some(3))?;
-            Orientation::Fixed(nalgebra::UnitQuaternion::from_euler_angles(v[0].to_radians(), v[1].to_radians(), v[2].to_radians()))
+            Orientation::Fixed(nalgebra::UnitQuaternion::from_euler_angles(
+                v[0].to_radians(),
+                v[1].to_radians(),
+                v[2].to_radians(),
+            ))
         }
         None => Orientation::AtZero,
     };
