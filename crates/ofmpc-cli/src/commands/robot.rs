@@ -1,9 +1,8 @@
 //! Robot selection shared by the commands: `--robot`, `--drives`, `--payload`.
 
 use crate::cli::RobotArgs;
-use anyhow::{bail, Context};
-use ofmpc::robot::{Drives, Payload, Robot};
-use std::path::Path;
+use anyhow::bail;
+use ofmpc::robot::{Payload, Robot};
 
 /// Loads the robot named by `--robot` (built-in name or URDF path), applies
 /// `--drives` and a point-mass payload at the flange.
