@@ -7,18 +7,7 @@ use ofmpc::robot::{Payload, Robot};
 /// Loads the robot named by `--robot` (built-in name or URDF path), applies
 /// `--drives` and a point-mass payload at the flange.
 pub fn load_robot(args: &RobotArgs, payload_kg: f64) -> anyhow::Result<Robot> {
-    let path = Path::new(&args.robot);
-    let mut robot = if args.robot.ends_with(".urdf") || path.exists() {
-        Robot::from_urdf_file(path)?
-    } else {
-        Robot::builtin(&args.robot)?
-    };
-    if let Some(d) = &args.drives {
-        let drives = Drives::from_file(d)?;
-        robot
-            .apply_drives(&drives)
-            .with_context(|| format!("applying {}", d.display()))?;
-    }
+    let mut robot = crate::scenario::load_robot(&args.robot, args.drives.as_deref())?;
     if !payload_kg.is_finite() || payload_kg < 0.0 {
         bail!("--payload {payload_kg}: the payload must be a finite mass ≥ 0 kg");
     }
