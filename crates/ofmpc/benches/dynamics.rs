@@ -56,6 +56,26 @@ fn bench(c: &mut Criterion) {
             .map(|a| a[0])
         })
     });
+    // Baseline in the same run: H column by column from n inverse dynamics
+    // calls with unit accelerations (what CRBA saves).
+    let zero = [0.0; 6];
+    let mut h = nalgebra::DMatrix::zeros(6, 6);
+    g.bench_function("baseline: H by 6 RNEA calls", |b| {
+        b.iter(|| {
+            let g0 = rnea(&robot, &mut ws, black_box(&q), &zero, &zero).map(|t| t.clone_owned());
+            let g0 = g0.unwrap_or_else(|_| nalgebra::DVector::zeros(6));
+            for j in 0..6 {
+                let mut e = [0.0; 6];
+                e[j] = 1.0;
+                if let Ok(t) = rnea(&robot, &mut ws, &q, &zero, &e) {
+                    for i in 0..6 {
+                        h[(i, j)] = t[i] - g0[i];
+                    }
+                }
+            }
+            h[(0, 0)]
+        })
+    });
     g.finish();
 }
 
