@@ -204,3 +204,32 @@ fn render_writes_both_files_or_neither() {
     names.sort();
     assert_eq!(names, vec!["fig6.png", "fig6.svg"]);
 }
+
+#[test]
+fn extreme_values_render() {
+    use output::plot::{Figure, Panel, Series};
+    let cases: [(&str, Vec<f64>, Vec<f64>); 6] = [
+        ("huge span", vec![0.0, 1.0], vec![-1e308, 1e308]),
+        ("max span", vec![0.0, 1.0], vec![-f64::MAX, f64::MAX]),
+        ("tiny values", vec![0.0, 1.0], vec![1e-308, 3e-308]),
+        ("huge x", vec![-1e300, 1e300], vec![0.0, 1.0]),
+        (
+            "huge offset",
+            vec![0.0, 1.0, 2.0],
+            vec![1e12, 1e12 + 1e-3, 1e12 + 2e-3],
+        ),
+        ("all NaN", vec![f64::NAN, 1.0], vec![2.0, f64::NAN]),
+    ];
+    for (name, x, y) in cases {
+        for log_y in [false, true] {
+            let mut fig = Figure::new(name, 1);
+            let mut p = Panel::new(name, "x", "y");
+            p.log_y = log_y;
+            p.series.push(Series::line("s", x.clone(), y.clone(), 1));
+            p.series.push(Series::markers("m", x.clone(), y.clone(), 2));
+            fig.panels.push(p);
+            let r = plot::render_both(&fig).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(decode_png(&r.png).width, fig.canvas_size().0);
+        }
+    }
+}

@@ -6,9 +6,11 @@
 //! (The SVG names the family `sans-serif` and is laid out with DejaVu metrics; a viewer draws its
 //! own sans-serif font.)
 //!
-//! Data handling: points with a NaN or infinite coordinate are skipped and break a line into
-//! separate pieces (a diverged run ends its line instead of drawing a spike); on a logarithmic
-//! axis points with y ≤ 0 are skipped too. Long lines with non-decreasing x are reduced to the
+//! Data handling: points with a NaN or infinite coordinate (or one beyond ±[`HUGE`]) are
+//! skipped and break a line into separate pieces (a diverged run ends its line instead of
+//! drawing a spike); on a logarithmic axis points with y < [`TINY`] (so all y ≤ 0) are skipped
+//! too. An axis range is never degenerate: no data gives [0, 1], constant data a band around
+//! the value. Long lines with non-decreasing x are reduced to the
 //! first, lowest, highest and last point of each pixel column (M4 reduction), which draws
 //! the same pixels with far fewer points and keeps the SVG small. Markers that land on the same
 //! pixel are drawn once.
@@ -467,9 +469,20 @@ struct Prepared<'a> {
     runs: Vec<Vec<(f64, f64)>>,
 }
 
+/// Magnitudes above this are treated like infinity (skipped): plotters' tick computation
+/// overflows on spans near `f64::MAX`, and such values only occur in diverged runs.
+pub const HUGE: f64 = 1e250;
+
+/// Spans below this are treated as zero: ticks this fine would need subnormal numbers.
+pub const TINY: f64 = 1e-250;
+
+/// Range of y values shown on a logarithmic axis (others are skipped). plotters' log ticks
+/// need the axis end ratio to stay finite, so the axis may cover at most ~300 decades.
+pub const LOG_LIMITS: (f64, f64) = (1e-150, 1e150);
+
 /// Whether (x, y) can be drawn on this panel.
 fn valid(x: f64, y: f64, log_y: bool) -> bool {
-    x.is_finite() && y.is_finite() && (!log_y || y > 0.0)
+    x.abs() <= HUGE && y.abs() <= HUGE && (!log_y || (LOG_LIMITS.0..=LOG_LIMITS.1).contains(&y))
 }
 
 /// Splits a series into runs of valid points.
@@ -497,30 +510,31 @@ fn min_max(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     })
 }
 
-/// A non-degenerate linear axis range containing `data`, padded by `pad` of the span on each
-/// side. An empty range gives [0, 1]; a (nearly) constant one is widened to ±10 % of the value
-/// (±1 around 0). Spans below 1e-9 of the magnitude count as constant: plotting them would
-/// only show floating-point noise.
+/// A non-degenerate linear axis range containing `data` (values within ±[`HUGE`]), padded by
+/// `pad` (≤ 1) of the span on each side. An empty range gives [0, 1]; a (nearly) constant one
+/// is widened to ±10 % of the value (±1 around 0, at least ±[`TINY`]). Spans below 1e-9 of the
+/// magnitude count as constant: plotting them would only show floating-point noise.
 pub fn linear_range(data: Option<(f64, f64)>, pad: f64) -> (f64, f64) {
     let Some((lo, hi)) = data else {
         return (0.0, 1.0);
     };
     let mag = lo.abs().max(hi.abs());
     let span = hi - lo;
-    if span <= 1e-9 * mag || span == 0.0 {
-        let mid = 0.5 * (lo + hi);
-        let half = if mid == 0.0 { 1.0 } else { 0.1 * mid.abs() };
+    if span <= 1e-9 * mag || span < TINY {
+        let mid = 0.5 * lo + 0.5 * hi;
+        let half = if mid == 0.0 {
+            1.0
+        } else {
+            (0.1 * mid.abs()).max(TINY)
+        };
         return (mid - half, mid + half);
-    }
-    if !span.is_finite() {
-        // lo and hi are finite but their difference overflows: no room for padding.
-        return (lo, hi);
     }
     (lo - pad * span, hi + pad * span)
 }
 
-/// A non-degenerate logarithmic range containing positive `data`, padded by 5 % of its width
-/// in decades on each side; a constant value v gives [v/2, 2v], no data [1, 10].
+/// A non-degenerate logarithmic range containing `data` (within [`LOG_LIMITS`]), padded by 5 %
+/// of its width in decades on each side (at most 2 decades); a constant value v gives
+/// [v/2, 2v], no data [1, 10].
 pub fn log_range(data: Option<(f64, f64)>) -> (f64, f64) {
     let Some((lo, hi)) = data else {
         return (1.0, 10.0);
@@ -528,56 +542,48 @@ pub fn log_range(data: Option<(f64, f64)>) -> (f64, f64) {
     if hi <= lo * (1.0 + 1e-9) {
         return (lo / 2.0, hi * 2.0);
     }
-    let f = (hi / lo).powf(0.05);
+    // 5 % of the decades, computed in logarithms so that hi / lo cannot overflow.
+    let f = 10f64.powf((0.05 * (hi.log10() - lo.log10())).min(2.0));
     (lo / f, hi * f)
 }
 
 /// Shared precision for the tick labels of one linear axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TickFormat {
-    /// Common power of ten (0 = plain decimal notation).
+    /// Power of ten by which the axis values were divided (0 = plain decimal notation); shown
+    /// as an `e<exponent>` suffix on every label.
     pub exponent: i32,
     /// Digits after the decimal point of the mantissa.
     pub decimals: usize,
 }
 
 impl TickFormat {
-    /// Chooses one format for all `ticks` (the axis key points): plain notation for magnitudes
-    /// in [0.01, 1e5), otherwise mantissa·10^E with E of the largest tick; the fewest decimals
-    /// that print every tick distinctly and within 1 ‰ of the tick step.
-    pub fn for_ticks(ticks: &[f64]) -> Self {
-        let finite: Vec<f64> = ticks.iter().copied().filter(|v| v.is_finite()).collect();
-        let mag = finite.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        if mag == 0.0 {
-            return Self {
-                exponent: 0,
-                decimals: 0,
-            };
-        }
-        let mut sorted = finite.clone();
+    /// Chooses one format for all `ticks` (the axis key points, already divided by
+    /// 10^`exponent`): the fewest decimals that print every tick distinctly and within 1 ‰ of
+    /// the tick step.
+    pub fn for_ticks(ticks: &[f64], exponent: i32) -> Self {
+        let mut sorted: Vec<f64> = ticks.iter().copied().filter(|v| v.is_finite()).collect();
         sorted.sort_by(f64::total_cmp);
+        let mag = sorted.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let step = sorted
             .windows(2)
             .map(|w| w[1] - w[0])
             .filter(|d| *d > 0.0)
             .fold(f64::INFINITY, f64::min);
-        let step = if step.is_finite() { step } else { mag };
-        let exponent = if (1e-2..1e5).contains(&mag) {
-            0
+        // A single tick has no step; any precision that shows it exactly to 3 digits will do.
+        let step = if step.is_finite() {
+            step
         } else {
-            mag.log10().floor() as i32
+            mag.max(1.0) * 1e-3
         };
-        let scale = 10f64.powi(exponent);
-        let base = (-((step / scale).log10() + 1e-9).floor()).max(0.0) as usize;
+        let base = (-(step.log10() + 1e-9).floor()).max(0.0) as usize;
         for decimals in base..base + 4 {
             let f = Self { exponent, decimals };
             let texts: Vec<String> = sorted.iter().map(|&v| f.format(v)).collect();
             let distinct = texts.windows(2).all(|w| w[0] != w[1]);
             let accurate = sorted.iter().all(|&v| {
-                let m: f64 = format!("{:.*}", decimals, v / scale)
-                    .parse()
-                    .unwrap_or(f64::NAN);
-                (m * scale - v).abs() <= 1e-3 * step
+                let m: f64 = format!("{v:.decimals$}").parse().unwrap_or(f64::NAN);
+                (m - v).abs() <= 1e-3 * step
             });
             if distinct && accurate {
                 return f;
@@ -589,10 +595,10 @@ impl TickFormat {
         }
     }
 
-    /// Formats one value (zero is always `"0"`, never `"-0.00"`).
+    /// Formats one (divided) value: mantissa with the chosen decimals and the `e` suffix;
+    /// zero is always `"0"`, never `"-0.00"` or `"0e-4"`.
     pub fn format(&self, v: f64) -> String {
-        let scale = 10f64.powi(self.exponent);
-        let m = format!("{:.*}", self.decimals, v / scale);
+        let m = format!("{:.*}", self.decimals, v);
         if m.parse::<f64>().map(|p| p == 0.0).unwrap_or(false) {
             return "0".to_string();
         }
@@ -601,6 +607,59 @@ impl TickFormat {
         } else {
             format!("{m}e{}", self.exponent)
         }
+    }
+}
+
+/// The power of ten an axis with largest magnitude `mag` is divided by: 0 for magnitudes in
+/// [0.01, 1e5) (and 0), else ⌊log10 mag⌋. Besides short labels this keeps the values handed to
+/// plotters near 1: its tick computation uses absolute tolerances (f64::EPSILON) and produces
+/// wrong ticks for spans below about 1e-14.
+pub fn axis_exponent(mag: f64) -> i32 {
+    if mag == 0.0 || !mag.is_finite() || (1e-2..1e5).contains(&mag) {
+        0
+    } else {
+        mag.log10().floor() as i32
+    }
+}
+
+/// A linear axis ready for plotters: values are divided by 10^`exponent`, `range` is in those
+/// units, `format` labels them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinearAxis {
+    /// Power of ten the data is divided by.
+    pub exponent: i32,
+    /// Axis range in divided units (never degenerate, see [`linear_range`]).
+    pub range: (f64, f64),
+    /// Tick label format.
+    pub format: TickFormat,
+    /// Number of labels to request from plotters (`x_labels`/`y_labels`): the requested count,
+    /// raised where plotters would otherwise place fewer than two ticks.
+    pub labels: usize,
+}
+
+impl LinearAxis {
+    /// Axis for data spanning `data` (raw units), padded by `pad` of the span, with about
+    /// `labels` tick labels.
+    pub fn new(data: Option<(f64, f64)>, pad: f64, labels: usize) -> Self {
+        let exponent = axis_exponent(data.map_or(0.0, |(lo, hi)| lo.abs().max(hi.abs())));
+        let s = 10f64.powi(-exponent);
+        let range = linear_range(data.map(|(lo, hi)| (lo * s, hi * s)), pad);
+        let coord = RangedCoordf64::from(range.0..range.1);
+        let (labels, ticks) = (labels.max(2)..labels.max(2) + 12)
+            .map(|n| (n, coord.key_points(n)))
+            .find(|(_, t)| t.len() >= 2)
+            .unwrap_or_else(|| (labels, coord.key_points(labels)));
+        Self {
+            exponent,
+            range,
+            format: TickFormat::for_ticks(&ticks, exponent),
+            labels,
+        }
+    }
+
+    /// Factor from raw to axis units (10^-exponent).
+    pub fn scale(&self) -> f64 {
+        10f64.powi(-self.exponent)
     }
 }
 
@@ -688,79 +747,94 @@ fn draw_panel<DB: DrawingBackend>(
     panel: &Panel,
     fig: &Figure,
 ) -> Result<(), PlotError> {
+    const N_LABELS: usize = 6;
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    let runs: Vec<Vec<Vec<(f64, f64)>>> = panel
+        .series
+        .iter()
+        .map(|s| split_runs(s, panel.log_y))
+        .collect();
+    let points = || runs.iter().flatten().flatten();
+    let x_axis = LinearAxis::new(min_max(points().map(|p| p.0)), 0.0, N_LABELS);
+    let y_data = min_max(points().map(|p| p.1));
+    let y_axis = (!panel.log_y).then(|| LinearAxis::new(y_data, 0.05, N_LABELS));
+    // Points in axis units (the log axis is not divided).
+    let (sx, sy) = (
+        x_axis.scale(),
+        y_axis.as_ref().map_or(1.0, LinearAxis::scale),
+    );
     let prepared: Vec<Prepared> = panel
         .series
         .iter()
-        .map(|s| Prepared {
-            series: s,
-            runs: split_runs(s, panel.log_y),
+        .zip(runs)
+        .map(|(series, runs)| Prepared {
+            series,
+            runs: runs
+                .into_iter()
+                .map(|r| r.into_iter().map(|(x, y)| (x * sx, y * sy)).collect())
+                .collect(),
         })
         .collect();
-    let points = || prepared.iter().flat_map(|p| p.runs.iter().flatten());
-    let x_range = linear_range(min_max(points().map(|p| p.0)), 0.0);
-    let y_data = min_max(points().map(|p| p.1));
 
     let mut builder = ChartBuilder::on(area);
     builder.margin(10).margin_right(18).x_label_area_size(44);
     if !panel.title.is_empty() {
         builder.caption(panel.title.as_str(), (FONT_FAMILY, 16));
     }
-    const N_LABELS: usize = 6;
-    let x_fmt =
-        TickFormat::for_ticks(&RangedCoordf64::from(x_range.0..x_range.1).key_points(N_LABELS));
-    let x_formatter = |v: &f64| x_fmt.format(*v);
+    let x_formatter = |v: &f64| x_axis.format.format(*v);
+    let x_range = x_axis.range.0..x_axis.range.1;
 
-    if panel.log_y {
-        let y_range = log_range(y_data);
-        let y_coord = (y_range.0..y_range.1).log_scale();
-        // Labels are decades and their 2x/5x multiples between the ends; the ends bound the width.
-        let labels = [format_general(y_range.0), format_general(y_range.1)];
-        builder.y_label_area_size(label_width(area, &labels) + 40);
-        let mut chart = builder
-            .build_cartesian_2d(x_range.0..x_range.1, y_coord)
-            .map_err(err)?;
-        let y_formatter = |v: &f64| format_general(*v);
-        chart
-            .configure_mesh()
-            .x_desc(panel.x_label.as_str())
-            .y_desc(panel.y_label.as_str())
-            .x_labels(N_LABELS)
-            .y_labels(N_LABELS)
-            .x_label_formatter(&x_formatter)
-            .y_label_formatter(&y_formatter)
-            .label_style((FONT_FAMILY, 12))
-            .axis_desc_style((FONT_FAMILY, 13))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .light_line_style(RGBColor(242, 242, 242))
-            .draw()
-            .map_err(err)?;
-        draw_series(&mut chart, &prepared, fig)
-    } else {
-        let y_range = linear_range(y_data, 0.05);
-        let y_keys = RangedCoordf64::from(y_range.0..y_range.1).key_points(N_LABELS);
-        let y_fmt = TickFormat::for_ticks(&y_keys);
-        let labels: Vec<String> = y_keys.iter().map(|v| y_fmt.format(*v)).collect();
-        builder.y_label_area_size(label_width(area, &labels) + 40);
-        let mut chart = builder
-            .build_cartesian_2d(x_range.0..x_range.1, y_range.0..y_range.1)
-            .map_err(err)?;
-        let y_formatter = |v: &f64| y_fmt.format(*v);
-        chart
-            .configure_mesh()
-            .x_desc(panel.x_label.as_str())
-            .y_desc(panel.y_label.as_str())
-            .x_labels(N_LABELS)
-            .y_labels(N_LABELS)
-            .x_label_formatter(&x_formatter)
-            .y_label_formatter(&y_formatter)
-            .label_style((FONT_FAMILY, 12))
-            .axis_desc_style((FONT_FAMILY, 13))
-            .bold_line_style(RGBColor(215, 215, 215))
-            .light_line_style(RGBColor(242, 242, 242))
-            .draw()
-            .map_err(err)?;
-        draw_series(&mut chart, &prepared, fig)
+    match &y_axis {
+        None => {
+            let y_range = log_range(y_data);
+            // Labels are decades (and 2x/5x multiples) between the ends; the ends bound the width.
+            let labels = [format_general(y_range.0), format_general(y_range.1)];
+            builder.y_label_area_size(label_width(area, &labels) + 40);
+            let mut chart = builder
+                .build_cartesian_2d(x_range, (y_range.0..y_range.1).log_scale())
+                .map_err(err)?;
+            let y_formatter = |v: &f64| format_general(*v);
+            chart
+                .configure_mesh()
+                .x_desc(panel.x_label.as_str())
+                .y_desc(panel.y_label.as_str())
+                .x_labels(x_axis.labels)
+                .y_labels(N_LABELS)
+                .x_label_formatter(&x_formatter)
+                .y_label_formatter(&y_formatter)
+                .label_style((FONT_FAMILY, 12))
+                .axis_desc_style((FONT_FAMILY, 13))
+                .bold_line_style(RGBColor(215, 215, 215))
+                .light_line_style(RGBColor(242, 242, 242))
+                .draw()
+                .map_err(err)?;
+            draw_series(&mut chart, &prepared, fig)
+        }
+        Some(y_axis) => {
+            let y_keys =
+                RangedCoordf64::from(y_axis.range.0..y_axis.range.1).key_points(y_axis.labels);
+            let labels: Vec<String> = y_keys.iter().map(|v| y_axis.format.format(*v)).collect();
+            builder.y_label_area_size(label_width(area, &labels) + 40);
+            let mut chart = builder
+                .build_cartesian_2d(x_range, y_axis.range.0..y_axis.range.1)
+                .map_err(err)?;
+            let y_formatter = |v: &f64| y_axis.format.format(*v);
+            chart
+                .configure_mesh()
+                .x_desc(panel.x_label.as_str())
+                .y_desc(panel.y_label.as_str())
+                .x_labels(x_axis.labels)
+                .y_labels(y_axis.labels)
+                .x_label_formatter(&x_formatter)
+                .y_label_formatter(&y_formatter)
+                .label_style((FONT_FAMILY, 12))
+                .axis_desc_style((FONT_FAMILY, 13))
+                .bold_line_style(RGBColor(215, 215, 215))
+                .light_line_style(RGBColor(242, 242, 242))
+                .draw()
+                .map_err(err)?;
+            draw_series(&mut chart, &prepared, fig)
+        }
     }
 }
 
@@ -977,23 +1051,92 @@ mod tests {
         // Normal data: padded by the given fraction.
         let (lo, hi) = linear_range(Some((0.0, 10.0)), 0.05);
         assert!((lo + 0.5).abs() < 1e-12 && (hi - 10.5).abs() < 1e-12);
-        let (lo, hi) = linear_range(Some((-f64::MAX, f64::MAX)), 0.05);
-        assert!(lo.is_finite() && hi.is_finite() && lo < hi);
+        let (lo, hi) = linear_range(Some((-HUGE, HUGE)), 0.05);
+        assert!(lo.is_finite() && hi.is_finite() && lo < hi && (hi - lo).is_finite());
+        let (lo, hi) = linear_range(Some((1e-308, 3e-308)), 0.05);
+        assert!(lo < 1e-308 && hi > 3e-308 && hi - lo >= TINY);
+    }
+
+    /// Checks the ticks and labels plotters will draw for an axis over `data`.
+    fn check_axis(data: (f64, f64)) {
+        let axis = LinearAxis::new(Some(data), 0.05, 6);
+        let (lo, hi) = axis.range;
+        assert!(lo < hi && lo.is_finite() && hi.is_finite(), "{data:?}");
+        // The axis (in raw units) contains the data.
+        let s = axis.scale();
+        assert!(
+            lo / s <= data.0 * (1.0 + 1e-12) + 1e-300,
+            "{data:?} {axis:?}"
+        );
+        assert!(
+            hi / s >= data.1 * (1.0 - 1e-12) - 1e-300,
+            "{data:?} {axis:?}"
+        );
+        let keys = RangedCoordf64::from(lo..hi).key_points(axis.labels);
+        assert!(
+            (2..=axis.labels).contains(&keys.len()),
+            "{data:?} {axis:?}: {keys:?}"
+        );
+        let step = keys[1] - keys[0];
+        for k in &keys {
+            assert!(
+                *k >= lo - 1e-9 * step && *k <= hi + 1e-9 * step,
+                "{k} outside {lo}..{hi}"
+            );
+        }
+        let texts: Vec<String> = keys.iter().map(|&v| axis.format.format(v)).collect();
+        assert!(
+            texts.windows(2).all(|w| w[0] != w[1]),
+            "{data:?}: {texts:?}"
+        );
+        for (t, &v) in texts.iter().zip(&keys) {
+            let parsed: f64 = t.parse().unwrap();
+            let raw = v / s;
+            assert!(
+                (parsed - raw).abs() <= 1e-3 * step / s,
+                "{data:?}: label {t} for {raw:e}"
+            );
+            // Narrow ranges far from zero need more digits; ordinary ones stay short.
+            let rel = (data.1 - data.0) / data.0.abs().max(data.1.abs());
+            let limit = if rel > 1e-2 { 12 } else { 18 };
+            assert!(t.len() <= limit, "label too long: {t} for {data:?}");
+        }
     }
 
     #[test]
-    fn log_range_is_never_degenerate() {
-        assert_eq!(log_range(None), (1.0, 10.0));
-        assert_eq!(log_range(Some((1e-6, 1e-6))), (5e-7, 2e-6));
-        let (lo, hi) = log_range(Some((1e-6, 1e-2)));
-        assert!(lo < 1e-6 && hi > 1e-2 && lo > 0.0);
+    fn random_ranges_give_good_ticks_quickly() {
+        // Data from 1e-250 to 1e250, both signs, wide and narrow: plotters' key points must
+        // exist (its loop terminates), lie on the axis, and print distinctly and accurately.
+        use plotters::coord::combinators::LogCoord;
+        let mut state = 99u64;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..3000 {
+            let a = (rnd() * 2.0 - 1.0).signum() * 10f64.powf(rnd() * 500.0 - 250.0);
+            let b = if rnd() < 0.5 {
+                a * (1.0 + 10f64.powf(-rnd() * 16.0))
+            } else {
+                (rnd() * 2.0 - 1.0).signum() * 10f64.powf(rnd() * 500.0 - 250.0)
+            };
+            check_axis(min_max([a, b].into_iter()).unwrap());
+            let (a, b) = (
+                a.abs().clamp(LOG_LIMITS.0, LOG_LIMITS.1),
+                b.abs().clamp(LOG_LIMITS.0, LOG_LIMITS.1),
+            );
+            let (llo, lhi) = log_range(min_max([a, b].into_iter()));
+            assert!(0.0 < llo && llo < lhi && lhi.is_finite(), "{a} {b}");
+            let log_keys = LogCoord::from((llo..lhi).log_scale()).key_points(6);
+            assert!(log_keys.iter().all(|v| v.is_finite()), "{log_keys:?}");
+        }
     }
 
     #[test]
-    fn tick_format_prints_plotters_key_points_distinctly_and_accurately() {
-        // For many ranges, the labels of plotters' own key points must be distinct, short and
-        // parse back to the tick value within 1 ‰ of the step.
-        let ranges = [
+    fn typical_ranges_give_good_ticks() {
+        for data in [
             (0.0, 1.0),
             (0.0, 10.0),
             (-1.2e-4, 3.3e-4),
@@ -1003,41 +1146,43 @@ mod tests {
             (3.0e-7, 9.0e-7),
             (-0.05, 0.05),
             (99.9, 100.4),
-        ];
-        for (lo, hi) in ranges {
-            let keys = RangedCoordf64::from(lo..hi).key_points(6);
-            assert!(keys.len() >= 2, "{lo}..{hi}: {keys:?}");
-            let f = TickFormat::for_ticks(&keys);
-            let texts: Vec<String> = keys.iter().map(|&v| f.format(v)).collect();
-            for w in texts.windows(2) {
-                assert_ne!(w[0], w[1], "{lo}..{hi}: {texts:?}");
-            }
-            let step = keys[1] - keys[0];
-            for (t, &v) in texts.iter().zip(&keys) {
-                let parsed: f64 = t.parse().unwrap();
-                assert!((parsed - v).abs() <= 1e-3 * step, "{t} vs {v}");
-                assert!(t.len() <= 9, "label too long: {t} ({lo}..{hi})");
-                assert!(!t.starts_with("-0") || t.starts_with("-0."), "{t}");
-            }
+            (-2.47e-16, 1.18e-17),
+            (-3e-15, 3e-15),
+            (0.0, 5.0),
+        ] {
+            check_axis(data);
         }
     }
 
     #[test]
+    fn log_range_is_never_degenerate() {
+        assert_eq!(log_range(None), (1.0, 10.0));
+        assert_eq!(log_range(Some((1e-6, 1e-6))), (5e-7, 2e-6));
+        let (lo, hi) = log_range(Some((1e-6, 1e-2)));
+        assert!(lo < 1e-6 && hi > 1e-2 && lo > 0.0);
+        let (lo, hi) = log_range(Some(LOG_LIMITS));
+        assert!(lo > 0.0 && lo < LOG_LIMITS.0 && hi > LOG_LIMITS.1 && (hi / lo).is_finite());
+    }
+
+    #[test]
     fn tick_format_examples() {
-        let f = TickFormat::for_ticks(&[0.0, 0.5, 1.0, 1.5]);
+        let f = TickFormat::for_ticks(&[0.0, 0.5, 1.0, 1.5], 0);
         assert_eq!(f.format(1.0), "1.0");
         assert_eq!(f.format(0.0), "0");
-        let f = TickFormat::for_ticks(&[-2e-4, 0.0, 2e-4, 4e-4]);
-        assert_eq!(f.format(-2e-4), "-2e-4");
-        assert_eq!(f.format(4e-4), "4e-4");
-        let f = TickFormat::for_ticks(&[0.0, 2.0, 4.0]);
-        assert_eq!(f.format(4.0), "4");
         assert_eq!(f.format(-1e-17), "0");
-        let f = TickFormat::for_ticks(&[-5e-4, 0.0, 5e-4, 1e-3]);
-        assert_eq!(f.format(-5e-4), "-0.5e-3");
-        assert_eq!(f.format(1e-3), "1.0e-3");
-        let f = TickFormat::for_ticks(&[0.0, 2e5, 4e5]);
-        assert_eq!(f.format(4e5), "4e5");
+        let f = TickFormat::for_ticks(&[-2.0, 0.0, 2.0, 4.0], -4);
+        assert_eq!(f.format(-2.0), "-2e-4");
+        assert_eq!(f.format(4.0), "4e-4");
+        assert_eq!(f.format(0.0), "0");
+        let f = TickFormat::for_ticks(&[0.0, 2.0, 4.0], 0);
+        assert_eq!(f.format(4.0), "4");
+        let axis = LinearAxis::new(Some((-5e-4, 1e-3)), 0.0, 6);
+        assert_eq!(axis.exponent, -3);
+        assert_eq!(axis.format.format(-0.5), "-0.5e-3");
+        assert_eq!(axis.format.format(1.0), "1.0e-3");
+        assert_eq!(LinearAxis::new(Some((0.0, 4e5)), 0.0, 6).exponent, 5);
+        assert_eq!(LinearAxis::new(Some((0.0, 4e4)), 0.0, 6).exponent, 0);
+        assert_eq!(LinearAxis::new(None, 0.0, 6).range, (0.0, 1.0));
     }
 
     #[test]

@@ -1,0 +1,256 @@
+//! The HTML report in a real browser: headless Chromium loads the page, the inline check script
+//! confirms every figure rendered, and a screenshot shows the page is not blank.
+//!
+//! Skipped (with a note on stderr) when no Chromium is installed; CI installs it.
+
+#[allow(dead_code)]
+#[path = "../src/output/mod.rs"]
+mod output;
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use common::{decode_png, edge_case_figure, errors_figure, keep_artifact};
+use output::plot::{self, color, COLOR_FIRST, COLOR_USUAL};
+use output::report::{Image, Report, Table};
+
+/// Chromium binary: `/usr/bin/chromium`, else the first of the usual names on PATH.
+fn find_chromium() -> Option<PathBuf> {
+    let fixed = Path::new("/usr/bin/chromium");
+    if fixed.is_file() {
+        return Some(fixed.to_path_buf());
+    }
+    let path = std::env::var_os("PATH")?;
+    for dir in std::env::split_paths(&path) {
+        for name in [
+            "chromium",
+            "chromium-browser",
+            "google-chrome",
+            "google-chrome-stable",
+        ] {
+            let p = dir.join(name);
+            if p.is_file() {
+                return Some(p);
+            }
+        }
+    }
+    None
+}
+
+/// Runs headless Chromium with a fresh profile on `page`, plus `extra` arguments; returns
+/// stdout. Kills it after two minutes.
+fn chromium(bin: &Path, profile: &Path, extra: &[String], page: &Path) -> String {
+    let mut cmd = Command::new(bin);
+    cmd.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--hide-scrollbars",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()))
+    .args(extra)
+    .arg(format!("file://{}", page.display()))
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped());
+    let child = cmd.spawn().expect("start chromium");
+    let id = child.id();
+    // Watchdog: a hung browser must not hang the test suite.
+    let (tx, rx) = std::sync::mpsc::channel::<()>();
+    let watchdog = std::thread::spawn(move || {
+        let start = Instant::now();
+        while start.elapsed() < Duration::from_secs(120) {
+            if rx.recv_timeout(Duration::from_millis(200)).is_ok() {
+                return false;
+            }
+        }
+        let _ = Command::new("kill").arg("-9").arg(id.to_string()).status();
+        true
+    });
+    let out = child.wait_with_output().expect("wait for chromium");
+    let _ = tx.send(());
+    let killed = watchdog.join().unwrap_or(false);
+    assert!(!killed, "chromium did not finish within 120 s");
+    assert!(
+        out.status.success(),
+        "chromium failed ({}): {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Value of attribute `name` in the start tag of the element with id `id` in serialized HTML.
+fn attribute(dom: &str, id: &str, name: &str) -> Option<String> {
+    let at = dom.find(&format!("id=\"{id}\""))?;
+    let tag_start = dom[..at].rfind('<')?;
+    let tag_end = at + dom[at..].find('>')?;
+    let tag = &dom[tag_start..tag_end];
+    let key = format!("{name}=\"");
+    let v = &tag[tag.find(&key)? + key.len()..];
+    Some(v[..v.find('"')?].to_string())
+}
+
+/// A report like the one `ofmpc` writes: text, a table, SVG and PNG figures.
+fn sample_report() -> Report {
+    let errors = plot::render_both(&errors_figure()).unwrap();
+    let edges = plot::render_both(&edge_case_figure()).unwrap();
+    let mut r = Report::new("ofmpc report: IRB 140, paper trajectory <test>");
+    r.paragraph("Control errors of the First and Second algorithms compared with Usual predictive control & friends.");
+    r.table(Table {
+        caption: "Table I. RMS control errors".into(),
+        header: vec!["controller".into(), "RMS e₂ (mrad)".into()],
+        rows: vec![
+            vec!["usual".into(), "0.412".into()],
+            vec!["first".into(), "0.121".into()],
+            vec!["second".into(), "0.057".into()],
+        ],
+    });
+    r.heading("Figures");
+    r.figure("Fig. 6 (SVG). Control errors.", Image::Svg(errors.svg));
+    r.figure("Fig. 6 (PNG). Control errors.", Image::Png(errors.png));
+    r.figure("Edge cases (SVG).", Image::Svg(edges.svg));
+    r.figure("Edge cases (PNG).", Image::Png(edges.png));
+    r.code("ofmpc reproduce --out results/");
+    r
+}
+
+#[test]
+fn report_renders_all_figures_in_chromium() {
+    let report = sample_report();
+    let html = report.to_html().unwrap();
+    let n = report.figure_count();
+    assert_eq!(n, 4);
+    // Structure, independent of the browser.
+    assert_eq!(
+        attribute(&html, "figure-check", "data-total"),
+        Some(n.to_string())
+    );
+    assert_eq!(
+        attribute(&html, "figure-check", "data-ok"),
+        Some("0".into())
+    );
+    for i in 1..=n {
+        assert!(html.contains(&format!("id=\"figure-{i}\"")));
+    }
+    assert!(!html.contains("<test>"), "title not escaped");
+
+    let Some(bin) = find_chromium() else {
+        eprintln!("note: Chromium not found; skipping the browser part of report_chromium");
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let page = tmp.path().join("report.html");
+    report.write(&page).unwrap();
+    keep_artifact("report.html", html.as_bytes());
+
+    let dom = chromium(
+        &bin,
+        &tmp.path().join("profile1"),
+        &["--dump-dom".into()],
+        &page,
+    );
+    assert_eq!(
+        attribute(&dom, "figure-check", "data-total"),
+        Some(n.to_string()),
+        "DOM: {}",
+        &dom[..dom.len().min(2000)]
+    );
+    assert_eq!(
+        attribute(&dom, "figure-check", "data-ok"),
+        Some(n.to_string())
+    );
+    assert_eq!(attribute(&dom, "figure-check", "class"), Some("ok".into()));
+    for i in 1..=n {
+        assert_eq!(
+            attribute(&dom, &format!("figure-{i}"), "data-rendered"),
+            Some("yes".into())
+        );
+    }
+
+    let shot = tmp.path().join("shot.png");
+    chromium(
+        &bin,
+        &tmp.path().join("profile2"),
+        &[
+            format!("--screenshot={}", shot.display()),
+            "--window-size=1200,2000".into(),
+        ],
+        &page,
+    );
+    let bytes = std::fs::read(&shot).expect("screenshot written");
+    keep_artifact("report_screenshot.png", &bytes);
+    let img = decode_png(&bytes);
+    assert_eq!((img.width, img.height), (1200, 2000));
+    let mut non_white = 0usize;
+    let mut usual = 0usize;
+    let mut first = 0usize;
+    let near = |p: [u8; 3], c: plotters::style::RGBColor| {
+        (i32::from(p[0]) - i32::from(c.0)).abs() <= 12
+            && (i32::from(p[1]) - i32::from(c.1)).abs() <= 12
+            && (i32::from(p[2]) - i32::from(c.2)).abs() <= 12
+    };
+    for y in 0..img.height {
+        for x in 0..img.width {
+            let p = img.pixel(x, y);
+            if p.iter().any(|&c| c < 240) {
+                non_white += 1;
+            }
+            usual += usize::from(near(p, color(COLOR_USUAL)));
+            first += usize::from(near(p, color(COLOR_FIRST)));
+        }
+    }
+    let total = (img.width * img.height) as usize;
+    assert!(
+        non_white > total / 100,
+        "screenshot nearly blank: {non_white} of {total} pixels"
+    );
+    assert!(
+        usual > 1000 && first > 1000,
+        "plot lines not visible: usual {usual}, first {first}"
+    );
+}
+
+#[test]
+fn check_script_detects_a_broken_figure() {
+    // Negative control: a PNG with a valid signature but garbage data cannot be decoded, so the
+    // page must report fewer rendered figures than it has.
+    let Some(bin) = find_chromium() else {
+        eprintln!("note: Chromium not found; skipping check_script_detects_a_broken_figure");
+        return;
+    };
+    let good = plot::render_png(&edge_case_figure()).unwrap();
+    let mut r = Report::new("broken");
+    r.figure("good", Image::Png(good));
+    r.figure(
+        "broken",
+        Image::Png(b"\x89PNG\r\n\x1a\nthis is not image data".to_vec()),
+    );
+    let tmp = tempfile::tempdir().unwrap();
+    let page = tmp.path().join("broken.html");
+    r.write(&page).unwrap();
+    let dom = chromium(
+        &bin,
+        &tmp.path().join("profile"),
+        &["--dump-dom".into()],
+        &page,
+    );
+    assert_eq!(
+        attribute(&dom, "figure-check", "data-total"),
+        Some("2".into())
+    );
+    assert_eq!(attribute(&dom, "figure-check", "data-ok"), Some("1".into()));
+    assert_eq!(attribute(&dom, "figure-check", "class"), Some("bad".into()));
+    assert_eq!(
+        attribute(&dom, "figure-2", "data-rendered"),
+        Some("no".into())
+    );
+}
