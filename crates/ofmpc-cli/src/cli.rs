@@ -109,6 +109,7 @@ pub struct RobotArgs {
 /// `ofmpc inspect dynamics`
 #[derive(Debug, Args)]
 pub struct InspectDynamics {
+    /// Which robot.
     #[command(flatten)]
     pub robot: RobotArgs,
     /// Point mass at the flange centre (kg).

@@ -3,9 +3,7 @@
 //!
 //! Skipped (with a note on stderr) when no Chromium is installed; CI installs it.
 
-#[allow(dead_code)]
-#[path = "../src/output/mod.rs"]
-mod output;
+use ofmpc_cli::output;
 
 mod common;
 

@@ -1,9 +1,7 @@
 //! Figure rendering: PNG and SVG output, embedded font, data edge cases, atomic files.
 
 // The binary crate has no library target; the output layer is compiled into this test directly.
-#[allow(dead_code)]
-#[path = "../src/output/mod.rs"]
-mod output;
+use ofmpc_cli::output;
 
 mod common;
 

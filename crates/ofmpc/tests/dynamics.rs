@@ -1,6 +1,8 @@
 //! Properties of the rigid-body algorithms on random states of the IRB 140 and
 //! of random serial chains (revolute and prismatic joints, fixed frames).
 
+#![allow(clippy::approx_constant)] // the PARAMETERS.md table is printed to 9 digits
+
 mod robot_common;
 use robot_common as common;
 
