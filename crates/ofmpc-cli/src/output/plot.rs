@@ -569,7 +569,7 @@ pub fn render_png(fig: &Figure) -> Result<Vec<u8>, PlotError> {
         let backend = BitMapBackend::<RGBPixel>::with_buffer_and_format(&mut buf, (w, h))
             .map_err(|e| draw_error(fig, e))?;
         let root = backend.into_drawing_area();
-        draw_figure(&root, fig)?;
+        draw_figure(&root, fig, LineMode::Segments)?;
         root.present().map_err(|e| draw_error(fig, e))?;
     }
     encode_png(&buf, w, h).map_err(|e| PlotError::Png {
@@ -586,7 +586,7 @@ pub fn render_svg(fig: &Figure) -> Result<String, PlotError> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_figure(&root, fig)?;
+        draw_figure(&root, fig, LineMode::Polylines)?;
         root.present().map_err(|e| draw_error(fig, e))?;
     }
     Ok(svg)
@@ -639,10 +639,23 @@ fn draw_error(fig: &Figure, e: impl std::fmt::Display) -> PlotError {
     }
 }
 
+/// How lines wider than one pixel are handed to the backend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LineMode {
+    /// One polyline per run (SVG: the viewer strokes it correctly and the file stays small).
+    Polylines,
+    /// One element per segment (bitmap). plotters fills a wide polyline as a single polygon,
+    /// so where a path runs back over itself (a path retraced, a reversal) the overlapping parts
+    /// cancel and leave a gap or two thin edges instead of the line; single segments cannot
+    /// overlap themselves.
+    Segments,
+}
+
 /// Draws title and panel grid.
 fn draw_figure<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     root.fill(&WHITE).map_err(err)?;
@@ -665,7 +678,7 @@ fn draw_figure<DB: DrawingBackend>(
     let (rows, cols) = fig.grid();
     let cells = body.split_evenly((rows, cols));
     for (panel, cell) in fig.panels.iter().zip(cells.iter()) {
-        draw_panel(cell, panel, fig)?;
+        draw_panel(cell, panel, fig, mode)?;
     }
     Ok(())
 }
@@ -954,6 +967,7 @@ fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     // The margins and caption plotters' ChartBuilder would add, drawn once here so that the chart
@@ -967,8 +981,8 @@ fn draw_panel<DB: DrawingBackend>(
             .map_err(err)?
     };
     match &panel.three_d {
-        Some(axes) => draw_panel_3d(&inner, panel, axes, fig),
-        None => draw_panel_2d(&inner, panel, fig),
+        Some(axes) => draw_panel_3d(&inner, panel, axes, fig, mode),
+        None => draw_panel_2d(&inner, panel, fig, mode),
     }
 }
 
@@ -1061,6 +1075,7 @@ fn draw_panel_2d<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     let runs: Vec<Vec<Vec<(f64, f64)>>> = panel
@@ -1135,7 +1150,7 @@ fn draw_panel_2d<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig)
+            draw_series(&mut chart, &prepared, fig, mode)
         }
         Some(y_axis) => {
             let mut chart = builder
@@ -1156,7 +1171,7 @@ fn draw_panel_2d<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig)
+            draw_series(&mut chart, &prepared, fig, mode)
         }
     }
 }
@@ -1166,6 +1181,7 @@ fn draw_series<'a, DB, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     prepared: &[Prepared],
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError>
 where
     DB: DrawingBackend + 'a,
@@ -1225,7 +1241,17 @@ where
                     }
                     let run = reduce_run(chart, run);
                     let anno = if s.style == SeriesStyle::Line {
-                        chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                        match mode {
+                            LineMode::Polylines => {
+                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                            }
+                            LineMode::Segments => chart
+                                .draw_series(
+                                    run.windows(2)
+                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
+                                )
+                                .map_err(err)?,
+                        }
                     } else {
                         chart
                             .draw_series(DashedLineSeries::new(run, 8, 5, line))
@@ -1652,6 +1678,7 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
     panel: &Panel,
     axes3d: &Axes3d,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     let runs: Vec<Vec<Vec<(f64, f64, f64)>>> = axes3d.series.iter().map(split_runs_3d).collect();
@@ -1778,7 +1805,17 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
                             .draw_series(run.into_iter().map(|pt| Circle::new(pt, 2, fill)))
                             .map_err(err)?
                     } else if s.style == SeriesStyle::Line {
-                        chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                        match mode {
+                            LineMode::Polylines => {
+                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                            }
+                            LineMode::Segments => chart
+                                .draw_series(
+                                    run.windows(2)
+                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
+                                )
+                                .map_err(err)?,
+                        }
                     } else {
                         chart
                             .draw_series(DashedLineSeries::new(run, 8, 5, line))
