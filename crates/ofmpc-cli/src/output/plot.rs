@@ -1533,9 +1533,9 @@ fn draw_axes_3d<DB: DrawingBackend>(
     let pane = ShapeStyle::from(RGBColor(247, 247, 247)).filled();
     let grid = ShapeStyle::from(RGBColor(215, 215, 215)).stroke_width(1);
     let frame = ShapeStyle::from(RGBColor(150, 150, 150)).stroke_width(1);
-    for i in 0..3 {
+    for (i, &back_i) in back.iter().enumerate() {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-        let base = with(lo, i, back[i]);
+        let base = with(lo, i, back_i);
         let corners = [
             base,
             with(base, j, hi[j]),
@@ -2125,6 +2125,115 @@ mod tests {
         assert_eq!(fig.grid(), (1, 6));
         fig.title = "T".into();
         assert_eq!(fig.canvas_size().1, 340 + TITLE_HEIGHT);
+    }
+
+    #[test]
+    fn cube_ranges_have_equal_spans_centred_on_the_data() {
+        let data = [
+            Some((380.0, 780.0)),
+            Some((-200.0, 200.0)),
+            Some((148.0, 150.0)),
+        ];
+        let r = cube_ranges(data, 0.04);
+        let span = r[0].1 - r[0].0;
+        // The largest span (400) padded by 4 % on each side, on every axis.
+        assert!((span - 400.0 * 1.08).abs() < 1e-9, "{r:?}");
+        for (k, d) in data.iter().enumerate() {
+            let (lo, hi) = d.unwrap();
+            assert!((r[k].1 - r[k].0 - span).abs() < 1e-9);
+            assert!(((r[k].0 + r[k].1) - (lo + hi)).abs() < 1e-9);
+            assert!(r[k].0 < lo && r[k].1 > hi);
+        }
+        // Degenerate data: never a zero span, always finite.
+        assert_eq!(cube_ranges([None; 3], 0.04), [(0.0, 1.0); 3]);
+        let r = cube_ranges([Some((0.0, 0.0)); 3], 0.04);
+        assert_eq!(r, [(-1.0, 1.0); 3]);
+        let r = cube_ranges(
+            [Some((5.0, 5.0)), Some((0.0, 0.0)), Some((-5.0, -5.0))],
+            0.04,
+        );
+        assert_eq!(r, [(4.5, 5.5), (-0.5, 0.5), (-5.5, -4.5)]);
+        let r = cube_ranges([Some((-HUGE, HUGE)), None, Some((1e12, 1e12 + 1e-3))], 0.04);
+        for (lo, hi) in r {
+            assert!(lo.is_finite() && hi.is_finite() && lo < hi, "{r:?}");
+        }
+        // A tiny span far from zero is widened to 2e-6 of the magnitude, not shown as noise.
+        let r = cube_ranges(
+            [Some((1e6, 1e6 + 0.01)), Some((0.0, 0.0)), Some((0.0, 0.0))],
+            0.0,
+        );
+        assert!(
+            (r[0].1 - r[0].0 - 2e-6 * (1e6 + 0.01)).abs() < 1e-9,
+            "{r:?}"
+        );
+    }
+
+    #[test]
+    fn view_basis_is_right_handed_and_orthonormal() {
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        for (yaw, pitch) in [(-60.0, 30.0), (0.0, 0.0), (123.0, -80.0), (-90.0, 90.0)] {
+            let (r, u, v) = view_basis(View3d {
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+            });
+            for (a, b, want) in [
+                (r, r, 1.0),
+                (u, u, 1.0),
+                (v, v, 1.0),
+                (r, u, 0.0),
+                (r, v, 0.0),
+            ] {
+                assert!((dot(a, b) - want).abs() < 1e-12);
+            }
+            let rxu = cross(r, u);
+            assert!(
+                (0..3).all(|i| (rxu[i] - v[i]).abs() < 1e-12),
+                "{yaw} {pitch}"
+            );
+            // z never points down on screen when seen from above or level.
+            if pitch >= 0.0 {
+                assert!(u[2] >= -1e-12);
+            }
+        }
+        // Default view: x to the right and towards the viewer, y to the right and away.
+        let (r, _, v) = view_basis(View3d::default());
+        assert!(r[0] > 0.0 && v[0] > 0.0 && r[1] > 0.0 && v[1] < 0.0);
+    }
+
+    #[test]
+    fn validation_of_3d_panels() {
+        let mut fig = Figure::new("F", 1);
+        let mut p = Panel::new_3d("P", "x", "y", "z");
+        p.series_3d()
+            .push(Series3d::line("s", ramp(3), ramp(3), ramp(3), 1));
+        fig.panels.push(p);
+        assert!(validate(&fig).is_ok());
+        fig.panels[0].log_y = true;
+        assert!(matches!(validate(&fig), Err(PlotError::Mixed3d { .. })));
+        fig.panels[0].log_y = false;
+        fig.panels[0].series_3d()[0].y.push(1.0);
+        let e = validate(&fig).unwrap_err();
+        assert!(matches!(
+            e,
+            PlotError::LengthMismatch3d {
+                x_len: 3,
+                y_len: 4,
+                z_len: 3,
+                ..
+            }
+        ));
+        // series_3d on a 2-D panel turns it into a 3-D one.
+        let mut q = Panel::new("Q", "x", "y");
+        assert!(q.three_d.is_none());
+        q.series_3d();
+        assert_eq!(q.three_d.map(|a| a.view), Some(View3d::default()));
     }
 
     #[test]
