@@ -15,6 +15,13 @@
 //! the same pixels with far fewer points and keeps the SVG small. Markers that land on the same
 //! pixel are drawn once.
 //!
+//! A panel may have equal scales on x and y ([`Panel::equal_aspect`]) or be a 3-D plot
+//! ([`Panel::new_3d`], [`Axes3d`]): an orthographic view with z up and the same scale on all
+//! three axes, drawn through plotters' 3-D coordinates with its own projection matrix, back
+//! panes, ticks and axis descriptions. In PNG output wide lines are drawn segment by segment
+//! (plotters fills a wide polyline as one polygon, which cancels where a path runs back over
+//! itself); the SVG keeps one polyline per run.
+//!
 //! Colours come from a fixed colour-blind-safe palette (Okabe–Ito), indexed by
 //! [`Series::color`]; the named indices [`COLOR_USUAL`], [`COLOR_FIRST`], [`COLOR_SECOND`] and
 //! [`COLOR_REFERENCE`] keep each controller in the same colour in every figure.
