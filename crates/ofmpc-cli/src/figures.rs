@@ -3,7 +3,7 @@
 //! payload), the Cartesian errors, the path, and the payload sweep.
 
 use crate::output::plot::{
-    Figure, Panel, Series, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
+    Figure, Panel, Series, Series3d, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
 };
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
@@ -105,48 +105,51 @@ pub fn cartesian_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
     f
 }
 
-/// The path: XY view, an isometric 3-D view, and the joint reference q(t).
+/// The path of the flange in the base frame (mm): top view XY and side view XZ, both with equal
+/// axis scales, a 3-D view, and the joint reference q(t) of every joint; the start point is
+/// marked in each view of the path.
 pub fn path(title: &str, reference: &JointReference) -> Figure {
     let k = reference.len();
     let p: Vec<[f64; 3]> = (0..k).map(|s| reference.position(s)).collect();
-    let mm = |f: &dyn Fn(&[f64; 3]) -> f64| p.iter().map(|q| f(q) * 1e3).collect::<Vec<f64>>();
+    let mm = |c: usize| p.iter().map(|q| q[c] * 1e3).collect::<Vec<f64>>();
+    let (x, y, z) = (mm(0), mm(1), mm(2));
+    let start = |v: &[f64]| v.first().map(|&a| vec![a]).unwrap_or_default();
     let mut f = Figure::new(title, 2);
-    let mut xy = Panel::new("top view (XY)", "x (mm)", "y (mm)");
-    xy.series.push(Series::line(
+    f.panel_size = (600, 440);
+    let view2d = |name: &str, h: &[f64], hl: &str, v: &[f64], vl: &str| {
+        let mut panel = Panel::new(name, hl, vl);
+        panel.equal_aspect = true;
+        panel.series.push(Series::line(
+            "flange path",
+            h.to_vec(),
+            v.to_vec(),
+            COLOR_REFERENCE,
+        ));
+        panel
+            .series
+            .push(Series::markers("start", start(h), start(v), COLOR_USUAL));
+        panel
+    };
+    f.panels
+        .push(view2d("top view (XY)", &x, "x (mm)", &y, "y (mm)"));
+    let mut iso = Panel::new_3d("3-D view", "x (mm)", "y (mm)", "z (mm)");
+    iso.series_3d().push(Series3d::line(
         "flange path",
-        mm(&|q| q[0]),
-        mm(&|q| q[1]),
+        x.clone(),
+        y.clone(),
+        z.clone(),
         COLOR_REFERENCE,
     ));
-    xy.series.push(Series::markers(
+    iso.series_3d().push(Series3d::markers(
         "start",
-        vec![p[0][0] * 1e3],
-        vec![p[0][1] * 1e3],
+        start(&x),
+        start(&y),
+        start(&z),
         COLOR_USUAL,
     ));
-    f.panels.push(xy);
-    // Isometric projection: u = (x − y) cos 30°, v = z + (x + y) sin 30°.
-    let (c, s) = (30f64.to_radians().cos(), 30f64.to_radians().sin());
-    let mut iso = Panel::new(
-        "3-D view (isometric projection)",
-        "(x − y)·cos30° (mm)",
-        "z + (x + y)·sin30° (mm)",
-    );
-    iso.series.push(Series::line(
-        "flange path",
-        mm(&|q| (q[0] - q[1]) * c),
-        mm(&|q| q[2] + (q[0] + q[1]) * s),
-        COLOR_REFERENCE,
-    ));
     f.panels.push(iso);
-    let mut xz = Panel::new("side view (XZ)", "x (mm)", "z (mm)");
-    xz.series.push(Series::line(
-        "flange path",
-        mm(&|q| q[0]),
-        mm(&|q| q[2]),
-        COLOR_REFERENCE,
-    ));
-    f.panels.push(xz);
+    f.panels
+        .push(view2d("side view (XZ)", &x, "x (mm)", &z, "z (mm)"));
     let t: Vec<f64> = (0..k).map(|s| s as f64 * reference.ts()).collect();
     let mut qp = Panel::new("joint reference", "t (s)", "q (rad)");
     for i in 0..reference.dof() {

@@ -231,3 +231,327 @@ fn extreme_values_render() {
         }
     }
 }
+
+/// Bounding box (x0, y0, x1, y1), inclusive, of the pixels of exactly colour `c`.
+fn bbox(img: &Rgb, c: RgbColor) -> Option<(u32, u32, u32, u32)> {
+    let RgbColor(r, g, b) = c;
+    let mut out: Option<(u32, u32, u32, u32)> = None;
+    for y in 0..img.height {
+        for x in 0..img.width {
+            if img.pixel(x, y) == [r, g, b] {
+                out = Some(match out {
+                    None => (x, y, x, y),
+                    Some((x0, y0, x1, y1)) => (x0.min(x), y0.min(y), x1.max(x), y1.max(y)),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// An ellipse (cx + a cos θ, cy + b sin θ), 721 points, unlabelled (no legend sample).
+fn ellipse(cx: f64, cy: f64, a: f64, b: f64) -> (Vec<f64>, Vec<f64>) {
+    (0..=720)
+        .map(|i| {
+            let t = i as f64 * std::f64::consts::PI / 360.0;
+            (cx + a * t.cos(), cy + b * t.sin())
+        })
+        .unzip()
+}
+
+/// Pixel width and height of the ellipse drawn in a one-panel figure.
+fn drawn_ellipse(a: f64, b: f64, equal_aspect: bool, size: (u32, u32)) -> (f64, f64) {
+    use output::plot::{Figure, Panel, Series};
+    let (x, y) = ellipse(3.0, -1.0, a, b);
+    let mut fig = Figure::new("", 1);
+    fig.panel_size = size;
+    let mut p = Panel::new("ellipse", "x (m)", "y (m)");
+    p.equal_aspect = equal_aspect;
+    p.series.push(Series::line("", x, y, COLOR_FIRST));
+    fig.panels.push(p);
+    let img = decode_png(&plot::render_png(&fig).unwrap());
+    let (x0, y0, x1, y1) = bbox(&img, color(COLOR_FIRST)).expect("ellipse drawn");
+    (f64::from(x1 - x0), f64::from(y1 - y0))
+}
+
+#[test]
+fn equal_aspect_draws_a_circle_round() {
+    // A circle is square in pixels (the 2 px line adds the same to both sides) in a wide and in
+    // a tall panel; an ellipse keeps its 4:1 ratio.
+    for size in [(560, 340), (300, 520), (900, 300)] {
+        let (w, h) = drawn_ellipse(1.0, 1.0, true, size);
+        assert!((w - h).abs() <= 3.0, "{size:?}: circle drawn {w} x {h} px");
+        let (w, h) = drawn_ellipse(2.0, 0.5, true, size);
+        assert!(
+            ((w - 2.0) - 4.0 * (h - 2.0)).abs() <= 6.0,
+            "{size:?}: ellipse 4:1 drawn {w} x {h} px"
+        );
+    }
+    // Negative control: without equal_aspect the default panel stretches the circle.
+    let (w, h) = drawn_ellipse(1.0, 1.0, false, (560, 340));
+    assert!(w - h > 50.0, "free axes: circle drawn {w} x {h} px");
+}
+
+#[test]
+fn equal_aspect_ranges_give_equal_units_per_pixel() {
+    for (x, y, px) in [
+        ((0.0, 10.0), (0.0, 1.0), (400.0, 300.0)),
+        ((-1.0, 1.0), (-50.0, 50.0), (400.0, 300.0)),
+        ((1e3, 1e3 + 1.0), (-2e-3, 5e-3), (123.0, 456.0)),
+    ] {
+        let ((x0, x1), (y0, y1)) = plot::equal_aspect_ranges(x, y, px);
+        let (ux, uy) = ((x1 - x0) / px.0, (y1 - y0) / px.1);
+        assert!((ux - uy).abs() <= 1e-12 * ux, "{ux} vs {uy}");
+        // The data stays inside, centred, and one axis keeps its range.
+        assert!(x0 <= x.0 && x1 >= x.1 && y0 <= y.0 && y1 >= y.1);
+        assert!(((x0 + x1) - (x.0 + x.1)).abs() <= 1e-12 * (x1 - x0).max(x0.abs()));
+        assert!(((y0 + y1) - (y.0 + y.1)).abs() <= 1e-12 * (y1 - y0).max(y0.abs()));
+        assert!((x1 - x0 - (x.1 - x.0)).abs() < 1e-9 || (y1 - y0 - (y.1 - y.0)).abs() < 1e-9);
+    }
+}
+
+/// One 3-D panel with the given series, seen from `view`.
+fn figure_3d(series: Vec<output::plot::Series3d>, view: output::plot::View3d) -> plot::Figure {
+    use output::plot::{Figure, Panel};
+    let mut fig = Figure::new("3-D figure", 1);
+    let mut p = Panel::new_3d("Helix", "x (mm)", "y (mm)", "z (mm)");
+    if let Some(a) = p.three_d.as_mut() {
+        a.view = view;
+        a.series = series;
+    }
+    fig.panels.push(p);
+    fig
+}
+
+fn helix() -> output::plot::Series3d {
+    let n = 2000;
+    let (mut x, mut y, mut z) = (vec![], vec![], vec![]);
+    for i in 0..n {
+        let t = i as f64 / (n - 1) as f64 * 6.0 * std::f64::consts::PI;
+        x.push(500.0 + 100.0 * t.cos());
+        y.push(-50.0 + 100.0 * t.sin());
+        z.push(300.0 + 8.0 * t);
+    }
+    output::plot::Series3d::line("helix", x, y, z, COLOR_FIRST)
+}
+
+#[test]
+fn panel_3d_renders_with_labels_in_png_and_svg() {
+    use output::plot::{Series3d, View3d};
+    let start = Series3d::markers("start", vec![600.0], vec![-50.0], vec![300.0], COLOR_USUAL);
+    let fig = figure_3d(vec![helix(), start], View3d::default());
+    let r = plot::render_both(&fig).unwrap();
+    keep_artifact("panel_3d.png", &r.png);
+    keep_artifact("panel_3d.svg", r.svg.as_bytes());
+    let texts = svg_texts(&r.svg);
+    for text in [
+        "3-D figure",
+        "Helix",
+        "x (mm)",
+        "y (mm)",
+        "z (mm)",
+        "helix",
+        "start",
+    ] {
+        assert!(
+            texts.iter().any(|t| t == text),
+            "missing {text:?} in {texts:?}"
+        );
+    }
+    // Tick labels of the three axes (data 400..600, -150..50, 300..450 mm).
+    for tick in ["400", "500", "600", "0", "-100", "300", "400"] {
+        assert!(
+            texts.iter().any(|t| t == tick),
+            "tick {tick} missing in {texts:?}"
+        );
+    }
+    let img = decode_png(&r.png);
+    assert_eq!((img.width, img.height), fig.canvas_size());
+    let (w, h) = fig.canvas_size();
+    let RgbColor(rr, gg, bb) = color(COLOR_FIRST);
+    let n = count(&img, (0, 44, w, h), |p| p == [rr, gg, bb]);
+    assert!(n > 1000, "helix has only {n} pixels");
+    let RgbColor(rr, gg, bb) = color(COLOR_USUAL);
+    let n = count(&img, (0, 44, w, h), |p| p == [rr, gg, bb]);
+    assert!(n > 20, "start marker has only {n} pixels");
+    // Axis descriptions are dark text left of and below the box.
+    assert!(count(&img, (0, 44, w / 4, h), dark) > 100);
+    assert!(count(&img, (0, h * 3 / 4, w, h), dark) > 100);
+}
+
+#[test]
+fn panel_3d_has_equal_scales_on_all_axes() {
+    use output::plot::{Series3d, View3d};
+    // A circle of radius 20 mm in the xy plane seen from above, and one of radius 100 mm in the
+    // xz plane seen from the front, in the same box: both are round in pixels, and the second
+    // one is 5 times larger (the data spans differ, the scales do not).
+    let small = {
+        let (x, y) = ellipse(10.0, 0.0, 20.0, 20.0);
+        Series3d::line("", x, y, vec![0.0; 721], COLOR_FIRST)
+    };
+    let big = {
+        let (x, z) = ellipse(0.0, 0.0, 100.0, 100.0);
+        Series3d::line("", x, vec![0.0; 721], z, COLOR_SECOND)
+    };
+    let top = View3d {
+        yaw_deg: -90.0,
+        pitch_deg: 90.0,
+    };
+    let front = View3d {
+        yaw_deg: -90.0,
+        pitch_deg: 0.0,
+    };
+    let size = |fig: &plot::Figure, c: usize| {
+        let img = decode_png(&plot::render_png(fig).unwrap());
+        let (x0, y0, x1, y1) = bbox(&img, color(c)).expect("drawn");
+        (f64::from(x1 - x0), f64::from(y1 - y0))
+    };
+    let (w, h) = size(&figure_3d(vec![big.clone()], top), COLOR_SECOND);
+    assert!(
+        w > 100.0 && h <= 3.0,
+        "xz circle from above is a line: {w} x {h}"
+    );
+    let (w, h) = size(&figure_3d(vec![big.clone()], front), COLOR_SECOND);
+    assert!(
+        w > 100.0 && (w - h).abs() <= 3.0,
+        "xz circle from the front: {w} x {h}"
+    );
+    let (ws, hs) = size(
+        &figure_3d(vec![small.clone(), big.clone()], top),
+        COLOR_FIRST,
+    );
+    let (wb, _) = size(&figure_3d(vec![small, big.clone()], front), COLOR_SECOND);
+    assert!((ws - hs).abs() <= 3.0, "xy circle from above: {ws} x {hs}");
+    // Diameters without the 2 px line width.
+    let ratio = (wb - 2.0) / (ws - 2.0);
+    assert!(
+        (ratio - 5.0).abs() < 0.25,
+        "size ratio {ratio}: {wb} vs {ws}"
+    );
+}
+
+#[test]
+fn panel_3d_odd_data_renders_and_bad_input_is_an_error() {
+    use output::plot::{Series3d, View3d};
+    let nan = f64::NAN;
+    let cases: Vec<(&str, Vec<Series3d>)> = vec![
+        ("no series", vec![]),
+        (
+            "empty",
+            vec![Series3d::line("e", vec![], vec![], vec![], 1)],
+        ),
+        (
+            "all NaN",
+            vec![Series3d::line(
+                "n",
+                vec![nan, 1.0],
+                vec![2.0, nan],
+                vec![nan; 2],
+                1,
+            )],
+        ),
+        (
+            "single point",
+            vec![Series3d::line("p", vec![0.3], vec![0.5], vec![0.1], 2)],
+        ),
+        (
+            "zero span",
+            vec![Series3d::line(
+                "c",
+                vec![1.0; 5],
+                vec![2.0; 5],
+                vec![3.0; 5],
+                2,
+            )],
+        ),
+        (
+            "flat",
+            vec![Series3d::dashed(
+                "f",
+                vec![0.0, 1.0, 2.0],
+                vec![0.0; 3],
+                vec![5.0; 3],
+                3,
+            )],
+        ),
+        (
+            "huge and inf",
+            vec![Series3d::markers(
+                "h",
+                vec![-1e300, 0.0, f64::INFINITY, 1e12],
+                vec![0.0, 1e-300, 1.0, 1e12 + 1e-3],
+                vec![f64::MAX, 0.0, 1.0, 1e12],
+                1,
+            )],
+        ),
+    ];
+    for (name, series) in cases {
+        for view in [
+            View3d::default(),
+            View3d {
+                yaw_deg: 0.0,
+                pitch_deg: 90.0,
+            },
+            View3d {
+                yaw_deg: 720.0,
+                pitch_deg: -45.0,
+            },
+        ] {
+            let fig = figure_3d(series.clone(), view);
+            let r = plot::render_both(&fig).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(decode_png(&r.png).width, fig.canvas_size().0);
+            for poly in r.svg.split("<polyline").skip(1) {
+                let pts = poly
+                    .split("points=\"")
+                    .nth(1)
+                    .unwrap()
+                    .split('"')
+                    .next()
+                    .unwrap();
+                for pair in pts.split_whitespace() {
+                    let (x, y) = pair.split_once(',').unwrap();
+                    assert!(
+                        x.parse::<i32>().is_ok() && y.parse::<i32>().is_ok(),
+                        "{pair}"
+                    );
+                }
+            }
+        }
+    }
+    // Mismatched lengths, a mixed 2-D/3-D panel and a NaN view are errors naming the panel.
+    let bad = figure_3d(
+        vec![Series3d::line(
+            "s",
+            vec![0.0; 3],
+            vec![0.0; 3],
+            vec![0.0; 2],
+            1,
+        )],
+        View3d::default(),
+    );
+    let e = plot::render_png(&bad).unwrap_err();
+    assert!(
+        matches!(e, PlotError::LengthMismatch3d { z_len: 2, .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("Helix"), "{e}");
+    let mut mixed = figure_3d(vec![helix()], View3d::default());
+    mixed.panels[0]
+        .series
+        .push(output::plot::Series::line("2d", vec![0.0], vec![0.0], 1));
+    assert!(matches!(
+        plot::render_svg(&mixed),
+        Err(PlotError::Mixed3d { .. })
+    ));
+    let nan_view = figure_3d(
+        vec![helix()],
+        View3d {
+            yaw_deg: nan,
+            pitch_deg: 0.0,
+        },
+    );
+    assert!(matches!(
+        plot::render_png(&nan_view),
+        Err(PlotError::BadView { .. })
+    ));
+}

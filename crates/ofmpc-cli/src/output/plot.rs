@@ -15,6 +15,13 @@
 //! the same pixels with far fewer points and keeps the SVG small. Markers that land on the same
 //! pixel are drawn once.
 //!
+//! A panel may have equal scales on x and y ([`Panel::equal_aspect`]) or be a 3-D plot
+//! ([`Panel::new_3d`], [`Axes3d`]): an orthographic view with z up and the same scale on all
+//! three axes, drawn through plotters' 3-D coordinates with its own projection matrix, back
+//! panes, ticks and axis descriptions. In PNG output wide lines are drawn segment by segment
+//! (plotters fills a wide polyline as one polygon, which cancels where a path runs back over
+//! itself); the SVG keeps one polyline per run.
+//!
 //! Colours come from a fixed colour-blind-safe palette (Okabe–Ito), indexed by
 //! [`Series::color`]; the named indices [`COLOR_USUAL`], [`COLOR_FIRST`], [`COLOR_SECOND`] and
 //! [`COLOR_REFERENCE`] keep each controller in the same colour in every figure.
@@ -26,12 +33,14 @@ use std::sync::OnceLock;
 
 use plotters::backend::RGBPixel;
 use plotters::chart::SeriesAnno;
+use plotters::coord::cartesian::Cartesian3d;
 use plotters::coord::ranged1d::Ranged;
+use plotters::coord::ranged3d::ProjectionMatrix;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
-use plotters::style::{register_font, FontStyle};
+use plotters::style::{register_font, FontStyle, FontTransform};
 
 use super::atomic::write_atomic;
 
@@ -148,6 +157,14 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Logarithmic y axis (points with y ≤ 0 are skipped).
     pub log_y: bool,
+    /// Equal scales on x and y: one data unit has the same length in pixels on both axes (a
+    /// circle is drawn round). The data range of the tighter axis is widened about its centre;
+    /// both keep a 5 % margin so that nothing touches the frame. Ignored with `log_y`.
+    pub equal_aspect: bool,
+    /// 3-D content. When set, the panel is a 3-D plot of [`Axes3d::series`] with axes
+    /// `x_label`, `y_label` and [`Axes3d::z_label`]; `series` must then be empty and `log_y`
+    /// false (see [`validate`]).
+    pub three_d: Option<Axes3d>,
 }
 
 impl Panel {
@@ -163,8 +180,133 @@ impl Panel {
             y_label: y_label.into(),
             series: Vec::new(),
             log_y: false,
+            equal_aspect: false,
+            three_d: None,
         }
     }
+
+    /// An empty 3-D panel with the default [`View3d`]; add series to
+    /// [`Panel::series_3d`].
+    pub fn new_3d(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+        z_label: impl Into<String>,
+    ) -> Self {
+        Self {
+            three_d: Some(Axes3d {
+                z_label: z_label.into(),
+                series: Vec::new(),
+                view: View3d::default(),
+            }),
+            ..Self::new(title, x_label, y_label)
+        }
+    }
+
+    /// The 3-D series of this panel, making it a 3-D panel (with an empty z label and the
+    /// default view) if it was not one.
+    pub fn series_3d(&mut self) -> &mut Vec<Series3d> {
+        &mut self.three_d.get_or_insert_with(Axes3d::default).series
+    }
+}
+
+/// One data series of a 3-D panel. Points with a NaN, infinite or huge (beyond ±[`HUGE`])
+/// coordinate are skipped and break a line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series3d {
+    /// Legend text; an empty label gives no legend entry.
+    pub label: String,
+    /// x coordinates (same length as `y` and `z`).
+    pub x: Vec<f64>,
+    /// y coordinates.
+    pub y: Vec<f64>,
+    /// z coordinates (drawn vertical).
+    pub z: Vec<f64>,
+    /// Line, dashed line or markers.
+    pub style: SeriesStyle,
+    /// Palette index, see [`color`] and the `COLOR_*` constants.
+    pub color: usize,
+}
+
+impl Series3d {
+    /// A solid line.
+    pub fn line(
+        label: impl Into<String>,
+        x: Vec<f64>,
+        y: Vec<f64>,
+        z: Vec<f64>,
+        color: usize,
+    ) -> Self {
+        Self {
+            label: label.into(),
+            x,
+            y,
+            z,
+            style: SeriesStyle::Line,
+            color,
+        }
+    }
+
+    /// A dashed line.
+    pub fn dashed(
+        label: impl Into<String>,
+        x: Vec<f64>,
+        y: Vec<f64>,
+        z: Vec<f64>,
+        color: usize,
+    ) -> Self {
+        Self {
+            style: SeriesStyle::Dashed,
+            ..Self::line(label, x, y, z, color)
+        }
+    }
+
+    /// Markers only.
+    pub fn markers(
+        label: impl Into<String>,
+        x: Vec<f64>,
+        y: Vec<f64>,
+        z: Vec<f64>,
+        color: usize,
+    ) -> Self {
+        Self {
+            style: SeriesStyle::Markers,
+            ..Self::line(label, x, y, z, color)
+        }
+    }
+}
+
+/// The direction a 3-D panel is seen from. The z axis is drawn vertical (pointing up) and the
+/// projection is orthographic and keeps handedness: a right-handed frame (such as a robot's base
+/// frame) looks right-handed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View3d {
+    /// Azimuth of the viewer in degrees, about +z from the +x axis towards +y.
+    pub yaw_deg: f64,
+    /// Elevation of the viewer above the xy plane in degrees (positive: looking down).
+    pub pitch_deg: f64,
+}
+
+impl Default for View3d {
+    /// Azimuth −60°, elevation 30° (the usual default of engineering plot tools): x runs to the
+    /// right and towards the viewer, y to the right and away, z up.
+    fn default() -> Self {
+        Self {
+            yaw_deg: -60.0,
+            pitch_deg: 30.0,
+        }
+    }
+}
+
+/// The 3-D part of a [`Panel`]: all three axes have the same scale (a sphere looks round).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Axes3d {
+    /// Z axis label with unit, e.g. `"z (mm)"` (x and y use the panel's labels).
+    pub z_label: String,
+    /// Series drawn in order (later ones on top).
+    pub series: Vec<Series3d>,
+    /// Viewing direction.
+    pub view: View3d,
 }
 
 /// A titled grid of panels, filled row by row.
@@ -258,6 +400,51 @@ pub enum PlotError {
         /// Length of `y`.
         y_len: usize,
     },
+    /// A 3-D series has different numbers of x, y and z values.
+    #[error(
+        "figure {figure:?}, panel {panel:?}, 3-D series {series:?}: x, y and z have {x_len}, \
+         {y_len} and {z_len} values; give exactly one point (x, y, z) per index"
+    )]
+    LengthMismatch3d {
+        /// Figure title.
+        figure: String,
+        /// Panel title.
+        panel: String,
+        /// Series label.
+        series: String,
+        /// Length of `x`.
+        x_len: usize,
+        /// Length of `y`.
+        y_len: usize,
+        /// Length of `z`.
+        z_len: usize,
+    },
+    /// A 3-D panel also has 2-D series or a logarithmic axis.
+    #[error(
+        "figure {figure:?}, panel {panel:?} is a 3-D panel but also has 2-D series or log_y set; \
+         put 2-D series in a panel of their own"
+    )]
+    Mixed3d {
+        /// Figure title.
+        figure: String,
+        /// Panel title.
+        panel: String,
+    },
+    /// A 3-D view angle is NaN or infinite.
+    #[error(
+        "figure {figure:?}, panel {panel:?}: view yaw {yaw_deg}° / pitch {pitch_deg}° is not \
+         finite; use finite angles in degrees (e.g. View3d::default())"
+    )]
+    BadView {
+        /// Figure title.
+        figure: String,
+        /// Panel title.
+        panel: String,
+        /// The yaw given.
+        yaw_deg: f64,
+        /// The pitch given.
+        pitch_deg: f64,
+    },
     /// The embedded font could not be registered (a corrupt build).
     #[error(
         "the embedded DejaVu Sans font could not be loaded; the binary is damaged, rebuild it"
@@ -336,6 +523,34 @@ pub fn validate(fig: &Figure) -> Result<(), PlotError> {
         });
     }
     for p in &fig.panels {
+        if let Some(a) = &p.three_d {
+            if !p.series.is_empty() || p.log_y {
+                return Err(PlotError::Mixed3d {
+                    figure: fig.title.clone(),
+                    panel: p.title.clone(),
+                });
+            }
+            if !(a.view.yaw_deg.is_finite() && a.view.pitch_deg.is_finite()) {
+                return Err(PlotError::BadView {
+                    figure: fig.title.clone(),
+                    panel: p.title.clone(),
+                    yaw_deg: a.view.yaw_deg,
+                    pitch_deg: a.view.pitch_deg,
+                });
+            }
+            for s in &a.series {
+                if s.x.len() != s.y.len() || s.x.len() != s.z.len() {
+                    return Err(PlotError::LengthMismatch3d {
+                        figure: fig.title.clone(),
+                        panel: p.title.clone(),
+                        series: s.label.clone(),
+                        x_len: s.x.len(),
+                        y_len: s.y.len(),
+                        z_len: s.z.len(),
+                    });
+                }
+            }
+        }
         for s in &p.series {
             if s.x.len() != s.y.len() {
                 return Err(PlotError::LengthMismatch {
@@ -361,7 +576,7 @@ pub fn render_png(fig: &Figure) -> Result<Vec<u8>, PlotError> {
         let backend = BitMapBackend::<RGBPixel>::with_buffer_and_format(&mut buf, (w, h))
             .map_err(|e| draw_error(fig, e))?;
         let root = backend.into_drawing_area();
-        draw_figure(&root, fig)?;
+        draw_figure(&root, fig, LineMode::Segments)?;
         root.present().map_err(|e| draw_error(fig, e))?;
     }
     encode_png(&buf, w, h).map_err(|e| PlotError::Png {
@@ -378,7 +593,7 @@ pub fn render_svg(fig: &Figure) -> Result<String, PlotError> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_figure(&root, fig)?;
+        draw_figure(&root, fig, LineMode::Polylines)?;
         root.present().map_err(|e| draw_error(fig, e))?;
     }
     Ok(svg)
@@ -431,10 +646,23 @@ fn draw_error(fig: &Figure, e: impl std::fmt::Display) -> PlotError {
     }
 }
 
+/// How lines wider than one pixel are handed to the backend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LineMode {
+    /// One polyline per run (SVG: the viewer strokes it correctly and the file stays small).
+    Polylines,
+    /// One element per segment (bitmap). plotters fills a wide polyline as a single polygon,
+    /// so where a path runs back over itself (a path retraced, a reversal) the overlapping parts
+    /// cancel and leave a gap or two thin edges instead of the line; single segments cannot
+    /// overlap themselves.
+    Segments,
+}
+
 /// Draws title and panel grid.
 fn draw_figure<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     root.fill(&WHITE).map_err(err)?;
@@ -457,7 +685,7 @@ fn draw_figure<DB: DrawingBackend>(
     let (rows, cols) = fig.grid();
     let cells = body.split_evenly((rows, cols));
     for (panel, cell) in fig.panels.iter().zip(cells.iter()) {
-        draw_panel(cell, panel, fig)?;
+        draw_panel(cell, panel, fig, mode)?;
     }
     Ok(())
 }
@@ -741,13 +969,121 @@ fn label_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, labels: &[Stri
         .unwrap_or(0)
 }
 
-/// Draws one panel.
+/// Draws one panel: margins and caption, then a 2-D or 3-D chart.
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     panel: &Panel,
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError> {
-    const N_LABELS: usize = 6;
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    // The margins and caption plotters' ChartBuilder would add, drawn once here so that the chart
+    // below can be built (and measured) more than once.
+    let inner = area.margin(10, 10, 10, 18);
+    let inner = if panel.title.is_empty() {
+        inner
+    } else {
+        inner
+            .titled(panel.title.as_str(), (FONT_FAMILY, 16))
+            .map_err(err)?
+    };
+    match &panel.three_d {
+        Some(axes) => draw_panel_3d(&inner, panel, axes, fig, mode),
+        None => draw_panel_2d(&inner, panel, fig, mode),
+    }
+}
+
+/// Number of tick labels requested on each 2-D axis.
+const N_LABELS: usize = 6;
+
+/// Height of the x label area of a 2-D chart (tick labels and axis description).
+const X_LABEL_AREA: u32 = 44;
+
+/// Width of the y label area for the tick labels of `axis` (widest label + 40 px for the
+/// rotated axis description).
+fn y_label_area<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, axis: &LinearAxis) -> u32 {
+    let keys = RangedCoordf64::from(axis.range.0..axis.range.1).key_points(axis.labels);
+    let labels: Vec<String> = keys.iter().map(|v| axis.format.format(*v)).collect();
+    label_width(area, &labels) + 40
+}
+
+/// Widens `x` or `y` (raw data ranges, both non-degenerate) about its centre so that one data
+/// unit has the same length on both axes of a plot `pixels` = (width, height) in size: the axis
+/// with more data per pixel keeps its range, the other one gets the same units per pixel.
+/// Non-finite results (spans near `f64::MAX`) leave the ranges unchanged.
+pub fn equal_aspect_ranges(
+    x: (f64, f64),
+    y: (f64, f64),
+    pixels: (f64, f64),
+) -> ((f64, f64), (f64, f64)) {
+    let (w, h) = (pixels.0.max(1.0), pixels.1.max(1.0));
+    let per_px = ((x.1 - x.0) / w).max((y.1 - y.0) / h);
+    let (cx, cy) = (0.5 * x.0 + 0.5 * x.1, 0.5 * y.0 + 0.5 * y.1);
+    let (hx, hy) = (0.5 * per_px * w, 0.5 * per_px * h);
+    let out = ((cx - hx, cx + hx), (cy - hy, cy + hy));
+    let ok = [out.0 .0, out.0 .1, out.1 .0, out.1 .1]
+        .iter()
+        .all(|v| v.is_finite() && v.abs() <= HUGE)
+        && per_px > 0.0;
+    if ok {
+        out
+    } else {
+        (x, y)
+    }
+}
+
+/// Size in pixels (width, height) of the plotting area of a 2-D chart on `area` with a y label
+/// area `y_label_px` wide, measured on a chart built like the real one (building draws nothing).
+fn plot_pixels<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    y_label_px: u32,
+    fig: &Figure,
+) -> Result<(f64, f64), PlotError> {
+    let chart = ChartBuilder::on(area)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(y_label_px)
+        .build_cartesian_2d(0f64..1f64, 0f64..1f64)
+        .map_err(|e| draw_error(fig, e))?;
+    let (x0, y0) = chart.backend_coord(&(0.0, 0.0));
+    let (x1, y1) = chart.backend_coord(&(1.0, 1.0));
+    Ok((f64::from((x1 - x0).max(1)), f64::from((y0 - y1).max(1))))
+}
+
+/// Axes with equal scales for data spanning `x_data` and `y_data`, and the y label area width
+/// they need. The plot size depends on the width of the y tick labels, which depends on the y
+/// range; the width only grows, so a few rounds reach a fixed point.
+fn equal_aspect_axes<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    x_data: Option<(f64, f64)>,
+    y_data: Option<(f64, f64)>,
+    fig: &Figure,
+) -> Result<(LinearAxis, LinearAxis, u32), PlotError> {
+    const PAD: f64 = 0.05;
+    let (xr, yr) = (linear_range(x_data, PAD), linear_range(y_data, PAD));
+    let mut label_px = y_label_area(area, &LinearAxis::new(Some(yr), 0.0, N_LABELS));
+    let mut rounds = 0;
+    loop {
+        let (xe, ye) = equal_aspect_ranges(xr, yr, plot_pixels(area, label_px, fig)?);
+        let (xa, ya) = (
+            LinearAxis::new(Some(xe), 0.0, N_LABELS),
+            LinearAxis::new(Some(ye), 0.0, N_LABELS),
+        );
+        let need = y_label_area(area, &ya);
+        rounds += 1;
+        if need <= label_px || rounds >= 4 {
+            return Ok((xa, ya, label_px.max(need)));
+        }
+        label_px = need;
+    }
+}
+
+/// Draws a 2-D panel into `area` (inside the panel's margins and caption).
+fn draw_panel_2d<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+    fig: &Figure,
+    mode: LineMode,
+) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     let runs: Vec<Vec<Vec<(f64, f64)>>> = panel
         .series
@@ -755,9 +1091,26 @@ fn draw_panel<DB: DrawingBackend>(
         .map(|s| split_runs(s, panel.log_y))
         .collect();
     let points = || runs.iter().flatten().flatten();
-    let x_axis = LinearAxis::new(min_max(points().map(|p| p.0)), 0.0, N_LABELS);
+    let x_data = min_max(points().map(|p| p.0));
     let y_data = min_max(points().map(|p| p.1));
-    let y_axis = (!panel.log_y).then(|| LinearAxis::new(y_data, 0.05, N_LABELS));
+    // (x axis, linear y axis or None for log, y label area width)
+    let (x_axis, y_axis, y_label_px) = if panel.log_y {
+        let y_range = log_range(y_data);
+        // Labels are decades (and 2x/5x multiples) between the ends; the ends bound the width.
+        let labels = [format_general(y_range.0), format_general(y_range.1)];
+        (
+            LinearAxis::new(x_data, 0.0, N_LABELS),
+            None,
+            label_width(area, &labels) + 40,
+        )
+    } else if panel.equal_aspect {
+        let (x, y, px) = equal_aspect_axes(area, x_data, y_data, fig)?;
+        (x, Some(y), px)
+    } else {
+        let y = LinearAxis::new(y_data, 0.05, N_LABELS);
+        let px = y_label_area(area, &y);
+        (LinearAxis::new(x_data, 0.0, N_LABELS), Some(y), px)
+    };
     // Points in axis units (the log axis is not divided).
     let (sx, sy) = (
         x_axis.scale(),
@@ -777,19 +1130,15 @@ fn draw_panel<DB: DrawingBackend>(
         .collect();
 
     let mut builder = ChartBuilder::on(area);
-    builder.margin(10).margin_right(18).x_label_area_size(44);
-    if !panel.title.is_empty() {
-        builder.caption(panel.title.as_str(), (FONT_FAMILY, 16));
-    }
+    builder
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(y_label_px);
     let x_formatter = |v: &f64| x_axis.format.format(*v);
     let x_range = x_axis.range.0..x_axis.range.1;
 
     match &y_axis {
         None => {
             let y_range = log_range(y_data);
-            // Labels are decades (and 2x/5x multiples) between the ends; the ends bound the width.
-            let labels = [format_general(y_range.0), format_general(y_range.1)];
-            builder.y_label_area_size(label_width(area, &labels) + 40);
             let mut chart = builder
                 .build_cartesian_2d(x_range, (y_range.0..y_range.1).log_scale())
                 .map_err(err)?;
@@ -808,13 +1157,9 @@ fn draw_panel<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig)
+            draw_series(&mut chart, &prepared, fig, mode)
         }
         Some(y_axis) => {
-            let y_keys =
-                RangedCoordf64::from(y_axis.range.0..y_axis.range.1).key_points(y_axis.labels);
-            let labels: Vec<String> = y_keys.iter().map(|v| y_axis.format.format(*v)).collect();
-            builder.y_label_area_size(label_width(area, &labels) + 40);
             let mut chart = builder
                 .build_cartesian_2d(x_range, y_axis.range.0..y_axis.range.1)
                 .map_err(err)?;
@@ -833,7 +1178,7 @@ fn draw_panel<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig)
+            draw_series(&mut chart, &prepared, fig, mode)
         }
     }
 }
@@ -843,6 +1188,7 @@ fn draw_series<'a, DB, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     prepared: &[Prepared],
     fig: &Figure,
+    mode: LineMode,
 ) -> Result<(), PlotError>
 where
     DB: DrawingBackend + 'a,
@@ -866,24 +1212,7 @@ where
         let mut labelled = false;
         let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
             if !labelled && !s.label.is_empty() {
-                anno.label(label.clone());
-                match s.style {
-                    SeriesStyle::Markers => {
-                        anno.legend(move |(x, y)| Circle::new((x + 10, y), 3, fill));
-                    }
-                    SeriesStyle::Line => {
-                        anno.legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], line)
-                        });
-                    }
-                    SeriesStyle::Dashed => {
-                        anno.legend(move |(x, y)| {
-                            EmptyElement::at((x, y))
-                                + PathElement::new(vec![(0, 0), (8, 0)], line)
-                                + PathElement::new(vec![(12, 0), (20, 0)], line)
-                        });
-                    }
-                }
+                legend_entry(anno, label.clone(), s.style, c);
                 labelled = true;
             }
         };
@@ -919,7 +1248,17 @@ where
                     }
                     let run = reduce_run(chart, run);
                     let anno = if s.style == SeriesStyle::Line {
-                        chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                        match mode {
+                            LineMode::Polylines => {
+                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                            }
+                            LineMode::Segments => chart
+                                .draw_series(
+                                    run.windows(2)
+                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
+                                )
+                                .map_err(err)?,
+                        }
                     } else {
                         chart
                             .draw_series(DashedLineSeries::new(run, 8, 5, line))
@@ -932,7 +1271,12 @@ where
         any_label |= !s.label.is_empty();
     }
     if any_label {
-        let position = legend_position(chart, prepared);
+        let labels: Vec<&str> = prepared.iter().map(|p| p.series.label.as_str()).collect();
+        let pixels = prepared
+            .iter()
+            .flat_map(|p| p.runs.iter().flatten())
+            .map(|pt| chart.backend_coord(pt));
+        let position = legend_position(chart.plotting_area(), &labels, pixels);
         chart
             .configure_series_labels()
             .position(position)
@@ -945,34 +1289,72 @@ where
     Ok(())
 }
 
-/// The legend corner covering the fewest data points (ties: upper right, upper left, lower
-/// right, lower left, upper middle, lower middle). The legend box size is estimated like
-/// plotters lays it out (text block + 30 px sample + 10 px margins, 5 px from the edges).
-fn legend_position<DB, Y>(
-    chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, Y>>,
-    prepared: &[Prepared],
-) -> SeriesLabelPosition
-where
-    DB: DrawingBackend,
-    Y: Ranged<ValueType = f64>,
-{
-    let area = chart.plotting_area();
+/// Sets the legend text and sample (line, dashed line or marker in colour `c`) of a series.
+fn legend_entry<'a, DB: DrawingBackend + 'a>(
+    anno: &mut SeriesAnno<'a, DB>,
+    label: String,
+    style: SeriesStyle,
+    c: RGBColor,
+) {
+    let line = c.stroke_width(2);
+    let fill = c.filled();
+    anno.label(label);
+    match style {
+        SeriesStyle::Markers => {
+            anno.legend(move |(x, y)| Circle::new((x + 10, y), 3, fill));
+        }
+        SeriesStyle::Line => {
+            anno.legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], line));
+        }
+        SeriesStyle::Dashed => {
+            anno.legend(move |(x, y)| {
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (8, 0)], line)
+                    + PathElement::new(vec![(12, 0), (20, 0)], line)
+            });
+        }
+    }
+}
+
+/// Estimated size (width, height) in pixels of the legend box for series `labels` (empty ones
+/// have no entry; room for a "(no data)" suffix is kept), or `None` without entries: the text
+/// block + 30 px sample + 10 px margins, 16 px per entry, as plotters lays it out.
+fn legend_size<DB: DrawingBackend, CT: CoordTranslate>(
+    area: &DrawingArea<DB, CT>,
+    labels: &[&str],
+) -> Option<(u32, u32)> {
     let style = TextStyle::from((FONT_FAMILY, 12).into_font());
-    let labelled: Vec<&Prepared> = prepared
-        .iter()
-        .filter(|p| !p.series.label.is_empty())
-        .collect();
+    let labelled: Vec<&str> = labels.iter().copied().filter(|l| !l.is_empty()).collect();
+    if labelled.is_empty() {
+        return None;
+    }
     let text_w = labelled
         .iter()
-        .map(|p| {
-            let text = format!("{} (no data)", p.series.label);
+        .map(|l| {
+            let text = format!("{l} (no data)");
             area.estimate_text_size(&text, &style)
                 .map(|(w, _)| w)
                 .unwrap_or(0)
         })
         .max()
-        .unwrap_or(0) as i32;
-    let (bw, bh) = (text_w + 50, 16 * labelled.len() as i32 + 20);
+        .unwrap_or(0);
+    Some((text_w + 50, 16 * labelled.len() as u32 + 20))
+}
+
+/// The legend corner of the plotting `area` covering the fewest of the drawn points (`pixels`,
+/// backend coordinates); ties: upper right, upper left, lower right, lower left, upper middle,
+/// lower middle. `labels` are the series labels (empty ones have no entry). The legend box size
+/// is estimated like plotters lays it out (text block + 30 px sample + 10 px margins, 5 px from
+/// the edges).
+fn legend_position<DB: DrawingBackend, CT: CoordTranslate>(
+    area: &DrawingArea<DB, CT>,
+    labels: &[&str],
+    pixels: impl Iterator<Item = (i32, i32)>,
+) -> SeriesLabelPosition {
+    let Some((bw, bh)) = legend_size(area, labels) else {
+        return SeriesLabelPosition::UpperRight;
+    };
+    let (bw, bh) = (bw as i32, bh as i32);
     let (x0, y0) = area.get_base_pixel();
     let (w, h) = area.dim_in_pixel();
     let (w, h) = (w as i32, h as i32);
@@ -990,8 +1372,7 @@ where
         (SeriesLabelPosition::LowerMiddle, middle, bottom),
     ];
     let mut counts = [0usize; 6];
-    for pt in prepared.iter().flat_map(|p| p.runs.iter().flatten()) {
-        let (px, py) = chart.backend_coord(pt);
+    for (px, py) in pixels {
         for (k, (_, (xa, xb), (ya, yb))) in candidates.iter().enumerate() {
             if (*xa..=*xb).contains(&px) && (*ya..=*yb).contains(&py) {
                 counts[k] += 1;
@@ -1005,6 +1386,465 @@ where
         Some((pos, _, _)) => pos.clone(),
         None => SeriesLabelPosition::UpperRight,
     }
+}
+
+/// Splits a 3-D series into runs of valid points (all coordinates finite and within ±[`HUGE`]).
+fn split_runs_3d(s: &Series3d) -> Vec<Vec<(f64, f64, f64)>> {
+    let mut runs = Vec::new();
+    let mut cur: Vec<(f64, f64, f64)> = Vec::new();
+    for ((&x, &y), &z) in s.x.iter().zip(&s.y).zip(&s.z) {
+        if x.abs() <= HUGE && y.abs() <= HUGE && z.abs() <= HUGE {
+            cur.push((x, y, z));
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        runs.push(cur);
+    }
+    runs
+}
+
+/// Axis ranges of a 3-D plot with equal scales: every axis gets the same span, the largest data
+/// span padded by `pad` of it on each side, centred on its own data. Constant data (all spans
+/// below 1e-9 of the magnitude) gets ±10 % of the largest magnitude (±1 at the origin); an axis
+/// without data is centred on 0, and no data at all gives [0, 1] on every axis. The span is at
+/// least 2e-6 of the largest magnitude, so no axis shows only floating-point noise.
+pub fn cube_ranges(data: [Option<(f64, f64)>; 3], pad: f64) -> [(f64, f64); 3] {
+    if data.iter().all(Option::is_none) {
+        return [(0.0, 1.0); 3];
+    }
+    let mag = data
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, (lo, hi)| m.max(lo.abs()).max(hi.abs()));
+    let half_data = data
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, (lo, hi)| m.max(0.5 * hi - 0.5 * lo));
+    let half = if half_data <= 0.5e-9 * mag || half_data < TINY {
+        if mag == 0.0 {
+            1.0
+        } else {
+            (0.1 * mag).max(TINY)
+        }
+    } else {
+        (half_data * (1.0 + 2.0 * pad)).max(1e-6 * mag)
+    };
+    data.map(|d| {
+        let mid = d.map_or(0.0, |(lo, hi)| 0.5 * lo + 0.5 * hi);
+        (mid - half, mid + half)
+    })
+}
+
+/// Side of the cube (in plotters' 3-D pixel units) the three axes are mapped onto before the
+/// projection; large, so that positions are not rounded visibly (plotters maps them to integers).
+const CUBE: i32 = 20_000;
+
+/// Space kept free around the projected box of a 3-D panel (left, right, top, bottom, in
+/// pixels) for tick labels and axis descriptions.
+const MARGIN_3D: (f64, f64, f64, f64) = (62.0, 62.0, 8.0, 46.0);
+
+/// Tick mark length of 3-D axes in pixels; labels sit at twice this distance from the axis.
+const TICK_3D: i32 = 5;
+
+/// Number of tick labels requested on each 3-D axis.
+const N_LABELS_3D: usize = 5;
+
+/// Unit vectors of a view in data coordinates: (screen right, screen up, towards the viewer).
+fn view_basis(view: View3d) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    let (a, e) = (view.yaw_deg.to_radians(), view.pitch_deg.to_radians());
+    let toward = [e.cos() * a.cos(), e.cos() * a.sin(), e.sin()];
+    let right = [-a.sin(), a.cos(), 0.0];
+    // up = toward × right, so that right × up = toward (handedness is kept).
+    let up = [-e.sin() * a.cos(), -e.sin() * a.sin(), e.cos()];
+    (right, up, toward)
+}
+
+/// The projection of plotters' cube coordinates (0..[`CUBE`] on each axis) onto the pixel
+/// rectangle `(x0, y0)`–`(x1, y1)`: orthographic along the view, scaled so that the whole box
+/// fits inside the rectangle less [`MARGIN_3D`] and `legend_px` more on the right (room for the
+/// legend). Row 2 is the depth (larger is farther).
+fn projection_3d(
+    view: View3d,
+    (x0, y0): (i32, i32),
+    (x1, y1): (i32, i32),
+    legend_px: f64,
+) -> ProjectionMatrix {
+    let (r, u, v) = view_basis(view);
+    let (ml, mr, mt, mb) = MARGIN_3D;
+    let mr = mr.max(legend_px);
+    let w = (f64::from(x1 - x0) - ml - mr).max(20.0);
+    let h = (f64::from(y1 - y0) - mt - mb).max(20.0);
+    let side = f64::from(CUBE);
+    let extent = |a: [f64; 3]| side * (a[0].abs() + a[1].abs() + a[2].abs());
+    let k = (w / extent(r)).min(h / extent(u));
+    let (ox, oy) = (f64::from(x0) + ml + 0.5 * w, f64::from(y0) + mt + 0.5 * h);
+    let c = 0.5 * side;
+    let dot_c = |a: [f64; 3]| c * (a[0] + a[1] + a[2]);
+    ProjectionMatrix::from([
+        [k * r[0], k * r[1], k * r[2], ox - k * dot_c(r)],
+        [-k * u[0], -k * u[1], -k * u[2], oy + k * dot_c(u)],
+        [-v[0], -v[1], -v[2], dot_c(v)],
+        [0.0, 0.0, 0.0, 1.0],
+    ])
+}
+
+/// A 3-D series reduced to drawable pieces (in axis units).
+struct Prepared3d<'a> {
+    series: &'a Series3d,
+    runs: Vec<Vec<(f64, f64, f64)>>,
+}
+
+/// A point of a 3-D chart as plotters' coordinate tuple.
+fn pt3(p: [f64; 3]) -> (f64, f64, f64) {
+    (p[0], p[1], p[2])
+}
+
+/// Draws the box of a 3-D chart the way engineering plot tools do: the three back faces filled
+/// and gridded at the ticks, tick marks and labels along the front bottom edges of x and y and
+/// along the leftmost vertical edge of z, each with its axis description beyond the labels.
+/// Tick labels point away from the box; an edge seen end-on (shorter than 20 px) gets none.
+fn draw_axes_3d<DB: DrawingBackend>(
+    chart: &ChartContext<'_, DB, Cartesian3d<RangedCoordf64, RangedCoordf64, RangedCoordf64>>,
+    names: [&str; 3],
+    axes: &[LinearAxis; 3],
+    fig: &Figure,
+) -> Result<(), PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    let coord = chart.as_coord_spec();
+    let area = chart.plotting_area();
+    let ranges = [axes[0].range, axes[1].range, axes[2].range];
+    let lo = [ranges[0].0, ranges[1].0, ranges[2].0];
+    let hi = [ranges[0].1, ranges[1].1, ranges[2].1];
+    let px = |p: [f64; 3]| coord.translate(&pt3(p));
+    let depth = |p: [f64; 3]| coord.projected_depth(&p[0], &p[1], &p[2]);
+    let with = |mut p: [f64; 3], i: usize, v: f64| {
+        p[i] = v;
+        p
+    };
+    let ticks: Vec<Vec<f64>> = axes
+        .iter()
+        .map(|a| RangedCoordf64::from(a.range.0..a.range.1).key_points(a.labels))
+        .collect();
+    // The back side of each axis: the face farther from the viewer (ties: the low end).
+    let back: Vec<f64> = (0..3)
+        .map(|i| {
+            if depth(with(lo, i, hi[i])) > depth(lo) {
+                hi[i]
+            } else {
+                lo[i]
+            }
+        })
+        .collect();
+    let pane = ShapeStyle::from(RGBColor(247, 247, 247)).filled();
+    let grid = ShapeStyle::from(RGBColor(215, 215, 215)).stroke_width(1);
+    let frame = ShapeStyle::from(RGBColor(150, 150, 150)).stroke_width(1);
+    for (i, &back_i) in back.iter().enumerate() {
+        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+        let base = with(lo, i, back_i);
+        let corners = [
+            base,
+            with(base, j, hi[j]),
+            with(with(base, j, hi[j]), k, hi[k]),
+            with(base, k, hi[k]),
+        ];
+        area.draw(&Polygon::new(corners.map(pt3).to_vec(), pane))
+            .map_err(err)?;
+        for (a, b) in [(j, k), (k, j)] {
+            for &t in &ticks[a] {
+                let p = with(base, a, t);
+                area.draw(&PathElement::new(
+                    vec![pt3(p), pt3(with(p, b, hi[b]))],
+                    grid,
+                ))
+                .map_err(err)?;
+            }
+        }
+        let mut outline = corners.map(pt3).to_vec();
+        outline.push(pt3(base));
+        area.draw(&PathElement::new(outline, frame)).map_err(err)?;
+    }
+
+    let (x0, y0) = px([
+        0.5 * lo[0] + 0.5 * hi[0],
+        0.5 * lo[1] + 0.5 * hi[1],
+        0.5 * lo[2] + 0.5 * hi[2],
+    ]);
+    let tick_font = TextStyle::from((FONT_FAMILY, 12).into_font()).color(&BLACK);
+    let axis_line = ShapeStyle::from(RGBColor(60, 60, 60)).stroke_width(1);
+    for (idx, name) in names.iter().enumerate() {
+        // The four edges parallel to this axis, by their start point.
+        let others: Vec<usize> = (0..3).filter(|&i| i != idx).collect();
+        let mut starts = Vec::with_capacity(4);
+        for &a in &[lo[others[0]], hi[others[0]]] {
+            for &b in &[lo[others[1]], hi[others[1]]] {
+                starts.push(with(with(lo, others[0], a), others[1], b));
+            }
+        }
+        let mid_of = |s: [f64; 3]| {
+            let (a, b) = (px(s), px(with(s, idx, hi[idx])));
+            (f64::from(a.0 + b.0) / 2.0, f64::from(a.1 + b.1) / 2.0)
+        };
+        // x and y: the lowest edge on screen (the front bottom one when seen from above);
+        // z: the leftmost. Ties: the one nearer to the viewer.
+        let score = |s: [f64; 3]| {
+            let (mx, my) = mid_of(s);
+            let d = f64::from(depth(s) + depth(with(s, idx, hi[idx])));
+            if idx == 2 {
+                (mx, d)
+            } else {
+                (-my, d)
+            }
+        };
+        let Some(start) = starts.into_iter().min_by(|a, b| {
+            score(*a)
+                .partial_cmp(&score(*b))
+                .unwrap_or(std::cmp::Ordering::Equal)
+        }) else {
+            continue;
+        };
+        let end = with(start, idx, hi[idx]);
+        let (b, e) = (px(start), px(end));
+        let (dx, dy) = (f64::from(e.0 - b.0), f64::from(e.1 - b.1));
+        let len = dx.hypot(dy);
+        area.draw(&PathElement::new(vec![pt3(start), pt3(end)], axis_line))
+            .map_err(err)?;
+        if len < 20.0 {
+            continue;
+        }
+        // Unit normal of the edge on screen, pointing away from the box centre.
+        let (mx, my) = mid_of(start);
+        let (mut nx, mut ny) = (-dy / len, dx / len);
+        if nx * (mx - f64::from(x0)) + ny * (my - f64::from(y0)) < 0.0 {
+            (nx, ny) = (-nx, -ny);
+        }
+        let h = if nx > 0.5 {
+            HPos::Left
+        } else if nx < -0.5 {
+            HPos::Right
+        } else {
+            HPos::Center
+        };
+        let v = if ny > 0.5 {
+            VPos::Top
+        } else if ny < -0.5 {
+            VPos::Bottom
+        } else {
+            VPos::Center
+        };
+        let off = |d: f64| ((nx * d).round() as i32, (ny * d).round() as i32);
+        let a = &axes[idx];
+        let (mut lw, mut lh) = (0u32, 0u32);
+        for &t in &ticks[idx] {
+            let text = a.format.format(t);
+            if let Ok((w, h)) = area.estimate_text_size(&text, &tick_font) {
+                (lw, lh) = (lw.max(w), lh.max(h));
+            }
+            let style = tick_font.clone().pos(Pos::new(h, v));
+            area.draw(
+                &(EmptyElement::at(pt3(with(start, idx, t)))
+                    + PathElement::new(vec![(0, 0), off(f64::from(TICK_3D))], axis_line)
+                    + Text::new(text, off(f64::from(TICK_3D + 3)), style)),
+            )
+            .map_err(err)?;
+        }
+        if name.is_empty() {
+            continue;
+        }
+        let extent = nx.abs() * f64::from(lw) + ny.abs() * f64::from(lh);
+        let gap = f64::from(TICK_3D + 3) + extent + 8.0;
+        let font = (FONT_FAMILY, 13).into_font();
+        let (style, gap) = if nx.abs() > 0.7 {
+            let style = TextStyle::from(font.transform(FontTransform::Rotate270))
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, VPos::Center));
+            (style, gap + 8.0)
+        } else {
+            let vpos = if ny >= 0.0 { VPos::Top } else { VPos::Bottom };
+            let style = TextStyle::from(font)
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, vpos));
+            (style, gap)
+        };
+        // Anchor at the start point of the edge and offset to the description position.
+        let (ox, oy) = off(gap);
+        let to = (
+            (mx - f64::from(b.0)).round() as i32 + ox,
+            (my - f64::from(b.1)).round() as i32 + oy,
+        );
+        area.draw(&(EmptyElement::at(pt3(start)) + Text::new(name.to_string(), to, style)))
+            .map_err(err)?;
+    }
+    Ok(())
+}
+
+/// Draws a 3-D panel into `area` (inside the panel's margins and caption).
+fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
+    area: &'a DrawingArea<DB, Shift>,
+    panel: &Panel,
+    axes3d: &Axes3d,
+    fig: &Figure,
+    mode: LineMode,
+) -> Result<(), PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    let runs: Vec<Vec<Vec<(f64, f64, f64)>>> = axes3d.series.iter().map(split_runs_3d).collect();
+    let points = || runs.iter().flatten().flatten();
+    let data = [
+        min_max(points().map(|p| p.0)),
+        min_max(points().map(|p| p.1)),
+        min_max(points().map(|p| p.2)),
+    ];
+    let axes = cube_ranges(data, 0.04).map(|r| LinearAxis::new(Some(r), 0.0, N_LABELS_3D));
+    let scale = [axes[0].scale(), axes[1].scale(), axes[2].scale()];
+    let ranges = [axes[0].range, axes[1].range, axes[2].range];
+    let prepared: Vec<Prepared3d> = axes3d
+        .series
+        .iter()
+        .zip(runs)
+        .map(|(series, runs)| Prepared3d {
+            series,
+            runs: runs
+                .into_iter()
+                .map(|r| {
+                    r.into_iter()
+                        .map(|(x, y, z)| (x * scale[0], y * scale[1], z * scale[2]))
+                        .collect()
+                })
+                .collect(),
+        })
+        .collect();
+
+    let mut chart = ChartBuilder::on(area)
+        .build_cartesian_3d(
+            ranges[0].0..ranges[0].1,
+            ranges[1].0..ranges[1].1,
+            ranges[2].0..ranges[2].1,
+        )
+        .map_err(err)?;
+    let labels: Vec<&str> = axes3d.series.iter().map(|s| s.label.as_str()).collect();
+    // The legend goes in the upper right corner, beside the box (which is made narrower).
+    let legend_px = match legend_size(chart.plotting_area(), &labels) {
+        Some((w, _)) => f64::from(w + 10),
+        None => 0.0,
+    };
+    let (px, py) = chart.plotting_area().get_pixel_range();
+    let projection = projection_3d(
+        axes3d.view,
+        (px.start, py.start),
+        (px.end, py.end),
+        legend_px,
+    );
+    chart
+        .set_3d_pixel_range((CUBE, CUBE, CUBE))
+        .with_projection(|_| projection);
+
+    draw_axes_3d(
+        &chart,
+        [
+            panel.x_label.as_str(),
+            panel.y_label.as_str(),
+            axes3d.z_label.as_str(),
+        ],
+        &axes,
+        fig,
+    )?;
+
+    let mut any_label = false;
+    for p in &prepared {
+        let s = p.series;
+        let c = color(s.color);
+        let line = c.stroke_width(2);
+        let fill = c.filled();
+        let label = if p.runs.is_empty() {
+            format!("{} (no data)", s.label)
+        } else {
+            s.label.clone()
+        };
+        let coord = chart.as_coord_spec().clone();
+        let px = |pt: &(f64, f64, f64)| coord.translate(pt);
+        // Points on the same pixel as their predecessor add nothing to a line or to markers.
+        let thin = |run: &[(f64, f64, f64)]| -> Vec<(f64, f64, f64)> {
+            let mut out: Vec<(f64, f64, f64)> = Vec::with_capacity(run.len());
+            let mut last = None;
+            for (i, pt) in run.iter().enumerate() {
+                let here = px(pt);
+                if last != Some(here) || i + 1 == run.len() {
+                    out.push(*pt);
+                }
+                last = Some(here);
+            }
+            out
+        };
+        let mut labelled = false;
+        let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
+            if !labelled && !s.label.is_empty() {
+                legend_entry(anno, label.clone(), s.style, c);
+                labelled = true;
+            }
+        };
+        match s.style {
+            SeriesStyle::Markers => {
+                let mut seen = HashSet::new();
+                let pts: Vec<(f64, f64, f64)> = p
+                    .runs
+                    .iter()
+                    .flatten()
+                    .copied()
+                    .filter(|pt| seen.insert(px(pt)))
+                    .collect();
+                let anno = chart
+                    .draw_series(pts.into_iter().map(|pt| Circle::new(pt, 3, fill)))
+                    .map_err(err)?;
+                annotate(anno);
+            }
+            SeriesStyle::Line | SeriesStyle::Dashed => {
+                if p.runs.is_empty() {
+                    let anno = chart
+                        .draw_series(std::iter::empty::<Circle<(f64, f64, f64), i32>>())
+                        .map_err(err)?;
+                    annotate(anno);
+                }
+                for run in &p.runs {
+                    let run = thin(run);
+                    let anno = if run.len() == 1 {
+                        chart
+                            .draw_series(run.into_iter().map(|pt| Circle::new(pt, 2, fill)))
+                            .map_err(err)?
+                    } else if s.style == SeriesStyle::Line {
+                        match mode {
+                            LineMode::Polylines => {
+                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
+                            }
+                            LineMode::Segments => chart
+                                .draw_series(
+                                    run.windows(2)
+                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
+                                )
+                                .map_err(err)?,
+                        }
+                    } else {
+                        chart
+                            .draw_series(DashedLineSeries::new(run, 8, 5, line))
+                            .map_err(err)?
+                    };
+                    annotate(anno);
+                }
+            }
+        }
+        any_label |= !s.label.is_empty();
+    }
+    if any_label {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(190, 190, 190))
+            .label_font((FONT_FAMILY, 12))
+            .draw()
+            .map_err(err)?;
+    }
+    Ok(())
 }
 
 /// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs are
@@ -1292,6 +2132,115 @@ mod tests {
         assert_eq!(fig.grid(), (1, 6));
         fig.title = "T".into();
         assert_eq!(fig.canvas_size().1, 340 + TITLE_HEIGHT);
+    }
+
+    #[test]
+    fn cube_ranges_have_equal_spans_centred_on_the_data() {
+        let data = [
+            Some((380.0, 780.0)),
+            Some((-200.0, 200.0)),
+            Some((148.0, 150.0)),
+        ];
+        let r = cube_ranges(data, 0.04);
+        let span = r[0].1 - r[0].0;
+        // The largest span (400) padded by 4 % on each side, on every axis.
+        assert!((span - 400.0 * 1.08).abs() < 1e-9, "{r:?}");
+        for (k, d) in data.iter().enumerate() {
+            let (lo, hi) = d.unwrap();
+            assert!((r[k].1 - r[k].0 - span).abs() < 1e-9);
+            assert!(((r[k].0 + r[k].1) - (lo + hi)).abs() < 1e-9);
+            assert!(r[k].0 < lo && r[k].1 > hi);
+        }
+        // Degenerate data: never a zero span, always finite.
+        assert_eq!(cube_ranges([None; 3], 0.04), [(0.0, 1.0); 3]);
+        let r = cube_ranges([Some((0.0, 0.0)); 3], 0.04);
+        assert_eq!(r, [(-1.0, 1.0); 3]);
+        let r = cube_ranges(
+            [Some((5.0, 5.0)), Some((0.0, 0.0)), Some((-5.0, -5.0))],
+            0.04,
+        );
+        assert_eq!(r, [(4.5, 5.5), (-0.5, 0.5), (-5.5, -4.5)]);
+        let r = cube_ranges([Some((-HUGE, HUGE)), None, Some((1e12, 1e12 + 1e-3))], 0.04);
+        for (lo, hi) in r {
+            assert!(lo.is_finite() && hi.is_finite() && lo < hi, "{r:?}");
+        }
+        // A tiny span far from zero is widened to 2e-6 of the magnitude, not shown as noise.
+        let r = cube_ranges(
+            [Some((1e6, 1e6 + 0.01)), Some((0.0, 0.0)), Some((0.0, 0.0))],
+            0.0,
+        );
+        assert!(
+            (r[0].1 - r[0].0 - 2e-6 * (1e6 + 0.01)).abs() < 1e-9,
+            "{r:?}"
+        );
+    }
+
+    #[test]
+    fn view_basis_is_right_handed_and_orthonormal() {
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        for (yaw, pitch) in [(-60.0, 30.0), (0.0, 0.0), (123.0, -80.0), (-90.0, 90.0)] {
+            let (r, u, v) = view_basis(View3d {
+                yaw_deg: yaw,
+                pitch_deg: pitch,
+            });
+            for (a, b, want) in [
+                (r, r, 1.0),
+                (u, u, 1.0),
+                (v, v, 1.0),
+                (r, u, 0.0),
+                (r, v, 0.0),
+            ] {
+                assert!((dot(a, b) - want).abs() < 1e-12);
+            }
+            let rxu = cross(r, u);
+            assert!(
+                (0..3).all(|i| (rxu[i] - v[i]).abs() < 1e-12),
+                "{yaw} {pitch}"
+            );
+            // z never points down on screen when seen from above or level.
+            if pitch >= 0.0 {
+                assert!(u[2] >= -1e-12);
+            }
+        }
+        // Default view: x to the right and towards the viewer, y to the right and away.
+        let (r, _, v) = view_basis(View3d::default());
+        assert!(r[0] > 0.0 && v[0] > 0.0 && r[1] > 0.0 && v[1] < 0.0);
+    }
+
+    #[test]
+    fn validation_of_3d_panels() {
+        let mut fig = Figure::new("F", 1);
+        let mut p = Panel::new_3d("P", "x", "y", "z");
+        p.series_3d()
+            .push(Series3d::line("s", ramp(3), ramp(3), ramp(3), 1));
+        fig.panels.push(p);
+        assert!(validate(&fig).is_ok());
+        fig.panels[0].log_y = true;
+        assert!(matches!(validate(&fig), Err(PlotError::Mixed3d { .. })));
+        fig.panels[0].log_y = false;
+        fig.panels[0].series_3d()[0].y.push(1.0);
+        let e = validate(&fig).unwrap_err();
+        assert!(matches!(
+            e,
+            PlotError::LengthMismatch3d {
+                x_len: 3,
+                y_len: 4,
+                z_len: 3,
+                ..
+            }
+        ));
+        // series_3d on a 2-D panel turns it into a 3-D one.
+        let mut q = Panel::new("Q", "x", "y");
+        assert!(q.three_d.is_none());
+        q.series_3d();
+        assert_eq!(q.three_d.map(|a| a.view), Some(View3d::default()));
     }
 
     #[test]
