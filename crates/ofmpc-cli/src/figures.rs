@@ -8,6 +8,9 @@ use crate::output::plot::{
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
 
+/// Palette indices for joints 1..6 (no yellow: it vanishes on white).
+const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
+
 /// Palette index of a controller by name.
 pub fn controller_color(name: &str) -> usize {
     match name {
@@ -157,7 +160,7 @@ pub fn path(title: &str, reference: &JointReference) -> Figure {
             format!("q{}", i + 1),
             t.clone(),
             (0..k).map(|s| reference.q(s)[i]).collect(),
-            4 + i,
+            JOINT_COLORS[i % JOINT_COLORS.len()],
         ));
     }
     f.panels.push(qp);
