@@ -177,41 +177,38 @@ impl Predictions {
                 blk[i] = 1.0;
             }
         }
-        k.fill(0.0); // K_0
+        // K_{j+1} = K_j E + Φ1 (K_0 = 0), stored as F1[j+1] = [I, K_{j+1}].
+        k.copy_from_slice(phi1); // K_1
         for j in 0..nh {
-            let r0 = j * n;
-            for col in 0..n {
-                let o = col * rows + r0;
-                // g1_j = Φ2 + K_j Φ1
-                let dst = &mut g1[o..o + n];
-                dst.copy_from_slice(&phi2[col * n..col * n + n]);
-                if j > 0 {
-                    for (m, km) in k.chunks_exact(n).enumerate() {
-                        super::dense::axpy(phi1[col * n + m], km, dst);
-                    }
-                }
-                // g2_j = g2_{j−1} + g1_j, g3_j = g3_{j−1} + g2_{j−1}, g3_0 = 0.
-                if j == 0 {
-                    g2[o..o + n].copy_from_slice(&g1[o..o + n]);
-                    g3[o..o + n].fill(0.0);
-                } else {
-                    for i in o..o + n {
-                        g3[i] = g3[i - n] + g2[i - n];
-                        g2[i] = g2[i - n] + g1[i];
-                    }
-                }
-            }
-            // K_{j+1} = K_j E + Φ1
-            k_next.copy_from_slice(phi1);
             if j > 0 {
+                k_next.copy_from_slice(phi1);
                 gemm(n, n, n, 1.0, k, e, 1.0, k_next);
+                k.copy_from_slice(k_next);
             }
-            k.copy_from_slice(k_next);
-            // F1[j+1] = [I, K_{j+1}]
             for col in 0..n {
-                let o = (n + col) * rows + r0;
+                let o = (n + col) * rows + j * n;
                 f[o..o + n].copy_from_slice(&k[col * n..col * n + n]);
             }
+        }
+        // g1_d = Φ2 + K_d Φ1 for all d at once: K_d (d ≥ 1) is block d−1 of
+        // F1's right half, so each column is one long axpy per m.
+        for col in 0..n {
+            let gc = &mut g1[col * rows..col * rows + rows];
+            for blk in gc.chunks_exact_mut(n) {
+                blk.copy_from_slice(&phi2[col * n..col * n + n]);
+            }
+            for m in 0..n {
+                let km = &f[(n + m) * rows..(n + m) * rows + rows - n];
+                super::dense::axpy(phi1[col * n + m], km, &mut gc[n..]);
+            }
+        }
+        // g2_d = g2_{d−1} + g1_d, g3_d = g3_{d−1} + g2_{d−1}, g3_0 = 0.
+        for ((c1, c2), c3) in g1
+            .chunks_exact(rows)
+            .zip(g2.chunks_exact_mut(rows))
+            .zip(g3.chunks_exact_mut(rows))
+        {
+            prefix_sums(n, c1, c2, Some(c3));
         }
         Ok(())
     }
