@@ -57,6 +57,8 @@ pub(crate) struct Core {
     pub w_bot: Vec<f64>,
     pub model: LinearLikeModel,
     pub zoh: Zoh,
+    /// `F1` and the `G` generators; its `F2`, `F3` are not maintained (the
+    /// controllers form `F2 Δx`, `F3 Δx` from `F1 Δx` by running sums).
     pub pred: Predictions,
     pub lsq: LsqWorkspace,
     /// Generator of G2 + G3 (N·n × n), second algorithm only.
@@ -71,6 +73,7 @@ pub(crate) struct Core {
     /// N·n work vectors for F·Δx products.
     pub v1: Vec<f64>,
     pub v2: Vec<f64>,
+    pub v3: Vec<f64>,
 }
 
 impl Core {
@@ -130,6 +133,7 @@ impl Core {
             tau_new: vec![0.0; n],
             v1: vec![0.0; p],
             v2: vec![0.0; p],
+            v3: vec![0.0; p],
         })
     }
 
@@ -163,7 +167,7 @@ impl Core {
         self.model.update(model, &x[..n], &x[n..])?;
         self.zoh.discretize(self.model.f0(), self.ts)?;
         self.pred
-            .update_from_zoh(&self.zoh)
+            .update_f1_and_generators_from_zoh(&self.zoh)
             .map_err(|_| StepError::Internal("prediction shapes"))?;
         for ((d, a), b) in self.dx.iter_mut().zip(x).zip(&self.x_prev) {
             *d = a - b;
@@ -193,40 +197,51 @@ impl Core {
         let mid_gen = self.pred.g1_gen().as_slice();
         let m = self.lsq.rows();
         let a = self.lsq.matrix_mut();
-        for tp in 1..=nh {
-            for jj in 0..n {
-                let c = (tp - 1) * n + jj;
-                let col = &mut a[c * m..c * m + g * n * tp];
-                let top_src = &top_gen[jj * p..jj * p + p];
-                let mid_src = &mid_gen[jj * p..jj * p + p];
-                for (t, level) in col.chunks_exact_mut(g * n).enumerate() {
-                    let d = tp - 1 - t; // lag t' − t
-                    let (top_rows, rest) = level.split_at_mut(n);
-                    for ((r, s), w) in top_rows
+        // Column (t', jj) at level t holds the blocks of lag t' − t, so it is
+        // the last t' levels of column (N, jj): write the last column block
+        // (all N levels), then copy its tails into the other blocks.
+        let gn = g * n;
+        let (head, last) = a.split_at_mut((p - n) * m);
+        for (jj, col) in last.chunks_exact_mut(m).enumerate() {
+            let top_src = &top_gen[jj * p..jj * p + p];
+            let mid_src = &mid_gen[jj * p..jj * p + p];
+            for (t, level) in col[..gn * nh].chunks_exact_mut(gn).enumerate() {
+                let d = nh - 1 - t; // lag N − t
+                let (top_rows, rest) = level.split_at_mut(n);
+                for ((r, s), w) in top_rows
+                    .iter_mut()
+                    .zip(&top_src[d * n..d * n + n])
+                    .zip(&self.w_top)
+                {
+                    *r = w * s;
+                }
+                let bot_rows = if g == 3 {
+                    let (mid_rows, bot) = rest.split_at_mut(n);
+                    for ((r, s), w) in mid_rows
                         .iter_mut()
-                        .zip(&top_src[d * n..d * n + n])
-                        .zip(&self.w_top)
+                        .zip(&mid_src[d * n..d * n + n])
+                        .zip(&self.w_mid)
                     {
                         *r = w * s;
                     }
-                    let bot_rows = if g == 3 {
-                        let (mid_rows, bot) = rest.split_at_mut(n);
-                        for ((r, s), w) in mid_rows
-                            .iter_mut()
-                            .zip(&mid_src[d * n..d * n + n])
-                            .zip(&self.w_mid)
-                        {
-                            *r = w * s;
-                        }
-                        bot
-                    } else {
-                        rest
-                    };
-                    bot_rows.fill(0.0);
-                    if d == 0 {
-                        bot_rows[jj] = self.w_bot[jj];
-                    }
+                    bot
+                } else {
+                    rest
+                };
+                bot_rows.fill(0.0);
+                if d == 0 {
+                    bot_rows[jj] = self.w_bot[jj];
                 }
+            }
+        }
+        for tp in 1..nh {
+            let len = gn * tp;
+            let skip = gn * (nh - tp);
+            for (jj, col) in head[(tp - 1) * n * m..tp * n * m]
+                .chunks_exact_mut(m)
+                .enumerate()
+            {
+                col[..len].copy_from_slice(&last[jj * m + skip..jj * m + skip + len]);
             }
         }
     }

@@ -9,6 +9,7 @@
 //! It removes the steady error for constant references.
 
 use super::core::{Core, TopBlocks};
+use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
 use super::{Controller, ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -67,7 +68,8 @@ impl Controller for FirstMpc {
         let (n, nh, g) = (c.n, c.nh, c.groups);
         let rows = nh * n;
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
-        Core::f_times(c.pred.f2().as_slice(), &c.dx, rows, &mut c.v2);
+        // F2 Δx: block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i]).
+        prefix_sums(n, &c.v1, &mut c.v2, None);
         let y = &x[..n];
         let b = c.lsq.rhs_mut();
         for j in 1..=nh {

@@ -13,7 +13,7 @@
 //! same as the dense one with fewer flops. The controllers order rows and
 //! unknowns so that their block-triangular `𝒜` has such a profile.
 
-use super::dense::{axpy, dot};
+use super::dense::{all_finite, axpy, dot};
 
 /// Widest panel of columns whose reflectors are applied together.
 const PANEL: usize = 8;
@@ -195,6 +195,9 @@ impl LsqWorkspace {
         for c in 0..=p {
             let end = if c < p { self.row_end[c] } else { m };
             let col = &self.a[c * m..c * m + end];
+            if all_finite(col) {
+                continue;
+            }
             if let Some(row) = col.iter().position(|v| !v.is_finite()) {
                 return Err(LsqError::NonFiniteInput { row, col: c, p });
             }

@@ -139,84 +139,108 @@ impl Predictions {
     /// `C A^j = [I, K_j]` with `K_j = K_{j−1} E + Φ1`, `K_0 = 0`, and
     /// `C A^d B = Φ2 + K_d Φ1`. Needs `nx = 2n`, `nu = ny = n`.
     pub fn update_from_zoh(&mut self, zoh: &Zoh) -> Result<(), PredictionError> {
+        self.update_f1_and_generators_from_zoh(zoh)?;
+        self.accumulate_f();
+        Ok(())
+    }
+
+    /// The part of [`Predictions::update_from_zoh`] the controllers need:
+    /// `F1` and the generators of `G1`, `G2`, `G3`. `F2` and `F3` are left
+    /// as they were (the controllers form `F2 Δx`, `F3 Δx` from `F1 Δx` by
+    /// the same running sums, see [`prefix_sums`]).
+    pub(crate) fn update_f1_and_generators_from_zoh(
+        &mut self,
+        zoh: &Zoh,
+    ) -> Result<(), PredictionError> {
         let n = zoh.dof();
         let nh = self.horizon;
         check_shape("(nx, nu) of the ZOH model", (self.nx, self.nu), (2 * n, n))?;
         check_shape("(ny, nu) of the ZOH model", (self.ny, self.nu), (n, n))?;
         let rows = nh * n;
-        self.k.fill(0.0);
-        // F1: left block identity per row block, right block K_j.
-        self.f1.fill(0.0);
-        for j in 0..nh {
-            // C A^j B for d = j uses K_j (before update): g1 block j.
-            // g1_j = Φ2 + K_j Φ1
-            {
-                let g = self.g1.as_mut_slice();
-                for col in 0..n {
-                    for i in 0..n {
-                        g[col * rows + j * n + i] = zoh.phi2()[(i, col)];
-                    }
-                }
-                for col in 0..n {
-                    for m in 0..n {
-                        let s = zoh.phi1()[(m, col)];
-                        let km = &self.k.as_slice()[m * n..m * n + n];
-                        let dst = &mut g[col * rows + j * n..col * rows + j * n + n];
-                        super::dense::axpy(s, km, dst);
-                    }
-                }
-            }
-            // K_{j+1} = K_j E + Φ1
-            self.k_next.copy_from(zoh.phi1());
-            gemm(
-                n,
-                n,
-                n,
-                1.0,
-                self.k.as_slice(),
-                zoh.e().as_slice(),
-                1.0,
-                self.k_next.as_mut_slice(),
-            );
-            std::mem::swap(&mut self.k, &mut self.k_next);
-            // F1[j+1] = [I, K_{j+1}]
-            let f = self.f1.as_mut_slice();
-            for i in 0..n {
-                f[i * rows + j * n + i] = 1.0;
-            }
-            for col in 0..n {
-                let src = &self.k.as_slice()[col * n..col * n + n];
-                f[(n + col) * rows + j * n..(n + col) * rows + j * n + n].copy_from_slice(src);
+        let (phi1, phi2, e) = (
+            zoh.phi1().as_slice(),
+            zoh.phi2().as_slice(),
+            zoh.e().as_slice(),
+        );
+        let k = self.k.as_mut_slice();
+        let k_next = self.k_next.as_mut_slice();
+        let f = self.f1.as_mut_slice();
+        let (g1, g2, g3) = (
+            self.g1.as_mut_slice(),
+            self.g2.as_mut_slice(),
+            self.g3.as_mut_slice(),
+        );
+        // F1 = [F_I, K]: the left half is the constant block column of I.
+        for (i, col) in f[..n * rows].chunks_exact_mut(rows).enumerate() {
+            col.fill(0.0);
+            for blk in col.chunks_exact_mut(n) {
+                blk[i] = 1.0;
             }
         }
-        self.accumulate();
+        // K_{j+1} = K_j E + Φ1 (K_0 = 0), stored as F1[j+1] = [I, K_{j+1}].
+        k.copy_from_slice(phi1); // K_1
+        for j in 0..nh {
+            if j > 0 {
+                k_next.copy_from_slice(phi1);
+                gemm(n, n, n, 1.0, k, e, 1.0, k_next);
+                k.copy_from_slice(k_next);
+            }
+            for col in 0..n {
+                let o = (n + col) * rows + j * n;
+                f[o..o + n].copy_from_slice(&k[col * n..col * n + n]);
+            }
+        }
+        // g1_d = Φ2 + K_d Φ1 for all d at once: K_d (d ≥ 1) is block d−1 of
+        // F1's right half, so each column is one long axpy per m.
+        for col in 0..n {
+            let gc = &mut g1[col * rows..col * rows + rows];
+            for blk in gc.chunks_exact_mut(n) {
+                blk.copy_from_slice(&phi2[col * n..col * n + n]);
+            }
+            for m in 0..n {
+                let km = &f[(n + m) * rows..(n + m) * rows + rows - n];
+                super::dense::axpy(phi1[col * n + m], km, &mut gc[n..]);
+            }
+        }
+        // g2_d = g2_{d−1} + g1_d, g3_d = g3_{d−1} + g2_{d−1}, g3_0 = 0.
+        for ((c1, c2), c3) in g1
+            .chunks_exact(rows)
+            .zip(g2.chunks_exact_mut(rows))
+            .zip(g3.chunks_exact_mut(rows))
+        {
+            prefix_sums(n, c1, c2, Some(c3));
+        }
         Ok(())
+    }
+
+    /// F2, F3 from F1.
+    fn accumulate_f(&mut self) {
+        Self::running_sums(self.ny, self.horizon, &self.f1, &mut self.f2, &mut self.f3);
     }
 
     /// F2, F3 from F1 and the G2, G3 generators from G1's.
     fn accumulate(&mut self) {
-        let (ny, nh) = (self.ny, self.horizon);
+        Self::running_sums(self.ny, self.horizon, &self.f1, &mut self.f2, &mut self.f3);
+        Self::running_sums(self.ny, self.horizon, &self.g1, &mut self.g2, &mut self.g3);
+    }
+
+    /// Block running sums down the columns of `s1` (blocks of `ny` rows):
+    /// `s2_j = s2_{j−1} + s1_j`, `s3_j = s3_{j−1} + s2_{j−1}`, `s3_0 = 0`.
+    fn running_sums(
+        ny: usize,
+        nh: usize,
+        f1: &DMatrix<f64>,
+        f2: &mut DMatrix<f64>,
+        f3: &mut DMatrix<f64>,
+    ) {
         let rows = nh * ny;
-        for (f1, f2, f3) in [
-            (&self.f1, &mut self.f2, &mut self.f3),
-            (&self.g1, &mut self.g2, &mut self.g3),
-        ] {
-            let cols = f1.ncols();
-            let (s1, s2, s3) = (f1.as_slice(), f2.as_mut_slice(), f3.as_mut_slice());
-            for col in 0..cols {
-                let o = col * rows;
-                for i in 0..ny {
-                    s2[o + i] = s1[o + i];
-                    s3[o + i] = 0.0;
-                }
-                for j in 1..nh {
-                    for i in 0..ny {
-                        let (cur, prev) = (o + j * ny + i, o + (j - 1) * ny + i);
-                        s2[cur] = s2[prev] + s1[cur];
-                        s3[cur] = s3[prev] + s2[prev];
-                    }
-                }
-            }
+        let (s1, s2, s3) = (f1.as_slice(), f2.as_mut_slice(), f3.as_mut_slice());
+        for ((c1, c2), c3) in s1
+            .chunks_exact(rows)
+            .zip(s2.chunks_exact_mut(rows))
+            .zip(s3.chunks_exact_mut(rows))
+        {
+            prefix_sums(ny, c1, c2, Some(c3));
         }
     }
 
@@ -271,6 +295,32 @@ impl Predictions {
             }
         }
         Ok(())
+    }
+}
+
+/// Block running sums of `s1` (blocks of `blk` values, over the common
+/// length of `s1`, `s2` and `s3`): `s2_j = s2_{j−1} + s1_j`, and if given
+/// `s3_j = s3_{j−1} + s2_{j−1}`, `s3_0 = 0`. This is how `F2`, `F3` follow
+/// from `F1` (and `G2`, `G3` from `G1`), so also `F2 v`, `F3 v` from `F1 v`.
+pub(crate) fn prefix_sums(blk: usize, s1: &[f64], s2: &mut [f64], s3: Option<&mut [f64]>) {
+    let mut len = s1.len().min(s2.len());
+    if let Some(s3) = s3.as_deref() {
+        len = len.min(s3.len());
+    }
+    if blk == 0 || len < blk {
+        return;
+    }
+    let (s1, s2) = (&s1[..len], &mut s2[..len]);
+    s2[..blk].copy_from_slice(&s1[..blk]);
+    for i in blk..len {
+        s2[i] = s2[i - blk] + s1[i];
+    }
+    if let Some(s3) = s3 {
+        let s3 = &mut s3[..len];
+        s3[..blk].fill(0.0);
+        for i in blk..len {
+            s3[i] = s3[i - blk] + s2[i - blk];
+        }
     }
 }
 
@@ -354,4 +404,41 @@ pub fn fill_w_s(n: usize, preview: &[f64], out: &mut [f64]) -> Result<(), Predic
         acc = 0.0;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The controllers' path (F1 and the generators, then running sums of
+    /// `F1 v`) reproduces the full update: the same generators, and `F2 v`,
+    /// `F3 v` of the accumulated matrices.
+    #[test]
+    fn generator_path_and_running_sums_match_the_full_update() {
+        let n = 3;
+        let nh = 7;
+        let f0 = DMatrix::<f64>::from_fn(n, n, |i, j| 0.3 * (i as f64) - 0.7 * (j as f64) + 0.1);
+        let mut zoh = Zoh::new(n);
+        zoh.discretize(&f0, 0.05).unwrap();
+        let mut full = Predictions::new(2 * n, n, n, nh);
+        full.update_from_zoh(&zoh).unwrap();
+        let mut part = Predictions::new(2 * n, n, n, nh);
+        part.update_f1_and_generators_from_zoh(&zoh).unwrap();
+        assert_eq!(full.f1(), part.f1());
+        assert_eq!(full.g1_gen(), part.g1_gen());
+        assert_eq!(full.g2_gen(), part.g2_gen());
+        assert_eq!(full.g3_gen(), part.g3_gen());
+        let v = nalgebra::DVector::<f64>::from_fn(2 * n, |i, _| (i as f64 * 0.9).sin());
+        let f1v = full.f1() * &v;
+        let (mut s2, mut s3) = (vec![0.0; nh * n], vec![0.0; nh * n]);
+        prefix_sums(n, f1v.as_slice(), &mut s2, Some(&mut s3));
+        let (f2v, f3v) = (full.f2() * &v, full.f3() * &v);
+        for i in 0..nh * n {
+            assert!((s2[i] - f2v[i]).abs() <= 1e-13 * (1.0 + f2v[i].abs()));
+            assert!((s3[i] - f3v[i]).abs() <= 1e-13 * (1.0 + f3v[i].abs()));
+        }
+        // F3 block 1 is zero and F2 block 1 is F1 block 1.
+        assert!(s3[..n].iter().all(|&x| x == 0.0));
+        assert_eq!(&s2[..n], &f1v.as_slice()[..n]);
+    }
 }

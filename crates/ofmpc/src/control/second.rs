@@ -12,7 +12,7 @@
 //! It removes the steady error for constant and ramp references.
 
 use super::core::{Core, TopBlocks};
-use super::dense::gemm;
+use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
 use super::{Controller, ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -84,17 +84,12 @@ impl Controller for SecondMpc {
         }
         // v1 = F1 Δx, v2 = (F2 + F3) Δx.
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
-        Core::f_times(c.pred.f2().as_slice(), &c.dx, rows, &mut c.v2);
-        gemm(
-            rows,
-            2 * n,
-            1,
-            1.0,
-            c.pred.f3().as_slice(),
-            &c.dx,
-            1.0,
-            &mut c.v2,
-        );
+        // F2 Δx, F3 Δx by block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i],
+        // F3[j] = F3[j−1] + F2[j−1]).
+        prefix_sums(n, &c.v1, &mut c.v2, Some(&mut c.v3));
+        for (a, b) in c.v2.iter_mut().zip(&c.v3) {
+            *a += b;
+        }
         // W_s block j = Σ_{i<j} w_{k+i}: running sum.
         self.ws.fill(0.0);
         let b = c.lsq.rhs_mut();
