@@ -92,6 +92,16 @@ pub struct ReproduceArgs {
 pub enum Inspect {
     /// H, C, g, inverse dynamics and the flange pose at a state, as JSON.
     Dynamics(InspectDynamics),
+    /// The robot as loaded: joints, limits, drives, masses, flange, as JSON.
+    Robot(InspectRobot),
+}
+
+/// `ofmpc inspect robot`
+#[derive(Debug, Args)]
+pub struct InspectRobot {
+    /// Which robot.
+    #[command(flatten)]
+    pub robot: RobotArgs,
 }
 
 /// Which robot: built in by name, or a URDF file, with drives and payload.

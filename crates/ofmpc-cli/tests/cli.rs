@@ -453,3 +453,16 @@ fn trajectory_writes_the_reference_csv_and_figures() {
         dir.path().join("y.csv").to_str().unwrap(),
     ]);
 }
+
+#[test]
+fn inspect_robot_lists_joints_limits_and_drives() {
+    let v: Value = serde_json::from_str(&ok(&["inspect", "robot"])).unwrap();
+    assert_eq!(v["dof"], 6);
+    assert_eq!(v["flange"]["frame"], "flange");
+    assert!((v["moving_mass_kg"].as_f64().unwrap() - 71.882).abs() < 0.01);
+    let j3 = &v["joints"][2];
+    assert_eq!(j3["name"], "joint_3");
+    assert!((j3["upper"].as_f64().unwrap() - 50f64.to_radians()).abs() < 1e-9);
+    assert_eq!(j3["armature_kgm2"].as_f64().unwrap(), 0.5);
+    assert_eq!(v["joints"][5]["max_effort"].as_f64().unwrap(), 16.0);
+}

@@ -2,9 +2,10 @@
 //! that any peer implementation can be checked against this one.
 
 use super::{load_robot, parse_vector};
-use crate::cli::InspectDynamics;
+use crate::cli::{InspectDynamics, InspectRobot};
 use nalgebra::DMatrix;
 use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
+use ofmpc::robot::JointKind;
 use serde_json::json;
 
 fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
@@ -54,6 +55,46 @@ pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
             "position": [flange.pos.x, flange.pos.y, flange.pos.z],
             "rotation": rot,
         },
+    });
+    println!("{}", serde_json::to_string_pretty(&out)?);
+    Ok(())
+}
+
+/// Prints the robot as loaded: joints (kind, axis, limits, drive data, the
+/// moved body's mass and centre of mass), flange frame, total moving mass.
+/// Unknown limits (infinite) print as `null`.
+pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
+    let robot = load_robot(&a.robot, 0.0)?;
+    let joints: Vec<serde_json::Value> = robot
+        .joints()
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let body = robot.body_inertia(i);
+            let com = body.com();
+            json!({
+                "name": j.name,
+                "link": j.link,
+                "type": match j.kind { JointKind::Revolute => "revolute", JointKind::Prismatic => "prismatic" },
+                "axis": [j.axis.x, j.axis.y, j.axis.z],
+                "lower": j.limits.lower,
+                "upper": j.limits.upper,
+                "max_speed": j.limits.velocity,
+                "max_effort": j.limits.effort,
+                "armature_kgm2": j.armature,
+                "body_mass_kg": body.mass,
+                "body_com_m": [com.x, com.y, com.z],
+            })
+        })
+        .collect();
+    let f = robot.flange_offset();
+    let out = json!({
+        "robot": robot.name(),
+        "dof": robot.dof(),
+        "moving_mass_kg": robot.moving_mass(),
+        "gravity": [robot.gravity().x, robot.gravity().y, robot.gravity().z],
+        "flange": { "frame": robot.flange_name(), "offset_from_last_body_m": [f.pos.x, f.pos.y, f.pos.z] },
+        "joints": joints,
     });
     println!("{}", serde_json::to_string_pretty(&out)?);
     Ok(())

@@ -14,6 +14,7 @@ pub use robot::{load_robot, parse_vector};
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(Inspect::Dynamics(a)) => inspect::dynamics(&a),
+        Command::Inspect(Inspect::Robot(a)) => inspect::robot(&a),
         Command::Trajectory(a) => trajectory::trajectory(&a),
         Command::Run(a) => {
             let file = ScenarioFile::from_file(&a.scenario)?;
