@@ -49,6 +49,12 @@ impl Experiment {
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<(RunResult, RunMetrics), String> {
         let n = self.robot.dof();
+        if self.reference.dof() != n {
+            return Err(format!(
+                "the reference has {} joints, the robot {n}: build the reference for this robot",
+                self.reference.dof()
+            ));
+        }
         if (self.mpc.ts - self.reference.ts()).abs() > 1e-12 {
             return Err(format!(
                 "the controller's ts {} s differs from the reference's {} s",
