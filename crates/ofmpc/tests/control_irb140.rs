@@ -47,3 +47,48 @@ fn holding_a_pose_with_an_unknown_payload() {
         assert!(e.iter().all(|x| *x < 1e-9), "{kind:?}: {e:?}");
     }
 }
+
+/// Beyond the paper tuning's margin (NOTES.md: second algorithm ≈ 1.5 kg) the
+/// run diverges; it must be stopped and flagged, with null steady metrics.
+#[test]
+fn divergence_beyond_the_tunings_margin_is_flagged() {
+    let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
+    let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
+    let exp = Experiment {
+        robot: Robot::irb140(),
+        reference,
+        mpc: MpcSettings::default(),
+        plant: Default::default(),
+        loop_settings: LoopSettings {
+            hold_s: 3.0,
+            ..Default::default()
+        },
+    };
+    let (r, m) = exp
+        .run(
+            ControllerKind::Second,
+            &Payload::point_mass(4.0),
+            &mut |_, _| {},
+        )
+        .unwrap();
+    let t = r
+        .diverged_at
+        .expect("the second algorithm diverges with 4 kg");
+    assert!(t < 3.0 && m.diverged && m.diverged_at_s == Some(t));
+    assert!(
+        r.reason
+            .as_deref()
+            .unwrap_or("")
+            .contains("divergence threshold"),
+        "{:?}",
+        r.reason
+    );
+    assert!(m.steady_cartesian_error_mm.is_nan());
+    let json = serde_json::to_string(&m).unwrap();
+    assert!(
+        json.contains("\"steady_cartesian_error_mm\":null") && json.contains("\"diverged\":true"),
+        "{json}"
+    );
+    // The run stopped at the divergence: the record ends there.
+    assert!(r.record.len() < 300);
+}
