@@ -13,11 +13,11 @@ use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings};
 use ofmpc::timelaw::Profile;
 use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// `[robot]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct RobotSection {
     /// `"irb140"` or a URDF path (relative to the scenario file).
@@ -36,7 +36,7 @@ impl Default for RobotSection {
 }
 
 /// `[payload]`: the rigid body at the flange that the controllers do not know.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PayloadSection {
     /// One run per mass and controller (kg).
@@ -59,7 +59,7 @@ impl Default for PayloadSection {
 }
 
 /// `[program]`
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProgramSection {
     /// G-code file (relative to the scenario file); default the paper's Table I program.
@@ -69,7 +69,7 @@ pub struct ProgramSection {
 }
 
 /// `[timing]`
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TimingSection {
     /// `"septic"` (the paper's: acceleration a 5th-order polynomial) or `"quintic"`.
@@ -92,7 +92,7 @@ impl Default for TimingSection {
 }
 
 /// `[orientation]`
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OrientationSection {
     /// Fixed flange orientation as roll, pitch, yaw (degrees, base frame, R = Rz Ry Rx);
@@ -101,7 +101,7 @@ pub struct OrientationSection {
 }
 
 /// A scenario file as written, defaults filled in.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ScenarioFile {
     /// A title for the report.
@@ -169,6 +169,9 @@ impl ScenarioFile {
 
 /// A resolved scenario: the experiment and what to run.
 pub struct Scenario {
+    /// The file it was resolved from, every default filled in (written to the
+    /// output directory as `scenario.toml`, so `ofmpc run` repeats the run).
+    pub file: ScenarioFile,
     /// Report title.
     pub title: String,
     /// The program text and its name.
@@ -287,6 +290,7 @@ impl Scenario {
         let reference = build_reference(&robot, &trajectory, orientation, f.mpc.ts)
             .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
         Ok(Self {
+            file: f.clone(),
             title: f.title.clone(),
             program_name,
             controllers: f.controllers.clone(),

@@ -170,7 +170,39 @@ fn reproduce_confirms_the_papers_claims_and_writes_every_output() {
         assert!(!name.starts_with('.'), "leftover {name}");
     }
     replay_matches_the_recorded_states(&out.join("second_m0.25/timeseries.csv"), 0.25);
+    the_written_scenario_repeats_the_run(&out, &metrics);
     report_renders_in_chromium(&out.join("report.html"));
+}
+
+/// `ofmpc run OUT/scenario.toml` repeats the run: the same errors, bit for bit
+/// (the simulation is deterministic; only timings differ).
+fn the_written_scenario_repeats_the_run(out: &Path, metrics: &Value) {
+    let again = out.parent().unwrap().join("again");
+    ok(&[
+        "run",
+        out.join("scenario.toml").to_str().unwrap(),
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    let m2: Value =
+        serde_json::from_str(&std::fs::read_to_string(again.join("metrics.json")).unwrap())
+            .unwrap();
+    let (a, b) = (
+        metrics["runs"].as_array().unwrap(),
+        m2["runs"].as_array().unwrap(),
+    );
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        for key in [
+            "name",
+            "joint_error_rms_rad",
+            "steady_joint_error_max_rad",
+            "cartesian_error_rms_mm",
+            "torque_max_nm",
+        ] {
+            assert_eq!(x[key], y[key], "{key} of {}", x["name"]);
+        }
+    }
 }
 
 /// An independent replay: from each row's state, apply its torque over one

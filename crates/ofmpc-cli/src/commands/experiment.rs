@@ -213,6 +213,13 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     }
     let json = serde_json::to_string_pretty(&MetricsFile { runs: &metrics })?;
     dir.write("metrics.json", json.as_bytes())?;
+    let effective = toml::to_string(&scenario.file).context("writing the effective scenario")?;
+    let effective = format!(
+        "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
+    );
+    report.heading("Scenario");
+    report.code(effective.clone());
+    dir.write("scenario.toml", effective.as_bytes())?;
     dir.write("report.html", report.to_html()?.as_bytes())?;
     dir.commit()
         .with_context(|| format!("moving the results into {}", out.display()))?;
