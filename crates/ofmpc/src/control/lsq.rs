@@ -268,8 +268,9 @@ pub fn lsq_flops(p: usize, row_end: &[usize]) -> u64 {
 /// the same `row_end`): the panel is factored column by column, then its
 /// reflectors are applied, in order, to four trailing columns at a time while
 /// those stay in L1 cache. Per column this is exactly the operation sequence of
-/// the textbook algorithm. Dispatches at run time to an AVX2+FMA build of the
-/// same code where the CPU has it.
+/// the textbook algorithm. Where the CPU has AVX2 and FMA (detected at run
+/// time) the panel is factored with explicit 4-wide kernels and applied to
+/// the trailing columns in compact WY form (same reflectors, other rounding).
 fn factor(a: &mut [f64], m: usize, p: usize, row_end: &[usize], tau: &mut [f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
@@ -320,21 +321,38 @@ fn factor_generic<const FMA: bool>(
         while c1 < p && c1 - c0 < PANEL && row_end[c1] == end {
             c1 += 1;
         }
+        // AVX2+FMA: vectorized panel factorization, then blocked (compact WY)
+        // application of the panel's reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the
+        // trailing columns.
+        #[cfg(target_arch = "x86_64")]
+        if FMA {
+            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
+            // only where AVX2 and FMA were detected; `end > c` for every
+            // panel column (checked profile) and `c1 ≤ p`, so all rows and
+            // columns touched lie inside the m×(p+1) array `a`.
+            unsafe {
+                let pr = avx::factor_panel(a, m, c0, c1, end, tau);
+                rmax = rmax.max(pr);
+                let (left, right) = a.split_at_mut(c1 * m);
+                let gram = avx::gram(left, m, c0, c1, end);
+                let tmat = t_from_gram(c1 - c0, &tau[c0..c1], &gram);
+                avx::apply_block(left, m, c0, c1 - c0, end, &tmat, right);
+            }
+            c0 = c1;
+            continue;
+        }
         // Panel factorization.
         for c in c0..c1 {
             let (left, right) = a.split_at_mut((c + 1) * m);
             let v = &mut left[c * m + c..c * m + end];
-            let x0 = v[0];
             let sigma = dot_k::<FMA>(&v[1..], &v[1..]);
-            let t = if sigma == 0.0 {
-                0.0 // already triangular in this column
-            } else {
-                let alpha = (x0 * x0 + sigma).sqrt();
-                let beta = if x0 > 0.0 { -alpha } else { alpha };
-                let inv = 1.0 / (x0 - beta);
-                v[1..].iter_mut().for_each(|e| *e *= inv);
-                v[0] = beta;
-                (beta - x0) / beta
+            let t = match reflector(v[0], sigma) {
+                None => 0.0, // already triangular in this column
+                Some((beta, inv, t)) => {
+                    v[1..].iter_mut().for_each(|e| *e *= inv);
+                    v[0] = beta;
+                    t
+                }
             };
             tau[c] = t;
             rmax = rmax.max(v[0].abs());
@@ -344,18 +362,6 @@ fn factor_generic<const FMA: bool>(
                     apply1::<FMA>(t, vt, &mut col[c..end]);
                 }
             }
-        }
-        // AVX2+FMA: blocked (compact WY) application of the panel's
-        // reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the trailing columns.
-        #[cfg(target_arch = "x86_64")]
-        if FMA {
-            let (left, right) = a.split_at_mut(c1 * m);
-            let tmat = triangular_factor(left, m, c0, c1, end, tau);
-            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
-            // only where AVX2 and FMA were detected.
-            unsafe { avx::apply_block(left, m, c0, c1 - c0, end, &tmat, right) };
-            c0 = c1;
-            continue;
         }
         // Trailing columns c1..p−1 and b, four at a time.
         let (left, right) = a.split_at_mut(c1 * m);
@@ -391,31 +397,33 @@ fn factor_generic<const FMA: bool>(
     rmax
 }
 
+/// The Householder reflector `H = I − τ v vᵀ`, `v = [1; x/(x0 − β)]`, that
+/// maps `[x0; x]` (with `σ = ‖x‖² > 0`) to `[β; 0]`: returns `(β, 1/(x0 − β),
+/// τ)`, or `None` when `σ = 0` (the column is already triangular).
+#[inline(always)]
+fn reflector(x0: f64, sigma: f64) -> Option<(f64, f64, f64)> {
+    if sigma == 0.0 {
+        return None;
+    }
+    let alpha = (x0 * x0 + sigma).sqrt();
+    let beta = if x0 > 0.0 { -alpha } else { alpha };
+    Some((beta, 1.0 / (x0 - beta), (beta - x0) / beta))
+}
+
 /// The upper-triangular `T` of the compact WY form `H_1 ⋯ H_k = I − V T Vᵀ`
-/// of the panel's reflectors (LAPACK `dlarft`, forward, columnwise).
-#[cfg(target_arch = "x86_64")]
+/// of a panel's `k` reflectors (LAPACK `dlarft`, forward, columnwise), from
+/// `τ` and the Gram entries `gram[j][r] = v_jᵀ v_r`, `j < r < k`.
+#[inline(always)]
 #[allow(clippy::needless_range_loop)]
-fn triangular_factor(
-    left: &[f64],
-    m: usize,
-    c0: usize,
-    c1: usize,
-    end: usize,
-    tau: &[f64],
-) -> [[f64; PANEL]; PANEL] {
-    let k = c1 - c0;
+fn t_from_gram(k: usize, tau: &[f64], gram: &[[f64; PANEL]; PANEL]) -> [[f64; PANEL]; PANEL] {
     let mut t = [[0.0f64; PANEL]; PANEL];
-    for r in 0..k {
-        let tr = tau[c0 + r];
+    for r in 0..k.min(PANEL) {
+        let tr = tau[r];
         t[r][r] = tr;
-        let row0 = c0 + r;
-        let vr = &left[(c0 + r) * m + row0 + 1..(c0 + r) * m + end];
-        // z_j = −τ_r v_jᵀ v_r (v_r is zero above row0 and 1 at row0).
+        // z_j = −τ_r v_jᵀ v_r, column r of T = T[..r, ..r] z.
         let mut z = [0.0f64; PANEL];
-        for (j, zj) in z.iter_mut().enumerate().take(r) {
-            let col = (c0 + j) * m;
-            let s = left[col + row0] + dot(&left[col + row0 + 1..col + end], vr);
-            *zj = -tr * s;
+        for j in 0..r {
+            z[j] = -tr * gram[j][r];
         }
         for i in 0..r {
             let mut s = 0.0;
@@ -426,6 +434,29 @@ fn triangular_factor(
         }
     }
     t
+}
+
+/// Portable reference of `avx::gram`: `gram[j][r] = v_jᵀ v_r` for the
+/// reflectors of the panel `c0..c1` (rows up to `end`, unit diagonal and
+/// zeros above it implicit).
+#[cfg(test)]
+fn gram_portable(
+    left: &[f64],
+    m: usize,
+    c0: usize,
+    c1: usize,
+    end: usize,
+) -> [[f64; PANEL]; PANEL] {
+    let mut g = [[0.0f64; PANEL]; PANEL];
+    for r in 1..c1 - c0 {
+        let row0 = c0 + r;
+        let vr = &left[row0 * m + row0 + 1..row0 * m + end];
+        for j in 0..r {
+            let col = (c0 + j) * m;
+            g[j][r] = left[col + row0] + dot(&left[col + row0 + 1..col + end], vr);
+        }
+    }
+    g
 }
 
 /// Dot product with four independent 4-wide accumulators.
@@ -536,6 +567,192 @@ mod avx {
         let s = _mm_add_pd(lo, hi);
         let h = _mm_unpackhi_pd(s, s);
         _mm_cvtsd_f64(_mm_add_sd(s, h))
+    }
+
+    /// `Σ x_i y_i` over the common length: four 4-wide accumulators, then
+    /// single vectors, then a scalar tail of at most three.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
+        let len = x.len().min(y.len());
+        let (px, py) = (x.as_ptr(), y.as_ptr());
+        let mut acc = [_mm256_setzero_pd(); 4];
+        let mut i = 0;
+        // SAFETY (all loads): `i + 4 ≤ len` (resp. `i < len`), both slices
+        // are at least `len` long.
+        while i + 16 <= len {
+            for l in 0..4 {
+                let o = i + 4 * l;
+                acc[l] = _mm256_fmadd_pd(
+                    _mm256_loadu_pd(px.add(o)),
+                    _mm256_loadu_pd(py.add(o)),
+                    acc[l],
+                );
+            }
+            i += 16;
+        }
+        while i + 4 <= len {
+            acc[0] = _mm256_fmadd_pd(
+                _mm256_loadu_pd(px.add(i)),
+                _mm256_loadu_pd(py.add(i)),
+                acc[0],
+            );
+            i += 4;
+        }
+        let mut s = hsum(_mm256_add_pd(
+            _mm256_add_pd(acc[0], acc[1]),
+            _mm256_add_pd(acc[2], acc[3]),
+        ));
+        while i < len {
+            s = (*px.add(i)).mul_add(*py.add(i), s);
+            i += 1;
+        }
+        s
+    }
+
+    /// `x ← s·x` (each product rounded once, as the scalar loop).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn scale(s: f64, x: &mut [f64]) {
+        let len = x.len();
+        let px = x.as_mut_ptr();
+        let sv = _mm256_set1_pd(s);
+        let mut i = 0;
+        // SAFETY: `i + 4 ≤ len` (resp. `i < len`).
+        while i + 4 <= len {
+            _mm256_storeu_pd(px.add(i), _mm256_mul_pd(sv, _mm256_loadu_pd(px.add(i))));
+            i += 4;
+        }
+        while i < len {
+            *px.add(i) *= s;
+            i += 1;
+        }
+    }
+
+    /// Factors the panel `c0..c1` (all with `row_end = end`) of the
+    /// column-major m-row array `a` in place, column by column: reflector of
+    /// column `c`, applied at once to the panel's later columns. Writes
+    /// `tau[c0..c1]`, returns `max |R_cc|` over the panel.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA. Index ranges are checked (slices,
+    /// and the asserts of `apply_block_k`): the caller passes a panel with
+    /// `c0 < c1 ≤ c0 + PANEL`, `c1 ≤ end ≤ m`, `c1·m ≤ a.len()`,
+    /// `c1 ≤ tau.len()`.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn factor_panel(
+        a: &mut [f64],
+        m: usize,
+        c0: usize,
+        c1: usize,
+        end: usize,
+        tau: &mut [f64],
+    ) -> f64 {
+        let mut rmax = 0.0f64;
+        for c in c0..c1 {
+            let (left, right) = a.split_at_mut((c + 1) * m);
+            let v = &mut left[c * m + c..c * m + end];
+            let (head, tail) = v.split_at_mut(1);
+            let t = match super::reflector(head[0], dot(tail, tail)) {
+                None => 0.0,
+                Some((beta, inv, t)) => {
+                    scale(inv, tail);
+                    head[0] = beta;
+                    t
+                }
+            };
+            tau[c] = t;
+            rmax = rmax.max(head[0].abs());
+            if t != 0.0 && c + 1 < c1 {
+                let mut t1 = [[0.0f64; super::PANEL]; super::PANEL];
+                t1[0][0] = t;
+                apply_block_k::<1>(left, m, c, end, &t1, &mut right[..(c1 - c - 1) * m]);
+            }
+        }
+        rmax
+    }
+
+    /// `gram[j][r] = v_jᵀ v_r` for `j < r` of the panel `c0..c1` of `left`
+    /// (reflector `j` has its unit entry at row `c0 + j`, stored entries
+    /// below it, rows up to `end`).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn gram(
+        left: &[f64],
+        m: usize,
+        c0: usize,
+        c1: usize,
+        end: usize,
+    ) -> [[f64; super::PANEL]; super::PANEL] {
+        assert!(c1 <= c0 + super::PANEL && c1 * m <= left.len() && end <= m && c1 <= end);
+        let mut g = [[0.0f64; super::PANEL]; super::PANEL];
+        let v = left.as_ptr();
+        for r in 1..c1 - c0 {
+            let col = match r {
+                1 => gram_col::<1>(v, m, c0, end),
+                2 => gram_col::<2>(v, m, c0, end),
+                3 => gram_col::<3>(v, m, c0, end),
+                4 => gram_col::<4>(v, m, c0, end),
+                5 => gram_col::<5>(v, m, c0, end),
+                6 => gram_col::<6>(v, m, c0, end),
+                _ => gram_col::<7>(v, m, c0, end),
+            };
+            for j in 0..r {
+                g[j][r] = col[j];
+            }
+        }
+        g
+    }
+
+    /// `v_jᵀ v_R` for `j < R`, one pass over the rows below `c0 + R`.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn gram_col<const R: usize>(
+        v: *const f64,
+        m: usize,
+        c0: usize,
+        end: usize,
+    ) -> [f64; super::PANEL] {
+        // SAFETY: the caller (`gram`) checked that columns c0..=c0+R, rows
+        // below `end ≤ m`, lie inside the array `v` points to.
+        let row0 = c0 + R;
+        let vr = v.add(row0 * m);
+        let mut s = [0.0f64; super::PANEL];
+        for j in 0..R {
+            s[j] = *v.add((c0 + j) * m + row0);
+        }
+        let start = row0 + 1;
+        let len = end - start;
+        let mut acc = [_mm256_setzero_pd(); R];
+        let mut i = 0;
+        while i + 4 <= len {
+            let row = start + i;
+            let x = _mm256_loadu_pd(vr.add(row));
+            for j in 0..R {
+                acc[j] = _mm256_fmadd_pd(_mm256_loadu_pd(v.add((c0 + j) * m + row)), x, acc[j]);
+            }
+            i += 4;
+        }
+        for j in 0..R {
+            s[j] += hsum(acc[j]);
+        }
+        while i < len {
+            let row = start + i;
+            let x = *vr.add(row);
+            for j in 0..R {
+                s[j] = (*v.add((c0 + j) * m + row)).mul_add(x, s[j]);
+            }
+            i += 1;
+        }
+        s
     }
 
     /// `A ← (I − V Tᵀ Vᵀ) A` for all trailing columns in `right` (each `m`
@@ -808,6 +1025,100 @@ mod tests {
                         (x - y).abs() <= 1e-11 * (1.0 + x.abs()),
                         "m={m} p={p} ({i},{c}): {x} vs {y}"
                     );
+                }
+            }
+        }
+    }
+
+    /// Small multiples of 1/4: sums of their products are exact in any
+    /// order, so differently ordered kernels must agree bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    fn dyadic(seed: &mut u64) -> f64 {
+        (rng(seed) * 8.0).round() / 4.0
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    fn has_avx2_fma() -> bool {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+
+    /// The AVX2 dot product and scaling equal the portable loops on every
+    /// length 0..=40 and around 70 (all vector/scalar tail combinations).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_dot_and_scale_equal_portable() {
+        if !has_avx2_fma() {
+            return;
+        }
+        let mut seed = 31;
+        for len in (0..=40).chain(64..=75) {
+            let x: Vec<f64> = (0..len).map(|_| dyadic(&mut seed)).collect();
+            let y: Vec<f64> = (0..len + 3).map(|_| dyadic(&mut seed)).collect();
+            let portable = x.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
+            // SAFETY: AVX2 and FMA detected above.
+            let fast = unsafe { avx::dot(&x, &y) };
+            assert_eq!(portable.to_bits(), fast.to_bits(), "len {len}");
+            // Rounded data: same result up to summation order.
+            let xr: Vec<f64> = (0..len).map(|_| rng(&mut seed)).collect();
+            let bound: f64 = xr.iter().zip(&y).map(|(a, b)| (a * b).abs()).sum();
+            let portable = xr.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
+            // SAFETY: as above.
+            let fast = unsafe { avx::dot(&xr, &y) };
+            assert!((portable - fast).abs() <= 1e-15 * bound.max(f64::MIN_POSITIVE) * len as f64);
+            let s = rng(&mut seed);
+            let mut z = xr.clone();
+            // SAFETY: as above.
+            unsafe { avx::scale(s, &mut z) };
+            for (a, b) in z.iter().zip(&xr) {
+                assert_eq!(a.to_bits(), (s * b).to_bits());
+            }
+        }
+    }
+
+    /// One reflector applied by the AVX2 block kernel (K = 1, column pairs
+    /// and a single column) equals the portable `apply1`, and the AVX2 Gram
+    /// entries of a panel equal the portable dot products, bit for bit on
+    /// exact data, for row counts that leave every tail length.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_panel_kernels_equal_portable() {
+        if !has_avx2_fma() {
+            return;
+        }
+        let mut seed = 41;
+        for m in [9usize, 12, 17, 70, 71, 72, 73, 74] {
+            for (c0, k) in [(0usize, 1usize), (0, 6), (2, 8), (3, 5)] {
+                if c0 + k > m {
+                    continue;
+                }
+                for end in [c0 + k, c0 + k + 1, m - 1, m] {
+                    if end < c0 + k || end > m {
+                        continue;
+                    }
+                    let ncols = c0 + k + 3;
+                    let a: Vec<f64> = (0..m * ncols).map(|_| dyadic(&mut seed)).collect();
+                    let (left, right) = a.split_at(c0 * m + k * m);
+                    // Gram of the panel c0..c0+k.
+                    // SAFETY: AVX2 and FMA detected above; shapes as required.
+                    let g = unsafe { avx::gram(left, m, c0, c0 + k, end) };
+                    assert_eq!(
+                        g,
+                        gram_portable(left, m, c0, c0 + k, end),
+                        "m={m} c0={c0} k={k} end={end}"
+                    );
+                    // Reflector of column c0 applied to three trailing columns.
+                    let mut t1 = [[0.0f64; PANEL]; PANEL];
+                    t1[0][0] = 0.5;
+                    let mut fast = right.to_vec();
+                    let left1 = &left[..(c0 + 1) * m];
+                    // SAFETY: as above.
+                    unsafe { avx::apply_block(left1, m, c0, 1, end, &t1, &mut fast) };
+                    let mut slow = right.to_vec();
+                    let vt = &left1[c0 * m + c0 + 1..c0 * m + end];
+                    for col in slow.chunks_exact_mut(m) {
+                        apply1::<false>(0.5, vt, &mut col[c0..end]);
+                    }
+                    assert_eq!(fast, slow, "m={m} c0={c0} end={end}");
                 }
             }
         }
