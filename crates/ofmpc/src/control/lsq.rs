@@ -198,15 +198,8 @@ impl LsqWorkspace {
     pub fn solve(&mut self) -> Result<LsqInfo, LsqError> {
         let (m, p) = (self.m, self.p);
         // Finite input (inside the profile; b everywhere).
-        for c in 0..=p {
-            let end = if c < p { self.row_end[c] } else { m };
-            let col = &self.a[c * m..c * m + end];
-            if all_finite(col) {
-                continue;
-            }
-            if let Some(row) = col.iter().position(|v| !v.is_finite()) {
-                return Err(LsqError::NonFiniteInput { row, col: c, p });
-            }
+        if let Some((row, col)) = first_non_finite(&self.a, m, p, &self.row_end) {
+            return Err(LsqError::NonFiniteInput { row, col, p });
         }
         let rmax = factor(
             &mut self.a,
@@ -242,15 +235,7 @@ impl LsqWorkspace {
                 p,
             });
         }
-        // Back substitution R1 x = c1, column-oriented.
-        let (r, cvec) = self.a.split_at_mut(m * p);
-        self.x.copy_from_slice(&cvec[..p]);
-        for j in (0..p).rev() {
-            let xj = self.x[j] / r[j * m + j];
-            self.x[j] = xj;
-            axpy(-xj, &r[j * m..j * m + j], &mut self.x[..j]);
-        }
-        let residual_sq = dot(&cvec[p..], &cvec[p..]);
+        let residual_sq = back_substitute(&self.a, m, p, &mut self.x);
         if !residual_sq.is_finite() || self.x.iter().any(|v| !v.is_finite()) {
             return Err(LsqError::NonFiniteResult);
         }
@@ -259,6 +244,86 @@ impl LsqWorkspace {
             r_diag_ratio: rmax / rmin,
         })
     }
+}
+
+/// The first non-finite entry `(row, column)` of `[𝒜 | b]` inside the
+/// profile (column `p` is `b`, checked everywhere). Dispatches like
+/// [`factor`] (the AVX2 build only vectorizes wider; same result).
+fn first_non_finite(a: &[f64], m: usize, p: usize, row_end: &[usize]) -> Option<(usize, usize)> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { first_non_finite_avx2(a, m, p, row_end) };
+        }
+    }
+    first_non_finite_generic(a, m, p, row_end)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn first_non_finite_avx2(
+    a: &[f64],
+    m: usize,
+    p: usize,
+    row_end: &[usize],
+) -> Option<(usize, usize)> {
+    first_non_finite_generic(a, m, p, row_end)
+}
+
+#[inline(always)]
+fn first_non_finite_generic(
+    a: &[f64],
+    m: usize,
+    p: usize,
+    row_end: &[usize],
+) -> Option<(usize, usize)> {
+    for c in 0..=p {
+        let end = if c < p { row_end[c] } else { m };
+        let col = &a[c * m..c * m + end];
+        if all_finite(col) {
+            continue;
+        }
+        if let Some(row) = col.iter().position(|v| !v.is_finite()) {
+            return Some((row, c));
+        }
+    }
+    None
+}
+
+/// Back substitution `R1 x = c1` (column-oriented) on the factored
+/// `[R1 … | c]`, returns `J_min = ‖c2‖²`. Dispatches like [`factor`]: the
+/// AVX2 build runs the same operations (no contraction), so the results are
+/// identical.
+fn back_substitute(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { back_substitute_avx2(a, m, p, x) };
+        }
+    }
+    back_substitute_generic(a, m, p, x)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn back_substitute_avx2(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    back_substitute_generic(a, m, p, x)
+}
+
+#[inline(always)]
+fn back_substitute_generic(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    let (r, cvec) = a.split_at(m * p);
+    x.copy_from_slice(&cvec[..p]);
+    for j in (0..p).rev() {
+        let xj = x[j] / r[j * m + j];
+        x[j] = xj;
+        axpy(-xj, &r[j * m..j * m + j], &mut x[..j]);
+    }
+    dot(&cvec[p..], &cvec[p..])
 }
 
 /// Flops of [`LsqWorkspace::solve`] (factorization with `b`, back
@@ -1356,6 +1421,37 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// The dispatched finite check and back substitution equal the portable
+    /// builds bit for bit.
+    #[test]
+    fn dispatched_check_and_back_substitution_equal_portable() {
+        let mut seed = 61;
+        for (m, p) in [(5, 3), (40, 13), (180, 60)] {
+            let mut a: Vec<f64> = (0..m * (p + 1)).map(|_| rng(&mut seed)).collect();
+            for c in 0..p {
+                a[c * m + c] += 4.0_f64.copysign(a[c * m + c]);
+            }
+            let (mut x1, mut x2) = (vec![0.0; p], vec![0.0; p]);
+            let j1 = back_substitute_generic(&a, m, p, &mut x1);
+            let j2 = back_substitute(&a, m, p, &mut x2);
+            assert_eq!(j1.to_bits(), j2.to_bits());
+            assert_eq!(x1, x2);
+            let row_end = vec![m; p];
+            assert_eq!(first_non_finite(&a, m, p, &row_end), None);
+            for (i, bad) in [
+                (m * p - 1, f64::NAN),
+                (3, f64::INFINITY),
+                (m * (p + 1) - 1, -f64::INFINITY),
+            ] {
+                let mut b = a.clone();
+                b[i] = bad;
+                let want = Some((i % m, i / m));
+                assert_eq!(first_non_finite_generic(&b, m, p, &row_end), want);
+                assert_eq!(first_non_finite(&b, m, p, &row_end), want);
             }
         }
     }
