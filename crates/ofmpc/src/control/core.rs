@@ -29,6 +29,52 @@ use super::zoh::Zoh;
 use super::{StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
+/// Implements [`Controller`](super::Controller) for a controller struct with a
+/// field `core: Core` and an inherent method `run_step` with the signature of
+/// [`Controller::step`](super::Controller::step): the accessors and `reset`
+/// are the same for all three algorithms, only the step differs.
+macro_rules! impl_controller {
+    ($ty:ty, $kind:expr) => {
+        impl $crate::control::Controller for $ty {
+            fn kind(&self) -> $crate::control::ControllerKind {
+                $kind
+            }
+
+            fn dof(&self) -> usize {
+                self.core.n
+            }
+
+            fn horizon(&self) -> usize {
+                self.core.nh
+            }
+
+            fn settings(&self) -> &$crate::control::MpcSettings {
+                &self.core.settings
+            }
+
+            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
+                self.core.reset(x0)
+            }
+
+            fn input(&self) -> &[f64] {
+                &self.core.u_prev
+            }
+
+            fn step(
+                &mut self,
+                model: &mut dyn $crate::dynamics::JointSpaceDynamics,
+                x: &[f64],
+                w_k: &[f64],
+                preview: &[f64],
+                tau: &mut [f64],
+            ) -> Result<$crate::control::StepInfo, $crate::control::StepError> {
+                self.run_step(model, x, w_k, preview, tau)
+            }
+        }
+    };
+}
+pub(crate) use impl_controller;
+
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
 const MAX_ENTRIES: usize = 1 << 26;
 

@@ -8,17 +8,19 @@
 //!
 //! It removes the steady error for constant references.
 
-use super::core::{Core, TopBlocks};
+use super::core::{impl_controller, Core, TopBlocks};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{Controller, ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The first algorithm, Eq. (32)/(37). Allocation-free [`Controller::step`].
+/// The first algorithm, Eq. (32)/(37). Allocation-free [`Controller::step`](super::Controller::step).
 #[derive(Debug, Clone)]
 pub struct FirstMpc {
     core: Core,
 }
+
+impl_controller!(FirstMpc, ControllerKind::First);
 
 impl FirstMpc {
     /// A controller for `n` joints (buffers sized once).
@@ -27,34 +29,9 @@ impl FirstMpc {
             core: Core::new(n, settings, true)?,
         })
     }
-}
 
-impl Controller for FirstMpc {
-    fn kind(&self) -> ControllerKind {
-        ControllerKind::First
-    }
-
-    fn dof(&self) -> usize {
-        self.core.n
-    }
-
-    fn horizon(&self) -> usize {
-        self.core.nh
-    }
-
-    fn settings(&self) -> &MpcSettings {
-        &self.core.settings
-    }
-
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
-        self.core.reset(x0)
-    }
-
-    fn input(&self) -> &[f64] {
-        &self.core.u_prev
-    }
-
-    fn step(
+    /// [`Controller::step`](super::Controller::step) of the first algorithm.
+    fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
         x: &[f64],

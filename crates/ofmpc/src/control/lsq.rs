@@ -18,6 +18,9 @@ use super::dense::{all_finite, axpy, dot};
 /// Widest panel of columns whose reflectors are applied together.
 const PANEL: usize = 8;
 
+/// Copies of a panel's reflectors kept by the AVX2 path (see `factor_generic`).
+const VBUF_PER_ROW: usize = 2;
+
 /// Outcome of a successful solve.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LsqInfo {
@@ -73,6 +76,8 @@ pub struct LsqWorkspace {
     row_end: Vec<usize>,
     tau: Vec<f64>,
     x: Vec<f64>,
+    /// The reflectors of one panel, explicit and interleaved (AVX2 kernels).
+    vbuf: Vec<f64>,
 }
 
 /// The shape or profile given to [`LsqWorkspace::new`] is not usable.
@@ -131,6 +136,7 @@ impl LsqWorkspace {
             row_end,
             tau: vec![0.0; p],
             x: vec![0.0; p],
+            vbuf: vec![0.0; VBUF_PER_ROW * PANEL * (m + 4)],
         })
     }
 
@@ -192,17 +198,17 @@ impl LsqWorkspace {
     pub fn solve(&mut self) -> Result<LsqInfo, LsqError> {
         let (m, p) = (self.m, self.p);
         // Finite input (inside the profile; b everywhere).
-        for c in 0..=p {
-            let end = if c < p { self.row_end[c] } else { m };
-            let col = &self.a[c * m..c * m + end];
-            if all_finite(col) {
-                continue;
-            }
-            if let Some(row) = col.iter().position(|v| !v.is_finite()) {
-                return Err(LsqError::NonFiniteInput { row, col: c, p });
-            }
+        if let Some((row, col)) = first_non_finite(&self.a, m, p, &self.row_end) {
+            return Err(LsqError::NonFiniteInput { row, col, p });
         }
-        let rmax = factor(&mut self.a, m, p, &self.row_end, &mut self.tau);
+        let rmax = factor(
+            &mut self.a,
+            m,
+            p,
+            &self.row_end,
+            &mut self.tau,
+            &mut self.vbuf,
+        );
         // Rank check on the diagonal of R1.
         let tol = (m.max(p) as f64) * f64::EPSILON * rmax;
         let mut rmin = f64::INFINITY;
@@ -229,15 +235,7 @@ impl LsqWorkspace {
                 p,
             });
         }
-        // Back substitution R1 x = c1, column-oriented.
-        let (r, cvec) = self.a.split_at_mut(m * p);
-        self.x.copy_from_slice(&cvec[..p]);
-        for j in (0..p).rev() {
-            let xj = self.x[j] / r[j * m + j];
-            self.x[j] = xj;
-            axpy(-xj, &r[j * m..j * m + j], &mut self.x[..j]);
-        }
-        let residual_sq = dot(&cvec[p..], &cvec[p..]);
+        let residual_sq = back_substitute(&self.a, m, p, &mut self.x);
         if !residual_sq.is_finite() || self.x.iter().any(|v| !v.is_finite()) {
             return Err(LsqError::NonFiniteResult);
         }
@@ -246,6 +244,86 @@ impl LsqWorkspace {
             r_diag_ratio: rmax / rmin,
         })
     }
+}
+
+/// The first non-finite entry `(row, column)` of `[𝒜 | b]` inside the
+/// profile (column `p` is `b`, checked everywhere). Dispatches like
+/// [`factor`] (the AVX2 build only vectorizes wider; same result).
+fn first_non_finite(a: &[f64], m: usize, p: usize, row_end: &[usize]) -> Option<(usize, usize)> {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { first_non_finite_avx2(a, m, p, row_end) };
+        }
+    }
+    first_non_finite_generic(a, m, p, row_end)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn first_non_finite_avx2(
+    a: &[f64],
+    m: usize,
+    p: usize,
+    row_end: &[usize],
+) -> Option<(usize, usize)> {
+    first_non_finite_generic(a, m, p, row_end)
+}
+
+#[inline(always)]
+fn first_non_finite_generic(
+    a: &[f64],
+    m: usize,
+    p: usize,
+    row_end: &[usize],
+) -> Option<(usize, usize)> {
+    for c in 0..=p {
+        let end = if c < p { row_end[c] } else { m };
+        let col = &a[c * m..c * m + end];
+        if all_finite(col) {
+            continue;
+        }
+        if let Some(row) = col.iter().position(|v| !v.is_finite()) {
+            return Some((row, c));
+        }
+    }
+    None
+}
+
+/// Back substitution `R1 x = c1` (column-oriented) on the factored
+/// `[R1 … | c]`, returns `J_min = ‖c2‖²`. Dispatches like [`factor`]: the
+/// AVX2 build runs the same operations (no contraction), so the results are
+/// identical.
+fn back_substitute(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features the function is compiled for.
+            return unsafe { back_substitute_avx2(a, m, p, x) };
+        }
+    }
+    back_substitute_generic(a, m, p, x)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn back_substitute_avx2(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    back_substitute_generic(a, m, p, x)
+}
+
+#[inline(always)]
+fn back_substitute_generic(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+    let (r, cvec) = a.split_at(m * p);
+    x.copy_from_slice(&cvec[..p]);
+    for j in (0..p).rev() {
+        let xj = x[j] / r[j * m + j];
+        x[j] = xj;
+        axpy(-xj, &r[j * m..j * m + j], &mut x[..j]);
+    }
+    dot(&cvec[p..], &cvec[p..])
 }
 
 /// Flops of [`LsqWorkspace::solve`] (factorization with `b`, back
@@ -268,18 +346,26 @@ pub fn lsq_flops(p: usize, row_end: &[usize]) -> u64 {
 /// the same `row_end`): the panel is factored column by column, then its
 /// reflectors are applied, in order, to four trailing columns at a time while
 /// those stay in L1 cache. Per column this is exactly the operation sequence of
-/// the textbook algorithm. Dispatches at run time to an AVX2+FMA build of the
-/// same code where the CPU has it.
-fn factor(a: &mut [f64], m: usize, p: usize, row_end: &[usize], tau: &mut [f64]) -> f64 {
+/// the textbook algorithm. Where the CPU has AVX2 and FMA (detected at run
+/// time) the panel is factored with explicit 4-wide kernels and applied to
+/// the trailing columns in compact WY form (same reflectors, other rounding).
+fn factor(
+    a: &mut [f64],
+    m: usize,
+    p: usize,
+    row_end: &[usize],
+    tau: &mut [f64],
+    vbuf: &mut [f64],
+) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { factor_avx2_fma(a, m, p, row_end, tau) };
+            return unsafe { factor_avx2_fma(a, m, p, row_end, tau, vbuf) };
         }
     }
-    factor_generic::<false>(a, m, p, row_end, tau)
+    factor_generic::<false>(a, m, p, row_end, tau, vbuf)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -290,8 +376,9 @@ unsafe fn factor_avx2_fma(
     p: usize,
     row_end: &[usize],
     tau: &mut [f64],
+    vbuf: &mut [f64],
 ) -> f64 {
-    factor_generic::<true>(a, m, p, row_end, tau)
+    factor_generic::<true>(a, m, p, row_end, tau, vbuf)
 }
 
 /// `a·b + c`, fused when `FMA`.
@@ -304,13 +391,18 @@ fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
     }
 }
 
+/// `vbuf` (at least `2·PANEL·(m + 4)` long) holds the current panel's
+/// reflectors explicitly (`PANEL·m`) and interleaved (the rest) for the AVX2
+/// kernels; the portable path does not use it.
 #[inline(always)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
 fn factor_generic<const FMA: bool>(
     a: &mut [f64],
     m: usize,
     p: usize,
     row_end: &[usize],
     tau: &mut [f64],
+    vbuf: &mut [f64],
 ) -> f64 {
     let mut rmax = 0.0f64;
     let mut c0 = 0;
@@ -320,21 +412,39 @@ fn factor_generic<const FMA: bool>(
         while c1 < p && c1 - c0 < PANEL && row_end[c1] == end {
             c1 += 1;
         }
+        // AVX2+FMA: vectorized panel factorization, then blocked (compact WY)
+        // application of the panel's reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the
+        // trailing columns.
+        #[cfg(target_arch = "x86_64")]
+        if FMA {
+            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
+            // only where AVX2 and FMA were detected; `end > c` for every
+            // panel column (checked profile) and `c1 ≤ p`, so all rows and
+            // columns touched lie inside the m×(p+1) array `a`.
+            unsafe {
+                let (vbuf, vpack) = vbuf.split_at_mut(PANEL * m);
+                let pr = avx::factor_panel(a, m, c0, c1, end, tau, vbuf);
+                rmax = rmax.max(pr);
+                let (left, right) = a.split_at_mut(c1 * m);
+                let gram = avx::gram(left, m, c0, c1, end);
+                let tmat = t_from_gram(c1 - c0, &tau[c0..c1], &gram);
+                avx::apply_block_packed(vbuf, m, c1 - c0, c0, end, m, &tmat, right, vpack);
+            }
+            c0 = c1;
+            continue;
+        }
         // Panel factorization.
         for c in c0..c1 {
             let (left, right) = a.split_at_mut((c + 1) * m);
             let v = &mut left[c * m + c..c * m + end];
-            let x0 = v[0];
             let sigma = dot_k::<FMA>(&v[1..], &v[1..]);
-            let t = if sigma == 0.0 {
-                0.0 // already triangular in this column
-            } else {
-                let alpha = (x0 * x0 + sigma).sqrt();
-                let beta = if x0 > 0.0 { -alpha } else { alpha };
-                let inv = 1.0 / (x0 - beta);
-                v[1..].iter_mut().for_each(|e| *e *= inv);
-                v[0] = beta;
-                (beta - x0) / beta
+            let t = match reflector(v[0], sigma) {
+                None => 0.0, // already triangular in this column
+                Some((beta, inv, t)) => {
+                    v[1..].iter_mut().for_each(|e| *e *= inv);
+                    v[0] = beta;
+                    t
+                }
             };
             tau[c] = t;
             rmax = rmax.max(v[0].abs());
@@ -344,18 +454,6 @@ fn factor_generic<const FMA: bool>(
                     apply1::<FMA>(t, vt, &mut col[c..end]);
                 }
             }
-        }
-        // AVX2+FMA: blocked (compact WY) application of the panel's
-        // reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the trailing columns.
-        #[cfg(target_arch = "x86_64")]
-        if FMA {
-            let (left, right) = a.split_at_mut(c1 * m);
-            let tmat = triangular_factor(left, m, c0, c1, end, tau);
-            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
-            // only where AVX2 and FMA were detected.
-            unsafe { avx::apply_block(left, m, c0, c1 - c0, end, &tmat, right) };
-            c0 = c1;
-            continue;
         }
         // Trailing columns c1..p−1 and b, four at a time.
         let (left, right) = a.split_at_mut(c1 * m);
@@ -391,31 +489,33 @@ fn factor_generic<const FMA: bool>(
     rmax
 }
 
+/// The Householder reflector `H = I − τ v vᵀ`, `v = [1; x/(x0 − β)]`, that
+/// maps `[x0; x]` (with `σ = ‖x‖² > 0`) to `[β; 0]`: returns `(β, 1/(x0 − β),
+/// τ)`, or `None` when `σ = 0` (the column is already triangular).
+#[inline(always)]
+fn reflector(x0: f64, sigma: f64) -> Option<(f64, f64, f64)> {
+    if sigma == 0.0 {
+        return None;
+    }
+    let alpha = (x0 * x0 + sigma).sqrt();
+    let beta = if x0 > 0.0 { -alpha } else { alpha };
+    Some((beta, 1.0 / (x0 - beta), (beta - x0) / beta))
+}
+
 /// The upper-triangular `T` of the compact WY form `H_1 ⋯ H_k = I − V T Vᵀ`
-/// of the panel's reflectors (LAPACK `dlarft`, forward, columnwise).
-#[cfg(target_arch = "x86_64")]
+/// of a panel's `k` reflectors (LAPACK `dlarft`, forward, columnwise), from
+/// `τ` and the Gram entries `gram[j][r] = v_jᵀ v_r`, `j < r < k`.
+#[inline(always)]
 #[allow(clippy::needless_range_loop)]
-fn triangular_factor(
-    left: &[f64],
-    m: usize,
-    c0: usize,
-    c1: usize,
-    end: usize,
-    tau: &[f64],
-) -> [[f64; PANEL]; PANEL] {
-    let k = c1 - c0;
+fn t_from_gram(k: usize, tau: &[f64], gram: &[[f64; PANEL]; PANEL]) -> [[f64; PANEL]; PANEL] {
     let mut t = [[0.0f64; PANEL]; PANEL];
-    for r in 0..k {
-        let tr = tau[c0 + r];
+    for r in 0..k.min(PANEL) {
+        let tr = tau[r];
         t[r][r] = tr;
-        let row0 = c0 + r;
-        let vr = &left[(c0 + r) * m + row0 + 1..(c0 + r) * m + end];
-        // z_j = −τ_r v_jᵀ v_r (v_r is zero above row0 and 1 at row0).
+        // z_j = −τ_r v_jᵀ v_r, column r of T = T[..r, ..r] z.
         let mut z = [0.0f64; PANEL];
-        for (j, zj) in z.iter_mut().enumerate().take(r) {
-            let col = (c0 + j) * m;
-            let s = left[col + row0] + dot(&left[col + row0 + 1..col + end], vr);
-            *zj = -tr * s;
+        for j in 0..r {
+            z[j] = -tr * gram[j][r];
         }
         for i in 0..r {
             let mut s = 0.0;
@@ -426,6 +526,29 @@ fn triangular_factor(
         }
     }
     t
+}
+
+/// Portable reference of `avx::gram`: `gram[j][r] = v_jᵀ v_r` for the
+/// reflectors of the panel `c0..c1` (rows up to `end`, unit diagonal and
+/// zeros above it implicit).
+#[cfg(test)]
+fn gram_portable(
+    left: &[f64],
+    m: usize,
+    c0: usize,
+    c1: usize,
+    end: usize,
+) -> [[f64; PANEL]; PANEL] {
+    let mut g = [[0.0f64; PANEL]; PANEL];
+    for r in 1..c1 - c0 {
+        let row0 = c0 + r;
+        let vr = &left[row0 * m + row0 + 1..row0 * m + end];
+        for j in 0..r {
+            let col = (c0 + j) * m;
+            g[j][r] = left[col + row0] + dot(&left[col + row0 + 1..col + end], vr);
+        }
+    }
+    g
 }
 
 /// Dot product with four independent 4-wide accumulators.
@@ -538,114 +661,428 @@ mod avx {
         _mm_cvtsd_f64(_mm_add_sd(s, h))
     }
 
-    /// `A ← (I − V Tᵀ Vᵀ) A` for all trailing columns in `right` (each `m`
-    /// long), `V` the `k` reflectors of the panel starting at column `c0` of
-    /// `left` (unit diagonal implicit, rows `c0..end`), `T` from
-    /// `triangular_factor`.
+    /// `Σ x_i y_i` over the common length: four 4-wide accumulators, then
+    /// single vectors, then a scalar tail of at most three.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
+        let len = x.len().min(y.len());
+        let (px, py) = (x.as_ptr(), y.as_ptr());
+        let mut acc = [_mm256_setzero_pd(); 4];
+        let mut i = 0;
+        // SAFETY (all loads): `i + 4 ≤ len` (resp. `i < len`), both slices
+        // are at least `len` long.
+        while i + 16 <= len {
+            for l in 0..4 {
+                let o = i + 4 * l;
+                acc[l] = _mm256_fmadd_pd(
+                    _mm256_loadu_pd(px.add(o)),
+                    _mm256_loadu_pd(py.add(o)),
+                    acc[l],
+                );
+            }
+            i += 16;
+        }
+        while i + 4 <= len {
+            acc[0] = _mm256_fmadd_pd(
+                _mm256_loadu_pd(px.add(i)),
+                _mm256_loadu_pd(py.add(i)),
+                acc[0],
+            );
+            i += 4;
+        }
+        let mut s = hsum(_mm256_add_pd(
+            _mm256_add_pd(acc[0], acc[1]),
+            _mm256_add_pd(acc[2], acc[3]),
+        ));
+        while i < len {
+            s = (*px.add(i)).mul_add(*py.add(i), s);
+            i += 1;
+        }
+        s
+    }
+
+    /// `x ← s·x` (each product rounded once, as the scalar loop).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn scale(s: f64, x: &mut [f64]) {
+        let len = x.len();
+        let px = x.as_mut_ptr();
+        let sv = _mm256_set1_pd(s);
+        let mut i = 0;
+        // SAFETY: `i + 4 ≤ len` (resp. `i < len`).
+        while i + 4 <= len {
+            _mm256_storeu_pd(px.add(i), _mm256_mul_pd(sv, _mm256_loadu_pd(px.add(i))));
+            i += 4;
+        }
+        while i < len {
+            *px.add(i) *= s;
+            i += 1;
+        }
+    }
+
+    /// Factors the panel `c0..c1` (all with `row_end = end`) of the
+    /// column-major m-row array `a` in place, column by column: reflector of
+    /// column `c`, applied at once to the panel's later columns. Writes
+    /// `tau[c0..c1]` and the explicit reflectors to `vbuf` (`m` per column,
+    /// rows `c0..end`, see [`apply_block`]), returns `max |R_cc|`.
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA. Index ranges are checked (slices,
+    /// and the asserts of `apply_block_k`): the caller passes a panel with
+    /// `c0 < c1 ≤ c0 + PANEL`, `c1 ≤ end ≤ m`, `c1·m ≤ a.len()`,
+    /// `c1 ≤ tau.len()`, `(c1 − c0)·m ≤ vbuf.len()`.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn factor_panel(
+        a: &mut [f64],
+        m: usize,
+        c0: usize,
+        c1: usize,
+        end: usize,
+        tau: &mut [f64],
+        vbuf: &mut [f64],
+    ) -> f64 {
+        let mut rmax = 0.0f64;
+        for c in c0..c1 {
+            let (left, right) = a.split_at_mut((c + 1) * m);
+            let v = &mut left[c * m + c..c * m + end];
+            let (head, tail) = v.split_at_mut(1);
+            let t = match super::reflector(head[0], dot(tail, tail)) {
+                None => 0.0,
+                Some((beta, inv, t)) => {
+                    scale(inv, tail);
+                    head[0] = beta;
+                    t
+                }
+            };
+            tau[c] = t;
+            rmax = rmax.max(head[0].abs());
+            // Column r of the explicit V: rows c0..end.
+            let r = c - c0;
+            let vcol = &mut vbuf[r * m..r * m + (end - c0)];
+            vcol[..r].fill(0.0);
+            vcol[r] = 1.0;
+            vcol[r + 1..].copy_from_slice(tail);
+            if t != 0.0 && c + 1 < c1 {
+                let mut t1 = [[0.0f64; super::PANEL]; super::PANEL];
+                t1[0][0] = t;
+                let vb = &vbuf[r * m + r..(r + 1) * m];
+                apply_block_k::<1, false>(vb, m, c, end, m, &t1, &mut right[..(c1 - c - 1) * m]);
+            }
+        }
+        rmax
+    }
+
+    /// `gram[j][r] = v_jᵀ v_r` for `j < r` of the panel `c0..c1` of `left`
+    /// (reflector `j` has its unit entry at row `c0 + j`, stored entries
+    /// below it, rows up to `end`).
     ///
     /// # Safety
     /// The CPU must support AVX2 and FMA.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn apply_block(
+    pub(super) unsafe fn gram(
         left: &[f64],
         m: usize,
         c0: usize,
-        k: usize,
+        c1: usize,
         end: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-    ) {
-        match k {
-            1 => apply_block_k::<1>(left, m, c0, end, t, right),
-            2 => apply_block_k::<2>(left, m, c0, end, t, right),
-            3 => apply_block_k::<3>(left, m, c0, end, t, right),
-            4 => apply_block_k::<4>(left, m, c0, end, t, right),
-            5 => apply_block_k::<5>(left, m, c0, end, t, right),
-            6 => apply_block_k::<6>(left, m, c0, end, t, right),
-            7 => apply_block_k::<7>(left, m, c0, end, t, right),
-            _ => apply_block_k::<8>(left, m, c0, end, t, right),
-        }
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn apply_block_k<const K: usize>(
-        left: &[f64],
-        m: usize,
-        c0: usize,
-        end: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-    ) {
-        // The panel's columns c0..c0+K, rows up to `end`, lie inside `left`.
-        assert!(K <= super::PANEL && (c0 + K) * m <= left.len() && end <= m && c0 + K <= end);
+    ) -> [[f64; super::PANEL]; super::PANEL] {
+        assert!(c1 <= c0 + super::PANEL && c1 * m <= left.len() && end <= m && c1 <= end);
+        let mut g = [[0.0f64; super::PANEL]; super::PANEL];
         let v = left.as_ptr();
-        let mut pairs = right.chunks_exact_mut(2 * m);
-        for pair in &mut pairs {
-            let (a0, a1) = pair.split_at_mut(m);
-            block::<K, 2>(v, m, c0, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]);
+        for r in 1..c1 - c0 {
+            let col = match r {
+                1 => gram_col::<1>(v, m, c0, end),
+                2 => gram_col::<2>(v, m, c0, end),
+                3 => gram_col::<3>(v, m, c0, end),
+                4 => gram_col::<4>(v, m, c0, end),
+                5 => gram_col::<5>(v, m, c0, end),
+                6 => gram_col::<6>(v, m, c0, end),
+                _ => gram_col::<7>(v, m, c0, end),
+            };
+            for j in 0..r {
+                g[j][r] = col[j];
+            }
         }
-        for col in pairs.into_remainder().chunks_exact_mut(m) {
-            block::<K, 1>(v, m, c0, end, t, [col.as_mut_ptr()]);
-        }
+        g
     }
 
-    /// One group of `Q` columns (each `m` long, rows `c0..end` touched).
+    /// `v_jᵀ v_R` for `j < R`, one pass over the rows below `c0 + R`.
     #[inline]
     #[target_feature(enable = "avx2,fma")]
-    unsafe fn block<const K: usize, const Q: usize>(
+    unsafe fn gram_col<const R: usize>(
         v: *const f64,
         m: usize,
         c0: usize,
         end: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        cols: [*mut f64; Q],
-    ) {
-        // V[i, r] for i > c0 + r.
-        let vat = |i: usize, r: usize| *v.add((c0 + r) * m + i);
-        // Y = Vᵀ A: triangle rows c0..c0+K first.
-        let mut y = [[0.0f64; Q]; K];
-        for rr in 0..K {
-            for q in 0..Q {
-                let a = *cols[q].add(c0 + rr);
-                for r in 0..rr {
-                    y[r][q] = vat(c0 + rr, r).mul_add(a, y[r][q]);
-                }
-                y[rr][q] += a;
-            }
+    ) -> [f64; super::PANEL] {
+        // SAFETY: the caller (`gram`) checked that columns c0..=c0+R, rows
+        // below `end ≤ m`, lie inside the array `v` points to.
+        let row0 = c0 + R;
+        let vr = v.add(row0 * m);
+        let mut s = [0.0f64; super::PANEL];
+        for j in 0..R {
+            s[j] = *v.add((c0 + j) * m + row0);
         }
-        let start = c0 + K;
+        let start = row0 + 1;
         let len = end - start;
-        let mut acc = [[_mm256_setzero_pd(); Q]; K];
+        let mut acc = [_mm256_setzero_pd(); R];
         let mut i = 0;
         while i + 4 <= len {
             let row = start + i;
-            let mut av = [_mm256_setzero_pd(); Q];
-            for q in 0..Q {
-                av[q] = _mm256_loadu_pd(cols[q].add(row));
-            }
-            for r in 0..K {
-                let vv = _mm256_loadu_pd(v.add((c0 + r) * m + row));
-                for q in 0..Q {
-                    acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
-                }
+            let x = _mm256_loadu_pd(vr.add(row));
+            for j in 0..R {
+                acc[j] = _mm256_fmadd_pd(_mm256_loadu_pd(v.add((c0 + j) * m + row)), x, acc[j]);
             }
             i += 4;
         }
-        for r in 0..K {
-            for q in 0..Q {
-                y[r][q] += hsum(acc[r][q]);
-            }
+        for j in 0..R {
+            s[j] += hsum(acc[j]);
         }
         while i < len {
             let row = start + i;
-            for r in 0..K {
-                let vr = vat(row, r);
-                for q in 0..Q {
-                    y[r][q] = vr.mul_add(*cols[q].add(row), y[r][q]);
-                }
+            let x = *vr.add(row);
+            for j in 0..R {
+                s[j] = (*v.add((c0 + j) * m + row)).mul_add(x, s[j]);
             }
             i += 1;
+        }
+        s
+    }
+
+    /// `A ← (I − V Tᵀ Vᵀ) A` on rows `lo..end` of every column in `right`
+    /// (each `m` long), for `k` reflectors held explicitly in `vb`: column
+    /// `r` starts at `vb[r·ld]` and holds rows `lo..end` (zeros above the unit
+    /// diagonal). `T` from [`super::t_from_gram`].
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA. (Index ranges are asserted.)
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn apply_block(
+        vb: &[f64],
+        ld: usize,
+        k: usize,
+        lo: usize,
+        end: usize,
+        m: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+    ) {
+        match k {
+            1 => apply_block_k::<1, false>(vb, ld, lo, end, m, t, right),
+            2 => apply_block_k::<2, false>(vb, ld, lo, end, m, t, right),
+            3 => apply_block_k::<3, false>(vb, ld, lo, end, m, t, right),
+            4 => apply_block_k::<4, false>(vb, ld, lo, end, m, t, right),
+            5 => apply_block_k::<5, false>(vb, ld, lo, end, m, t, right),
+            6 => apply_block_k::<6, false>(vb, ld, lo, end, m, t, right),
+            7 => apply_block_k::<7, false>(vb, ld, lo, end, m, t, right),
+            _ => apply_block_k::<8, false>(vb, ld, lo, end, m, t, right),
+        }
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn apply_block_k<const K: usize, const IL: bool>(
+        vb: &[f64],
+        ld: usize,
+        lo: usize,
+        end: usize,
+        m: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+    ) {
+        // Every V entry read lies in `vb` (column layout: column r < K,
+        // offset < end − lo; interleaved: all chunks of the K columns), every
+        // A entry (row < end ≤ m) in its column.
+        assert!(K <= super::PANEL && lo < end && end <= m);
+        let len = end - lo;
+        if IL {
+            assert!(len >= 4 && ld == 4 && len.div_ceil(4) * 4 * K <= vb.len());
+        } else {
+            assert!((K - 1) * ld + len <= vb.len());
+        }
+        let v = vb.as_ptr();
+        let mut pairs = right.chunks_exact_mut(2 * m);
+        for pair in &mut pairs {
+            let (a0, a1) = pair.split_at_mut(m);
+            block::<K, 2, IL>(v, ld, lo, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]);
+        }
+        for col in pairs.into_remainder().chunks_exact_mut(m) {
+            block::<K, 1, IL>(v, ld, lo, end, t, [col.as_mut_ptr()]);
+        }
+    }
+
+    /// [`apply_block`] with the reflectors first copied to `vpack` in an
+    /// interleaved layout (per 4-row chunk, the `k` columns side by side), so
+    /// that the inner loops address `V` with constant offsets. Same
+    /// operations in the same order: bit-for-bit the result of
+    /// [`apply_block`].
+    ///
+    /// # Safety
+    /// The CPU must support AVX2 and FMA. (Index ranges are asserted.)
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    pub(super) unsafe fn apply_block_packed(
+        vb: &[f64],
+        ld: usize,
+        k: usize,
+        lo: usize,
+        end: usize,
+        m: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+        vpack: &mut [f64],
+    ) {
+        let len = end.saturating_sub(lo);
+        let chunks = len.div_ceil(4);
+        if len < 4 || k == 0 || k > super::PANEL || chunks * 4 * k > vpack.len() {
+            return apply_block(vb, ld, k, lo, end, m, t, right);
+        }
+        match k {
+            1 => pack_apply::<1>(vb, ld, lo, end, m, t, right, vpack),
+            2 => pack_apply::<2>(vb, ld, lo, end, m, t, right, vpack),
+            3 => pack_apply::<3>(vb, ld, lo, end, m, t, right, vpack),
+            4 => pack_apply::<4>(vb, ld, lo, end, m, t, right, vpack),
+            5 => pack_apply::<5>(vb, ld, lo, end, m, t, right, vpack),
+            6 => pack_apply::<6>(vb, ld, lo, end, m, t, right, vpack),
+            7 => pack_apply::<7>(vb, ld, lo, end, m, t, right, vpack),
+            _ => pack_apply::<8>(vb, ld, lo, end, m, t, right, vpack),
+        }
+    }
+
+    /// Packs `K` columns (`len = end − lo ≥ 4` rows each) of `vb` into
+    /// `vpack`, chunk by chunk: chunk 0 holds rows 0..4 when `head = len mod
+    /// 4 ≠ 0` (masked later), then the full chunks at row offsets
+    /// `head + 4j`; within a chunk the `K` columns are side by side. Then
+    /// applies them with the interleaved kernel.
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    #[allow(clippy::too_many_arguments)]
+    unsafe fn pack_apply<const K: usize>(
+        vb: &[f64],
+        ld: usize,
+        lo: usize,
+        end: usize,
+        m: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        right: &mut [f64],
+        vpack: &mut [f64],
+    ) {
+        let len = end - lo;
+        let head = len % 4;
+        assert!(
+            len >= 4 && (K - 1) * ld + len <= vb.len() && len.div_ceil(4) * 4 * K <= vpack.len()
+        );
+        let (src, dst) = (vb.as_ptr(), vpack.as_mut_ptr());
+        // SAFETY: reads at column offsets `< len` of the K columns of `vb`,
+        // writes to the `ceil(len/4)·4K` first entries of `vpack` (asserted).
+        let mut d = dst;
+        if head != 0 {
+            for r in 0..K {
+                _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld)));
+            }
+            d = d.add(4 * K);
+        }
+        let mut off = head;
+        while off + 4 <= len {
+            for r in 0..K {
+                _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld + off)));
+            }
+            d = d.add(4 * K);
+            off += 4;
+        }
+        apply_block_k::<K, true>(vpack, 4, lo, end, m, t, right);
+    }
+
+    /// One group of `Q` columns, rows `lo..end`. The rows are taken four at
+    /// a time; when their count is not a multiple of four (and at least
+    /// four), the first `head` rows go first as a masked 4-row chunk (loads
+    /// and stores of the lanes `≥ head` are suppressed), so that no scalar
+    /// tail remains. `V` is column-major with leading dimension `ld`, or,
+    /// when `IL`, interleaved as built by [`apply_block_packed`] (`ld = 4`,
+    /// then `len ≥ 4`).
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
+        v: *const f64,
+        ld: usize,
+        lo: usize,
+        end: usize,
+        t: &[[f64; super::PANEL]; super::PANEL],
+        cols: [*mut f64; Q],
+    ) {
+        // SAFETY (all accesses): `apply_block_k` asserted that the V
+        // entries read (column layout: offsets `r·ld + i`, `r < K`,
+        // `i < end − lo`; interleaved: the chunks of all K columns) lie in
+        // the V buffer and rows `lo + i < end ≤ m` in each column; masked
+        // chunks start at offset 0 and are only used when `end − lo ≥ 4`.
+        let len = end - lo;
+        let head = len % 4;
+        // Distance between the columns of V and between successive chunks;
+        // first full chunk.
+        let (rs, cs) = if IL { (4, 4 * K) } else { (ld, 4) };
+        let v_full = if IL {
+            v.add(usize::from(head != 0) * 4 * K)
+        } else {
+            v.add(head)
+        };
+        let ap: [*mut f64; Q] = std::array::from_fn(|q| cols[q].add(lo + head));
+        let full = len / 4;
+        let mut y = [[0.0f64; Q]; K];
+        let mask = _mm256_cmpgt_epi64(
+            _mm256_set1_epi64x(head as i64),
+            _mm256_set_epi64x(3, 2, 1, 0),
+        );
+        // Y = Vᵀ A.
+        if len < 4 {
+            for i in 0..len {
+                for r in 0..K {
+                    let vr = *v.add(r * ld + i);
+                    for q in 0..Q {
+                        y[r][q] = vr.mul_add(*cols[q].add(lo + i), y[r][q]);
+                    }
+                }
+            }
+        } else {
+            let mut acc = [[_mm256_setzero_pd(); Q]; K];
+            if head != 0 {
+                let mut av = [_mm256_setzero_pd(); Q];
+                for q in 0..Q {
+                    av[q] = _mm256_maskload_pd(cols[q].add(lo), mask);
+                }
+                for r in 0..K {
+                    let vv = _mm256_maskload_pd(v.add(r * rs), mask);
+                    for q in 0..Q {
+                        acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
+                    }
+                }
+            }
+            let mut vc = v_full;
+            for j in 0..full {
+                let mut av = [_mm256_setzero_pd(); Q];
+                for q in 0..Q {
+                    av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
+                }
+                for r in 0..K {
+                    let vv = _mm256_loadu_pd(vc.add(r * rs));
+                    for q in 0..Q {
+                        acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
+                    }
+                }
+                vc = vc.add(cs);
+            }
+            for r in 0..K {
+                for q in 0..Q {
+                    y[r][q] = hsum(acc[r][q]);
+                }
+            }
         }
         // W = Tᵀ Y.
         let mut w = [[0.0f64; Q]; K];
@@ -656,51 +1093,51 @@ mod avx {
                 }
             }
         }
-        // A −= V W: triangle rows.
-        for rr in 0..K {
-            for q in 0..Q {
-                let mut s = w[rr][q];
-                for r in 0..rr {
-                    s = vat(c0 + rr, r).mul_add(w[r][q], s);
+        // A −= V W.
+        if len < 4 {
+            for i in 0..len {
+                for q in 0..Q {
+                    let mut a = *cols[q].add(lo + i);
+                    for r in 0..K {
+                        a = (-w[r][q]).mul_add(*v.add(r * ld + i), a);
+                    }
+                    *cols[q].add(lo + i) = a;
                 }
-                *cols[q].add(c0 + rr) -= s;
             }
+            return;
         }
-        // Full rows.
         let mut wb = [[_mm256_setzero_pd(); Q]; K];
         for r in 0..K {
             for q in 0..Q {
                 wb[r][q] = _mm256_set1_pd(-w[r][q]);
             }
         }
-        let mut i = 0;
-        while i + 4 <= len {
-            let row = start + i;
+        if head != 0 {
+            for q in 0..Q {
+                let mut av = _mm256_maskload_pd(cols[q].add(lo), mask);
+                for r in 0..K {
+                    let vv = _mm256_maskload_pd(v.add(r * rs), mask);
+                    av = _mm256_fmadd_pd(wb[r][q], vv, av);
+                }
+                _mm256_maskstore_pd(cols[q].add(lo), mask, av);
+            }
+        }
+        let mut vc = v_full;
+        for j in 0..full {
             let mut av = [_mm256_setzero_pd(); Q];
             for q in 0..Q {
-                av[q] = _mm256_loadu_pd(cols[q].add(row));
+                av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
             }
             for r in 0..K {
-                let vv = _mm256_loadu_pd(v.add((c0 + r) * m + row));
+                let vv = _mm256_loadu_pd(vc.add(r * rs));
                 for q in 0..Q {
                     av[q] = _mm256_fmadd_pd(wb[r][q], vv, av[q]);
                 }
             }
             for q in 0..Q {
-                _mm256_storeu_pd(cols[q].add(row), av[q]);
+                _mm256_storeu_pd(ap[q].add(4 * j), av[q]);
             }
-            i += 4;
-        }
-        while i < len {
-            let row = start + i;
-            for q in 0..Q {
-                let mut a = *cols[q].add(row);
-                for r in 0..K {
-                    a = (-w[r][q]).mul_add(vat(row, r), a);
-                }
-                *cols[q].add(row) = a;
-            }
-            i += 1;
+            vc = vc.add(cs);
         }
     }
 }
@@ -797,8 +1234,9 @@ mod tests {
             let a: Vec<f64> = (0..m * (p + 1)).map(|_| rng(&mut seed)).collect();
             let (mut a1, mut a2) = (a.clone(), a);
             let (mut t1, mut t2) = (vec![0.0; p], vec![0.0; p]);
-            let r1 = factor_generic::<false>(&mut a1, m, p, &row_end, &mut t1);
-            let r2 = factor(&mut a2, m, p, &row_end, &mut t2);
+            let mut vbuf = vec![0.0; VBUF_PER_ROW * PANEL * (m + 4)];
+            let r1 = factor_generic::<false>(&mut a1, m, p, &row_end, &mut t1, &mut vbuf);
+            let r2 = factor(&mut a2, m, p, &row_end, &mut t2, &mut vbuf);
             assert!((r1 - r2).abs() <= 1e-13 * r1);
             for c in 0..=p {
                 let end = if c < p { row_end[c] } else { m };
@@ -809,6 +1247,211 @@ mod tests {
                         "m={m} p={p} ({i},{c}): {x} vs {y}"
                     );
                 }
+            }
+        }
+    }
+
+    /// Small multiples of 1/4: sums of their products are exact in any
+    /// order, so differently ordered kernels must agree bit for bit.
+    #[cfg(target_arch = "x86_64")]
+    fn dyadic(seed: &mut u64) -> f64 {
+        (rng(seed) * 8.0).round() / 4.0
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    fn has_avx2_fma() -> bool {
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+    }
+
+    /// The AVX2 dot product and scaling equal the portable loops on every
+    /// length 0..=40 and around 70 (all vector/scalar tail combinations).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_dot_and_scale_equal_portable() {
+        if !has_avx2_fma() {
+            return;
+        }
+        let mut seed = 31;
+        for len in (0..=40).chain(64..=75) {
+            let x: Vec<f64> = (0..len).map(|_| dyadic(&mut seed)).collect();
+            let y: Vec<f64> = (0..len + 3).map(|_| dyadic(&mut seed)).collect();
+            let portable = x.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
+            // SAFETY: AVX2 and FMA detected above.
+            let fast = unsafe { avx::dot(&x, &y) };
+            assert_eq!(portable.to_bits(), fast.to_bits(), "len {len}");
+            // Rounded data: same result up to summation order.
+            let xr: Vec<f64> = (0..len).map(|_| rng(&mut seed)).collect();
+            let bound: f64 = xr.iter().zip(&y).map(|(a, b)| (a * b).abs()).sum();
+            let portable = xr.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
+            // SAFETY: as above.
+            let fast = unsafe { avx::dot(&xr, &y) };
+            assert!((portable - fast).abs() <= 1e-15 * bound.max(f64::MIN_POSITIVE) * len as f64);
+            let s = rng(&mut seed);
+            let mut z = xr.clone();
+            // SAFETY: as above.
+            unsafe { avx::scale(s, &mut z) };
+            for (a, b) in z.iter().zip(&xr) {
+                assert_eq!(a.to_bits(), (s * b).to_bits());
+            }
+        }
+    }
+
+    /// One reflector applied by the AVX2 block kernel (K = 1, column pairs
+    /// and a single column) equals the portable `apply1`, and the AVX2 Gram
+    /// entries of a panel equal the portable dot products, bit for bit on
+    /// exact data, for row counts that leave every tail length.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_panel_kernels_equal_portable() {
+        if !has_avx2_fma() {
+            return;
+        }
+        let mut seed = 41;
+        for m in [9usize, 12, 17, 70, 71, 72, 73, 74] {
+            for (c0, k) in [(0usize, 1usize), (0, 6), (2, 8), (3, 5)] {
+                if c0 + k > m {
+                    continue;
+                }
+                for end in [c0 + k, c0 + k + 1, m - 1, m] {
+                    if end < c0 + k || end > m {
+                        continue;
+                    }
+                    let ncols = c0 + k + 3;
+                    let a: Vec<f64> = (0..m * ncols).map(|_| dyadic(&mut seed)).collect();
+                    let (left, right) = a.split_at(c0 * m + k * m);
+                    // Gram of the panel c0..c0+k.
+                    // SAFETY: AVX2 and FMA detected above; shapes as required.
+                    let g = unsafe { avx::gram(left, m, c0, c0 + k, end) };
+                    assert_eq!(
+                        g,
+                        gram_portable(left, m, c0, c0 + k, end),
+                        "m={m} c0={c0} k={k} end={end}"
+                    );
+                    // Reflector of column c0 applied to three trailing columns.
+                    let mut t1 = [[0.0f64; PANEL]; PANEL];
+                    t1[0][0] = 0.5;
+                    let mut fast = right.to_vec();
+                    let vt = &left[c0 * m + c0 + 1..c0 * m + end];
+                    let vb: Vec<f64> = std::iter::once(1.0).chain(vt.iter().copied()).collect();
+                    // SAFETY: as above.
+                    unsafe { avx::apply_block(&vb, m, 1, c0, end, m, &t1, &mut fast) };
+                    let mut slow = right.to_vec();
+                    for col in slow.chunks_exact_mut(m) {
+                        apply1::<false>(0.5, vt, &mut col[c0..end]);
+                    }
+                    assert_eq!(fast, slow, "m={m} c0={c0} end={end}");
+                }
+            }
+        }
+    }
+
+    /// The blocked AVX2 kernel, column layout and interleaved (packed)
+    /// layout, applies `k` reflectors like `k` successive portable `apply1`
+    /// calls (within rounding), and the two layouts agree bit for bit, for
+    /// every `k`, every head length `(end − lo) mod 4`, short row ranges and
+    /// an odd number of columns.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_block_layouts_agree_and_equal_sequential() {
+        if !has_avx2_fma() {
+            return;
+        }
+        let mut seed = 51;
+        let m = 40;
+        for k in 1..=PANEL {
+            for lo in [0usize, 3] {
+                for len in [k, k + 1, k + 2, k + 3, 17, 18, 19, 20, 37 - lo] {
+                    let end = lo + len;
+                    if len < k || end > m {
+                        continue;
+                    }
+                    // Reflectors: unit diagonal at row lo + r, random below.
+                    let ld = m;
+                    let mut vb = vec![0.0; PANEL * ld];
+                    let mut tau = [0.0; PANEL];
+                    for r in 0..k {
+                        vb[r * ld + r] = 1.0;
+                        for i in r + 1..len {
+                            vb[r * ld + i] = 0.3 * rng(&mut seed);
+                        }
+                        let vv: f64 = vb[r * ld..r * ld + len].iter().map(|x| x * x).sum();
+                        tau[r] = 2.0 / vv; // exact reflector: orthogonal H
+                    }
+                    let mut gram = [[0.0; PANEL]; PANEL];
+                    for r in 0..k {
+                        for j in 0..r {
+                            gram[j][r] = (0..len).map(|i| vb[j * ld + i] * vb[r * ld + i]).sum();
+                        }
+                    }
+                    let t = t_from_gram(k, &tau, &gram);
+                    let ncols = 5;
+                    let a: Vec<f64> = (0..m * ncols).map(|_| rng(&mut seed)).collect();
+                    let mut slow = a.clone();
+                    for col in slow.chunks_exact_mut(m) {
+                        for r in 0..k {
+                            let v = &vb[r * ld + r + 1..r * ld + len];
+                            apply1::<false>(tau[r], v, &mut col[lo + r..end]);
+                        }
+                    }
+                    let (mut col_layout, mut packed) = (a.clone(), a.clone());
+                    let mut vpack = vec![f64::NAN; PANEL * (m + 4)];
+                    // SAFETY: AVX2 and FMA detected above; shapes as required.
+                    unsafe {
+                        avx::apply_block(&vb, ld, k, lo, end, m, &t, &mut col_layout);
+                        avx::apply_block_packed(
+                            &vb,
+                            ld,
+                            k,
+                            lo,
+                            end,
+                            m,
+                            &t,
+                            &mut packed,
+                            &mut vpack,
+                        );
+                    }
+                    assert_eq!(col_layout, packed, "k={k} lo={lo} len={len}");
+                    for (i, (x, y)) in slow.iter().zip(&packed).enumerate() {
+                        assert!(
+                            (x - y).abs() <= 1e-13,
+                            "k={k} lo={lo} len={len} at {i}: {x} vs {y}"
+                        );
+                        if i % m < lo || i % m >= end {
+                            assert_eq!(y.to_bits(), a[i].to_bits(), "row outside lo..end touched");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// The dispatched finite check and back substitution equal the portable
+    /// builds bit for bit.
+    #[test]
+    fn dispatched_check_and_back_substitution_equal_portable() {
+        let mut seed = 61;
+        for (m, p) in [(5, 3), (40, 13), (180, 60)] {
+            let mut a: Vec<f64> = (0..m * (p + 1)).map(|_| rng(&mut seed)).collect();
+            for c in 0..p {
+                a[c * m + c] += 4.0_f64.copysign(a[c * m + c]);
+            }
+            let (mut x1, mut x2) = (vec![0.0; p], vec![0.0; p]);
+            let j1 = back_substitute_generic(&a, m, p, &mut x1);
+            let j2 = back_substitute(&a, m, p, &mut x2);
+            assert_eq!(j1.to_bits(), j2.to_bits());
+            assert_eq!(x1, x2);
+            let row_end = vec![m; p];
+            assert_eq!(first_non_finite(&a, m, p, &row_end), None);
+            for (i, bad) in [
+                (m * p - 1, f64::NAN),
+                (3, f64::INFINITY),
+                (m * (p + 1) - 1, -f64::INFINITY),
+            ] {
+                let mut b = a.clone();
+                b[i] = bad;
+                let want = Some((i % m, i / m));
+                assert_eq!(first_non_finite_generic(&b, m, p, &row_end), want);
+                assert_eq!(first_non_finite(&b, m, p, &row_end), want);
             }
         }
     }

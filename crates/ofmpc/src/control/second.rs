@@ -11,18 +11,20 @@
 //!
 //! It removes the steady error for constant and ramp references.
 
-use super::core::{Core, TopBlocks};
+use super::core::{impl_controller, Core, TopBlocks};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{Controller, ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The second algorithm, Eq. (34)/(39). Allocation-free [`Controller::step`].
+/// The second algorithm, Eq. (34)/(39). Allocation-free [`Controller::step`](super::Controller::step).
 #[derive(Debug, Clone)]
 pub struct SecondMpc {
     core: Core,
     ws: Vec<f64>,
 }
+
+impl_controller!(SecondMpc, ControllerKind::Second);
 
 impl SecondMpc {
     /// A controller for `n` joints (buffers sized once).
@@ -37,34 +39,9 @@ impl SecondMpc {
     pub fn aggregated_error(&self) -> &[f64] {
         &self.core.ebar
     }
-}
 
-impl Controller for SecondMpc {
-    fn kind(&self) -> ControllerKind {
-        ControllerKind::Second
-    }
-
-    fn dof(&self) -> usize {
-        self.core.n
-    }
-
-    fn horizon(&self) -> usize {
-        self.core.nh
-    }
-
-    fn settings(&self) -> &MpcSettings {
-        &self.core.settings
-    }
-
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
-        self.core.reset(x0)
-    }
-
-    fn input(&self) -> &[f64] {
-        &self.core.u_prev
-    }
-
-    fn step(
+    /// [`Controller::step`](super::Controller::step) of the second algorithm.
+    fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
         x: &[f64],

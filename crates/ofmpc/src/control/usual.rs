@@ -4,16 +4,18 @@
 //! `F = [CA; …; CA^N]`, `G[j,l] = C A^{j−l} B`. It has no integrator and keeps
 //! a steady offset under a model mismatch.
 
-use super::core::{Core, TopBlocks};
+use super::core::{impl_controller, Core, TopBlocks};
 use super::settings::{MpcSettings, SettingsError};
-use super::{Controller, ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The usual MPC of Eq. (43). Allocation-free [`Controller::step`].
+/// The usual MPC of Eq. (43). Allocation-free [`Controller::step`](super::Controller::step).
 #[derive(Debug, Clone)]
 pub struct UsualMpc {
     core: Core,
 }
+
+impl_controller!(UsualMpc, ControllerKind::Usual);
 
 impl UsualMpc {
     /// A controller for `n` joints (buffers sized once).
@@ -22,34 +24,9 @@ impl UsualMpc {
             core: Core::new(n, settings, false)?,
         })
     }
-}
 
-impl Controller for UsualMpc {
-    fn kind(&self) -> ControllerKind {
-        ControllerKind::Usual
-    }
-
-    fn dof(&self) -> usize {
-        self.core.n
-    }
-
-    fn horizon(&self) -> usize {
-        self.core.nh
-    }
-
-    fn settings(&self) -> &MpcSettings {
-        &self.core.settings
-    }
-
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
-        self.core.reset(x0)
-    }
-
-    fn input(&self) -> &[f64] {
-        &self.core.u_prev
-    }
-
-    fn step(
+    /// [`Controller::step`](super::Controller::step) of the usual algorithm.
+    fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
         x: &[f64],
