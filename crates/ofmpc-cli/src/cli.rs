@@ -57,8 +57,9 @@ pub struct TrajectoryArgs {
     /// Path acceleration limit (m/s²).
     #[arg(long, default_value_t = 2.5)]
     pub accel: f64,
-    /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figure goes beside it as
-    /// `<stem>_path.png` and `<stem>_path.svg`.
+    /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figures go beside it:
+    /// `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and
+    /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4).
     #[arg(long)]
     pub out: PathBuf,
 }

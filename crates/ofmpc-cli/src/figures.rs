@@ -7,6 +7,7 @@ use crate::output::plot::{
 };
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
+use ofmpc::trajectory::CartesianTrajectory;
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
@@ -222,5 +223,36 @@ pub fn payload_sweep(title: &str, runs: &[RunMetrics]) -> Figure {
     }
     f.panels.push(steady);
     f.panels.push(rms);
+    f
+}
+
+/// The paper's Fig. 4: the timed Cartesian reference — position, velocity and
+/// acceleration of the flange along x, y, z, sampled every `ts`.
+pub fn cartesian_reference(title: &str, trajectory: &CartesianTrajectory, ts: f64) -> Figure {
+    let k = (trajectory.duration() / ts).ceil() as usize + 1;
+    let t: Vec<f64> = (0..k)
+        .map(|s| (s as f64 * ts).min(trajectory.duration()))
+        .collect();
+    let samples: Vec<_> = t.iter().map(|&t| trajectory.sample(t)).collect();
+    let mut f = Figure::new(title, 1);
+    let quantities: [(
+        &str,
+        &str,
+        f64,
+        fn(&ofmpc::trajectory::CartesianSample) -> nalgebra::Vector3<f64>,
+    ); 3] = [
+        ("position", "mm", 1e3, |s| s.position),
+        ("velocity", "mm/s", 1e3, |s| s.velocity),
+        ("acceleration", "mm/s²", 1e3, |s| s.acceleration),
+    ];
+    for (name, unit, scale, get) in quantities {
+        let mut p = Panel::new(name, "t (s)", format!("{name} ({unit})"));
+        for (c, axis) in ["x", "y", "z"].iter().enumerate() {
+            let y = samples.iter().map(|s| get(s)[c] * scale).collect();
+            p.series
+                .push(Series::line(*axis, t.clone(), y, JOINT_COLORS[c]));
+        }
+        f.panels.push(p);
+    }
     f
 }

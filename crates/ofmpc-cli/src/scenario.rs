@@ -182,6 +182,8 @@ pub struct Scenario {
     pub payloads: Vec<Payload>,
     /// Everything but controller and payload.
     pub experiment: Experiment,
+    /// The timed Cartesian path (for the paper's Fig. 4).
+    pub trajectory: CartesianTrajectory,
     /// Parser warnings, to print.
     pub warnings: Vec<String>,
 }
@@ -302,6 +304,7 @@ impl Scenario {
                 plant: f.plant.clone(),
                 loop_settings: f.simulation.clone(),
             },
+            trajectory,
             warnings,
         })
     }

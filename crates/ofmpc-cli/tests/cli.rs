@@ -454,7 +454,14 @@ fn trajectory_writes_the_reference_csv_and_figures() {
             && (rows[0][3] - 0.15).abs() < 1e-12
     );
     assert!((rows[1][0] - 0.02).abs() < 1e-15);
-    assert!(dir.path().join("ref_path.png").is_file() && dir.path().join("ref_path.svg").is_file());
+    for f in [
+        "ref_path.png",
+        "ref_path.svg",
+        "ref_cartesian.png",
+        "ref_cartesian.svg",
+    ] {
+        assert!(dir.path().join(f).is_file(), "{f} missing");
+    }
     // Read in the base frame (no work offset), the paper's path is out of range:
     // the error names the program line, joint 3 and the work offset to use.
     let g = dir.path().join("base.gcode");

@@ -141,6 +141,17 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         "The path: top, isometric and side views, and the joint reference",
         &figures::path("Path and joint reference", &exp.reference),
     )?;
+    figure(
+        &mut dir,
+        &mut report,
+        "cartesian_reference",
+        "Fig. 4: the timed Cartesian reference (each segment rest to rest)",
+        &figures::cartesian_reference(
+            "Cartesian reference: position, velocity, acceleration",
+            &scenario.trajectory,
+            exp.reference.ts(),
+        ),
+    )?;
     report.heading("Tracking errors of the three controllers (the paper's Fig. 6 and 7)");
     for p in &scenario.payloads {
         let these: Vec<(&str, &ofmpc::sim::Record)> = runs

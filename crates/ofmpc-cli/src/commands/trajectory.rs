@@ -66,15 +66,31 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let svg = png.with_extension("svg");
     write_atomic(&png, &fig.png).with_context(|| format!("writing {}", png.display()))?;
     write_atomic(&svg, fig.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
+    let cart = render_both(&figures::cartesian_reference(
+        &format!("{name}: Cartesian reference"),
+        &traj,
+        a.ts,
+    ))?;
+    let cpng = png.with_file_name(
+        png.file_name()
+            .map(|n| n.to_string_lossy().replace("_path.png", "_cartesian.png"))
+            .unwrap_or_default(),
+    );
+    write_atomic(&cpng, &cart.png).with_context(|| format!("writing {}", cpng.display()))?;
+    let csvg = cpng.with_extension("svg");
+    write_atomic(&csvg, cart.svg.as_bytes())
+        .with_context(|| format!("writing {}", csvg.display()))?;
     println!(
-        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {}, {})",
+        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {})",
         traj.segments().len(),
         traj.duration(),
         reference.len(),
         a.ts,
         a.out.display(),
         png.display(),
-        svg.display()
+        svg.display(),
+        cpng.display(),
+        csvg.display()
     );
     Ok(())
 }
