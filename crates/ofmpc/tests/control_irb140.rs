@@ -92,3 +92,35 @@ fn divergence_beyond_the_tunings_margin_is_flagged() {
     // The run stopped at the divergence: the record ends there.
     assert!(r.record.len() < 300);
 }
+
+/// NOTES.md: without the drives' armature the IRB 140's wrist is so light that
+/// 0.25 kg already breaks the second algorithm with the paper's tuning; with
+/// the armature it holds.
+#[test]
+fn drive_inertia_decides_whether_a_quarter_kilogram_breaks_the_second_algorithm() {
+    let run = |robot: Robot| {
+        let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
+        let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
+        let exp = Experiment {
+            robot,
+            reference,
+            mpc: MpcSettings::default(),
+            plant: Default::default(),
+            loop_settings: LoopSettings {
+                hold_s: 2.0,
+                ..Default::default()
+            },
+        };
+        exp.run(
+            ControllerKind::Second,
+            &Payload::point_mass(0.25),
+            &mut |_, _| {},
+        )
+        .unwrap()
+        .0
+        .diverged_at
+    };
+    assert!(run(Robot::irb140()).is_none(), "with armature: stable");
+    let bare = Robot::from_urdf_str(ofmpc::robot::IRB140_URDF).unwrap();
+    assert!(run(bare).is_some(), "without armature: diverges");
+}
