@@ -7,7 +7,7 @@ use crate::output::plot::{
 };
 use ofmpc::reference::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
-use ofmpc::trajectory::CartesianTrajectory;
+use ofmpc::trajectory::{CartesianSample, CartesianTrajectory};
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
@@ -235,20 +235,16 @@ pub fn cartesian_reference(title: &str, trajectory: &CartesianTrajectory, ts: f6
         .collect();
     let samples: Vec<_> = t.iter().map(|&t| trajectory.sample(t)).collect();
     let mut f = Figure::new(title, 1);
-    let quantities: [(
-        &str,
-        &str,
-        f64,
-        fn(&ofmpc::trajectory::CartesianSample) -> nalgebra::Vector3<f64>,
-    ); 3] = [
-        ("position", "mm", 1e3, |s| s.position),
-        ("velocity", "mm/s", 1e3, |s| s.velocity),
-        ("acceleration", "mm/s²", 1e3, |s| s.acceleration),
+    type Get = fn(&CartesianSample) -> nalgebra::Vector3<f64>;
+    let quantities: [(&str, &str, Get); 3] = [
+        ("position", "mm", |s| s.position),
+        ("velocity", "mm/s", |s| s.velocity),
+        ("acceleration", "mm/s²", |s| s.acceleration),
     ];
-    for (name, unit, scale, get) in quantities {
+    for (name, unit, get) in quantities {
         let mut p = Panel::new(name, "t (s)", format!("{name} ({unit})"));
         for (c, axis) in ["x", "y", "z"].iter().enumerate() {
-            let y = samples.iter().map(|s| get(s)[c] * scale).collect();
+            let y = samples.iter().map(|s| get(s)[c] * 1e3).collect();
             p.series
                 .push(Series::line(*axis, t.clone(), y, JOINT_COLORS[c]));
         }
