@@ -172,6 +172,10 @@ pub fn build_reference(
     let mut position = Vec::with_capacity(steps);
     let mut lines = Vec::with_capacity(steps);
     let mut prev = vec![0.0; n];
+    let mut fk = RobotDynamics::new(robot.clone());
+    let mut jac = nalgebra::DMatrix::zeros(6, n);
+    let mut exact_qd = Vec::with_capacity(if n == 6 { steps * n } else { 0 });
+    let mut exact_ok = true;
     for k in 0..steps {
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
@@ -211,12 +215,29 @@ pub fn build_reference(
                 }
             }
         }
+        // Exact joint velocity where the Jacobian is square and regular:
+        // J(q) q̇ = [ṗ; ω] with ω = 0 (constant orientation).
+        if n == 6 {
+            fk.flange_jacobian(&sol, &mut jac);
+            let rhs = nalgebra::DVector::from_column_slice(&[
+                sample.velocity.x,
+                sample.velocity.y,
+                sample.velocity.z,
+                0.0,
+                0.0,
+                0.0,
+            ]);
+            match jac.clone().lu().solve(&rhs) {
+                Some(v) if v.iter().all(|x| x.is_finite()) => exact_qd.extend(v.iter()),
+                _ => exact_ok = false,
+            }
+        }
         q.extend_from_slice(&sol);
         position.push([p.x, p.y, p.z]);
         lines.push(sample.line);
         prev.copy_from_slice(&sol);
     }
-    JointReference::from_samples(n, ts, q, position, lines).ok_or_else(|| {
+    let mut r = JointReference::from_samples(n, ts, q, position, lines).ok_or_else(|| {
         fail(
             0,
             0.0,
@@ -224,7 +245,11 @@ pub fn build_reference(
             "empty reference".into(),
             "check the program",
         )
-    })
+    })?;
+    if n == 6 && exact_ok && exact_qd.len() == r.qd.len() {
+        r.qd = exact_qd;
+    }
+    Ok(r)
 }
 /// A joint reference sampled at `ts`. Vectors are stored row-major (`k·n + i`).
 #[derive(Debug, Clone, PartialEq)]
@@ -241,8 +266,9 @@ pub struct JointReference {
 impl JointReference {
     /// A reference from its samples: `q` (K·n values), the flange positions
     /// (K) and the program line of each sample (K). Velocities and
-    /// accelerations are central differences of `q` (one-sided at the ends,
-    /// where the path is at rest).
+    /// accelerations are central differences of `q` (zero at the ends, where
+    /// the path is at rest). [`build_reference`] replaces the velocities by
+    /// the exact `J(q)⁻¹ ṗ` for six-joint robots.
     ///
     /// Returns `None` when the sizes disagree, `K = 0` or `ts ≤ 0`.
     pub fn from_samples(

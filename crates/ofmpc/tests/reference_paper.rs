@@ -91,3 +91,35 @@ fn numeric_ik_is_used_for_other_robots_and_agrees() {
         assert!((f.pos - nalgebra::Vector3::from(r.position(k))).norm() < 1e-9);
     }
 }
+
+#[test]
+fn reference_velocity_is_exact_and_agrees_with_differences() {
+    let robot = Robot::irb140();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
+    let ts = 0.01;
+    let r = build_reference(&robot, &traj, Orientation::AtZero, ts).unwrap();
+    let mut ws = Workspace::new(&robot);
+    let (mut worst_exact, mut worst_diff, mut peak) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 1..r.len() - 1 {
+        let j = ofmpc::dynamics::flange_jacobian(&robot, &mut ws, r.q(k))
+            .unwrap()
+            .clone();
+        let qd = nalgebra::DVector::from_column_slice(r.qd(k));
+        let v = traj.sample(k as f64 * ts).velocity;
+        let twist = &j * &qd;
+        for c in 0..3 {
+            worst_exact = worst_exact
+                .max((twist[c] - v[c]).abs())
+                .max(twist[c + 3].abs());
+        }
+        for i in 0..6 {
+            let diff = (r.q(k + 1)[i] - r.q(k - 1)[i]) / (2.0 * ts);
+            worst_diff = worst_diff.max((diff - r.qd(k)[i]).abs());
+            peak = peak.max(r.qd(k)[i].abs());
+        }
+    }
+    assert!(worst_exact < 1e-9, "J q̇ − [v; 0] = {worst_exact:e}");
+    // Central differences are O(Ts²) accurate: within 1 % of the peak joint speed.
+    assert!(worst_diff < 0.01 * peak, "{worst_diff} vs peak {peak}");
+}
