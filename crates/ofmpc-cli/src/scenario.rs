@@ -172,13 +172,9 @@ pub struct Scenario {
     /// The file it was resolved from, every default filled in (written to the
     /// output directory as `scenario.toml`, so `ofmpc run` repeats the run).
     pub file: ScenarioFile,
-    /// Report title.
-    pub title: String,
-    /// The program text and its name.
+    /// The program's name (its path, or the built-in program's).
     pub program_name: String,
-    /// Controllers × payloads.
-    pub controllers: Vec<ControllerKind>,
-    /// The payloads.
+    /// The payloads (from `file.payload`, validated).
     pub payloads: Vec<Payload>,
     /// Everything but controller and payload.
     pub experiment: Experiment,
@@ -293,9 +289,7 @@ impl Scenario {
             .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
         Ok(Self {
             file: f.clone(),
-            title: f.title.clone(),
             program_name,
-            controllers: f.controllers.clone(),
             payloads,
             experiment: Experiment {
                 robot,

@@ -330,18 +330,16 @@ impl JointReference {
         let k = self.clamp(k);
         &self.q[k * self.n..(k + 1) * self.n]
     }
-    /// Reference velocity at sample `k` (zero past the end).
+    /// Reference velocity at sample `k` (n values); past the end, the last
+    /// sample's (the path ends at rest: zero).
     pub fn qd(&self, k: usize) -> &[f64] {
-        if k >= self.len() {
-            return &self.qd[..0];
-        }
+        let k = self.clamp(k);
         &self.qd[k * self.n..(k + 1) * self.n]
     }
-    /// Reference acceleration at sample `k` (empty past the end).
+    /// Reference acceleration at sample `k` (n values); past the end, the
+    /// last sample's (zero).
     pub fn qdd(&self, k: usize) -> &[f64] {
-        if k >= self.len() {
-            return &self.qdd[..0];
-        }
+        let k = self.clamp(k);
         &self.qdd[k * self.n..(k + 1) * self.n]
     }
     /// Flange position of the reference at sample `k` (m, base frame).

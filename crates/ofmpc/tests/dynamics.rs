@@ -1,8 +1,6 @@
 //! Properties of the rigid-body algorithms on random states of the IRB 140 and
 //! of random serial chains (revolute and prismatic joints, fixed frames).
 
-#![allow(clippy::approx_constant)] // the PARAMETERS.md table is printed to 9 digits
-
 mod robot_common;
 use robot_common as common;
 
@@ -227,68 +225,10 @@ fn energy_of_the_unforced_frictionless_robot_is_conserved() {
 /// PARAMETERS.md, "Test poses": flange position and rotation of the IRB 140.
 #[test]
 fn irb140_flange_poses_match_the_parameter_table() {
-    let d = std::f64::consts::PI / 180.0;
-    let cases: [([f64; 6], [f64; 3], [f64; 9]); 7] = [
-        (
-            [0.0; 6],
-            [0.515, 0.0, 0.712],
-            [0., 0., 1., 0., 1., 0., -1., 0., 0.],
-        ),
-        (
-            [90.0 * d, 0., 0., 0., 0., 0.],
-            [0.0, 0.515, 0.712],
-            [0., -1., 0., 0., 0., 1., -1., 0., 0.],
-        ),
-        (
-            [0., 30.0 * d, 0., 0., 0., 0.],
-            [0.635381305, 0.0, 0.441269145],
-            [-0.5, 0., 0.866025404, 0., 1., 0., -0.866025404, 0., -0.5],
-        ),
-        (
-            [0., 0., -90.0 * d, 0., 0., 0.],
-            [0.070, 0.0, 1.157],
-            [1., 0., 0., 0., 1., 0., 0., 0., 1.],
-        ),
-        (
-            [0., 0., 0., 0., 90.0 * d, 0.],
-            [0.450, 0.0, 0.647],
-            [-1., 0., 0., 0., 1., 0., 0., 0., -1.],
-        ),
-        (
-            [0., 0., 0., 90.0 * d, 45.0 * d, 30.0 * d],
-            [0.495961941, 0.045961941, 0.712],
-            [
-                -0.612372436,
-                0.353553391,
-                0.707106781,
-                0.612372436,
-                -0.353553391,
-                0.707106781,
-                0.5,
-                0.866025404,
-                0.0,
-            ],
-        ),
-        (
-            [0.3, -0.4, 0.5, 1.0, -0.6, 2.0],
-            [0.356171283, 0.077849371, 0.660020493],
-            [
-                -0.192462260,
-                -0.229702739,
-                0.954041367,
-                0.152204704,
-                -0.967439544,
-                -0.202223780,
-                0.969428701,
-                0.106289138,
-                0.221157439,
-            ],
-        ),
-    ];
     let robot = Robot::irb140();
     assert_eq!(robot.flange_name(), "flange");
     let mut ws = Workspace::new(&robot);
-    for (q, p, r) in cases {
+    for (q, p, r) in common::parameter_poses() {
         let f = forward_kinematics(&robot, &mut ws, &q).unwrap();
         let rot = Matrix3::from_row_slice(&r);
         assert!(

@@ -3,6 +3,7 @@
 #![allow(clippy::approx_constant)]
 
 mod ik_common;
+mod robot_common;
 
 use std::f64::consts::PI;
 
@@ -10,73 +11,10 @@ use ik_common::*;
 use nalgebra::{Isometry3, Matrix3, Vector3};
 use ofmpc::ik::OpwParameters;
 
-/// Test poses P0..P6 of PARAMETERS.md: q, flange position, rotation rows.
-#[allow(clippy::type_complexity)]
-fn parameter_poses() -> Vec<([f64; 6], [f64; 3], [f64; 9])> {
-    let d = |x: f64| x.to_radians();
-    vec![
-        (
-            [0.0; 6],
-            [0.515, 0.0, 0.712],
-            [0., 0., 1., 0., 1., 0., -1., 0., 0.],
-        ),
-        (
-            [d(90.0), 0.0, 0.0, 0.0, 0.0, 0.0],
-            [0.0, 0.515, 0.712],
-            [0., -1., 0., 0., 0., 1., -1., 0., 0.],
-        ),
-        (
-            [0.0, d(30.0), 0.0, 0.0, 0.0, 0.0],
-            [0.635381305, 0.0, 0.441269145],
-            [-0.5, 0., 0.866025404, 0., 1., 0., -0.866025404, 0., -0.5],
-        ),
-        (
-            [0.0, 0.0, d(-90.0), 0.0, 0.0, 0.0],
-            [0.070, 0.0, 1.157],
-            [1., 0., 0., 0., 1., 0., 0., 0., 1.],
-        ),
-        (
-            [0.0, 0.0, 0.0, 0.0, d(90.0), 0.0],
-            [0.450, 0.0, 0.647],
-            [-1., 0., 0., 0., 1., 0., 0., 0., -1.],
-        ),
-        (
-            [0.0, 0.0, 0.0, d(90.0), d(45.0), d(30.0)],
-            [0.495961941, 0.045961941, 0.712],
-            [
-                -0.612372436,
-                0.353553391,
-                0.707106781,
-                0.612372436,
-                -0.353553391,
-                0.707106781,
-                0.5,
-                0.866025404,
-                0.0,
-            ],
-        ),
-        (
-            [0.3, -0.4, 0.5, 1.0, -0.6, 2.0],
-            [0.356171283, 0.077849371, 0.660020493],
-            [
-                -0.192462260,
-                -0.229702739,
-                0.954041367,
-                0.152204704,
-                -0.967439544,
-                -0.202223780,
-                0.969428701,
-                0.106289138,
-                0.221157439,
-            ],
-        ),
-    ]
-}
-
 #[test]
 fn forward_matches_parameter_test_poses() {
     let opw = OpwParameters::irb140();
-    for (k, (q, p, r)) in parameter_poses().into_iter().enumerate() {
+    for (k, (q, p, r)) in robot_common::parameter_poses().into_iter().enumerate() {
         let pose = opw.forward(&q);
         let dp = (pose.translation.vector - Vector3::from(p)).amax();
         let dr = (rot(&pose) - Matrix3::from_row_slice(&r)).amax();

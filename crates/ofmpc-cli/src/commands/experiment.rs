@@ -53,7 +53,7 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     let jobs: Vec<(ControllerKind, Payload)> = scenario
         .payloads
         .iter()
-        .flat_map(|p| scenario.controllers.iter().map(move |k| (*k, *p)))
+        .flat_map(|p| scenario.file.controllers.iter().map(move |k| (*k, *p)))
         .collect();
     let steps_per_run = (exp.reference.len()
         + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize)
@@ -93,7 +93,7 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
 
     let mut dir = StagedDir::new(out)
         .with_context(|| format!("preparing the output directory {}", out.display()))?;
-    let mut report = Report::new(&scenario.title);
+    let mut report = Report::new(&scenario.file.title);
     report.heading("Summary");
     let robot = &exp.robot;
     report.paragraph(format!(

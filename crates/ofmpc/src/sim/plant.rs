@@ -328,11 +328,6 @@ impl Plant {
             Err(_) => [f64::NAN; 3],
         }
     }
-
-    /// Friction torque the plant would apply at velocities `qd` (for reports).
-    pub fn friction_torque(&self, i: usize, v: f64) -> f64 {
-        self.friction(i, v)
-    }
 }
 
 #[cfg(test)]
