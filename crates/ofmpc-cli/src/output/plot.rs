@@ -1183,6 +1183,30 @@ fn draw_panel_2d<DB: DrawingBackend>(
     }
 }
 
+/// Draws one run of at least two points as a solid or dashed line, in 2-D or
+/// 3-D coordinates alike; returns its annotation (for the legend entry).
+fn draw_line_run<'a, 'b, DB, CT>(
+    chart: &'b mut ChartContext<'a, DB, CT>,
+    run: Vec<CT::From>,
+    style: SeriesStyle,
+    mode: LineMode,
+    line: ShapeStyle,
+) -> Result<&'b mut SeriesAnno<'a, DB>, DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+    CT::From: Clone + 'static,
+{
+    match (style, mode) {
+        (SeriesStyle::Line, LineMode::Polylines) => chart.draw_series(LineSeries::new(run, line)),
+        (SeriesStyle::Line, LineMode::Segments) => chart.draw_series(
+            run.windows(2)
+                .map(|w| PathElement::new(vec![w[0].clone(), w[1].clone()], line)),
+        ),
+        _ => chart.draw_series(DashedLineSeries::new(run, 8, 5, line)),
+    }
+}
+
 /// Draws the prepared series and the legend into a chart with an f64 x axis.
 fn draw_series<'a, DB, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
@@ -1247,23 +1271,7 @@ where
                         continue;
                     }
                     let run = reduce_run(chart, run);
-                    let anno = if s.style == SeriesStyle::Line {
-                        match mode {
-                            LineMode::Polylines => {
-                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
-                            }
-                            LineMode::Segments => chart
-                                .draw_series(
-                                    run.windows(2)
-                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
-                                )
-                                .map_err(err)?,
-                        }
-                    } else {
-                        chart
-                            .draw_series(DashedLineSeries::new(run, 8, 5, line))
-                            .map_err(err)?
-                    };
+                    let anno = draw_line_run(chart, run, s.style, mode, line).map_err(err)?;
                     annotate(anno);
                 }
             }
@@ -1811,22 +1819,8 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
                         chart
                             .draw_series(run.into_iter().map(|pt| Circle::new(pt, 2, fill)))
                             .map_err(err)?
-                    } else if s.style == SeriesStyle::Line {
-                        match mode {
-                            LineMode::Polylines => {
-                                chart.draw_series(LineSeries::new(run, line)).map_err(err)?
-                            }
-                            LineMode::Segments => chart
-                                .draw_series(
-                                    run.windows(2)
-                                        .map(|w| PathElement::new(vec![w[0], w[1]], line)),
-                                )
-                                .map_err(err)?,
-                        }
                     } else {
-                        chart
-                            .draw_series(DashedLineSeries::new(run, 8, 5, line))
-                            .map_err(err)?
+                        draw_line_run(&mut chart, run, s.style, mode, line).map_err(err)?
                     };
                     annotate(anno);
                 }
