@@ -47,16 +47,15 @@ pub enum Orientation {
 
 enum Ik {
     Analytic(Box<IkSolver>),
-    Numeric(Box<NumericIk>, Box<RobotDynamics>),
+    Numeric(Box<NumericIk>),
 }
 
 /// True when the built-in OPW parameters reproduce the robot's forward
 /// kinematics (checked at 50 pseudo-random configurations to 1e-9).
-fn opw_matches(robot: &Robot, opw: &OpwParameters) -> bool {
-    if robot.dof() != 6 {
+fn opw_matches(d: &mut RobotDynamics, opw: &OpwParameters) -> bool {
+    if d.robot().dof() != 6 {
         return false;
     }
-    let mut d = RobotDynamics::new(robot.clone());
     let mut s = 12345u64;
     (0..50).all(|_| {
         let q: [f64; 6] = std::array::from_fn(|_| {
@@ -109,12 +108,11 @@ pub fn build_reference(
     ts: f64,
 ) -> Result<JointReference, ReferenceError> {
     let n = robot.dof();
+    // One model for every kinematic query below: q = 0 pose, OPW check,
+    // numeric IK, Jacobians.
+    let mut fk = RobotDynamics::new(robot.clone());
     let rotation = match orientation {
-        Orientation::AtZero => {
-            RobotDynamics::new(robot.clone())
-                .flange_pose(&vec![0.0; n])
-                .rotation
-        }
+        Orientation::AtZero => fk.flange_pose(&vec![0.0; n]).rotation,
         Orientation::Fixed(r) => r,
     };
     let fail =
@@ -138,7 +136,7 @@ pub fn build_reference(
     let lower = robot.lower_limits();
     let upper = robot.upper_limits();
     let opw = OpwParameters::irb140();
-    let mut ik = if opw_matches(robot, &opw) {
+    let mut ik = if opw_matches(&mut fk, &opw) {
         let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
         let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
         Ik::Analytic(Box::new(IkSolver::new(opw, lo, up).map_err(|e| {
@@ -162,17 +160,13 @@ pub fn build_reference(
                 "check the joint limits",
             )
         })?;
-        Ik::Numeric(
-            Box::new(numeric),
-            Box::new(RobotDynamics::new(robot.clone())),
-        )
+        Ik::Numeric(Box::new(numeric))
     };
     let steps = (trajectory.duration() / ts - 1e-9).ceil().max(0.0) as usize + 1;
     let mut q = Vec::with_capacity(steps * n);
     let mut position = Vec::with_capacity(steps);
     let mut lines = Vec::with_capacity(steps);
     let mut prev = vec![0.0; n];
-    let mut fk = RobotDynamics::new(robot.clone());
     let mut jac = nalgebra::DMatrix::zeros(6, n);
     let mut exact_qd = Vec::with_capacity(if n == 6 { steps * n } else { 0 });
     let mut exact_ok = true;
@@ -186,9 +180,9 @@ pub fn build_reference(
                 let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
                 s.solve_near(&pose, &hint).map(|a| a.to_vec())
             }
-            Ik::Numeric(num, fk) => {
+            Ik::Numeric(num) => {
                 let mut x = prev.clone();
-                num.solve(fk.as_mut(), &pose, &mut x).map(|_| x)
+                num.solve(&mut fk, &pose, &mut x).map(|_| x)
             }
         };
         let sol = sol.map_err(|e| fail(sample.line, t, p, e.to_string(), offset_hint))?;
