@@ -246,14 +246,21 @@ impl LsqWorkspace {
     }
 }
 
+/// Whether the CPU runs the AVX2+FMA builds of the kernels (the detection is
+/// cached by the standard library).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn has_avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
 /// The first non-finite entry `(row, column)` of `[𝒜 | b]` inside the
 /// profile (column `p` is `b`, checked everywhere). Dispatches like
 /// [`factor`] (the AVX2 build only vectorizes wider; same result).
 fn first_non_finite(a: &[f64], m: usize, p: usize, row_end: &[usize]) -> Option<(usize, usize)> {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if has_avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe { first_non_finite_avx2(a, m, p, row_end) };
         }
@@ -299,8 +306,7 @@ fn first_non_finite_generic(
 fn back_substitute(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if has_avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe { back_substitute_avx2(a, m, p, x) };
         }
@@ -359,8 +365,7 @@ fn factor(
 ) -> f64 {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if has_avx2_fma() {
             // SAFETY: the CPU supports the features the function is compiled for.
             return unsafe { factor_avx2_fma(a, m, p, row_end, tau, vbuf) };
         }
@@ -1256,11 +1261,6 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     fn dyadic(seed: &mut u64) -> f64 {
         (rng(seed) * 8.0).round() / 4.0
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    fn has_avx2_fma() -> bool {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
     }
 
     /// The AVX2 dot product and scaling equal the portable loops on every
