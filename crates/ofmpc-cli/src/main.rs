@@ -10,7 +10,12 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::from(2)
+            // 1: the runs were made and written, but some failed; 2: nothing was run.
+            if e.downcast_ref::<ofmpc_cli::errors::RunsFailed>().is_some() {
+                ExitCode::from(1)
+            } else {
+                ExitCode::from(2)
+            }
         }
     }
 }

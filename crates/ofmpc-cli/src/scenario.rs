@@ -241,10 +241,10 @@ impl Scenario {
             .map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
         f.simulation
             .validate()
-            .map_err(|e| anyhow::anyhow!("[simulation] {e}"))?;
+            .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e.into())))?;
         f.plant
-            .validate(n)
-            .map_err(|e| anyhow::anyhow!("[plant] {e}"))?;
+            .validate_for(n, f.mpc.ts)
+            .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e.into())))?;
         let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
         let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let mut payloads = Vec::new();
@@ -287,17 +287,21 @@ impl Scenario {
         };
         let reference = build_reference(&robot, &trajectory, orientation, f.mpc.ts)
             .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        let experiment = Experiment {
+            robot,
+            reference,
+            mpc: f.mpc.clone(),
+            plant: f.plant.clone(),
+            loop_settings: f.simulation.clone(),
+        };
+        experiment.validate().map_err(|e| {
+            anyhow::anyhow!("{program_name}: {}", crate::errors::experiment_error(&e))
+        })?;
         Ok(Self {
             file: f.clone(),
             program_name,
             payloads,
-            experiment: Experiment {
-                robot,
-                reference,
-                mpc: f.mpc.clone(),
-                plant: f.plant.clone(),
-                loop_settings: f.simulation.clone(),
-            },
+            experiment,
             trajectory,
             warnings,
         })

@@ -32,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ] {
         let (r, m) = exp.run(kind, &Payload::point_mass(payload), &mut |_, _| {})?;
         println!(
-            "{:8} rms {:8.4} mm max {:8.4} mm steady {:10.3e} mm  steady joint {:10.3e}  step {:6.1} us  wall {:.2}s {:?}",
+            "{:8} rms {:8.4} mm max {:8.4} mm steady {:10.3e} mm  steady joint {:10.3e}  step {:6.1} us  wall {:.2}s {}",
             m.controller,
             m.cartesian_error_rms_mm,
             m.cartesian_error_max_mm,
@@ -40,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             m.steady_joint_error_max_rad.iter().cloned().fold(0.0, f64::max),
             m.step_time_us.median,
             m.wall_s,
-            r.reason
+            r.outcome
         );
     }
     Ok(())

@@ -5,7 +5,7 @@
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::reference::JointReference;
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings};
+use ofmpc::sim::{Experiment, LoopSettings, RunOutcome, RunStatus};
 
 fn hold(kind: ControllerKind, payload_kg: f64) -> Vec<f64> {
     let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
@@ -23,7 +23,7 @@ fn hold(kind: ControllerKind, payload_kg: f64) -> Vec<f64> {
     let (r, m) = exp
         .run(kind, &Payload::point_mass(payload_kg), &mut |_, _| {})
         .unwrap();
-    assert!(r.diverged_at.is_none(), "{kind:?}: {:?}", r.reason);
+    assert!(r.outcome.is_completed(), "{kind:?}: {}", r.outcome);
     m.steady_joint_error_max_rad
 }
 
@@ -71,22 +71,22 @@ fn divergence_beyond_the_tunings_margin_is_flagged() {
             &mut |_, _| {},
         )
         .unwrap();
-    let t = r
-        .diverged_at
-        .expect("the second algorithm diverges with 4 kg");
+    let RunOutcome::Diverged {
+        t, threshold_rad, ..
+    } = r.outcome
+    else {
+        panic!("the second algorithm diverges with 4 kg: {}", r.outcome);
+    };
     assert!(t < 3.0 && m.diverged && m.diverged_at_s == Some(t));
-    assert!(
-        r.reason
-            .as_deref()
-            .unwrap_or("")
-            .contains("divergence threshold"),
-        "{:?}",
-        r.reason
-    );
+    assert_eq!(threshold_rad, 0.2);
+    assert_eq!(m.status, RunStatus::Diverged);
+    assert!(m.reason.contains("divergence threshold"), "{}", m.reason);
     assert!(m.steady_cartesian_error_mm.is_nan());
     let json = serde_json::to_string(&m).unwrap();
     assert!(
-        json.contains("\"steady_cartesian_error_mm\":null") && json.contains("\"diverged\":true"),
+        json.contains("\"steady_cartesian_error_mm\":null")
+            && json.contains("\"diverged\":true")
+            && json.contains("\"status\":\"diverged\""),
         "{json}"
     );
     // The run stopped at the divergence: the record ends there.
@@ -118,7 +118,8 @@ fn drive_inertia_decides_whether_a_quarter_kilogram_breaks_the_second_algorithm(
         )
         .unwrap()
         .0
-        .diverged_at
+        .outcome
+        .stopped_at()
     };
     assert!(run(Robot::irb140()).is_none(), "with armature: stable");
     let bare = Robot::from_urdf_str(ofmpc::robot::IRB140_URDF).unwrap();

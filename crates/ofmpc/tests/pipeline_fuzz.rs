@@ -6,7 +6,7 @@ use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
 use ofmpc::reference::{build_reference, JointReference, Orientation};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings, PlantSettings};
+use ofmpc::sim::{Experiment, ExperimentError, LoopSettings, PlantSettings, RunStatus};
 use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 use proptest::prelude::*;
 
@@ -58,10 +58,13 @@ proptest! {
         };
         match exp.run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {}) {
             Ok((r, m)) => {
-                prop_assert_eq!(m.diverged, r.diverged_at.is_some());
+                prop_assert_eq!(m.diverged, r.outcome.status() == RunStatus::Diverged);
+                prop_assert_eq!(m.status, r.outcome.status());
+                prop_assert_eq!(m.stopped_at_s, r.outcome.stopped_at());
                 prop_assert!(r.record.q.iter().all(|x| x.is_finite()));
             }
-            Err(e) => prop_assert!(!e.is_empty()), // invalid settings (e.g. q_du ≤ 0) are reported
+            // Invalid settings (e.g. q_du ≤ 0) are reported as such.
+            Err(e) => prop_assert!(matches!(e, ExperimentError::Mpc(_)), "{e:?}"),
         }
     }
 }

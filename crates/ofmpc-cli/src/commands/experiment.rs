@@ -13,7 +13,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, run_name, RunMetrics, RunResult};
+use ofmpc::sim::{kind_name, run_name, RunMetrics, RunResult, RunStatus};
 use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -78,7 +78,13 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
                     bar.inc((k - last) as u64);
                     last = k;
                 })
-                .map_err(|e| anyhow::anyhow!("{}: {e}", run_name(kind, &payload)))?;
+                .map_err(|e| {
+                    anyhow::anyhow!(
+                        "{}: {}",
+                        run_name(kind, &payload),
+                        crate::errors::experiment_error(&e)
+                    )
+                })?;
             Ok(Run {
                 kind,
                 payload,
@@ -115,8 +121,14 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         header: SUMMARY_HEADER.iter().map(|s| s.to_string()).collect(),
         rows: summary_rows(&metrics),
     });
-    let diverged: Vec<&Run> = runs.iter().filter(|r| r.result.reason.is_some()).collect();
-    if !diverged.is_empty() {
+    let stopped: Vec<&Run> = runs
+        .iter()
+        .filter(|r| !r.result.outcome.is_completed())
+        .collect();
+    if stopped
+        .iter()
+        .any(|r| r.metrics.status == RunStatus::Diverged)
+    {
         report.heading("Diverged runs");
         report.paragraph(
             "A run stops when a joint error passes the divergence threshold. With the paper's tuning \
@@ -126,11 +138,19 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
              4.6 kg and 1.5 kg. A divergence beyond those payloads is the physics of the tuning, not a \
              numerical failure.",
         );
-        for r in diverged {
-            if let Some(reason) = &r.result.reason {
-                report.paragraph(format!("{}: {reason}", r.metrics.name));
-            }
-        }
+    }
+    if stopped
+        .iter()
+        .any(|r| r.metrics.status == RunStatus::Failed)
+    {
+        report.heading("Failed runs");
+        report.paragraph(
+            "A failed run could not go on (a controller step or the plant's integration failed); its \
+             metrics cover what was recorded before, and metrics that do not exist are null.",
+        );
+    }
+    for r in &stopped {
+        report.paragraph(format!("{}: {}", r.metrics.name, r.result.outcome));
     }
 
     report.heading("The path");
@@ -242,5 +262,13 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64(),
         out.display()
     );
+    let failed: Vec<String> = metrics
+        .iter()
+        .filter(|m| m.status == RunStatus::Failed)
+        .map(|m| format!("{}: {}", m.name, m.reason))
+        .collect();
+    if !failed.is_empty() {
+        return Err(crate::errors::RunsFailed { runs: failed }.into());
+    }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! The closed loop: measure, control, apply the torque over one period.
 
 use super::metrics::Record;
+use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
 use crate::control::Controller;
 use crate::dynamics::JointSpaceDynamics;
@@ -32,30 +33,37 @@ impl Default for LoopSettings {
 
 impl LoopSettings {
     /// Checks the values.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), LoopSettingsError> {
         if !(self.hold_s.is_finite() && self.hold_s >= 0.0) {
-            return Err(format!(
-                "simulation.hold_s = {}: must be ≥ 0 s",
-                self.hold_s
-            ));
+            return Err(LoopSettingsError::HoldTime(self.hold_s));
         }
         if !(self.divergence_threshold_rad.is_finite() && self.divergence_threshold_rad > 0.0) {
-            return Err(format!(
-                "simulation.divergence_threshold_rad = {}: must be > 0",
-                self.divergence_threshold_rad
+            return Err(LoopSettingsError::DivergenceThreshold(
+                self.divergence_threshold_rad,
             ));
         }
         if !(self.steady_window_s.is_finite()
             && self.steady_window_s > 0.0
             && self.steady_window_s <= self.hold_s.max(1e-9))
         {
-            return Err(format!(
-                "simulation.steady_window_s = {}: must be > 0 and not longer than the hold ({} s)",
-                self.steady_window_s, self.hold_s
-            ));
+            return Err(LoopSettingsError::SteadyWindow {
+                value: self.steady_window_s,
+                hold_s: self.hold_s,
+            });
         }
         Ok(())
     }
+
+    /// Samples of the hold at the control period `ts`, saturating.
+    pub fn hold_samples(&self, ts: f64) -> usize {
+        (self.hold_s / ts).round() as usize
+    }
+}
+
+/// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
+/// flange and its reference (6), the step time.
+pub fn record_columns(n: usize) -> usize {
+    4 * n + 8
 }
 
 /// The outcome of one run.
@@ -63,10 +71,8 @@ impl LoopSettings {
 pub struct RunResult {
     /// What was recorded, up to the end or to the divergence.
     pub record: Record,
-    /// Time at which the run was stopped as diverged.
-    pub diverged_at: Option<f64>,
-    /// Why it diverged: the joint error, or a failed controller step or plant step.
-    pub reason: Option<String>,
+    /// How it ended.
+    pub outcome: RunOutcome,
     /// Wall time of the whole run (s).
     pub wall_s: f64,
 }
@@ -90,20 +96,28 @@ pub fn run_closed_loop(
     let n = reference.dof();
     let ts = reference.ts();
     let horizon = controller.horizon();
-    let total = reference.len() + (settings.hold_s / ts).round() as usize;
-    let mut rec = Record::with_capacity(n, total);
+    let total = reference.len().saturating_add(settings.hold_samples(ts));
+    let capacity = if total.saturating_mul(record_columns(n)) <= MAX_RECORD_VALUES {
+        total
+    } else {
+        // The caller did not check the bound ([`super::Experiment::run`]
+        // does): grow as needed instead of reserving an absurd size.
+        0
+    };
+    let mut rec = Record::with_capacity(n, capacity);
     let mut x = vec![0.0; 2 * n];
     let mut tau = vec![0.0; n];
     let mut preview = vec![0.0; horizon * n];
-    let mut diverged_at = None;
-    let mut reason = None;
+    let mut outcome = RunOutcome::Completed;
     plant.measure(&mut x);
     if let Err(e) = controller.reset(&x) {
         return RunResult {
             record: rec,
-            diverged_at: Some(0.0),
-            reason: Some(format!("reset failed: {e}")),
-            wall_s: 0.0,
+            outcome: RunOutcome::Failed {
+                t: 0.0,
+                cause: RunFailure::Reset(e),
+            },
+            wall_s: start.elapsed().as_secs_f64(),
         };
     }
     for k in 0..total {
@@ -118,13 +132,17 @@ pub fn run_closed_loop(
         let status = controller.step(model, &x, w, &preview, &mut tau);
         let us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
-            diverged_at = Some(t);
-            reason = Some(format!("controller step failed at t = {t:.3} s: {e}"));
+            outcome = RunOutcome::Failed {
+                t,
+                cause: RunFailure::Controller(e),
+            };
             break;
         }
         if let Err(e) = plant.step(&tau, ts) {
-            diverged_at = Some(t);
-            reason = Some(format!("plant integration failed at t = {t:.3} s: {e}"));
+            outcome = RunOutcome::Failed {
+                t,
+                cause: RunFailure::Plant(e),
+            };
             break;
         }
         rec.t.push(t);
@@ -135,17 +153,22 @@ pub fn run_closed_loop(
         rec.flange_ref.push(reference.position(k));
         rec.step_us.push(us);
         rec.flange.push(flange);
-        if let Some(i) = (0..n).find(|&i| {
-            let e = rec.joint_error(k, i).abs();
-            e.is_nan() || e > settings.divergence_threshold_rad
-        }) {
-            diverged_at = Some(t);
-            reason = Some(format!(
-                "joint {} error {:.4} rad passed the divergence threshold {} rad at t = {t:.3} s",
-                i + 1,
-                rec.joint_error(k, i),
-                settings.divergence_threshold_rad
-            ));
+        if let Some(joint) = (0..n).find(|&i| rec.joint_error(k, i).is_nan()) {
+            outcome = RunOutcome::Failed {
+                t,
+                cause: RunFailure::NonFiniteError { joint },
+            };
+            break;
+        }
+        if let Some(joint) =
+            (0..n).find(|&i| rec.joint_error(k, i).abs() > settings.divergence_threshold_rad)
+        {
+            outcome = RunOutcome::Diverged {
+                t,
+                joint,
+                error_rad: rec.joint_error(k, joint),
+                threshold_rad: settings.divergence_threshold_rad,
+            };
             break;
         }
         if k % 100 == 0 {
@@ -155,8 +178,7 @@ pub fn run_closed_loop(
     progress(total, total);
     RunResult {
         record: rec,
-        diverged_at,
-        reason,
+        outcome,
         wall_s: start.elapsed().as_secs_f64(),
     }
 }

@@ -2,8 +2,9 @@
 //! robot (no payload), the plant with the payload it does not know, the joint
 //! reference; run, then judged.
 
-use super::closed_loop::{run_closed_loop, LoopSettings, RunResult};
+use super::closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
 use super::metrics::{compute, RunMetrics};
+use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{new_controller, ControllerKind, MpcSettings};
 use crate::dynamics::RobotDynamics;
@@ -26,50 +27,93 @@ pub struct Experiment {
 }
 
 /// Name of a run's folder: `<controller>_m<payload>`, e.g. `second_m0.25`.
+///
+/// The mass is written in its shortest round-trip form when that is short
+/// (`0.25`, `6`, `1e-7`), else with 6 significant digits, so that a name stays
+/// bounded (at most 13 characters for the mass) whatever the value.
 pub fn run_name(kind: ControllerKind, payload: &Payload) -> String {
-    format!("{}_m{}", kind_name(kind), payload.mass)
+    format!("{}_m{}", kind_name(kind), mass_label(payload.mass))
+}
+
+/// The payload mass as written in run names (see [`run_name`]).
+pub fn mass_label(mass: f64) -> String {
+    let m = if mass == 0.0 { 0.0 } else { mass }; // -0 → 0
+    let short = format!("{m}");
+    if short.len() <= 12 {
+        return short;
+    }
+    let e = format!("{m:.5e}");
+    // Trim trailing zeros of the mantissa: 1.50000e300 → 1.5e300.
+    match e.split_once('e') {
+        Some((mant, exp)) => {
+            let mant = mant.trim_end_matches('0').trim_end_matches('.');
+            format!("{mant}e{exp}")
+        }
+        None => e,
+    }
 }
 
 /// "usual", "first" or "second".
 pub fn kind_name(kind: ControllerKind) -> &'static str {
-    match kind {
-        ControllerKind::Usual => "usual",
-        ControllerKind::First => "first",
-        ControllerKind::Second => "second",
-    }
+    kind.name()
 }
 
 impl Experiment {
+    /// Checks everything a run needs but the payload, before anything is
+    /// allocated: the reference fits the robot and the controller's sample
+    /// time, the tuning, the loop and plant settings, and the number of
+    /// samples the run would record ([`MAX_RECORD_VALUES`]).
+    pub fn validate(&self) -> Result<(), ExperimentError> {
+        let n = self.robot.dof();
+        if self.reference.dof() != n {
+            return Err(ExperimentError::ReferenceDof {
+                reference: self.reference.dof(),
+                robot: n,
+            });
+        }
+        let ts = self.reference.ts();
+        if (self.mpc.ts - ts).abs() > 1e-12 {
+            return Err(ExperimentError::SampleTime {
+                controller: self.mpc.ts,
+                reference: ts,
+            });
+        }
+        self.mpc.validate_for_dof(n)?;
+        self.loop_settings.validate()?;
+        self.plant.validate_for(n, ts)?;
+        let samples = self
+            .reference
+            .len()
+            .saturating_add(self.loop_settings.hold_samples(ts));
+        let columns = record_columns(n);
+        let values = samples.saturating_mul(columns);
+        if values > MAX_RECORD_VALUES {
+            return Err(ExperimentError::TooManySamples {
+                samples,
+                columns,
+                values,
+                limit: MAX_RECORD_VALUES,
+            });
+        }
+        Ok(())
+    }
+
     /// Runs `kind` against the plant carrying `payload`. Errors only for
-    /// settings that do not fit; a diverging run is a result, not an error.
+    /// settings that do not fit ([`Self::validate`], the payload); how the run
+    /// ended (completed, diverged, failed) is its [`RunResult::outcome`].
     pub fn run(
         &self,
         kind: ControllerKind,
         payload: &Payload,
         progress: &mut dyn FnMut(usize, usize),
-    ) -> Result<(RunResult, RunMetrics), String> {
+    ) -> Result<(RunResult, RunMetrics), ExperimentError> {
+        self.validate()?;
         let n = self.robot.dof();
-        if self.reference.dof() != n {
-            return Err(format!(
-                "the reference has {} joints, the robot {n}: build the reference for this robot",
-                self.reference.dof()
-            ));
-        }
-        if (self.mpc.ts - self.reference.ts()).abs() > 1e-12 {
-            return Err(format!(
-                "the controller's ts {} s differs from the reference's {} s",
-                self.mpc.ts,
-                self.reference.ts()
-            ));
-        }
-        let mut controller = new_controller(kind, n, &self.mpc).map_err(|e| e.to_string())?;
+        let mut controller = new_controller(kind, n, &self.mpc)?;
         let mut model = RobotDynamics::new(self.robot.clone());
         let mut plant_robot = self.robot.clone();
-        plant_robot
-            .set_payload(Some(*payload))
-            .map_err(|e| e.to_string())?;
-        let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))
-            .map_err(|e| e.to_string())?;
+        plant_robot.set_payload(Some(*payload))?;
+        let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
         let result = run_closed_loop(
             controller.as_mut(),
             &mut model,
@@ -85,7 +129,7 @@ impl Experiment {
             &result.record,
             self.loop_settings.steady_window_s,
             result.wall_s,
-            result.diverged_at,
+            &result.outcome,
         );
         Ok((result, metrics))
     }

@@ -1,6 +1,7 @@
 //! What a closed-loop run is judged by: tracking errors (joint and
 //! Cartesian), torques, step times, divergence.
 
+use super::outcome::{RunOutcome, RunStatus};
 use serde::Serialize;
 
 /// The recorded time series of one run. Row `k` holds the state measured at
@@ -73,8 +74,9 @@ pub struct StepTime {
     pub max: f64,
 }
 
-/// Summary of one run, as in `metrics.json`. Non-finite numbers serialize as
-/// `null`.
+/// Summary of one run, as in `metrics.json`. A metric that does not exist
+/// (nothing recorded, no steady window because the run stopped early) is NaN,
+/// which serializes as `null`: never 0.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunMetrics {
     /// Run name (its folder): `<controller>_m<payload>`.
@@ -105,6 +107,12 @@ pub struct RunMetrics {
     pub diverged: bool,
     /// Time of the divergence (s), `None` when it did not diverge.
     pub diverged_at_s: Option<f64>,
+    /// `"ok"`, `"diverged"` or `"failed"`.
+    pub status: RunStatus,
+    /// How the run ended, in words (the outcome's `Display`).
+    pub reason: String,
+    /// When the run was stopped early, diverged or failed (s).
+    pub stopped_at_s: Option<f64>,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -131,7 +139,7 @@ pub fn compute(
     rec: &Record,
     steady_window: f64,
     wall_s: f64,
-    diverged_at_s: Option<f64>,
+    outcome: &RunOutcome,
 ) -> RunMetrics {
     let n = rec.n;
     let len = rec.len();
@@ -164,10 +172,13 @@ pub fn compute(
             c_steady = c_steady.max(norm);
         }
     }
+    let status = outcome.status();
+    let stopped = status != RunStatus::Ok;
+    // Nothing recorded: no metric exists.
+    let recorded = |v: f64| if len == 0 { f64::NAN } else { v };
     let denom = len.max(1) as f64;
-    let diverged = diverged_at_s.is_some();
     let steady_or_nan = |v: f64| {
-        if diverged || steady_from >= len {
+        if stopped || steady_from >= len {
             f64::NAN
         } else {
             v
@@ -177,21 +188,27 @@ pub fn compute(
         name: name.to_string(),
         controller: controller.to_string(),
         payload_kg,
-        joint_error_rms_rad: rms.iter().map(|s| (s / denom).sqrt()).collect(),
-        joint_error_max_rad: max,
+        joint_error_rms_rad: rms.iter().map(|s| recorded((s / denom).sqrt())).collect(),
+        joint_error_max_rad: max.into_iter().map(recorded).collect(),
         steady_joint_error_max_rad: steady.into_iter().map(steady_or_nan).collect(),
-        cartesian_error_rms_mm: (c_sq / denom).sqrt(),
-        cartesian_error_max_mm: c_max,
+        cartesian_error_rms_mm: recorded((c_sq / denom).sqrt()),
+        cartesian_error_max_mm: recorded(c_max),
         steady_cartesian_error_mm: steady_or_nan(c_steady),
-        torque_max_nm: tmax,
+        torque_max_nm: tmax.into_iter().map(recorded).collect(),
         step_time_us: StepTime {
             median: quantile(&rec.step_us, 0.5),
             p99: quantile(&rec.step_us, 0.99),
             max: rec.step_us.iter().copied().fold(f64::NAN, f64::max),
         },
         wall_s,
-        diverged,
-        diverged_at_s,
+        diverged: status == RunStatus::Diverged,
+        diverged_at_s: match outcome {
+            RunOutcome::Diverged { t, .. } => Some(*t),
+            _ => None,
+        },
+        status,
+        reason: outcome.to_string(),
+        stopped_at_s: outcome.stopped_at(),
     }
 }
 
@@ -214,7 +231,7 @@ mod tests {
             r.flange_ref.push([0.003, 0.004, 0.0]);
             r.step_us.push(k as f64);
         }
-        let m = compute("x", "first", 0.25, &r, 0.5, 1.0, None);
+        let m = compute("x", "first", 0.25, &r, 0.5, 1.0, &RunOutcome::Completed);
         let rms = ((100.0 * 1.0 + 100.0 * 0.01) / 200.0f64).sqrt();
         assert!((m.joint_error_rms_rad[0] - rms).abs() < 1e-12);
         assert_eq!(m.joint_error_max_rad[0], 1.0);
@@ -224,7 +241,47 @@ mod tests {
         assert_eq!(m.torque_max_nm[0], 199.0);
         assert!((m.step_time_us.median - 99.5).abs() < 1e-12);
         assert_eq!(m.step_time_us.max, 199.0);
-        let d = compute("x", "first", 0.25, &r, 0.5, 1.0, Some(1.5));
+        let outcome = RunOutcome::Diverged {
+            t: 1.5,
+            joint: 0,
+            error_rad: 0.3,
+            threshold_rad: 0.2,
+        };
+        let d = compute("x", "first", 0.25, &r, 0.5, 1.0, &outcome);
         assert!(d.diverged && d.steady_cartesian_error_mm.is_nan());
+        assert_eq!(
+            (d.status, d.diverged_at_s),
+            (RunStatus::Diverged, Some(1.5))
+        );
+        assert!(d.reason.contains("joint 1"), "{}", d.reason);
+        assert!(d.cartesian_error_rms_mm.is_finite());
+    }
+
+    #[test]
+    fn metrics_of_an_empty_record_do_not_exist() {
+        let r = Record::with_capacity(2, 0);
+        let outcome = RunOutcome::Failed {
+            t: 0.0,
+            cause: super::super::outcome::RunFailure::NonFiniteError { joint: 1 },
+        };
+        let m = compute("x", "second", 1.0, &r, 0.5, 0.0, &outcome);
+        assert_eq!(m.status, RunStatus::Failed);
+        assert!(!m.diverged && m.diverged_at_s.is_none());
+        assert_eq!(m.stopped_at_s, Some(0.0));
+        for v in [
+            m.cartesian_error_rms_mm,
+            m.cartesian_error_max_mm,
+            m.steady_cartesian_error_mm,
+        ] {
+            assert!(v.is_nan(), "{v}");
+        }
+        for v in m
+            .joint_error_rms_rad
+            .iter()
+            .chain(&m.joint_error_max_rad)
+            .chain(&m.torque_max_nm)
+        {
+            assert!(v.is_nan(), "{v}");
+        }
     }
 }

@@ -1,12 +1,18 @@
-//! Closed-loop simulation: the plant (nonlinear robot with an unknown payload)
-//! and, later, the loop that runs a controller against it.
+//! Closed-loop simulation: the plant (nonlinear robot with an unknown payload),
+//! the loop that runs a controller against it, the run's typed outcome and its
+//! metrics.
 
 mod closed_loop;
 mod experiment;
 mod metrics;
+mod outcome;
 mod plant;
 
-pub use closed_loop::{run_closed_loop, LoopSettings, RunResult};
-pub use experiment::{kind_name, run_name, Experiment};
+pub use closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
+pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
-pub use plant::{Plant, PlantSettings};
+pub use outcome::{
+    ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, MAX_RECORD_VALUES,
+    MAX_SUBSTEPS,
+};
+pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError};

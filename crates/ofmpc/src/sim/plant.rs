@@ -4,12 +4,14 @@
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::robot::{ModelError, Robot};
 use serde::{Deserialize, Serialize};
+use std::fmt;
 
 /// Options of the plant; every effect is off by default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PlantSettings {
-    /// RK4 substep (s); the control period is split into ⌈Ts / substep⌉ equal steps.
+    /// RK4 substep (s); the control period must be a whole number of substeps
+    /// (at most [`super::MAX_SUBSTEPS`]).
     pub substep: f64,
     /// Viscous friction per joint (N·m·s/rad); one value for all joints or one per joint.
     pub viscous_friction: Vec<f64>,
@@ -45,49 +47,194 @@ impl Default for PlantSettings {
     }
 }
 
+/// Which friction vector of [`PlantSettings`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum FrictionKind {
+    /// Viscous friction (N·m·s/rad).
+    Viscous,
+    /// Coulomb friction (N·m).
+    Coulomb,
+}
+
+impl fmt::Display for FrictionKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            FrictionKind::Viscous => "viscous friction",
+            FrictionKind::Coulomb => "Coulomb friction",
+        })
+    }
+}
+
+/// Which noise of [`PlantSettings`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum NoiseKind {
+    /// On measured positions (rad).
+    Position,
+    /// On measured velocities (rad/s).
+    Velocity,
+}
+
+impl fmt::Display for NoiseKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            NoiseKind::Position => "position noise",
+            NoiseKind::Velocity => "velocity noise",
+        })
+    }
+}
+
+/// Why plant settings cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlantSettingsError {
+    /// The integration substep is not a positive time.
+    #[error("the integration substep is {0} s: it must be a positive time")]
+    Substep(f64),
+    /// The control period is not a whole number of substeps, or too many.
+    #[error(
+        "the control period {ts} s is {ratio} integration substeps of {substep} s: it must be a whole number \
+         of substeps, from 1 to {max}{}",
+        suggest_substep(*ts, *ratio, *max)
+    )]
+    SubstepRatio {
+        /// Control period (s).
+        ts: f64,
+        /// Substep (s).
+        substep: f64,
+        /// `ts / substep`.
+        ratio: f64,
+        /// [`super::MAX_SUBSTEPS`].
+        max: usize,
+    },
+    /// A friction vector has neither 0, 1 nor n values.
+    #[error("{kind} has {got} values: give none, one for all joints, or one per joint ({n})")]
+    FrictionLength {
+        /// Which friction.
+        kind: FrictionKind,
+        /// Values given.
+        got: usize,
+        /// Joints.
+        n: usize,
+    },
+    /// A friction value is negative or not finite.
+    #[error("{kind} of joint {} is {value}: it must be finite and ≥ 0", index + 1)]
+    FrictionValue {
+        /// Which friction.
+        kind: FrictionKind,
+        /// 0-based index.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// The velocity scale of the smoothed Coulomb friction is not > 0.
+    #[error("the Coulomb friction's velocity scale is {0} rad/s: it must be finite and > 0")]
+    CoulombVelocity(f64),
+    /// A noise level is negative or not finite.
+    #[error("the {kind} is {value}: it must be finite and ≥ 0")]
+    Noise {
+        /// Which noise.
+        kind: NoiseKind,
+        /// The standard deviation.
+        value: f64,
+    },
+}
+
+fn suggest_substep(ts: f64, ratio: f64, max: usize) -> String {
+    if !(ratio.is_finite() && ratio >= 0.5 && ts > 0.0) {
+        return String::new();
+    }
+    let k = ratio.round().clamp(1.0, max as f64);
+    format!(" (e.g. {} s, {k} substeps)", ts / k)
+}
+
+/// Why the plant could not be built or advanced.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlantError {
+    /// Its settings do not fit.
+    #[error(transparent)]
+    Settings(#[from] PlantSettingsError),
+    /// A vector has the wrong length or is not finite, or the robot's
+    /// dynamics failed.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The state stopped being finite during the integration (the state is
+    /// left as before the step).
+    #[error("the simulated state of joint {} stopped being finite during the integration: the torque or the motion is beyond what the model can integrate", joint + 1)]
+    NonFiniteState {
+        /// 0-based joint.
+        joint: usize,
+    },
+}
+
 impl PlantSettings {
     /// Checks the settings against a robot with `n` joints.
-    pub fn validate(&self, n: usize) -> Result<(), String> {
+    pub fn validate(&self, n: usize) -> Result<(), PlantSettingsError> {
         if !(self.substep.is_finite() && self.substep > 0.0) {
-            return Err(format!(
-                "plant.substep = {}: must be a positive time in seconds",
-                self.substep
-            ));
+            return Err(PlantSettingsError::Substep(self.substep));
         }
-        for (name, v) in [
-            ("viscous_friction", &self.viscous_friction),
-            ("coulomb_friction", &self.coulomb_friction),
+        for (kind, v) in [
+            (FrictionKind::Viscous, &self.viscous_friction),
+            (FrictionKind::Coulomb, &self.coulomb_friction),
         ] {
             if !(v.is_empty() || v.len() == 1 || v.len() == n) {
-                return Err(format!(
-                    "plant.{name} has {} values: give none, one for all joints, or {n}",
-                    v.len()
-                ));
+                return Err(PlantSettingsError::FrictionLength {
+                    kind,
+                    got: v.len(),
+                    n,
+                });
             }
-            if v.iter().any(|x| !x.is_finite() || *x < 0.0) {
-                return Err(format!(
-                    "plant.{name} = {v:?}: values must be finite and ≥ 0"
-                ));
+            if let Some((index, &value)) = v
+                .iter()
+                .enumerate()
+                .find(|(_, x)| !x.is_finite() || **x < 0.0)
+            {
+                return Err(PlantSettingsError::FrictionValue { kind, index, value });
             }
         }
-        for (name, v) in [
-            ("coulomb_velocity", self.coulomb_velocity),
-            ("position_noise", self.position_noise),
-            ("velocity_noise", self.velocity_noise),
+        let cv = self.coulomb_velocity;
+        if !(cv.is_finite() && cv > 0.0) {
+            return Err(PlantSettingsError::CoulombVelocity(cv));
+        }
+        for (kind, value) in [
+            (NoiseKind::Position, self.position_noise),
+            (NoiseKind::Velocity, self.velocity_noise),
         ] {
-            if !v.is_finite() || v < 0.0 || (name == "coulomb_velocity" && v == 0.0) {
-                return Err(format!(
-                    "plant.{name} = {v}: must be finite and {}",
-                    if name == "coulomb_velocity" {
-                        "> 0"
-                    } else {
-                        "≥ 0"
-                    }
-                ));
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(PlantSettingsError::Noise { kind, value });
             }
         }
         Ok(())
     }
+
+    /// Checks the settings for a control period `ts`: [`Self::validate`],
+    /// and `ts` a whole number of substeps (within 1e-9 relative), at most
+    /// [`super::MAX_SUBSTEPS`]. Returns the number of substeps.
+    pub fn validate_for(&self, n: usize, ts: f64) -> Result<usize, PlantSettingsError> {
+        self.validate(n)?;
+        substeps(ts, self.substep)
+    }
+}
+
+/// `ts / substep` as a whole number of substeps, within bounds.
+fn substeps(ts: f64, substep: f64) -> Result<usize, PlantSettingsError> {
+    let ratio = ts / substep;
+    let k = ratio.round();
+    let max = super::MAX_SUBSTEPS;
+    if !(ts.is_finite() && ts > 0.0)
+        || !(k >= 1.0 && k <= max as f64)
+        || (ratio - k).abs() > 1e-9 * k
+    {
+        return Err(PlantSettingsError::SubstepRatio {
+            ts,
+            substep,
+            ratio,
+            max,
+        });
+    }
+    Ok(k as usize)
 }
 
 fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
@@ -147,10 +294,10 @@ pub struct Plant {
 
 impl Plant {
     /// A plant at rest at `q0`.
-    pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, ModelError> {
+    pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, PlantError> {
         let n = robot.dof();
         robot.check_vector("q0", q0)?;
-        settings.validate(n).map_err(ModelError::structure)?;
+        settings.validate(n)?;
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
         Ok(Self {
@@ -254,7 +401,9 @@ impl Plant {
     /// Advances the plant by `ts` seconds under the constant torque `tau`
     /// (zero-order hold), by RK4 substeps. Returns an error (and leaves the
     /// state as it was) when the state or torque stops being finite.
-    pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), ModelError> {
+    /// `ts` must be a whole number of the settings' substeps
+    /// ([`PlantSettings::validate_for`]).
+    pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), PlantError> {
         let n = self.q.len();
         self.robot.check_vector("tau", tau)?;
         for i in 0..n {
@@ -265,7 +414,7 @@ impl Plant {
                 tau[i]
             };
         }
-        let steps = (ts / self.settings.substep).ceil().max(1.0) as usize;
+        let steps = substeps(ts, self.settings.substep)?;
         let h = ts / steps as f64;
         self.backup[..n].copy_from_slice(&self.q);
         self.backup[n..].copy_from_slice(&self.qd);
@@ -279,7 +428,7 @@ impl Plant {
         Ok(())
     }
 
-    fn integrate(&mut self, steps: usize, h: f64) -> Result<(), ModelError> {
+    fn integrate(&mut self, steps: usize, h: f64) -> Result<(), PlantError> {
         let n = self.q.len();
         for _ in 0..steps {
             // k[0..4]: accelerations of the 4 stages; velocities are the stage states.
@@ -310,12 +459,10 @@ impl Plant {
                 self.q[i] += dq;
                 self.qd[i] += dv;
             }
-            if self.q.iter().chain(&self.qd).any(|x| !x.is_finite()) {
-                return Err(ModelError::NonFinite {
-                    what: "plant state".into(),
-                    index: 0,
-                    value: f64::NAN,
-                });
+            if let Some(joint) =
+                (0..n).find(|&i| !(self.q[i].is_finite() && self.qd[i].is_finite()))
+            {
+                return Err(PlantError::NonFiniteState { joint });
             }
         }
         Ok(())

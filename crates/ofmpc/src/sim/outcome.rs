@@ -1,0 +1,215 @@
+//! How a closed-loop run ended, and why a run could not start: typed, with
+//! the offending values, so that callers (the CLI, bindings) word them.
+
+use super::plant::{PlantError, PlantSettingsError};
+use crate::control::{SettingsError, StepError};
+use crate::robot::ModelError;
+use serde::Serialize;
+use std::fmt;
+
+/// The largest number of values (samples × recorded columns) one run may
+/// record: 100 million `f64`, 800 MB. A run that would need more is rejected
+/// before anything is allocated ([`ExperimentError::TooManySamples`]).
+pub const MAX_RECORD_VALUES: usize = 100_000_000;
+
+/// The largest number of integration substeps per control period.
+pub const MAX_SUBSTEPS: usize = 100_000;
+
+/// The three ways a run ends, as written in `metrics.json` (`"ok"`,
+/// `"diverged"`, `"failed"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RunStatus {
+    /// The run went through the path and the hold.
+    Ok,
+    /// The closed loop was unstable: a joint error passed the divergence
+    /// threshold and the run was stopped. A result, not a failure.
+    Diverged,
+    /// The run could not go on: a controller step or the plant's integration
+    /// failed. Its metrics cover what was recorded before.
+    Failed,
+}
+
+impl RunStatus {
+    /// `"ok"`, `"diverged"` or `"failed"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            RunStatus::Ok => "ok",
+            RunStatus::Diverged => "diverged",
+            RunStatus::Failed => "failed",
+        }
+    }
+}
+
+impl fmt::Display for RunStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Why a run failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunFailure {
+    /// The controller could not be initialized at the first measurement.
+    #[error("the controller could not start from the first measurement: {0}")]
+    Reset(StepError),
+    /// A control step failed (model, discretization or solve).
+    #[error("the controller step failed: {0}")]
+    Controller(StepError),
+    /// The plant's integration failed (its state stopped being finite).
+    #[error("the plant's integration failed: {0}")]
+    Plant(PlantError),
+    /// A measured joint error is NaN: the state is no longer a number.
+    #[error("the error of joint {} is not a number", joint + 1)]
+    NonFiniteError {
+        /// 0-based joint.
+        joint: usize,
+    },
+}
+
+/// How one closed-loop run ended.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum RunOutcome {
+    /// Through the path and the hold.
+    Completed,
+    /// Stopped at `t` because joint `joint` (0-based) had the error
+    /// `error_rad`, beyond `threshold_rad`.
+    Diverged {
+        /// Time of the sample that passed the threshold (s).
+        t: f64,
+        /// 0-based joint.
+        joint: usize,
+        /// The joint error `w − q` there (rad).
+        error_rad: f64,
+        /// The divergence threshold (rad).
+        threshold_rad: f64,
+    },
+    /// Stopped at `t` by a failure.
+    Failed {
+        /// Time of the sample that failed (s).
+        t: f64,
+        /// What failed.
+        cause: RunFailure,
+    },
+}
+
+impl RunOutcome {
+    /// `Ok`, `Diverged` or `Failed`.
+    pub fn status(&self) -> RunStatus {
+        match self {
+            RunOutcome::Completed => RunStatus::Ok,
+            RunOutcome::Diverged { .. } => RunStatus::Diverged,
+            RunOutcome::Failed { .. } => RunStatus::Failed,
+        }
+    }
+    /// When the run was stopped early (s), `None` when it completed.
+    pub fn stopped_at(&self) -> Option<f64> {
+        match self {
+            RunOutcome::Completed => None,
+            RunOutcome::Diverged { t, .. } | RunOutcome::Failed { t, .. } => Some(*t),
+        }
+    }
+    /// True when it completed.
+    pub fn is_completed(&self) -> bool {
+        matches!(self, RunOutcome::Completed)
+    }
+}
+
+impl fmt::Display for RunOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RunOutcome::Completed => f.write_str("completed the path and the hold"),
+            RunOutcome::Diverged {
+                t,
+                joint,
+                error_rad,
+                threshold_rad,
+            } => write!(
+                f,
+                "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
+                 divergence threshold {threshold_rad} rad",
+                joint + 1
+            ),
+            RunOutcome::Failed { t, cause } => write!(f, "failed at t = {t:.3} s: {cause}"),
+        }
+    }
+}
+
+/// Why the hold, divergence threshold or steady window cannot be used.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum LoopSettingsError {
+    /// The hold after the path is negative or not finite.
+    #[error("the hold after the path is {0} s: it must be a finite time ≥ 0 s")]
+    HoldTime(f64),
+    /// The divergence threshold is not a positive number.
+    #[error("the divergence threshold is {0} rad: it must be a finite angle > 0")]
+    DivergenceThreshold(f64),
+    /// The steady window is not positive or longer than the hold.
+    #[error(
+        "the steady window is {value} s: it must be > 0 and not longer than the hold ({hold_s} s)"
+    )]
+    SteadyWindow {
+        /// The window (s).
+        value: f64,
+        /// The hold (s).
+        hold_s: f64,
+    },
+}
+
+/// Why an experiment cannot be run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ExperimentError {
+    /// The reference was built for another number of joints.
+    #[error("the reference has {reference} joints but the robot has {robot}: build the reference for this robot")]
+    ReferenceDof {
+        /// Joints of the reference.
+        reference: usize,
+        /// Joints of the robot.
+        robot: usize,
+    },
+    /// The controller's sample time differs from the reference's.
+    #[error("the controller's sample time {controller} s differs from the reference's {reference} s: use one sample time")]
+    SampleTime {
+        /// The controller's (s).
+        controller: f64,
+        /// The reference's (s).
+        reference: f64,
+    },
+    /// The controller's tuning does not fit.
+    #[error(transparent)]
+    Mpc(#[from] SettingsError),
+    /// Hold, divergence threshold or steady window.
+    #[error(transparent)]
+    Loop(#[from] LoopSettingsError),
+    /// The plant's settings, or its start.
+    #[error(transparent)]
+    Plant(#[from] PlantError),
+    /// The payload is not a physical body, or the plant's start is invalid.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The run would record more values than [`MAX_RECORD_VALUES`].
+    #[error(
+        "the run would record {samples} samples × {columns} values = {values} values, more than the limit of {limit}: \
+         shorten the path or the hold, or use a longer sample time"
+    )]
+    TooManySamples {
+        /// Samples of the path and the hold.
+        samples: usize,
+        /// Values recorded per sample.
+        columns: usize,
+        /// `samples × columns` (saturating).
+        values: usize,
+        /// [`MAX_RECORD_VALUES`].
+        limit: usize,
+    },
+}
+
+impl From<PlantSettingsError> for ExperimentError {
+    fn from(e: PlantSettingsError) -> Self {
+        ExperimentError::Plant(PlantError::Settings(e))
+    }
+}
