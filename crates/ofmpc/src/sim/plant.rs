@@ -223,9 +223,7 @@ fn substeps(ts: f64, substep: f64) -> Result<usize, PlantSettingsError> {
     let ratio = ts / substep;
     let k = ratio.round();
     let max = super::MAX_SUBSTEPS;
-    if !(ts.is_finite() && ts > 0.0)
-        || !(k >= 1.0 && k <= max as f64)
-        || (ratio - k).abs() > 1e-9 * k
+    if !(ts.is_finite() && ts > 0.0 && k >= 1.0 && k <= max as f64) || (ratio - k).abs() > 1e-9 * k
     {
         return Err(PlantSettingsError::SubstepRatio {
             ts,
