@@ -194,9 +194,16 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     };
     if let Some(d) = drives {
         let drives = Drives::from_file(d)?;
-        robot
+        let unset = robot
             .apply_drives(&drives)
             .with_context(|| format!("applying {}", d.display()))?;
+        if !unset.is_empty() {
+            eprintln!(
+                "warning: {} sets nothing for joint(s) {}: they keep the URDF's limits and have no armature",
+                d.display(),
+                unset.join(", ")
+            );
+        }
     }
     Ok(robot)
 }

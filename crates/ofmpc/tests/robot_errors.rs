@@ -164,3 +164,57 @@ fn random_garbage_urdf_never_panics() {
         }
     }
 }
+
+/// Issue 9 item 5: a misspelled table or key, or an empty file, is an error
+/// that names it; joints a file sets nothing for are reported.
+#[test]
+fn drives_files_are_read_strictly() {
+    use ofmpc::robot::DrivesError;
+    let err = |text: &str| match Drives::from_toml_str(text).unwrap_err() {
+        ofmpc::robot::ModelError::Drives { error, .. } => error,
+        e => panic!("expected a drives error, got {e:?}"),
+    };
+    // `[joint.joint_1]` (singular) is an unknown table, `jionts = 1` an unknown key.
+    match err("[joint.joint_1]\narmature_kgm2 = 1.0\n") {
+        DrivesError::UnknownKey { what, key, .. } => {
+            assert_eq!((what, key.as_str()), ("table", "joint"))
+        }
+        e => panic!("{e:?}"),
+    }
+    match err("jionts = 1\n[joints.joint_1]\narmature_kgm2 = 1.0\n") {
+        DrivesError::UnknownKey { what, key, .. } => {
+            assert_eq!((what, key.as_str()), ("key", "jionts"))
+        }
+        e => panic!("{e:?}"),
+    }
+    assert_eq!(err(""), DrivesError::Empty);
+    assert_eq!(
+        err("# only a comment\n[meta]\nrobot = \"x\"\n"),
+        DrivesError::Empty
+    );
+    let e = err("[joints.joint_1]\nmax_torque_nm = -3\n");
+    assert!(
+        matches!(e, DrivesError::Value { value, .. } if value == -3.0),
+        "{e:?}"
+    );
+    // A file that sets two joints of six: the other four are named.
+    let mut robot = Robot::from_urdf_str(ofmpc::robot::IRB140_URDF).unwrap();
+    let d = Drives::from_toml_str(
+        "[joints.joint_1]\narmature_kgm2 = 1.0\n[joints.joint_6]\narmature_kgm2 = 0.1\n",
+    )
+    .unwrap();
+    let unset = robot.apply_drives(&d).unwrap();
+    assert_eq!(unset, ["joint_2", "joint_3", "joint_4", "joint_5"]);
+    assert_eq!(robot.joints()[0].armature, 1.0);
+    let all = Drives::from_toml_str(ofmpc::robot::IRB140_DRIVES).unwrap();
+    assert!(robot.apply_drives(&all).unwrap().is_empty());
+    // An unknown joint names the robot's joints.
+    let e = robot
+        .apply_drives(&Drives::from_toml_str("[joints.joint_9]\narmature_kgm2 = 1.0\n").unwrap())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("joint_9") && e.contains("joint_1, joint_2"),
+        "{e}"
+    );
+}

@@ -14,6 +14,52 @@ use super::ModelError;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
+/// Why a drives file cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DrivesError {
+    /// Not TOML, or a value of the wrong type (the message has line and column).
+    #[error("{0}")]
+    Syntax(String),
+    /// A table or key the format does not have (a typo?).
+    #[error("unknown {what} '{key}'{}: expected {expected}", joint.as_ref().map(|j| format!(" in [joints.{j}]")).unwrap_or_default())]
+    UnknownKey {
+        /// `"table"` or `"key"`.
+        what: &'static str,
+        /// The key as written.
+        key: String,
+        /// The joint's table it is in, if any.
+        joint: Option<String>,
+        /// The keys that exist there.
+        expected: &'static str,
+    },
+    /// A value is out of its range.
+    #[error("[joints.{joint}] {key} = {value}: must be a finite number {requirement}")]
+    Value {
+        /// The joint.
+        joint: String,
+        /// The key.
+        key: &'static str,
+        /// The value.
+        value: f64,
+        /// `"≥ 0"` or `"> 0"`.
+        requirement: &'static str,
+    },
+    /// The file sets nothing.
+    #[error("the drives file sets no joint: add a [joints.<joint name>] table per joint (armature_kgm2, max_torque_nm, max_speed_rad_s)")]
+    Empty,
+    /// A joint table names no moving joint of the robot.
+    #[error("joint '{name}' of the drives file is not a moving joint of the robot (its joints: {joints})")]
+    UnknownJoint {
+        /// The name in the file.
+        name: String,
+        /// The robot's moving joints, comma-separated.
+        joints: String,
+    },
+}
+
+const JOINT_KEYS: &str = "armature_kgm2, max_torque_nm, max_speed_rad_s (or a *_source note)";
+
 /// The drive data of one joint; absent values leave the URDF's in place.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
 pub struct DriveData {
@@ -35,6 +81,7 @@ pub struct Drives {
 }
 
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct File {
     #[serde(default)]
     joints: BTreeMap<String, DriveData>,
@@ -47,14 +94,36 @@ impl Drives {
     /// Parses a drives file; errors name the line and column (TOML syntax), or
     /// the joint and key (values).
     pub fn from_toml_str(text: &str) -> Result<Self, ModelError> {
-        let f: File = toml::from_str(text).map_err(|e| ModelError::Drives(e.to_string()))?;
+        // Unknown top-level tables and keys first, by name (serde's message
+        // would list them less clearly).
+        let value: toml::Table =
+            toml::from_str(text).map_err(|e| DrivesError::Syntax(e.to_string()))?;
+        if let Some(key) = value.keys().find(|k| *k != "joints" && *k != "meta") {
+            return Err(DrivesError::UnknownKey {
+                what: if value[key].is_table() {
+                    "table"
+                } else {
+                    "key"
+                },
+                key: key.clone(),
+                joint: None,
+                expected: "[joints.<joint name>] tables and an optional [meta] table",
+            }
+            .into());
+        }
+        let f: File = toml::from_str(text).map_err(|e| DrivesError::Syntax(e.to_string()))?;
+        if f.joints.is_empty() {
+            return Err(DrivesError::Empty.into());
+        }
         for (name, d) in &f.joints {
-            for key in d.other.keys() {
-                if !key.ends_with("_source") {
-                    return Err(ModelError::Drives(format!(
-                        "[joints.{name}]: unknown key '{key}': expected armature_kgm2, max_torque_nm, max_speed_rad_s (or a *_source note)"
-                    )));
+            if let Some(key) = d.other.keys().find(|k| !k.ends_with("_source")) {
+                return Err(DrivesError::UnknownKey {
+                    what: "key",
+                    key: key.clone(),
+                    joint: Some(name.clone()),
+                    expected: JOINT_KEYS,
                 }
+                .into());
             }
             for (key, v) in [
                 ("armature_kgm2", d.armature_kgm2),
@@ -69,14 +138,17 @@ impl Drives {
                             v > 0.0
                         };
                     if !ok {
-                        return Err(ModelError::Drives(format!(
-                            "[joints.{name}] {key} = {v}: must be a finite number {}",
-                            if key == "armature_kgm2" {
+                        return Err(DrivesError::Value {
+                            joint: name.clone(),
+                            key,
+                            value: v,
+                            requirement: if key == "armature_kgm2" {
                                 "≥ 0"
                             } else {
                                 "> 0"
-                            }
-                        )));
+                            },
+                        }
+                        .into());
                     }
                 }
             }
@@ -91,7 +163,10 @@ impl Drives {
             message: e.to_string(),
         })?;
         Self::from_toml_str(&text).map_err(|e| match e {
-            ModelError::Drives(m) => ModelError::Drives(format!("{}: {m}", path.display())),
+            ModelError::Drives { error, .. } => ModelError::Drives {
+                file: format!("{}: ", path.display()),
+                error,
+            },
             e => e,
         })
     }

@@ -1,5 +1,6 @@
 //! Errors of the robot description.
 
+use super::drives::DrivesError;
 use thiserror::Error;
 
 /// What can be wrong with a robot description or with the vectors given to it.
@@ -29,9 +30,14 @@ pub enum ModelError {
         /// What is wrong and what to do.
         message: String,
     },
-    /// The drives file is malformed.
-    #[error("drives file: {0}")]
-    Drives(String),
+    /// The drives file is malformed or does not fit the robot.
+    #[error("{file}drives file: {error}")]
+    Drives {
+        /// `"path: "` when known.
+        file: String,
+        /// What is wrong.
+        error: DrivesError,
+    },
     /// The payload is not a physical rigid body.
     #[error("invalid payload: {0}")]
     InvalidPayload(String),
@@ -74,6 +80,15 @@ impl ModelError {
         ModelError::Structure {
             file: String::new(),
             message: message.into(),
+        }
+    }
+}
+
+impl From<DrivesError> for ModelError {
+    fn from(error: DrivesError) -> Self {
+        ModelError::Drives {
+            file: String::new(),
+            error,
         }
     }
 }

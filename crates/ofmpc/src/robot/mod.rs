@@ -9,7 +9,7 @@ mod drives;
 mod error;
 mod urdf;
 
-pub use drives::{DriveData, Drives};
+pub use drives::{DriveData, Drives, DrivesError};
 pub use error::ModelError;
 
 use crate::spatial::{Inertia, Transform};
@@ -203,16 +203,18 @@ impl Robot {
 
     /// Applies a drives file: armature and, where given, speed and torque limits
     /// (they replace the URDF's). Every joint named in the file must exist.
-    pub fn apply_drives(&mut self, drives: &Drives) -> Result<(), ModelError> {
+    /// Returns the names of the robot's moving joints the file sets nothing
+    /// for (they keep the URDF's values and no armature): a caller should say so.
+    pub fn apply_drives(&mut self, drives: &Drives) -> Result<Vec<String>, ModelError> {
+        let names: Vec<String> = self.joints.iter().map(|j| j.name.clone()).collect();
         for (name, d) in &drives.joints {
             let j = self
                 .joints
                 .iter_mut()
                 .find(|j| &j.name == name)
-                .ok_or_else(|| {
-                    ModelError::Drives(format!(
-                        "joint '{name}' of the drives file is not a moving joint of the robot"
-                    ))
+                .ok_or_else(|| DrivesError::UnknownJoint {
+                    name: name.clone(),
+                    joints: names.join(", "),
                 })?;
             if let Some(a) = d.armature_kgm2 {
                 j.armature = a;
@@ -224,7 +226,10 @@ impl Robot {
                 j.limits.velocity = v;
             }
         }
-        Ok(())
+        Ok(names
+            .into_iter()
+            .filter(|n| !drives.joints.contains_key(n))
+            .collect())
     }
 
     /// Robot name (URDF `<robot name>`).
