@@ -188,7 +188,11 @@ pub struct Scenario {
 pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     let path = Path::new(model);
     let mut robot = if model.ends_with(".urdf") || path.is_file() {
-        Robot::from_urdf_file(path)?
+        let robot = Robot::from_urdf_file(path)?;
+        for w in robot.warnings() {
+            eprintln!("warning: {}: {w}", path.display());
+        }
+        robot
     } else {
         Robot::builtin(model)?
     };

@@ -218,3 +218,200 @@ fn drives_files_are_read_strictly() {
         "{e}"
     );
 }
+
+fn one_joint(limit: &str, extra: &str, kind: &str) -> String {
+    format!(
+        "<robot name=\"r\"><link name=\"b\"/><link name=\"l\">{LINK}</link>\
+         <joint name=\"j1\" type=\"{kind}\"><parent link=\"b\"/><child link=\"l\"/><axis xyz=\"0 0 1\"/>{limit}{extra}</joint></robot>"
+    )
+}
+
+fn urdf_error(text: &str) -> ofmpc::robot::UrdfError {
+    match Robot::from_urdf_str(text).expect_err("must be rejected") {
+        ModelError::Structure { error, .. } => error,
+        e => panic!("expected a structure error, got {e:?}"),
+    }
+}
+
+/// Issue 9 item 6: the URDF specification's required limits, `<mimic>`, and
+/// what is ignored is said, never reinterpreted silently.
+#[test]
+fn urdf_limits_follow_the_specification() {
+    use ofmpc::robot::{UrdfError, UrdfWarning};
+    let full = "<limit lower=\"-1\" upper=\"1\" velocity=\"2\" effort=\"30\"/>";
+    let r = Robot::from_urdf_str(&one_joint(full, "", "revolute")).unwrap();
+    assert_eq!(r.joints()[0].limits.effort, 30.0);
+    assert!(r.warnings().is_empty());
+    // lower == upper: an empty range, not "continuous".
+    let e = urdf_error(&one_joint(
+        "<limit lower=\"0.5\" upper=\"0.5\" velocity=\"2\" effort=\"30\"/>",
+        "",
+        "revolute",
+    ));
+    assert!(
+        matches!(&e, UrdfError::EmptyRange { joint, value, .. } if joint == "j1" && *value == 0.5),
+        "{e:?}"
+    );
+    // No <limit> at all on a revolute or prismatic joint.
+    for kind in ["revolute", "prismatic"] {
+        let e = urdf_error(&one_joint("", "", kind));
+        assert!(
+            matches!(
+                e,
+                UrdfError::EmptyRange { .. } | UrdfError::MissingLimit { .. }
+            ),
+            "{kind}: {e:?}"
+        );
+        assert!(e.to_string().contains("URDF specification"), "{e}");
+    }
+    // velocity or effort ≤ 0.
+    for (lim, attr) in [
+        (
+            "<limit lower=\"-1\" upper=\"1\" velocity=\"0\" effort=\"30\"/>",
+            "velocity",
+        ),
+        (
+            "<limit lower=\"-1\" upper=\"1\" velocity=\"2\" effort=\"-5\"/>",
+            "effort",
+        ),
+    ] {
+        let e = urdf_error(&one_joint(lim, "", "revolute"));
+        assert!(
+            matches!(&e, UrdfError::MissingLimit { attribute, .. } if *attribute == attr),
+            "{e:?}"
+        );
+    }
+    // A continuous joint may omit them: unlimited.
+    let r = Robot::from_urdf_str(&one_joint("", "", "continuous")).unwrap();
+    let l = r.joints()[0].limits;
+    assert!(
+        l.lower == f64::NEG_INFINITY && l.velocity == f64::INFINITY && l.effort == f64::INFINITY
+    );
+    // <mimic> is rejected by name.
+    let e = urdf_error(&one_joint(
+        full,
+        "<mimic joint=\"j0\" multiplier=\"2\"/>",
+        "revolute",
+    ));
+    assert!(
+        matches!(&e, UrdfError::Mimic { joint, of } if joint == "j1" && of == "j0"),
+        "{e:?}"
+    );
+    // <dynamics> and <safety_controller> are ignored with a warning each.
+    let r = Robot::from_urdf_str(&one_joint(
+        full,
+        "<dynamics damping=\"0.5\" friction=\"1\"/><safety_controller soft_lower_limit=\"-0.9\" soft_upper_limit=\"0.9\" k_velocity=\"1\"/>",
+        "revolute",
+    ))
+    .unwrap();
+    assert_eq!(
+        r.warnings(),
+        [
+            UrdfWarning::IgnoredDynamics {
+                joint: "j1".into(),
+                damping: 0.5,
+                friction: 1.0
+            },
+            UrdfWarning::IgnoredSafetyController("j1".into())
+        ]
+    );
+}
+
+/// Issue 9 item 3: thousands of chained fixed joints load without
+/// recursion (no stack overflow) and in linear time, and fold their masses.
+#[test]
+fn a_long_chain_of_fixed_frames_loads() {
+    let n_fixed = 5_000;
+    let mut s = String::from("<robot name=\"long\"><link name=\"b\"/>");
+    s += &format!("<link name=\"l\">{LINK}</link>");
+    s += "<joint name=\"j1\" type=\"revolute\"><parent link=\"b\"/><child link=\"l\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" velocity=\"1\" effort=\"1\"/></joint>";
+    let mut parent = "l".to_string();
+    for i in 0..n_fixed {
+        let child = format!("f{i}");
+        s += &format!("<link name=\"{child}\">{LINK}</link><joint name=\"x{i}\" type=\"fixed\"><parent link=\"{parent}\"/><child link=\"{child}\"/><origin xyz=\"0 0 0.001\"/></joint>");
+        parent = child;
+    }
+    s += "</robot>";
+    // Run on a thread with a small stack: a recursive walk would overflow it.
+    let robot = std::thread::Builder::new()
+        .stack_size(256 * 1024)
+        .spawn(move || Robot::from_urdf_str(&s))
+        .unwrap()
+        .join()
+        .expect("no stack overflow")
+        .unwrap();
+    assert_eq!(robot.dof(), 1);
+    assert!((robot.moving_mass() - (n_fixed + 1) as f64).abs() < 1e-6);
+    // The flange is the last link of the chain, 20 m up.
+    assert_eq!(robot.flange_name(), format!("f{}", n_fixed - 1));
+    assert!((robot.flange_offset().pos.z - n_fixed as f64 * 0.001).abs() < 1e-9);
+}
+
+/// Issue 9 items 7 and 18: a workspace of another robot is an error (it
+/// panicked), and so is a result that overflows (q̇ = 1e160).
+#[test]
+fn workspace_mismatch_and_overflowing_results_are_errors() {
+    use ofmpc::dynamics::{coriolis_matrix, forward_dynamics, gravity, joint_space_terms};
+    let robot = Robot::irb140();
+    let small = Robot::from_urdf_str(&one_joint(
+        "<limit lower=\"-1\" upper=\"1\" velocity=\"2\" effort=\"30\"/>",
+        "",
+        "revolute",
+    ))
+    .unwrap();
+    let mut ws = Workspace::new(&small);
+    let z = [0.0; 6];
+    let mismatch = |e: ModelError| {
+        matches!(
+            e,
+            ModelError::WorkspaceMismatch {
+                workspace: 1,
+                robot: 6
+            }
+        )
+    };
+    assert!(mismatch(rnea(&robot, &mut ws, &z, &z, &z).unwrap_err()));
+    assert!(mismatch(crba(&robot, &mut ws, &z).unwrap_err()));
+    assert!(mismatch(gravity(&robot, &mut ws, &z).unwrap_err()));
+    assert!(mismatch(
+        coriolis_matrix(&robot, &mut ws, &z, &z).unwrap_err()
+    ));
+    assert!(mismatch(
+        forward_dynamics(&robot, &mut ws, &z, &z, &z).unwrap_err()
+    ));
+    assert!(mismatch(
+        joint_space_terms(&robot, &mut ws, &z, &z).unwrap_err()
+    ));
+    assert!(mismatch(
+        ofmpc::dynamics::forward_kinematics(&robot, &mut ws, &z).unwrap_err()
+    ));
+    assert!(mismatch(
+        ofmpc::dynamics::flange_jacobian(&robot, &mut ws, &z).unwrap_err()
+    ));
+    let mut ws = Workspace::new(&robot);
+    let qd = [1e160, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let e = rnea(&robot, &mut ws, &z, &qd, &z).unwrap_err();
+    assert!(
+        matches!(e, ModelError::NonFiniteResult { what: "tau", .. }),
+        "{e:?}"
+    );
+}
+
+/// Issue 9 item 17: an absurd payload is blamed on the payload.
+#[test]
+fn an_absurd_payload_is_named() {
+    use ofmpc::robot::PayloadError;
+    let mut robot = Robot::irb140();
+    let e = robot
+        .set_payload(Some(Payload::point_mass(1e20)))
+        .unwrap_err();
+    assert!(
+        matches!(e, ModelError::InvalidPayload(PayloadError::TooHeavy { mass, .. }) if mass == 1e20),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("payload"), "{e}");
+    robot.set_payload(Some(Payload::point_mass(6.0))).unwrap();
+    robot
+        .set_payload(Some(Payload::point_mass(1e-300)))
+        .unwrap();
+}

@@ -2,7 +2,7 @@
 
 use super::rnea::rnea_unchecked;
 use super::terms::crba;
-use super::{check, Workspace};
+use super::{check, check_ws, finite_result, Workspace};
 use crate::robot::{ModelError, Robot};
 use nalgebra::DVector;
 
@@ -16,6 +16,7 @@ pub fn forward_dynamics<'w>(
     qd: &[f64],
     tau: &[f64],
 ) -> Result<&'w DVector<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     check(robot, "qd", qd)?;
     check(robot, "tau", tau)?;
@@ -34,10 +35,11 @@ pub fn forward_dynamics<'w>(
             d -= ws.chol[(j, k)] * ws.chol[(j, k)];
         }
         if d <= 0.0 || !d.is_finite() {
-            return Err(ModelError::structure(format!(
-                "the joint-space inertia matrix is not positive definite at joint {} (pivot {d:e}): check the inertials",
-                j + 1
-            )));
+            return Err(ModelError::NotPositiveDefinite {
+                joint: j,
+                pivot: d,
+                with_payload: robot.payload().is_some_and(|p| p.mass > 0.0),
+            });
         }
         let l = d.sqrt();
         ws.chol[(j, j)] = l;
@@ -64,6 +66,7 @@ pub fn forward_dynamics<'w>(
         }
         ws.qdd[i] = s / ws.chol[(i, i)];
     }
+    finite_result("qdd", ws.qdd.as_slice())?;
     Ok(&ws.qdd)
 }
 
@@ -74,6 +77,7 @@ pub fn kinetic_energy(
     q: &[f64],
     qd: &[f64],
 ) -> Result<f64, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "qd", qd)?;
     let h = crba(robot, ws, q)?;
     let v = DVector::from_column_slice(qd);

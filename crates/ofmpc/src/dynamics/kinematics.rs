@@ -1,6 +1,6 @@
 //! Forward kinematics and the geometric Jacobian.
 
-use super::{check, Workspace};
+use super::{check, check_ws, finite_result, Workspace};
 use crate::robot::{JointKind, ModelError, Robot};
 use crate::spatial::{axis_angle, Motion, Transform};
 use nalgebra::DMatrix;
@@ -67,6 +67,7 @@ pub fn forward_kinematics<'w>(
     ws: &'w mut Workspace,
     q: &[f64],
 ) -> Result<&'w Transform, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     fk_unchecked(robot, ws, q);
     Ok(&ws.flange)
@@ -80,6 +81,7 @@ pub fn flange_jacobian<'w>(
     ws: &'w mut Workspace,
     q: &[f64],
 ) -> Result<&'w DMatrix<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     fk_unchecked(robot, ws, q);
     let p = ws.flange.pos;
@@ -92,5 +94,6 @@ pub fn flange_jacobian<'w>(
             ws.jacobian[(r + 3, i)] = s.ang[r];
         }
     }
+    finite_result("J", ws.jacobian.as_slice())?;
     Ok(&ws.jacobian)
 }

@@ -116,6 +116,29 @@ pub(crate) fn check(robot: &Robot, what: &str, v: &[f64]) -> Result<(), ModelErr
     robot.check_vector(what, v)
 }
 
+/// The workspace must have been built for this robot's number of joints.
+pub(crate) fn check_ws(robot: &Robot, ws: &Workspace) -> Result<(), ModelError> {
+    if !ws.fits(robot.dof()) {
+        return Err(ModelError::WorkspaceMismatch {
+            workspace: ws.dof(),
+            robot: robot.dof(),
+        });
+    }
+    Ok(())
+}
+
+/// A result must be finite (inputs such as q̇ = 1e160 overflow it).
+pub(crate) fn finite_result(what: &'static str, v: &[f64]) -> Result<(), ModelError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(ModelError::NonFiniteResult {
+            what,
+            index,
+            value: v[index],
+        }),
+    }
+}
+
 impl crate::ik::ForwardKinematics for RobotDynamics {
     fn dof(&self) -> usize {
         self.robot.dof()

@@ -2,7 +2,7 @@
 //! *Rigid Body Dynamics Algorithms*, §5.3), in body frames.
 
 use super::kinematics::{joint_transform, local_axis};
-use super::{check, Workspace};
+use super::{check, check_ws, finite_result, Workspace};
 use crate::robot::{ModelError, Robot};
 use crate::spatial::Motion;
 use nalgebra::DVector;
@@ -19,10 +19,12 @@ pub fn rnea<'w>(
     qd: &[f64],
     qdd: &[f64],
 ) -> Result<&'w DVector<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     check(robot, "qd", qd)?;
     check(robot, "qdd", qdd)?;
     rnea_unchecked(robot, ws, q, qd, qdd);
+    finite_result("tau", ws.tau.as_slice())?;
     Ok(&ws.tau)
 }
 

@@ -16,7 +16,7 @@
 //!   `½ Ḣ + S` (NOTES.md, "Model decomposition").
 
 use super::kinematics::fk_unchecked;
-use super::{check, Workspace};
+use super::{check, check_ws, finite_result, Workspace};
 use crate::robot::{ModelError, Robot};
 use crate::spatial::{Force, Inertia, Motion};
 use nalgebra::{DMatrix, DVector};
@@ -101,10 +101,12 @@ pub fn crba<'w>(
     ws: &'w mut Workspace,
     q: &[f64],
 ) -> Result<&'w DMatrix<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     fk_unchecked(robot, ws, q);
     composite_pass(robot, ws);
     fill_h(robot, ws);
+    finite_result("H", ws.h.as_slice())?;
     Ok(&ws.h)
 }
 
@@ -114,10 +116,12 @@ pub fn gravity<'w>(
     ws: &'w mut Workspace,
     q: &[f64],
 ) -> Result<&'w DVector<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     fk_unchecked(robot, ws, q);
     composite_pass(robot, ws);
     fill_g(robot, ws);
+    finite_result("g", ws.g.as_slice())?;
     Ok(&ws.g)
 }
 
@@ -130,11 +134,13 @@ pub fn coriolis_matrix<'w>(
     q: &[f64],
     qd: &[f64],
 ) -> Result<&'w DMatrix<f64>, ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     check(robot, "qd", qd)?;
     fk_unchecked(robot, ws, q);
     composite_pass(robot, ws);
     fill_c(robot, ws, qd);
+    finite_result("C", ws.c.as_slice())?;
     Ok(&ws.c)
 }
 
@@ -146,6 +152,7 @@ pub fn joint_space_terms(
     q: &[f64],
     qd: &[f64],
 ) -> Result<(), ModelError> {
+    check_ws(robot, ws)?;
     check(robot, "q", q)?;
     check(robot, "qd", qd)?;
     fk_unchecked(robot, ws, q);
@@ -153,5 +160,8 @@ pub fn joint_space_terms(
     fill_h(robot, ws);
     fill_g(robot, ws);
     fill_c(robot, ws, qd);
+    finite_result("H", ws.h.as_slice())?;
+    finite_result("C", ws.c.as_slice())?;
+    finite_result("g", ws.g.as_slice())?;
     Ok(())
 }

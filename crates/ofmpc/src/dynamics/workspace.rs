@@ -71,4 +71,30 @@ impl Workspace {
     pub fn dof(&self) -> usize {
         self.tau.len()
     }
+    /// True when every buffer is sized for `n` joints (the public result
+    /// fields could have been replaced by the caller).
+    pub(crate) fn fits(&self, n: usize) -> bool {
+        [
+            self.local.len(),
+            self.poses.len(),
+            self.tau.len(),
+            self.g.len(),
+            self.qdd.len(),
+            self.v.len(),
+            self.a.len(),
+            self.f.len(),
+            self.s.len(),
+            self.sdot.len(),
+            self.inertia.len(),
+            self.composite.len(),
+            self.ivel.len(),
+            self.zero.len(),
+        ]
+        .iter()
+        .all(|&l| l == n)
+            && self.jacobian.shape() == (6, n)
+            && self.h.shape() == (n, n)
+            && self.c.shape() == (n, n)
+            && self.chol.shape() == (n, n)
+    }
 }

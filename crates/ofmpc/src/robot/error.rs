@@ -1,10 +1,231 @@
-//! Errors of the robot description.
+//! Errors of the robot description and of the vectors given to it: typed,
+//! each with the offending names and values.
 
 use super::drives::DrivesError;
 use thiserror::Error;
 
+/// What is wrong with an inertia tensor about a centre of mass.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+#[non_exhaustive]
+pub enum InertiaError {
+    /// `I ≠ Iᵀ` beyond round-off.
+    #[error("the inertia tensor is not symmetric (asymmetry {0:e})")]
+    NotSymmetric(f64),
+    /// A principal moment is negative.
+    #[error("the inertia tensor has a negative principal moment ({0:?})")]
+    NegativeMoment([f64; 3]),
+    /// The principal moments violate `a + b ≥ c`.
+    #[error("the principal moments {0:?} violate the triangle inequality")]
+    Triangle([f64; 3]),
+}
+
+/// Why a payload is not a physical rigid body for this robot.
+#[derive(Debug, Clone, Copy, PartialEq, Error)]
+#[non_exhaustive]
+pub enum PayloadError {
+    /// Mass, centre of mass or inertia not finite.
+    #[error("mass {mass} kg, centre of mass {com:?} m: every value must be finite")]
+    NotFinite {
+        /// Mass (kg).
+        mass: f64,
+        /// Centre of mass (m).
+        com: [f64; 3],
+    },
+    /// A negative mass.
+    #[error("mass {0} kg: a payload's mass must be ≥ 0")]
+    NegativeMass(f64),
+    /// The inertia tensor is not physical.
+    #[error("payload of {mass} kg: {error}")]
+    Inertia {
+        /// Mass (kg).
+        mass: f64,
+        /// What is wrong.
+        error: InertiaError,
+    },
+    /// So heavy against the robot that its dynamics lose all precision.
+    #[error("mass {mass} kg is more than {factor} times the robot's own moving mass ({robot_kg:.3} kg): its dynamics would be dominated by round-off; check the payload's unit (kg)")]
+    TooHeavy {
+        /// Mass (kg).
+        mass: f64,
+        /// The robot's moving mass without payload (kg).
+        robot_kg: f64,
+        /// The accepted ratio.
+        factor: f64,
+    },
+}
+
+/// What is wrong with a URDF's structure or values (XML syntax errors are
+/// [`ModelError::Urdf`]).
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum UrdfError {
+    /// A joint names a link that is not defined.
+    #[error("link '{0}' is used by a joint but not defined: add a <link name=\"{0}\"/>")]
+    UndefinedLink(String),
+    /// A link is defined twice.
+    #[error("link '{0}' is defined twice")]
+    DuplicateLink(String),
+    /// A link's `<inertial>` has a negative or non-finite value.
+    #[error("link '{link}': <inertial> must have a finite mass ≥ 0 (got {mass}) and finite origin and inertia")]
+    BadInertial {
+        /// The link.
+        link: String,
+        /// Its mass.
+        mass: f64,
+    },
+    /// A link's inertia tensor is not physical.
+    #[error("link '{link}': {error}")]
+    LinkInertia {
+        /// The link.
+        link: String,
+        /// What is wrong.
+        error: InertiaError,
+    },
+    /// A moving link without mass and inertia.
+    #[error("link '{link}' (moved by joint '{joint}') has no inertial: add an <inertial> with mass, origin and inertia")]
+    NoInertial {
+        /// The link.
+        link: String,
+        /// Its joint.
+        joint: String,
+    },
+    /// Two moving joints leave one link.
+    #[error("not a serial chain: link '{link}' branches into moving joints {joints:?}; only one path of moving joints is supported (fixed side branches are fine)")]
+    NotSerial {
+        /// The link.
+        link: String,
+        /// The moving joints below it.
+        joints: Vec<String>,
+    },
+    /// A joint's `<origin>` is not finite.
+    #[error("joint '{0}': <origin> must be finite")]
+    BadOrigin(String),
+    /// A joint type other than revolute, continuous, prismatic, fixed.
+    #[error("joint '{joint}' is of type {kind}: only revolute, continuous, prismatic and fixed joints are supported")]
+    UnsupportedJointType {
+        /// The joint.
+        joint: String,
+        /// Its type as parsed.
+        kind: String,
+    },
+    /// A zero or non-finite axis.
+    #[error("joint '{0}': <axis xyz> must be a non-zero finite vector")]
+    BadAxis(String),
+    /// `lower > upper` (or NaN).
+    #[error("joint '{joint}': limit lower = {lower} > upper = {upper}: swap them")]
+    LimitOrder {
+        /// The joint.
+        joint: String,
+        /// `lower`.
+        lower: f64,
+        /// `upper`.
+        upper: f64,
+    },
+    /// A revolute or prismatic joint whose range is empty (`lower == upper`,
+    /// also what a missing `<limit>` reads as).
+    #[error("joint '{joint}' ({kind}) has the empty range lower = upper = {value}: the URDF specification requires <limit lower upper effort velocity> on revolute and prismatic joints; give its range, or make it a continuous or fixed joint")]
+    EmptyRange {
+        /// The joint.
+        joint: String,
+        /// `"revolute"` or `"prismatic"`.
+        kind: &'static str,
+        /// The value of both limits.
+        value: f64,
+    },
+    /// A revolute or prismatic joint without a positive velocity or effort
+    /// limit (a missing `<limit>` reads as 0).
+    #[error("joint '{joint}' ({kind}): <limit> {attribute} = {value}: the URDF specification requires a positive {attribute} limit on revolute and prismatic joints")]
+    MissingLimit {
+        /// The joint.
+        joint: String,
+        /// `"revolute"` or `"prismatic"`.
+        kind: &'static str,
+        /// `"velocity"` or `"effort"`.
+        attribute: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A negative velocity or effort limit on a continuous joint.
+    #[error("joint '{joint}': <limit> {attribute} = {value} is negative")]
+    NegativeLimit {
+        /// The joint.
+        joint: String,
+        /// `"velocity"` or `"effort"`.
+        attribute: &'static str,
+        /// Its value.
+        value: f64,
+    },
+    /// A `<mimic>` joint (coupled to another): not an independent joint.
+    #[error("joint '{joint}' mimics joint '{of}': mimic joints are not supported (every moving joint is driven on its own); remove <mimic> or model the coupling as one joint")]
+    Mimic {
+        /// The joint.
+        joint: String,
+        /// The joint it follows.
+        of: String,
+    },
+    /// A link is the child of two joints.
+    #[error("link '{link}' is the child of two joints ('{first}' and '{second}'): a closed loop is not a serial chain")]
+    TwoParents {
+        /// The link.
+        link: String,
+        /// First joint.
+        first: String,
+        /// Second joint.
+        second: String,
+    },
+    /// A joint connects links that are not defined.
+    #[error(
+        "joint '{joint}' connects '{parent}' to '{child}', but one of these links is not defined"
+    )]
+    DanglingJoint {
+        /// The joint.
+        joint: String,
+        /// Its parent link.
+        parent: String,
+        /// Its child link.
+        child: String,
+    },
+    /// Every link is a child.
+    #[error("the URDF has no root link (every link is a child): remove the loop")]
+    NoRoot,
+    /// Several trees.
+    #[error("the URDF has {} root links {roots:?}: connect them into one tree", roots.len())]
+    ManyRoots {
+        /// The root links.
+        roots: Vec<String>,
+    },
+    /// Links not reachable from the root.
+    #[error("{0} link(s) are not reachable from the root link (a loop?)")]
+    Unreachable(usize),
+    /// Nothing moves.
+    #[error("the URDF has no revolute or prismatic joint: nothing to control")]
+    NoMovingJoint,
+}
+
+/// Something the URDF says that ofmpc does not model: it is ignored, and the
+/// caller should say so.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
+pub enum UrdfWarning {
+    /// `<dynamics damping friction>`: the model has no joint friction (the
+    /// plant's friction is a setting of the simulation).
+    #[error("joint '{joint}': <dynamics damping=\"{damping}\" friction=\"{friction}\"> is ignored (the robot model has no joint friction; set the simulated plant's friction instead)")]
+    IgnoredDynamics {
+        /// The joint.
+        joint: String,
+        /// Damping (N·m·s/rad).
+        damping: f64,
+        /// Friction (N·m).
+        friction: f64,
+    },
+    /// `<safety_controller>` soft limits: the hard `<limit>` is used.
+    #[error("joint '{0}': <safety_controller> soft limits are ignored; the <limit> range is used")]
+    IgnoredSafetyController(String),
+}
+
 /// What can be wrong with a robot description or with the vectors given to it.
 #[derive(Debug, Clone, PartialEq, Error)]
+#[non_exhaustive]
 pub enum ModelError {
     /// A file could not be read.
     #[error("cannot read {path}: {message}")]
@@ -22,13 +243,13 @@ pub enum ModelError {
         /// The parser's message.
         message: String,
     },
-    /// The URDF describes a structure this crate does not model.
-    #[error("{file}{message}")]
+    /// The URDF describes a structure or values this crate does not model.
+    #[error("{file}{error}")]
     Structure {
         /// `"path: "` when known.
         file: String,
         /// What is wrong and what to do.
-        message: String,
+        error: UrdfError,
     },
     /// The drives file is malformed or does not fit the robot.
     #[error("{file}drives file: {error}")]
@@ -40,7 +261,7 @@ pub enum ModelError {
     },
     /// The payload is not a physical rigid body.
     #[error("invalid payload: {0}")]
-    InvalidPayload(String),
+    InvalidPayload(#[from] PayloadError),
     /// No built-in robot of that name.
     #[error("unknown robot '{0}': use 'irb140' or the path of a .urdf file")]
     UnknownRobot(String),
@@ -64,6 +285,36 @@ pub enum ModelError {
         /// The value.
         value: f64,
     },
+    /// A dynamics workspace built for another robot.
+    #[error("the workspace was built for {workspace} joints but the robot has {robot}: build it with Workspace::new(&robot)")]
+    WorkspaceMismatch {
+        /// Joints of the workspace.
+        workspace: usize,
+        /// Joints of the robot.
+        robot: usize,
+    },
+    /// The joint-space inertia matrix is not positive definite (Cholesky
+    /// pivot ≤ 0 or not finite) at this state.
+    #[error("the joint-space inertia matrix is not positive definite at joint {} (pivot {pivot:e}){}", joint + 1,
+        if *with_payload { ": check the payload (mass, centre of mass, inertia) and the link inertials" } else { ": check the link inertials" })]
+    NotPositiveDefinite {
+        /// 0-based joint of the failing pivot.
+        joint: usize,
+        /// The pivot.
+        pivot: f64,
+        /// Whether a payload was attached.
+        with_payload: bool,
+    },
+    /// A result that should be finite is not (inputs too large).
+    #[error("{what} is not finite at this state ({what}[{index}] = {value}): the inputs are too large for the model")]
+    NonFiniteResult {
+        /// Which result (`"tau"`, `"H"`, ...).
+        what: &'static str,
+        /// 0-based index of the first bad entry.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
 }
 
 impl ModelError {
@@ -72,14 +323,17 @@ impl ModelError {
         let file = format!("{}: ", path.display());
         match self {
             ModelError::Urdf { message, .. } => ModelError::Urdf { file, message },
-            ModelError::Structure { message, .. } => ModelError::Structure { file, message },
+            ModelError::Structure { error, .. } => ModelError::Structure { file, error },
             e => e,
         }
     }
-    pub(crate) fn structure(message: impl Into<String>) -> Self {
+}
+
+impl From<UrdfError> for ModelError {
+    fn from(error: UrdfError) -> Self {
         ModelError::Structure {
             file: String::new(),
-            message: message.into(),
+            error,
         }
     }
 }

@@ -10,7 +10,7 @@ mod error;
 mod urdf;
 
 pub use drives::{DriveData, Drives, DrivesError};
-pub use error::ModelError;
+pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
@@ -92,45 +92,47 @@ impl Payload {
     }
     /// Checks the payload is physical: finite, mass ≥ 0, inertia symmetric
     /// positive semi-definite and satisfying the triangle inequalities.
-    pub fn validate(&self) -> Result<(), ModelError> {
+    pub fn validate(&self) -> Result<(), PayloadError> {
         let finite = self.mass.is_finite()
             && self.com.iter().all(|v| v.is_finite())
             && self.inertia.iter().all(|v| v.is_finite());
-        if !finite || self.mass < 0.0 {
-            return Err(ModelError::InvalidPayload(format!(
-                "mass {} kg, com {:?}: mass must be finite and ≥ 0, com finite",
-                self.mass,
-                self.com.as_slice()
-            )));
+        if !finite {
+            return Err(PayloadError::NotFinite {
+                mass: self.mass,
+                com: [self.com.x, self.com.y, self.com.z],
+            });
         }
-        check_inertia_tensor(&self.inertia).map_err(ModelError::InvalidPayload)
+        if self.mass < 0.0 {
+            return Err(PayloadError::NegativeMass(self.mass));
+        }
+        check_inertia_tensor(&self.inertia).map_err(|error| PayloadError::Inertia {
+            mass: self.mass,
+            error,
+        })
     }
 }
 
+/// A payload may weigh at most this many times the robot's own moving mass:
+/// beyond, the joint-space inertia loses the robot's terms to round-off.
+pub const MAX_PAYLOAD_RATIO: f64 = 1e3;
+
 /// Checks a rotational inertia about the centre of mass: symmetric, principal
 /// moments ≥ 0 and satisfying the triangle inequality.
-pub(crate) fn check_inertia_tensor(i: &Matrix3<f64>) -> Result<(), String> {
+pub(crate) fn check_inertia_tensor(i: &Matrix3<f64>) -> Result<(), InertiaError> {
     let asym = (i - i.transpose()).abs().max();
     let scale = i.abs().max().max(1e-300);
     if asym > 1e-9 * scale {
-        return Err(format!(
-            "inertia tensor is not symmetric (asymmetry {asym:e})"
-        ));
+        return Err(InertiaError::NotSymmetric(asym));
     }
     let eig = i.symmetric_eigenvalues();
+    let moments = [eig[0], eig[1], eig[2]];
     let tol = 1e-9 * scale;
     if eig.iter().any(|&e| e < -tol) {
-        return Err(format!(
-            "inertia tensor has a negative principal moment ({:?})",
-            eig.as_slice()
-        ));
+        return Err(InertiaError::NegativeMoment(moments));
     }
     let (a, b, c) = (eig[0], eig[1], eig[2]);
     if a + b < c - tol || a + c < b - tol || b + c < a - tol {
-        return Err(format!(
-            "principal moments {:?} violate the triangle inequality",
-            eig.as_slice()
-        ));
+        return Err(InertiaError::Triangle(moments));
     }
     Ok(())
 }
@@ -147,6 +149,8 @@ pub struct Robot {
     payload: Option<Payload>,
     /// Inertia of each body in its joint frame, payload included on the last one.
     bodies: Vec<Inertia>,
+    /// What the description said that is not modelled.
+    warnings: Vec<UrdfWarning>,
 }
 
 impl Robot {
@@ -198,6 +202,7 @@ impl Robot {
             gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
             payload: None,
             bodies,
+            warnings: Vec::new(),
         }
     }
 
@@ -264,10 +269,25 @@ impl Robot {
     pub fn payload(&self) -> Option<&Payload> {
         self.payload.as_ref()
     }
-    /// Attaches (or with `None`, removes) a payload at the flange.
+    /// What the URDF said that the model ignores (say so to the user).
+    pub fn warnings(&self) -> &[UrdfWarning] {
+        &self.warnings
+    }
+    /// Attaches (or with `None`, removes) a payload at the flange. It must be
+    /// physical ([`Payload::validate`]) and weigh at most
+    /// [`MAX_PAYLOAD_RATIO`] times the robot's own moving mass.
     pub fn set_payload(&mut self, payload: Option<Payload>) -> Result<(), ModelError> {
         if let Some(p) = &payload {
             p.validate()?;
+            let robot_kg: f64 = self.joints.iter().map(|j| j.body.mass).sum();
+            if p.mass > MAX_PAYLOAD_RATIO * robot_kg {
+                return Err(PayloadError::TooHeavy {
+                    mass: p.mass,
+                    robot_kg,
+                    factor: MAX_PAYLOAD_RATIO,
+                }
+                .into());
+            }
         }
         self.payload = payload;
         let last = self.joints.len() - 1;

@@ -6,21 +6,20 @@
 //! on, and fixed frames between two moving joints go into the next joint's
 //! placement. Side branches that hold only fixed joints are allowed (a camera
 //! bracket, a tool); a second branch with a moving joint is not a serial chain.
+//!
+//! As the URDF specification requires, revolute and prismatic joints must have
+//! a `<limit>` with a non-empty range and positive `effort` and `velocity`;
+//! continuous joints may omit them (unlimited). `<mimic>` is rejected;
+//! `<dynamics>` and `<safety_controller>` are ignored with a [`UrdfWarning`].
+//!
+//! The walk over the tree is iterative and linear in the number of links
+//! (a chain of thousands of fixed frames neither recurses nor rescans).
 
+use super::error::{UrdfError, UrdfWarning};
 use super::{check_inertia_tensor, Joint, JointKind, JointLimits, ModelError, Robot};
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
-
-struct Walker<'a> {
-    links: HashMap<&'a str, &'a urdf_rs::Link>,
-    children: HashMap<&'a str, Vec<&'a urdf_rs::Joint>>,
-    joints: Vec<Joint>,
-    /// Named frames: link name → (body index or None for the fixed base, pose in that body).
-    frames: HashMap<String, (Option<usize>, Transform)>,
-    /// The last link on the moving path, and its pose in the last body.
-    last_link: Option<(String, Transform)>,
-}
 
 fn origin(p: &urdf_rs::Pose) -> Transform {
     Transform::from_xyz_rpy(*p.xyz, *p.rpy)
@@ -30,170 +29,138 @@ fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-impl<'a> Walker<'a> {
-    fn has_moving(&self, link: &str) -> bool {
-        self.children.get(link).is_some_and(|js| {
-            js.iter().any(|j| {
-                j.joint_type != urdf_rs::JointType::Fixed || self.has_moving(&j.child.link)
+fn link_inertia(link: &urdf_rs::Link) -> Result<Inertia, UrdfError> {
+    let i = &link.inertial;
+    let m = i.mass.value;
+    let t = &i.inertia;
+    let tensor = Matrix3::new(
+        t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
+    );
+    if !m.is_finite()
+        || m < 0.0
+        || tensor.iter().any(|v| !v.is_finite())
+        || !finite3(&i.origin.xyz)
+        || !finite3(&i.origin.rpy)
+    {
+        return Err(UrdfError::BadInertial {
+            link: link.name.clone(),
+            mass: m,
+        });
+    }
+    check_inertia_tensor(&tensor).map_err(|error| UrdfError::LinkInertia {
+        link: link.name.clone(),
+        error,
+    })?;
+    let frame = origin(&i.origin);
+    let i_com = frame.rot * tensor * frame.rot.transpose();
+    Ok(Inertia::from_com(m, frame.pos, i_com))
+}
+
+fn is_fixed(j: &urdf_rs::Joint) -> bool {
+    j.joint_type == urdf_rs::JointType::Fixed
+}
+
+/// The moving joint a URDF joint becomes, with its checks.
+fn moving_joint(
+    j: &urdf_rs::Joint,
+    placement: Transform,
+    warnings: &mut Vec<UrdfWarning>,
+) -> Result<Joint, UrdfError> {
+    let (kind, kind_name, limited) = match j.joint_type {
+        urdf_rs::JointType::Revolute => (JointKind::Revolute, "revolute", true),
+        urdf_rs::JointType::Continuous => (JointKind::Revolute, "continuous", false),
+        urdf_rs::JointType::Prismatic => (JointKind::Prismatic, "prismatic", true),
+        ref other => {
+            return Err(UrdfError::UnsupportedJointType {
+                joint: j.name.clone(),
+                kind: format!("{other:?}").to_lowercase(),
             })
-        })
+        }
+    };
+    if let Some(m) = &j.mimic {
+        return Err(UrdfError::Mimic {
+            joint: j.name.clone(),
+            of: m.joint.clone(),
+        });
     }
-
-    fn link_inertia(&self, name: &str) -> Result<Inertia, ModelError> {
-        let link = self.links.get(name).ok_or_else(|| {
-            ModelError::structure(format!(
-                "link '{name}' is used by a joint but not defined: add a <link name=\"{name}\"/>"
-            ))
-        })?;
-        let i = &link.inertial;
-        let m = i.mass.value;
-        let t = &i.inertia;
-        let tensor = Matrix3::new(
-            t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
-        );
-        if !m.is_finite()
-            || m < 0.0
-            || tensor.iter().any(|v| !v.is_finite())
-            || !finite3(&i.origin.xyz)
-            || !finite3(&i.origin.rpy)
-        {
-            return Err(ModelError::structure(format!(
-                "link '{name}': <inertial> must have a finite mass ≥ 0 (got {m}) and finite origin and inertia"
-            )));
-        }
-        check_inertia_tensor(&tensor)
-            .map_err(|e| ModelError::structure(format!("link '{name}': {e}")))?;
-        let frame = origin(&i.origin);
-        let i_com = frame.rot * tensor * frame.rot.transpose();
-        Ok(Inertia::from_com(m, frame.pos, i_com))
+    let axis = Vector3::from(*j.axis.xyz);
+    let norm = axis.norm();
+    if !norm.is_finite() || norm < 1e-9 {
+        return Err(UrdfError::BadAxis(j.name.clone()));
     }
-
-    /// Visits `link`, which sits at `pose` in the frame of `body`.
-    fn walk(
-        &mut self,
-        link: &'a str,
-        pose: Transform,
-        body: Option<usize>,
-        depth: usize,
-    ) -> Result<(), ModelError> {
-        if depth > 10_000 {
-            return Err(ModelError::structure(
-                "the kinematic tree is too deep (a loop?)",
-            ));
+    let l = &j.limit;
+    let (lower, upper, velocity, effort) = if limited {
+        if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
+            return Err(UrdfError::LimitOrder {
+                joint: j.name.clone(),
+                lower: l.lower,
+                upper: l.upper,
+            });
         }
-        let inertia = self.link_inertia(link)?;
-        if let Some(b) = body {
-            let j = &mut self.joints[b];
-            j.body = j.body + inertia.to_parent(&pose);
+        if l.lower == l.upper {
+            return Err(UrdfError::EmptyRange {
+                joint: j.name.clone(),
+                kind: kind_name,
+                value: l.lower,
+            });
         }
-        self.frames.insert(link.to_string(), (body, pose));
-        let children: Vec<&'a urdf_rs::Joint> =
-            self.children.get(link).cloned().unwrap_or_default();
-        let moving: Vec<&&urdf_rs::Joint> = children
-            .iter()
-            .filter(|j| j.joint_type != urdf_rs::JointType::Fixed || self.has_moving(&j.child.link))
-            .collect();
-        if moving.len() > 1 {
-            let names: Vec<&str> = moving.iter().map(|j| j.name.as_str()).collect();
-            return Err(ModelError::structure(format!(
-                "not a serial chain: link '{link}' branches into moving joints {names:?}; \
-                 only one path of moving joints is supported (fixed side branches are fine)"
-            )));
-        }
-        let main = moving.first().map(|j| j.name.clone());
-        if main.is_none() {
-            // End of the moving path, or a fixed side branch.
-            if body.is_some() && body == self.joints.len().checked_sub(1) {
-                self.last_link = Some((link.to_string(), pose));
+        for (attribute, value) in [("velocity", l.velocity), ("effort", l.effort)] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(UrdfError::MissingLimit {
+                    joint: j.name.clone(),
+                    kind: kind_name,
+                    attribute,
+                    value,
+                });
             }
         }
-        for j in &children {
-            if Some(&j.name) == main.as_ref() {
-                continue;
-            }
-            self.visit_joint(j, pose, body, depth)?;
-        }
-        if let Some(name) = main {
-            let j = children.iter().find(|j| j.name == name).copied();
-            if let Some(j) = j {
-                self.visit_joint(j, pose, body, depth)?;
-            }
-        }
-        Ok(())
-    }
-
-    fn visit_joint(
-        &mut self,
-        j: &'a urdf_rs::Joint,
-        pose: Transform,
-        body: Option<usize>,
-        depth: usize,
-    ) -> Result<(), ModelError> {
-        if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
-            return Err(ModelError::structure(format!(
-                "joint '{}': <origin> must be finite",
-                j.name
-            )));
-        }
-        let placement = pose.compose(&origin(&j.origin));
-        let kind = match j.joint_type {
-            urdf_rs::JointType::Fixed => return self.walk(&j.child.link, placement, body, depth + 1),
-            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => JointKind::Revolute,
-            urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-            ref other => {
-                return Err(ModelError::structure(format!(
-                    "joint '{}' is of type {other:?}: only revolute, continuous, prismatic and fixed joints are supported",
-                    j.name
-                )))
-            }
-        };
-        let axis = Vector3::from(*j.axis.xyz);
-        let norm = axis.norm();
-        if !norm.is_finite() || norm < 1e-9 {
-            return Err(ModelError::structure(format!(
-                "joint '{}': <axis xyz> must be a non-zero finite vector",
-                j.name
-            )));
-        }
-        let l = &j.limit;
-        let positive_or_inf = |v: f64| {
-            if v.is_finite() && v > 0.0 {
-                v
+        (l.lower, l.upper, l.velocity, l.effort)
+    } else {
+        // Continuous: no range; velocity and effort optional (0 = not given).
+        let optional = |attribute: &'static str, v: f64| {
+            if v.is_nan() || v < 0.0 {
+                Err(UrdfError::NegativeLimit {
+                    joint: j.name.clone(),
+                    attribute,
+                    value: v,
+                })
+            } else if v == 0.0 {
+                Ok(f64::INFINITY)
             } else {
-                f64::INFINITY
+                Ok(v)
             }
         };
-        let (lower, upper) = if j.joint_type == urdf_rs::JointType::Continuous || l.lower == l.upper
-        {
-            (f64::NEG_INFINITY, f64::INFINITY)
-        } else {
-            (l.lower, l.upper)
-        };
-        if lower.is_nan() || upper.is_nan() || lower > upper {
-            return Err(ModelError::structure(format!(
-                "joint '{}': limit lower = {} > upper = {}: swap them",
-                j.name, l.lower, l.upper
-            )));
+        let velocity = optional("velocity", l.velocity)?;
+        let effort = optional("effort", l.effort)?;
+        (f64::NEG_INFINITY, f64::INFINITY, velocity, effort)
+    };
+    if let Some(d) = &j.dynamics {
+        if d.damping != 0.0 || d.friction != 0.0 {
+            warnings.push(UrdfWarning::IgnoredDynamics {
+                joint: j.name.clone(),
+                damping: d.damping,
+                friction: d.friction,
+            });
         }
-        let limits = JointLimits {
+    }
+    if j.safety_controller.is_some() {
+        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
+    }
+    Ok(Joint {
+        name: j.name.clone(),
+        link: j.child.link.clone(),
+        kind,
+        placement,
+        axis: axis / norm,
+        body: Inertia::zero(),
+        limits: JointLimits {
             lower,
             upper,
-            velocity: positive_or_inf(l.velocity),
-            effort: positive_or_inf(l.effort),
-        };
-        self.joints.push(Joint {
-            name: j.name.clone(),
-            link: j.child.link.clone(),
-            kind,
-            placement,
-            axis: axis / norm,
-            body: Inertia::zero(),
-            limits,
-            armature: 0.0,
-        });
-        let b = self.joints.len() - 1;
-        self.walk(&j.child.link, Transform::identity(), Some(b), depth + 1)
-    }
+            velocity,
+            effort,
+        },
+        armature: 0.0,
+    })
 }
 
 /// Parses a URDF text into a [`Robot`].
@@ -202,94 +169,165 @@ pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
         file: String::new(),
         message: e.to_string(),
     })?;
-    let mut links = HashMap::new();
-    for l in &urdf.links {
-        if links.insert(l.name.as_str(), l).is_some() {
-            return Err(ModelError::structure(format!(
-                "link '{}' is defined twice",
-                l.name
-            )));
+    let mut links: HashMap<&str, usize> = HashMap::new();
+    for (i, l) in urdf.links.iter().enumerate() {
+        if links.insert(l.name.as_str(), i).is_some() {
+            return Err(UrdfError::DuplicateLink(l.name.clone()).into());
         }
     }
-    let mut children: HashMap<&str, Vec<&urdf_rs::Joint>> = HashMap::new();
-    let mut parent_of: HashMap<&str, &str> = HashMap::new();
-    for j in &urdf.joints {
-        if let Some(prev) = parent_of.insert(j.child.link.as_str(), j.name.as_str()) {
-            return Err(ModelError::structure(format!(
-                "link '{}' is the child of two joints ('{prev}' and '{}'): a closed loop is not a serial chain",
-                j.child.link, j.name
-            )));
+    // Children of each link (indices into urdf.joints), parent joint of each link.
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); urdf.links.len()];
+    let mut parent_of: Vec<Option<usize>> = vec![None; urdf.links.len()];
+    for (ji, j) in urdf.joints.iter().enumerate() {
+        let (Some(&p), Some(&c)) = (
+            links.get(j.parent.link.as_str()),
+            links.get(j.child.link.as_str()),
+        ) else {
+            return Err(UrdfError::DanglingJoint {
+                joint: j.name.clone(),
+                parent: j.parent.link.clone(),
+                child: j.child.link.clone(),
+            }
+            .into());
+        };
+        if let Some(prev) = parent_of[c] {
+            return Err(UrdfError::TwoParents {
+                link: j.child.link.clone(),
+                first: urdf.joints[prev].name.clone(),
+                second: j.name.clone(),
+            }
+            .into());
         }
-        if !links.contains_key(j.parent.link.as_str()) || !links.contains_key(j.child.link.as_str())
-        {
-            return Err(ModelError::structure(format!(
-                "joint '{}' connects '{}' to '{}', but one of these links is not defined",
-                j.name, j.parent.link, j.child.link
-            )));
-        }
-        children.entry(j.parent.link.as_str()).or_default().push(j);
+        parent_of[c] = Some(ji);
+        children[p].push(ji);
     }
-    let roots: Vec<&str> = urdf
-        .links
-        .iter()
-        .map(|l| l.name.as_str())
-        .filter(|n| !parent_of.contains_key(n))
+    let roots: Vec<usize> = (0..urdf.links.len())
+        .filter(|&l| parent_of[l].is_none())
         .collect();
     let root = match roots.as_slice() {
         [r] => *r,
-        [] => {
-            return Err(ModelError::structure(
-                "the URDF has no root link (every link is a child): remove the loop",
-            ))
-        }
+        [] => return Err(UrdfError::NoRoot.into()),
         many => {
-            return Err(ModelError::structure(format!(
-                "the URDF has {} root links {many:?}: connect them into one tree",
-                many.len()
-            )))
+            return Err(UrdfError::ManyRoots {
+                roots: many.iter().map(|&l| urdf.links[l].name.clone()).collect(),
+            }
+            .into())
         }
     };
-    let mut w = Walker {
-        links,
-        children,
-        joints: Vec::new(),
-        frames: HashMap::new(),
-        last_link: None,
-    };
-    w.walk(root, Transform::identity(), None, 0)?;
-    if w.frames.len() != urdf.links.len() {
-        return Err(ModelError::structure(
-            "some links are not reachable from the root link (a loop?)",
-        ));
+    let child_link = |ji: usize| links[urdf.joints[ji].child.link.as_str()];
+
+    // Pre-order from the root (iterative); links unreachable from it are in a loop.
+    let mut order = Vec::with_capacity(urdf.links.len());
+    let mut stack = vec![root];
+    while let Some(l) = stack.pop() {
+        order.push(l);
+        stack.extend(children[l].iter().map(|&ji| child_link(ji)));
     }
-    if w.joints.is_empty() {
-        return Err(ModelError::structure(
-            "the URDF has no revolute or prismatic joint: nothing to control",
-        ));
+    if order.len() != urdf.links.len() {
+        return Err(UrdfError::Unreachable(urdf.links.len() - order.len()).into());
     }
-    let n = w.joints.len();
-    for j in &w.joints {
+    // has_moving[l]: a moving joint lies at or below one of l's child joints.
+    // Reverse pre-order visits children before parents: one linear pass.
+    let mut has_moving = vec![false; urdf.links.len()];
+    for &l in order.iter().rev() {
+        has_moving[l] = children[l]
+            .iter()
+            .any(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[child_link(ji)]);
+    }
+
+    // Walk: each link sits at `pose` in the frame of body `body` (None = base).
+    let mut joints: Vec<Joint> = Vec::new();
+    let mut warnings = Vec::new();
+    let mut frames: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
+    let mut last_link: Option<(String, Transform)> = None;
+    let mut stack: Vec<(usize, Transform, Option<usize>)> =
+        vec![(root, Transform::identity(), None)];
+    while let Some((l, pose, body)) = stack.pop() {
+        let link = &urdf.links[l];
+        let inertia = link_inertia(link)?;
+        if let Some(b) = body {
+            let j = &mut joints[b];
+            j.body = j.body + inertia.to_parent(&pose);
+        }
+        frames.insert(link.name.as_str(), (body, pose));
+        let moving: Vec<usize> = children[l]
+            .iter()
+            .copied()
+            .filter(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[child_link(ji)])
+            .collect();
+        if moving.len() > 1 {
+            return Err(UrdfError::NotSerial {
+                link: link.name.clone(),
+                joints: moving
+                    .iter()
+                    .map(|&ji| urdf.joints[ji].name.clone())
+                    .collect(),
+            }
+            .into());
+        }
+        if moving.is_empty() && body.is_some() && body == joints.len().checked_sub(1) {
+            // End of the moving path, or a fixed side branch of the last body.
+            last_link = Some((link.name.clone(), pose));
+        }
+        // The main child goes on the stack first: side branches (fixed only)
+        // are finished before the chain goes on.
+        // Side branches are pushed in reverse so that they are visited in
+        // document order (the last leaf of the last body names the flange).
+        let main = moving.first().copied();
+        for ji in main.into_iter().chain(
+            children[l]
+                .iter()
+                .rev()
+                .copied()
+                .filter(|&ji| Some(ji) != main),
+        ) {
+            let j = &urdf.joints[ji];
+            if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
+                return Err(UrdfError::BadOrigin(j.name.clone()).into());
+            }
+            let placement = pose.compose(&origin(&j.origin));
+            if is_fixed(j) {
+                stack.push((child_link(ji), placement, body));
+            } else {
+                // One moving child per link: joints are numbered base to tip.
+                joints.push(moving_joint(j, placement, &mut warnings)?);
+                stack.push((
+                    child_link(ji),
+                    Transform::identity(),
+                    Some(joints.len() - 1),
+                ));
+            }
+        }
+    }
+    if joints.is_empty() {
+        return Err(UrdfError::NoMovingJoint.into());
+    }
+    let n = joints.len();
+    for j in &joints {
         if j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0 {
-            return Err(ModelError::structure(format!(
-                "link '{}' (moved by joint '{}') has no inertial: add an <inertial> with mass, origin and inertia",
-                j.link, j.name
-            )));
+            return Err(UrdfError::NoInertial {
+                link: j.link.clone(),
+                joint: j.name.clone(),
+            }
+            .into());
         }
     }
     let named = ["tool0", "flange"]
         .iter()
-        .find_map(|name| match w.frames.get(*name) {
+        .find_map(|name| match frames.get(*name) {
             Some((Some(b), pose)) if *b == n - 1 => Some((name.to_string(), *pose)),
             _ => None,
         });
-    let (flange_name, flange) = match named.or(w.last_link.clone()) {
+    let (flange_name, flange) = match named.or(last_link) {
         Some(f) => f,
-        None => (w.joints[n - 1].link.clone(), Transform::identity()),
+        None => (joints[n - 1].link.clone(), Transform::identity()),
     };
     let name = if urdf.name.is_empty() {
         "robot".to_string()
     } else {
         urdf.name.clone()
     };
-    Ok(Robot::assemble(name, w.joints, flange, flange_name))
+    let mut robot = Robot::assemble(name, joints, flange, flange_name);
+    robot.warnings = warnings;
+    Ok(robot)
 }
