@@ -39,6 +39,10 @@
 // chains over several parallel arrays would read worse.
 #![allow(clippy::needless_range_loop)]
 
+/// The linear-algebra crate of the public API (its matrices and vectors
+/// appear in signatures): use this re-export to get the same version.
+pub use nalgebra;
+
 pub mod control;
 pub mod dynamics;
 pub mod gcode;

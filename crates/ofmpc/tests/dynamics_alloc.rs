@@ -3,28 +3,10 @@
 use ofmpc::dynamics::*;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Plant, PlantSettings};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.alloc(l) }
-    }
-    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
-        unsafe { System.dealloc(p, l) }
-    }
-    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
-        unsafe { System.realloc(p, l, n) }
-    }
-}
+mod alloc_counter;
 
 #[global_allocator]
-static A: Counting = Counting;
+static A: alloc_counter::Counting = alloc_counter::Counting;
 
 #[test]
 fn algorithms_and_plant_do_not_allocate() {
@@ -49,11 +31,7 @@ fn algorithms_and_plant_do_not_allocate() {
     let mut x = [0.0; 12];
     let q = [0.1, 0.4, -0.3, 0.7, 0.5, -0.2];
     let qd = [0.3, -0.2, 0.4, 0.5, -0.6, 0.7];
-    let count = |f: &mut dyn FnMut()| {
-        let b = ALLOCS.load(Ordering::SeqCst);
-        f();
-        ALLOCS.load(Ordering::SeqCst) - b
-    };
+    let count = |f: &mut dyn FnMut()| alloc_counter::allocations_during(f);
     assert_eq!(
         count(&mut || {
             forward_kinematics(&robot, &mut ws, &q).unwrap();
@@ -110,7 +88,7 @@ fn algorithms_and_plant_do_not_allocate() {
         0,
         "pstep"
     );
-    let before = ALLOCS.load(Ordering::SeqCst);
+    let before = alloc_counter::allocations();
     for _ in 0..100 {
         forward_kinematics(&robot, &mut ws, &q).unwrap();
         flange_jacobian(&robot, &mut ws, &q).unwrap();
@@ -124,5 +102,25 @@ fn algorithms_and_plant_do_not_allocate() {
         plant.measure(&mut x);
         plant.step(&[1.0; 6], 0.01).unwrap();
     }
-    assert_eq!(ALLOCS.load(Ordering::SeqCst) - before, 0);
+    assert_eq!(alloc_counter::allocations() - before, 0);
+}
+
+/// Negative control: the counter sees this thread's allocations.
+#[test]
+fn the_counter_counts_this_threads_allocations() {
+    let n = alloc_counter::allocations_during(|| {
+        let v = std::hint::black_box(vec![1u8; 64]);
+        drop(v);
+    });
+    assert_eq!(n, 1);
+    // ... and not another thread's.
+    let n = alloc_counter::allocations_during(|| {
+        std::thread::scope(|s| {
+            s.spawn(|| std::hint::black_box(vec![0u8; 64]));
+        })
+    });
+    assert!(
+        n < 8,
+        "thread spawn bookkeeping only, not the other thread's vec: {n}"
+    );
 }

@@ -1,10 +1,8 @@
 //! Numeric (damped least squares) IK on an independent IRB 140 chain built from the
 //! URDF joint origins and axes; allocation checks for the whole ik module.
 
+mod alloc_counter;
 mod ik_common;
-
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::f64::consts::PI;
 
 use ik_common::*;
@@ -13,42 +11,10 @@ use ofmpc::ik::{
     rotation_log, ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings, OpwParameters,
 };
 
-/// Counts heap allocations of the current thread (tests run in parallel threads).
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
-}
-
-fn count() {
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocations() -> usize {
-    ALLOCATIONS.with(|c| c.get())
-}
-
-// SAFETY: forwards to the system allocator; only counts.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        unsafe { System.alloc_zeroed(layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
 #[global_allocator]
-static GLOBAL: CountingAllocator = CountingAllocator;
+static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
+
+use alloc_counter::allocations;
 
 fn numeric() -> NumericIk {
     NumericIk::new(6, &LOWER, &UPPER, NumericIkSettings::default()).unwrap()
