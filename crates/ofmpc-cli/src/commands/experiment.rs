@@ -13,7 +13,7 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, run_name, RunMetrics, RunResult, RunStatus};
+use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult, RunStatus};
 use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -182,20 +182,20 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         let label = if p.mass == 0.0 {
             "exact model (no payload)".to_string()
         } else {
-            format!("payload {} kg unknown to the model", p.mass)
+            format!("payload {} kg unknown to the model", mass_label(p.mass))
         };
         let fig_no = if p.mass == 0.0 { "Fig. 6" } else { "Fig. 7" };
         figure(
             &mut dir,
             &mut report,
-            &format!("joint_errors_m{}", p.mass),
+            &format!("joint_errors_m{}", mass_label(p.mass)),
             &format!("{fig_no}: joint errors, {label}"),
             &figures::joint_errors(&format!("Joint errors e = w − q, {label}"), &these),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("cartesian_errors_m{}", p.mass),
+            &format!("cartesian_errors_m{}", mass_label(p.mass)),
             &format!("Cartesian errors, {label}"),
             &figures::cartesian_errors(
                 &format!("Cartesian errors (reference − flange), {label}"),
