@@ -258,6 +258,30 @@ fn special_files_at_the_output_path_are_refused() {
     );
     assert!(e.contains("is a file, not a folder"), "{e}");
     assert_eq!(snapshot(d), before);
+    // An output folder given as a symbolic link to a folder: followed, and said so.
+    fs::create_dir(d.join("real_out")).unwrap();
+    std::os::unix::fs::symlink(d.join("real_out"), d.join("out_link")).unwrap();
+    let o = ok_in(
+        d,
+        &[
+            "trajectory",
+            "paper",
+            "--ts",
+            "0.05",
+            "--out",
+            "out_link/r.csv",
+        ],
+    );
+    let err = stderr(&o);
+    assert!(
+        err.contains("out_link is a symbolic link to") && err.contains("real_out"),
+        "{err}"
+    );
+    assert!(d.join("real_out/r.csv").is_file());
+    assert!(fs::symlink_metadata(d.join("out_link"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
 }
 
 /// Item 11: the outputs never replace an input of the same run.

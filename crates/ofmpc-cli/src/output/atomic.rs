@@ -101,6 +101,20 @@ where
         )
     })?;
     let dir = parent_dir(path);
+    // A rename would replace a device, FIFO, socket, folder or symbolic link at `path` by a
+    // regular file (as root, `/dev/null` included): refuse anything but a regular file.
+    if let Ok(m) = fs::symlink_metadata(path) {
+        if !m.file_type().is_file() {
+            return Err(io::Error::new(
+                io::ErrorKind::AlreadyExists,
+                format!(
+                    "{} is {}, not a regular file: it is never replaced",
+                    path.display(),
+                    describe(m.file_type())
+                ),
+            ));
+        }
+    }
     let stem = name.to_string_lossy();
     // create_new never reuses an existing file; on the (unlikely) collision take the next number.
     let (file, tmp) = loop {
@@ -165,6 +179,25 @@ pub fn pid_alive(pid: u32) -> Option<bool> {
     }
 }
 
+/// Whether this process's user owns the file of `meta` (Unix; elsewhere always true). With
+/// `/proc` mounted `hidepid`, other users' processes are invisible: their stages and locks must
+/// not be taken for stale, so only our own user's are.
+fn owned_by_me(meta: &fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match fs::metadata("/proc/self") {
+            Ok(me) => me.uid() == meta.uid(),
+            Err(_) => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        true
+    }
+}
+
 /// The pid in a name `<prefix><pid>-...`.
 fn pid_of(name: &str) -> Option<u32> {
     let rest = name
@@ -186,6 +219,9 @@ pub fn remove_stale(dir: &Path) -> Vec<PathBuf> {
             continue;
         };
         if pid == std::process::id() || pid_alive(pid) != Some(false) {
+            continue;
+        }
+        if !e.metadata().is_ok_and(|m| owned_by_me(&m)) {
             continue;
         }
         let path = e.path();
@@ -222,8 +258,9 @@ impl DirLock {
             }
             let held = fs::read_to_string(&path).ok();
             let pid = held.as_deref().and_then(|t| t.trim().parse::<u32>().ok());
+            let mine = fs::symlink_metadata(&path).is_ok_and(|m| owned_by_me(&m));
             match pid.map(|p| (p, pid_alive(p))) {
-                Some((p, Some(false))) => {
+                Some((p, Some(false))) if mine => {
                     // Stale: move it aside first (only one process wins the rename), then make
                     // sure the moved file is the stale one and not a fresh lock of a competitor.
                     let aside = tmp_sibling(dir, "stale-lock");
@@ -949,5 +986,27 @@ mod tests {
                 ".ofmpc-stage-notapid".into()
             ]
         );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn write_atomic_never_replaces_a_link_or_special_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let real = tmp.path().join("real.csv");
+        fs::write(&real, b"precious").unwrap();
+        let link = tmp.path().join("link.csv");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let e = write_atomic(&link, b"new").unwrap_err().to_string();
+        assert!(e.contains("is a symbolic link, not a regular file"), "{e}");
+        assert!(fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(fs::read(&real).unwrap(), b"precious");
+        let sock = tmp.path().join("s.sock");
+        let _l = std::os::unix::net::UnixListener::bind(&sock).unwrap();
+        let e = write_atomic(&sock, b"new").unwrap_err().to_string();
+        assert!(e.contains("is a socket"), "{e}");
+        assert_eq!(names(tmp.path()), vec!["link.csv", "real.csv", "s.sock"]);
     }
 }
