@@ -1,4 +1,4 @@
-//! The terminal side of the output layer: every line for stdout goes through [`print`], which
+//! The terminal side of the output layer: every line for stdout goes through [`print()`], which
 //! returns the I/O error instead of panicking like `println!` does when stdout is closed
 //! (`ofmpc inspect robot | head -1`). `main` turns an error of kind
 //! [`io::ErrorKind::BrokenPipe`] into a quiet exit with status 0, as ripgrep and coreutils'
@@ -16,7 +16,7 @@ pub fn print(text: &str) -> io::Result<()> {
     out.flush()
 }
 
-/// Like [`print`] with a newline appended.
+/// Like [`print()`] with a newline appended.
 pub fn println(text: &str) -> io::Result<()> {
     let mut out = io::stdout().lock();
     out.write_all(text.as_bytes())?;
