@@ -8,15 +8,19 @@
 //!   (or a panic in the producer) the temporary file is removed and the target is untouched:
 //!   a reader sees either the complete old file or the complete new one, never a mixture.
 //!
-//! * [`StagedDir`] collects a whole run's outputs in a hidden staging directory inside the
-//!   output directory and moves them into place only on [`StagedDir::commit`]. Guarantee:
-//!   if the run fails before `commit` (error, panic, early return), the output directory is
-//!   exactly as it was (a directory that did not exist before and is still empty is removed
-//!   again). During `commit` each file is replaced by an atomic `rename`, in the order the files
-//!   were written; a crash in the middle of `commit` can leave some files new and some old, but
-//!   never a truncated file. Write the file that marks a run as complete (e.g. `report.html`)
-//!   last. Files in the output directory that the run did not write are left alone, so pointing
-//!   `--out` at a directory holding other data is safe.
+//! * [`StagedDir`] collects a whole run's outputs in a hidden staging folder
+//!   `.ofmpc-stage-<pid>-<n>` inside the output folder and moves them into place only on
+//!   [`StagedDir::commit`]. Guarantees: the output folder is locked ([`DirLock`], a second run
+//!   fails at once and names the process holding it); if the run fails before `commit` (error,
+//!   panic, early return, SIGINT/SIGTERM), the output folder is exactly as it was (folders that
+//!   did not exist before and are still empty are removed again); `commit` first checks every
+//!   destination ([`check_destinations`]: no device, FIFO, socket, folder or symbolic link and
+//!   no input of the run is ever replaced) so that on a conflict nothing moves, and undoes the
+//!   moves already done if a later one fails. Only a crash in the middle of `commit` can leave
+//!   some files new and some old, never a truncated file; write the file that marks a run as
+//!   complete (e.g. `report.html`) last. Files in the output folder that the run does not write
+//!   are left alone, so pointing `--out` at a folder holding other data is safe. Stages of dead
+//!   processes are removed by the next run ([`remove_stale`]).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
@@ -652,16 +656,48 @@ impl StagedDir {
     /// error lists them all), then moves every staged file into the target directory (one
     /// atomic rename per file, in write order), fsyncs the directories, removes the staging
     /// directory and releases the lock. A signal arriving meanwhile waits for the end.
+    ///
+    /// If a move fails anyway (an I/O error, a folder created meanwhile by another program),
+    /// the moves already done are undone: each replaced file was first hard-linked (or copied)
+    /// into the staging folder and is put back, new files and folders are removed, so the target
+    /// is as before. Only a crash in the middle can leave a mixture (never a truncated file).
     pub fn commit(mut self) -> io::Result<()> {
         let mut reg = super::cleanup::lock();
         check_destinations(&self.target, &self.files, &self.inputs)?;
+        let backups = self.staging.join(".ofmpc-replaced");
+        let mut undo = Undo::default();
         let mut dirs_to_sync: Vec<PathBuf> = vec![self.target.clone()];
-        for rel in &self.files {
+        for (i, rel) in self.files.iter().enumerate() {
             let from = self.staging.join(rel);
             let to = self.target.join(rel);
             let dir = parent_dir(&to).to_path_buf();
-            fs::create_dir_all(&dir).map_err(|e| with_path(e, "cannot create directory", &dir))?;
-            fs::rename(&from, &to).map_err(|e| with_path(e, "cannot move into place", &to))?;
+            let step = (|| {
+                for d in missing_dirs(&dir) {
+                    fs::create_dir(&d).map_err(|e| with_path(e, "cannot create directory", &d))?;
+                    undo.dirs.push(d);
+                }
+                let backup = if to.exists() {
+                    let b = backups.join(rel);
+                    fs::create_dir_all(parent_dir(&b))?;
+                    fs::hard_link(&to, &b)
+                        .or_else(|_| fs::copy(&to, &b).map(|_| ()))
+                        .map_err(|e| with_path(e, "cannot keep a copy of", &to))?;
+                    Some(b)
+                } else {
+                    None
+                };
+                fault_injection(i)?;
+                fs::rename(&from, &to).map_err(|e| with_path(e, "cannot move into place", &to))?;
+                undo.moved.push((to.clone(), backup));
+                Ok::<(), io::Error>(())
+            })();
+            if let Err(e) = step {
+                undo.run();
+                return Err(io::Error::new(
+                    e.kind(),
+                    format!("{e}; the files moved before were put back, nothing changed"),
+                ));
+            }
             if !dirs_to_sync.contains(&dir) {
                 dirs_to_sync.push(dir);
             }
@@ -677,6 +713,56 @@ impl StagedDir {
         drop(reg);
         removed
     }
+}
+
+/// Folders on the way to `dir` that do not exist yet, outermost first.
+fn missing_dirs(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+        .map(Path::to_path_buf)
+        .collect();
+    v.reverse();
+    v
+}
+
+/// What [`StagedDir::commit`] did so far, to undo it on a failure.
+#[derive(Default)]
+struct Undo {
+    /// Destination and the kept copy of the file it replaced (None: it was new).
+    moved: Vec<(PathBuf, Option<PathBuf>)>,
+    /// Folders created, outermost first.
+    dirs: Vec<PathBuf>,
+}
+
+impl Undo {
+    fn run(&mut self) {
+        for (to, backup) in self.moved.drain(..).rev() {
+            let _ = match backup {
+                Some(b) => fs::rename(&b, &to),
+                None => fs::remove_file(&to),
+            };
+        }
+        for d in self.dirs.drain(..).rev() {
+            let _ = fs::remove_dir(&d);
+        }
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Test hook: the commit step (index) that fails, on this thread only.
+    static FAIL_AT: std::cell::Cell<Option<usize>> = const { std::cell::Cell::new(None) };
+}
+
+/// Test hook: fails step `i` of a commit when a test asked for it (no-op in the binary).
+fn fault_injection(i: usize) -> io::Result<()> {
+    #[cfg(test)]
+    if FAIL_AT.with(|f| f.get()) == Some(i) {
+        return Err(io::Error::other("injected failure"));
+    }
+    let _ = i;
+    Ok(())
 }
 
 impl Drop for StagedDir {
@@ -1008,5 +1094,27 @@ mod tests {
         let e = write_atomic(&sock, b"new").unwrap_err().to_string();
         assert!(e.contains("is a socket"), "{e}");
         assert_eq!(names(tmp.path()), vec!["link.csv", "real.csv", "s.sock"]);
+    }
+
+    #[test]
+    fn a_failing_move_is_undone() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        fs::write(out.join("a.csv"), b"old a").unwrap();
+        fs::write(out.join("mine.txt"), b"user").unwrap();
+        let mut s = StagedDir::new(out).unwrap();
+        s.write("a.csv", b"new a").unwrap();
+        s.write("run/b.csv", b"new b").unwrap();
+        s.write("c.csv", b"new c").unwrap();
+        FAIL_AT.with(|f| f.set(Some(2)));
+        let e = s.commit().unwrap_err().to_string();
+        FAIL_AT.with(|f| f.set(None));
+        assert!(
+            e.contains("injected failure") && e.contains("put back"),
+            "{e}"
+        );
+        // a.csv replaced and b.csv (in a new folder) moved in before the failure: both undone.
+        assert_eq!(names(out), vec!["a.csv", "mine.txt"]);
+        assert_eq!(fs::read(out.join("a.csv")).unwrap(), b"old a");
     }
 }
