@@ -121,6 +121,8 @@ fn closed_stdout_stops_quietly() {
     };
     let out = tmp.path().join("o");
     for args in [
+        vec!["--help"],
+        vec!["reproduce", "--help"],
         vec!["inspect", "robot"],
         vec!["inspect", "dynamics", "--q", "0,0,0,0,0,0"],
         vec!["trajectory", "paper", "--ts", "0.05"],
