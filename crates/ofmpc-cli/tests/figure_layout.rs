@@ -3,8 +3,8 @@
 //! figure type (path, Cartesian reference, joint and Cartesian errors per payload, payload
 //! sweep, and per run joints/torques and Cartesian error), `trajectory` writes its two; then:
 //!
-//! * nothing is drawn within 3 px of a panel cell's left or right edge, nor of the canvas edge
-//!   (panel content is inset by 10 px margins, so ink there is text cut at the edge), in the
+//! * nothing is drawn within 3 px of a panel cell's edges, nor of the canvas edge (panel
+//!   content is inset by margins of 10 px or more, so ink there is text cut at the edge), in the
 //!   PNG;
 //! * each figure title in the SVG is the whole title (one or two lines, never shortened);
 //! * in every 2-D panel, every data point lies below the legend rows of that panel (the legend
@@ -171,6 +171,24 @@ fn no_figure_has_clipped_text_or_a_legend_over_data() {
                     assert!(
                         !ink(x, y),
                         "{name}: ink at ({x}, {y}), at a panel edge: clipped text?"
+                    );
+                }
+            }
+        }
+
+        //    Likewise at the top and bottom of every panel row.
+        let row_h = if (h - TITLE_BAND) % 340 == 0 {
+            340
+        } else {
+            440
+        };
+        assert_eq!((h - TITLE_BAND) % row_h, 0, "{name}: canvas height {h}");
+        for edge in (TITLE_BAND..=h).step_by(row_h as usize) {
+            for y in edge.saturating_sub(3)..(edge + 3).min(h) {
+                for x in 0..w {
+                    assert!(
+                        !ink(x, y),
+                        "{name}: ink at ({x}, {y}), at a panel row edge: clipped text?"
                     );
                 }
             }
