@@ -177,12 +177,9 @@ fn no_figure_has_clipped_text_or_a_legend_over_data() {
         }
 
         //    Likewise at the top and bottom of every panel row.
-        let row_h = if (h - TITLE_BAND) % 340 == 0 {
-            340
-        } else {
-            440
-        };
-        assert_eq!((h - TITLE_BAND) % row_h, 0, "{name}: canvas height {h}");
+        let body = h - TITLE_BAND;
+        let row_h = if body / 340 * 340 == body { 340 } else { 440 };
+        assert_eq!(body % row_h, 0, "{name}: canvas height {h}");
         for edge in (TITLE_BAND..=h).step_by(row_h as usize) {
             for y in edge.saturating_sub(3)..(edge + 3).min(h) {
                 for x in 0..w {
