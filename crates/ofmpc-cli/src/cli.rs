@@ -57,17 +57,32 @@ pub struct TrajectoryArgs {
     /// Path acceleration limit (m/s²).
     #[arg(long, default_value_t = 2.5)]
     pub accel: f64,
-    /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figures go beside it:
-    /// `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and
+    /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`; SI units: t in s, x,y,z in m (flange position,
+    /// base frame), q in rad (m for a prismatic joint), qd in rad/s (m/s)); the figures go
+    /// beside it: `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and
     /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4).
-    #[arg(long)]
+    /// The five files appear together or not at all; an existing file that is an input, a
+    /// folder, a device, a FIFO or a symbolic link is never replaced.
+    #[arg(long, default_value = "ofmpc-out/reference.csv")]
     pub out: PathBuf,
 }
 
+/// What the output folder of `run` and `reproduce` holds (shown by their `--help`).
+const RESULTS_HELP: &str = "\
+Output: metrics.json, report.html, the figures (PNG and SVG), scenario.toml (re-runs this run), \
+and one folder per run (<controller>_m<payload kg>/) with timeseries.csv. Files appear only \
+when the whole run succeeded; a second run into the same folder fails until the first ends.
+
+timeseries.csv columns, SI units: t (s); q1..qn joint positions (rad; m for a prismatic \
+joint); qd1..qdn joint velocities (rad/s; m/s); tau1..taun joint torques applied over \
+[t, t + Ts) (N·m; N); qref1..qrefn reference (rad); e1..en = qref − q (rad); x,y,z flange \
+position (m, base frame); xref,yref,zref its reference (m); ex,ey,ez = ref − flange (m).";
+
 /// `ofmpc run`
 #[derive(Debug, Args)]
+#[command(after_help = RESULTS_HELP)]
 pub struct RunArgs {
-    /// Scenario file (TOML).
+    /// Scenario file (TOML). Paths in it are relative to its own folder.
     pub scenario: PathBuf,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]
@@ -76,6 +91,7 @@ pub struct RunArgs {
 
 /// `ofmpc reproduce`
 #[derive(Debug, Args)]
+#[command(after_help = RESULTS_HELP)]
 pub struct ReproduceArgs {
     /// G-code program (default: the paper's Table I, built in).
     #[arg(long)]

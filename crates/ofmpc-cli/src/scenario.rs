@@ -144,27 +144,31 @@ impl Default for ScenarioFile {
 }
 
 impl ScenarioFile {
-    /// Reads a scenario; relative paths inside are resolved against its folder.
+    /// Reads a scenario. Relative paths inside (`program.file`, `robot.drives`, and
+    /// `robot.model` when it ends in `.urdf` or names a file there) are resolved against the
+    /// scenario file's folder, not the working directory, and made absolute: the scenario
+    /// written with the results (`scenario.toml`) then re-runs from any working directory.
     pub fn from_file(path: &Path) -> anyhow::Result<Self> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read scenario {}", path.display()))?;
         let mut s: ScenarioFile =
             toml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let resolve = |p: &Path| {
-            if p.is_absolute() {
-                p.to_path_buf()
-            } else {
-                dir.join(p)
-            }
-        };
-        if s.robot.model.ends_with(".urdf") {
-            s.robot.model = resolve(Path::new(&s.robot.model)).display().to_string();
+        let dir = absolute(path.parent().unwrap_or(Path::new(".")));
+        let resolve = |p: &Path| absolute(&dir.join(p));
+        let model = resolve(Path::new(&s.robot.model));
+        if s.robot.model.ends_with(".urdf") || model.is_file() {
+            s.robot.model = model.display().to_string();
         }
         s.robot.drives = s.robot.drives.as_deref().map(resolve);
         s.program.file = s.program.file.as_deref().map(resolve);
         Ok(s)
     }
+}
+
+/// `p` as an absolute path (joined to the working directory if relative; `.` components
+/// dropped, symbolic links not resolved). Falls back to `p` if the working directory is unknown.
+pub fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
 /// A resolved scenario: the experiment and what to run.
@@ -190,7 +194,7 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     let mut robot = if model.ends_with(".urdf") || path.is_file() {
         let robot = Robot::from_urdf_file(path)?;
         for w in robot.warnings() {
-            eprintln!("warning: {}: {w}", path.display());
+            crate::output::console::warn(&format!("{}: {w}", path.display()));
         }
         robot
     } else {
@@ -202,11 +206,11 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
             .apply_drives(&drives)
             .with_context(|| format!("applying {}", d.display()))?;
         if !unset.is_empty() {
-            eprintln!(
-                "warning: {} sets nothing for joint(s) {}: they keep the URDF's limits and have no armature",
+            crate::output::console::warn(&format!(
+                "{} sets nothing for joint(s) {}: they keep the URDF's limits and have no armature",
                 d.display(),
                 unset.join(", ")
-            );
+            ));
         }
     }
     Ok(robot)

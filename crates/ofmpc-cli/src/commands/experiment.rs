@@ -4,7 +4,8 @@
 //! run leaves no half-written file.
 
 use crate::figures;
-use crate::output::atomic::StagedDir;
+use crate::output::atomic::{Input, StagedDir};
+use crate::output::console;
 use crate::output::plot::{render_both, Figure};
 use crate::output::report::{Image, Report, Table};
 use crate::scenario::Scenario;
@@ -16,7 +17,7 @@ use ofmpc::robot::Payload;
 use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult, RunStatus};
 use rayon::prelude::*;
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 struct Run {
@@ -42,18 +43,192 @@ fn figure(
     Ok(())
 }
 
+/// The payloads and controllers of a scenario with repeats removed (a repeat would write the
+/// same run folder twice); `-0` counts as `0`. Returns the warnings for the repeats.
+fn unique_runs(scenario: &Scenario) -> (Vec<Payload>, Vec<ControllerKind>, Vec<String>) {
+    let mut warnings = Vec::new();
+    let mut payloads: Vec<Payload> = Vec::new();
+    for p in &scenario.payloads {
+        let mut p = *p;
+        p.mass += 0.0; // -0.0 → 0.0: one run folder `_m0`
+                       // Same folder name (the label rounds masses past 6 digits) = same run.
+        if payloads
+            .iter()
+            .any(|q| mass_label(q.mass) == mass_label(p.mass))
+        {
+            warnings.push(format!(
+                "the payload {} kg is listed more than once ({:?}): it is run once",
+                mass_label(p.mass),
+                scenario.file.payload.masses_kg
+            ));
+        } else {
+            payloads.push(p);
+        }
+    }
+    let mut controllers: Vec<ControllerKind> = Vec::new();
+    for k in &scenario.file.controllers {
+        if controllers.contains(k) {
+            warnings.push(format!(
+                "the controller \"{}\" is listed more than once: it is run once per payload",
+                kind_name(*k)
+            ));
+        } else {
+            controllers.push(*k);
+        }
+    }
+    warnings.dedup();
+    (payloads, controllers, warnings)
+}
+
+/// Every file a run of these payloads and controllers writes, relative to the output folder.
+fn planned_files(payloads: &[Payload], controllers: &[ControllerKind]) -> Vec<PathBuf> {
+    let mut v: Vec<String> = Vec::new();
+    let both = |v: &mut Vec<String>, stem: String| {
+        v.push(format!("{stem}.png"));
+        v.push(format!("{stem}.svg"));
+    };
+    both(&mut v, "path".into());
+    both(&mut v, "cartesian_reference".into());
+    for p in payloads {
+        both(&mut v, format!("joint_errors_m{}", mass_label(p.mass)));
+        both(&mut v, format!("cartesian_errors_m{}", mass_label(p.mass)));
+    }
+    if payloads.len() >= 3 {
+        both(&mut v, "payload_sweep".into());
+    }
+    for p in payloads {
+        for k in controllers {
+            let name = run_name(*k, p);
+            v.push(format!("{name}/timeseries.csv"));
+            both(&mut v, format!("{name}/joints_torques"));
+            both(&mut v, format!("{name}/cartesian_error"));
+        }
+    }
+    v.extend(["metrics.json", "scenario.toml", "report.html"].map(String::from));
+    v.into_iter().map(PathBuf::from).collect()
+}
+
+/// Entries of `out` written by an earlier run that this run does not replace: run folders
+/// (`<controller>_m<mass>/` with a `timeseries.csv`) and per-payload or sweep figures.
+fn earlier_run_leftovers(out: &Path, planned: &[PathBuf]) -> Vec<String> {
+    let top: std::collections::HashSet<String> = planned
+        .iter()
+        .filter_map(|p| p.components().next())
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Vec::new();
+    };
+    let mut found: Vec<String> = entries
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            if top.contains(&name) {
+                return None;
+            }
+            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+            let run_dir = is_dir
+                && ControllerKind::ALL
+                    .iter()
+                    .any(|k| name.starts_with(&format!("{}_m", kind_name(*k))))
+                && e.path().join("timeseries.csv").is_file();
+            let figure = !is_dir
+                && (name.ends_with(".png") || name.ends_with(".svg"))
+                && (name.starts_with("joint_errors_m")
+                    || name.starts_with("cartesian_errors_m")
+                    || name.starts_with("payload_sweep."));
+            if run_dir {
+                Some(format!("{name}/"))
+            } else if figure {
+                Some(name)
+            } else {
+                None
+            }
+        })
+        .collect();
+    found.sort();
+    found
+}
+
+/// The files a scenario reads (never overwritten by its outputs).
+fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
+    let f = &scenario.file;
+    let mut v = Vec::new();
+    if let Some(p) = scenario_path {
+        v.push(Input::new(p, "the scenario file"));
+    }
+    if let Some(p) = &f.program.file {
+        v.push(Input::new(p, "the program"));
+    }
+    if Path::new(&f.robot.model).is_file() {
+        v.push(Input::new(&f.robot.model, "the robot model"));
+    }
+    if let Some(p) = &f.robot.drives {
+        v.push(Input::new(p, "the drives file"));
+    }
+    v
+}
+
+/// Opens the output folder `out` for a run: lock, stale stages of dead runs removed (noted), a
+/// note if `out` is a symbolic link, the inputs protected, and every planned destination
+/// checked before anything is computed.
+pub(crate) fn open_output(
+    out: &Path,
+    inputs: Vec<Input>,
+    planned: &[PathBuf],
+) -> anyhow::Result<StagedDir> {
+    if let Ok(to) = std::fs::read_link(out) {
+        console::note(&format!(
+            "{} is a symbolic link to {}: the results go there",
+            out.display(),
+            to.display()
+        ));
+    }
+    let mut dir = StagedDir::new(out)
+        .with_context(|| format!("preparing the output directory {}", out.display()))?;
+    for p in dir.removed_stale() {
+        console::note(&format!(
+            "removed {}, left by an interrupted run (its process no longer runs)",
+            p.display()
+        ));
+    }
+    dir.protect(inputs);
+    dir.check(planned)?;
+    Ok(dir)
+}
+
 /// Runs the scenario and writes everything into `out`. Prints the summary
-/// table on stdout; progress on stderr when it is a terminal.
-pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
+/// table on stdout; progress on stderr when it is a terminal. `scenario_path` is the file the
+/// scenario was read from, if any (never overwritten).
+pub fn execute(
+    scenario: &Scenario,
+    scenario_path: Option<&Path>,
+    out: &Path,
+) -> anyhow::Result<()> {
     let started = Instant::now();
     for w in &scenario.warnings {
-        eprintln!("warning: {w}");
+        console::warn(w);
+    }
+    let (payloads, controllers, repeats) = unique_runs(scenario);
+    for w in &repeats {
+        console::warn(w);
+    }
+    let planned = planned_files(&payloads, &controllers);
+    let mut dir = open_output(out, inputs(scenario, scenario_path), &planned)?;
+    let leftovers = earlier_run_leftovers(out, &planned);
+    if !leftovers.is_empty() {
+        console::warn(&format!(
+            "{} holds results of an earlier run that this run does not replace: {}. \
+             metrics.json and report.html describe only this run; remove them or choose \
+             another --out",
+            out.display(),
+            leftovers.join(", ")
+        ));
     }
     let exp = &scenario.experiment;
-    let jobs: Vec<(ControllerKind, Payload)> = scenario
-        .payloads
+    let jobs: Vec<(ControllerKind, Payload)> = payloads
         .iter()
-        .flat_map(|p| scenario.file.controllers.iter().map(move |k| (*k, *p)))
+        .flat_map(|p| controllers.iter().map(move |k| (*k, *p)))
         .collect();
     let steps_per_run = (exp.reference.len()
         + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize)
@@ -97,8 +272,6 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     let runs: Vec<Run> = runs.into_iter().collect::<anyhow::Result<_>>()?;
     let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
 
-    let mut dir = StagedDir::new(out)
-        .with_context(|| format!("preparing the output directory {}", out.display()))?;
     let mut report = Report::new(&scenario.file.title);
     report.heading("Summary");
     let robot = &exp.robot;
@@ -173,7 +346,7 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
         ),
     )?;
     report.heading("Tracking errors of the three controllers (the paper's Fig. 6 and 7)");
-    for p in &scenario.payloads {
+    for p in &payloads {
         let these: Vec<(&str, &ofmpc::sim::Record)> = runs
             .iter()
             .filter(|r| r.payload.mass == p.mass)
@@ -203,7 +376,7 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
             ),
         )?;
     }
-    if scenario.payloads.len() >= 3 {
+    if payloads.len() >= 3 {
         report.heading("Payload sweep");
         figure(
             &mut dir,
@@ -244,7 +417,12 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     }
     let json = serde_json::to_string_pretty(&MetricsFile { runs: &metrics })?;
     dir.write("metrics.json", json.as_bytes())?;
-    let effective = toml::to_string(&scenario.file).context("writing the effective scenario")?;
+    // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
+    // file re-runs from any working directory.
+    let mut file = scenario.file.clone();
+    file.payload.masses_kg = payloads.iter().map(|p| p.mass).collect();
+    file.controllers = controllers.clone();
+    let effective = toml::to_string(&file).context("writing the effective scenario")?;
     let effective = format!(
         "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
     );
@@ -255,13 +433,13 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
     dir.commit()
         .with_context(|| format!("moving the results into {}", out.display()))?;
 
-    print!("{}", summary_text(&metrics));
-    println!(
+    console::print(&summary_text(&metrics))?;
+    console::println(&format!(
         "{} runs in {:.2} s (wall); results in {}/ (metrics.json, report.html, one folder per run)",
         runs.len(),
         started.elapsed().as_secs_f64(),
         out.display()
-    );
+    ))?;
     let failed: Vec<String> = metrics
         .iter()
         .filter(|m| m.status == RunStatus::Failed)

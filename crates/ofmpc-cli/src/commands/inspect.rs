@@ -3,6 +3,7 @@
 
 use super::{load_robot, parse_vector};
 use crate::cli::{InspectDynamics, InspectRobot};
+use crate::output::console;
 use nalgebra::DMatrix;
 use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
 use ofmpc::robot::JointKind;
@@ -56,7 +57,7 @@ pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
             "rotation": rot,
         },
     });
-    println!("{}", serde_json::to_string_pretty(&out)?);
+    console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }
 
@@ -96,6 +97,6 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
         "flange": { "frame": robot.flange_name(), "offset_from_last_body_m": [f.pos.x, f.pos.y, f.pos.z] },
         "joints": joints,
     });
-    println!("{}", serde_json::to_string_pretty(&out)?);
+    console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }

@@ -1,6 +1,6 @@
 //! The commands. Each returns `anyhow::Result`; `main` prints the error chain.
 
-mod experiment;
+pub(crate) mod experiment;
 mod inspect;
 mod robot;
 mod trajectory;
@@ -8,7 +8,7 @@ mod trajectory;
 use crate::cli::{Cli, Command, Inspect};
 use crate::scenario::{Scenario, ScenarioFile};
 
-pub use robot::{load_robot, parse_vector};
+pub use robot::{load_robot, parse_fixed, parse_vector};
 
 /// Runs one command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -20,14 +20,16 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             let file = ScenarioFile::from_file(&a.scenario)?;
             let scenario = Scenario::resolve(&file)
                 .map_err(|e| anyhow::anyhow!("{}: {e:#}", a.scenario.display()))?;
-            experiment::execute(&scenario, &a.out)
+            experiment::execute(&scenario, Some(&a.scenario), &a.out)
         }
         Command::Reproduce(a) => {
             let mut file = ScenarioFile::default();
-            file.program.file = a.program.clone();
+            // Absolute, so that the scenario.toml written with the results re-runs from any
+            // working directory.
+            file.program.file = a.program.as_deref().map(crate::scenario::absolute);
             file.payload.masses_kg = parse_vector("--payload", &a.payload, None)?;
             let scenario = Scenario::resolve(&file)?;
-            experiment::execute(&scenario, &a.out)
+            experiment::execute(&scenario, None, &a.out)
         }
     }
 }

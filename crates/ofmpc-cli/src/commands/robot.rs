@@ -41,3 +41,23 @@ pub fn parse_vector(name: &str, text: &str, n: Option<usize>) -> anyhow::Result<
     }
     Ok(v)
 }
+
+/// Parses a comma-separated vector of exactly `n` numbers for option `name` whose values are
+/// `what` (e.g. "x,y,z of the work offset in mm"); `example` is a valid value for the message.
+pub fn parse_fixed(
+    name: &str,
+    text: &str,
+    n: usize,
+    what: &str,
+    example: &str,
+) -> anyhow::Result<Vec<f64>> {
+    let v = parse_vector(name, text, None)?;
+    if v.len() != n {
+        bail!(
+            "{name} has {} value{} but needs {n}: {what}, comma-separated (e.g. {name} {example})",
+            v.len(),
+            if v.len() == 1 { "" } else { "s" }
+        );
+    }
+    Ok(v)
+}

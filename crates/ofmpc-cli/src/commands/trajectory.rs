@@ -1,9 +1,10 @@
 //! `ofmpc trajectory`: a program's timed path and joint reference.
 
-use super::parse_vector;
+use super::parse_fixed;
 use crate::cli::TrajectoryArgs;
 use crate::figures;
-use crate::output::atomic::write_atomic;
+use crate::output::atomic::{check_destinations, Input};
+use crate::output::console;
 use crate::output::plot::render_both;
 use crate::scenario::{load_robot, parse_profile, read_program};
 use crate::tables::reference_csv;
@@ -11,17 +12,64 @@ use anyhow::Context;
 use ofmpc::gcode::{parse, ParseOptions};
 use ofmpc::reference::{build_reference, Orientation};
 use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The files `trajectory --out DIR/NAME.csv` writes: the CSV and, beside it,
+/// `NAME_path.png/.svg` and `NAME_cartesian.png/.svg`. Returns the folder and the file names.
+fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 5])> {
+    let name = out
+        .file_name()
+        .filter(|_| !out.as_os_str().to_string_lossy().ends_with('/'))
+        .ok_or_else(|| {
+            anyhow::anyhow!(
+                "--out {}: give the path of the CSV file to write (e.g. --out ref.csv)",
+                out.display()
+            )
+        })?;
+    let dir = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let stem = Path::new(name)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let files = [
+        PathBuf::from(name),
+        PathBuf::from(format!("{stem}_path.png")),
+        PathBuf::from(format!("{stem}_path.svg")),
+        PathBuf::from(format!("{stem}_cartesian.png")),
+        PathBuf::from(format!("{stem}_cartesian.svg")),
+    ];
+    Ok((dir, files))
+}
 
 /// Parses, times and maps the program; writes the CSV and the figure.
 pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
+    // The outputs are checked before any work: no device, FIFO, folder or symbolic link is
+    // replaced, and no input of this run is overwritten.
+    let (out_dir, files) = outputs(&a.out)?;
+    let mut inputs = vec![Input::new(&a.program, "the program")];
+    if Path::new(&a.robot).is_file() {
+        inputs.push(Input::new(&a.robot, "the robot model"));
+    }
+    if let Some(d) = &a.drives {
+        inputs.push(Input::new(d, "the drives file"));
+    }
+    check_destinations(&out_dir, &files, &inputs)?;
     let robot = load_robot(&a.robot, a.drives.as_deref())?;
     let file =
         (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
     let (name, text) = read_program(file)?;
     let origin = match &a.origin {
         Some(o) => {
-            let v = parse_vector("--origin", o, Some(3))?;
+            let v = parse_fixed(
+                "--origin",
+                o,
+                3,
+                "the work offset's x,y,z in mm",
+                "150,0,-250",
+            )?;
             Some([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3])
         }
         None => None,
@@ -29,7 +77,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let program =
         parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     for w in &program.warnings {
-        eprintln!("warning: {name}: {w}");
+        console::warn(&format!("{name}: {w}"));
     }
     let timing = TimingOptions {
         profile: parse_profile(&a.profile)?,
@@ -39,7 +87,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
     let orientation = match &a.rpy {
         Some(t) => {
-            let v = parse_vector("--rpy", t, Some(3))?;
+            let v = parse_fixed("--rpy", t, 3, "roll,pitch,yaw in degrees", "0,90,0")?;
             Orientation::Fixed(nalgebra::UnitQuaternion::from_euler_angles(
                 v[0].to_radians(),
                 v[1].to_radians(),
@@ -50,47 +98,36 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     };
     let reference = build_reference(&robot, &traj, orientation, a.ts)
         .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    write_atomic(&a.out, reference_csv(&reference).as_bytes())
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    let stem = a.out.with_extension("");
     let fig = render_both(&figures::path(
         &format!("{name}: path and joint reference"),
         &reference,
     ))?;
-    let png = stem.with_file_name(format!(
-        "{}_path.png",
-        stem.file_name()
-            .map(|s| s.to_string_lossy())
-            .unwrap_or_default()
-    ));
-    let svg = png.with_extension("svg");
-    write_atomic(&png, &fig.png).with_context(|| format!("writing {}", png.display()))?;
-    write_atomic(&svg, fig.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
     let cart = render_both(&figures::cartesian_reference(
         &format!("{name}: Cartesian reference"),
         &traj,
         a.ts,
     ))?;
-    let cpng = png.with_file_name(
-        png.file_name()
-            .map(|n| n.to_string_lossy().replace("_path.png", "_cartesian.png"))
-            .unwrap_or_default(),
-    );
-    write_atomic(&cpng, &cart.png).with_context(|| format!("writing {}", cpng.display()))?;
-    let csvg = cpng.with_extension("svg");
-    write_atomic(&csvg, cart.svg.as_bytes())
-        .with_context(|| format!("writing {}", csvg.display()))?;
-    println!(
-        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {})",
+    // All five files as one set: they appear together or not at all.
+    let mut dir = super::experiment::open_output(&out_dir, inputs, &files)?;
+    dir.write(&files[0], reference_csv(&reference).as_bytes())?;
+    dir.write(&files[1], &fig.png)?;
+    dir.write(&files[2], fig.svg.as_bytes())?;
+    dir.write(&files[3], &cart.png)?;
+    dir.write(&files[4], cart.svg.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", out_dir.display()))?;
+    let shown: Vec<String> = files
+        .iter()
+        .map(|f| a.out.with_file_name(f).display().to_string())
+        .collect();
+    console::println(&format!(
+        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {})",
         traj.segments().len(),
         traj.duration(),
         reference.len(),
         a.ts,
-        a.out.display(),
-        png.display(),
-        svg.display(),
-        cpng.display(),
-        csvg.display()
-    );
+        shown[0],
+        shown[1..].join(", ")
+    ))?;
     Ok(())
 }

@@ -8,15 +8,19 @@
 //!   (or a panic in the producer) the temporary file is removed and the target is untouched:
 //!   a reader sees either the complete old file or the complete new one, never a mixture.
 //!
-//! * [`StagedDir`] collects a whole run's outputs in a hidden staging directory inside the
-//!   output directory and moves them into place only on [`StagedDir::commit`]. Guarantee:
-//!   if the run fails before `commit` (error, panic, early return), the output directory is
-//!   exactly as it was (a directory that did not exist before and is still empty is removed
-//!   again). During `commit` each file is replaced by an atomic `rename`, in the order the files
-//!   were written; a crash in the middle of `commit` can leave some files new and some old, but
-//!   never a truncated file. Write the file that marks a run as complete (e.g. `report.html`)
-//!   last. Files in the output directory that the run did not write are left alone, so pointing
-//!   `--out` at a directory holding other data is safe.
+//! * [`StagedDir`] collects a whole run's outputs in a hidden staging folder
+//!   `.ofmpc-stage-<pid>-<n>` inside the output folder and moves them into place only on
+//!   [`StagedDir::commit`]. Guarantees: the output folder is locked ([`DirLock`], a second run
+//!   fails at once and names the process holding it); if the run fails before `commit` (error,
+//!   panic, early return, SIGINT/SIGTERM), the output folder is exactly as it was (folders that
+//!   did not exist before and are still empty are removed again); `commit` first checks every
+//!   destination ([`check_destinations`]: no device, FIFO, socket, folder or symbolic link and
+//!   no input of the run is ever replaced) so that on a conflict nothing moves, and undoes the
+//!   moves already done if a later one fails. Only a crash in the middle of `commit` can leave
+//!   some files new and some old, never a truncated file; write the file that marks a run as
+//!   complete (e.g. `report.html`) last. Files in the output folder that the run does not write
+//!   are left alone, so pointing `--out` at a folder holding other data is safe. Stages of dead
+//!   processes are removed by the next run ([`remove_stale`]).
 
 use std::fs::{self, File, OpenOptions};
 use std::io::{self, Write};
@@ -101,6 +105,20 @@ where
         )
     })?;
     let dir = parent_dir(path);
+    // A rename would replace a device, FIFO, socket, folder or symbolic link at `path` by a
+    // regular file (as root, `/dev/null` included): refuse anything but a regular file.
+    if let Ok(m) = fs::symlink_metadata(path) {
+        if !m.file_type().is_file() {
+            return Err(io::Error::new(
+                io::ErrorKind::AlreadyExists,
+                format!(
+                    "{} is {}, not a regular file: it is never replaced",
+                    path.display(),
+                    describe(m.file_type())
+                ),
+            ));
+        }
+    }
     let stem = name.to_string_lossy();
     // create_new never reuses an existing file; on the (unlikely) collision take the next number.
     let (file, tmp) = loop {
@@ -148,47 +166,431 @@ fn check_relative(rel: &Path) -> io::Result<()> {
     }
 }
 
-/// An output directory whose files appear only when the whole run succeeded.
+/// Prefix of a staging folder: `.ofmpc-stage-<pid>-<n>` (the pid lets the next run tell a stage
+/// of a dead process from one of a live run).
+pub const STAGE_PREFIX: &str = ".ofmpc-stage-";
+
+/// Name of the lock file in an output folder; it holds the pid of the run writing there.
+pub const LOCK_NAME: &str = ".ofmpc-lock";
+
+/// Whether process `pid` is alive: `Some` on Linux (from `/proc`), `None` where this cannot be
+/// told (no `/proc`): then nothing is treated as stale.
+pub fn pid_alive(pid: u32) -> Option<bool> {
+    if cfg!(target_os = "linux") && Path::new("/proc/self").exists() {
+        Some(Path::new(&format!("/proc/{pid}")).exists())
+    } else {
+        None
+    }
+}
+
+/// Whether this process's user owns the file of `meta` (Unix; elsewhere always true). With
+/// `/proc` mounted `hidepid`, other users' processes are invisible: their stages and locks must
+/// not be taken for stale, so only our own user's are.
+fn owned_by_me(meta: &fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match fs::metadata("/proc/self") {
+            Ok(me) => me.uid() == meta.uid(),
+            Err(_) => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        true
+    }
+}
+
+/// The pid in a name `<prefix><pid>-...`.
+fn pid_of(name: &str) -> Option<u32> {
+    let rest = name
+        .strip_prefix(STAGE_PREFIX)
+        .or_else(|| name.strip_prefix(TMP_PREFIX))?;
+    rest.split('-').next()?.parse().ok()
+}
+
+/// Removes staging folders and temporary files in `dir` left by processes that no longer run
+/// (killed with SIGKILL, power loss); returns what was removed.
+pub fn remove_stale(dir: &Path) -> Vec<PathBuf> {
+    let mut removed = Vec::new();
+    let Ok(entries) = fs::read_dir(dir) else {
+        return removed;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(pid) = pid_of(&name.to_string_lossy()) else {
+            continue;
+        };
+        if pid == std::process::id() || pid_alive(pid) != Some(false) {
+            continue;
+        }
+        if !e.metadata().is_ok_and(|m| owned_by_me(&m)) {
+            continue;
+        }
+        let path = e.path();
+        let gone = match e.file_type() {
+            Ok(t) if t.is_dir() => fs::remove_dir_all(&path),
+            _ => fs::remove_file(&path),
+        };
+        if gone.is_ok() {
+            removed.push(path);
+        }
+    }
+    removed
+}
+
+/// Exclusive use of an output folder by one process: the file [`LOCK_NAME`] in it, holding the
+/// pid. Created atomically with its content (hard link of a complete temporary file), removed
+/// on drop. A lock whose process is dead (Linux: no `/proc/<pid>`) is stale and taken over.
+#[derive(Debug)]
+pub struct DirLock {
+    path: PathBuf,
+}
+
+impl DirLock {
+    /// Takes the lock of `dir` (which must exist). Fails at once if another live process holds
+    /// it, naming that process.
+    pub fn acquire(dir: &Path) -> io::Result<Self> {
+        let path = dir.join(LOCK_NAME);
+        let me = std::process::id();
+        for _ in 0..4 {
+            match create_with(&path, format!("{me}\n").as_bytes()) {
+                Ok(()) => return Ok(Self { path }),
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(with_path(e, "cannot create lock file", &path)),
+            }
+            let held = fs::read_to_string(&path).ok();
+            let pid = held.as_deref().and_then(|t| t.trim().parse::<u32>().ok());
+            let mine = fs::symlink_metadata(&path).is_ok_and(|m| owned_by_me(&m));
+            match pid.map(|p| (p, pid_alive(p))) {
+                Some((p, Some(false))) if mine => {
+                    // Stale: move it aside first (only one process wins the rename), then make
+                    // sure the moved file is the stale one and not a fresh lock of a competitor.
+                    let aside = tmp_sibling(dir, "stale-lock");
+                    if fs::rename(&path, &aside).is_ok() {
+                        let moved = fs::read_to_string(&aside).ok();
+                        if moved.as_deref().map(str::trim) == Some(p.to_string().as_str()) {
+                            let _ = fs::remove_file(&aside);
+                        } else {
+                            // A competitor's fresh lock: put it back and give up.
+                            let _ = fs::hard_link(&aside, &path);
+                            let _ = fs::remove_file(&aside);
+                            return Err(in_use(dir, &path, None));
+                        }
+                    }
+                }
+                Some((p, _)) => return Err(in_use(dir, &path, Some(p))),
+                None if held.is_none() => {} // removed meanwhile: try again
+                None => return Err(in_use(dir, &path, None)),
+            }
+        }
+        Err(in_use(dir, &path, None))
+    }
+
+    /// The lock file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.path);
+    }
+}
+
+/// The error of a folder locked by another process.
+fn in_use(dir: &Path, lock: &Path, pid: Option<u32>) -> io::Error {
+    let who = match pid {
+        Some(p) => format!("process {p} (another ofmpc run)"),
+        None => "another process".to_string(),
+    };
+    io::Error::new(
+        io::ErrorKind::WouldBlock,
+        format!(
+            "the output folder {} is in use by {who}: wait for it to finish or choose another \
+             --out (if no such process runs, delete {})",
+            dir.display(),
+            lock.display()
+        ),
+    )
+}
+
+/// Creates `path` with `bytes` as its content in one step: a complete temporary file is
+/// hard-linked to `path` (fails with `AlreadyExists` if something is there). Falls back to
+/// `create_new` + write on file systems without hard links.
+fn create_with(path: &Path, bytes: &[u8]) -> io::Result<()> {
+    let dir = parent_dir(path);
+    let tmp = tmp_sibling(dir, "lock");
+    fs::write(&tmp, bytes)?;
+    let linked = fs::hard_link(&tmp, path);
+    let _ = fs::remove_file(&tmp);
+    match linked {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Err(e),
+        Err(_) => {
+            let mut f = OpenOptions::new().write(true).create_new(true).open(path)?;
+            f.write_all(bytes)
+        }
+    }
+}
+
+/// What a file-system entry is, in words.
+fn describe(t: fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if t.is_char_device() {
+            return "a character device";
+        }
+        if t.is_block_device() {
+            return "a block device";
+        }
+        if t.is_fifo() {
+            return "a named pipe (FIFO)";
+        }
+        if t.is_socket() {
+            return "a socket";
+        }
+    }
+    if t.is_symlink() {
+        "a symbolic link"
+    } else if t.is_dir() {
+        "a folder"
+    } else if t.is_file() {
+        "a file"
+    } else {
+        "not a regular file"
+    }
+}
+
+/// Identity of a file (device and inode on Unix; the canonical path elsewhere).
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct FileId(#[cfg(unix)] (u64, u64), #[cfg(not(unix))] PathBuf);
+
+impl FileId {
+    fn of(path: &Path) -> Option<Self> {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            let m = fs::metadata(path).ok()?;
+            Some(Self((m.dev(), m.ino())))
+        }
+        #[cfg(not(unix))]
+        {
+            Some(Self(fs::canonicalize(path).ok()?))
+        }
+    }
+}
+
+/// An input of a run that its outputs must never replace (scenario, program, robot, drives).
+#[derive(Debug, Clone)]
+pub struct Input {
+    /// How the user named it (for the message).
+    pub path: PathBuf,
+    /// What it is, e.g. "the scenario file".
+    pub role: String,
+    id: Option<FileId>,
+}
+
+impl Input {
+    /// An input file; one that does not exist (a built-in program) protects nothing.
+    pub fn new(path: impl Into<PathBuf>, role: impl Into<String>) -> Self {
+        let path = path.into();
+        let id = FileId::of(&path);
+        Self {
+            path,
+            role: role.into(),
+            id,
+        }
+    }
+}
+
+/// Checks, before anything is written, that the files `rels` (relative paths) can be put into
+/// `target`: every existing destination is a regular file (not a folder, device, FIFO, socket
+/// or symbolic link) and none is one of `inputs`; every folder on the way is a real folder.
+/// All conflicts are listed in one error (kind `AlreadyExists`), so that the user can fix them
+/// at once. A missing `target` is fine (it will be created).
+pub fn check_destinations(target: &Path, rels: &[PathBuf], inputs: &[Input]) -> io::Result<()> {
+    let mut conflicts: Vec<String> = Vec::new();
+    let mut push = |c: String| {
+        if !conflicts.contains(&c) {
+            conflicts.push(c);
+        }
+    };
+    match fs::metadata(target) {
+        Ok(m) if !m.is_dir() => push(format!(
+            "{} is {}, not a folder",
+            target.display(),
+            describe(m.file_type())
+        )),
+        _ => {}
+    }
+    for rel in rels {
+        check_relative(rel)?;
+        let comps: Vec<Component> = rel.components().collect();
+        let mut cur = target.to_path_buf();
+        for (i, c) in comps.iter().enumerate() {
+            cur.push(c);
+            let last = i + 1 == comps.len();
+            let meta = match fs::symlink_metadata(&cur) {
+                Ok(m) => m,
+                Err(e) if e.kind() == io::ErrorKind::NotFound => break,
+                Err(e) => {
+                    push(format!("{}: {e}", cur.display()));
+                    break;
+                }
+            };
+            let t = meta.file_type();
+            if !last {
+                if !t.is_dir() {
+                    push(format!(
+                        "{} is {}, where this run writes a folder",
+                        cur.display(),
+                        describe(t)
+                    ));
+                    break;
+                }
+                continue;
+            }
+            if !t.is_file() {
+                let what = match fs::read_link(&cur) {
+                    Ok(to) => format!("a symbolic link to {}", to.display()),
+                    Err(_) => describe(t).to_string(),
+                };
+                push(format!(
+                    "{} is {what}, where this run writes a file (it is never replaced or \
+                     written through)",
+                    cur.display()
+                ));
+            } else if let Some(input) = inputs
+                .iter()
+                .find(|i| i.id.is_some() && i.id == FileId::of(&cur))
+            {
+                push(format!(
+                    "{} is {} of this run ({}); it is never overwritten",
+                    cur.display(),
+                    input.role,
+                    input.path.display()
+                ));
+            }
+        }
+    }
+    if conflicts.is_empty() {
+        return Ok(());
+    }
+    Err(io::Error::new(
+        io::ErrorKind::AlreadyExists,
+        format!(
+            "nothing was written to {}: {}. Move {} away or choose another output path",
+            target.display(),
+            conflicts.join("; "),
+            if conflicts.len() == 1 { "it" } else { "them" }
+        ),
+    ))
+}
+
+/// An output folder whose files appear only when the whole run succeeded.
 ///
-/// Files are written into a hidden staging directory `<target>/.ofmpc-tmp-<pid>-<n>-stage`
-/// (same file system as the target, so moving them is a rename) and moved into `target` by
-/// [`StagedDir::commit`]. Dropping a `StagedDir` without committing deletes the staging
-/// directory, and `target` too if this value created it and it is still empty.
-/// See the module documentation for the exact guarantee.
+/// [`StagedDir::new`] takes the folder's lock ([`DirLock`]: a second run into the same folder
+/// fails at once and names the process), removes staging folders of dead runs, and creates a
+/// hidden staging folder `<target>/.ofmpc-stage-<pid>-<n>` (same file system as the target,
+/// so moving files is a rename). Files are written there and moved into `target` by
+/// [`StagedDir::commit`], which first checks every destination ([`check_destinations`]): on a
+/// conflict nothing moves. Dropping a `StagedDir` without committing, or SIGINT/SIGTERM (see
+/// [`super::cleanup`]), removes the staging folder, the lock, and `target` too if this value
+/// created it and it is still empty.
 #[derive(Debug)]
 pub struct StagedDir {
     target: PathBuf,
     staging: PathBuf,
-    created_target: bool,
+    /// Folders this value created (the target and missing parents), outermost first.
+    created_dirs: Vec<PathBuf>,
     /// Relative paths in the order they were written (commit order); no duplicates.
     files: Vec<PathBuf>,
+    /// Files the run reads: never overwritten.
+    inputs: Vec<Input>,
+    lock: Option<DirLock>,
+    /// Registration ids in [`super::cleanup`].
+    cleanup_ids: Vec<u64>,
+    /// Stale staging folders of dead runs removed by [`StagedDir::new`].
+    removed_stale: Vec<PathBuf>,
     done: bool,
 }
 
 impl StagedDir {
-    /// Prepares `target` (created with its parents if missing) and an empty staging directory.
+    /// Prepares `target` (created with its parents if missing), takes its lock, removes stale
+    /// stages of dead runs and creates an empty staging folder. `target` must be a folder (a
+    /// symbolic link to one is followed: the caller says so).
     pub fn new(target: &Path) -> io::Result<Self> {
-        let created_target = !target.exists();
-        fs::create_dir_all(target)
-            .map_err(|e| with_path(e, "cannot create output directory", target))?;
+        if let Ok(m) = fs::metadata(target) {
+            if !m.is_dir() {
+                return Err(io::Error::new(
+                    io::ErrorKind::AlreadyExists,
+                    format!(
+                        "the output folder {} is {}, not a folder: choose another output path",
+                        target.display(),
+                        describe(m.file_type())
+                    ),
+                ));
+            }
+        }
+        let mut reg = super::cleanup::lock();
+        let mut cleanup_ids = Vec::new();
+        // Every folder this creates, outermost first; registered so that they go on a signal.
+        let mut created_dirs: Vec<PathBuf> = target
+            .ancestors()
+            .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+            .map(Path::to_path_buf)
+            .collect();
+        created_dirs.reverse();
+        for d in &created_dirs {
+            cleanup_ids.push(super::cleanup::register_empty_dir(&mut reg, d.clone()));
+        }
+        let fail = |reg: &mut Vec<_>, ids: &[u64], e: io::Error| {
+            super::cleanup::unregister(reg, ids);
+            for d in created_dirs.iter().rev() {
+                let _ = fs::remove_dir(d);
+            }
+            e
+        };
+        if let Err(e) = fs::create_dir_all(target) {
+            let e = with_path(e, "cannot create output directory", target);
+            return Err(fail(&mut reg, &cleanup_ids, e));
+        }
+        let lock = match DirLock::acquire(target) {
+            Ok(l) => l,
+            Err(e) => return Err(fail(&mut reg, &cleanup_ids, e)),
+        };
+        cleanup_ids.push(super::cleanup::register_file(
+            &mut reg,
+            lock.path().to_path_buf(),
+        ));
+        let removed_stale = remove_stale(target);
         let staging = loop {
-            let s = tmp_sibling(target, "stage");
+            let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+            let s = target.join(format!("{STAGE_PREFIX}{}-{n}", std::process::id()));
             match fs::create_dir(&s) {
                 Ok(()) => break s,
                 Err(e) if e.kind() == io::ErrorKind::AlreadyExists => continue,
                 Err(e) => {
-                    if created_target {
-                        let _ = fs::remove_dir(target);
-                    }
-                    return Err(with_path(e, "cannot create staging directory", &s));
+                    drop(lock);
+                    let e = with_path(e, "cannot create staging directory", &s);
+                    return Err(fail(&mut reg, &cleanup_ids, e));
                 }
             }
         };
+        cleanup_ids.push(super::cleanup::register_tree(&mut reg, staging.clone()));
         Ok(Self {
             target: target.to_path_buf(),
             staging,
-            created_target,
+            created_dirs: created_dirs.clone(),
             files: Vec::new(),
+            inputs: Vec::new(),
+            lock: Some(lock),
+            cleanup_ids,
+            removed_stale,
             done: false,
         })
     }
@@ -208,6 +610,21 @@ impl StagedDir {
         &self.files
     }
 
+    /// Staging folders of dead runs that [`StagedDir::new`] removed.
+    pub fn removed_stale(&self) -> &[PathBuf] {
+        &self.removed_stale
+    }
+
+    /// Declares the files this run reads: [`StagedDir::commit`] refuses to replace any of them.
+    pub fn protect(&mut self, inputs: impl IntoIterator<Item = Input>) {
+        self.inputs.extend(inputs);
+    }
+
+    /// Checks planned destinations now (before a long computation), like `commit` will.
+    pub fn check(&self, rels: &[PathBuf]) -> io::Result<()> {
+        check_destinations(&self.target, rels, &self.inputs)
+    }
+
     /// Stages `bytes` as `rel` (a relative path, subdirectories allowed). Writing the same `rel`
     /// twice replaces the staged content; it keeps its first position in the commit order.
     pub fn write(&mut self, rel: impl AsRef<Path>, bytes: &[u8]) -> io::Result<()> {
@@ -224,6 +641,9 @@ impl StagedDir {
         check_relative(rel)?;
         let dest = self.staging.join(rel);
         let dir = parent_dir(&dest);
+        // Held while writing: a signal handler waits, so it cannot remove the staging folder
+        // under this write and have it recreated by `create_dir_all`.
+        let _reg = super::cleanup::lock();
         fs::create_dir_all(dir).map_err(|e| with_path(e, "cannot create directory", dir))?;
         write_atomic_with(&dest, fill)?;
         if !self.files.iter().any(|f| f == rel) {
@@ -232,26 +652,52 @@ impl StagedDir {
         Ok(())
     }
 
-    /// Moves every staged file into the target directory (one atomic rename per file, in
-    /// write order), fsyncs the directories and removes the staging directory.
+    /// Checks every destination ([`check_destinations`]; on a conflict nothing moves and the
+    /// error lists them all), then moves every staged file into the target directory (one
+    /// atomic rename per file, in write order), fsyncs the directories, removes the staging
+    /// directory and releases the lock. A signal arriving meanwhile waits for the end.
+    ///
+    /// If a move fails anyway (an I/O error, a folder created meanwhile by another program),
+    /// the moves already done are undone: each replaced file was first hard-linked (or copied)
+    /// into the staging folder and is put back, new files and folders are removed, so the target
+    /// is as before. Only a crash in the middle can leave a mixture (never a truncated file).
     pub fn commit(mut self) -> io::Result<()> {
+        let mut reg = super::cleanup::lock();
+        check_destinations(&self.target, &self.files, &self.inputs)?;
+        let backups = self.staging.join(".ofmpc-replaced");
+        let mut undo = Undo::default();
         let mut dirs_to_sync: Vec<PathBuf> = vec![self.target.clone()];
-        for rel in &self.files {
+        for (i, rel) in self.files.iter().enumerate() {
             let from = self.staging.join(rel);
             let to = self.target.join(rel);
             let dir = parent_dir(&to).to_path_buf();
-            fs::create_dir_all(&dir).map_err(|e| with_path(e, "cannot create directory", &dir))?;
-            if to.is_dir() {
+            let step = (|| {
+                for d in missing_dirs(&dir) {
+                    fs::create_dir(&d).map_err(|e| with_path(e, "cannot create directory", &d))?;
+                    undo.dirs.push(d);
+                }
+                let backup = if to.exists() {
+                    let b = backups.join(rel);
+                    fs::create_dir_all(parent_dir(&b))?;
+                    fs::hard_link(&to, &b)
+                        .or_else(|_| fs::copy(&to, &b).map(|_| ()))
+                        .map_err(|e| with_path(e, "cannot keep a copy of", &to))?;
+                    Some(b)
+                } else {
+                    None
+                };
+                fault_injection(i)?;
+                fs::rename(&from, &to).map_err(|e| with_path(e, "cannot move into place", &to))?;
+                undo.moved.push((to.clone(), backup));
+                Ok::<(), io::Error>(())
+            })();
+            if let Err(e) = step {
+                undo.run();
                 return Err(io::Error::new(
-                    io::ErrorKind::AlreadyExists,
-                    format!(
-                        "cannot write {}: a directory of that name exists; move it away or \
-                         choose another output directory",
-                        to.display()
-                    ),
+                    e.kind(),
+                    format!("{e}; the files moved before were put back, nothing changed"),
                 ));
             }
-            fs::rename(&from, &to).map_err(|e| with_path(e, "cannot move into place", &to))?;
             if !dirs_to_sync.contains(&dir) {
                 dirs_to_sync.push(dir);
             }
@@ -260,18 +706,75 @@ impl StagedDir {
             sync_dir(d);
         }
         self.done = true;
-        fs::remove_dir_all(&self.staging)
-            .map_err(|e| with_path(e, "cannot remove staging directory", &self.staging))
+        super::cleanup::unregister(&mut reg, &self.cleanup_ids);
+        let removed = fs::remove_dir_all(&self.staging)
+            .map_err(|e| with_path(e, "cannot remove staging directory", &self.staging));
+        self.lock = None;
+        drop(reg);
+        removed
     }
+}
+
+/// Folders on the way to `dir` that do not exist yet, outermost first.
+fn missing_dirs(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = dir
+        .ancestors()
+        .take_while(|a| !a.as_os_str().is_empty() && !a.exists())
+        .map(Path::to_path_buf)
+        .collect();
+    v.reverse();
+    v
+}
+
+/// What [`StagedDir::commit`] did so far, to undo it on a failure.
+#[derive(Default)]
+struct Undo {
+    /// Destination and the kept copy of the file it replaced (None: it was new).
+    moved: Vec<(PathBuf, Option<PathBuf>)>,
+    /// Folders created, outermost first.
+    dirs: Vec<PathBuf>,
+}
+
+impl Undo {
+    fn run(&mut self) {
+        for (to, backup) in self.moved.drain(..).rev() {
+            let _ = match backup {
+                Some(b) => fs::rename(&b, &to),
+                None => fs::remove_file(&to),
+            };
+        }
+        for d in self.dirs.drain(..).rev() {
+            let _ = fs::remove_dir(&d);
+        }
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Test hook: the commit step (index) that fails, on this thread only.
+    static FAIL_AT: std::cell::Cell<Option<usize>> = const { std::cell::Cell::new(None) };
+}
+
+/// Test hook: fails step `i` of a commit when a test asked for it (no-op in the binary).
+fn fault_injection(i: usize) -> io::Result<()> {
+    #[cfg(test)]
+    if FAIL_AT.with(|f| f.get()) == Some(i) {
+        return Err(io::Error::other("injected failure"));
+    }
+    let _ = i;
+    Ok(())
 }
 
 impl Drop for StagedDir {
     fn drop(&mut self) {
+        let mut reg = super::cleanup::lock();
+        super::cleanup::unregister(&mut reg, &self.cleanup_ids);
         if !self.done {
             let _ = fs::remove_dir_all(&self.staging);
-            if self.created_target {
-                // Succeeds only if nothing else was put there meanwhile.
-                let _ = fs::remove_dir(&self.target);
+            self.lock = None;
+            // Each succeeds only if nothing else was put there meanwhile.
+            for d in self.created_dirs.iter().rev() {
+                let _ = fs::remove_dir(d);
             }
         }
     }
@@ -459,5 +962,159 @@ mod tests {
         s.commit().unwrap();
         assert_eq!(fs::read(tmp.path().join("a")).unwrap(), b"3");
         assert_eq!(names(tmp.path()), vec!["a", "b"]);
+    }
+
+    /// A pid that is not running: a child that has exited (and been reaped).
+    fn dead_pid() -> u32 {
+        let mut c = std::process::Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        c.wait().unwrap();
+        pid
+    }
+
+    #[test]
+    fn commit_checks_every_destination_before_the_first_move() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        let mut s = StagedDir::new(out).unwrap();
+        s.write("a.csv", b"a").unwrap();
+        s.write("run/b.csv", b"b").unwrap();
+        s.write("c.csv", b"c").unwrap();
+        // Conflicts appear while the run computes: a file where the run folder goes, a folder
+        // where the last file goes.
+        fs::write(out.join("run"), b"not a folder").unwrap();
+        fs::create_dir(out.join("c.csv")).unwrap();
+        let e = s.commit().unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains("run is a file, where this run writes a folder"),
+            "{msg}"
+        );
+        assert!(
+            msg.contains("c.csv is a folder, where this run writes a file"),
+            "{msg}"
+        );
+        // Nothing moved (a.csv, first in order, has no conflict and still did not appear), and
+        // the stage and lock are gone.
+        assert_eq!(names(out), vec!["c.csv", "run"]);
+        assert_eq!(fs::read(out.join("run")).unwrap(), b"not a folder");
+    }
+
+    #[test]
+    fn inputs_are_protected_at_commit() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        fs::write(out.join("scenario.toml"), b"# mine").unwrap();
+        let mut s = StagedDir::new(out).unwrap();
+        s.protect([Input::new(out.join("scenario.toml"), "the scenario file")]);
+        s.write("x", b"x").unwrap();
+        s.write("scenario.toml", b"generated").unwrap();
+        let e = s.commit().unwrap_err().to_string();
+        assert!(e.contains("is the scenario file of this run"), "{e}");
+        assert_eq!(fs::read(out.join("scenario.toml")).unwrap(), b"# mine");
+        assert_eq!(names(out), vec!["scenario.toml"]);
+    }
+
+    #[test]
+    fn the_lock_is_exclusive_names_its_holder_and_stale_locks_are_taken_over() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        let first = StagedDir::new(out).unwrap();
+        let e = StagedDir::new(out).unwrap_err();
+        assert_eq!(e.kind(), io::ErrorKind::WouldBlock);
+        assert!(
+            e.to_string()
+                .contains(&format!("in use by process {}", std::process::id())),
+            "{e}"
+        );
+        drop(first);
+        assert!(names(out).is_empty());
+        // A lock of a dead process is stale.
+        if pid_alive(1) == Some(true) {
+            fs::write(out.join(LOCK_NAME), format!("{}\n", dead_pid())).unwrap();
+            let s = StagedDir::new(out).unwrap();
+            assert_eq!(
+                fs::read_to_string(out.join(LOCK_NAME)).unwrap().trim(),
+                std::process::id().to_string()
+            );
+            drop(s);
+            assert!(names(out).is_empty());
+        }
+        // An unreadable lock (no pid) is respected, with a hint.
+        fs::write(out.join(LOCK_NAME), b"").unwrap();
+        let e = StagedDir::new(out).unwrap_err().to_string();
+        assert!(
+            e.contains("another process") && e.contains(LOCK_NAME),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn stale_stages_of_dead_processes_are_removed() {
+        if pid_alive(1) != Some(true) {
+            return; // no /proc: nothing is ever treated as stale
+        }
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        let dead = dead_pid();
+        let me = std::process::id();
+        fs::create_dir_all(out.join(format!("{STAGE_PREFIX}{dead}-7/run"))).unwrap();
+        fs::write(out.join(format!("{TMP_PREFIX}{dead}-1-a.csv")), b"x").unwrap();
+        fs::create_dir(out.join(format!("{STAGE_PREFIX}{me}-99"))).unwrap();
+        fs::write(out.join(".ofmpc-stage-notapid"), b"user file").unwrap();
+        let s = StagedDir::new(out).unwrap();
+        assert_eq!(s.removed_stale().len(), 2);
+        drop(s);
+        assert_eq!(
+            names(out),
+            vec![
+                format!("{STAGE_PREFIX}{me}-99"),
+                ".ofmpc-stage-notapid".into()
+            ]
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn write_atomic_never_replaces_a_link_or_special_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let real = tmp.path().join("real.csv");
+        fs::write(&real, b"precious").unwrap();
+        let link = tmp.path().join("link.csv");
+        std::os::unix::fs::symlink(&real, &link).unwrap();
+        let e = write_atomic(&link, b"new").unwrap_err().to_string();
+        assert!(e.contains("is a symbolic link, not a regular file"), "{e}");
+        assert!(fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(fs::read(&real).unwrap(), b"precious");
+        let sock = tmp.path().join("s.sock");
+        let _l = std::os::unix::net::UnixListener::bind(&sock).unwrap();
+        let e = write_atomic(&sock, b"new").unwrap_err().to_string();
+        assert!(e.contains("is a socket"), "{e}");
+        assert_eq!(names(tmp.path()), vec!["link.csv", "real.csv", "s.sock"]);
+    }
+
+    #[test]
+    fn a_failing_move_is_undone() {
+        let tmp = tempfile::tempdir().unwrap();
+        let out = tmp.path();
+        fs::write(out.join("a.csv"), b"old a").unwrap();
+        fs::write(out.join("mine.txt"), b"user").unwrap();
+        let mut s = StagedDir::new(out).unwrap();
+        s.write("a.csv", b"new a").unwrap();
+        s.write("run/b.csv", b"new b").unwrap();
+        s.write("c.csv", b"new c").unwrap();
+        FAIL_AT.with(|f| f.set(Some(2)));
+        let e = s.commit().unwrap_err().to_string();
+        FAIL_AT.with(|f| f.set(None));
+        assert!(
+            e.contains("injected failure") && e.contains("put back"),
+            "{e}"
+        );
+        // a.csv replaced and b.csv (in a new folder) moved in before the failure: both undone.
+        assert_eq!(names(out), vec!["a.csv", "mine.txt"]);
+        assert_eq!(fs::read(out.join("a.csv")).unwrap(), b"old a");
     }
 }

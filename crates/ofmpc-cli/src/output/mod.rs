@@ -5,5 +5,7 @@
 //! * [`report`]: one self-contained HTML page with tables and figures.
 
 pub mod atomic;
+pub mod cleanup;
+pub mod console;
 pub mod plot;
 pub mod report;

@@ -671,15 +671,22 @@ fn draw_figure<DB: DrawingBackend>(
     } else {
         let (top, body) = root.split_vertically(TITLE_HEIGHT);
         let (w, h) = top.dim_in_pixel();
-        let style = TextStyle::from((FONT_FAMILY, 22).into_font())
-            .color(&BLACK)
-            .pos(Pos::new(HPos::Center, VPos::Center));
-        top.draw(&Text::new(
-            fig.title.as_str(),
-            (w as i32 / 2, h as i32 / 2),
-            style,
-        ))
-        .map_err(err)?;
+        let fit = fit_text(
+            &|t, size| text_width(&top, t, size),
+            &fig.title,
+            fit_width(w),
+            &FIGURE_TITLE_SIZES,
+        );
+        let n = fit.lines.len() as i32;
+        let line_h = (fit.size * 1.15).round() as i32;
+        for (i, line) in fit.lines.iter().enumerate() {
+            let style = TextStyle::from((FONT_FAMILY, fit.size).into_font())
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, VPos::Center));
+            let y = h as i32 / 2 + (2 * i as i32 - (n - 1)) * line_h / 2;
+            top.draw(&Text::new(line.as_str(), (w as i32 / 2, y), style))
+                .map_err(err)?;
+        }
         body
     };
     let (rows, cols) = fig.grid();
@@ -969,6 +976,213 @@ fn label_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, labels: &[Stri
         .unwrap_or(0)
 }
 
+/// Font sizes tried for a figure title, one line each, largest first; then [`TWO_LINE_SIZES`].
+const FIGURE_TITLE_SIZES: [TitleSize; 9] = [
+    TitleSize::One(22.0),
+    TitleSize::One(21.0),
+    TitleSize::One(20.0),
+    TitleSize::One(19.0),
+    TitleSize::One(18.0),
+    TitleSize::Two(18.0),
+    TitleSize::Two(16.0),
+    TitleSize::Two(14.0),
+    TitleSize::Two(12.0),
+];
+
+/// Font sizes tried for a panel title (one line), largest first.
+const PANEL_TITLE_SIZES: [TitleSize; 6] = [
+    TitleSize::One(16.0),
+    TitleSize::One(15.0),
+    TitleSize::One(14.0),
+    TitleSize::One(13.0),
+    TitleSize::One(12.0),
+    TitleSize::One(11.0),
+];
+
+/// A candidate layout of a title: one line or two lines at a font size (px).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TitleSize {
+    /// One line at this size.
+    One(f64),
+    /// Up to two lines (broken at a space) at this size.
+    Two(f64),
+}
+
+/// A title laid out to fit a width.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FittedText {
+    /// Font size (px).
+    pub size: f64,
+    /// One or two lines; the text is shortened with "…" only if no candidate fits.
+    pub lines: Vec<String>,
+}
+
+/// The width (px) available for a title in an area `w` px wide: 16 px margin on each side, and
+/// 4 % less for fonts that render a little wider than the embedded one (SVG in a browser).
+fn fit_width(w: u32) -> u32 {
+    (f64::from(w.saturating_sub(32)) * 0.96) as u32
+}
+
+/// Width in pixels of `text` in the embedded font at `size` px.
+fn text_width<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, text: &str, size: f64) -> u32 {
+    area.estimate_text_size(text, &TextStyle::from((FONT_FAMILY, size).into_font()))
+        .map(|(w, _)| w)
+        .unwrap_or(u32::MAX)
+}
+
+/// The layout rule that keeps titles inside their area: the first candidate of `sizes` whose
+/// lines (`measure(text, size)` px wide) all fit in `max_w`; a two-line candidate breaks at the
+/// space that makes the longer line shortest. If none fits, the last candidate's size is used
+/// and the text shortened with "…" (never clipped).
+pub fn fit_text(
+    measure: &dyn Fn(&str, f64) -> u32,
+    text: &str,
+    max_w: u32,
+    sizes: &[TitleSize],
+) -> FittedText {
+    for cand in sizes {
+        match *cand {
+            TitleSize::One(size) => {
+                if measure(text, size) <= max_w {
+                    return FittedText {
+                        size,
+                        lines: vec![text.to_string()],
+                    };
+                }
+            }
+            TitleSize::Two(size) => {
+                let best = text
+                    .match_indices(' ')
+                    .map(|(i, _)| (text[..i].trim_end(), text[i + 1..].trim_start()))
+                    .map(|(a, b)| (measure(a, size).max(measure(b, size)), a, b))
+                    .min_by_key(|(w, _, _)| *w);
+                if let Some((w, a, b)) = best {
+                    if w <= max_w {
+                        return FittedText {
+                            size,
+                            lines: vec![a.to_string(), b.to_string()],
+                        };
+                    }
+                }
+            }
+        }
+    }
+    let size = match sizes.last() {
+        Some(TitleSize::One(s) | TitleSize::Two(s)) => *s,
+        None => 12.0,
+    };
+    let chars: Vec<char> = text.chars().collect();
+    let mut n = chars.len();
+    while n > 0 {
+        let t: String = chars[..n].iter().collect::<String>() + "…";
+        if measure(&t, size) <= max_w {
+            return FittedText {
+                size,
+                lines: vec![t],
+            };
+        }
+        n -= 1;
+    }
+    FittedText {
+        size,
+        lines: vec![String::new()],
+    }
+}
+
+/// Height of one row of the legend strip above a 2-D plot (px).
+const LEGEND_ROW: u32 = 17;
+
+/// Width of a legend entry's sample (line, dashes or marker) and the gap after it (px).
+const LEGEND_SAMPLE: u32 = 26;
+
+/// Space between two legend entries on a row (px).
+const LEGEND_GAP: u32 = 16;
+
+/// The layout rule that keeps legends off the data: a 2-D panel's legend is a strip of rows
+/// above its plot area, entries placed left to right and wrapped to the next row when a row is
+/// full, each row centred. Returns each entry's (row, x offset) and the number of rows, for
+/// entries `widths` px wide in a strip `width` px wide.
+pub fn legend_rows(widths: &[u32], width: u32) -> (Vec<(u32, u32)>, u32) {
+    let mut rows: Vec<Vec<(usize, u32)>> = Vec::new();
+    let mut x = 0;
+    for (i, &w) in widths.iter().enumerate() {
+        if rows.is_empty() || (x > 0 && x + w > width) {
+            rows.push(Vec::new());
+            x = 0;
+        }
+        if let Some(row) = rows.last_mut() {
+            row.push((i, x));
+        }
+        x += w + LEGEND_GAP;
+    }
+    let mut pos = vec![(0, 0); widths.len()];
+    for (r, row) in rows.iter().enumerate() {
+        let used = row.last().map_or(0, |&(i, x)| x + widths[i]);
+        let left = width.saturating_sub(used) / 2;
+        for &(i, x) in row {
+            pos[i] = (r as u32, left + x);
+        }
+    }
+    (pos, rows.len() as u32)
+}
+
+/// Draws the legend strip of a 2-D panel (entries of labelled series; a series without a
+/// drawable point gets "(no data)") at the top of `area`; returns the area left for the plot.
+fn legend_strip<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(String, SeriesStyle, RGBColor)],
+    fig: &Figure,
+) -> Result<DrawingArea<DB, Shift>, PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
+    if entries.is_empty() {
+        return Ok(area.clone());
+    }
+    let (w, _) = area.dim_in_pixel();
+    let max_text = w.saturating_sub(LEGEND_SAMPLE + 8);
+    let texts: Vec<String> = entries
+        .iter()
+        .map(|(label, _, _)| {
+            fit_text(
+                &|t, size| text_width(area, t, size),
+                label,
+                max_text,
+                &[TitleSize::One(12.0)],
+            )
+            .lines
+            .join(" ")
+        })
+        .collect();
+    let widths: Vec<u32> = texts
+        .iter()
+        .map(|t| LEGEND_SAMPLE + text_width(area, t, 12.0))
+        .collect();
+    let (pos, rows) = legend_rows(&widths, w);
+    let (strip, rest) = area.split_vertically(rows * LEGEND_ROW + 4);
+    for ((text, &(row, x)), (_, style, c)) in texts.iter().zip(&pos).zip(entries) {
+        let (x, y) = (x as i32, (row * LEGEND_ROW + LEGEND_ROW / 2 + 2) as i32);
+        let line = c.stroke_width(2);
+        match style {
+            SeriesStyle::Markers => strip.draw(&Circle::new((x + 10, y), 3, c.filled())),
+            SeriesStyle::Line => strip.draw(&PathElement::new(vec![(x, y), (x + 20, y)], line)),
+            SeriesStyle::Dashed => strip
+                .draw(&PathElement::new(vec![(x, y), (x + 8, y)], line))
+                .and_then(|_| strip.draw(&PathElement::new(vec![(x + 12, y), (x + 20, y)], line))),
+        }
+        .map_err(err)?;
+        let font = TextStyle::from((FONT_FAMILY, 12).into_font())
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        strip
+            .draw(&Text::new(
+                text.as_str(),
+                (x + LEGEND_SAMPLE as i32, y),
+                font,
+            ))
+            .map_err(err)?;
+    }
+    Ok(rest)
+}
+
 /// Draws one panel: margins and caption, then a 2-D or 3-D chart.
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
@@ -983,8 +1197,14 @@ fn draw_panel<DB: DrawingBackend>(
     let inner = if panel.title.is_empty() {
         inner
     } else {
+        let fit = fit_text(
+            &|t, size| text_width(&inner, t, size),
+            &panel.title,
+            fit_width(inner.dim_in_pixel().0),
+            &PANEL_TITLE_SIZES,
+        );
         inner
-            .titled(panel.title.as_str(), (FONT_FAMILY, 16))
+            .titled(fit.lines.join(" ").as_str(), (FONT_FAMILY, fit.size))
             .map_err(err)?
     };
     match &panel.three_d {
@@ -1090,6 +1310,21 @@ fn draw_panel_2d<DB: DrawingBackend>(
         .iter()
         .map(|s| split_runs(s, panel.log_y))
         .collect();
+    let entries: Vec<(String, SeriesStyle, RGBColor)> = panel
+        .series
+        .iter()
+        .zip(&runs)
+        .filter(|(s, _)| !s.label.is_empty())
+        .map(|(s, r)| {
+            let label = if r.iter().any(|r| !r.is_empty()) {
+                s.label.clone()
+            } else {
+                format!("{} (no data)", s.label)
+            };
+            (label, s.style, color(s.color))
+        })
+        .collect();
+    let area = &legend_strip(area, &entries, fig)?;
     let points = || runs.iter().flatten().flatten();
     let x_data = min_max(points().map(|p| p.0));
     let y_data = min_max(points().map(|p| p.1));
@@ -1207,7 +1442,8 @@ where
     }
 }
 
-/// Draws the prepared series and the legend into a chart with an f64 x axis.
+/// Draws the prepared series into a chart with an f64 x axis (the legend is drawn above the
+/// plot by [`legend_strip`]).
 fn draw_series<'a, DB, Y>(
     chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
     prepared: &[Prepared],
@@ -1219,27 +1455,11 @@ where
     Y: Ranged<ValueType = f64>,
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
-    let mut any_label = false;
     for p in prepared {
         let s = p.series;
         let c = color(s.color);
         let line = c.stroke_width(2);
         let fill = c.filled();
-        let has_data = p.runs.iter().any(|r| !r.is_empty());
-        let label = if has_data {
-            s.label.clone()
-        } else {
-            format!("{} (no data)", s.label)
-        };
-        // Every element is drawn through `draw_series`; the annotation of the first call carries
-        // the legend entry.
-        let mut labelled = false;
-        let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
-            if !labelled && !s.label.is_empty() {
-                legend_entry(anno, label.clone(), s.style, c);
-                labelled = true;
-            }
-        };
         match s.style {
             SeriesStyle::Markers => {
                 let mut seen = HashSet::new();
@@ -1250,49 +1470,23 @@ where
                     .copied()
                     .filter(|pt| seen.insert(chart.backend_coord(pt)))
                     .collect();
-                let anno = chart
+                chart
                     .draw_series(pts.into_iter().map(|pt| Circle::new(pt, 3, fill)))
                     .map_err(err)?;
-                annotate(anno);
             }
             SeriesStyle::Line | SeriesStyle::Dashed => {
-                if p.runs.is_empty() {
-                    let anno = chart
-                        .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-                        .map_err(err)?;
-                    annotate(anno);
-                }
                 for run in &p.runs {
                     if run.len() == 1 {
-                        let anno = chart
+                        chart
                             .draw_series(run.iter().map(|&pt| Circle::new(pt, 2, fill)))
                             .map_err(err)?;
-                        annotate(anno);
                         continue;
                     }
                     let run = reduce_run(chart, run);
-                    let anno = draw_line_run(chart, run, s.style, mode, line).map_err(err)?;
-                    annotate(anno);
+                    draw_line_run(chart, run, s.style, mode, line).map_err(err)?;
                 }
             }
         }
-        any_label |= !s.label.is_empty();
-    }
-    if any_label {
-        let labels: Vec<&str> = prepared.iter().map(|p| p.series.label.as_str()).collect();
-        let pixels = prepared
-            .iter()
-            .flat_map(|p| p.runs.iter().flatten())
-            .map(|pt| chart.backend_coord(pt));
-        let position = legend_position(chart.plotting_area(), &labels, pixels);
-        chart
-            .configure_series_labels()
-            .position(position)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(190, 190, 190))
-            .label_font((FONT_FAMILY, 12))
-            .draw()
-            .map_err(err)?;
     }
     Ok(())
 }
@@ -1347,53 +1541,6 @@ fn legend_size<DB: DrawingBackend, CT: CoordTranslate>(
         .max()
         .unwrap_or(0);
     Some((text_w + 50, 16 * labelled.len() as u32 + 20))
-}
-
-/// The legend corner of the plotting `area` covering the fewest of the drawn points (`pixels`,
-/// backend coordinates); ties: upper right, upper left, lower right, lower left, upper middle,
-/// lower middle. `labels` are the series labels (empty ones have no entry). The legend box size
-/// is estimated like plotters lays it out (text block + 30 px sample + 10 px margins, 5 px from
-/// the edges).
-fn legend_position<DB: DrawingBackend, CT: CoordTranslate>(
-    area: &DrawingArea<DB, CT>,
-    labels: &[&str],
-    pixels: impl Iterator<Item = (i32, i32)>,
-) -> SeriesLabelPosition {
-    let Some((bw, bh)) = legend_size(area, labels) else {
-        return SeriesLabelPosition::UpperRight;
-    };
-    let (bw, bh) = (bw as i32, bh as i32);
-    let (x0, y0) = area.get_base_pixel();
-    let (w, h) = area.dim_in_pixel();
-    let (w, h) = (w as i32, h as i32);
-    let left = (x0 + 5, x0 + 5 + bw);
-    let right = (x0 + w - 5 - bw, x0 + w - 5);
-    let middle = (x0 + (w - bw) / 2, x0 + (w + bw) / 2);
-    let top = (y0 + 5, y0 + 5 + bh);
-    let bottom = (y0 + h - 5 - bh, y0 + h - 5);
-    let candidates = [
-        (SeriesLabelPosition::UpperRight, right, top),
-        (SeriesLabelPosition::UpperLeft, left, top),
-        (SeriesLabelPosition::LowerRight, right, bottom),
-        (SeriesLabelPosition::LowerLeft, left, bottom),
-        (SeriesLabelPosition::UpperMiddle, middle, top),
-        (SeriesLabelPosition::LowerMiddle, middle, bottom),
-    ];
-    let mut counts = [0usize; 6];
-    for (px, py) in pixels {
-        for (k, (_, (xa, xb), (ya, yb))) in candidates.iter().enumerate() {
-            if (*xa..=*xb).contains(&px) && (*ya..=*yb).contains(&py) {
-                counts[k] += 1;
-            }
-        }
-    }
-    let best = (0..candidates.len())
-        .min_by_key(|&k| (counts[k], k))
-        .unwrap_or(0);
-    match candidates.get(best) {
-        Some((pos, _, _)) => pos.clone(),
-        None => SeriesLabelPosition::UpperRight,
-    }
 }
 
 /// Splits a 3-D series into runs of valid points (all coordinates finite and within ±[`HUGE`]).
@@ -2246,5 +2393,56 @@ mod tests {
             }
         }
         assert_eq!(color(PALETTE.len() + 2), color(2));
+    }
+
+    /// A monospace measure: 0.5 × size px per character.
+    fn mono(t: &str, size: f64) -> u32 {
+        (t.chars().count() as f64 * size * 0.5).ceil() as u32
+    }
+
+    #[test]
+    fn titles_fit_by_shrinking_then_wrapping_then_shortening() {
+        let sizes = FIGURE_TITLE_SIZES;
+        // Fits at the largest size.
+        let f = fit_text(&mono, "short", 100, &sizes);
+        assert_eq!((f.size, f.lines.clone()), (22.0, vec!["short".to_string()]));
+        // 40 chars: 440 px at 22, 360 px at 18: one line at the first size that fits.
+        let t = "a".repeat(19) + " " + &"b".repeat(20);
+        let f = fit_text(&mono, &t, 380, &sizes);
+        assert_eq!(f.size, 19.0);
+        assert!(mono(&f.lines[0], f.size) <= 380);
+        // Too long for one line even at 18: two lines, broken at the space, each fitting.
+        let f = fit_text(&mono, &t, 200, &sizes);
+        assert_eq!(f.lines, vec!["a".repeat(19), "b".repeat(20)]);
+        assert!(f.lines.iter().all(|l| mono(l, f.size) <= 200));
+        assert_eq!(f.lines.join(" "), t);
+        // No space and too long: shortened with an ellipsis, within the width.
+        let long = "x".repeat(200);
+        let f = fit_text(&mono, &long, 300, &sizes);
+        assert_eq!(f.lines.len(), 1);
+        assert!(f.lines[0].ends_with('…') && mono(&f.lines[0], f.size) <= 300);
+        assert!(
+            mono(&(f.lines[0].clone() + "x"), f.size) > 300,
+            "shortened too much"
+        );
+    }
+
+    #[test]
+    fn legend_rows_wrap_and_never_exceed_the_width() {
+        let widths = [100, 120, 90, 300, 50];
+        let (pos, rows) = legend_rows(&widths, 400);
+        assert_eq!(rows, 2); // 100 + 120 + 90 (+ gaps) = 342; then 300 + 50
+        for (i, &(row, x)) in pos.iter().enumerate() {
+            assert!(x + widths[i] <= 400, "entry {i} at {x}");
+            // Entries on one row do not overlap.
+            for (j, &(row2, x2)) in pos.iter().enumerate().skip(i + 1) {
+                if row == row2 {
+                    assert!(x + widths[i] + LEGEND_GAP <= x2, "{i} and {j}");
+                }
+            }
+        }
+        assert_eq!(legend_rows(&[], 400).1, 0);
+        // An entry wider than the strip gets a row of its own.
+        assert_eq!(legend_rows(&[500, 10], 400).1, 2);
     }
 }
