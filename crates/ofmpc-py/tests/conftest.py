@@ -6,6 +6,7 @@ import os
 import pathlib
 import shutil
 import subprocess
+import sys
 
 import pytest
 
@@ -14,6 +15,11 @@ IRB140_DIR = REPO / "crates" / "ofmpc" / "robots" / "irb140"
 IRB140_URDF = IRB140_DIR / "irb140.urdf"
 IRB140_DRIVES = IRB140_DIR / "drives.toml"
 EXAMPLES = REPO / "examples" / "python"
+
+# The examples are modules of the tests (and of the Dask workers, which are new
+# processes: hence PYTHONPATH too).
+sys.path.insert(0, str(EXAMPLES))
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(EXAMPLES), os.environ.get("PYTHONPATH")]))
 
 
 def ofmpc_binary() -> pathlib.Path:
