@@ -1,11 +1,11 @@
 //! Python bindings of `ofmpc` (the extension module `ofmpc._ofmpc`; the
 //! package `ofmpc` in `python/ofmpc` re-exports it with docstrings and stubs).
 //!
-//! A thin layer over the public Rust API, one file per concept: [`errors`]
-//! (library errors → Python exceptions), [`arrays`] (numpy in and out),
-//! [`robot`] (model and rigid-body algorithms), [`plan`] (program → joint
-//! reference), [`controller`] (one predictive controller, step by step) and
-//! [`run`] (a whole scenario, as `ofmpc run` runs it).
+//! A thin layer over the public Rust API, one file per concept: `errors.rs`
+//! (library errors → Python exceptions), `arrays.rs` (numpy in and out),
+//! `robot.rs` (model and rigid-body algorithms), `plan.rs` (program → joint
+//! reference), `controller.rs` (one predictive controller, step by step) and
+//! `run.rs` (a whole scenario, as `ofmpc run` runs it).
 
 use pyo3::prelude::*;
 
