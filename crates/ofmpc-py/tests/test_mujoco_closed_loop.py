@@ -92,3 +92,24 @@ def test_mujoco_and_ofmpc_s_own_plant_agree(runs):
         mj = runs[r["controller"]].metrics["cartesian_error_rms_mm"]
         print(f"{r['controller']}: RMS Cartesian error ofmpc plant {r['cartesian_error_rms_mm']:.6g} mm, MuJoCo {mj:.6g} mm")
         assert abs(mj - r["cartesian_error_rms_mm"]) < 1e-4 * r["cartesian_error_rms_mm"]
+
+
+def test_the_example_script_prints_its_table():
+    """The script as a user runs it (short hold): one row per controller, the first
+    algorithm's steady error at round-off."""
+    import subprocess
+    import sys
+
+    from conftest import EXAMPLES
+
+    out = subprocess.run(
+        [sys.executable, str(EXAMPLES / "mujoco_closed_loop.py"), "--payload", "0.5", "--controllers", "usual,first", "--hold", "1"],
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+    print(out)
+    rows = {line.split()[0]: line.split()[1:] for line in out.splitlines()[2:]}
+    assert set(rows) == {"usual", "first"}
+    assert float(rows["first"][1]) < 1e-6  # steady Cartesian error (mm)
+    assert float(rows["usual"][1]) > 0.1  # 0.5 kg: the usual MPC's offset (about 0.17 mm)
