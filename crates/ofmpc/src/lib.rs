@@ -33,7 +33,7 @@
 //! assert!(metrics.steady_joint_error_max_rad.iter().all(|e| *e < 1e-9)); // offset-free
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-
+#![doc = include_str!("../docs/embedding.md")]
 #![warn(missing_docs)]
 // Index loops mirror the equations' subscripts (H_ij, C_ij, q_i); iterator
 // chains over several parallel arrays would read worse.

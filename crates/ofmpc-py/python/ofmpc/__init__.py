@@ -1,0 +1,135 @@
+"""ofmpc: offset-free model predictive control of industrial robots, from Python.
+
+The computation runs in Rust (the ``ofmpc`` crate); this package is a thin
+layer over it: numpy arrays in and out, ``OfmpcError`` (a ``ValueError``)
+with the library's messages.
+
+>>> import ofmpc
+>>> robot = ofmpc.Robot.irb140()
+>>> ref = ofmpc.plan("paper", robot)               # the paper's Table I path
+>>> ctl = ofmpc.Controller("second", robot)         # the paper's tuning
+>>> x = list(ref.q[0]) + [0.0] * robot.dof
+>>> ctl.reset(x)
+>>> tau = ctl.step(x, ref.q[0], ref.preview(0, ctl.horizon))
+>>> metrics = ofmpc.run({"controllers": ["first"], "payload": {"masses_kg": [0.25]}})
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from typing import Any, Mapping, Optional, Sequence, Tuple, Union
+
+from ._ofmpc import (
+    STANDARD_GRAVITY,
+    Controller,
+    OfmpcError,
+    Reference,
+    Robot,
+    __version__,
+    _plan,
+    _run_file,
+    _run_json,
+)
+
+__all__ = [
+    "Controller",
+    "OfmpcError",
+    "Reference",
+    "Robot",
+    "STANDARD_GRAVITY",
+    "__version__",
+    "plan",
+    "run",
+]
+
+_PROGRAM_SUFFIXES = (".gcode", ".nc", ".ngc", ".tap", ".cnc", ".txt")
+
+
+def _program_text(program: Union[str, "os.PathLike[str]"]) -> Tuple[Optional[str], str]:
+    """(text or None for the built-in program, name for messages)."""
+    if isinstance(program, os.PathLike):
+        path = os.fspath(program)
+        with open(path, encoding="utf-8") as f:
+            return f.read(), path
+    if not isinstance(program, str):
+        raise TypeError(f"program must be a path, G-code text or 'paper', not {type(program).__name__}")
+    if program.strip().lower() == "paper":
+        return None, "paper-table1.gcode (built in)"
+    if "\n" not in program and os.path.isfile(program):
+        with open(program, encoding="utf-8") as f:
+            return f.read(), program
+    if "\n" not in program and program.strip().lower().endswith(_PROGRAM_SUFFIXES):
+        raise FileNotFoundError(f"program file {program!r} does not exist (give a path, G-code text or 'paper')")
+    return program, "program"
+
+
+def plan(
+    program: Union[str, "os.PathLike[str]"],
+    robot: Robot,
+    ts: float = 0.01,
+    origin: Optional[Sequence[float]] = None,
+    *,
+    profile: str = "septic",
+    max_speed: float = 0.5,
+    max_accel: float = 2.5,
+    rpy_deg: Optional[Sequence[float]] = None,
+) -> Reference:
+    """Plans a G-code program for ``robot``: parse, time, map to joint space by IK.
+
+    Args:
+        program: a G-code file path, G-code text, or ``"paper"`` (the paper's Table I
+            program, built in).
+        robot: the robot whose inverse kinematics maps the path.
+        ts: sample period of the reference (s); the controller's Ts.
+        origin: G54 work offset ``(x, y, z)`` in mm (as ``--origin`` of the CLI) for
+            programs that set none.
+        profile: rest-to-rest time law of every segment, ``"septic"`` (the paper's) or
+            ``"quintic"``.
+        max_speed: path speed limit (m/s) of moves without an F word.
+        max_accel: path acceleration limit (m/s²).
+        rpy_deg: fixed flange orientation (roll, pitch, yaw in degrees, base frame);
+            default: the orientation at q = 0.
+
+    Returns:
+        A :class:`Reference`: ``.t`` (K,), ``.q``/``.qd``/``.qdd`` (K, n),
+        ``.cartesian`` (K, 3) and ``.preview(k, N)``.
+
+    Raises:
+        OfmpcError: the program does not parse (line and column in the message), a
+            point is unreachable or outside the joint limits, a setting is invalid.
+    """
+    text, name = _program_text(program)
+    o = None if origin is None else tuple(float(v) for v in origin)
+    r = None if rpy_deg is None else tuple(float(v) for v in rpy_deg)
+    if o is not None and len(o) != 3:
+        raise OfmpcError(f"origin has {len(o)} values: give (x, y, z) in mm")
+    if r is not None and len(r) != 3:
+        raise OfmpcError(f"rpy_deg has {len(r)} values: give (roll, pitch, yaw) in degrees")
+    return _plan(text, name, robot, float(ts), o, profile, float(max_speed), float(max_accel), r)
+
+
+def run(scenario: Union[Mapping[str, Any], str, "os.PathLike[str]"]) -> dict:
+    """Runs a scenario in Rust (the GIL released) and returns its metrics.
+
+    Args:
+        scenario: a dict with the keys of the TOML scenario file (see
+            ``examples/scenario.toml``; relative paths are relative to the working
+            directory), or the path of such a file (paths inside relative to it).
+            Keys left out take their defaults; unknown keys are an error.
+
+    Returns:
+        The content of ``metrics.json`` of ``ofmpc run`` for the same scenario:
+        ``{"runs": [{"name", "controller", "payload_kg", "joint_error_rms_rad", ...}]}``,
+        one run per payload × controller (payloads outer). No file is written.
+
+    Raises:
+        OfmpcError: the scenario is invalid (the message names the key).
+    """
+    if isinstance(scenario, Mapping):
+        text = _run_json(json.dumps(scenario))
+    elif isinstance(scenario, (str, os.PathLike)):
+        text = _run_file(os.fspath(scenario))
+    else:
+        raise TypeError(f"scenario must be a dict or a path, not {type(scenario).__name__}")
+    return json.loads(text)

@@ -1,0 +1,151 @@
+"""Type stubs of the ``ofmpc`` package (Python bindings of the ofmpc Rust crates)."""
+
+import os
+from typing import Any, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+ArrayLike = npt.ArrayLike
+F64Array = npt.NDArray[np.float64]
+
+STANDARD_GRAVITY: float
+"""Standard gravity 9.80665 m/s², the default gravity of every robot."""
+__version__: str
+
+class OfmpcError(ValueError):
+    """An error reported by the ofmpc library; the message says where and what to do."""
+
+class Robot:
+    """A serial robot: URDF kinematics and inertials, drives' armature, optional payload."""
+
+    @staticmethod
+    def irb140() -> Robot:
+        """The built-in ABB IRB 140 with its drives (armature, torque and speed limits)."""
+    @staticmethod
+    def from_urdf(path: Union[str, os.PathLike[str]], drives: Optional[Union[str, os.PathLike[str]]] = None) -> Robot:
+        """A robot from a URDF file, with an optional drives file (TOML)."""
+    @property
+    def dof(self) -> int:
+        """Number of joints n."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def joint_names(self) -> List[str]: ...
+    @property
+    def armature(self) -> F64Array:
+        """Armature of every joint (kg·m²), added to the diagonal of H."""
+    @property
+    def gravity_vector(self) -> F64Array:
+        """Gravity in the base frame, (0, 0, −9.80665) m/s² by default."""
+    @property
+    def payload(self) -> Optional[Tuple[float, F64Array, F64Array]]:
+        """(mass_kg, com (3,), inertia about the com (3, 3)) or None."""
+    def set_payload(
+        self,
+        mass_kg: float,
+        com: Tuple[float, float, float] = (0.0, 0.0, 0.0),
+        inertia: Optional[ArrayLike] = None,
+    ) -> None:
+        """Attaches a rigid payload at the flange (com in the flange frame, m); 0 kg removes it."""
+    def rnea(self, q: ArrayLike, qd: ArrayLike, qdd: ArrayLike) -> F64Array:
+        """τ = H(q) q̈ + C(q, q̇) q̇ + g(q), shape (n,)."""
+    def mass_matrix(self, q: ArrayLike) -> F64Array:
+        """H(q), armature included, shape (n, n)."""
+    def coriolis_matrix(self, q: ArrayLike, qd: ArrayLike) -> F64Array:
+        """C(q, q̇) from Christoffel symbols (Ḣ − 2C skew-symmetric), shape (n, n)."""
+    def gravity(self, q: ArrayLike) -> F64Array:
+        """g(q), shape (n,)."""
+    def flange_pose(self, q: ArrayLike) -> F64Array:
+        """Flange pose in the base frame, 4×4 homogeneous matrix."""
+    def flange_jacobian(self, q: ArrayLike) -> F64Array:
+        """Geometric flange Jacobian (6, n), linear rows first, base frame."""
+    def forward_dynamics(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike) -> F64Array:
+        """q̈ = H⁻¹ (τ − C q̇ − g), shape (n,)."""
+    def copy(self) -> Robot: ...
+
+class Reference:
+    """A joint reference w_k sampled every ts seconds along a program."""
+
+    @property
+    def t(self) -> F64Array:
+        """Sample times (K,)."""
+    @property
+    def q(self) -> F64Array:
+        """Joint positions (K, n)."""
+    @property
+    def qd(self) -> F64Array:
+        """Joint velocities (K, n)."""
+    @property
+    def qdd(self) -> F64Array:
+        """Joint accelerations (K, n)."""
+    @property
+    def cartesian(self) -> F64Array:
+        """Flange position of the reference (K, 3), m."""
+    @property
+    def lines(self) -> List[int]: ...
+    @property
+    def ts(self) -> float: ...
+    @property
+    def dof(self) -> int: ...
+    @property
+    def duration(self) -> float: ...
+    @property
+    def warnings(self) -> List[str]: ...
+    def w(self, k: int) -> F64Array:
+        """w_k (n,); past the end the last sample."""
+    def preview(self, k: int, horizon: int) -> F64Array:
+        """w_{k+1..k+N} as (N, n), the last sample held past the end."""
+    def __len__(self) -> int: ...
+
+class Controller:
+    """A predictive controller of the paper: "usual" (Eq. 43), "first" (Eq. 32/37), "second" (Eq. 34/39).
+
+    Its model of the robot is a copy of ``robot`` at construction (payload included).
+    Weights (square roots: the cost uses QᵀQ), each a number (times I) or one per joint:
+    ``q_yw`` (output error), ``q_dy`` (output increment), ``q_du`` (input increment),
+    ``q_u`` (input, usual MPC). Defaults: the paper's tuning.
+    """
+
+    def __init__(
+        self,
+        kind: str,
+        robot: Robot,
+        ts: float = 0.01,
+        horizon: int = 10,
+        **weights: Union[float, Sequence[float]],
+    ) -> None: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def dof(self) -> int: ...
+    @property
+    def horizon(self) -> int: ...
+    @property
+    def ts(self) -> float: ...
+    @property
+    def input(self) -> F64Array:
+        """u of the last step (n,)."""
+    @property
+    def last_info(self) -> Optional[dict]:
+        """{"cost", "r_diag_ratio", "zoh_squarings"} of the last step."""
+    def reset(self, x0: ArrayLike) -> None:
+        """Starts a run at the measured state x0 = [q; q̇] (2n,)."""
+    def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
+        """Measured x (2n,), reference w_k (n,), preview (N, n) → torque τ_k (n,)."""
+
+def plan(
+    program: Union[str, os.PathLike[str]],
+    robot: Robot,
+    ts: float = 0.01,
+    origin: Optional[Sequence[float]] = None,
+    *,
+    profile: str = "septic",
+    max_speed: float = 0.5,
+    max_accel: float = 2.5,
+    rpy_deg: Optional[Sequence[float]] = None,
+) -> Reference:
+    """Plans a program (path, G-code text or "paper") for ``robot``; origin in mm."""
+
+def run(scenario: Union[Mapping[str, Any], str, os.PathLike[str]]) -> dict:
+    """Runs a scenario (dict with the TOML keys, or a path) and returns metrics.json's content."""

@@ -1,0 +1,204 @@
+//! `ofmpc.Controller`: one predictive controller of the paper, stepped from
+//! Python, over `ofmpc::control`.
+
+use crate::arrays::array1;
+use crate::errors::to_py;
+use crate::robot::PyRobot;
+use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn};
+use ofmpc::control::{new_controller, Controller, ControllerKind, MpcSettings, StepInfo, Weight};
+use ofmpc::dynamics::RobotDynamics;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::Mutex;
+
+/// A controller with its own model of the robot and buffers sized once.
+#[pyclass(name = "Controller", module = "ofmpc")]
+pub struct PyController {
+    /// In a `Mutex` only to make the class `Sync` (a Python requirement):
+    /// `step` and `reset` take `&mut self` and reach it by `get_mut`, without locking.
+    controller: Mutex<Box<dyn Controller + Send>>,
+    kind: ControllerKind,
+    dof: usize,
+    horizon: usize,
+    ts: f64,
+    model: RobotDynamics,
+    x: Vec<f64>,
+    w: Vec<f64>,
+    preview: Vec<f64>,
+    tau: Vec<f64>,
+    info: Option<StepInfo>,
+}
+
+/// Reads a weight: a number (times I) or one value per joint.
+fn weight(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Weight> {
+    if let Ok(s) = value.extract::<f64>() {
+        return Ok(Weight::Scalar(s));
+    }
+    value
+        .extract::<Vec<f64>>()
+        .map(Weight::Diagonal)
+        .map_err(|_| {
+            to_py(format!(
+                "weight {name} = {value}: give a number (times I) or one number per joint"
+            ))
+        })
+}
+
+/// Copies an array-like of numbers into `out`, checking its size.
+fn fill(what: &str, v: &PyArrayLikeDyn<'_, f64, AllowTypeChange>, out: &mut [f64]) -> PyResult<()> {
+    let a = v.as_array();
+    if a.len() != out.len() {
+        return Err(to_py(format!(
+            "{what} has {} values (shape {:?}) but {} are needed",
+            a.len(),
+            a.shape(),
+            out.len()
+        )));
+    }
+    for (o, x) in out.iter_mut().zip(a.iter()) {
+        *o = *x;
+    }
+    Ok(())
+}
+
+#[pymethods]
+impl PyController {
+    #[new]
+    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, **weights))]
+    fn new(
+        kind: &str,
+        robot: &PyRobot,
+        ts: f64,
+        horizon: usize,
+        weights: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let kind: ControllerKind = kind.parse().map_err(to_py)?;
+        let mut settings = MpcSettings {
+            ts,
+            horizon,
+            ..MpcSettings::default()
+        };
+        if let Some(w) = weights {
+            for (key, value) in w.iter() {
+                let key: String = key.extract()?;
+                let wt = weight(&key, &value)?;
+                match key.as_str() {
+                    "q_yw" => settings.q_yw = wt,
+                    "q_dy" => settings.q_dy = wt,
+                    "q_du" => settings.q_du = wt,
+                    "q_u" => settings.q_u = wt,
+                    _ => {
+                        return Err(to_py(format!(
+                            "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u"
+                        )))
+                    }
+                }
+            }
+        }
+        let n = robot.robot().dof();
+        let controller = new_controller(kind, n, &settings).map_err(to_py)?;
+        Ok(Self {
+            kind: controller.kind(),
+            dof: controller.dof(),
+            horizon: controller.horizon(),
+            ts: controller.settings().ts,
+            controller: Mutex::new(controller),
+            model: RobotDynamics::new(robot.robot().clone()),
+            x: vec![0.0; 2 * n],
+            w: vec![0.0; n],
+            preview: vec![0.0; horizon * n],
+            tau: vec![0.0; n],
+            info: None,
+        })
+    }
+
+    /// "usual", "first" or "second".
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.kind.name()
+    }
+    /// Number of joints n.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.dof
+    }
+    /// Prediction horizon N.
+    #[getter]
+    fn horizon(&self) -> usize {
+        self.horizon
+    }
+    /// Sampling period Ts (s).
+    #[getter]
+    fn ts(&self) -> f64 {
+        self.ts
+    }
+    /// The input u of the last successful step (n,); zero after reset.
+    #[getter]
+    fn input<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let c = self.controller.lock().unwrap_or_else(|e| e.into_inner());
+        array1(py, c.input())
+    }
+    /// Diagnostics of the last successful step as a dict (cost, r_diag_ratio,
+    /// zoh_squarings), or None before the first.
+    #[getter]
+    fn last_info<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.info
+            .map(|i| {
+                let d = PyDict::new(py);
+                d.set_item("cost", i.cost)?;
+                d.set_item("r_diag_ratio", i.r_diag_ratio)?;
+                d.set_item("zoh_squarings", i.zoh_squarings)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+
+    /// Starts a run at the measured state x0 = [q; q̇] (2n,).
+    fn reset(&mut self, x0: PyArrayLikeDyn<'_, f64, AllowTypeChange>) -> PyResult<()> {
+        fill("x0", &x0, &mut self.x)?;
+        self.info = None;
+        self.controller
+            .get_mut()
+            .unwrap_or_else(|e| e.into_inner())
+            .reset(&self.x)
+            .map_err(to_py)
+    }
+
+    /// One control step: measured state x (2n,), current reference w_k (n,),
+    /// preview w_{k+1..k+N} ((N, n) or N·n values) → torque τ_k (n,).
+    fn step<'py>(
+        &mut self,
+        py: Python<'py>,
+        x: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        w_k: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        preview: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        fill("x", &x, &mut self.x)?;
+        fill("w_k", &w_k, &mut self.w)?;
+        fill("preview", &preview, &mut self.preview)?;
+        let info = self
+            .controller
+            .get_mut()
+            .unwrap_or_else(|e| e.into_inner())
+            .step(
+                &mut self.model,
+                &self.x,
+                &self.w,
+                &self.preview,
+                &mut self.tau,
+            )
+            .map_err(to_py)?;
+        self.info = Some(info);
+        Ok(array1(py, &self.tau))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Controller({:?}, dof={}, horizon={}, ts={})",
+            self.kind(),
+            self.dof(),
+            self.horizon(),
+            self.ts()
+        )
+    }
+}

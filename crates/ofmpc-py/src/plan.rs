@@ -1,0 +1,173 @@
+//! `ofmpc.plan`: G-code → timed Cartesian path → joint reference (IK), over
+//! `ofmpc::gcode`, `ofmpc::trajectory` and `ofmpc::reference`.
+
+use crate::arrays::{array1, array2};
+use crate::errors::to_py;
+use crate::robot::PyRobot;
+use nalgebra::UnitQuaternion;
+use numpy::{PyArray1, PyArray2};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, JointReference, Orientation};
+use ofmpc::timelaw::Profile;
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use pyo3::prelude::*;
+
+/// A joint reference w_k sampled every `ts` seconds along a program.
+#[pyclass(name = "Reference", module = "ofmpc", frozen)]
+pub struct PyReference {
+    pub(crate) reference: JointReference,
+    warnings: Vec<String>,
+}
+
+impl PyReference {
+    fn rows<'py>(
+        &self,
+        py: Python<'py>,
+        row: impl Fn(usize) -> Vec<f64>,
+        cols: usize,
+    ) -> Bound<'py, PyArray2<f64>> {
+        let k = self.reference.len();
+        array2(py, k, cols, (0..k).flat_map(row).collect())
+    }
+}
+
+#[pymethods]
+impl PyReference {
+    /// Sample times (K,), s.
+    #[getter]
+    fn t<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        let ts = self.reference.ts();
+        let t: Vec<f64> = (0..self.reference.len()).map(|k| k as f64 * ts).collect();
+        array1(py, &t)
+    }
+    /// Joint positions w_k (K, n), rad.
+    #[getter]
+    fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |k| self.reference.q(k).to_vec(), self.reference.dof())
+    }
+    /// Joint velocities (K, n), rad/s.
+    #[getter]
+    fn qd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |k| self.reference.qd(k).to_vec(), self.reference.dof())
+    }
+    /// Joint accelerations (K, n), rad/s².
+    #[getter]
+    fn qdd<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |k| self.reference.qdd(k).to_vec(), self.reference.dof())
+    }
+    /// Flange position of the reference (K, 3), m, base frame.
+    #[getter]
+    fn cartesian<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        self.rows(py, |k| self.reference.position(k).to_vec(), 3)
+    }
+    /// Program line of each sample (K,).
+    #[getter]
+    fn lines(&self) -> Vec<usize> {
+        (0..self.reference.len())
+            .map(|k| self.reference.line(k))
+            .collect()
+    }
+    /// Sample period (s).
+    #[getter]
+    fn ts(&self) -> f64 {
+        self.reference.ts()
+    }
+    /// Number of joints n.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.reference.dof()
+    }
+    /// Duration of the path, (K − 1)·ts (s).
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.reference.duration()
+    }
+    /// The program reader's warnings (things it ignored).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+    /// w_k (n,); past the end, the last sample.
+    fn w<'py>(&self, py: Python<'py>, k: usize) -> Bound<'py, PyArray1<f64>> {
+        array1(py, self.reference.q(k))
+    }
+    /// The preview w_{k+1}, …, w_{k+N} as an (N, n) array, the last sample held past the end.
+    fn preview<'py>(&self, py: Python<'py>, k: usize, horizon: usize) -> Bound<'py, PyArray2<f64>> {
+        let n = self.reference.dof();
+        let mut out = vec![0.0; horizon * n];
+        self.reference.preview(k, horizon, &mut out);
+        array2(py, horizon, n, out)
+    }
+    fn __len__(&self) -> usize {
+        self.reference.len()
+    }
+    fn __repr__(&self) -> String {
+        format!(
+            "Reference(K={}, n={}, ts={}, duration={:.3} s)",
+            self.reference.len(),
+            self.reference.dof(),
+            self.reference.ts(),
+            self.reference.duration()
+        )
+    }
+}
+
+/// Plans a program (`text`; `None`: the paper's Table I program) for `robot`.
+/// `name` prefixes error messages (the file name).
+#[pyfunction]
+#[pyo3(name = "_plan", signature = (text, name, robot, ts, origin_mm, profile, max_speed, max_accel, rpy_deg))]
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    py: Python<'_>,
+    text: Option<String>,
+    name: String,
+    robot: &PyRobot,
+    ts: f64,
+    origin_mm: Option<(f64, f64, f64)>,
+    profile: &str,
+    max_speed: f64,
+    max_accel: f64,
+    rpy_deg: Option<(f64, f64, f64)>,
+) -> PyResult<PyReference> {
+    let profile = match profile.to_ascii_lowercase().as_str() {
+        "septic" | "paper" => Profile::Septic,
+        "quintic" => Profile::Quintic,
+        other => {
+            return Err(to_py(format!(
+                "profile {other:?}: use \"septic\" (the paper's) or \"quintic\""
+            )))
+        }
+    };
+    let robot = robot.robot().clone();
+    let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
+    py.detach(move || {
+        let options = ParseOptions {
+            origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
+        };
+        let program = parse(&text, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
+        let timing = TimingOptions {
+            profile,
+            max_speed,
+            max_accel,
+        };
+        let path = CartesianTrajectory::new(&program, &timing).map_err(to_py)?;
+        let orientation = match rpy_deg {
+            None => Orientation::AtZero,
+            Some((r, p, y)) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
+                r.to_radians(),
+                p.to_radians(),
+                y.to_radians(),
+            )),
+        };
+        let reference = build_reference(&robot, &path, orientation, ts)
+            .map_err(|e| to_py(format!("{name}: {e}")))?;
+        Ok(PyReference {
+            reference,
+            warnings: program
+                .warnings
+                .iter()
+                .map(|w| format!("{name}: {w}"))
+                .collect(),
+        })
+    })
+}

@@ -1,0 +1,42 @@
+//! `ofmpc.run`: a whole scenario (every payload × controller) run in Rust with
+//! the GIL released, through the CLI crate's scenario loader and runner; the
+//! result is the text of `metrics.json` (the Python side parses it).
+
+use crate::errors::chain_to_py;
+use ofmpc_cli::api::{metrics_json, run_metrics};
+use ofmpc_cli::scenario::{Scenario, ScenarioFile};
+use pyo3::prelude::*;
+use std::path::PathBuf;
+
+fn run_file_inner(file: &ScenarioFile, origin: &str) -> anyhow::Result<String> {
+    let scenario = Scenario::resolve(file).map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
+    metrics_json(&run_metrics(&scenario)?)
+}
+
+/// Runs a scenario file (TOML, paths inside relative to it); returns metrics.json's text.
+#[pyfunction]
+#[pyo3(name = "_run_file")]
+pub fn run_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
+    py.detach(|| {
+        let file = ScenarioFile::from_file(&path)?;
+        run_file_inner(&file, &path.display().to_string())
+    })
+    .map_err(chain_to_py)
+}
+
+/// Runs a scenario given as JSON text with the keys of the TOML file (paths
+/// inside relative to the working directory); returns metrics.json's text.
+#[pyfunction]
+#[pyo3(name = "_run_json")]
+pub fn run_json(py: Python<'_>, text: String) -> PyResult<String> {
+    py.detach(|| {
+        let file: ScenarioFile = serde_json::from_str(&text).map_err(|e| {
+            // The JSON position means nothing to the caller (it wrote a dict).
+            let message = e.to_string();
+            let message = message.split(" at line ").next().unwrap_or(&message);
+            anyhow::anyhow!("scenario: {message}")
+        })?;
+        run_file_inner(&file, "scenario")
+    })
+    .map_err(chain_to_py)
+}

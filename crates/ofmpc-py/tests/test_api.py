@@ -1,0 +1,177 @@
+"""The Python API: shapes, physical identities across the bindings, the reference
+and its preview, the controller's contract, `run`, and errors with the library's
+messages."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import ofmpc
+from conftest import IRB140_DRIVES, IRB140_URDF, REPO, rel_err
+
+N_JOINTS = 6
+rng = np.random.default_rng(42)
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return ofmpc.Robot.irb140()
+
+
+@pytest.fixture(scope="module")
+def ref(robot):
+    return ofmpc.plan("paper", robot)
+
+
+def test_builtin_robot_equals_the_urdf_with_its_drives(robot):
+    other = ofmpc.Robot.from_urdf(IRB140_URDF, drives=IRB140_DRIVES)
+    bare = ofmpc.Robot.from_urdf(str(IRB140_URDF))
+    q = rng.uniform(-1, 1, N_JOINTS)
+    assert robot.dof == other.dof == N_JOINTS
+    np.testing.assert_array_equal(robot.mass_matrix(q), other.mass_matrix(q))
+    # Without drives.toml there is no armature: H differs by exactly diag(armature).
+    np.testing.assert_allclose(robot.mass_matrix(q) - bare.mass_matrix(q), np.diag(robot.armature), atol=1e-12)
+
+
+def test_the_terms_compose_to_rnea_and_forward_dynamics_inverts_it(robot):
+    for _ in range(10):
+        q, qd, qdd = rng.uniform(-2, 2, 6), rng.normal(0, 1, 6), rng.normal(0, 2, 6)
+        h, c, g = robot.mass_matrix(q), robot.coriolis_matrix(q, qd), robot.gravity(q)
+        assert h.shape == c.shape == (6, 6) and g.shape == (6,)
+        tau = robot.rnea(q, qd, qdd)
+        assert rel_err(h @ qdd + c @ qd + g, tau) < 1e-12
+        assert rel_err(robot.forward_dynamics(q, qd, tau), qdd) < 1e-10
+        assert rel_err(robot.rnea(q, np.zeros(6), np.zeros(6)), g) < 1e-13
+        assert np.allclose(h, h.T) and np.all(np.linalg.eigvalsh(h) > 0)
+
+
+def test_a_point_payload_adds_its_weight_through_the_jacobian_transpose():
+    """g_with − g_without = J_v(q)ᵀ · m · (0, 0, 9.80665) for a point mass at the flange."""
+    bare, loaded = ofmpc.Robot.irb140(), ofmpc.Robot.irb140()
+    loaded.set_payload(2.0)
+    assert loaded.payload[0] == 2.0 and bare.payload is None
+    for _ in range(5):
+        q = rng.uniform(-1.5, 1.5, 6)
+        jv = bare.flange_jacobian(q)[:3]
+        expected = jv.T @ (2.0 * np.array([0.0, 0.0, ofmpc.STANDARD_GRAVITY]))
+        assert rel_err(loaded.gravity(q) - bare.gravity(q), expected) < 1e-12
+    loaded.set_payload(0.0)
+    assert loaded.payload is None
+
+
+def test_flange_pose_is_homogeneous_and_matches_the_documented_home(robot):
+    pose = robot.flange_pose(np.zeros(6))
+    # irb140.urdf: flange origin at q = 0 is (0.515, 0, 0.712) m, flange z along base +x.
+    np.testing.assert_allclose(pose[:3, 3], [0.515, 0.0, 0.712], atol=1e-12)
+    np.testing.assert_allclose(pose[:3, 2], [1.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_array_equal(pose[3], [0, 0, 0, 1])
+    r = robot.flange_pose(rng.uniform(-1, 1, 6))[:3, :3]
+    np.testing.assert_allclose(r.T @ r, np.eye(3), atol=1e-12)
+
+
+def test_plan_shapes_times_and_ik_consistency(robot, ref):
+    k = len(ref)
+    assert ref.t.shape == (k,) and ref.q.shape == ref.qd.shape == ref.qdd.shape == (k, 6)
+    assert ref.cartesian.shape == (k, 3)
+    np.testing.assert_allclose(np.diff(ref.t), ref.ts, rtol=1e-12)
+    assert abs(ref.duration - ref.t[-1]) < 1e-9
+    # Every joint sample puts the flange on the Cartesian reference (the IK is exact).
+    for i in range(0, k, 97):
+        np.testing.assert_allclose(robot.flange_pose(ref.q[i])[:3, 3], ref.cartesian[i], atol=1e-9)
+    # The velocity is the derivative of the position (central difference, O(ts²)).
+    mid = (ref.q[2:] - ref.q[:-2]) / (2 * ref.ts)
+    assert np.abs(mid - ref.qd[1:-1]).max() < 1e-2 * np.abs(ref.qd).max()
+
+
+def test_preview_is_the_next_n_samples_with_the_last_held(ref):
+    k = 100
+    np.testing.assert_array_equal(ref.preview(k, 10), ref.q[k + 1 : k + 11])
+    end = len(ref) - 3
+    p = ref.preview(end, 5)
+    np.testing.assert_array_equal(p[:2], ref.q[end + 1 :])
+    np.testing.assert_array_equal(p[2:], np.repeat(ref.q[-1:], 3, axis=0))
+
+
+def test_program_text_file_and_builtin_plan_the_same(robot, ref, tmp_path):
+    text = (REPO / "examples" / "paper-table1.gcode").read_text()
+    f = tmp_path / "p.gcode"
+    f.write_text(text)
+    for program in (text, str(f), f):
+        np.testing.assert_array_equal(ofmpc.plan(program, robot).q, ref.q)
+    # A work offset moves the path: origin in mm.
+    moved = ofmpc.plan("G0 X0 Y0 Z0\nG1 X10 F1000\n", robot, origin=(450, 0, 400))
+    np.testing.assert_allclose(moved.cartesian[0], [0.45, 0.0, 0.40], atol=1e-12)
+    np.testing.assert_allclose(moved.cartesian[-1], [0.46, 0.0, 0.40], atol=1e-12)
+
+
+def test_controller_holds_a_rest_state_and_validates_its_inputs(robot, ref):
+    """At rest on the reference with a constant preview, the incremental controllers'
+    first torque holds the robot: τ = g(q) (u = Δu small, H u + g)."""
+    w = ref.q[0]
+    x = np.concatenate([w, np.zeros(6)])
+    for kind in ("usual", "first", "second"):
+        c = ofmpc.Controller(kind, robot, ts=0.01, horizon=8, q_yw=[1.0] * 6, q_dy=0.5)
+        assert (c.kind, c.dof, c.horizon, c.ts) == (kind, 6, 8, 0.01)
+        c.reset(x)
+        np.testing.assert_array_equal(c.input, np.zeros(6))
+        tau = c.step(x, w, np.tile(w, (8, 1)))
+        assert rel_err(tau, robot.gravity(w)) < 1e-9, kind
+        assert c.last_info["cost"] >= 0.0
+        # (N, n) and flat previews are the same input.
+        c.reset(x)
+        np.testing.assert_array_equal(c.step(x, w, np.tile(w, 8)), tau)
+    c = ofmpc.Controller("second", robot)
+    with pytest.raises(ofmpc.OfmpcError, match="x has 3 values"):
+        c.step(x[:3], w, ref.preview(0, 10))
+    with pytest.raises(ofmpc.OfmpcError, match="preview"):
+        c.step(x, w, ref.preview(0, 9))
+    with pytest.raises(ofmpc.OfmpcError, match="not finite"):
+        c.step(np.full(12, np.nan), w, ref.preview(0, 10))
+
+
+def test_errors_carry_the_library_s_messages(robot):
+    with pytest.raises(ofmpc.OfmpcError, match='unknown controller "third"'):
+        ofmpc.Controller("third", robot)
+    with pytest.raises(ofmpc.OfmpcError, match="unknown weight"):
+        ofmpc.Controller("first", robot, q_xx=1.0)
+    with pytest.raises(ofmpc.OfmpcError, match="horizon 0"):
+        ofmpc.Controller("first", robot, horizon=0)
+    with pytest.raises(ofmpc.OfmpcError, match=r"q_du\[0\] = -1"):
+        ofmpc.Controller("first", robot, q_du=-1.0)
+    with pytest.raises(ofmpc.OfmpcError, match="line 2, column"):
+        ofmpc.plan("G0 X0 Y0 Z0\nG1 X Q\n", robot)
+    with pytest.raises(FileNotFoundError):
+        ofmpc.plan("no-such-file.gcode", robot)
+    with pytest.raises(ofmpc.OfmpcError, match="no-such.urdf"):
+        ofmpc.Robot.from_urdf("no-such.urdf")
+    with pytest.raises(ofmpc.OfmpcError, match="q has 5 values"):
+        robot.rnea(np.zeros(5), np.zeros(6), np.zeros(6))
+    with pytest.raises(ofmpc.OfmpcError, match="invalid payload"):
+        ofmpc.Robot.irb140().set_payload(-1.0)
+    with pytest.raises(ofmpc.OfmpcError, match="unknown field `mpcx`"):
+        ofmpc.run({"mpcx": {}})
+    with pytest.raises(ofmpc.OfmpcError, match=r"\[mpc\] prediction horizon 0"):
+        ofmpc.run({"mpc": {"horizon": 0}})
+    assert issubclass(ofmpc.OfmpcError, ValueError)
+
+
+def test_run_from_a_dict_and_from_a_file_agree(tmp_path):
+    scenario = {
+        "controllers": ["first"],
+        "payload": {"masses_kg": [0.0, 0.5]},
+        "mpc": {"q_dy": [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]},
+        "simulation": {"hold_s": 1.0},
+    }
+    f = tmp_path / "s.toml"
+    f.write_text(
+        'controllers = ["first"]\n[payload]\nmasses_kg = [0.0, 0.5]\n'
+        "[mpc]\nq_dy = [0.5, 0.5, 0.5, 0.5, 0.5, 0.5]\n[simulation]\nhold_s = 1.0\n"
+    )
+    a, b = ofmpc.run(scenario), ofmpc.run(f)
+    assert [r["name"] for r in a["runs"]] == ["first_m0", "first_m0.5"]
+    for ra, rb in zip(a["runs"], b["runs"]):
+        for key in ("wall_s", "step_time_us"):
+            ra.pop(key), rb.pop(key)
+        assert ra == rb
+        assert ra["steady_cartesian_error_mm"] < 1e-6 and not ra["diverged"]
