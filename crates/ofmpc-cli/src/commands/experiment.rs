@@ -3,6 +3,7 @@
 //! figures and `report.html`, all through a staged directory so that a failed
 //! run leaves no half-written file.
 
+use crate::api::{run_jobs, unique_runs, Run};
 use crate::figures;
 use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
@@ -14,18 +15,10 @@ use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult, RunStatus};
-use rayon::prelude::*;
+use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunStatus};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-struct Run {
-    kind: ControllerKind,
-    payload: Payload,
-    result: RunResult,
-    metrics: RunMetrics,
-}
 
 /// Renders `fig` into the staged directory as `<rel>.png` and `<rel>.svg`,
 /// and adds the PNG to the report.
@@ -41,43 +34,6 @@ fn figure(
     dir.write(format!("{rel}.svg"), r.svg.as_bytes())?;
     report.figure(format!("{caption} ({rel}.png, .svg)"), Image::Png(r.png));
     Ok(())
-}
-
-/// The payloads and controllers of a scenario with repeats removed (a repeat would write the
-/// same run folder twice); `-0` counts as `0`. Returns the warnings for the repeats.
-fn unique_runs(scenario: &Scenario) -> (Vec<Payload>, Vec<ControllerKind>, Vec<String>) {
-    let mut warnings = Vec::new();
-    let mut payloads: Vec<Payload> = Vec::new();
-    for p in &scenario.payloads {
-        let mut p = *p;
-        p.mass += 0.0; // -0.0 → 0.0: one run folder `_m0`
-                       // Same folder name (the label rounds masses past 6 digits) = same run.
-        if payloads
-            .iter()
-            .any(|q| mass_label(q.mass) == mass_label(p.mass))
-        {
-            warnings.push(format!(
-                "the payload {} kg is listed more than once ({:?}): it is run once",
-                mass_label(p.mass),
-                scenario.file.payload.masses_kg
-            ));
-        } else {
-            payloads.push(p);
-        }
-    }
-    let mut controllers: Vec<ControllerKind> = Vec::new();
-    for k in &scenario.file.controllers {
-        if controllers.contains(k) {
-            warnings.push(format!(
-                "the controller \"{}\" is listed more than once: it is run once per payload",
-                kind_name(*k)
-            ));
-        } else {
-            controllers.push(*k);
-        }
-    }
-    warnings.dedup();
-    (payloads, controllers, warnings)
 }
 
 /// Every file a run of these payloads and controllers writes, relative to the output folder.
@@ -244,32 +200,10 @@ pub fn execute(
     } else {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let runs: Vec<anyhow::Result<Run>> = jobs
-        .par_iter()
-        .map(|&(kind, payload)| {
-            let mut last = 0usize;
-            let (result, metrics) = exp
-                .run(kind, &payload, &mut |k, _| {
-                    bar.inc((k - last) as u64);
-                    last = k;
-                })
-                .map_err(|e| {
-                    anyhow::anyhow!(
-                        "{}: {}",
-                        run_name(kind, &payload),
-                        crate::errors::experiment_error(&e)
-                    )
-                })?;
-            Ok(Run {
-                kind,
-                payload,
-                result,
-                metrics,
-            })
-        })
-        .collect();
+    let runs = run_jobs(scenario, &payloads, &controllers, &|samples| {
+        bar.inc(samples)
+    })?;
     bar.finish_and_clear();
-    let runs: Vec<Run> = runs.into_iter().collect::<anyhow::Result<_>>()?;
     let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
 
     let mut report = Report::new(&scenario.file.title);
