@@ -82,6 +82,32 @@ impl Weight {
     }
 }
 
+/// How a controller solves its least-squares problem each sample. Serde
+/// names: `"dense-qr"`, `"structured"`. Both return the same `ΔU` (to
+/// rounding); they differ in cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Solver {
+    /// The paper's dense system `𝒜 ΔU = b` (Eq. (40)–(42)) by Householder QR:
+    /// `O((N·n)³)` flops per sample. The reference.
+    DenseQr,
+    /// The same problem as a stage-wise LQ problem solved by a square-root
+    /// (Householder QR) Riccati recursion: `O(N·n³)` flops per sample
+    /// ([`super::structured`]). The default.
+    #[default]
+    Structured,
+}
+
+impl Solver {
+    /// The serde name (`"dense-qr"` or `"structured"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::DenseQr => "dense-qr",
+            Solver::Structured => "structured",
+        }
+    }
+}
+
 /// Settings shared by the three controllers. Defaults are the paper's tuning
 /// (Section IV): `Ts = 0.01 s`, `N = 10`, `Q_yw = I`, `Q_Δy = 0.5 I`,
 /// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
@@ -102,6 +128,9 @@ pub struct MpcSettings {
     pub q_du: Weight,
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
+    /// Least-squares solver (default [`Solver::Structured`]; both give the
+    /// same `ΔU`).
+    pub solver: Solver,
 }
 
 impl Default for MpcSettings {
@@ -113,6 +142,7 @@ impl Default for MpcSettings {
             q_dy: Weight::Scalar(0.5),
             q_du: Weight::Scalar(1e-5),
             q_u: Weight::Scalar(1e-4),
+            solver: Solver::default(),
         }
     }
 }
@@ -225,9 +255,10 @@ pub enum SettingsError {
     /// The least-squares system would be too large to allocate.
     #[error("the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: reduce the horizon")]
     TooLarge {
-        /// Rows of 𝒜.
+        /// Rows of 𝒜 (dense solver) or of the stored stage factors
+        /// (structured solver: N·n).
         rows: usize,
-        /// Columns of 𝒜.
+        /// Columns of 𝒜 (dense) or of a stage factor (structured).
         cols: usize,
         /// Largest accepted rows·cols.
         limit: usize,

@@ -1,0 +1,380 @@
+//! Structured least squares: the controllers' problem as a stage-wise
+//! linear-quadratic problem, solved by a square-root (QR) Riccati recursion
+//! whose cost grows linearly in the horizon `N`.
+//!
+//! The model is frozen over the horizon, so every controller's system
+//! `𝒜 ΔU = b` (Eq. (37), (39), (43)) is the condensed form of
+//!
+//! ```text
+//! min Σ_{j=0}^{N−1} ‖R v_j‖² + Σ_{j=1}^{N} ‖D (S z_j − r_j)‖²,
+//! z_{j+1} = A z_j + B v_j + c_j,   z_0 given,
+//! ```
+//!
+//! with an augmented state `z` (nz), the stage input `v_j` (nu: `Δu_{k+j}` or
+//! `u_{k+j}`), diagonal `R > 0` and `D ≥ 0`, and `S` selecting the first `nq`
+//! entries of `z` (each controller orders its state so that the weighted
+//! coordinates come first, see [`super::core`]).
+//!
+//! # Square-root recursion (Householder, no normal equations)
+//!
+//! The cost-to-go from stage `j` is `‖L_j z_j − l_j‖² + ρ_j` with `L_j`
+//! upper triangular (nz×nz). Starting from `L_N = [D S; 0]`, `l_N = [D r_N; 0]`,
+//! stage `j = N−1, …, 0` factorizes by Householder QR
+//!
+//! ```text
+//!  columns:        v_j          z_j            rhs
+//!             [ R             0        |   0               ]   nu rows (diagonal)
+//!             [ 0             D S      |   D r_j           ]   nq rows (diagonal; none at j = 0)
+//!             [ L_{j+1} B     L_{j+1} A |   l_{j+1} − L_{j+1} c_j ]   nz dense rows
+//!   = Q [ R_vv   R_vz | ρ_j ]
+//!       [ 0      L_j  | l_j ]
+//!       [ 0      0    | e_j ]
+//! ```
+//!
+//! so that `v_j = R_vv⁻¹(ρ_j − R_vz z_j)` (forward pass) and `ρ_{j} =
+//! ρ_{j+1} + ‖e_j‖²`. The top rows of the stacked matrix are diagonal, so the
+//! reflector of each of their columns touches its pivot row and the `nz`
+//! dense rows only. This is a Householder QR of `𝒜` itself with its unknowns
+//! in the order `v_{N−1}, …, v_0` (the order of the dense solver), applied
+//! stage by stage: the condition number is not squared, `|R_ii|` and
+//! `J_min = ρ_0 + ‖e_0‖²` equal those of the dense QR up to rounding.
+//!
+//! Flops per stage: `O((nu + nz)²·nz)`, independent of `N`.
+
+/// The stage-wise problem and its square-root Riccati workspace, sized once.
+#[derive(Debug, Clone)]
+pub(crate) struct StageLq {
+    pub nu: usize,
+    pub nz: usize,
+    pub nq: usize,
+    pub nh: usize,
+    /// `A` (nz×nz, column-major).
+    pub a: Vec<f64>,
+    /// `B` (nz×nu, column-major).
+    pub b: Vec<f64>,
+    /// Diagonal of `R` (nu), all > 0.
+    pub rd: Vec<f64>,
+    /// Diagonal of `D` (nq), all ≥ 0.
+    pub qd: Vec<f64>,
+    /// Targets `r_j`, j = 1..N: block `j − 1` (nq values each).
+    pub r: Vec<f64>,
+    /// Affine terms `c_j`, j = 0..N−1: block `j` (nz values each).
+    pub c: Vec<f64>,
+    /// Whether the `c_j` are all zero (skips `L c`).
+    pub c_zero: bool,
+    /// Initial state `z_0` (nz).
+    pub z0: Vec<f64>,
+    /// Stacked stage matrix, column-major, `ld = nu + nq + nz` rows,
+    /// `nu + nz + 1` columns.
+    m: Vec<f64>,
+    ld: usize,
+    /// Current `L` (nz×nz column-major, upper triangular) and `l`.
+    l_mat: Vec<f64>,
+    l_vec: Vec<f64>,
+    /// Per stage `j`: the `nu` rows `[R_vv R_vz ρ]`, column-major
+    /// nu × (nu + nz + 1).
+    vrows: Vec<f64>,
+    /// Forward pass: current and next state.
+    z: Vec<f64>,
+    z_next: Vec<f64>,
+    /// The solution `v_0, …, v_{N−1}` (N·nu, natural order).
+    sol: Vec<f64>,
+}
+
+/// Outcome of one structured solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StageInfo {
+    /// `J_min` of the condensed system.
+    pub residual_sq: f64,
+    /// `max|R_ii| / min|R_ii|` over the diagonal blocks `R_vv`.
+    pub r_diag_ratio: f64,
+    /// `max|R_ii|`.
+    pub r_max: f64,
+}
+
+/// Why a structured solve failed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum StageError {
+    /// A number became NaN or infinite.
+    NonFinite,
+}
+
+impl StageLq {
+    /// Buffers for `nu` inputs, `nz` states of which the first `nq` are
+    /// weighted, horizon `nh`.
+    pub fn new(nu: usize, nz: usize, nq: usize, nh: usize) -> Self {
+        let ld = nu + nq + nz;
+        let cols = nu + nz + 1;
+        Self {
+            nu,
+            nz,
+            nq,
+            nh,
+            a: vec![0.0; nz * nz],
+            b: vec![0.0; nz * nu],
+            rd: vec![0.0; nu],
+            qd: vec![0.0; nq],
+            r: vec![0.0; nh * nq],
+            c: vec![0.0; nh * nz],
+            c_zero: true,
+            z0: vec![0.0; nz],
+            m: vec![0.0; ld * cols],
+            ld,
+            l_mat: vec![0.0; nz * nz],
+            l_vec: vec![0.0; nz],
+            vrows: vec![0.0; nh * nu * cols],
+            z: vec![0.0; nz],
+            z_next: vec![0.0; nz],
+            sol: vec![0.0; nh * nu],
+        }
+    }
+
+    /// The solution `v_0, …, v_{N−1}` of the last successful solve.
+    pub fn solution(&self) -> &[f64] {
+        &self.sol
+    }
+
+    /// Backward square-root recursion and forward pass. Allocates nothing.
+    pub fn solve(&mut self) -> Result<StageInfo, StageError> {
+        let (nu, nz, nq, nh, ld) = (self.nu, self.nz, self.nq, self.nh, self.ld);
+        let cols = nu + nz + 1;
+        let rhs = nu + nz;
+        // L_N = [D S; 0], l_N = [D r_N; 0].
+        self.l_mat.fill(0.0);
+        self.l_vec.fill(0.0);
+        for i in 0..nq {
+            self.l_mat[i * nz + i] = self.qd[i];
+            self.l_vec[i] = self.qd[i] * self.r[(nh - 1) * nq + i];
+        }
+        let mut acc = 0.0;
+        let (mut dmax, mut dmin) = (0.0f64, f64::INFINITY);
+        for j in (0..nh).rev() {
+            // Rows of the diagonal part: nu (+ nq for j ≥ 1).
+            let top = if j == 0 { nu } else { nu + nq };
+            let m = &mut self.m;
+            // Clear the top rows, then write the diagonals.
+            for col in m.chunks_exact_mut(ld) {
+                col[..top].fill(0.0);
+            }
+            for i in 0..nu {
+                m[i * ld + i] = self.rd[i];
+            }
+            if j > 0 {
+                for i in 0..nq {
+                    let q = self.qd[i];
+                    m[(nu + i) * ld + nu + i] = q;
+                    m[rhs * ld + nu + i] = q * self.r[(j - 1) * nq + i];
+                }
+            }
+            // Dense rows: L_{j+1} [B A | −c_j] and l_{j+1}.
+            let (lm, lv) = (&self.l_mat, &self.l_vec);
+            for (col, src) in m
+                .chunks_exact_mut(ld)
+                .take(nu + nz)
+                .zip(self.b.chunks_exact(nz).chain(self.a.chunks_exact(nz)))
+            {
+                tri_times(lm, nz, src, &mut col[top..top + nz]);
+            }
+            {
+                let col = &mut m[rhs * ld + top..rhs * ld + top + nz];
+                if self.c_zero {
+                    col.copy_from_slice(lv);
+                } else {
+                    tri_times(lm, nz, &self.c[j * nz..(j + 1) * nz], col);
+                    for (o, l) in col.iter_mut().zip(lv) {
+                        *o = l - *o;
+                    }
+                }
+            }
+            // Householder on the columns with a diagonal pivot row.
+            for k in 0..top {
+                householder(m, ld, cols, k, k, top, top + nz);
+            }
+            if j > 0 {
+                // The remaining z columns: pivots in the dense rows.
+                for k in top..nu + nz {
+                    let p = k; // dense row k − top sits at row top + (k − top) = k
+                    householder(m, ld, cols, k, p, p + 1, top + nz);
+                }
+                // L_j: row c ↔ pivot row nu + c (for c < nq the diagonal row,
+                // else the dense row with the same index: top + c − nq = nu + c).
+                for c in 0..nz {
+                    let row = nu + c;
+                    for cc in 0..nz {
+                        self.l_mat[cc * nz + c] = if cc >= c {
+                            m[(nu + cc) * ld + row]
+                        } else {
+                            0.0
+                        };
+                    }
+                    self.l_vec[c] = m[rhs * ld + row];
+                }
+                // Rows below the pivots: residual only.
+                for row in nu + nz..top + nz {
+                    let e = m[rhs * ld + row];
+                    acc += e * e;
+                }
+            } else {
+                // j = 0: z_0 is known, the remaining rows are residual.
+                for row in top..top + nz {
+                    let mut e = -m[rhs * ld + row];
+                    for (c, zc) in self.z0.iter().enumerate() {
+                        e += m[(nu + c) * ld + row] * zc;
+                    }
+                    acc += e * e;
+                }
+            }
+            // Keep [R_vv R_vz ρ] of this stage.
+            let dst = &mut self.vrows[j * nu * cols..(j + 1) * nu * cols];
+            for (dcol, scol) in dst.chunks_exact_mut(nu).zip(m.chunks_exact(ld)) {
+                dcol.copy_from_slice(&scol[..nu]);
+            }
+            for i in 0..nu {
+                let d = dst[i * nu + i].abs();
+                dmax = dmax.max(d);
+                dmin = dmin.min(d);
+            }
+            if !(acc.is_finite() && self.l_mat.iter().all(|v| v.is_finite())) {
+                return Err(StageError::NonFinite);
+            }
+        }
+        if !dmax.is_finite() {
+            return Err(StageError::NonFinite);
+        }
+        if dmin == 0.0 {
+            // Zero pivot: the caller's rank test reports it.
+            return Ok(StageInfo {
+                residual_sq: acc,
+                r_diag_ratio: dmax / dmin,
+                r_max: dmax,
+            });
+        }
+        // Forward pass.
+        self.z.copy_from_slice(&self.z0);
+        for j in 0..nh {
+            let vr = &self.vrows[j * nu * cols..(j + 1) * nu * cols];
+            let v = &mut self.sol[j * nu..(j + 1) * nu];
+            // v = ρ − R_vz z
+            v.copy_from_slice(&vr[rhs * nu..rhs * nu + nu]);
+            for (c, zc) in self.z.iter().enumerate() {
+                let col = &vr[(nu + c) * nu..(nu + c + 1) * nu];
+                for (vi, r) in v.iter_mut().zip(col) {
+                    *vi -= r * zc;
+                }
+            }
+            // Back substitution with R_vv (upper triangular).
+            for i in (0..nu).rev() {
+                let vi = v[i] / vr[i * nu + i];
+                v[i] = vi;
+                for (vk, r) in v[..i].iter_mut().zip(&vr[i * nu..i * nu + i]) {
+                    *vk -= r * vi;
+                }
+            }
+            if j + 1 < nh {
+                // z_{j+1} = A z_j + B v_j + c_j
+                if self.c_zero {
+                    self.z_next.fill(0.0);
+                } else {
+                    self.z_next.copy_from_slice(&self.c[j * nz..(j + 1) * nz]);
+                }
+                for (col, zc) in self.a.chunks_exact(nz).zip(&self.z) {
+                    if *zc != 0.0 {
+                        for (o, a) in self.z_next.iter_mut().zip(col) {
+                            *o += a * zc;
+                        }
+                    }
+                }
+                for (col, vc) in self.b.chunks_exact(nz).zip(v.iter()) {
+                    for (o, b) in self.z_next.iter_mut().zip(col) {
+                        *o += b * vc;
+                    }
+                }
+                std::mem::swap(&mut self.z, &mut self.z_next);
+            }
+        }
+        if !self.sol.iter().all(|v| v.is_finite()) {
+            return Err(StageError::NonFinite);
+        }
+        Ok(StageInfo {
+            residual_sq: acc,
+            r_diag_ratio: dmax / dmin,
+            r_max: dmax,
+        })
+    }
+
+    /// `|R_ii|` of the last solve in the column order of the dense system
+    /// (`v_{N−1}` first).
+    pub fn r_diagonal_dense_order(&self) -> impl Iterator<Item = f64> + '_ {
+        let (nu, cols) = (self.nu, self.nu + self.nz + 1);
+        self.vrows
+            .chunks_exact(nu * cols)
+            .rev()
+            .flat_map(move |v| (0..nu).map(move |i| v[i * nu + i].abs()))
+    }
+}
+
+/// `out = L x` for an upper-triangular `L` (nz×nz, column-major): column `m`
+/// of `L` has nonzeros in rows `0..=m` only. Zero entries of `x` are skipped
+/// (the augmented `A`, `B` are sparse).
+#[inline]
+fn tri_times(l: &[f64], nz: usize, x: &[f64], out: &mut [f64]) {
+    out.fill(0.0);
+    for (mcol, (lcol, &xm)) in l.chunks_exact(nz).zip(x).enumerate() {
+        if xm != 0.0 {
+            for (o, lv) in out[..=mcol].iter_mut().zip(&lcol[..=mcol]) {
+                *o += lv * xm;
+            }
+        }
+    }
+}
+
+/// One Householder reflection of the stacked matrix `m` (column-major,
+/// leading dimension `ld`, `cols` columns): annihilates column `k` in rows
+/// `seg_lo..seg_hi` against the pivot row `p` (`p < seg_lo`; every other row
+/// is zero in column `k` by structure), and applies it to columns `k+1..cols`.
+/// Leaves `β` at `(p, k)` and zeros in the segment.
+#[inline]
+fn householder(
+    m: &mut [f64],
+    ld: usize,
+    cols: usize,
+    k: usize,
+    p: usize,
+    seg_lo: usize,
+    seg_hi: usize,
+) {
+    let (head, rest) = m.split_at_mut((k + 1) * ld);
+    let colk = &mut head[k * ld..];
+    let alpha = colk[p];
+    let seg = &mut colk[seg_lo..seg_hi];
+    let sigma: f64 = seg.iter().map(|v| v * v).sum();
+    if sigma == 0.0 {
+        return;
+    }
+    let norm = (alpha * alpha + sigma).sqrt();
+    let beta = if alpha >= 0.0 { -norm } else { norm };
+    let scale = 1.0 / (alpha - beta);
+    for v in seg.iter_mut() {
+        *v *= scale;
+    }
+    let tau = (beta - alpha) / beta;
+    colk[p] = beta;
+    let v = &colk[seg_lo..seg_hi];
+    for col in rest.chunks_exact_mut(ld).take(cols - k - 1) {
+        let (upper, lower) = col.split_at_mut(seg_lo);
+        let s = &mut lower[..seg_hi - seg_lo];
+        let mut w = upper[p];
+        for (a, b) in v.iter().zip(s.iter()) {
+            w += a * b;
+        }
+        let tw = tau * w;
+        upper[p] -= tw;
+        for (a, b) in s.iter_mut().zip(v) {
+            *a -= tw * b;
+        }
+    }
+    // The reflector's vector is no longer needed: the column is R's.
+    for x in &mut head[k * ld + seg_lo..k * ld + seg_hi] {
+        *x = 0.0;
+    }
+}
