@@ -25,6 +25,7 @@ pub mod model;
 pub mod prediction;
 pub mod second;
 pub mod settings;
+pub(crate) mod simd;
 pub(crate) mod structured;
 pub mod usual;
 pub mod zoh;

@@ -41,6 +41,8 @@
 //!
 //! Flops per stage: `O((nu + nz)²·nz)`, independent of `N`.
 
+use super::simd::Avx2Fma;
+
 /// The stage-wise problem and its square-root Riccati workspace, sized once.
 #[derive(Debug, Clone)]
 pub(crate) struct StageLq {
@@ -135,7 +137,45 @@ impl StageLq {
     }
 
     /// Backward square-root recursion and forward pass. Allocates nothing.
+    /// Runs the same code compiled for AVX2 when the CPU has it (the
+    /// partial sums are the same, so is the result).
     pub fn solve(&mut self) -> Result<StageInfo, StageError> {
+        match Avx2Fma::detect() {
+            Some(token) => self.solve_avx2(token),
+            None => self.solve_portable(),
+        }
+    }
+
+    /// [`StageLq::solve`] compiled for the baseline target.
+    pub fn solve_portable(&mut self) -> Result<StageInfo, StageError> {
+        self.solve_impl()
+    }
+
+    /// [`StageLq::solve`] compiled with AVX2 and FMA enabled; the token proves
+    /// the CPU runs them.
+    pub fn solve_avx2(&mut self, token: Avx2Fma) -> Result<StageInfo, StageError> {
+        let _proof = token;
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: an `Avx2Fma` exists only when the CPU supports AVX2 and
+            // FMA (`Avx2Fma::detect`), the features `solve_avx2_unchecked`
+            // enables.
+            unsafe { self.solve_avx2_unchecked() }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        self.solve_impl()
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2 and FMA.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn solve_avx2_unchecked(&mut self) -> Result<StageInfo, StageError> {
+        self.solve_impl()
+    }
+
+    #[inline(always)]
+    fn solve_impl(&mut self) -> Result<StageInfo, StageError> {
         let (nu, nz, nq, nh, ld) = (self.nu, self.nz, self.nq, self.nh, self.ld);
         let cols = nu + nz + 1;
         let rhs = nu + nz;
@@ -316,7 +356,7 @@ impl StageLq {
 /// `out = L x` for an upper-triangular `L` (nz×nz, column-major): column `m`
 /// of `L` has nonzeros in rows `0..=m` only. Zero entries of `x` are skipped
 /// (the augmented `A`, `B` are sparse).
-#[inline]
+#[inline(always)]
 fn tri_times(l: &[f64], nz: usize, x: &[f64], out: &mut [f64]) {
     out.fill(0.0);
     for (mcol, (lcol, &xm)) in l.chunks_exact(nz).zip(x).enumerate() {
@@ -333,7 +373,7 @@ fn tri_times(l: &[f64], nz: usize, x: &[f64], out: &mut [f64]) {
 /// `seg_lo..seg_hi` against the pivot row `p` (`p < seg_lo`; every other row
 /// is zero in column `k` by structure), and applies it to columns `k+1..cols`.
 /// Leaves `β` at `(p, k)` and zeros in the segment.
-#[inline]
+#[inline(always)]
 fn householder(
     m: &mut [f64],
     ld: usize,
@@ -347,7 +387,7 @@ fn householder(
     let colk = &mut head[k * ld..];
     let alpha = colk[p];
     let seg = &mut colk[seg_lo..seg_hi];
-    let sigma: f64 = seg.iter().map(|v| v * v).sum();
+    let sigma = dot(seg, seg);
     if sigma == 0.0 {
         return;
     }
@@ -360,21 +400,185 @@ fn householder(
     let tau = (beta - alpha) / beta;
     colk[p] = beta;
     let v = &colk[seg_lo..seg_hi];
-    for col in rest.chunks_exact_mut(ld).take(cols - k - 1) {
-        let (upper, lower) = col.split_at_mut(seg_lo);
-        let s = &mut lower[..seg_hi - seg_lo];
-        let mut w = upper[p];
-        for (a, b) in v.iter().zip(s.iter()) {
-            w += a * b;
+    let len = seg_hi - seg_lo;
+    let rest = &mut rest[..(cols - k - 1) * ld];
+    // Two columns at a time: independent accumulators for the dot products.
+    let mut pairs = rest.chunks_exact_mut(2 * ld);
+    for pair in &mut pairs {
+        let (c0, c1) = pair.split_at_mut(ld);
+        let (u0, l0) = c0.split_at_mut(seg_lo);
+        let (u1, l1) = c1.split_at_mut(seg_lo);
+        let (s0, s1) = (&mut l0[..len], &mut l1[..len]);
+        let (d0, d1) = dot2(v, s0, s1);
+        let (t0, t1) = (tau * (u0[p] + d0), tau * (u1[p] + d1));
+        u0[p] -= t0;
+        u1[p] -= t1;
+        for ((a0, a1), b) in s0.iter_mut().zip(s1.iter_mut()).zip(v) {
+            *a0 -= t0 * b;
+            *a1 -= t1 * b;
         }
-        let tw = tau * w;
-        upper[p] -= tw;
-        for (a, b) in s.iter_mut().zip(v) {
-            *a -= tw * b;
+    }
+    let last = pairs.into_remainder();
+    if last.len() == ld {
+        let (u0, l0) = last.split_at_mut(seg_lo);
+        let s0 = &mut l0[..len];
+        let t0 = tau * (u0[p] + dot(v, s0));
+        u0[p] -= t0;
+        for (a0, b) in s0.iter_mut().zip(v) {
+            *a0 -= t0 * b;
         }
     }
     // The reflector's vector is no longer needed: the column is R's.
     for x in &mut head[k * ld + seg_lo..k * ld + seg_hi] {
         *x = 0.0;
+    }
+}
+
+/// `xᵀy` with four independent partial sums (so that it vectorizes).
+#[inline(always)]
+fn dot(x: &[f64], y: &[f64]) -> f64 {
+    let len = x.len().min(y.len());
+    let (x, y) = (&x[..len], &y[..len]);
+    let mut acc = [0.0f64; 4];
+    let (cx, cy) = (x.chunks_exact(4), y.chunks_exact(4));
+    let (rx, ry) = (cx.remainder(), cy.remainder());
+    for (a, b) in cx.zip(cy) {
+        for l in 0..4 {
+            acc[l] += a[l] * b[l];
+        }
+    }
+    let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    for (a, b) in rx.iter().zip(ry) {
+        s += a * b;
+    }
+    s
+}
+
+/// `(vᵀx, vᵀy)` with four partial sums each.
+#[inline(always)]
+fn dot2(v: &[f64], x: &[f64], y: &[f64]) -> (f64, f64) {
+    let len = v.len().min(x.len()).min(y.len());
+    let (v, x, y) = (&v[..len], &x[..len], &y[..len]);
+    let (mut ax, mut ay) = ([0.0f64; 4], [0.0f64; 4]);
+    let (cv, cx, cy) = (v.chunks_exact(4), x.chunks_exact(4), y.chunks_exact(4));
+    let (rv, rx, ry) = (cv.remainder(), cx.remainder(), cy.remainder());
+    for ((a, b), c) in cv.zip(cx).zip(cy) {
+        for l in 0..4 {
+            ax[l] += a[l] * b[l];
+            ay[l] += a[l] * c[l];
+        }
+    }
+    let mut sx = (ax[0] + ax[1]) + (ax[2] + ax[3]);
+    let mut sy = (ay[0] + ay[1]) + (ay[2] + ay[3]);
+    for ((a, b), c) in rv.iter().zip(rx).zip(ry) {
+        sx += a * b;
+        sy += a * c;
+    }
+    (sx, sy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{DMatrix, DVector};
+
+    fn rng(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    fn random_problem(nu: usize, nz: usize, nq: usize, nh: usize, seed: &mut u64) -> StageLq {
+        let mut st = StageLq::new(nu, nz, nq, nh);
+        for v in st.a.iter_mut().chain(&mut st.b).chain(&mut st.r) {
+            *v = rng(seed);
+        }
+        for v in st.c.iter_mut().chain(&mut st.z0) {
+            *v = rng(seed);
+        }
+        st.c_zero = false;
+        for v in st.rd.iter_mut() {
+            *v = 0.1 + rng(seed).abs();
+        }
+        for v in st.qd.iter_mut() {
+            *v = rng(seed).abs();
+        }
+        st
+    }
+
+    /// The condensed problem built by brute force: unknowns v_0..v_{N−1},
+    /// states eliminated by z_{j} = A^j z_0 + Σ A^{j−1−i}(B v_i + c_i); solved
+    /// by SVD.
+    fn brute(st: &StageLq) -> (Vec<f64>, f64) {
+        let (nu, nz, nq, nh) = (st.nu, st.nz, st.nq, st.nh);
+        let a = DMatrix::from_column_slice(nz, nz, &st.a);
+        let b = DMatrix::from_column_slice(nz, nu, &st.b);
+        let p = nh * nu;
+        let rows = p + nh * nq;
+        let mut m = DMatrix::<f64>::zeros(rows, p);
+        let mut rhs = DVector::<f64>::zeros(rows);
+        for i in 0..p {
+            m[(i, i)] = st.rd[i % nu];
+        }
+        // z_j = Z_j [v; 1]: affine in v.
+        let mut zv = DMatrix::<f64>::zeros(nz, p);
+        let mut z1 = DVector::from_column_slice(&st.z0);
+        for j in 1..=nh {
+            let c = DVector::from_column_slice(&st.c[(j - 1) * nz..j * nz]);
+            zv = &a * zv;
+            zv.view_mut((0, (j - 1) * nu), (nz, nu)).copy_from(&b);
+            z1 = &a * z1 + c;
+            for i in 0..nq {
+                let row = p + (j - 1) * nq + i;
+                for col in 0..p {
+                    m[(row, col)] = st.qd[i] * zv[(i, col)];
+                }
+                rhs[row] = st.qd[i] * (st.r[(j - 1) * nq + i] - z1[i]);
+            }
+        }
+        let x = m.clone().svd(true, true).solve(&rhs, 1e-14).unwrap();
+        let res = (&m * &x - &rhs).norm_squared();
+        (x.as_slice().to_vec(), res)
+    }
+
+    #[test]
+    fn square_root_recursion_equals_brute_force_least_squares() {
+        let mut seed = 3;
+        for (nu, nz, nq, nh) in [(1, 1, 1, 1), (2, 3, 2, 4), (3, 5, 2, 6), (2, 4, 4, 9)] {
+            let mut st = random_problem(nu, nz, nq, nh, &mut seed);
+            let info = st.solve_portable().unwrap();
+            let (x, res) = brute(&st);
+            let diff = st
+                .solution()
+                .iter()
+                .zip(&x)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            let scale = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert!(diff <= 1e-10 * scale, "{nu} {nz} {nq} {nh}: {diff:e}");
+            assert!(
+                (info.residual_sq - res).abs() <= 1e-10 * res.max(1e-300),
+                "J_min {} vs {res}",
+                info.residual_sq
+            );
+        }
+    }
+
+    #[test]
+    fn avx2_build_equals_portable_build() {
+        let Some(token) = Avx2Fma::detect() else {
+            eprintln!("SKIPPED avx2_build_equals_portable_build: this CPU has no AVX2+FMA");
+            return;
+        };
+        let mut seed = 9;
+        for (nu, nz, nq, nh) in [(6, 24, 12, 10), (2, 3, 2, 4), (6, 18, 12, 7)] {
+            let mut st = random_problem(nu, nz, nq, nh, &mut seed);
+            let mut st2 = st.clone();
+            let a = st.solve_portable().unwrap();
+            let b = st2.solve_avx2(token).unwrap();
+            assert_eq!(a, b);
+            assert_eq!(st.solution(), st2.solution());
+        }
     }
 }
