@@ -66,14 +66,19 @@ pub(crate) struct StageLq {
     pub c_zero: bool,
     /// Initial state `z_0` (nz).
     pub z0: Vec<f64>,
-    /// Stacked stage matrix, column-major, `ld = nu + nq + nz` rows,
-    /// `nu + nz + 1` columns.
+    /// Stacked stage matrix, row-major: `ld = nu + nq + nz` rows of
+    /// `nu + nz + 1` columns (row operations are contiguous).
     m: Vec<f64>,
     ld: usize,
-    /// Current `L` (nz×nz column-major, upper triangular) and `l`.
+    /// `[B A]` row-major (nz × (nu + nz)).
+    ba: Vec<f64>,
+    /// Current `L` (nz×nz row-major, upper triangular) and `l`.
     l_mat: Vec<f64>,
     l_vec: Vec<f64>,
-    /// Per stage `j`: the `nu` rows `[R_vv R_vz ρ]`, column-major
+    /// Householder work: the reflector vector and `vᵀM`.
+    hv: Vec<f64>,
+    hw: Vec<f64>,
+    /// Per stage `j`: the `nu` rows `[R_vv R_vz ρ]`, row-major
     /// nu × (nu + nz + 1).
     vrows: Vec<f64>,
     /// Forward pass: current and next state.
@@ -122,6 +127,9 @@ impl StageLq {
             z0: vec![0.0; nz],
             m: vec![0.0; ld * cols],
             ld,
+            ba: vec![0.0; nz * (nu + nz)],
+            hv: vec![0.0; ld],
+            hw: vec![0.0; cols],
             l_mat: vec![0.0; nz * nz],
             l_vec: vec![0.0; nz],
             vrows: vec![0.0; nh * nu * cols],
@@ -179,6 +187,15 @@ impl StageLq {
         let (nu, nz, nq, nh, ld) = (self.nu, self.nz, self.nq, self.nh, self.ld);
         let cols = nu + nz + 1;
         let rhs = nu + nz;
+        // [B A] row-major.
+        for (i, row) in self.ba.chunks_exact_mut(nu + nz).enumerate() {
+            for (c, v) in row[..nu].iter_mut().enumerate() {
+                *v = self.b[c * nz + i];
+            }
+            for (c, v) in row[nu..].iter_mut().enumerate() {
+                *v = self.a[c * nz + i];
+            }
+        }
         // L_N = [D S; 0], l_N = [D r_N; 0].
         self.l_mat.fill(0.0);
         self.l_vec.fill(0.0);
@@ -192,85 +209,69 @@ impl StageLq {
             // Rows of the diagonal part: nu (+ nq for j ≥ 1).
             let top = if j == 0 { nu } else { nu + nq };
             let m = &mut self.m;
-            // Clear the top rows, then write the diagonals.
-            for col in m.chunks_exact_mut(ld) {
-                col[..top].fill(0.0);
-            }
+            m[..top * cols].fill(0.0);
             for i in 0..nu {
-                m[i * ld + i] = self.rd[i];
+                m[i * cols + i] = self.rd[i];
             }
             if j > 0 {
                 for i in 0..nq {
                     let q = self.qd[i];
-                    m[(nu + i) * ld + nu + i] = q;
-                    m[rhs * ld + nu + i] = q * self.r[(j - 1) * nq + i];
+                    let row = &mut m[(nu + i) * cols..(nu + i + 1) * cols];
+                    row[nu + i] = q;
+                    row[rhs] = q * self.r[(j - 1) * nq + i];
                 }
             }
-            // Dense rows: L_{j+1} [B A | −c_j] and l_{j+1}.
-            let (lm, lv) = (&self.l_mat, &self.l_vec);
-            for (col, src) in m
-                .chunks_exact_mut(ld)
-                .take(nu + nz)
-                .zip(self.b.chunks_exact(nz).chain(self.a.chunks_exact(nz)))
+            // Dense rows: row i = Σ_{k ≥ i} L[i,k] [B A | −c_j][k] and l_{j+1}.
+            let cj = &self.c[j * nz..(j + 1) * nz];
+            for (i, (row, lrow)) in m[top * cols..(top + nz) * cols]
+                .chunks_exact_mut(cols)
+                .zip(self.l_mat.chunks_exact(nz))
+                .enumerate()
             {
-                tri_times(lm, nz, src, &mut col[top..top + nz]);
-            }
-            {
-                let col = &mut m[rhs * ld + top..rhs * ld + top + nz];
-                if self.c_zero {
-                    col.copy_from_slice(lv);
+                let (out, last) = row.split_at_mut(rhs);
+                out.fill(0.0);
+                let li = &lrow[i..];
+                accumulate_rows(out, li, &self.ba[i * (nu + nz)..], nu + nz, 0);
+                let lc = if self.c_zero { 0.0 } else { dot(li, &cj[i..]) };
+                last[0] = if self.c_zero {
+                    self.l_vec[i]
                 } else {
-                    tri_times(lm, nz, &self.c[j * nz..(j + 1) * nz], col);
-                    for (o, l) in col.iter_mut().zip(lv) {
-                        *o = l - *o;
-                    }
-                }
+                    self.l_vec[i] - lc
+                };
             }
             // Householder on the columns with a diagonal pivot row.
             for k in 0..top {
-                householder(m, ld, cols, k, k, top, top + nz);
+                householder_rows(m, cols, k, k, top, top + nz, &mut self.hv, &mut self.hw);
             }
             if j > 0 {
-                // The remaining z columns: pivots in the dense rows.
+                // The remaining z columns: pivot k is dense row k − top, at row k.
                 for k in top..nu + nz {
-                    let p = k; // dense row k − top sits at row top + (k − top) = k
-                    householder(m, ld, cols, k, p, p + 1, top + nz);
+                    householder_rows(m, cols, k, k, k + 1, top + nz, &mut self.hv, &mut self.hw);
                 }
-                // L_j: row c ↔ pivot row nu + c (for c < nq the diagonal row,
-                // else the dense row with the same index: top + c − nq = nu + c).
-                for c in 0..nz {
-                    let row = nu + c;
-                    for cc in 0..nz {
-                        self.l_mat[cc * nz + c] = if cc >= c {
-                            m[(nu + cc) * ld + row]
-                        } else {
-                            0.0
-                        };
-                    }
-                    self.l_vec[c] = m[rhs * ld + row];
+                // L_j: row c is row nu + c from column nu + c on.
+                for (c, lrow) in self.l_mat.chunks_exact_mut(nz).enumerate() {
+                    let row = &m[(nu + c) * cols..(nu + c + 1) * cols];
+                    lrow[..c].fill(0.0);
+                    lrow[c..].copy_from_slice(&row[nu + c..rhs]);
+                    self.l_vec[c] = row[rhs];
                 }
                 // Rows below the pivots: residual only.
                 for row in nu + nz..top + nz {
-                    let e = m[rhs * ld + row];
+                    let e = m[row * cols + rhs];
                     acc += e * e;
                 }
             } else {
                 // j = 0: z_0 is known, the remaining rows are residual.
-                for row in top..top + nz {
-                    let mut e = -m[rhs * ld + row];
-                    for (c, zc) in self.z0.iter().enumerate() {
-                        e += m[(nu + c) * ld + row] * zc;
-                    }
+                for row in m[top * cols..(top + nz) * cols].chunks_exact(cols) {
+                    let e = dot(&row[nu..rhs], &self.z0) - row[rhs];
                     acc += e * e;
                 }
             }
             // Keep [R_vv R_vz ρ] of this stage.
             let dst = &mut self.vrows[j * nu * cols..(j + 1) * nu * cols];
-            for (dcol, scol) in dst.chunks_exact_mut(nu).zip(m.chunks_exact(ld)) {
-                dcol.copy_from_slice(&scol[..nu]);
-            }
+            dst.copy_from_slice(&m[..nu * cols]);
             for i in 0..nu {
-                let d = dst[i * nu + i].abs();
+                let d = dst[i * cols + i].abs();
                 dmax = dmax.max(d);
                 dmin = dmin.min(d);
             }
@@ -289,26 +290,20 @@ impl StageLq {
                 r_max: dmax,
             });
         }
+        let _ = ld;
         // Forward pass.
         self.z.copy_from_slice(&self.z0);
         for j in 0..nh {
             let vr = &self.vrows[j * nu * cols..(j + 1) * nu * cols];
             let v = &mut self.sol[j * nu..(j + 1) * nu];
-            // v = ρ − R_vz z
-            v.copy_from_slice(&vr[rhs * nu..rhs * nu + nu]);
-            for (c, zc) in self.z.iter().enumerate() {
-                let col = &vr[(nu + c) * nu..(nu + c + 1) * nu];
-                for (vi, r) in v.iter_mut().zip(col) {
-                    *vi -= r * zc;
-                }
-            }
-            // Back substitution with R_vv (upper triangular).
+            // Back substitution: R_vv v = ρ − R_vz z (R_vv upper triangular).
             for i in (0..nu).rev() {
-                let vi = v[i] / vr[i * nu + i];
-                v[i] = vi;
-                for (vk, r) in v[..i].iter_mut().zip(&vr[i * nu..i * nu + i]) {
-                    *vk -= r * vi;
+                let row = &vr[i * cols..(i + 1) * cols];
+                let mut s = row[rhs] - dot(&row[nu..rhs], &self.z);
+                for (r, vk) in row[i + 1..nu].iter().zip(&v[i + 1..]) {
+                    s -= r * vk;
                 }
+                v[i] = s / row[i];
             }
             if j + 1 < nh {
                 // z_{j+1} = A z_j + B v_j + c_j
@@ -349,88 +344,97 @@ impl StageLq {
         self.vrows
             .chunks_exact(nu * cols)
             .rev()
-            .flat_map(move |v| (0..nu).map(move |i| v[i * nu + i].abs()))
+            .flat_map(move |v| (0..nu).map(move |i| v[i * cols + i].abs()))
     }
 }
 
-/// `out = L x` for an upper-triangular `L` (nz×nz, column-major): column `m`
-/// of `L` has nonzeros in rows `0..=m` only. Zero entries of `x` are skipped
-/// (the augmented `A`, `B` are sparse).
+/// One Householder reflection of the stacked matrix `m` (row-major, `cols`
+/// columns): annihilates column `k` in rows `lo..hi` against the pivot row
+/// `p` (`p < lo`; every other row is zero in column `k` by structure), and
+/// applies it to columns `k+1..cols` by contiguous row operations. Leaves
+/// `β` at `(p, k)` and zeros in rows `lo..hi` of column `k`. `hv` (≥ hi − lo)
+/// and `hw` (≥ cols) are work.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn tri_times(l: &[f64], nz: usize, x: &[f64], out: &mut [f64]) {
-    out.fill(0.0);
-    for (mcol, (lcol, &xm)) in l.chunks_exact(nz).zip(x).enumerate() {
-        if xm != 0.0 {
-            for (o, lv) in out[..=mcol].iter_mut().zip(&lcol[..=mcol]) {
-                *o += lv * xm;
-            }
-        }
-    }
-}
-
-/// One Householder reflection of the stacked matrix `m` (column-major,
-/// leading dimension `ld`, `cols` columns): annihilates column `k` in rows
-/// `seg_lo..seg_hi` against the pivot row `p` (`p < seg_lo`; every other row
-/// is zero in column `k` by structure), and applies it to columns `k+1..cols`.
-/// Leaves `β` at `(p, k)` and zeros in the segment.
-#[inline(always)]
-fn householder(
+fn householder_rows(
     m: &mut [f64],
-    ld: usize,
     cols: usize,
     k: usize,
     p: usize,
-    seg_lo: usize,
-    seg_hi: usize,
+    lo: usize,
+    hi: usize,
+    hv: &mut [f64],
+    hw: &mut [f64],
 ) {
-    let (head, rest) = m.split_at_mut((k + 1) * ld);
-    let colk = &mut head[k * ld..];
-    let alpha = colk[p];
-    let seg = &mut colk[seg_lo..seg_hi];
-    let sigma = dot(seg, seg);
+    let len = hi - lo;
+    let v = &mut hv[..len];
+    for (x, row) in v.iter_mut().zip(m[lo * cols..hi * cols].chunks_exact(cols)) {
+        *x = row[k];
+    }
+    let sigma = dot(v, v);
     if sigma == 0.0 {
         return;
     }
+    let alpha = m[p * cols + k];
     let norm = (alpha * alpha + sigma).sqrt();
     let beta = if alpha >= 0.0 { -norm } else { norm };
     let scale = 1.0 / (alpha - beta);
-    for v in seg.iter_mut() {
-        *v *= scale;
+    for x in v.iter_mut() {
+        *x *= scale;
     }
     let tau = (beta - alpha) / beta;
-    colk[p] = beta;
-    let v = &colk[seg_lo..seg_hi];
-    let len = seg_hi - seg_lo;
-    let rest = &mut rest[..(cols - k - 1) * ld];
-    // Two columns at a time: independent accumulators for the dot products.
-    let mut pairs = rest.chunks_exact_mut(2 * ld);
-    for pair in &mut pairs {
-        let (c0, c1) = pair.split_at_mut(ld);
-        let (u0, l0) = c0.split_at_mut(seg_lo);
-        let (u1, l1) = c1.split_at_mut(seg_lo);
-        let (s0, s1) = (&mut l0[..len], &mut l1[..len]);
-        let (d0, d1) = dot2(v, s0, s1);
-        let (t0, t1) = (tau * (u0[p] + d0), tau * (u1[p] + d1));
-        u0[p] -= t0;
-        u1[p] -= t1;
-        for ((a0, a1), b) in s0.iter_mut().zip(s1.iter_mut()).zip(v) {
-            *a0 -= t0 * b;
-            *a1 -= t1 * b;
+    let w = &mut hw[..cols - k - 1];
+    let (upper, lower) = m.split_at_mut(lo * cols);
+    let prow = &mut upper[p * cols..(p + 1) * cols];
+    prow[k] = beta;
+    // w = M[p, k+1..] + Σ v_i M[i, k+1..]
+    w.copy_from_slice(&prow[k + 1..]);
+    let lower = &mut lower[..len * cols];
+    accumulate_rows(w, v, lower, cols, k + 1);
+    for o in w.iter_mut() {
+        *o *= tau;
+    }
+    for (o, x) in prow[k + 1..].iter_mut().zip(w.iter()) {
+        *o -= x;
+    }
+    for (vi, row) in v.iter().zip(lower.chunks_exact_mut(cols)) {
+        row[k] = 0.0;
+        for (o, x) in row[k + 1..].iter_mut().zip(w.iter()) {
+            *o -= vi * x;
         }
     }
-    let last = pairs.into_remainder();
-    if last.len() == ld {
-        let (u0, l0) = last.split_at_mut(seg_lo);
-        let s0 = &mut l0[..len];
-        let t0 = tau * (u0[p] + dot(v, s0));
-        u0[p] -= t0;
-        for (a0, b) in s0.iter_mut().zip(v) {
-            *a0 -= t0 * b;
+}
+
+/// `w[c] += Σ_i v[i]·m[i·cols + off + c]` for `c < w.len()`: a sum of
+/// scaled rows, eight columns at a time in registers (no round trip of `w`
+/// through memory per row).
+#[inline(always)]
+fn accumulate_rows(w: &mut [f64], v: &[f64], m: &[f64], cols: usize, off: usize) {
+    const W: usize = 8;
+    let len = w.len();
+    let mut c0 = 0;
+    while c0 + W <= len {
+        let mut acc = [0.0f64; W];
+        acc.copy_from_slice(&w[c0..c0 + W]);
+        for (&vi, row) in v.iter().zip(m.chunks(cols)) {
+            let seg = &row[off + c0..off + c0 + W];
+            for l in 0..W {
+                acc[l] += vi * seg[l];
+            }
         }
+        w[c0..c0 + W].copy_from_slice(&acc);
+        c0 += W;
     }
-    // The reflector's vector is no longer needed: the column is R's.
-    for x in &mut head[k * ld + seg_lo..k * ld + seg_hi] {
-        *x = 0.0;
+    if c0 < len {
+        let rest = len - c0;
+        let mut acc = [0.0f64; W];
+        acc[..rest].copy_from_slice(&w[c0..]);
+        for (&vi, row) in v.iter().zip(m.chunks(cols)) {
+            for (a, x) in acc[..rest].iter_mut().zip(&row[off + c0..off + len]) {
+                *a += vi * x;
+            }
+        }
+        w[c0..].copy_from_slice(&acc[..rest]);
     }
 }
 
@@ -452,29 +456,6 @@ fn dot(x: &[f64], y: &[f64]) -> f64 {
         s += a * b;
     }
     s
-}
-
-/// `(vᵀx, vᵀy)` with four partial sums each.
-#[inline(always)]
-fn dot2(v: &[f64], x: &[f64], y: &[f64]) -> (f64, f64) {
-    let len = v.len().min(x.len()).min(y.len());
-    let (v, x, y) = (&v[..len], &x[..len], &y[..len]);
-    let (mut ax, mut ay) = ([0.0f64; 4], [0.0f64; 4]);
-    let (cv, cx, cy) = (v.chunks_exact(4), x.chunks_exact(4), y.chunks_exact(4));
-    let (rv, rx, ry) = (cv.remainder(), cx.remainder(), cy.remainder());
-    for ((a, b), c) in cv.zip(cx).zip(cy) {
-        for l in 0..4 {
-            ax[l] += a[l] * b[l];
-            ay[l] += a[l] * c[l];
-        }
-    }
-    let mut sx = (ax[0] + ax[1]) + (ax[2] + ax[3]);
-    let mut sy = (ay[0] + ay[1]) + (ay[2] + ay[3]);
-    for ((a, b), c) in rv.iter().zip(rx).zip(ry) {
-        sx += a * b;
-        sy += a * c;
-    }
-    (sx, sy)
 }
 
 #[cfg(test)]
