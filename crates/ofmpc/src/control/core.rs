@@ -145,8 +145,8 @@ impl Core {
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
         let m = groups * p;
-        let (lsq, stage) = match settings.solver {
-            Solver::DenseQr => {
+        let (lsq, stage) = match settings.solver.for_horizon(nh) {
+            Solver::DenseQr | Solver::Auto => {
                 if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
                     return Err(SettingsError::TooLarge {
                         rows: m,

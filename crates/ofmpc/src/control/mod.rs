@@ -9,8 +9,9 @@
 //! 3. builds the prediction matrices ([`prediction`], Eq. (20)–(29)),
 //! 4. solves the least-squares problem `min ‖𝒜 ΔU − b‖` (Eq. (40)–(42)),
 //!    either as the stacked dense system by Householder QR ([`lsq`],
-//!    [`Solver::DenseQr`]) or, by default, stage-wise by a square-root
-//!    Riccati recursion whose cost is linear in `N` ([`Solver::Structured`]),
+//!    [`Solver::DenseQr`]) or stage-wise by a square-root Riccati recursion
+//!    whose cost is linear in `N` ([`Solver::Structured`]; by default the
+//!    faster of the two for the horizon, [`Solver::Auto`]),
 //! 5. applies the first block and returns `τ_k = H u_k + g` (Eq. (15)).
 //!
 //! All buffers are sized at construction; [`Controller::step`] allocates
@@ -42,7 +43,7 @@ pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, ModelError};
 pub use prediction::Predictions;
 pub use second::SecondMpc;
-pub use settings::{MpcSettings, SettingsError, Solver, Weight};
+pub use settings::{MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON};
 pub use usual::UsualMpc;
 pub use zoh::{Zoh, ZohError};
 

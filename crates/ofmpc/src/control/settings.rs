@@ -83,8 +83,8 @@ impl Weight {
 }
 
 /// How a controller solves its least-squares problem each sample. Serde
-/// names: `"dense-qr"`, `"structured"`. Both return the same `ΔU` (to
-/// rounding); they differ in cost.
+/// names: `"dense-qr"`, `"structured"`, `"auto"`. Both solvers return the
+/// same `ΔU` (to rounding); they differ in cost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Solver {
@@ -92,18 +92,35 @@ pub enum Solver {
     /// `O((N·n)³)` flops per sample. The reference.
     DenseQr,
     /// The same problem as a stage-wise LQ problem solved by a square-root
-    /// (Householder QR) Riccati recursion: `O(N·n³)` flops per sample
-    /// ([`super::structured`]). The default.
-    #[default]
+    /// (Householder QR) Riccati recursion: `O(N·n³)` flops per sample.
     Structured,
+    /// The faster of the two for the horizon (the default): the dense QR for
+    /// `N <` [`STRUCTURED_FROM_HORIZON`], the structured solver from there on
+    /// (the crossover measured by `cargo bench --bench control` on the IRB 140).
+    #[default]
+    Auto,
 }
 
+/// Smallest horizon for which [`Solver::Auto`] picks the structured solver.
+pub const STRUCTURED_FROM_HORIZON: usize = 20;
+
 impl Solver {
-    /// The serde name (`"dense-qr"` or `"structured"`).
+    /// The serde name (`"dense-qr"`, `"structured"` or `"auto"`).
     pub fn name(self) -> &'static str {
         match self {
             Solver::DenseQr => "dense-qr",
             Solver::Structured => "structured",
+            Solver::Auto => "auto",
+        }
+    }
+
+    /// The solver used at `horizon`: [`Solver::Auto`] resolved, the others
+    /// unchanged.
+    pub fn for_horizon(self, horizon: usize) -> Solver {
+        match self {
+            Solver::Auto if horizon < STRUCTURED_FROM_HORIZON => Solver::DenseQr,
+            Solver::Auto => Solver::Structured,
+            other => other,
         }
     }
 }
@@ -128,8 +145,8 @@ pub struct MpcSettings {
     pub q_du: Weight,
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
-    /// Least-squares solver (default [`Solver::Structured`]; both give the
-    /// same `ΔU`).
+    /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
+    /// N = 20, the structured solver from there on; both give the same `ΔU`).
     pub solver: Solver,
 }
 
