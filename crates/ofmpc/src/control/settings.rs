@@ -102,7 +102,7 @@ pub enum Solver {
 }
 
 /// Smallest horizon for which [`Solver::Auto`] picks the structured solver.
-pub const STRUCTURED_FROM_HORIZON: usize = 20;
+pub const STRUCTURED_FROM_HORIZON: usize = 30;
 
 impl Solver {
     /// The serde name (`"dense-qr"`, `"structured"` or `"auto"`).
@@ -146,7 +146,7 @@ pub struct MpcSettings {
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
     /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
-    /// N = 20, the structured solver from there on; both give the same `ΔU`).
+    /// N = 30, the structured solver from there on; both give the same `ΔU`).
     pub solver: Solver,
 }
 
