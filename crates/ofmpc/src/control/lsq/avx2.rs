@@ -9,6 +9,7 @@
 //! (the token) and, for the raw-pointer kernels, the index ranges that their
 //! callers check.
 #![allow(clippy::needless_range_loop)] // index loops read like the matrix formulas
+#![deny(unsafe_op_in_unsafe_fn)]
 
 use std::arch::x86_64::*;
 
@@ -86,9 +87,10 @@ unsafe fn back_substitute_unchecked(a: &[f64], m: usize, p: usize, x: &mut [f64]
     back_substitute_generic(a, m, p, x)
 }
 
+/// Sum of the four lanes (value intrinsics only: safe where AVX2 is enabled).
 #[inline]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn hsum(v: __m256d) -> f64 {
+fn hsum(v: __m256d) -> f64 {
     let lo = _mm256_castpd256_pd128(v);
     let hi = _mm256_extractf128_pd(v, 1);
     let s = _mm_add_pd(lo, hi);
@@ -114,8 +116,10 @@ pub(crate) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
         for l in 0..4 {
             let o = i + 4 * l;
             acc[l] = _mm256_fmadd_pd(
-                _mm256_loadu_pd(px.add(o)),
-                _mm256_loadu_pd(py.add(o)),
+                // SAFETY: offsets below `len`, the common length of `x` and `y` (loop bounds)
+                unsafe { _mm256_loadu_pd(px.wrapping_add(o)) },
+                // SAFETY: offsets below `len`, the common length of `x` and `y` (loop bounds)
+                unsafe { _mm256_loadu_pd(py.wrapping_add(o)) },
                 acc[l],
             );
         }
@@ -123,8 +127,10 @@ pub(crate) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
     }
     while i + 4 <= len {
         acc[0] = _mm256_fmadd_pd(
-            _mm256_loadu_pd(px.add(i)),
-            _mm256_loadu_pd(py.add(i)),
+            // SAFETY: offsets below `len`, the common length of `x` and `y` (loop bounds)
+            unsafe { _mm256_loadu_pd(px.wrapping_add(i)) },
+            // SAFETY: offsets below `len`, the common length of `x` and `y` (loop bounds)
+            unsafe { _mm256_loadu_pd(py.wrapping_add(i)) },
             acc[0],
         );
         i += 4;
@@ -134,7 +140,10 @@ pub(crate) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
         _mm256_add_pd(acc[2], acc[3]),
     ));
     while i < len {
-        s = (*px.add(i)).mul_add(*py.add(i), s);
+        // SAFETY: offsets below `len`, the common length of `x` and `y` (loop bounds)
+        unsafe {
+            s = (*px.wrapping_add(i)).mul_add(*py.wrapping_add(i), s);
+        }
         i += 1;
     }
     s
@@ -153,11 +162,20 @@ pub(crate) unsafe fn scale(s: f64, x: &mut [f64]) {
     let mut i = 0;
     // SAFETY: `i + 4 ≤ len` (resp. `i < len`).
     while i + 4 <= len {
-        _mm256_storeu_pd(px.add(i), _mm256_mul_pd(sv, _mm256_loadu_pd(px.add(i))));
+        // SAFETY: offsets below `len = x.len()` (loop bounds)
+        unsafe {
+            _mm256_storeu_pd(
+                px.wrapping_add(i),
+                _mm256_mul_pd(sv, _mm256_loadu_pd(px.wrapping_add(i))),
+            )
+        };
         i += 4;
     }
     while i < len {
-        *px.add(i) *= s;
+        // SAFETY: offsets below `len = x.len()` (loop bounds)
+        unsafe {
+            *px.wrapping_add(i) *= s;
+        }
         i += 1;
     }
 }
@@ -188,10 +206,12 @@ pub(crate) unsafe fn factor_panel(
         let (left, right) = a.split_at_mut((c + 1) * m);
         let v = &mut left[c * m + c..c * m + end];
         let (head, tail) = v.split_at_mut(1);
-        let t = match super::reflector(head[0], dot(tail, tail)) {
+        // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
+        let t = match super::reflector(head[0], unsafe { dot(tail, tail) }) {
             None => 0.0,
             Some((beta, inv, t)) => {
-                scale(inv, tail);
+                // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
+                unsafe { scale(inv, tail) };
                 head[0] = beta;
                 t
             }
@@ -208,7 +228,10 @@ pub(crate) unsafe fn factor_panel(
             let mut t1 = [[0.0f64; super::PANEL]; super::PANEL];
             t1[0][0] = t;
             let vb = &vbuf[r * m + r..(r + 1) * m];
-            apply_block_k::<1, false>(vb, m, c, end, m, &t1, &mut right[..(c1 - c - 1) * m]);
+            // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
+            unsafe {
+                apply_block_k::<1, false>(vb, m, c, end, m, &t1, &mut right[..(c1 - c - 1) * m])
+            };
         }
     }
     rmax
@@ -233,13 +256,20 @@ pub(crate) unsafe fn gram(
     let v = left.as_ptr();
     for r in 1..c1 - c0 {
         let col = match r {
-            1 => gram_col::<1>(v, m, c0, end),
-            2 => gram_col::<2>(v, m, c0, end),
-            3 => gram_col::<3>(v, m, c0, end),
-            4 => gram_col::<4>(v, m, c0, end),
-            5 => gram_col::<5>(v, m, c0, end),
-            6 => gram_col::<6>(v, m, c0, end),
-            _ => gram_col::<7>(v, m, c0, end),
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            1 => unsafe { gram_col::<1>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            2 => unsafe { gram_col::<2>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            3 => unsafe { gram_col::<3>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            4 => unsafe { gram_col::<4>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            5 => unsafe { gram_col::<5>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            6 => unsafe { gram_col::<6>(v, m, c0, end) },
+            // SAFETY: AVX2 and FMA are enabled; `gram` asserted that columns c0..c1 and rows below `end` lie in `left`
+            _ => unsafe { gram_col::<7>(v, m, c0, end) },
         };
         for j in 0..r {
             g[j][r] = col[j];
@@ -260,10 +290,13 @@ unsafe fn gram_col<const R: usize>(
     // SAFETY: the caller (`gram`) checked that columns c0..=c0+R, rows
     // below `end ≤ m`, lie inside the array `v` points to.
     let row0 = c0 + R;
-    let vr = v.add(row0 * m);
+    let vr = v.wrapping_add(row0 * m);
     let mut s = [0.0f64; super::PANEL];
     for j in 0..R {
-        s[j] = *v.add((c0 + j) * m + row0);
+        // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
+        unsafe {
+            s[j] = *v.wrapping_add((c0 + j) * m + row0);
+        }
     }
     let start = row0 + 1;
     let len = end - start;
@@ -271,9 +304,15 @@ unsafe fn gram_col<const R: usize>(
     let mut i = 0;
     while i + 4 <= len {
         let row = start + i;
-        let x = _mm256_loadu_pd(vr.add(row));
+        // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
+        let x = unsafe { _mm256_loadu_pd(vr.wrapping_add(row)) };
         for j in 0..R {
-            acc[j] = _mm256_fmadd_pd(_mm256_loadu_pd(v.add((c0 + j) * m + row)), x, acc[j]);
+            // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
+            acc[j] = _mm256_fmadd_pd(
+                unsafe { _mm256_loadu_pd(v.wrapping_add((c0 + j) * m + row)) },
+                x,
+                acc[j],
+            );
         }
         i += 4;
     }
@@ -282,9 +321,13 @@ unsafe fn gram_col<const R: usize>(
     }
     while i < len {
         let row = start + i;
-        let x = *vr.add(row);
+        // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
+        let x = unsafe { *vr.wrapping_add(row) };
         for j in 0..R {
-            s[j] = (*v.add((c0 + j) * m + row)).mul_add(x, s[j]);
+            // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
+            unsafe {
+                s[j] = (*v.wrapping_add((c0 + j) * m + row)).mul_add(x, s[j]);
+            }
         }
         i += 1;
     }
@@ -311,14 +354,22 @@ pub(crate) unsafe fn apply_block(
     right: &mut [f64],
 ) {
     match k {
-        1 => apply_block_k::<1, false>(vb, ld, lo, end, m, t, right),
-        2 => apply_block_k::<2, false>(vb, ld, lo, end, m, t, right),
-        3 => apply_block_k::<3, false>(vb, ld, lo, end, m, t, right),
-        4 => apply_block_k::<4, false>(vb, ld, lo, end, m, t, right),
-        5 => apply_block_k::<5, false>(vb, ld, lo, end, m, t, right),
-        6 => apply_block_k::<6, false>(vb, ld, lo, end, m, t, right),
-        7 => apply_block_k::<7, false>(vb, ld, lo, end, m, t, right),
-        _ => apply_block_k::<8, false>(vb, ld, lo, end, m, t, right),
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        1 => unsafe { apply_block_k::<1, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        2 => unsafe { apply_block_k::<2, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        3 => unsafe { apply_block_k::<3, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        4 => unsafe { apply_block_k::<4, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        5 => unsafe { apply_block_k::<5, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        6 => unsafe { apply_block_k::<6, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        7 => unsafe { apply_block_k::<7, false>(vb, ld, lo, end, m, t, right) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        _ => unsafe { apply_block_k::<8, false>(vb, ld, lo, end, m, t, right) },
     }
 }
 
@@ -347,10 +398,12 @@ unsafe fn apply_block_k<const K: usize, const IL: bool>(
     let mut pairs = right.chunks_exact_mut(2 * m);
     for pair in &mut pairs {
         let (a0, a1) = pair.split_at_mut(m);
-        block::<K, 2, IL>(v, ld, lo, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]);
+        // SAFETY: AVX2 and FMA are enabled; the V and A ranges were asserted above (rows < end ≤ m of each column)
+        unsafe { block::<K, 2, IL>(v, ld, lo, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]) };
     }
     for col in pairs.into_remainder().chunks_exact_mut(m) {
-        block::<K, 1, IL>(v, ld, lo, end, t, [col.as_mut_ptr()]);
+        // SAFETY: AVX2 and FMA are enabled; the V and A ranges were asserted above (rows < end ≤ m of each column)
+        unsafe { block::<K, 1, IL>(v, ld, lo, end, t, [col.as_mut_ptr()]) };
     }
 }
 
@@ -378,17 +431,26 @@ pub(crate) unsafe fn apply_block_packed(
     let len = end.saturating_sub(lo);
     let chunks = len.div_ceil(4);
     if len < 4 || k == 0 || k > super::PANEL || chunks * 4 * k > vpack.len() {
-        return apply_block(vb, ld, k, lo, end, m, t, right);
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        return unsafe { apply_block(vb, ld, k, lo, end, m, t, right) };
     }
     match k {
-        1 => pack_apply::<1>(vb, ld, lo, end, m, t, right, vpack),
-        2 => pack_apply::<2>(vb, ld, lo, end, m, t, right, vpack),
-        3 => pack_apply::<3>(vb, ld, lo, end, m, t, right, vpack),
-        4 => pack_apply::<4>(vb, ld, lo, end, m, t, right, vpack),
-        5 => pack_apply::<5>(vb, ld, lo, end, m, t, right, vpack),
-        6 => pack_apply::<6>(vb, ld, lo, end, m, t, right, vpack),
-        7 => pack_apply::<7>(vb, ld, lo, end, m, t, right, vpack),
-        _ => pack_apply::<8>(vb, ld, lo, end, m, t, right, vpack),
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        1 => unsafe { pack_apply::<1>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        2 => unsafe { pack_apply::<2>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        3 => unsafe { pack_apply::<3>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        4 => unsafe { pack_apply::<4>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        5 => unsafe { pack_apply::<5>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        6 => unsafe { pack_apply::<6>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        7 => unsafe { pack_apply::<7>(vb, ld, lo, end, m, t, right, vpack) },
+        // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
+        _ => unsafe { pack_apply::<8>(vb, ld, lo, end, m, t, right, vpack) },
     }
 }
 
@@ -419,19 +481,32 @@ unsafe fn pack_apply<const K: usize>(
     let mut d = dst;
     if head != 0 {
         for r in 0..K {
-            _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld)));
+            // SAFETY: column offsets below `len` of the K columns of `vb`, and the first ceil(len/4)·4K entries of `vpack` (asserted above)
+            unsafe {
+                _mm256_storeu_pd(
+                    d.wrapping_add(4 * r),
+                    _mm256_loadu_pd(src.wrapping_add(r * ld)),
+                )
+            };
         }
-        d = d.add(4 * K);
+        d = d.wrapping_add(4 * K);
     }
     let mut off = head;
     while off + 4 <= len {
         for r in 0..K {
-            _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld + off)));
+            // SAFETY: column offsets below `len` of the K columns of `vb`, and the first ceil(len/4)·4K entries of `vpack` (asserted above)
+            unsafe {
+                _mm256_storeu_pd(
+                    d.wrapping_add(4 * r),
+                    _mm256_loadu_pd(src.wrapping_add(r * ld + off)),
+                )
+            };
         }
-        d = d.add(4 * K);
+        d = d.wrapping_add(4 * K);
         off += 4;
     }
-    apply_block_k::<K, true>(vpack, 4, lo, end, m, t, right);
+    // SAFETY: column offsets below `len` of the K columns of `vb`, and the first ceil(len/4)·4K entries of `vpack` (asserted above)
+    unsafe { apply_block_k::<K, true>(vpack, 4, lo, end, m, t, right) };
 }
 
 /// One group of `Q` columns, rows `lo..end`. The rows are taken four at
@@ -462,11 +537,11 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
     // first full chunk.
     let (rs, cs) = if IL { (4, 4 * K) } else { (ld, 4) };
     let v_full = if IL {
-        v.add(usize::from(head != 0) * 4 * K)
+        v.wrapping_add(usize::from(head != 0) * 4 * K)
     } else {
-        v.add(head)
+        v.wrapping_add(head)
     };
-    let ap: [*mut f64; Q] = std::array::from_fn(|q| cols[q].add(lo + head));
+    let ap: [*mut f64; Q] = std::array::from_fn(|q| cols[q].wrapping_add(lo + head));
     let full = len / 4;
     let mut y = [[0.0f64; Q]; K];
     let mask = _mm256_cmpgt_epi64(
@@ -477,9 +552,13 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
     if len < 4 {
         for i in 0..len {
             for r in 0..K {
-                let vr = *v.add(r * ld + i);
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                let vr = unsafe { *v.wrapping_add(r * ld + i) };
                 for q in 0..Q {
-                    y[r][q] = vr.mul_add(*cols[q].add(lo + i), y[r][q]);
+                    // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                    unsafe {
+                        y[r][q] = vr.mul_add(*cols[q].wrapping_add(lo + i), y[r][q]);
+                    }
                 }
             }
         }
@@ -488,10 +567,12 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
         if head != 0 {
             let mut av = [_mm256_setzero_pd(); Q];
             for q in 0..Q {
-                av[q] = _mm256_maskload_pd(cols[q].add(lo), mask);
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                av[q] = unsafe { _mm256_maskload_pd(cols[q].wrapping_add(lo), mask) };
             }
             for r in 0..K {
-                let vv = _mm256_maskload_pd(v.add(r * rs), mask);
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                let vv = unsafe { _mm256_maskload_pd(v.wrapping_add(r * rs), mask) };
                 for q in 0..Q {
                     acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
                 }
@@ -501,15 +582,17 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
         for j in 0..full {
             let mut av = [_mm256_setzero_pd(); Q];
             for q in 0..Q {
-                av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                av[q] = unsafe { _mm256_loadu_pd(ap[q].wrapping_add(4 * j)) };
             }
             for r in 0..K {
-                let vv = _mm256_loadu_pd(vc.add(r * rs));
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                let vv = unsafe { _mm256_loadu_pd(vc.wrapping_add(r * rs)) };
                 for q in 0..Q {
                     acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
                 }
             }
-            vc = vc.add(cs);
+            vc = vc.wrapping_add(cs);
         }
         for r in 0..K {
             for q in 0..Q {
@@ -530,11 +613,18 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
     if len < 4 {
         for i in 0..len {
             for q in 0..Q {
-                let mut a = *cols[q].add(lo + i);
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                let mut a = unsafe { *cols[q].wrapping_add(lo + i) };
                 for r in 0..K {
-                    a = (-w[r][q]).mul_add(*v.add(r * ld + i), a);
+                    // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                    unsafe {
+                        a = (-w[r][q]).mul_add(*v.wrapping_add(r * ld + i), a);
+                    }
                 }
-                *cols[q].add(lo + i) = a;
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                unsafe {
+                    *cols[q].wrapping_add(lo + i) = a;
+                }
             }
         }
         return;
@@ -547,29 +637,35 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
     }
     if head != 0 {
         for q in 0..Q {
-            let mut av = _mm256_maskload_pd(cols[q].add(lo), mask);
+            // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+            let mut av = unsafe { _mm256_maskload_pd(cols[q].wrapping_add(lo), mask) };
             for r in 0..K {
-                let vv = _mm256_maskload_pd(v.add(r * rs), mask);
+                // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+                let vv = unsafe { _mm256_maskload_pd(v.wrapping_add(r * rs), mask) };
                 av = _mm256_fmadd_pd(wb[r][q], vv, av);
             }
-            _mm256_maskstore_pd(cols[q].add(lo), mask, av);
+            // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+            unsafe { _mm256_maskstore_pd(cols[q].wrapping_add(lo), mask, av) };
         }
     }
     let mut vc = v_full;
     for j in 0..full {
         let mut av = [_mm256_setzero_pd(); Q];
         for q in 0..Q {
-            av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
+            // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+            av[q] = unsafe { _mm256_loadu_pd(ap[q].wrapping_add(4 * j)) };
         }
         for r in 0..K {
-            let vv = _mm256_loadu_pd(vc.add(r * rs));
+            // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+            let vv = unsafe { _mm256_loadu_pd(vc.wrapping_add(r * rs)) };
             for q in 0..Q {
                 av[q] = _mm256_fmadd_pd(wb[r][q], vv, av[q]);
             }
         }
         for q in 0..Q {
-            _mm256_storeu_pd(ap[q].add(4 * j), av[q]);
+            // SAFETY: entries asserted by `apply_block_k`: V offsets inside the V buffer, rows lo..end ≤ m of each column
+            unsafe { _mm256_storeu_pd(ap[q].wrapping_add(4 * j), av[q]) };
         }
-        vc = vc.add(cs);
+        vc = vc.wrapping_add(cs);
     }
 }
