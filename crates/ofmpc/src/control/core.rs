@@ -2,6 +2,13 @@
 //! model pipeline (terms → `f0` → ZOH → predictions), the layout of the
 //! least-squares system and the final `u`, `τ` update.
 //!
+//! With the structured solver ([`super::Solver::Structured`]) the stacked
+//! system is never formed: each controller writes its stage-wise model
+//! (augmented state of [`stage_dims`], `A`, `B` from the ZOH blocks, `z_0`,
+//! targets and affine terms) and [`super::structured`] solves it; the
+//! prediction matrices are then not needed either. The layout below is the
+//! dense solver's.
+//!
 //! # Layout of `𝒜 ΔU = b`
 //!
 //! The paper stacks `𝒜 = [Q_YW G; Q_ΔY G1; Q_ΔU]` by cost term (Eq. (37),
