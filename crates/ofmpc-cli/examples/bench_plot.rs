@@ -98,7 +98,14 @@ fn main() -> Result<()> {
             .configure_mesh()
             .x_desc("horizon N")
             .y_desc("median step time (µs)")
-            .x_label_formatter(&|x| format!("{x:.0}"))
+            .x_label_formatter(&|x| {
+                let n = x.round();
+                if (x - n).abs() < 1e-6 && HORIZONS.contains(&(n as u32)) {
+                    format!("{n:.0}")
+                } else {
+                    String::new()
+                }
+            })
             .y_label_formatter(&|y| format!("{y:.0}"))
             .draw()?;
         for (id, ci, dashed, pts) in &curves {
@@ -110,7 +117,6 @@ fn main() -> Result<()> {
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
             chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
         }
-        // Reference slopes through the first structured and dense points.
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperLeft)
