@@ -1,6 +1,6 @@
-//! Per-step cost of the three controllers (model terms, f0, ZOH, predictions,
-//! building 𝒜 and b, QR solve) on the IRB 140 model, N = 5 … 100, and the
-//! least-squares solve alone.
+//! Per-step cost of the three controllers on the IRB 140 model with both
+//! least-squares solvers (dense Householder QR of 𝒜, structured square-root
+//! Riccati), N = 5 … 200, and the dense least-squares solve alone.
 //!
 //! Run: `cargo bench -p ofmpc --bench control`.
 
@@ -8,44 +8,64 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::lsq::lsq_flops;
 use ofmpc::control::{
-    new_controller, ControllerKind, LinearLikeModel, LsqWorkspace, MpcSettings, Predictions, Zoh,
+    new_controller, ControllerKind, LinearLikeModel, LsqWorkspace, MpcSettings, Predictions,
+    Solver, Zoh,
 };
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::robot::Robot;
 use std::hint::black_box;
 use std::time::Duration;
 
+/// One whole step (model terms, f0, ZOH, the least-squares problem and its
+/// solve) for every controller, both solvers, N = 5 … 200. Benchmark ids:
+/// `step_irb140/<controller>-<solver>/<N>`. `OFMPC_BENCH_KINDS=second`
+/// restricts the controllers, `OFMPC_BENCH_MAX_N=100` the horizons.
 fn steps(c: &mut Criterion) {
     let n = 6;
     let mut group = c.benchmark_group("step_irb140");
     group.warm_up_time(Duration::from_millis(300));
     group.measurement_time(Duration::from_secs(1));
     group.sample_size(20);
-    for nh in [5usize, 10, 20, 50, 100] {
-        let s = MpcSettings {
-            horizon: nh,
-            ..MpcSettings::default()
-        };
-        for kind in ControllerKind::ALL {
-            let mut ctrl = new_controller(kind, n, &s).unwrap();
-            let mut model = RobotDynamics::new(Robot::irb140());
-            // A state on the paper's path (moving), and a reference near it.
-            let x = vec![
-                -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
-            ];
-            ctrl.reset(&x).unwrap();
-            let wk: Vec<f64> = x[..n].iter().map(|q| q + 1e-3).collect();
-            let preview: Vec<f64> = (0..nh)
-                .flat_map(|j| x[..n].iter().map(move |q| q + 1e-3 * (j + 2) as f64))
-                .collect();
-            let mut tau = vec![0.0; n];
-            group.bench_with_input(BenchmarkId::new(kind.name(), nh), &nh, |b, _| {
-                b.iter(|| {
-                    ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                        .unwrap();
-                    black_box(&tau);
-                })
-            });
+    let kinds: Vec<ControllerKind> = match std::env::var("OFMPC_BENCH_KINDS") {
+        Ok(list) => list.split(',').filter_map(|k| k.parse().ok()).collect(),
+        Err(_) => ControllerKind::ALL.to_vec(),
+    };
+    let max_n: usize = std::env::var("OFMPC_BENCH_MAX_N")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(200);
+    for nh in [5usize, 10, 20, 50, 100, 200] {
+        if nh > max_n {
+            continue;
+        }
+        for solver in [Solver::Structured, Solver::DenseQr] {
+            let s = MpcSettings {
+                horizon: nh,
+                solver,
+                ..MpcSettings::default()
+            };
+            for &kind in &kinds {
+                let mut ctrl = new_controller(kind, n, &s).unwrap();
+                let mut model = RobotDynamics::new(Robot::irb140());
+                // A state on the paper's path (moving), and a reference near it.
+                let x = vec![
+                    -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
+                ];
+                ctrl.reset(&x).unwrap();
+                let wk: Vec<f64> = x[..n].iter().map(|q| q + 1e-3).collect();
+                let preview: Vec<f64> = (0..nh)
+                    .flat_map(|j| x[..n].iter().map(move |q| q + 1e-3 * (j + 2) as f64))
+                    .collect();
+                let mut tau = vec![0.0; n];
+                let id = format!("{}-{}", kind.name(), solver.name());
+                group.bench_with_input(BenchmarkId::new(id, nh), &nh, |b, _| {
+                    b.iter(|| {
+                        ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
+                            .unwrap();
+                        black_box(&tau);
+                    })
+                });
+            }
         }
     }
     group.finish();

@@ -400,3 +400,40 @@ fn reset_restarts_from_scratch() {
         assert_eq!(t, first, "{kind}");
     }
 }
+
+/// Issue 9 item 17: one size limit, stated once: a horizon the dense solver
+/// cannot hold is rejected by validation, with the same error the
+/// constructor would give; the structured solver takes it.
+#[test]
+fn horizon_size_limit_is_checked_by_validation() {
+    use ofmpc::control::{new_controller, ControllerKind, MpcSettings, SettingsError, Solver};
+    let dense = MpcSettings {
+        horizon: 1000,
+        solver: Solver::DenseQr,
+        ..MpcSettings::default()
+    };
+    let e = dense.validate_for_dof(6).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SettingsError::TooLarge {
+                rows: 18000,
+                cols: 6000,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let built = new_controller(ControllerKind::Usual, 6, &dense).err();
+    assert_eq!(built, Some(e));
+    let structured = MpcSettings {
+        solver: Solver::Structured,
+        ..dense.clone()
+    };
+    structured.validate_for_dof(6).unwrap();
+    let auto = MpcSettings {
+        solver: Solver::Auto,
+        ..dense
+    };
+    auto.validate_for_dof(6).unwrap();
+}

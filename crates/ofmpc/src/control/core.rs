@@ -2,6 +2,13 @@
 //! model pipeline (terms → `f0` → ZOH → predictions), the layout of the
 //! least-squares system and the final `u`, `τ` update.
 //!
+//! With the structured solver ([`super::Solver::Structured`]) the stacked
+//! system is never formed: each controller writes its stage-wise model
+//! (augmented state of [`stage_dims`], `A`, `B` from the ZOH blocks, `z_0`,
+//! targets and affine terms) and [`super::structured`] solves it; the
+//! prediction matrices are then not needed either. The layout below is the
+//! dense solver's.
+//!
 //! # Layout of `𝒜 ΔU = b`
 //!
 //! The paper stacks `𝒜 = [Q_YW G; Q_ΔY G1; Q_ΔU]` by cost term (Eq. (37),
@@ -21,12 +28,13 @@
 //! groups of rows per level.
 
 use super::dense::gemm;
-use super::lsq::{LsqInfo, LsqWorkspace};
+use super::lsq::{LsqError, LsqInfo, LsqWorkspace};
 use super::model::LinearLikeModel;
 use super::prediction::Predictions;
-use super::settings::{MpcSettings, SettingsError};
+use super::settings::{MpcSettings, SettingsError, Solver};
+use super::structured::{StageError, StageLq};
 use super::zoh::Zoh;
-use super::{StepError, StepInfo};
+use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
 /// Implements [`Controller`](super::Controller) for a controller struct with a
@@ -60,6 +68,10 @@ macro_rules! impl_controller {
                 &self.core.u_prev
             }
 
+            fn increments(&self) -> &[f64] {
+                &self.core.du
+            }
+
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
@@ -76,7 +88,7 @@ macro_rules! impl_controller {
 pub(crate) use impl_controller;
 
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
-const MAX_ENTRIES: usize = 1 << 26;
+const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;
 
 /// Which generator multiplies `Q_YW` in the first row group of `𝒜`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -106,7 +118,13 @@ pub(crate) struct Core {
     /// `F1` and the `G` generators; its `F2`, `F3` are not maintained (the
     /// controllers form `F2 Δx`, `F3 Δx` from `F1 Δx` by running sums).
     pub pred: Predictions,
-    pub lsq: LsqWorkspace,
+    /// The dense system (solver "dense-qr" only).
+    pub lsq: Option<LsqWorkspace>,
+    /// The stage-wise problem (solver "structured" only).
+    pub stage: Option<StageLq>,
+    /// The whole solution of the last step in natural order: block `j` is
+    /// `Δu_{k+j}` (or `u_{k+j}` for the usual controller), `j = 0..N`.
+    pub du: Vec<f64>,
     /// Generator of G2 + G3 (N·n × n), second algorithm only.
     pub g23: Vec<f64>,
     pub x_prev: Vec<f64>,
@@ -123,26 +141,65 @@ pub(crate) struct Core {
 }
 
 impl Core {
-    pub fn new(n: usize, settings: &MpcSettings, incremental: bool) -> Result<Self, SettingsError> {
+    pub fn new(
+        n: usize,
+        settings: &MpcSettings,
+        kind: ControllerKind,
+    ) -> Result<Self, SettingsError> {
         settings.validate_for_dof(n)?;
+        let incremental = kind != ControllerKind::Usual;
         let nh = settings.horizon;
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
         let m = groups * p;
-        if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
-            return Err(SettingsError::TooLarge {
-                rows: m,
-                cols: p,
-                limit: MAX_ENTRIES,
-            });
-        }
-        let row_end: Vec<usize> = (0..p).map(|c| groups * n * (c / n + 1)).collect();
-        let lsq =
-            LsqWorkspace::with_profile(m, p, row_end).map_err(|_| SettingsError::TooLarge {
-                rows: m,
-                cols: p,
-                limit: MAX_ENTRIES,
-            })?;
+        let (lsq, stage) = match settings.solver.for_horizon(nh) {
+            Solver::DenseQr | Solver::Auto => {
+                if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
+                    return Err(SettingsError::TooLarge {
+                        rows: m,
+                        cols: p,
+                        limit: MAX_ENTRIES,
+                    });
+                }
+                let row_end: Vec<usize> = (0..p).map(|c| groups * n * (c / n + 1)).collect();
+                let lsq = LsqWorkspace::with_profile(m, p, row_end).map_err(|_| {
+                    SettingsError::TooLarge {
+                        rows: m,
+                        cols: p,
+                        limit: MAX_ENTRIES,
+                    }
+                })?;
+                (Some(lsq), None)
+            }
+            Solver::Structured => {
+                let (nz, nq) = stage_dims(kind, n);
+                // The largest buffers: the N stored stage rows [R_vv R_vz ρ]
+                // (N·n × (n + nz + 1)) and the stacked stage matrix.
+                let cols = n + nz + 1;
+                let fits = |r: usize| matches!(r.checked_mul(cols), Some(e) if e <= MAX_ENTRIES);
+                if !(fits(p) && fits(n + nq + nz)) {
+                    return Err(SettingsError::TooLarge {
+                        rows: p,
+                        cols,
+                        limit: MAX_ENTRIES,
+                    });
+                }
+                let mut st = StageLq::new(n, nz, nq, nh);
+                fill_stage_constants(kind, n, &mut st);
+                // R = Q_Δu (Q_u), D = [Q_YW; Q_ΔY] (Q_YW) on the leading states.
+                let bot = if incremental {
+                    &settings.q_du
+                } else {
+                    &settings.q_u
+                };
+                bot.fill(&mut st.rd);
+                settings.q_yw.fill(&mut st.qd[..n]);
+                if incremental {
+                    settings.q_dy.fill(&mut st.qd[n..]);
+                }
+                (None, Some(st))
+            }
+        };
         let diag = |w: &super::settings::Weight| {
             let mut v = vec![0.0; n];
             w.fill(&mut v);
@@ -163,8 +220,10 @@ impl Core {
             },
             model: LinearLikeModel::new(n),
             zoh: Zoh::new(n),
-            pred: Predictions::new(2 * n, n, n, nh),
+            pred: Predictions::new(2 * n, n, n, if stage.is_some() { 0 } else { nh }),
             lsq,
+            stage,
+            du: vec![0.0; p],
             g23: if incremental {
                 vec![0.0; p * n]
             } else {
@@ -190,6 +249,7 @@ impl Core {
         self.x_prev.copy_from_slice(x0);
         self.u_prev.fill(0.0);
         self.ebar.fill(0.0);
+        self.du.fill(0.0);
         Ok(())
     }
 
@@ -212,9 +272,11 @@ impl Core {
         check_finite("preview", preview)?;
         self.model.update(model, &x[..n], &x[n..])?;
         self.zoh.discretize(self.model.f0(), self.ts)?;
-        self.pred
-            .update_f1_and_generators_from_zoh(&self.zoh)
-            .map_err(|_| StepError::Internal("prediction shapes"))?;
+        if self.lsq.is_some() {
+            self.pred
+                .update_f1_and_generators_from_zoh(&self.zoh)
+                .map_err(|_| StepError::Internal("prediction shapes"))?;
+        }
         for ((d, a), b) in self.dx.iter_mut().zip(x).zip(&self.x_prev) {
             *d = a - b;
         }
@@ -241,8 +303,11 @@ impl Core {
             TopBlocks::G2PlusG3 => &self.g23,
         };
         let mid_gen = self.pred.g1_gen().as_slice();
-        let m = self.lsq.rows();
-        let a = self.lsq.matrix_mut();
+        let Some(lsq) = self.lsq.as_mut() else {
+            return;
+        };
+        let m = lsq.rows();
+        let a = lsq.matrix_mut();
         // Column (t', jj) at level t holds the blocks of lag t' − t, so it is
         // the last t' levels of column (N, jj): write the last column block
         // (all N levels), then copy its tails into the other blocks.
@@ -297,9 +362,88 @@ impl Core {
         gemm(rows, v.len(), 1, 1.0, f, v, 0.0, out);
     }
 
-    /// Solves the least-squares system.
+    /// Solves the dense least-squares system and copies its solution (stored
+    /// in reversed block order) into `du`.
     pub fn solve(&mut self) -> Result<LsqInfo, StepError> {
-        Ok(self.lsq.solve()?)
+        let n = self.n;
+        let lsq = self
+            .lsq
+            .as_mut()
+            .ok_or(StepError::Internal("dense solve without its workspace"))?;
+        let info = lsq.solve()?;
+        for (dst, src) in self
+            .du
+            .chunks_exact_mut(n)
+            .zip(lsq.solution().chunks_exact(n).rev())
+        {
+            dst.copy_from_slice(src);
+        }
+        Ok(info)
+    }
+
+    /// Writes the per-sample part of the stage-wise model (the ZOH blocks of
+    /// `A`, `B`) for controller `kind`; the caller fills `z_0`, targets and
+    /// affine terms.
+    pub fn fill_stage_model(&mut self) -> Result<(), StepError> {
+        let n = self.n;
+        let st = self.stage.as_mut().ok_or(StepError::Internal(
+            "structured solve without its workspace",
+        ))?;
+        let (phi1, phi2, e) = (
+            self.zoh.phi1().as_slice(),
+            self.zoh.phi2().as_slice(),
+            self.zoh.e().as_slice(),
+        );
+        let nz = st.nz;
+        let blocks = nz / n;
+        // Every layout ends with the velocity block: Δq̇⁺ (or q̇⁺) = E · + Φ1 v,
+        // and every other block row gets Φ1 from it and Φ2 from v.
+        let last = blocks - 1;
+        for r in 0..blocks {
+            let (a_blk, b_blk) = if r == last { (e, phi1) } else { (phi1, phi2) };
+            set_block(&mut st.a, nz, r * n, last * n, a_blk, n);
+            set_block(&mut st.b, nz, r * n, 0, b_blk, n);
+        }
+        Ok(())
+    }
+
+    /// Solves the stage-wise problem (after [`Core::fill_stage_model`] and the
+    /// caller's `z_0`, targets, affine terms) and copies its solution to `du`.
+    pub fn solve_structured(&mut self) -> Result<LsqInfo, StepError> {
+        let (n, nh, g) = (self.n, self.nh, self.groups);
+        let st = self.stage.as_mut().ok_or(StepError::Internal(
+            "structured solve without its workspace",
+        ))?;
+        let info = match st.solve() {
+            Ok(info) => info,
+            Err(StageError::NonFinite) => return Err(LsqError::NonFiniteResult.into()),
+        };
+        // The dense solver's rank test: |R_ii| > max(m, p)·ε·max|R_jj|, with
+        // the columns numbered as in the dense system (Δu_{k+N−1} first).
+        let tol = (g * nh * n) as f64 * f64::EPSILON * info.r_max;
+        let (mut rank, mut first_bad) = (0, None);
+        for (column, d) in st.r_diagonal_dense_order().enumerate() {
+            if d > tol {
+                rank += 1;
+            } else if first_bad.is_none() {
+                first_bad = Some((column, d));
+            }
+        }
+        if let Some((column, value)) = first_bad {
+            return Err(LsqError::RankDeficient {
+                column,
+                value,
+                tolerance: tol,
+                rank,
+                p: nh * n,
+            }
+            .into());
+        }
+        self.du.copy_from_slice(st.solution());
+        Ok(LsqInfo {
+            residual_sq: info.residual_sq,
+            r_diag_ratio: info.r_diag_ratio,
+        })
     }
 
     /// `u_k` from the solution, `τ_k = H u_k + g` (Eq. (15)); checks the
@@ -312,8 +456,7 @@ impl Core {
         tau: &mut [f64],
     ) -> Result<StepInfo, StepError> {
         let n = self.n;
-        let p = self.nh * n;
-        let first = &self.lsq.solution()[p - n..p];
+        let first = &self.du[..n];
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
             *u = if incremental { prev + d } else { *d };
         }
@@ -356,5 +499,70 @@ pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), StepErro
     match v.iter().position(|e| !e.is_finite()) {
         Some(index) => Err(StepError::NonFiniteInput { what, index }),
         None => Ok(()),
+    }
+}
+
+/// `(nz, nq)` of the stage-wise problem of each controller: the augmented
+/// state and how many of its leading entries the stage cost weights.
+///
+/// * usual, Eq. (43): `z = [q; q̇]`, cost `Q_yw (q − w)`;
+/// * first, Eq. (37): `z = [y; Δq; Δq̇]`, cost `Q_yw (y − w)`, `Q_Δy Δq`;
+/// * second, Eq. (39): `z = [s; Δq; y; Δq̇]` with
+///   `s_j = Σ_{i≤j} (ŷ_{k+i} − w_{k+i}) − ē_k`, cost `Q_yw s`, `Q_Δy Δq`.
+pub(crate) fn stage_dims(kind: ControllerKind, n: usize) -> (usize, usize) {
+    match kind {
+        ControllerKind::Usual => (2 * n, n),
+        ControllerKind::First => (3 * n, 2 * n),
+        ControllerKind::Second => (4 * n, 2 * n),
+    }
+}
+
+/// The constant part of each controller's stage-wise model: the identity
+/// blocks of `A` (position and integrator chains), and nothing else.
+///
+/// With `Δq⁺ = Δq + Φ1 Δq̇ + Φ2 v`, `Δq̇⁺ = E Δq̇ + Φ1 v` (Eq. (13)):
+///
+/// ```text
+/// usual:  q⁺ = q + Φ1 q̇ + Φ2 u,             q̇⁺ = E q̇ + Φ1 u
+/// first:  y⁺ = y + Δq + Φ1 Δq̇ + Φ2 v,       Δq⁺, Δq̇⁺ as above
+/// second: s⁺ = s + y + Δq + Φ1 Δq̇ + Φ2 v − w_{k+j+1},
+///         y⁺ = y + Δq + Φ1 Δq̇ + Φ2 v,       Δq⁺, Δq̇⁺ as above
+/// ```
+fn fill_stage_constants(kind: ControllerKind, n: usize, st: &mut StageLq) {
+    let nz = st.nz;
+    st.a.fill(0.0);
+    st.b.fill(0.0);
+    let mut eye = |r: usize, c: usize| {
+        for i in 0..n {
+            st.a[(c * n + i) * nz + r * n + i] = 1.0;
+        }
+    };
+    match kind {
+        ControllerKind::Usual => eye(0, 0),
+        ControllerKind::First => {
+            // blocks: 0 y, 1 Δq, 2 Δq̇
+            eye(0, 0);
+            eye(0, 1);
+            eye(1, 1);
+        }
+        ControllerKind::Second => {
+            // blocks: 0 s, 1 Δq, 2 y, 3 Δq̇
+            eye(0, 0);
+            eye(0, 1);
+            eye(0, 2);
+            eye(1, 1);
+            eye(2, 1);
+            eye(2, 2);
+        }
+    }
+    st.c_zero = kind != ControllerKind::Second;
+}
+
+/// Copies the n×n column-major `src` into `dst` (column-major, `ld` rows) at
+/// `(r0, c0)`.
+fn set_block(dst: &mut [f64], ld: usize, r0: usize, c0: usize, src: &[f64], n: usize) {
+    for (j, col) in src.chunks_exact(n).enumerate() {
+        let o = (c0 + j) * ld + r0;
+        dst[o..o + n].copy_from_slice(col);
     }
 }

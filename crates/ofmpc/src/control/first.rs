@@ -26,7 +26,7 @@ impl FirstMpc {
     /// A controller for `n` joints (buffers sized once).
     pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
         Ok(Self {
-            core: Core::new(n, settings, true)?,
+            core: Core::new(n, settings, ControllerKind::First)?,
         })
     }
 
@@ -41,6 +41,22 @@ impl FirstMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
+        if let Some(st) = c.stage.as_mut() {
+            // Stage-wise: z = [y − y_k; Δq; Δq̇] (deviation from the measured
+            // output, as W − F_I y_k in Eq. (37)), z_0 = [0; Δx_k]; targets:
+            // w_{k+j} − y_k for the first block, 0 for Δq (Q_YW (ŷ − w), Q_ΔY Δŷ).
+            let n = c.n;
+            st.z0[..n].fill(0.0);
+            st.z0[n..].copy_from_slice(&c.dx);
+            for (r, w) in st.r.chunks_exact_mut(2 * n).zip(preview.chunks_exact(n)) {
+                for ((r, w), y) in r[..n].iter_mut().zip(w).zip(&x[..n]) {
+                    *r = w - y;
+                }
+            }
+            c.fill_stage_model()?;
+            let info = c.solve_structured()?;
+            return c.finish(x, true, info, tau);
+        }
         c.build_matrix(TopBlocks::G2);
         let (n, nh, g) = (c.n, c.nh, c.groups);
         let rows = nh * n;
@@ -48,7 +64,11 @@ impl FirstMpc {
         // F2 Δx: block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i]).
         prefix_sums(n, &c.v1, &mut c.v2, None);
         let y = &x[..n];
-        let b = c.lsq.rhs_mut();
+        let b = c
+            .lsq
+            .as_mut()
+            .ok_or(StepError::Internal("dense solve without its workspace"))?
+            .rhs_mut();
         for j in 1..=nh {
             let base = (nh - j) * g * n;
             let o = (j - 1) * n;

@@ -14,6 +14,7 @@
 //! unknowns so that their block-triangular `𝒜` has such a profile.
 
 use super::dense::{all_finite, axpy, dot};
+use super::simd::Avx2Fma;
 
 /// Widest panel of columns whose reflectors are applied together.
 const PANEL: usize = 8;
@@ -246,41 +247,19 @@ impl LsqWorkspace {
     }
 }
 
-/// Whether the CPU runs the AVX2+FMA builds of the kernels (the detection is
-/// cached by the standard library).
-#[cfg(target_arch = "x86_64")]
-#[inline]
-fn has_avx2_fma() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-}
-
 /// The first non-finite entry `(row, column)` of `[𝒜 | b]` inside the
 /// profile (column `p` is `b`, checked everywhere). Dispatches like
 /// [`factor`] (the AVX2 build only vectorizes wider; same result).
 fn first_non_finite(a: &[f64], m: usize, p: usize, row_end: &[usize]) -> Option<(usize, usize)> {
     #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx2_fma() {
-            // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { first_non_finite_avx2(a, m, p, row_end) };
-        }
+    if let Some(token) = Avx2Fma::detect() {
+        return avx2::first_non_finite(token, a, m, p, row_end);
     }
     first_non_finite_generic(a, m, p, row_end)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn first_non_finite_avx2(
-    a: &[f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-) -> Option<(usize, usize)> {
-    first_non_finite_generic(a, m, p, row_end)
-}
-
 #[inline(always)]
-fn first_non_finite_generic(
+pub(super) fn first_non_finite_generic(
     a: &[f64],
     m: usize,
     p: usize,
@@ -305,23 +284,14 @@ fn first_non_finite_generic(
 /// identical.
 fn back_substitute(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
     #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx2_fma() {
-            // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { back_substitute_avx2(a, m, p, x) };
-        }
+    if let Some(token) = Avx2Fma::detect() {
+        return avx2::back_substitute(token, a, m, p, x);
     }
     back_substitute_generic(a, m, p, x)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn back_substitute_avx2(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
-    back_substitute_generic(a, m, p, x)
-}
-
 #[inline(always)]
-fn back_substitute_generic(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
+pub(super) fn back_substitute_generic(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
     let (r, cvec) = a.split_at(m * p);
     x.copy_from_slice(&cvec[..p]);
     for j in (0..p).rev() {
@@ -364,26 +334,10 @@ fn factor(
     vbuf: &mut [f64],
 ) -> f64 {
     #[cfg(target_arch = "x86_64")]
-    {
-        if has_avx2_fma() {
-            // SAFETY: the CPU supports the features the function is compiled for.
-            return unsafe { factor_avx2_fma(a, m, p, row_end, tau, vbuf) };
-        }
+    if let Some(token) = Avx2Fma::detect() {
+        return avx2::factor(token, a, m, p, row_end, tau, vbuf);
     }
-    factor_generic::<false>(a, m, p, row_end, tau, vbuf)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn factor_avx2_fma(
-    a: &mut [f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-    tau: &mut [f64],
-    vbuf: &mut [f64],
-) -> f64 {
-    factor_generic::<true>(a, m, p, row_end, tau, vbuf)
+    factor_generic::<false>(None, a, m, p, row_end, tau, vbuf)
 }
 
 /// `a·b + c`, fused when `FMA`.
@@ -398,10 +352,13 @@ fn madd<const FMA: bool>(a: f64, b: f64, c: f64) -> f64 {
 
 /// `vbuf` (at least `2·PANEL·(m + 4)` long) holds the current panel's
 /// reflectors explicitly (`PANEL·m`) and interleaved (the rest) for the AVX2
-/// kernels; the portable path does not use it.
+/// kernels; the portable path does not use it. The explicit AVX2 kernels
+/// run only with an [`Avx2Fma`] token (`avx`), which proves the CPU support;
+/// `FMA` only selects fused multiply-adds in the portable loops.
 #[inline(always)]
 #[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
-fn factor_generic<const FMA: bool>(
+pub(super) fn factor_generic<const FMA: bool>(
+    avx: Option<Avx2Fma>,
     a: &mut [f64],
     m: usize,
     p: usize,
@@ -421,20 +378,24 @@ fn factor_generic<const FMA: bool>(
         // application of the panel's reflectors, Qᵀ = I − V Tᵀ Vᵀ, to the
         // trailing columns.
         #[cfg(target_arch = "x86_64")]
-        if FMA {
-            // SAFETY: FMA = true only inside `factor_avx2_fma`, which runs
-            // only where AVX2 and FMA were detected; `end > c` for every
-            // panel column (checked profile) and `c1 ≤ p`, so all rows and
-            // columns touched lie inside the m×(p+1) array `a`.
-            unsafe {
-                let (vbuf, vpack) = vbuf.split_at_mut(PANEL * m);
-                let pr = avx::factor_panel(a, m, c0, c1, end, tau, vbuf);
-                rmax = rmax.max(pr);
-                let (left, right) = a.split_at_mut(c1 * m);
-                let gram = avx::gram(left, m, c0, c1, end);
-                let tmat = t_from_gram(c1 - c0, &tau[c0..c1], &gram);
-                avx::apply_block_packed(vbuf, m, c1 - c0, c0, end, m, &tmat, right, vpack);
-            }
+        if let Some(_token) = avx {
+            let (vbuf, vpack) = vbuf.split_at_mut(PANEL * m);
+            // SAFETY: the token proves AVX2 and FMA; `end > c` for every
+            // panel column (checked profile), `c0 < c1 ≤ c0 + PANEL`,
+            // `c1 ≤ p`, `tau` has p entries and `vbuf` PANEL·m, so all rows
+            // and columns touched lie inside the m×(p+1) array `a`.
+            let pr = unsafe { avx2::factor_panel(a, m, c0, c1, end, tau, vbuf) };
+            rmax = rmax.max(pr);
+            let (left, right) = a.split_at_mut(c1 * m);
+            // SAFETY: the token proves AVX2 and FMA; columns c0..c1 of
+            // `left` hold the panel's reflectors in rows c0..end ≤ m.
+            let gram = unsafe { avx2::gram(left, m, c0, c1, end) };
+            let tmat = t_from_gram(c1 - c0, &tau[c0..c1], &gram);
+            // SAFETY: the token proves AVX2 and FMA; `vbuf` holds the
+            // c1 − c0 reflectors written by `factor_panel` (rows c0..end),
+            // `right` the trailing columns and b (whole columns of m rows),
+            // `vpack` is (VBUF_PER_ROW − 1)·PANEL·(m + 4) long.
+            unsafe { avx2::apply_block_packed(vbuf, m, c1 - c0, c0, end, m, &tmat, right, vpack) };
             c0 = c1;
             continue;
         }
@@ -533,7 +494,7 @@ fn t_from_gram(k: usize, tau: &[f64], gram: &[[f64; PANEL]; PANEL]) -> [[f64; PA
     t
 }
 
-/// Portable reference of `avx::gram`: `gram[j][r] = v_jᵀ v_r` for the
+/// Portable reference of `avx2::gram`: `gram[j][r] = v_jᵀ v_r` for the
 /// reflectors of the panel `c0..c1` (rows up to `end`, unit diagonal and
 /// zeros above it implicit).
 #[cfg(test)]
@@ -652,500 +613,7 @@ fn apply4<const FMA: bool>(tau: f64, vt: &[f64], quad: [&mut [f64]; 4]) {
 /// Explicit AVX2+FMA kernels: blocked application of a panel's reflectors in
 /// compact WY form, 4-wide vectors along the rows, two columns at a time.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::needless_range_loop)] // index loops read like the matrix formulas
-mod avx {
-    use std::arch::x86_64::*;
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn hsum(v: __m256d) -> f64 {
-        let lo = _mm256_castpd256_pd128(v);
-        let hi = _mm256_extractf128_pd(v, 1);
-        let s = _mm_add_pd(lo, hi);
-        let h = _mm_unpackhi_pd(s, s);
-        _mm_cvtsd_f64(_mm_add_sd(s, h))
-    }
-
-    /// `Σ x_i y_i` over the common length: four 4-wide accumulators, then
-    /// single vectors, then a scalar tail of at most three.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn dot(x: &[f64], y: &[f64]) -> f64 {
-        let len = x.len().min(y.len());
-        let (px, py) = (x.as_ptr(), y.as_ptr());
-        let mut acc = [_mm256_setzero_pd(); 4];
-        let mut i = 0;
-        // SAFETY (all loads): `i + 4 ≤ len` (resp. `i < len`), both slices
-        // are at least `len` long.
-        while i + 16 <= len {
-            for l in 0..4 {
-                let o = i + 4 * l;
-                acc[l] = _mm256_fmadd_pd(
-                    _mm256_loadu_pd(px.add(o)),
-                    _mm256_loadu_pd(py.add(o)),
-                    acc[l],
-                );
-            }
-            i += 16;
-        }
-        while i + 4 <= len {
-            acc[0] = _mm256_fmadd_pd(
-                _mm256_loadu_pd(px.add(i)),
-                _mm256_loadu_pd(py.add(i)),
-                acc[0],
-            );
-            i += 4;
-        }
-        let mut s = hsum(_mm256_add_pd(
-            _mm256_add_pd(acc[0], acc[1]),
-            _mm256_add_pd(acc[2], acc[3]),
-        ));
-        while i < len {
-            s = (*px.add(i)).mul_add(*py.add(i), s);
-            i += 1;
-        }
-        s
-    }
-
-    /// `x ← s·x` (each product rounded once, as the scalar loop).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn scale(s: f64, x: &mut [f64]) {
-        let len = x.len();
-        let px = x.as_mut_ptr();
-        let sv = _mm256_set1_pd(s);
-        let mut i = 0;
-        // SAFETY: `i + 4 ≤ len` (resp. `i < len`).
-        while i + 4 <= len {
-            _mm256_storeu_pd(px.add(i), _mm256_mul_pd(sv, _mm256_loadu_pd(px.add(i))));
-            i += 4;
-        }
-        while i < len {
-            *px.add(i) *= s;
-            i += 1;
-        }
-    }
-
-    /// Factors the panel `c0..c1` (all with `row_end = end`) of the
-    /// column-major m-row array `a` in place, column by column: reflector of
-    /// column `c`, applied at once to the panel's later columns. Writes
-    /// `tau[c0..c1]` and the explicit reflectors to `vbuf` (`m` per column,
-    /// rows `c0..end`, see [`apply_block`]), returns `max |R_cc|`.
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA. Index ranges are checked (slices,
-    /// and the asserts of `apply_block_k`): the caller passes a panel with
-    /// `c0 < c1 ≤ c0 + PANEL`, `c1 ≤ end ≤ m`, `c1·m ≤ a.len()`,
-    /// `c1 ≤ tau.len()`, `(c1 − c0)·m ≤ vbuf.len()`.
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn factor_panel(
-        a: &mut [f64],
-        m: usize,
-        c0: usize,
-        c1: usize,
-        end: usize,
-        tau: &mut [f64],
-        vbuf: &mut [f64],
-    ) -> f64 {
-        let mut rmax = 0.0f64;
-        for c in c0..c1 {
-            let (left, right) = a.split_at_mut((c + 1) * m);
-            let v = &mut left[c * m + c..c * m + end];
-            let (head, tail) = v.split_at_mut(1);
-            let t = match super::reflector(head[0], dot(tail, tail)) {
-                None => 0.0,
-                Some((beta, inv, t)) => {
-                    scale(inv, tail);
-                    head[0] = beta;
-                    t
-                }
-            };
-            tau[c] = t;
-            rmax = rmax.max(head[0].abs());
-            // Column r of the explicit V: rows c0..end.
-            let r = c - c0;
-            let vcol = &mut vbuf[r * m..r * m + (end - c0)];
-            vcol[..r].fill(0.0);
-            vcol[r] = 1.0;
-            vcol[r + 1..].copy_from_slice(tail);
-            if t != 0.0 && c + 1 < c1 {
-                let mut t1 = [[0.0f64; super::PANEL]; super::PANEL];
-                t1[0][0] = t;
-                let vb = &vbuf[r * m + r..(r + 1) * m];
-                apply_block_k::<1, false>(vb, m, c, end, m, &t1, &mut right[..(c1 - c - 1) * m]);
-            }
-        }
-        rmax
-    }
-
-    /// `gram[j][r] = v_jᵀ v_r` for `j < r` of the panel `c0..c1` of `left`
-    /// (reflector `j` has its unit entry at row `c0 + j`, stored entries
-    /// below it, rows up to `end`).
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA.
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn gram(
-        left: &[f64],
-        m: usize,
-        c0: usize,
-        c1: usize,
-        end: usize,
-    ) -> [[f64; super::PANEL]; super::PANEL] {
-        assert!(c1 <= c0 + super::PANEL && c1 * m <= left.len() && end <= m && c1 <= end);
-        let mut g = [[0.0f64; super::PANEL]; super::PANEL];
-        let v = left.as_ptr();
-        for r in 1..c1 - c0 {
-            let col = match r {
-                1 => gram_col::<1>(v, m, c0, end),
-                2 => gram_col::<2>(v, m, c0, end),
-                3 => gram_col::<3>(v, m, c0, end),
-                4 => gram_col::<4>(v, m, c0, end),
-                5 => gram_col::<5>(v, m, c0, end),
-                6 => gram_col::<6>(v, m, c0, end),
-                _ => gram_col::<7>(v, m, c0, end),
-            };
-            for j in 0..r {
-                g[j][r] = col[j];
-            }
-        }
-        g
-    }
-
-    /// `v_jᵀ v_R` for `j < R`, one pass over the rows below `c0 + R`.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn gram_col<const R: usize>(
-        v: *const f64,
-        m: usize,
-        c0: usize,
-        end: usize,
-    ) -> [f64; super::PANEL] {
-        // SAFETY: the caller (`gram`) checked that columns c0..=c0+R, rows
-        // below `end ≤ m`, lie inside the array `v` points to.
-        let row0 = c0 + R;
-        let vr = v.add(row0 * m);
-        let mut s = [0.0f64; super::PANEL];
-        for j in 0..R {
-            s[j] = *v.add((c0 + j) * m + row0);
-        }
-        let start = row0 + 1;
-        let len = end - start;
-        let mut acc = [_mm256_setzero_pd(); R];
-        let mut i = 0;
-        while i + 4 <= len {
-            let row = start + i;
-            let x = _mm256_loadu_pd(vr.add(row));
-            for j in 0..R {
-                acc[j] = _mm256_fmadd_pd(_mm256_loadu_pd(v.add((c0 + j) * m + row)), x, acc[j]);
-            }
-            i += 4;
-        }
-        for j in 0..R {
-            s[j] += hsum(acc[j]);
-        }
-        while i < len {
-            let row = start + i;
-            let x = *vr.add(row);
-            for j in 0..R {
-                s[j] = (*v.add((c0 + j) * m + row)).mul_add(x, s[j]);
-            }
-            i += 1;
-        }
-        s
-    }
-
-    /// `A ← (I − V Tᵀ Vᵀ) A` on rows `lo..end` of every column in `right`
-    /// (each `m` long), for `k` reflectors held explicitly in `vb`: column
-    /// `r` starts at `vb[r·ld]` and holds rows `lo..end` (zeros above the unit
-    /// diagonal). `T` from [`super::t_from_gram`].
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA. (Index ranges are asserted.)
-    #[target_feature(enable = "avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) unsafe fn apply_block(
-        vb: &[f64],
-        ld: usize,
-        k: usize,
-        lo: usize,
-        end: usize,
-        m: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-    ) {
-        match k {
-            1 => apply_block_k::<1, false>(vb, ld, lo, end, m, t, right),
-            2 => apply_block_k::<2, false>(vb, ld, lo, end, m, t, right),
-            3 => apply_block_k::<3, false>(vb, ld, lo, end, m, t, right),
-            4 => apply_block_k::<4, false>(vb, ld, lo, end, m, t, right),
-            5 => apply_block_k::<5, false>(vb, ld, lo, end, m, t, right),
-            6 => apply_block_k::<6, false>(vb, ld, lo, end, m, t, right),
-            7 => apply_block_k::<7, false>(vb, ld, lo, end, m, t, right),
-            _ => apply_block_k::<8, false>(vb, ld, lo, end, m, t, right),
-        }
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn apply_block_k<const K: usize, const IL: bool>(
-        vb: &[f64],
-        ld: usize,
-        lo: usize,
-        end: usize,
-        m: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-    ) {
-        // Every V entry read lies in `vb` (column layout: column r < K,
-        // offset < end − lo; interleaved: all chunks of the K columns), every
-        // A entry (row < end ≤ m) in its column.
-        assert!(K <= super::PANEL && lo < end && end <= m);
-        let len = end - lo;
-        if IL {
-            assert!(len >= 4 && ld == 4 && len.div_ceil(4) * 4 * K <= vb.len());
-        } else {
-            assert!((K - 1) * ld + len <= vb.len());
-        }
-        let v = vb.as_ptr();
-        let mut pairs = right.chunks_exact_mut(2 * m);
-        for pair in &mut pairs {
-            let (a0, a1) = pair.split_at_mut(m);
-            block::<K, 2, IL>(v, ld, lo, end, t, [a0.as_mut_ptr(), a1.as_mut_ptr()]);
-        }
-        for col in pairs.into_remainder().chunks_exact_mut(m) {
-            block::<K, 1, IL>(v, ld, lo, end, t, [col.as_mut_ptr()]);
-        }
-    }
-
-    /// [`apply_block`] with the reflectors first copied to `vpack` in an
-    /// interleaved layout (per 4-row chunk, the `k` columns side by side), so
-    /// that the inner loops address `V` with constant offsets. Same
-    /// operations in the same order: bit-for-bit the result of
-    /// [`apply_block`].
-    ///
-    /// # Safety
-    /// The CPU must support AVX2 and FMA. (Index ranges are asserted.)
-    #[target_feature(enable = "avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    pub(super) unsafe fn apply_block_packed(
-        vb: &[f64],
-        ld: usize,
-        k: usize,
-        lo: usize,
-        end: usize,
-        m: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-        vpack: &mut [f64],
-    ) {
-        let len = end.saturating_sub(lo);
-        let chunks = len.div_ceil(4);
-        if len < 4 || k == 0 || k > super::PANEL || chunks * 4 * k > vpack.len() {
-            return apply_block(vb, ld, k, lo, end, m, t, right);
-        }
-        match k {
-            1 => pack_apply::<1>(vb, ld, lo, end, m, t, right, vpack),
-            2 => pack_apply::<2>(vb, ld, lo, end, m, t, right, vpack),
-            3 => pack_apply::<3>(vb, ld, lo, end, m, t, right, vpack),
-            4 => pack_apply::<4>(vb, ld, lo, end, m, t, right, vpack),
-            5 => pack_apply::<5>(vb, ld, lo, end, m, t, right, vpack),
-            6 => pack_apply::<6>(vb, ld, lo, end, m, t, right, vpack),
-            7 => pack_apply::<7>(vb, ld, lo, end, m, t, right, vpack),
-            _ => pack_apply::<8>(vb, ld, lo, end, m, t, right, vpack),
-        }
-    }
-
-    /// Packs `K` columns (`len = end − lo ≥ 4` rows each) of `vb` into
-    /// `vpack`, chunk by chunk: chunk 0 holds rows 0..4 when `head = len mod
-    /// 4 ≠ 0` (masked later), then the full chunks at row offsets
-    /// `head + 4j`; within a chunk the `K` columns are side by side. Then
-    /// applies them with the interleaved kernel.
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn pack_apply<const K: usize>(
-        vb: &[f64],
-        ld: usize,
-        lo: usize,
-        end: usize,
-        m: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        right: &mut [f64],
-        vpack: &mut [f64],
-    ) {
-        let len = end - lo;
-        let head = len % 4;
-        assert!(
-            len >= 4 && (K - 1) * ld + len <= vb.len() && len.div_ceil(4) * 4 * K <= vpack.len()
-        );
-        let (src, dst) = (vb.as_ptr(), vpack.as_mut_ptr());
-        // SAFETY: reads at column offsets `< len` of the K columns of `vb`,
-        // writes to the `ceil(len/4)·4K` first entries of `vpack` (asserted).
-        let mut d = dst;
-        if head != 0 {
-            for r in 0..K {
-                _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld)));
-            }
-            d = d.add(4 * K);
-        }
-        let mut off = head;
-        while off + 4 <= len {
-            for r in 0..K {
-                _mm256_storeu_pd(d.add(4 * r), _mm256_loadu_pd(src.add(r * ld + off)));
-            }
-            d = d.add(4 * K);
-            off += 4;
-        }
-        apply_block_k::<K, true>(vpack, 4, lo, end, m, t, right);
-    }
-
-    /// One group of `Q` columns, rows `lo..end`. The rows are taken four at
-    /// a time; when their count is not a multiple of four (and at least
-    /// four), the first `head` rows go first as a masked 4-row chunk (loads
-    /// and stores of the lanes `≥ head` are suppressed), so that no scalar
-    /// tail remains. `V` is column-major with leading dimension `ld`, or,
-    /// when `IL`, interleaved as built by [`apply_block_packed`] (`ld = 4`,
-    /// then `len ≥ 4`).
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
-        v: *const f64,
-        ld: usize,
-        lo: usize,
-        end: usize,
-        t: &[[f64; super::PANEL]; super::PANEL],
-        cols: [*mut f64; Q],
-    ) {
-        // SAFETY (all accesses): `apply_block_k` asserted that the V
-        // entries read (column layout: offsets `r·ld + i`, `r < K`,
-        // `i < end − lo`; interleaved: the chunks of all K columns) lie in
-        // the V buffer and rows `lo + i < end ≤ m` in each column; masked
-        // chunks start at offset 0 and are only used when `end − lo ≥ 4`.
-        let len = end - lo;
-        let head = len % 4;
-        // Distance between the columns of V and between successive chunks;
-        // first full chunk.
-        let (rs, cs) = if IL { (4, 4 * K) } else { (ld, 4) };
-        let v_full = if IL {
-            v.add(usize::from(head != 0) * 4 * K)
-        } else {
-            v.add(head)
-        };
-        let ap: [*mut f64; Q] = std::array::from_fn(|q| cols[q].add(lo + head));
-        let full = len / 4;
-        let mut y = [[0.0f64; Q]; K];
-        let mask = _mm256_cmpgt_epi64(
-            _mm256_set1_epi64x(head as i64),
-            _mm256_set_epi64x(3, 2, 1, 0),
-        );
-        // Y = Vᵀ A.
-        if len < 4 {
-            for i in 0..len {
-                for r in 0..K {
-                    let vr = *v.add(r * ld + i);
-                    for q in 0..Q {
-                        y[r][q] = vr.mul_add(*cols[q].add(lo + i), y[r][q]);
-                    }
-                }
-            }
-        } else {
-            let mut acc = [[_mm256_setzero_pd(); Q]; K];
-            if head != 0 {
-                let mut av = [_mm256_setzero_pd(); Q];
-                for q in 0..Q {
-                    av[q] = _mm256_maskload_pd(cols[q].add(lo), mask);
-                }
-                for r in 0..K {
-                    let vv = _mm256_maskload_pd(v.add(r * rs), mask);
-                    for q in 0..Q {
-                        acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
-                    }
-                }
-            }
-            let mut vc = v_full;
-            for j in 0..full {
-                let mut av = [_mm256_setzero_pd(); Q];
-                for q in 0..Q {
-                    av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
-                }
-                for r in 0..K {
-                    let vv = _mm256_loadu_pd(vc.add(r * rs));
-                    for q in 0..Q {
-                        acc[r][q] = _mm256_fmadd_pd(vv, av[q], acc[r][q]);
-                    }
-                }
-                vc = vc.add(cs);
-            }
-            for r in 0..K {
-                for q in 0..Q {
-                    y[r][q] = hsum(acc[r][q]);
-                }
-            }
-        }
-        // W = Tᵀ Y.
-        let mut w = [[0.0f64; Q]; K];
-        for r in 0..K {
-            for j in 0..=r {
-                for q in 0..Q {
-                    w[r][q] = t[j][r].mul_add(y[j][q], w[r][q]);
-                }
-            }
-        }
-        // A −= V W.
-        if len < 4 {
-            for i in 0..len {
-                for q in 0..Q {
-                    let mut a = *cols[q].add(lo + i);
-                    for r in 0..K {
-                        a = (-w[r][q]).mul_add(*v.add(r * ld + i), a);
-                    }
-                    *cols[q].add(lo + i) = a;
-                }
-            }
-            return;
-        }
-        let mut wb = [[_mm256_setzero_pd(); Q]; K];
-        for r in 0..K {
-            for q in 0..Q {
-                wb[r][q] = _mm256_set1_pd(-w[r][q]);
-            }
-        }
-        if head != 0 {
-            for q in 0..Q {
-                let mut av = _mm256_maskload_pd(cols[q].add(lo), mask);
-                for r in 0..K {
-                    let vv = _mm256_maskload_pd(v.add(r * rs), mask);
-                    av = _mm256_fmadd_pd(wb[r][q], vv, av);
-                }
-                _mm256_maskstore_pd(cols[q].add(lo), mask, av);
-            }
-        }
-        let mut vc = v_full;
-        for j in 0..full {
-            let mut av = [_mm256_setzero_pd(); Q];
-            for q in 0..Q {
-                av[q] = _mm256_loadu_pd(ap[q].add(4 * j));
-            }
-            for r in 0..K {
-                let vv = _mm256_loadu_pd(vc.add(r * rs));
-                for q in 0..Q {
-                    av[q] = _mm256_fmadd_pd(wb[r][q], vv, av[q]);
-                }
-            }
-            for q in 0..Q {
-                _mm256_storeu_pd(ap[q].add(4 * j), av[q]);
-            }
-            vc = vc.add(cs);
-        }
-    }
-}
+mod avx2;
 
 #[cfg(test)]
 mod tests {
@@ -1240,7 +708,7 @@ mod tests {
             let (mut a1, mut a2) = (a.clone(), a);
             let (mut t1, mut t2) = (vec![0.0; p], vec![0.0; p]);
             let mut vbuf = vec![0.0; VBUF_PER_ROW * PANEL * (m + 4)];
-            let r1 = factor_generic::<false>(&mut a1, m, p, &row_end, &mut t1, &mut vbuf);
+            let r1 = factor_generic::<false>(None, &mut a1, m, p, &row_end, &mut t1, &mut vbuf);
             let r2 = factor(&mut a2, m, p, &row_end, &mut t2, &mut vbuf);
             assert!((r1 - r2).abs() <= 1e-13 * r1);
             for c in 0..=p {
@@ -1268,7 +736,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_dot_and_scale_equal_portable() {
-        if !has_avx2_fma() {
+        if Avx2Fma::detect().is_none() {
+            eprintln!("SKIPPED avx_dot_and_scale_equal_portable: this CPU has no AVX2+FMA (the kernels are not used here)");
             return;
         }
         let mut seed = 31;
@@ -1277,19 +746,19 @@ mod tests {
             let y: Vec<f64> = (0..len + 3).map(|_| dyadic(&mut seed)).collect();
             let portable = x.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
             // SAFETY: AVX2 and FMA detected above.
-            let fast = unsafe { avx::dot(&x, &y) };
+            let fast = unsafe { avx2::dot(&x, &y) };
             assert_eq!(portable.to_bits(), fast.to_bits(), "len {len}");
             // Rounded data: same result up to summation order.
             let xr: Vec<f64> = (0..len).map(|_| rng(&mut seed)).collect();
             let bound: f64 = xr.iter().zip(&y).map(|(a, b)| (a * b).abs()).sum();
             let portable = xr.iter().zip(&y).fold(0.0, |s, (a, b)| s + a * b);
             // SAFETY: as above.
-            let fast = unsafe { avx::dot(&xr, &y) };
+            let fast = unsafe { avx2::dot(&xr, &y) };
             assert!((portable - fast).abs() <= 1e-15 * bound.max(f64::MIN_POSITIVE) * len as f64);
             let s = rng(&mut seed);
             let mut z = xr.clone();
             // SAFETY: as above.
-            unsafe { avx::scale(s, &mut z) };
+            unsafe { avx2::scale(s, &mut z) };
             for (a, b) in z.iter().zip(&xr) {
                 assert_eq!(a.to_bits(), (s * b).to_bits());
             }
@@ -1303,7 +772,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_panel_kernels_equal_portable() {
-        if !has_avx2_fma() {
+        if Avx2Fma::detect().is_none() {
+            eprintln!("SKIPPED avx_panel_kernels_equal_portable: this CPU has no AVX2+FMA (the kernels are not used here)");
             return;
         }
         let mut seed = 41;
@@ -1321,7 +791,7 @@ mod tests {
                     let (left, right) = a.split_at(c0 * m + k * m);
                     // Gram of the panel c0..c0+k.
                     // SAFETY: AVX2 and FMA detected above; shapes as required.
-                    let g = unsafe { avx::gram(left, m, c0, c0 + k, end) };
+                    let g = unsafe { avx2::gram(left, m, c0, c0 + k, end) };
                     assert_eq!(
                         g,
                         gram_portable(left, m, c0, c0 + k, end),
@@ -1334,7 +804,7 @@ mod tests {
                     let vt = &left[c0 * m + c0 + 1..c0 * m + end];
                     let vb: Vec<f64> = std::iter::once(1.0).chain(vt.iter().copied()).collect();
                     // SAFETY: as above.
-                    unsafe { avx::apply_block(&vb, m, 1, c0, end, m, &t1, &mut fast) };
+                    unsafe { avx2::apply_block(&vb, m, 1, c0, end, m, &t1, &mut fast) };
                     let mut slow = right.to_vec();
                     for col in slow.chunks_exact_mut(m) {
                         apply1::<false>(0.5, vt, &mut col[c0..end]);
@@ -1353,7 +823,8 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_block_layouts_agree_and_equal_sequential() {
-        if !has_avx2_fma() {
+        if Avx2Fma::detect().is_none() {
+            eprintln!("SKIPPED avx_block_layouts_agree_and_equal_sequential: this CPU has no AVX2+FMA (the kernels are not used here)");
             return;
         }
         let mut seed = 51;
@@ -1397,8 +868,8 @@ mod tests {
                     let mut vpack = vec![f64::NAN; PANEL * (m + 4)];
                     // SAFETY: AVX2 and FMA detected above; shapes as required.
                     unsafe {
-                        avx::apply_block(&vb, ld, k, lo, end, m, &t, &mut col_layout);
-                        avx::apply_block_packed(
+                        avx2::apply_block(&vb, ld, k, lo, end, m, &t, &mut col_layout);
+                        avx2::apply_block_packed(
                             &vb,
                             ld,
                             k,

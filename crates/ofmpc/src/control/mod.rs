@@ -7,8 +7,11 @@
 //! 2. discretizes `A = [[0, I], [0, f0]]`, `B = [[0], [I]]` by exact
 //!    zero-order hold ([`zoh`], Eq. (13)),
 //! 3. builds the prediction matrices ([`prediction`], Eq. (20)–(29)),
-//! 4. stacks the over-determined system `𝒜 ΔU = b` and solves it by
-//!    Householder QR ([`lsq`], Eq. (40)–(42)),
+//! 4. solves the least-squares problem `min ‖𝒜 ΔU − b‖` (Eq. (40)–(42)),
+//!    either as the stacked dense system by Householder QR ([`lsq`],
+//!    [`Solver::DenseQr`]) or stage-wise by a square-root Riccati recursion
+//!    whose cost is linear in `N` ([`Solver::Structured`]; by default the
+//!    faster of the two for the horizon, [`Solver::Auto`]),
 //! 5. applies the first block and returns `τ_k = H u_k + g` (Eq. (15)).
 //!
 //! All buffers are sized at construction; [`Controller::step`] allocates
@@ -23,6 +26,8 @@ pub mod model;
 pub mod prediction;
 pub mod second;
 pub mod settings;
+pub(crate) mod simd;
+pub(crate) mod structured;
 pub mod usual;
 pub mod zoh;
 
@@ -38,7 +43,7 @@ pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, ModelError};
 pub use prediction::Predictions;
 pub use second::SecondMpc;
-pub use settings::{MpcSettings, SettingsError, Weight};
+pub use settings::{MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON};
 pub use usual::UsualMpc;
 pub use zoh::{Zoh, ZohError};
 
@@ -169,6 +174,11 @@ pub trait Controller {
     /// The input `u` of the last successful step (`u_{k−1}` of the next one),
     /// `n` values; zero after [`Controller::reset`].
     fn input(&self) -> &[f64];
+    /// The whole optimal sequence of the last successful step, `N·n` values
+    /// in natural order: block `j` is `Δu_{k+j}` (incremental algorithms) or
+    /// `u_{k+j}` (usual controller), `j = 0..N`; only block 0 is applied.
+    /// Zero before the first step.
+    fn increments(&self) -> &[f64];
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);

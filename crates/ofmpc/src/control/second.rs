@@ -30,7 +30,7 @@ impl SecondMpc {
     /// A controller for `n` joints (buffers sized once).
     pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
         Ok(Self {
-            core: Core::new(n, settings, true)?,
+            core: Core::new(n, settings, ControllerKind::Second)?,
             ws: vec![0.0; n],
         })
     }
@@ -51,7 +51,6 @@ impl SecondMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
-        c.build_matrix(TopBlocks::G2PlusG3);
         let (n, nh, g) = (c.n, c.nh, c.groups);
         let rows = nh * n;
         let y = &x[..n];
@@ -59,6 +58,30 @@ impl SecondMpc {
         for (((e, prev), w), yi) in c.ebar_new.iter_mut().zip(&c.ebar).zip(w_k).zip(y) {
             *e = prev + (w - yi);
         }
+        if let Some(st) = c.stage.as_mut() {
+            // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
+            // w_{k+i}) − ē_k, so Q_YW s_j is the first row of Eq. (39):
+            // z_0 = [−ē_k; Δq_k; 0; Δq̇_k], c_j = [y_k − w_{k+j+1}; 0; 0; 0]
+            // (s⁺ = s + (y⁺ − y_k) + (y_k − w)), targets 0.
+            st.z0[..n]
+                .iter_mut()
+                .zip(&c.ebar_new)
+                .for_each(|(z, e)| *z = -e);
+            st.z0[n..2 * n].copy_from_slice(&c.dx[..n]);
+            st.z0[2 * n..3 * n].fill(0.0);
+            st.z0[3 * n..].copy_from_slice(&c.dx[n..]);
+            for (cj, w) in st.c.chunks_exact_mut(4 * n).zip(preview.chunks_exact(n)) {
+                for ((c, w), y) in cj[..n].iter_mut().zip(w).zip(y) {
+                    *c = y - w;
+                }
+            }
+            c.fill_stage_model()?;
+            let info = c.solve_structured()?;
+            let out = c.finish(x, true, info, tau)?;
+            c.ebar.copy_from_slice(&c.ebar_new);
+            return Ok(out);
+        }
+        c.build_matrix(TopBlocks::G2PlusG3);
         // v1 = F1 Δx, v2 = (F2 + F3) Δx.
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx, F3 Δx by block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i],
@@ -69,7 +92,11 @@ impl SecondMpc {
         }
         // W_s block j = Σ_{i<j} w_{k+i}: running sum.
         self.ws.fill(0.0);
-        let b = c.lsq.rhs_mut();
+        let b = c
+            .lsq
+            .as_mut()
+            .ok_or(StepError::Internal("dense solve without its workspace"))?
+            .rhs_mut();
         for j in 1..=nh {
             let base = (nh - j) * g * n;
             let o = (j - 1) * n;

@@ -6,6 +6,10 @@ use serde::{Deserialize, Serialize};
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
 
+/// Largest accepted number of entries of the dense least-squares system
+/// (rows·(cols + 1)), 64 Mi `f64` = 512 MiB.
+pub const MAX_SYSTEM_ENTRIES: usize = 1 << 26;
+
 /// A square-root weight `Q` of the cost (the cost uses `QᵀQ`, Eq. (31)).
 ///
 /// Either a scalar `s` meaning `s·I` for any number of joints, or a per-joint
@@ -82,6 +86,49 @@ impl Weight {
     }
 }
 
+/// How a controller solves its least-squares problem each sample. Serde
+/// names: `"dense-qr"`, `"structured"`, `"auto"`. Both solvers return the
+/// same `ΔU` (to rounding); they differ in cost.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Solver {
+    /// The paper's dense system `𝒜 ΔU = b` (Eq. (40)–(42)) by Householder QR:
+    /// `O((N·n)³)` flops per sample. The reference.
+    DenseQr,
+    /// The same problem as a stage-wise LQ problem solved by a square-root
+    /// (Householder QR) Riccati recursion: `O(N·n³)` flops per sample.
+    Structured,
+    /// The faster of the two for the horizon (the default): the dense QR for
+    /// `N <` [`STRUCTURED_FROM_HORIZON`], the structured solver from there on
+    /// (the crossover measured by `cargo bench --bench control` on the IRB 140).
+    #[default]
+    Auto,
+}
+
+/// Smallest horizon for which [`Solver::Auto`] picks the structured solver.
+pub const STRUCTURED_FROM_HORIZON: usize = 30;
+
+impl Solver {
+    /// The serde name (`"dense-qr"`, `"structured"` or `"auto"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Solver::DenseQr => "dense-qr",
+            Solver::Structured => "structured",
+            Solver::Auto => "auto",
+        }
+    }
+
+    /// The solver used at `horizon`: [`Solver::Auto`] resolved, the others
+    /// unchanged.
+    pub fn for_horizon(self, horizon: usize) -> Solver {
+        match self {
+            Solver::Auto if horizon < STRUCTURED_FROM_HORIZON => Solver::DenseQr,
+            Solver::Auto => Solver::Structured,
+            other => other,
+        }
+    }
+}
+
 /// Settings shared by the three controllers. Defaults are the paper's tuning
 /// (Section IV): `Ts = 0.01 s`, `N = 10`, `Q_yw = I`, `Q_Δy = 0.5 I`,
 /// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
@@ -102,6 +149,9 @@ pub struct MpcSettings {
     pub q_du: Weight,
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
+    /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
+    /// N = 30, the structured solver from there on; both give the same `ΔU`).
+    pub solver: Solver,
 }
 
 impl Default for MpcSettings {
@@ -113,6 +163,7 @@ impl Default for MpcSettings {
             q_dy: Weight::Scalar(0.5),
             q_du: Weight::Scalar(1e-5),
             q_u: Weight::Scalar(1e-4),
+            solver: Solver::default(),
         }
     }
 }
@@ -125,12 +176,28 @@ impl MpcSettings {
         self.check(None)
     }
 
-    /// [`MpcSettings::validate`] plus: every diagonal weight has `dof` entries.
+    /// [`MpcSettings::validate`] plus: every diagonal weight has `dof` entries,
+    /// and the dense least-squares system of the horizon fits in
+    /// [`MAX_SYSTEM_ENTRIES`] when the dense solver is used (checked here,
+    /// once, for the largest of the three controllers' systems: `3·N·n` rows),
+    /// so that a setting that validates also builds.
     pub fn validate_for_dof(&self, dof: usize) -> Result<(), SettingsError> {
         if dof == 0 {
             return Err(SettingsError::ZeroDof);
         }
-        self.check(Some(dof))
+        self.check(Some(dof))?;
+        if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
+            let p = self.horizon.saturating_mul(dof);
+            let rows = p.saturating_mul(3);
+            if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
+                return Err(SettingsError::TooLarge {
+                    rows,
+                    cols: p,
+                    limit: MAX_SYSTEM_ENTRIES,
+                });
+            }
+        }
+        Ok(())
     }
 
     fn check(&self, dof: Option<usize>) -> Result<(), SettingsError> {
@@ -223,11 +290,12 @@ pub enum SettingsError {
     #[error("the robot has 0 joints: a controller needs at least one")]
     ZeroDof,
     /// The least-squares system would be too large to allocate.
-    #[error("the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: reduce the horizon")]
+    #[error("the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: reduce the horizon, or use the structured solver (its size grows linearly with the horizon)")]
     TooLarge {
-        /// Rows of 𝒜.
+        /// Rows of 𝒜 (dense solver) or of the stored stage factors
+        /// (structured solver: N·n).
         rows: usize,
-        /// Columns of 𝒜.
+        /// Columns of 𝒜 (dense) or of a stage factor (structured).
         cols: usize,
         /// Largest accepted rows·cols.
         limit: usize,

@@ -21,7 +21,7 @@ impl UsualMpc {
     /// A controller for `n` joints (buffers sized once).
     pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
         Ok(Self {
-            core: Core::new(n, settings, false)?,
+            core: Core::new(n, settings, ControllerKind::Usual)?,
         })
     }
 
@@ -36,12 +36,24 @@ impl UsualMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
+        if let Some(st) = c.stage.as_mut() {
+            // Stage-wise: z = [q; q̇], z_0 = x_k, target of q at stage j is w_{k+j}.
+            st.z0.copy_from_slice(x);
+            st.r.copy_from_slice(preview);
+            c.fill_stage_model()?;
+            let info = c.solve_structured()?;
+            return c.finish(x, false, info, tau);
+        }
         c.build_matrix(TopBlocks::G1);
         let (n, nh, g) = (c.n, c.nh, c.groups);
         let rows = nh * n;
         // v1 = F x_k (positional prediction from the full state).
         Core::f_times(c.pred.f1().as_slice(), x, rows, &mut c.v1);
-        let b = c.lsq.rhs_mut();
+        let b = c
+            .lsq
+            .as_mut()
+            .ok_or(StepError::Internal("dense solve without its workspace"))?
+            .rhs_mut();
         b.fill(0.0);
         for j in 1..=nh {
             let base = (nh - j) * g * n;

@@ -63,7 +63,8 @@ impl Record {
     }
 }
 
-/// Median, 99th percentile and maximum of the controller's step time (µs).
+/// Median, 99th percentile and maximum of the controller's step time (µs),
+/// and how many steps missed their real-time deadline.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StepTime {
     /// Median (µs).
@@ -72,6 +73,20 @@ pub struct StepTime {
     pub p99: f64,
     /// Maximum (µs).
     pub max: f64,
+    /// Steps that took longer than the sampling period `Ts` (the spacing of
+    /// the record's sample times): each of them would have missed its
+    /// deadline in a real-time loop.
+    pub deadline_misses: usize,
+}
+
+/// Number of step times (µs) longer than the sampling period `ts` (s).
+/// Zero when `ts` is not a finite positive number.
+pub fn deadline_misses(step_us: &[f64], ts: f64) -> usize {
+    if !(ts.is_finite() && ts > 0.0) {
+        return 0;
+    }
+    let limit_us = ts * 1e6;
+    step_us.iter().filter(|&&s| s > limit_us).count()
 }
 
 /// Summary of one run, as in `metrics.json`. A metric that does not exist
@@ -128,6 +143,15 @@ pub fn quantile(v: &[f64], p: f64) -> f64 {
     let pos = p.clamp(0.0, 1.0) * (s.len() - 1) as f64;
     let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
     s[lo] + (s[hi] - s[lo]) * (pos - lo as f64)
+}
+
+/// The sampling period of a record: the spacing of its first two sample
+/// times (NaN with fewer than two samples).
+fn sample_period(t: &[f64]) -> f64 {
+    match t {
+        [t0, t1, ..] => t1 - t0,
+        _ => f64::NAN,
+    }
 }
 
 /// Computes the metrics of a record. `steady_window` (s) is the final window
@@ -199,6 +223,7 @@ pub fn compute(
             median: quantile(&rec.step_us, 0.5),
             p99: quantile(&rec.step_us, 0.99),
             max: rec.step_us.iter().copied().fold(f64::NAN, f64::max),
+            deadline_misses: deadline_misses(&rec.step_us, sample_period(&rec.t)),
         },
         wall_s,
         diverged: status == RunStatus::Diverged,
@@ -241,6 +266,8 @@ mod tests {
         assert_eq!(m.torque_max_nm[0], 199.0);
         assert!((m.step_time_us.median - 99.5).abs() < 1e-12);
         assert_eq!(m.step_time_us.max, 199.0);
+        // Ts = 10 ms = 10_000 µs: no step time of 0..199 µs misses it.
+        assert_eq!(m.step_time_us.deadline_misses, 0);
         let outcome = RunOutcome::Diverged {
             t: 1.5,
             joint: 0,

@@ -1,0 +1,105 @@
+//! Real-time property of both least-squares solvers: after construction and
+//! reset, `Controller::step` performs no heap allocation (counted by a global
+//! allocator, per thread), with the structured solver at long horizons and
+//! the dense QR named explicitly.
+
+mod common;
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+
+use common::{CoupledModel, TwoLinkArm};
+use ofmpc::control::{new_controller, ControllerKind, MpcSettings, Solver, Weight};
+use ofmpc::dynamics::JointSpaceDynamics;
+
+struct Counting;
+
+thread_local! {
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        System.alloc(layout)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCS.with(|c| c.set(c.get() + 1));
+        System.realloc(ptr, layout, new_size)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCS.with(|c| c.get())
+}
+
+fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
+    let n = model.dof();
+    for kind in ControllerKind::ALL {
+        let mut ctrl = new_controller(kind, n, settings).unwrap();
+        let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+        ctrl.reset(&x0).unwrap();
+        let mut x = x0.clone();
+        let wk = vec![0.3; n];
+        let preview: Vec<f64> = (0..n * settings.horizon)
+            .map(|i| 0.3 + 1e-3 * i as f64)
+            .collect();
+        let mut tau = vec![0.0; n];
+        let bad_x = vec![f64::NAN; 2 * n];
+        let before = allocations();
+        for k in 0..50 {
+            // Vary the state so that f0 and the number of ZOH squarings change.
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
+            }
+            ctrl.step(model, &x, &wk, &preview, &mut tau).unwrap();
+            // Failed steps allocate nothing either.
+            assert!(ctrl.step(model, &bad_x, &wk, &preview, &mut tau).is_err());
+            assert!(ctrl.step(model, &x[1..], &wk, &preview, &mut tau).is_err());
+        }
+        let after = allocations();
+        assert_eq!(
+            after - before,
+            0,
+            "{kind} ({:?}), n = {n}, N = {}: {} allocations in 150 steps",
+            settings.solver,
+            settings.horizon,
+            after - before
+        );
+        assert!(ctrl.increments().iter().any(|v| *v != 0.0));
+    }
+}
+
+#[test]
+fn structured_and_dense_steps_allocate_nothing() {
+    // Sanity: the counter sees allocations.
+    let before = allocations();
+    let v = std::hint::black_box(vec![1u8; 10]);
+    assert!(allocations() > before);
+    drop(v);
+
+    for solver in [Solver::Structured, Solver::DenseQr, Solver::Auto] {
+        for nh in [1usize, 10, 40] {
+            let s = MpcSettings {
+                horizon: nh,
+                solver,
+                ..MpcSettings::default()
+            };
+            count_steps(&mut CoupledModel::new(6, 1), &s);
+        }
+        let diagonal = MpcSettings {
+            horizon: 25,
+            solver,
+            q_yw: Weight::Diagonal(vec![1.0, 2.0]),
+            q_dy: Weight::Diagonal(vec![0.5, 0.0]),
+            ..MpcSettings::default()
+        };
+        count_steps(&mut TwoLinkArm::new(), &diagonal);
+    }
+}
