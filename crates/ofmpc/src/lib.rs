@@ -42,6 +42,7 @@
 pub mod control;
 pub mod dynamics;
 pub mod gcode;
+pub mod ident;
 pub mod ik;
 pub mod path;
 pub mod reference;
