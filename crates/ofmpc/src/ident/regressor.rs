@@ -74,7 +74,7 @@ pub fn inertia_of(pi: &PayloadParams) -> Inertia {
 /// this changes the inertia by about 1e-9 relative.
 pub fn payload_of(pi: &PayloadParams) -> Option<Payload> {
     let i = inertia_of(pi);
-    if !(i.mass > 1e-9) || !pi.iter().all(|v| v.is_finite()) {
+    if !pi.iter().all(|v| v.is_finite()) || i.mass <= 1e-9 {
         return None;
     }
     let com = i.h / i.mass;

@@ -253,7 +253,7 @@ pub fn project_physical(pi: &PayloadParams, max_mass: f64) -> PayloadParams {
         // Scaling the whole body keeps J ⪰ 0.
         out *= max_mass / out[0];
     }
-    if !(out[0] >= 0.0) {
+    if out[0].is_nan() || out[0] < 0.0 {
         out = PayloadParams::zeros();
     }
     out
