@@ -232,4 +232,11 @@ pub enum SettingsError {
         /// Largest accepted rows·cols.
         limit: usize,
     },
+    /// An adaptive variant of the usual MPC was requested: it has none (no
+    /// integrator to remove what the identification leaves).
+    #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]
+    NoAdaptiveVariant,
+    /// The payload estimator's tuning cannot be used.
+    #[error(transparent)]
+    Estimator(#[from] crate::ident::RlsSettingsError),
 }

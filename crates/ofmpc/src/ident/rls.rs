@@ -47,6 +47,11 @@ pub struct RlsSettings {
     pub sigma_torque: f64,
     /// Upper bound of the mass (kg).
     pub max_mass: f64,
+    /// A joint's a-priori prediction error (N·m) beyond which the payload is
+    /// taken to have changed (picked up, dropped): the covariance restarts
+    /// from the prior, so that the estimate moves at once instead of at the
+    /// pace of the forgetting factor.
+    pub change_threshold_nm: f64,
 }
 
 impl Default for RlsSettings {
@@ -58,6 +63,7 @@ impl Default for RlsSettings {
             sigma_inertia: 0.2,
             sigma_torque: 0.1,
             max_mass: 1e3,
+            change_threshold_nm: 2.0,
         }
     }
 }
@@ -91,6 +97,7 @@ impl RlsSettings {
             ("prior inertia deviation", self.sigma_inertia),
             ("torque noise deviation", self.sigma_torque),
             ("mass bound", self.max_mass),
+            ("change threshold", self.change_threshold_nm),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(RlsSettingsError::NotPositive { what, value });
@@ -114,7 +121,7 @@ impl RlsSettings {
 }
 
 /// The recursive estimator of `π`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PayloadRls {
     settings: RlsSettings,
     prior: PayloadParams,
@@ -123,6 +130,7 @@ pub struct PayloadRls {
     p: Cov,
     p_trace_max: f64,
     updates: u64,
+    restarts: u64,
 }
 
 impl PayloadRls {
@@ -139,6 +147,7 @@ impl PayloadRls {
             p_trace_max: p.trace(),
             p,
             updates: 0,
+            restarts: 0,
         };
         s.project();
         Ok(s)
@@ -149,6 +158,7 @@ impl PayloadRls {
         self.theta = self.prior;
         self.p = self.settings.prior_covariance();
         self.updates = 0;
+        self.restarts = 0;
         self.project();
     }
 
@@ -172,6 +182,11 @@ impl PayloadRls {
         &self.p
     }
 
+    /// Covariance restarts on a detected payload change since the start.
+    pub fn restarts(&self) -> u64 {
+        self.restarts
+    }
+
     /// Samples processed since the start.
     pub fn updates(&self) -> u64 {
         self.updates
@@ -188,6 +203,14 @@ impl PayloadRls {
             return false;
         }
         let r = self.settings.sigma_torque * self.settings.sigma_torque;
+        let jump = rows.iter().zip(y).any(|(row, &yi)| {
+            let phi = PayloadParams::from_column_slice(row);
+            (yi - phi.dot(&self.theta)).abs() > self.settings.change_threshold_nm
+        });
+        if jump && self.updates > 0 {
+            self.p = self.settings.prior_covariance();
+            self.restarts += 1;
+        }
         for (row, &yi) in rows.iter().zip(y) {
             let phi = PayloadParams::from_column_slice(row);
             let pphi = self.p * phi;

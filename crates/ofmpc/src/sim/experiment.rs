@@ -2,7 +2,9 @@
 //! robot (no payload), the plant with the payload it does not know, the joint
 //! reference; run, then judged.
 
-use super::closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
+use super::closed_loop::{
+    record_columns, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
+};
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
@@ -112,14 +114,29 @@ impl Experiment {
         let mut controller = new_controller(kind, n, &self.mpc)?;
         let mut model = RobotDynamics::new(self.robot.clone());
         let mut plant_robot = self.robot.clone();
-        plant_robot.set_payload(Some(*payload))?;
+        payload.validate()?;
+        let ls = &self.loop_settings;
+        let events = RunEvents {
+            pre_roll: if kind.is_adaptive() {
+                ls.identification_samples(self.reference.ts())
+            } else {
+                0
+            },
+            pick_up: ls.pick_up_at_s.map(|t| (t, *payload)),
+        };
+        // Before a pick-up the plant carries nothing.
+        plant_robot.set_payload(match events.pick_up {
+            Some(_) => None,
+            None => Some(*payload),
+        })?;
         let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
-        let result = run_closed_loop(
+        let result = run_closed_loop_with(
             controller.as_mut(),
             &mut model,
             &mut plant,
             &self.reference,
-            &self.loop_settings,
+            ls,
+            &events,
             progress,
         );
         let metrics = compute(
