@@ -39,6 +39,7 @@
 // chains over several parallel arrays would read worse.
 #![allow(clippy::needless_range_loop)]
 
+pub mod analysis;
 pub mod control;
 pub mod dynamics;
 pub mod gcode;
