@@ -18,6 +18,8 @@ pub fn controller_color(name: &str) -> usize {
         "usual" => COLOR_USUAL,
         "first" => COLOR_FIRST,
         "second" => COLOR_SECOND,
+        "first-adaptive" => 4,
+        "second-adaptive" => 5,
         _ => COLOR_REFERENCE,
     }
 }

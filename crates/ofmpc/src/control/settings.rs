@@ -102,6 +102,10 @@ pub struct MpcSettings {
     pub q_du: Weight,
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
+    /// The payload the controllers' model assumes, a point mass at the
+    /// flange centre (kg, default 0: the paper's model knows no payload).
+    /// Robust tuning over a payload range centres the model inside it.
+    pub model_payload_kg: f64,
 }
 
 impl Default for MpcSettings {
@@ -113,6 +117,7 @@ impl Default for MpcSettings {
             q_dy: Weight::Scalar(0.5),
             q_du: Weight::Scalar(1e-5),
             q_u: Weight::Scalar(1e-4),
+            model_payload_kg: 0.0,
         }
     }
 }
@@ -136,6 +141,9 @@ impl MpcSettings {
     fn check(&self, dof: Option<usize>) -> Result<(), SettingsError> {
         if !self.ts.is_finite() || self.ts <= 0.0 {
             return Err(SettingsError::BadSamplingPeriod(self.ts));
+        }
+        if !(self.model_payload_kg.is_finite() && self.model_payload_kg >= 0.0) {
+            return Err(SettingsError::ModelPayload(self.model_payload_kg));
         }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
@@ -232,6 +240,9 @@ pub enum SettingsError {
         /// Largest accepted rows·cols.
         limit: usize,
     },
+    /// The payload the model assumes is negative or not finite.
+    #[error("the payload the model assumes is {0} kg: it must be a finite mass ≥ 0")]
+    ModelPayload(f64),
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]

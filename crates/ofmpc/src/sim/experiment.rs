@@ -100,6 +100,16 @@ impl Experiment {
         Ok(())
     }
 
+    /// The controllers' model: [`Self::robot`] with the payload the tuning
+    /// assumes ([`MpcSettings::model_payload_kg`], when > 0).
+    pub fn model_robot(&self) -> Result<Robot, ExperimentError> {
+        let mut r = self.robot.clone();
+        if self.mpc.model_payload_kg > 0.0 {
+            r.set_payload(Some(Payload::point_mass(self.mpc.model_payload_kg)))?;
+        }
+        Ok(r)
+    }
+
     /// Runs `kind` against the plant carrying `payload`. Errors only for
     /// settings that do not fit ([`Self::validate`], the payload); how the run
     /// ended (completed, diverged, failed) is its [`RunResult::outcome`].
@@ -112,7 +122,7 @@ impl Experiment {
         self.validate()?;
         let n = self.robot.dof();
         let mut controller = new_controller(kind, n, &self.mpc)?;
-        let mut model = RobotDynamics::new(self.robot.clone());
+        let mut model = RobotDynamics::new(self.model_robot()?);
         let mut plant_robot = self.robot.clone();
         payload.validate()?;
         let ls = &self.loop_settings;
