@@ -196,6 +196,43 @@ pub fn execute(scenario: &Scenario, out: &Path) -> anyhow::Result<()> {
             ),
         )?;
     }
+    if runs.iter().any(|r| r.kind.is_adaptive()) {
+        let pick_up = exp.loop_settings.pick_up_at_s;
+        report.heading("Online payload identification (adaptive variants)");
+        report.paragraph(format!(
+            "The adaptive variants identify the payload's inertial parameters by recursive least squares \
+             from the measured motion and their own torque, and update their model at every sample; they \
+             identify for {} s at rest before the path starts (not recorded).{}",
+            exp.loop_settings.identification_s,
+            match pick_up {
+                Some(t) => format!(" The plant picks the payload up at t = {t} s; the controllers are not told."),
+                None => String::new(),
+            }
+        ));
+        for p in &scenario.payloads {
+            let these: Vec<(&str, &ofmpc::sim::Record)> = runs
+                .iter()
+                .filter(|r| r.payload.mass == p.mass)
+                .map(|r| (kind_name(r.kind), &r.result.record))
+                .collect();
+            let m = p.mass;
+            let truth = move |t: f64| match pick_up {
+                Some(tp) if t < tp => 0.0,
+                _ => m,
+            };
+            figure(
+                &mut dir,
+                &mut report,
+                &format!("identification_m{m}"),
+                &format!("Error and identified mass against time, payload {m} kg"),
+                &figures::identification(
+                    &format!("Payload {m} kg: error and identified mass"),
+                    &these,
+                    &truth,
+                ),
+            )?;
+        }
+    }
     if scenario.payloads.len() >= 3 {
         report.heading("Payload sweep");
         figure(
