@@ -266,7 +266,11 @@ pub fn identification(
     let mut f = Figure::new(title, 1);
     let mut err = Panel::new("Cartesian error |p_ref − p|", "t (s)", "error (mm)");
     err.log_y = true;
-    let mut mass = Panel::new("payload mass: identified online and true", "t (s)", "mass (kg)");
+    let mut mass = Panel::new(
+        "payload mass: identified online and true",
+        "t (s)",
+        "mass (kg)",
+    );
     let mut t_all: Vec<f64> = Vec::new();
     for (name, rec) in runs {
         let e: Vec<f64> = (0..rec.len())
@@ -275,7 +279,12 @@ pub fn identification(
                 ((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3).max(1e-9)
             })
             .collect();
-        err.series.push(Series::line(*name, rec.t.clone(), e, controller_color(name)));
+        err.series.push(Series::line(
+            *name,
+            rec.t.clone(),
+            e,
+            controller_color(name),
+        ));
         if rec.payload_mass_est.len() == rec.len() && !rec.is_empty() {
             mass.series.push(Series::line(
                 format!("{name}: estimate"),
@@ -289,7 +298,8 @@ pub fn identification(
         }
     }
     let truth: Vec<f64> = t_all.iter().map(|&t| true_mass(t)).collect();
-    mass.series.push(Series::dashed("true", t_all, truth, COLOR_REFERENCE));
+    mass.series
+        .push(Series::dashed("true", t_all, truth, COLOR_REFERENCE));
     f.panels.push(err);
     f.panels.push(mass);
     f
