@@ -196,3 +196,38 @@ fn a_robot_that_is_not_an_irb140() {
         );
     }
 }
+
+mod never_panics {
+    use super::*;
+    use ofmpc::reference::JointReference;
+    use ofmpc::sim::PlantSettings;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+        /// Random tunings, payloads, pick-up and identification times and plant
+        /// effects the estimator does not model (friction, noise, saturation):
+        /// an outcome, never a panic, and the mass estimate stays physical.
+        #[test]
+        fn adaptive_runs_never_panic(
+            q_dy in 0.0f64..5.0, q_du in 1e-6f64..1e-2, payload in 0.0f64..20.0,
+            second in any::<bool>(), pick_up in prop::option::of(0.0f64..0.8),
+            identification in 0.0f64..1.0, friction in 0.0f64..2.0, noise in 0.0f64..1e-4,
+        ) {
+            let q = vec![0.2, 0.5, -0.3, 0.4, 0.9, -0.2];
+            let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
+            let exp = Experiment {
+                robot: Robot::irb140(),
+                reference,
+                mpc: MpcSettings { q_dy: ofmpc::control::Weight::Scalar(q_dy), q_du: ofmpc::control::Weight::Scalar(q_du), ..Default::default() },
+                plant: PlantSettings { coulomb_friction: vec![friction], position_noise: noise, torque_limits: true, ..Default::default() },
+                loop_settings: LoopSettings { hold_s: 0.8, identification_s: identification, pick_up_at_s: pick_up, ..Default::default() },
+            };
+            let kind = if second { ControllerKind::SecondAdaptive } else { ControllerKind::FirstAdaptive };
+            let (r, m) = exp.run(kind, &Payload::point_mass(payload), &mut |_, _| {}).unwrap();
+            prop_assert_eq!(m.status, r.outcome.status());
+            prop_assert_eq!(r.record.payload_mass_est.len(), r.record.len());
+            prop_assert!(r.record.payload_mass_est.iter().all(|m| m.is_finite() && *m >= 0.0));
+        }
+    }
+}
