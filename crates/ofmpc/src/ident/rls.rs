@@ -52,6 +52,15 @@ pub struct RlsSettings {
     /// from the prior, so that the estimate moves at once instead of at the
     /// pace of the forgetting factor.
     pub change_threshold_nm: f64,
+    /// The model receives the identified rotational inertia (about the
+    /// centre of mass) only once the standard deviation of every inertia
+    /// entry is below this (kg·m²); until then a point mass at the identified
+    /// centre of mass ([`PayloadRls::model_estimate`]). At rest the inertia is
+    /// not excited, and an early, poorly determined inertia on a light wrist
+    /// would make the model many times heavier than the plant: the
+    /// incremental algorithms tolerate only a few per cent of that
+    /// (`analyze stability`).
+    pub inertia_confidence_kgm2: f64,
 }
 
 impl Default for RlsSettings {
@@ -64,6 +73,7 @@ impl Default for RlsSettings {
             sigma_torque: 0.1,
             max_mass: 1e3,
             change_threshold_nm: 2.0,
+            inertia_confidence_kgm2: 1e-3,
         }
     }
 }
@@ -98,6 +108,7 @@ impl RlsSettings {
             ("torque noise deviation", self.sigma_torque),
             ("mass bound", self.max_mass),
             ("change threshold", self.change_threshold_nm),
+            ("inertia confidence", self.inertia_confidence_kgm2),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(RlsSettingsError::NotPositive { what, value });
@@ -165,6 +176,43 @@ impl PayloadRls {
     /// The current estimate `π̂`, physically consistent (projected).
     pub fn estimate(&self) -> &PayloadParams {
         &self.physical
+    }
+
+    /// Whether the rotational inertia is determined well enough to be used
+    /// (see [`RlsSettings::inertia_confidence_kgm2`]).
+    pub fn inertia_identified(&self) -> bool {
+        let limit = self.settings.inertia_confidence_kgm2;
+        (4..NUM_PARAMS).all(|k| self.p[(k, k)].max(0.0).sqrt() < limit)
+    }
+
+    /// What the controller's model receives: [`Self::estimate`], or while
+    /// the rotational inertia is not identified, the same mass and first
+    /// moments as a point mass (inertia about the centre of mass zero; the
+    /// projection keeps that consistent: a point mass is on the boundary of
+    /// the physical set).
+    pub fn model_estimate(&self) -> PayloadParams {
+        if self.inertia_identified() {
+            return self.physical;
+        }
+        let m = self.physical[0];
+        let mut out = PayloadParams::zeros();
+        out[0] = m;
+        if m > 0.0 {
+            let h = nalgebra::Vector3::new(self.physical[1], self.physical[2], self.physical[3]);
+            let c = h / m;
+            // I_o of a point mass at c: m (|c|² 1 − c cᵀ).
+            let i_o = (nalgebra::Matrix3::identity() * c.norm_squared() - c * c.transpose()) * m;
+            out[1] = h.x;
+            out[2] = h.y;
+            out[3] = h.z;
+            out[4] = i_o[(0, 0)];
+            out[5] = i_o[(0, 1)];
+            out[6] = i_o[(0, 2)];
+            out[7] = i_o[(1, 1)];
+            out[8] = i_o[(1, 2)];
+            out[9] = i_o[(2, 2)];
+        }
+        out
     }
 
     /// The recursion's unconstrained least-squares estimate.
