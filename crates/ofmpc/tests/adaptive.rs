@@ -231,3 +231,22 @@ mod never_panics {
         }
     }
 }
+
+#[test]
+fn controller_names_round_trip() {
+    for k in ControllerKind::WITH_ADAPTIVE {
+        assert_eq!(k.name().parse::<ControllerKind>().unwrap(), k);
+        let json = serde_json::to_string(&k).unwrap();
+        assert_eq!(json, format!("\"{}\"", k.name()));
+        assert_eq!(serde_json::from_str::<ControllerKind>(&json).unwrap(), k);
+        assert_eq!(k.is_adaptive(), k.name().ends_with("-adaptive"));
+        assert!(!k.base().is_adaptive());
+    }
+    let err = "third".parse::<ControllerKind>().unwrap_err().to_string();
+    assert!(err.contains("second-adaptive"), "{err}");
+    // The usual MPC has no adaptive variant.
+    assert!(
+        ofmpc::control::AdaptiveMpc::new(ControllerKind::Usual, 6, &MpcSettings::default())
+            .is_err()
+    );
+}
