@@ -25,6 +25,22 @@ pub enum Command {
     /// Reproduce the paper's experiment (section IV): all three controllers,
     /// with and without a payload the model does not know.
     Reproduce(ReproduceArgs),
+    /// Analyses that need no run: the stability margins of the controllers.
+    #[command(subcommand)]
+    Analyze(Analyze),
+    /// Search the tuning that keeps the non-adaptive controllers stable over a
+    /// payload range with the least RMS error; write it as a scenario file.
+    Tune(crate::commands::tune::TuneArgs),
+}
+
+/// `ofmpc analyze ...`
+#[derive(Debug, Subcommand)]
+pub enum Analyze {
+    /// The range of the inertia ratio α = H_model/H_plant over which each
+    /// controller is stable near rest, and the largest payload that keeps the
+    /// ratio inside it along the program, as JSON; the spectral radius against
+    /// α as a figure.
+    Stability(crate::commands::analyze::StabilityArgs),
 }
 
 /// `ofmpc trajectory`
@@ -84,6 +100,10 @@ position (m, base frame); xref,yref,zref its reference (m); ex,ey,ez = ref − f
 pub struct RunArgs {
     /// Scenario file (TOML). Paths in it are relative to its own folder.
     pub scenario: PathBuf,
+    /// Payloads in kg, comma-separated: replaces the scenario's
+    /// `[payload] masses_kg`.
+    #[arg(long, allow_hyphen_values = true)]
+    pub payload: Option<String>,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]
     pub out: PathBuf,
@@ -99,6 +119,14 @@ pub struct ReproduceArgs {
     /// Payloads in kg, comma-separated; e.g. 0,0.25,0.5,1,2,4,6 for a sweep.
     #[arg(long, default_value = "0,0.25", allow_hyphen_values = true)]
     pub payload: String,
+    /// Controllers, comma-separated: usual, first, second, first-adaptive,
+    /// second-adaptive.
+    #[arg(long, default_value = "usual,first,second")]
+    pub controllers: String,
+    /// The payload is picked up at this time (s) of the path: the plant carries
+    /// none before (the controllers are not told).
+    #[arg(long)]
+    pub pick_up_at: Option<f64>,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]
     pub out: PathBuf,

@@ -43,6 +43,10 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
             LoopSettingsError::SteadyWindow { value, .. } => {
                 format!("[simulation] steady_window_s = {value}")
             }
+            LoopSettingsError::IdentificationTime { value, .. } => {
+                format!("[simulation] identification_s = {value}")
+            }
+            LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
             _ => "[simulation]".into(),
         },
         ExperimentError::Plant(PlantError::Settings(p)) => match p {

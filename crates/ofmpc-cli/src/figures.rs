@@ -18,6 +18,8 @@ pub fn controller_color(name: &str) -> usize {
         "usual" => COLOR_USUAL,
         "first" => COLOR_FIRST,
         "second" => COLOR_SECOND,
+        "first-adaptive" => 4,
+        "second-adaptive" => 5,
         _ => COLOR_REFERENCE,
     }
 }
@@ -250,5 +252,55 @@ pub fn cartesian_reference(title: &str, trajectory: &CartesianTrajectory, ts: f6
         }
         f.panels.push(p);
     }
+    f
+}
+
+/// Online identification: the Cartesian error norm of every run (log scale)
+/// and the mass estimate of the adaptive ones against time, with the mass the
+/// plant carries (`true_mass(t)`, e.g. 0 before a pick-up).
+pub fn identification(
+    title: &str,
+    runs: &[(&str, &Record)],
+    true_mass: &dyn Fn(f64) -> f64,
+) -> Figure {
+    let mut f = Figure::new(title, 1);
+    let mut err = Panel::new("Cartesian error |p_ref − p|", "t (s)", "error (mm)");
+    err.log_y = true;
+    let mut mass = Panel::new(
+        "payload mass: identified online and true",
+        "t (s)",
+        "mass (kg)",
+    );
+    let mut t_all: Vec<f64> = Vec::new();
+    for (name, rec) in runs {
+        let e: Vec<f64> = (0..rec.len())
+            .map(|k| {
+                let c = rec.cartesian_error(k);
+                ((c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3).max(1e-9)
+            })
+            .collect();
+        err.series.push(Series::line(
+            *name,
+            rec.t.clone(),
+            e,
+            controller_color(name),
+        ));
+        if rec.payload_mass_est.len() == rec.len() && !rec.is_empty() {
+            mass.series.push(Series::line(
+                format!("{name}: estimate"),
+                rec.t.clone(),
+                rec.payload_mass_est.clone(),
+                controller_color(name),
+            ));
+        }
+        if rec.t.len() > t_all.len() {
+            t_all = rec.t.clone();
+        }
+    }
+    let truth: Vec<f64> = t_all.iter().map(|&t| true_mass(t)).collect();
+    mass.series
+        .push(Series::dashed("true", t_all, truth, COLOR_REFERENCE));
+    f.panels.push(err);
+    f.panels.push(mass);
     f
 }

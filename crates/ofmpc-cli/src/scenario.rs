@@ -46,6 +46,11 @@ pub struct PayloadSection {
     /// Inertia about the centre of mass, flange axes: `[ixx, iyy, izz, ixy, ixz, iyz]` (kg·m²);
     /// default zero (a point mass).
     pub inertia_kgm2: [f64; 6],
+    /// When the payload is picked up (s, path time): the plant carries none
+    /// before and the payload from then on; the controllers are not told.
+    /// Default: carried from the start.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pick_up_at_s: Option<f64>,
 }
 
 impl Default for PayloadSection {
@@ -54,6 +59,7 @@ impl Default for PayloadSection {
             masses_kg: vec![0.0, 0.25],
             com_m: [0.0; 3],
             inertia_kgm2: [0.0; 6],
+            pick_up_at_s: None,
         }
     }
 }
@@ -106,7 +112,8 @@ pub struct OrientationSection {
 pub struct ScenarioFile {
     /// A title for the report.
     pub title: String,
-    /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`.
+    /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`,
+    /// `"first-adaptive"`, `"second-adaptive"`.
     pub controllers: Vec<ControllerKind>,
     /// `[robot]`
     pub robot: RobotSection,
@@ -244,7 +251,7 @@ impl Scenario {
     /// Resolves a scenario file: loads, parses, times and maps to joint space.
     pub fn resolve(f: &ScenarioFile) -> anyhow::Result<Self> {
         if f.controllers.is_empty() {
-            bail!("controllers = []: name at least one of \"usual\", \"first\", \"second\"");
+            bail!("controllers = []: name at least one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\"");
         }
         if f.payload.masses_kg.is_empty() {
             bail!("payload.masses_kg = []: give at least one mass (0 for none)");
@@ -254,7 +261,9 @@ impl Scenario {
         f.mpc
             .validate_for_dof(n)
             .map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
-        f.simulation
+        let mut loop_settings = f.simulation.clone();
+        loop_settings.pick_up_at_s = f.payload.pick_up_at_s;
+        loop_settings
             .validate()
             .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e.into())))?;
         f.plant
@@ -307,7 +316,7 @@ impl Scenario {
             reference,
             mpc: f.mpc.clone(),
             plant: f.plant.clone(),
-            loop_settings: f.simulation.clone(),
+            loop_settings,
         };
         experiment.validate().map_err(|e| {
             anyhow::anyhow!("{program_name}: {}", crate::errors::experiment_error(&e))

@@ -20,7 +20,11 @@ fn num(s: &mut String, x: f64) {
 /// `ex,ey,ez` (= ref − true). SI units (s, rad, rad/s, N·m, m). Row k holds
 /// the state measured at t_k and the torque applied over [t_k, t_k + Ts).
 /// Numbers are printed at full precision (shortest round-trip form).
+/// Runs of a controller that identifies the payload online (the adaptive
+/// variants) have one more column, `payload_mass_est_kg`: the mass its model
+/// carries after the step of that row.
 pub fn timeseries_csv(rec: &Record) -> String {
+    let with_mass = !rec.payload_mass_est.is_empty() && rec.payload_mass_est.len() == rec.len();
     let n = rec.n;
     let mut s = String::with_capacity(rec.len() * (6 * n + 9) * 20 + 256);
     s.push('t');
@@ -29,7 +33,11 @@ pub fn timeseries_csv(rec: &Record) -> String {
             let _ = write!(s, ",{prefix}{i}");
         }
     }
-    s.push_str(",x,y,z,xref,yref,zref,ex,ey,ez\n");
+    s.push_str(",x,y,z,xref,yref,zref,ex,ey,ez");
+    if with_mass {
+        s.push_str(",payload_mass_est_kg");
+    }
+    s.push('\n');
     for k in 0..rec.len() {
         num(&mut s, rec.t[k]);
         for v in [&rec.q, &rec.qd, &rec.tau, &rec.q_ref] {
@@ -46,6 +54,10 @@ pub fn timeseries_csv(rec: &Record) -> String {
         for x in p.iter().chain(&r).chain(&e) {
             s.push(',');
             num(&mut s, *x);
+        }
+        if with_mass {
+            s.push(',');
+            num(&mut s, rec.payload_mass_est[k]);
         }
         s.push('\n');
     }

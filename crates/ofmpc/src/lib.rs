@@ -43,9 +43,11 @@
 /// appear in signatures): use this re-export to get the same version.
 pub use nalgebra;
 
+pub mod analysis;
 pub mod control;
 pub mod dynamics;
 pub mod gcode;
+pub mod ident;
 pub mod ik;
 pub mod path;
 pub mod reference;

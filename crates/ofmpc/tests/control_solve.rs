@@ -47,8 +47,8 @@ fn paper_system(
             r.rows_mut(0, p).copy_from(&(&qyw * (w - &b.f1 * x)));
             (a, r)
         }
-        ControllerKind::First | ControllerKind::Second => {
-            let second = kind == ControllerKind::Second;
+        _ => {
+            let second = kind.base() == ControllerKind::Second;
             let top = if second { &b.g2 + &b.g3 } else { b.g2.clone() };
             let mut a = DMatrix::<f64>::zeros(3 * p, p);
             a.view_mut((0, 0), (p, p)).copy_from(&(&qyw * top));

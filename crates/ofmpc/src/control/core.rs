@@ -510,10 +510,11 @@ pub(crate) fn check_finite(what: &'static str, v: &[f64]) -> Result<(), StepErro
 /// * second, Eq. (39): `z = [s; Δq; y; Δq̇]` with
 ///   `s_j = Σ_{i≤j} (ŷ_{k+i} − w_{k+i}) − ē_k`, cost `Q_yw s`, `Q_Δy Δq`.
 pub(crate) fn stage_dims(kind: ControllerKind, n: usize) -> (usize, usize) {
-    match kind {
+    // The adaptive variants run their base algorithm.
+    match kind.base() {
         ControllerKind::Usual => (2 * n, n),
         ControllerKind::First => (3 * n, 2 * n),
-        ControllerKind::Second => (4 * n, 2 * n),
+        _ => (4 * n, 2 * n),
     }
 }
 
@@ -537,7 +538,7 @@ fn fill_stage_constants(kind: ControllerKind, n: usize, st: &mut StageLq) {
             st.a[(c * n + i) * nz + r * n + i] = 1.0;
         }
     };
-    match kind {
+    match kind.base() {
         ControllerKind::Usual => eye(0, 0),
         ControllerKind::First => {
             // blocks: 0 y, 1 Δq, 2 Δq̇
@@ -545,8 +546,8 @@ fn fill_stage_constants(kind: ControllerKind, n: usize, st: &mut StageLq) {
             eye(0, 1);
             eye(1, 1);
         }
-        ControllerKind::Second => {
-            // blocks: 0 s, 1 Δq, 2 y, 3 Δq̇
+        _ => {
+            // Second: blocks 0 s, 1 Δq, 2 y, 3 Δq̇
             eye(0, 0);
             eye(0, 1);
             eye(0, 2);
@@ -555,7 +556,7 @@ fn fill_stage_constants(kind: ControllerKind, n: usize, st: &mut StageLq) {
             eye(2, 2);
         }
     }
-    st.c_zero = kind != ControllerKind::Second;
+    st.c_zero = kind.base() != ControllerKind::Second;
 }
 
 /// Copies the n×n column-major `src` into `dst` (column-major, `ld` rows) at

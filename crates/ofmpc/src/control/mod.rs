@@ -18,6 +18,7 @@
 //! nothing, never panics and reports a failed sample as a [`StepError`],
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
 
+pub mod adaptive;
 pub(crate) mod core;
 pub(crate) mod dense;
 pub mod first;
@@ -38,6 +39,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::JointSpaceDynamics;
 
+pub use adaptive::AdaptiveMpc;
 pub use first::FirstMpc;
 pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, ModelError};
@@ -47,8 +49,9 @@ pub use settings::{MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_H
 pub use usual::UsualMpc;
 pub use zoh::{Zoh, ZohError};
 
-/// Which of the paper's three controllers. Serde names: `"usual"`, `"first"`,
-/// `"second"`.
+/// Which controller: the paper's three, and the adaptive variants of the
+/// incremental ones ([`adaptive`]). Serde names: `"usual"`, `"first"`,
+/// `"second"`, `"first-adaptive"`, `"second-adaptive"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ControllerKind {
@@ -58,22 +61,57 @@ pub enum ControllerKind {
     First,
     /// Second incremental algorithm, Eq. (34)/(39): two integrators.
     Second,
+    /// The first algorithm with online payload identification ([`AdaptiveMpc`]).
+    #[serde(rename = "first-adaptive")]
+    FirstAdaptive,
+    /// The second algorithm with online payload identification ([`AdaptiveMpc`]).
+    #[serde(rename = "second-adaptive")]
+    SecondAdaptive,
 }
 
 impl ControllerKind {
-    /// All kinds, in the paper's order of comparison.
+    /// The paper's three, in its order of comparison.
     pub const ALL: [ControllerKind; 3] = [
         ControllerKind::Usual,
         ControllerKind::First,
         ControllerKind::Second,
     ];
 
-    /// The lowercase name (`"usual"`, `"first"`, `"second"`).
+    /// Every kind: the paper's three, then the adaptive variants.
+    pub const WITH_ADAPTIVE: [ControllerKind; 5] = [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+        ControllerKind::FirstAdaptive,
+        ControllerKind::SecondAdaptive,
+    ];
+
+    /// The lowercase name (`"usual"`, `"first"`, `"second"`,
+    /// `"first-adaptive"`, `"second-adaptive"`).
     pub fn name(self) -> &'static str {
         match self {
             ControllerKind::Usual => "usual",
             ControllerKind::First => "first",
             ControllerKind::Second => "second",
+            ControllerKind::FirstAdaptive => "first-adaptive",
+            ControllerKind::SecondAdaptive => "second-adaptive",
+        }
+    }
+
+    /// Whether it identifies the payload online.
+    pub fn is_adaptive(self) -> bool {
+        matches!(
+            self,
+            ControllerKind::FirstAdaptive | ControllerKind::SecondAdaptive
+        )
+    }
+
+    /// The algorithm it runs: the adaptive variants' plain kind.
+    pub fn base(self) -> ControllerKind {
+        match self {
+            ControllerKind::FirstAdaptive => ControllerKind::First,
+            ControllerKind::SecondAdaptive => ControllerKind::Second,
+            k => k,
         }
     }
 }
@@ -86,13 +124,13 @@ impl fmt::Display for ControllerKind {
 
 /// An unknown controller name.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\"")]
+#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\"")]
 pub struct UnknownControllerKind(pub String);
 
 impl FromStr for ControllerKind {
     type Err = UnknownControllerKind;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        ControllerKind::ALL
+        ControllerKind::WITH_ADAPTIVE
             .into_iter()
             .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
             .ok_or_else(|| UnknownControllerKind(s.to_string()))
@@ -152,6 +190,10 @@ pub enum StepError {
         /// Joint index.
         index: usize,
     },
+    /// An adaptive controller was given a model that is not a rigid-body
+    /// model, whose payload it cannot identify or update.
+    #[error("an adaptive controller needs a rigid-body model of the robot to identify and update its payload")]
+    NoRigidBodyModel,
     /// An internal invariant failed (a bug: please report).
     #[error("internal error in the controller: {0} (please report this bug)")]
     Internal(&'static str),
@@ -199,6 +241,11 @@ pub trait Controller {
         preview: &[f64],
         tau: &mut [f64],
     ) -> Result<StepInfo, StepError>;
+    /// The payload mass its model carries, identified online (kg); `None`
+    /// for the controllers that do not identify it.
+    fn payload_estimate(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Builds the controller `kind` for `n` joints after
@@ -212,5 +259,8 @@ pub fn new_controller(
         ControllerKind::Usual => Box::new(UsualMpc::new(n, settings)?),
         ControllerKind::First => Box::new(FirstMpc::new(n, settings)?),
         ControllerKind::Second => Box::new(SecondMpc::new(n, settings)?),
+        ControllerKind::FirstAdaptive | ControllerKind::SecondAdaptive => {
+            Box::new(AdaptiveMpc::new(kind, n, settings)?)
+        }
     })
 }

@@ -152,6 +152,10 @@ pub struct MpcSettings {
     /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
     /// N = 30, the structured solver from there on; both give the same `ΔU`).
     pub solver: Solver,
+    /// The payload the controllers' model assumes, a point mass at the
+    /// flange centre (kg, default 0: the paper's model knows no payload).
+    /// Robust tuning over a payload range centres the model inside it.
+    pub model_payload_kg: f64,
 }
 
 impl Default for MpcSettings {
@@ -164,6 +168,7 @@ impl Default for MpcSettings {
             q_du: Weight::Scalar(1e-5),
             q_u: Weight::Scalar(1e-4),
             solver: Solver::default(),
+            model_payload_kg: 0.0,
         }
     }
 }
@@ -203,6 +208,9 @@ impl MpcSettings {
     fn check(&self, dof: Option<usize>) -> Result<(), SettingsError> {
         if !self.ts.is_finite() || self.ts <= 0.0 {
             return Err(SettingsError::BadSamplingPeriod(self.ts));
+        }
+        if !(self.model_payload_kg.is_finite() && self.model_payload_kg >= 0.0) {
+            return Err(SettingsError::ModelPayload(self.model_payload_kg));
         }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
@@ -300,4 +308,14 @@ pub enum SettingsError {
         /// Largest accepted rows·cols.
         limit: usize,
     },
+    /// The payload the model assumes is negative or not finite.
+    #[error("the payload the model assumes is {0} kg: it must be a finite mass ≥ 0")]
+    ModelPayload(f64),
+    /// An adaptive variant of the usual MPC was requested: it has none (no
+    /// integrator to remove what the identification leaves).
+    #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]
+    NoAdaptiveVariant,
+    /// The payload estimator's tuning cannot be used.
+    #[error(transparent)]
+    Estimator(#[from] crate::ident::RlsSettingsError),
 }

@@ -25,6 +25,23 @@ pub use rnea::rnea;
 pub use terms::{coriolis_matrix, crba, gravity, joint_space_terms};
 pub use workspace::Workspace;
 
+pub(crate) use kinematics::local_axis;
+
+/// Runs RNEA (`ws.tau`, `ws.local`) without checks and returns the last
+/// body's spatial velocity and acceleration (gravity included), in its frame:
+/// what the payload regressor of [`crate::ident`] needs.
+pub(crate) fn rnea_unchecked_parts(
+    robot: &Robot,
+    ws: &mut Workspace,
+    q: &[f64],
+    qd: &[f64],
+    qdd: &[f64],
+) -> (crate::spatial::Motion, crate::spatial::Motion) {
+    rnea::rnea_unchecked(robot, ws, q, qd, qdd);
+    let last = robot.dof() - 1;
+    (ws.v[last], ws.a[last])
+}
+
 use crate::robot::{ModelError, Robot};
 use nalgebra::{DMatrix, DVector};
 
@@ -48,6 +65,13 @@ pub trait JointSpaceDynamics {
         c: &mut DMatrix<f64>,
         g: &mut DVector<f64>,
     );
+
+    /// The rigid-body model behind these terms, when there is one: adaptive
+    /// controllers identify the payload with it and update its payload
+    /// ([`Robot::set_payload`]). `None` by default.
+    fn robot_dynamics_mut(&mut self) -> Option<&mut RobotDynamics> {
+        None
+    }
 }
 
 /// A robot together with its workspace: the object a controller or a
@@ -82,6 +106,9 @@ impl RobotDynamics {
 impl JointSpaceDynamics for RobotDynamics {
     fn dof(&self) -> usize {
         self.robot.dof()
+    }
+    fn robot_dynamics_mut(&mut self) -> Option<&mut RobotDynamics> {
+        Some(self)
     }
     /// On a wrong length or non-finite input, writes NaN everywhere so that the
     /// caller's own finiteness check reports it.

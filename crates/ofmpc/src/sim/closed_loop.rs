@@ -19,7 +19,21 @@ pub struct LoopSettings {
     pub divergence_threshold_rad: f64,
     /// The "steady" window at the end of the hold, for the metrics (s).
     pub steady_window_s: f64,
+    /// Identification phase of the adaptive controllers (s, at most
+    /// [`MAX_IDENTIFICATION_S`]): they hold the path's first point this long
+    /// before the path starts, as industrial robots identify a newly attached
+    /// load at rest. Not recorded (the record starts with the path at
+    /// t = 0); ignored by the other controllers.
+    pub identification_s: f64,
+    /// When the plant picks up its payload (s, path time): it carries none
+    /// before and the payload of the run from then on. `None`: from the
+    /// start. The controllers are not told.
+    #[serde(skip)]
+    pub pick_up_at_s: Option<f64>,
 }
+
+/// Longest identification phase at rest (s).
+pub const MAX_IDENTIFICATION_S: f64 = 1.0;
 
 impl Default for LoopSettings {
     fn default() -> Self {
@@ -27,6 +41,8 @@ impl Default for LoopSettings {
             hold_s: 2.0,
             divergence_threshold_rad: 0.2,
             steady_window_s: 0.5,
+            identification_s: 0.5,
+            pick_up_at_s: None,
         }
     }
 }
@@ -51,7 +67,25 @@ impl LoopSettings {
                 hold_s: self.hold_s,
             });
         }
+        if !(self.identification_s.is_finite()
+            && (0.0..=MAX_IDENTIFICATION_S).contains(&self.identification_s))
+        {
+            return Err(LoopSettingsError::IdentificationTime {
+                value: self.identification_s,
+                max: MAX_IDENTIFICATION_S,
+            });
+        }
+        if let Some(t) = self.pick_up_at_s {
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(LoopSettingsError::PickUpTime(t));
+            }
+        }
         Ok(())
+    }
+
+    /// Samples of the identification phase at the control period `ts`.
+    pub fn identification_samples(&self, ts: f64) -> usize {
+        (self.identification_s / ts).round() as usize
     }
 
     /// Samples of the hold at the control period `ts`, saturating.
@@ -92,6 +126,42 @@ pub fn run_closed_loop(
     settings: &LoopSettings,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
+    run_closed_loop_with(
+        controller,
+        model,
+        plant,
+        reference,
+        settings,
+        &RunEvents::default(),
+        progress,
+    )
+}
+
+/// What happens in a run besides following the path.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RunEvents {
+    /// Samples at rest on the path's first point before the path starts
+    /// (the adaptive controllers' identification phase), not recorded.
+    pub pre_roll: usize,
+    /// At this path time (s) the plant picks up this payload.
+    pub pick_up: Option<(f64, crate::robot::Payload)>,
+}
+
+/// [`run_closed_loop`] with a pre-roll at rest and a payload picked up
+/// mid-path. During the pre-roll the reference and its preview are the
+/// path's first point; a divergence or failure there is reported at a
+/// negative time (`−pre_roll·Ts ≤ t < 0`). The record holds the path and the
+/// hold; for a controller that identifies the payload it also holds the
+/// mass estimate after each step.
+pub fn run_closed_loop_with(
+    controller: &mut dyn Controller,
+    model: &mut dyn JointSpaceDynamics,
+    plant: &mut Plant,
+    reference: &JointReference,
+    settings: &LoopSettings,
+    events: &RunEvents,
+    progress: &mut dyn FnMut(usize, usize),
+) -> RunResult {
     let start = Instant::now();
     let n = reference.dof();
     let ts = reference.ts();
@@ -105,6 +175,11 @@ pub fn run_closed_loop(
         0
     };
     let mut rec = Record::with_capacity(n, capacity);
+    let adaptive = controller.payload_estimate().is_some();
+    if adaptive {
+        rec.payload_mass_est.reserve(capacity);
+    }
+    let mut picked = false;
     let mut x = vec![0.0; 2 * n];
     let mut tau = vec![0.0; n];
     let mut preview = vec![0.0; horizon * n];
@@ -120,10 +195,69 @@ pub fn run_closed_loop(
             wall_s: start.elapsed().as_secs_f64(),
         };
     }
+    // The identification phase at rest on the first point.
+    let w0 = reference.q(0);
+    for j in 0..events.pre_roll {
+        let t = -((events.pre_roll - j) as f64) * ts;
+        if j > 0 {
+            plant.measure(&mut x);
+        }
+        for block in preview.chunks_mut(n.max(1)) {
+            block.copy_from_slice(w0);
+        }
+        if let Err(e) = controller.step(model, &x, w0, &preview, &mut tau) {
+            return RunResult {
+                record: rec,
+                outcome: RunOutcome::Failed {
+                    t,
+                    cause: RunFailure::Controller(e),
+                },
+                wall_s: start.elapsed().as_secs_f64(),
+            };
+        }
+        if let Err(e) = plant.step(&tau, ts) {
+            return RunResult {
+                record: rec,
+                outcome: RunOutcome::Failed {
+                    t,
+                    cause: RunFailure::Plant(e),
+                },
+                wall_s: start.elapsed().as_secs_f64(),
+            };
+        }
+        if let Some(joint) = (0..n).find(|&i| {
+            let e = w0[i] - plant.q()[i];
+            e.is_nan() || e.abs() > settings.divergence_threshold_rad
+        }) {
+            return RunResult {
+                record: rec,
+                outcome: RunOutcome::Diverged {
+                    t,
+                    joint,
+                    error_rad: w0[joint] - plant.q()[joint],
+                    threshold_rad: settings.divergence_threshold_rad,
+                },
+                wall_s: start.elapsed().as_secs_f64(),
+            };
+        }
+    }
     for k in 0..total {
         let t = k as f64 * ts;
-        if k > 0 {
+        if k > 0 || events.pre_roll > 0 {
             plant.measure(&mut x);
+        }
+        if let Some((t_pick, payload)) = events.pick_up {
+            // The payload is there from the first sample at or after t_pick.
+            if !picked && t >= t_pick - 1e-9 * ts {
+                picked = true;
+                if let Err(e) = plant.set_payload(Some(payload)) {
+                    outcome = RunOutcome::Failed {
+                        t,
+                        cause: RunFailure::Plant(e.into()),
+                    };
+                    break;
+                }
+            }
         }
         let flange = plant.flange_position();
         let w = reference.q(k);
@@ -153,6 +287,9 @@ pub fn run_closed_loop(
         rec.flange_ref.push(reference.position(k));
         rec.step_us.push(us);
         rec.flange.push(flange);
+        if let Some(m) = controller.payload_estimate() {
+            rec.payload_mass_est.push(m);
+        }
         if let Some(joint) = (0..n).find(|&i| rec.joint_error(k, i).is_nan()) {
             outcome = RunOutcome::Failed {
                 t,

@@ -2,14 +2,16 @@
 //! robot (no payload), the plant with the payload it does not know, the joint
 //! reference; run, then judged.
 
-use super::closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
+use super::closed_loop::{
+    record_columns, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
+};
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{new_controller, ControllerKind, MpcSettings};
 use crate::dynamics::RobotDynamics;
 use crate::reference::JointReference;
-use crate::robot::{Payload, Robot};
+use crate::robot::{ModelError, Payload, Robot};
 
 /// Everything a run needs but the controller kind and the payload.
 #[derive(Debug, Clone)]
@@ -98,6 +100,16 @@ impl Experiment {
         Ok(())
     }
 
+    /// The controllers' model: [`Self::robot`] with the payload the tuning
+    /// assumes ([`MpcSettings::model_payload_kg`], when > 0).
+    pub fn model_robot(&self) -> Result<Robot, ExperimentError> {
+        let mut r = self.robot.clone();
+        if self.mpc.model_payload_kg > 0.0 {
+            r.set_payload(Some(Payload::point_mass(self.mpc.model_payload_kg)))?;
+        }
+        Ok(r)
+    }
+
     /// Runs `kind` against the plant carrying `payload`. Errors only for
     /// settings that do not fit ([`Self::validate`], the payload); how the run
     /// ended (completed, diverged, failed) is its [`RunResult::outcome`].
@@ -110,16 +122,31 @@ impl Experiment {
         self.validate()?;
         let n = self.robot.dof();
         let mut controller = new_controller(kind, n, &self.mpc)?;
-        let mut model = RobotDynamics::new(self.robot.clone());
+        let mut model = RobotDynamics::new(self.model_robot()?);
         let mut plant_robot = self.robot.clone();
-        plant_robot.set_payload(Some(*payload))?;
+        payload.validate().map_err(ModelError::from)?;
+        let ls = &self.loop_settings;
+        let events = RunEvents {
+            pre_roll: if kind.is_adaptive() {
+                ls.identification_samples(self.reference.ts())
+            } else {
+                0
+            },
+            pick_up: ls.pick_up_at_s.map(|t| (t, *payload)),
+        };
+        // Before a pick-up the plant carries nothing.
+        plant_robot.set_payload(match events.pick_up {
+            Some(_) => None,
+            None => Some(*payload),
+        })?;
         let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
-        let result = run_closed_loop(
+        let result = run_closed_loop_with(
             controller.as_mut(),
             &mut model,
             &mut plant,
             &self.reference,
-            &self.loop_settings,
+            ls,
+            &events,
             progress,
         );
         let metrics = compute(

@@ -27,6 +27,9 @@ pub struct Record {
     pub flange_ref: Vec<[f64; 3]>,
     /// Wall time of each controller step (µs).
     pub step_us: Vec<f64>,
+    /// The payload mass the controller's model carries after each step (kg),
+    /// for controllers that identify it online; empty otherwise.
+    pub payload_mass_est: Vec<f64>,
 }
 
 impl Record {
@@ -42,6 +45,7 @@ impl Record {
             flange: Vec::with_capacity(capacity),
             flange_ref: Vec::with_capacity(capacity),
             step_us: Vec::with_capacity(capacity),
+            payload_mass_est: Vec::new(),
         }
     }
     /// Number of samples.
@@ -128,6 +132,9 @@ pub struct RunMetrics {
     pub reason: String,
     /// When the run was stopped early, diverged or failed (s).
     pub stopped_at_s: Option<f64>,
+    /// The final payload mass identified online (kg); `None` (`null`) for
+    /// controllers that do not identify it.
+    pub payload_estimate_kg: Option<f64>,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -234,6 +241,7 @@ pub fn compute(
         status,
         reason: outcome.to_string(),
         stopped_at_s: outcome.stopped_at(),
+        payload_estimate_kg: rec.payload_mass_est.last().copied(),
     }
 }
 

@@ -8,7 +8,10 @@ mod metrics;
 mod outcome;
 mod plant;
 
-pub use closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
+pub use closed_loop::{
+    record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
+    MAX_IDENTIFICATION_S,
+};
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use outcome::{

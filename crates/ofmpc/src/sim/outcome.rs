@@ -157,6 +157,17 @@ pub enum LoopSettingsError {
         /// The hold (s).
         hold_s: f64,
     },
+    /// The identification phase is negative, not finite or too long.
+    #[error("the identification phase is {value} s: it must be a time from 0 to {max} s")]
+    IdentificationTime {
+        /// The phase (s).
+        value: f64,
+        /// The longest allowed (s).
+        max: f64,
+    },
+    /// The pick-up time is negative or not finite.
+    #[error("the payload pick-up time is {0} s: it must be a finite time ≥ 0 s")]
+    PickUpTime(f64),
 }
 
 /// Why an experiment cannot be run.

@@ -323,6 +323,14 @@ impl Plant {
     pub fn robot(&self) -> &Robot {
         &self.robot
     }
+    /// Attaches (or with `None`, removes) the payload at the flange from now
+    /// on: a part picked up or put down. The state is unchanged.
+    pub fn set_payload(
+        &mut self,
+        payload: Option<crate::robot::Payload>,
+    ) -> Result<(), ModelError> {
+        self.robot.set_payload(payload)
+    }
     /// Sets the true state (for replays and tests); lengths must be `n`.
     pub fn set_state(&mut self, q: &[f64], qd: &[f64]) -> Result<(), ModelError> {
         self.robot.check_vector("q", q)?;

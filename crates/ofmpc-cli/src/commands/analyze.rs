@@ -1,0 +1,226 @@
+//! `ofmpc analyze stability`: the inertia-ratio interval of each controller
+//! near rest (from its real step, linearized by perturbation), the largest
+//! point payload that keeps the ratio inside it along the program, and the
+//! spectral radius against α as a figure.
+
+use crate::output::atomic::write_atomic;
+use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_REFERENCE};
+use crate::scenario::{Scenario, ScenarioFile};
+use anyhow::Context;
+use clap::Args;
+use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
+use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc::robot::Robot;
+use std::path::PathBuf;
+
+/// The heaviest payload `max_payload_kg` reports (kg): a controller still
+/// inside its interval there reports this bound.
+pub const PAYLOAD_SEARCH_LIMIT_KG: f64 = 1000.0;
+
+/// Robot, program and tuning options shared by `analyze stability` and `tune`.
+#[derive(Debug, Args, Clone)]
+pub struct SetupArgs {
+    /// `irb140` (built in, with its drives) or the path of a .urdf file.
+    #[arg(long, default_value = "irb140")]
+    pub robot: String,
+    /// Drives file for a URDF robot.
+    #[arg(long)]
+    pub drives: Option<PathBuf>,
+    /// G-code program (default: the paper's Table I, built in).
+    #[arg(long)]
+    pub program: Option<PathBuf>,
+    /// G54 work offset X,Y,Z in mm, for programs that set none.
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+}
+
+/// Tuning options, as in `[mpc]` (default: the paper's).
+#[derive(Debug, Args, Clone)]
+pub struct TuningArgs {
+    /// Sampling period Ts (s).
+    #[arg(long)]
+    pub ts: Option<f64>,
+    /// Prediction horizon N (samples).
+    #[arg(long)]
+    pub horizon: Option<usize>,
+    /// Output-error weight Q_yw (scalar, times I).
+    #[arg(long)]
+    pub q_yw: Option<f64>,
+    /// Output-increment weight Q_Δy (scalar, times I).
+    #[arg(long)]
+    pub q_dy: Option<f64>,
+    /// Input-increment weight Q_Δu (scalar, times I).
+    #[arg(long)]
+    pub q_du: Option<f64>,
+    /// Input weight Q_u of the usual MPC (scalar, times I).
+    #[arg(long)]
+    pub q_u: Option<f64>,
+    /// The payload the controllers' model assumes (kg, point mass at the flange).
+    #[arg(long)]
+    pub model_payload_kg: Option<f64>,
+}
+
+impl TuningArgs {
+    /// The paper's tuning with these options applied.
+    pub fn settings(&self) -> MpcSettings {
+        let mut s = MpcSettings::default();
+        if let Some(v) = self.ts {
+            s.ts = v;
+        }
+        if let Some(v) = self.horizon {
+            s.horizon = v;
+        }
+        for (w, v) in [
+            (&mut s.q_yw, self.q_yw),
+            (&mut s.q_dy, self.q_dy),
+            (&mut s.q_du, self.q_du),
+            (&mut s.q_u, self.q_u),
+        ] {
+            if let Some(v) = v {
+                *w = Weight::Scalar(v);
+            }
+        }
+        if let Some(v) = self.model_payload_kg {
+            s.model_payload_kg = v;
+        }
+        s
+    }
+}
+
+/// `ofmpc analyze stability`
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// Robot and program.
+    #[command(flatten)]
+    pub setup: SetupArgs,
+    /// Controllers, comma-separated (usual, first, second).
+    #[arg(long, default_value = "usual,first,second")]
+    pub controllers: String,
+    /// Tuning.
+    #[command(flatten)]
+    pub tuning: TuningArgs,
+    /// Directory for the figure (`stability.png`, `stability.svg`).
+    #[arg(long, default_value = "ofmpc-out")]
+    pub out: PathBuf,
+}
+
+/// The scenario file of a setup and tuning (resolved like `ofmpc run`'s).
+pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<ScenarioFile> {
+    let mut f = ScenarioFile::default();
+    f.robot.model = setup.robot.clone();
+    f.robot.drives = setup.drives.clone();
+    f.program.file = setup.program.clone();
+    if let Some(o) = &setup.origin {
+        let v = super::parse_vector("--origin", o, Some(3))?;
+        f.program.origin_mm = Some([v[0], v[1], v[2]]);
+    }
+    f.mpc = mpc;
+    Ok(f)
+}
+
+/// What `analyze stability` computes for one controller.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Margin {
+    /// `[lo, hi]` of α = H_model/H_plant, stable near rest.
+    pub alpha_interval: [f64; 2],
+    /// Largest point payload at the flange keeping α inside along the program (kg).
+    pub max_payload_kg: f64,
+}
+
+/// The margin of `kind` for the robot, tuning and program of `scenario`:
+/// α interval at the program's first point, payload along the program.
+pub fn margin(scenario: &Scenario, kind: ControllerKind) -> anyhow::Result<Margin> {
+    let exp = &scenario.experiment;
+    let robot = exp
+        .model_robot()
+        .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e)))?;
+    let q0 = exp.reference.q(0);
+    let opts = StabilityOptions::default();
+    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts)
+        .with_context(|| format!("stability of {kind}"))?;
+    let poses = program_poses(scenario);
+    let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
+    Ok(Margin {
+        alpha_interval: [lo, hi],
+        max_payload_kg: m,
+    })
+}
+
+/// Every 10th point of the joint reference.
+fn program_poses(scenario: &Scenario) -> Vec<&[f64]> {
+    let r = &scenario.experiment.reference;
+    (0..r.len()).step_by(10).map(|k| r.q(k)).collect()
+}
+
+/// The spectral radius against α for each controller.
+pub fn radius_figure(
+    robot: &Robot,
+    mpc: &MpcSettings,
+    q0: &[f64],
+    kinds: &[ControllerKind],
+) -> anyhow::Result<Figure> {
+    let alphas: Vec<f64> = (0..=56).map(|i| 0.3 + 0.025 * i as f64).collect();
+    let mut p = Panel::new(
+        "closed loop near rest: spectral radius against the inertia ratio",
+        "α = H_model / H_plant",
+        "spectral radius ρ",
+    );
+    let opts = StabilityOptions::default();
+    for &k in kinds {
+        let rho = alphas
+            .iter()
+            .map(|&a| spectral_radius(robot, k.base(), mpc, q0, a, &opts))
+            .collect::<Result<Vec<f64>, _>>()?;
+        p.series.push(Series::line(
+            k.name(),
+            alphas.clone(),
+            rho.iter().map(|r| r.min(3.0)).collect(),
+            crate::figures::controller_color(k.name()),
+        ));
+    }
+    p.series.push(Series::dashed(
+        "ρ = 1 (stability limit)",
+        vec![alphas[0], alphas[alphas.len() - 1]],
+        vec![1.0, 1.0],
+        COLOR_REFERENCE,
+    ));
+    let mut f = Figure::new("Stability margin against model mismatch", 1);
+    f.panels.push(p);
+    Ok(f)
+}
+
+/// Runs `ofmpc analyze stability`.
+pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
+    let kinds = super::parse_controllers("--controllers", &a.controllers)?;
+    if let Some(k) = kinds.iter().find(|k| k.is_adaptive()) {
+        anyhow::bail!(
+            "--controllers {k}: the adaptive variants identify the payload, so no fixed margin applies; analyse {} instead",
+            k.base()
+        );
+    }
+    let file = scenario_file(&a.setup, a.tuning.settings())?;
+    let scenario = Scenario::resolve(&file)?;
+    let mut out = serde_json::Map::new();
+    for &k in &kinds {
+        out.insert(
+            k.name().to_string(),
+            serde_json::to_value(margin(&scenario, k)?)?,
+        );
+    }
+    let exp = &scenario.experiment;
+    let robot = exp
+        .model_robot()
+        .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e)))?;
+    let fig = radius_figure(&robot, &exp.mpc, exp.reference.q(0), &kinds)?;
+    let r = render_both(&fig).context("rendering the stability figure")?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    write_atomic(&a.out.join("stability.png"), &r.png)
+        .with_context(|| format!("writing {}", a.out.join("stability.png").display()))?;
+    write_atomic(&a.out.join("stability.svg"), r.svg.as_bytes())
+        .with_context(|| format!("writing {}", a.out.join("stability.svg").display()))?;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&serde_json::Value::Object(out))?
+    );
+    Ok(())
+}

@@ -1,0 +1,34 @@
+//! `cargo run --release -p ofmpc --example stability_quick`
+use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::robot::Robot;
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let robot = Robot::irb140();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    let q0 = reference.q(0).to_vec();
+    let opts = StabilityOptions::default();
+    let poses: Vec<&[f64]> = (0..reference.len())
+        .step_by(20)
+        .map(|k| reference.q(k))
+        .collect();
+    for kind in ControllerKind::ALL {
+        for a in [0.5, 0.8, 1.0, 1.1] {
+            let r = spectral_radius(&robot, kind, &MpcSettings::default(), &q0, a, &opts)?;
+            println!("{kind} α={a} ρ={r:.6}");
+        }
+        let t = std::time::Instant::now();
+        let iv = alpha_interval(&robot, kind, &MpcSettings::default(), &q0, &opts)?;
+        let m = max_payload(&robot, iv, &poses, 100.0)?;
+        println!(
+            "{kind}: {iv:?} max payload {m:.3} kg ({:.2} s)",
+            t.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,471 @@
+//! Stability of the closed loop near rest against an inertia mismatch.
+//!
+//! The plant is the controller's own robot model with its joint-space
+//! inertia scaled by `1/α` (`α = H_model / H_plant`; gravity and Coriolis
+//! terms as in the model): `q̈ = α H(q)⁻¹ (τ − C(q, q̇) q̇ − g(q))`, integrated by
+//! RK4 under zero-order-hold torque. At rest at a pose `q₀`, `τ = g(q₀)` is an
+//! equilibrium of plant and controller together. The one-sample map of the
+//! closed loop, in the deviation of the augmented state
+//!
+//! * usual MPC: `z_k = x_k`,
+//! * first algorithm: `z_k = [x_k; u_{k−1}]`,
+//! * second algorithm: `z_k = [x_k; u_{k−1}; ē_{k−1}]`
+//!
+//! (`x = [q; q̇]`; the controllers' memory of Eq. (32) and (34) is
+//! `x_{k−1}, u_{k−1}` and also `ē_{k−1}` for the second algorithm, but once the
+//! loop has run one sample `x_k = Φ x_{k−1} + Γ u_{k−1}` with the plant's
+//! invertible transition `Φ`, so `x_{k−1}` is a function of `z_k`: the
+//! minimal state; regressing on the redundant one would leave directions the
+//! loop never visits undetermined and give spurious eigenvalues), is
+//! linearized by perturbation of the **actual controller step**
+//! ([`crate::control::Controller::step`]) and the plant: short closed-loop
+//! runs from small random deviations (a random `x_{−1}` through
+//! [`crate::control::Controller::reset`], a random plant state, a random
+//! first reference to excite `u` and `ē`) give pairs `(z_k, z_{k+1})` and the
+//! matrix `M` with `z_{k+1} = M z_k` by least squares (exact for the linear
+//! part: the deviations are 1e-7). The loop is stable near rest iff the
+//! spectral radius `ρ(M) < 1`.
+//!
+//! With scalar weights the controller is isotropic in the input `u`, so a
+//! matrix mismatch `H_plant⁻¹ H_model` acts mode by mode through its
+//! eigenvalues: the loop stays stable while every generalized eigenvalue of
+//! `(H_model, H_plant)` lies in the interval of scalar `α`
+//! ([`inertia_ratio_range`], [`max_payload`]).
+
+use crate::control::{new_controller, ControllerKind, MpcSettings, SettingsError, StepError};
+use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
+use crate::robot::{ModelError, Payload, Robot};
+use nalgebra::{DMatrix, DVector};
+
+/// Options of the analysis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StabilityOptions {
+    /// Smallest `α` searched (the lower end is reported as this when the
+    /// loop is still stable there).
+    pub alpha_min: f64,
+    /// Largest `α` searched.
+    pub alpha_max: f64,
+    /// Width of the bisection's final bracket.
+    pub tolerance: f64,
+    /// Size of the state deviations (rad, rad/s).
+    pub perturbation: f64,
+    /// RK4 substeps per control period of the analysis plant.
+    pub substeps: usize,
+}
+
+impl Default for StabilityOptions {
+    fn default() -> Self {
+        Self {
+            alpha_min: 0.01,
+            alpha_max: 4.0,
+            tolerance: 1e-3,
+            perturbation: 1e-7,
+            substeps: 10,
+        }
+    }
+}
+
+/// Why the analysis could not be done.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StabilityError {
+    /// The tuning does not fit the robot.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// A controller step failed during the perturbation runs.
+    #[error("a controller step failed at the pose: {0}")]
+    Step(#[from] StepError),
+    /// The pose or the payload is not valid for the robot.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// The plant's state stopped being finite.
+    #[error("the analysis plant's state stopped being finite at α = {alpha}")]
+    NonFinite {
+        /// The inertia ratio.
+        alpha: f64,
+    },
+    /// The adaptive variants identify the payload: analyse their base algorithm.
+    #[error("{kind} identifies the payload online: analyse the algorithm it runs ({base})", kind = .0, base = .0.base())]
+    Adaptive(ControllerKind),
+    /// The loop is not stable even with an exact model (α = 1).
+    #[error("the closed loop is not stable near rest even with an exact model (spectral radius {radius} at α = 1): change the tuning")]
+    UnstableAtExactModel {
+        /// `ρ(M)` at `α = 1`.
+        radius: f64,
+    },
+    /// An option is out of range.
+    #[error("the analysis option {what} is {value}: {requirement}")]
+    Option {
+        /// Which option.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// What it must satisfy.
+        requirement: &'static str,
+    },
+}
+
+impl StabilityOptions {
+    fn validate(&self) -> Result<(), StabilityError> {
+        let bad = |what, value, requirement| {
+            Err(StabilityError::Option {
+                what,
+                value,
+                requirement,
+            })
+        };
+        if !(self.alpha_min > 0.0 && self.alpha_min < 1.0) {
+            return bad("alpha_min", self.alpha_min, "it must be in (0, 1)");
+        }
+        if !(self.alpha_max > 1.0 && self.alpha_max.is_finite()) {
+            return bad("alpha_max", self.alpha_max, "it must be finite and > 1");
+        }
+        if !(self.tolerance > 0.0 && self.tolerance < 0.5) {
+            return bad("tolerance", self.tolerance, "it must be in (0, 0.5)");
+        }
+        if !(self.perturbation > 0.0 && self.perturbation < 1e-2) {
+            return bad("perturbation", self.perturbation, "it must be in (0, 0.01)");
+        }
+        if self.substeps == 0 || self.substeps > 1000 {
+            return bad(
+                "substeps",
+                self.substeps as f64,
+                "it must be from 1 to 1000",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The analysis plant: the model with its inertia scaled by `1/α`.
+struct ScaledPlant {
+    model: RobotDynamics,
+    alpha: f64,
+    h: DMatrix<f64>,
+    c: DMatrix<f64>,
+    g: DVector<f64>,
+}
+
+impl ScaledPlant {
+    fn accel(&mut self, q: &[f64], qd: &[f64], tau: &[f64]) -> Option<DVector<f64>> {
+        self.model
+            .terms(q, qd, &mut self.h, &mut self.c, &mut self.g);
+        let rhs =
+            DVector::from_column_slice(tau) - &self.c * DVector::from_column_slice(qd) - &self.g;
+        let chol = self.h.clone().cholesky()?;
+        Some(chol.solve(&rhs) * self.alpha)
+    }
+
+    /// Advances `x = [q; q̇]` by `ts` under constant `tau`.
+    fn step(&mut self, x: &mut [f64], tau: &[f64], ts: f64, substeps: usize) -> Option<()> {
+        let n = tau.len();
+        let h = ts / substeps as f64;
+        for _ in 0..substeps {
+            let q = x[..n].to_vec();
+            let v = x[n..].to_vec();
+            let k1 = self.accel(&q, &v, tau)?;
+            let q2: Vec<f64> = (0..n).map(|i| q[i] + 0.5 * h * v[i]).collect();
+            let v2: Vec<f64> = (0..n).map(|i| v[i] + 0.5 * h * k1[i]).collect();
+            let k2 = self.accel(&q2, &v2, tau)?;
+            let q3: Vec<f64> = (0..n).map(|i| q[i] + 0.5 * h * v2[i]).collect();
+            let v3: Vec<f64> = (0..n).map(|i| v[i] + 0.5 * h * k2[i]).collect();
+            let k3 = self.accel(&q3, &v3, tau)?;
+            let q4: Vec<f64> = (0..n).map(|i| q[i] + h * v3[i]).collect();
+            let v4: Vec<f64> = (0..n).map(|i| v[i] + h * k3[i]).collect();
+            let k4 = self.accel(&q4, &v4, tau)?;
+            for i in 0..n {
+                x[i] = q[i] + h / 6.0 * (v[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
+                x[n + i] = v[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+            }
+        }
+        x.iter().all(|v| v.is_finite()).then_some(())
+    }
+}
+
+/// Blocks of the state for `kind` besides `x_k`: (u_{k−1}, ē_{k−1}).
+fn memory(kind: ControllerKind) -> (bool, bool) {
+    match kind {
+        ControllerKind::Usual => (false, false),
+        ControllerKind::First => (true, false),
+        _ => (true, true),
+    }
+}
+
+/// A small deterministic generator for the perturbations.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+}
+
+/// The matrix `M` of the closed loop's one-sample map near rest at `q0`
+/// (see the module doc), for the plant with inertia ratio `alpha`.
+pub fn closed_loop_matrix(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    alpha: f64,
+    options: &StabilityOptions,
+) -> Result<DMatrix<f64>, StabilityError> {
+    options.validate()?;
+    if kind.is_adaptive() {
+        return Err(StabilityError::Adaptive(kind));
+    }
+    robot.check_vector("q0", q0)?;
+    let n = robot.dof();
+    let (with_u, with_ebar) = memory(kind);
+    let dim = 2 * n + if with_u { n } else { 0 } + if with_ebar { n } else { 0 };
+    let ts = settings.ts;
+    let nh = settings.horizon;
+    let mut model = RobotDynamics::new(robot.clone());
+    let mut plant = ScaledPlant {
+        model: RobotDynamics::new(robot.clone()),
+        alpha,
+        h: DMatrix::zeros(n, n),
+        c: DMatrix::zeros(n, n),
+        g: DVector::zeros(n),
+    };
+    let x0: Vec<f64> = [q0, &vec![0.0; n]].concat();
+    let eps = options.perturbation;
+    let mut rng = Lcg(0x5eed);
+    // Pairs (z_k, z_{k+1}) as columns.
+    let runs = dim + 4;
+    let pairs_per_run = 3;
+    let mut z_now = DMatrix::zeros(dim, runs * pairs_per_run);
+    let mut z_next = DMatrix::zeros(dim, runs * pairs_per_run);
+    let mut col = 0;
+    let mut tau = vec![0.0; n];
+    let preview0: Vec<f64> = q0.repeat(nh);
+    for _ in 0..runs {
+        let mut ctrl = new_controller(kind, n, settings)?;
+        let x_minus: Vec<f64> = x0.iter().map(|v| v + eps * rng.next()).collect();
+        ctrl.reset(&x_minus)?;
+        let mut x: Vec<f64> = x0.iter().map(|v| v + eps * rng.next()).collect();
+        let mut ebar = vec![0.0; n];
+        // First step: a perturbed reference excites u and ē.
+        let w: Vec<f64> = q0.iter().map(|v| v + eps * rng.next()).collect();
+        let preview: Vec<f64> = preview0.iter().map(|v| v + eps * rng.next()).collect();
+        ctrl.step(&mut model, &x, &w, &preview, &mut tau)?;
+        for i in 0..n {
+            ebar[i] += w[i] - x[i];
+        }
+        plant
+            .step(&mut x, &tau, ts, options.substeps)
+            .ok_or(StabilityError::NonFinite { alpha })?;
+        let state = |x: &[f64], u: &[f64], ebar: &[f64]| {
+            let mut z = Vec::with_capacity(dim);
+            z.extend(x.iter().zip(&x0).map(|(a, b)| a - b));
+            if with_u {
+                z.extend_from_slice(u);
+            }
+            if with_ebar {
+                z.extend_from_slice(ebar);
+            }
+            DVector::from_vec(z)
+        };
+        let mut z = state(&x, ctrl.input(), &ebar);
+        for _ in 0..pairs_per_run {
+            ctrl.step(&mut model, &x, q0, &preview0, &mut tau)?;
+            for i in 0..n {
+                ebar[i] += q0[i] - x[i];
+            }
+            plant
+                .step(&mut x, &tau, ts, options.substeps)
+                .ok_or(StabilityError::NonFinite { alpha })?;
+            let z1 = state(&x, ctrl.input(), &ebar);
+            z_now.set_column(col, &z);
+            z_next.set_column(col, &z1);
+            col += 1;
+            z = z1;
+        }
+    }
+    // M Z = Z'  ⇔  Zᵀ Mᵀ = Z'ᵀ, least squares by SVD.
+    let svd = z_now.transpose().svd(true, true);
+    let mt = svd
+        .solve(&z_next.transpose(), 1e-12 * eps)
+        .map_err(|_| StabilityError::NonFinite { alpha })?;
+    Ok(mt.transpose())
+}
+
+/// `ρ(M)`: the largest eigenvalue modulus of [`closed_loop_matrix`].
+pub fn spectral_radius(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    alpha: f64,
+    options: &StabilityOptions,
+) -> Result<f64, StabilityError> {
+    let m = closed_loop_matrix(robot, kind, settings, q0, alpha, options)?;
+    Ok(m.complex_eigenvalues()
+        .iter()
+        .map(|l| l.norm())
+        .fold(0.0, f64::max))
+}
+
+/// The interval `[lo, hi] ∋ 1` of `α` over which the loop near rest at `q0`
+/// is stable (`ρ < 1`), by bisection from `α = 1` towards
+/// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
+/// bound still stable there is reported as that end). Assumes one interval.
+pub fn alpha_interval(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    options: &StabilityOptions,
+) -> Result<(f64, f64), StabilityError> {
+    let rho = |a: f64| spectral_radius(robot, kind, settings, q0, a, options);
+    let at_one = rho(1.0)?;
+    if at_one >= 1.0 {
+        return Err(StabilityError::UnstableAtExactModel { radius: at_one });
+    }
+    let edge = |stable: f64, far: f64| -> Result<f64, StabilityError> {
+        if rho(far)? < 1.0 {
+            return Ok(far);
+        }
+        let (mut s, mut u) = (stable, far);
+        while (s - u).abs() > options.tolerance {
+            let mid = 0.5 * (s + u);
+            if rho(mid)? < 1.0 {
+                s = mid;
+            } else {
+                u = mid;
+            }
+        }
+        Ok(0.5 * (s + u))
+    };
+    let lo = edge(1.0, options.alpha_min)?;
+    let hi = edge(1.0, options.alpha_max)?;
+    Ok((lo, hi))
+}
+
+/// The range of the generalized eigenvalues of `(H_model, H_plant)` over the
+/// poses (each `n` values): the inertia ratios `α` the loop meets when the
+/// plant carries `payload` and the model `robot` does not (the model's own
+/// payload, if any, is what it assumes).
+pub fn inertia_ratio_range(
+    robot: &Robot,
+    payload: &Payload,
+    poses: &[&[f64]],
+) -> Result<(f64, f64), StabilityError> {
+    let mut plant_robot = robot.clone();
+    plant_robot.set_payload(Some(*payload))?;
+    let n = robot.dof();
+    let mut model = RobotDynamics::new(robot.clone());
+    let mut plant = RobotDynamics::new(plant_robot);
+    let (mut hm, mut hp) = (DMatrix::zeros(n, n), DMatrix::zeros(n, n));
+    let (mut c, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    let zero = vec![0.0; n];
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for q in poses {
+        robot.check_vector("q", q)?;
+        model.terms(q, &zero, &mut hm, &mut c, &mut g);
+        plant.terms(q, &zero, &mut hp, &mut c, &mut g);
+        // eig(H_p⁻¹ H_m) = eig(L⁻¹ H_m L⁻ᵀ) with H_p = L Lᵀ.
+        let Some(chol) = hp.clone().cholesky() else {
+            return Err(StabilityError::NonFinite { alpha: f64::NAN });
+        };
+        let l = chol.l();
+        let li = l
+            .clone()
+            .try_inverse()
+            .ok_or(StabilityError::NonFinite { alpha: f64::NAN })?;
+        let s = &li * &hm * li.transpose();
+        let s = (&s + s.transpose()) * 0.5;
+        for e in s.symmetric_eigenvalues().iter() {
+            lo = lo.min(*e);
+            hi = hi.max(*e);
+        }
+    }
+    Ok((lo, hi))
+}
+
+/// The largest point payload at the flange centre, up to `mass_limit`, for
+/// which the inertia ratios along `poses` stay inside `interval`
+/// (bisection to 1 g). 0 when even a small payload leaves it.
+pub fn max_payload(
+    robot: &Robot,
+    interval: (f64, f64),
+    poses: &[&[f64]],
+    mass_limit: f64,
+) -> Result<f64, StabilityError> {
+    let inside = |m: f64| -> Result<bool, StabilityError> {
+        let (lo, hi) = inertia_ratio_range(robot, &Payload::point_mass(m), poses)?;
+        Ok(lo >= interval.0 && hi <= interval.1)
+    };
+    if inside(mass_limit)? {
+        return Ok(mass_limit);
+    }
+    let (mut ok, mut bad) = (0.0, mass_limit);
+    if !inside(ok)? {
+        return Ok(0.0);
+    }
+    while bad - ok > 1e-3 {
+        let mid = 0.5 * (ok + bad);
+        if inside(mid)? {
+            ok = mid;
+        } else {
+            bad = mid;
+        }
+    }
+    Ok(ok)
+}
+
+/// A closed-loop simulation near rest at `q0` with the plant's inertia
+/// scaled by `1/α` (the analysis plant), from a deviation of size
+/// `deviation` of the initial state: returns the largest joint deviation
+/// from `q0` over the last tenth of `steps` samples divided by the initial
+/// one. Below 1 (and shrinking with `steps`) when the loop is stable. The
+/// check of [`alpha_interval`] by simulation, independent of the
+/// linearization.
+pub fn simulated_growth(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    alpha: f64,
+    deviation: f64,
+    steps: usize,
+) -> Result<f64, StabilityError> {
+    robot.check_vector("q0", q0)?;
+    let n = robot.dof();
+    let mut model = RobotDynamics::new(robot.clone());
+    let mut plant = ScaledPlant {
+        model: RobotDynamics::new(robot.clone()),
+        alpha,
+        h: DMatrix::zeros(n, n),
+        c: DMatrix::zeros(n, n),
+        g: DVector::zeros(n),
+    };
+    let mut ctrl = new_controller(kind, n, settings)?;
+    let mut x: Vec<f64> = [q0, &vec![0.0; n]].concat();
+    ctrl.reset(&x)?;
+    let mut rng = Lcg(7);
+    for xi in x.iter_mut().take(n) {
+        *xi += deviation * rng.next();
+    }
+    let initial = (0..n).map(|i| (x[i] - q0[i]).abs()).fold(0.0, f64::max);
+    let preview = q0.repeat(settings.horizon);
+    let mut tau = vec![0.0; n];
+    let mut last = 0.0f64;
+    for k in 0..steps {
+        ctrl.step(&mut model, &x, q0, &preview, &mut tau)?;
+        plant
+            .step(&mut x, &tau, settings.ts, 10)
+            .ok_or(StabilityError::NonFinite { alpha })?;
+        let d = (0..n).map(|i| (x[i] - q0[i]).abs()).fold(0.0, f64::max);
+        if d > 1.0 {
+            return Ok(f64::INFINITY);
+        }
+        if k >= steps - steps / 10 {
+            last = last.max(d);
+        }
+    }
+    Ok(last / initial)
+}
