@@ -20,7 +20,9 @@
 //! `t ≤ t'` and zero below: column block `t'` ends at row `g·n·t'` with `g`
 //! groups of rows per level.
 
+use super::constrained::TorqueLimitQp;
 use super::dense::gemm;
+use super::drive_model::DriveModel;
 use super::lsq::{LsqInfo, LsqWorkspace};
 use super::model::LinearLikeModel;
 use super::prediction::Predictions;
@@ -58,6 +60,17 @@ macro_rules! impl_controller {
 
             fn input(&self) -> &[f64] {
                 &self.core.u_prev
+            }
+
+            fn set_drive_model(
+                &mut self,
+                drives: &$crate::control::DriveModel,
+            ) -> Result<(), $crate::control::SettingsError> {
+                self.core.set_drive_model(drives)
+            }
+
+            fn qp_status(&self) -> Option<$crate::control::QpStatus> {
+                self.core.qp.as_ref().map(|q| q.status)
             }
 
             fn step(
@@ -120,6 +133,14 @@ pub(crate) struct Core {
     pub v1: Vec<f64>,
     pub v2: Vec<f64>,
     pub v3: Vec<f64>,
+    /// Incremental algorithm (`u_k = u_{k−1} + Δu_k`) or positional.
+    pub incremental: bool,
+    /// The drives as the controller models them ([`Core::set_drive_model`]).
+    pub drives: Option<DriveModel>,
+    /// Torque-limit QP, when `torque_limits` is on and a drive model is set.
+    pub qp: Option<Box<TorqueLimitQp>>,
+    /// Per-joint friction damping `d_i(q̇)` of the current sample.
+    pub damping: Vec<f64>,
 }
 
 impl Core {
@@ -180,7 +201,39 @@ impl Core {
             v1: vec![0.0; p],
             v2: vec![0.0; p],
             v3: vec![0.0; p],
+            incremental,
+            drives: None,
+            qp: None,
+            damping: vec![0.0; n],
         })
+    }
+
+    /// Gives the controller the drives' limits and friction estimates; with
+    /// `torque_limits` on, sizes the QP workspace (this allocates; `step`
+    /// then does not).
+    pub fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        drives.validate(self.n)?;
+        self.qp = if self.settings.torque_limits {
+            Some(Box::new(TorqueLimitQp::new(
+                self.n,
+                self.nh,
+                self.lsq.rows(),
+                self.incremental,
+                &drives.max_torque_nm,
+            )))
+        } else {
+            None
+        };
+        self.drives = Some(drives.clone());
+        Ok(())
+    }
+
+    /// True when the torque of joint `i` at this sample was held at its
+    /// limit by the QP (for the anti-windup of the integrators).
+    pub fn saturated(&self, i: usize) -> bool {
+        self.qp
+            .as_ref()
+            .is_some_and(|q| q.status.active && q.saturated.get(i).copied().unwrap_or(false))
     }
 
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
@@ -211,6 +264,16 @@ impl Core {
         check_finite("w_k", w_k)?;
         check_finite("preview", preview)?;
         self.model.update(model, &x[..n], &x[n..])?;
+        if self.settings.friction_compensation {
+            if let Some(d) = &self.drives {
+                // Friction in the linear-like model: F(q̇) = D(q̇) q̇ with
+                // D = diag(F_v + F_c tanh(q̇/v_s)/q̇), added to C (Eq. (6)).
+                for (i, (di, v)) in self.damping.iter_mut().zip(&x[n..]).enumerate() {
+                    *di = d.damping(i, *v);
+                }
+                self.model.add_damping(&self.damping)?;
+            }
+        }
         self.zoh.discretize(self.model.f0(), self.ts)?;
         self.pred
             .update_f1_and_generators_from_zoh(&self.zoh)
@@ -299,6 +362,10 @@ impl Core {
 
     /// Solves the least-squares system.
     pub fn solve(&mut self) -> Result<LsqInfo, StepError> {
+        if let Some(qp) = self.qp.as_mut() {
+            let (a, b) = self.lsq.system_mut();
+            qp.capture(a, b);
+        }
         Ok(self.lsq.solve()?)
     }
 
@@ -317,7 +384,23 @@ impl Core {
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
             *u = if incremental { prev + d } else { *d };
         }
+        if let Some(qp) = self.qp.as_mut() {
+            // Torque limits over the horizon (constrained.rs); unchanged when
+            // the unconstrained solution respects them.
+            qp.enforce(
+                &self.model,
+                self.lsq.solution(),
+                &self.u_prev,
+                &mut self.u_new,
+            );
+        }
         self.model.torque(&self.u_new, &mut self.tau_new)?;
+        if let Some(qp) = self.qp.as_ref().filter(|q| q.status.active) {
+            // Rounding guard only: the QP keeps a relative margin of 1e-9.
+            for (t, lim) in self.tau_new.iter_mut().zip(qp.limits()) {
+                *t = t.clamp(-lim, *lim);
+            }
+        }
         if let Some(index) = self
             .u_new
             .iter()

@@ -15,8 +15,10 @@
 //! nothing, never panics and reports a failed sample as a [`StepError`],
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
 
+pub mod constrained;
 pub(crate) mod core;
 pub(crate) mod dense;
+pub mod drive_model;
 pub mod first;
 pub mod lsq;
 pub mod model;
@@ -33,6 +35,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::dynamics::JointSpaceDynamics;
 
+pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
+pub use drive_model::{DriveModel, DriveQuantity};
 pub use first::FirstMpc;
 pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, ModelError};
@@ -169,6 +173,17 @@ pub trait Controller {
     /// The input `u` of the last successful step (`u_{k−1}` of the next one),
     /// `n` values; zero after [`Controller::reset`].
     fn input(&self) -> &[f64];
+    /// Gives the controller the drives' torque limits and friction estimates
+    /// (used when the settings' torque limits or friction compensation are
+    /// on). Allocates (sizes the constrained solver); call before a run.
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        let _ = drives;
+        Err(SettingsError::DrivesUnsupported(self.kind().name()))
+    }
+    /// What the torque-limit QP did at the last step (`None` without limits).
+    fn qp_status(&self) -> Option<QpStatus> {
+        None
+    }
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);

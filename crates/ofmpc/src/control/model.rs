@@ -193,6 +193,26 @@ impl LinearLikeModel {
     }
 }
 
+impl LinearLikeModel {
+    /// `b ← H⁻¹ b` with the Cholesky factor of the last update (`n` values;
+    /// a shorter or longer slice is left as it is). Allocation-free.
+    /// Adds `diag(d)` to `C` (friction `D(q̇) q̇` in the linear-like form)
+    /// and recomputes `f0 = −H⁻¹(C + D)`. Allocation-free.
+    pub(crate) fn add_damping(&mut self, d: &[f64]) -> Result<(), ModelError> {
+        check_len("d", d.len(), self.n)?;
+        for (i, di) in d.iter().enumerate() {
+            self.c[(i, i)] += di;
+        }
+        self.set_f0_from_terms()
+    }
+
+    pub(crate) fn solve_h_in_place(&self, b: &mut [f64]) {
+        if b.len() == self.n {
+            cholesky_solve_in_place(self.n, self.chol.as_slice(), b);
+        }
+    }
+}
+
 fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), ModelError> {
     if got == expected {
         Ok(())

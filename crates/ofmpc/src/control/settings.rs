@@ -102,6 +102,16 @@ pub struct MpcSettings {
     pub q_du: Weight,
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
+    /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
+    /// horizon as constraints of the optimization ([`super::constrained`]);
+    /// the limits come from the controller's [`super::DriveModel`]. Default off.
+    pub torque_limits: bool,
+    /// Use the drives' friction estimates (Coulomb, viscous) of the
+    /// [`super::DriveModel`] in the torque sent to the drives. Default off.
+    pub friction_compensation: bool,
+    /// Predict the measured state forward over the measurement delay with the
+    /// model before optimizing. Default off.
+    pub delay_compensation: bool,
 }
 
 impl Default for MpcSettings {
@@ -113,6 +123,9 @@ impl Default for MpcSettings {
             q_dy: Weight::Scalar(0.5),
             q_du: Weight::Scalar(1e-5),
             q_u: Weight::Scalar(1e-4),
+            torque_limits: false,
+            friction_compensation: false,
+            delay_compensation: false,
         }
     }
 }
@@ -219,6 +232,30 @@ pub enum SettingsError {
         /// Its length.
         second_len: usize,
     },
+    /// The drive model has another number of joints than the controller.
+    #[error("the drive data give {got} values of the {what} but the robot has {expected} joints")]
+    DriveModelLength {
+        /// Which quantity.
+        what: super::drive_model::DriveQuantity,
+        /// Joints.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A drive-model value is out of range.
+    #[error("the {what} of joint {} is {value}: limits must be > 0 (or infinite), friction finite and >= 0", index + 1)]
+    DriveModelValue {
+        /// Which quantity.
+        what: super::drive_model::DriveQuantity,
+        /// 0-based joint.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Torque limits or friction compensation are enabled but the controller
+    /// was given no drive model, or cannot use one.
+    #[error("the {0} controller does not support torque limits or friction compensation")]
+    DrivesUnsupported(&'static str),
     /// A controller for zero joints was requested.
     #[error("the robot has 0 joints: a controller needs at least one")]
     ZeroDof,

@@ -190,6 +190,8 @@ impl<'a> Walker<'a> {
             body: Inertia::zero(),
             limits,
             armature: 0.0,
+            coulomb_nm: 0.0,
+            viscous_nms: 0.0,
         });
         let b = self.joints.len() - 1;
         self.walk(&j.child.link, Transform::identity(), Some(b), depth + 1)

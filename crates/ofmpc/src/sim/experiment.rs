@@ -6,7 +6,7 @@ use super::closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResul
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
-use crate::control::{new_controller, ControllerKind, MpcSettings};
+use crate::control::{new_controller, ControllerKind, DriveModel, MpcSettings};
 use crate::dynamics::RobotDynamics;
 use crate::reference::JointReference;
 use crate::robot::{Payload, Robot};
@@ -110,6 +110,9 @@ impl Experiment {
         self.validate()?;
         let n = self.robot.dof();
         let mut controller = new_controller(kind, n, &self.mpc)?;
+        if self.mpc.torque_limits || self.mpc.friction_compensation {
+            controller.set_drive_model(&DriveModel::from_robot(&self.robot))?;
+        }
         let mut model = RobotDynamics::new(self.robot.clone());
         let mut plant_robot = self.robot.clone();
         plant_robot.set_payload(Some(*payload))?;

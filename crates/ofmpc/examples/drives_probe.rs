@@ -1,0 +1,86 @@
+//! Probe runs for the drives/sensors issue (#11): prints metrics of variants
+//! of the paper's experiment. `cargo run --release -p ofmpc --example drives_probe -- CASE`.
+
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::sim::{Experiment, PlantSettings};
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let case = std::env::args().nth(1).unwrap_or_default();
+    let mass: f64 = std::env::args()
+        .nth(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(0.25);
+    let scale: f64 = std::env::args()
+        .nth(3)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(1.0);
+    let mut robot = Robot::irb140();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    let mut mpc = MpcSettings::default();
+    let mut plant = PlantSettings::default();
+    match case.as_str() {
+        "limits" | "limits-plant" => {
+            // Lower limits: scale of the peak torques.
+            let text: String = robot
+                .joints()
+                .iter()
+                .take(1)
+                .map(|j| format!("[joints.{}]\nmax_torque_nm = {}\n", j.name, scale))
+                .collect();
+            robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+            plant.torque_limits = true;
+            mpc.torque_limits = case == "limits";
+        }
+        "friction" | "friction-comp" => {
+            plant.coulomb_friction = vec![1.0];
+            if case == "friction-comp" {
+                let text: String = robot
+                    .joints()
+                    .iter()
+                    .map(|j| format!("[joints.{}]\ncoulomb_nm = {}\n", j.name, 0.8 * scale))
+                    .collect();
+                robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+                mpc.friction_compensation = true;
+            }
+        }
+        _ => {}
+    }
+    let exp = Experiment {
+        robot: robot.clone(),
+        reference,
+        mpc,
+        plant,
+        loop_settings: Default::default(),
+    };
+    for kind in ControllerKind::ALL {
+        let (r, m) = exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})?;
+        let n = 6;
+        let mut ratio: f64 = 0.0;
+        for k in 0..r.record.len() {
+            for i in 0..n {
+                ratio = ratio.max(r.record.tau[k * n + i].abs() / robot.joints()[i].limits.effort);
+            }
+        }
+        println!(
+            "{:8} rms {:8.4} mm max {:8.4} mm steady {:10.3e} mm  steady joint {:10.3e}  max|tau|/lim {:.4} tau_max {:?} step {:6.1} us {}",
+            m.controller,
+            m.cartesian_error_rms_mm,
+            m.cartesian_error_max_mm,
+            m.steady_cartesian_error_mm,
+            m.steady_joint_error_max_rad.iter().cloned().fold(0.0, f64::max),
+            ratio,
+            m.torque_max_nm.iter().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>(),
+            m.step_time_us.median,
+            r.outcome
+        );
+    }
+    Ok(())
+}
