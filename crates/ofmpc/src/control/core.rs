@@ -139,7 +139,7 @@ pub(crate) struct Core {
     pub drives: Option<DriveModel>,
     /// Torque-limit QP, when `torque_limits` is on and a drive model is set.
     pub qp: Option<Box<TorqueLimitQp>>,
-    /// Per-joint friction damping `d_i(q̇)` of the current sample.
+    /// Per-joint friction feed-forward `F̂(v_ref)` of the current sample.
     pub damping: Vec<f64>,
 }
 
@@ -266,12 +266,15 @@ impl Core {
         self.model.update(model, &x[..n], &x[n..])?;
         if self.settings.friction_compensation {
             if let Some(d) = &self.drives {
-                // Friction in the linear-like model: F(q̇) = D(q̇) q̇ with
-                // D = diag(F_v + F_c tanh(q̇/v_s)/q̇), added to C (Eq. (6)).
-                for (i, (di, v)) in self.damping.iter_mut().zip(&x[n..]).enumerate() {
-                    *di = d.damping(i, *v);
+                // Friction feed-forward along the planned motion: the
+                // estimate F(v) = F_v v + F_c tanh(v/v_s) at the reference's
+                // velocity v = (w_{k+1} − w_k)/Ts, added to g so that
+                // τ = H u + g + F(v) (Eq. (15)); bounded by F_c + F_v|v|.
+                for (i, di) in self.damping.iter_mut().enumerate() {
+                    let v = (preview[i] - w_k[i]) / self.ts;
+                    *di = d.damping(i, v) * v;
                 }
-                self.model.add_damping(&self.damping)?;
+                self.model.add_bias_torque(&self.damping)?;
             }
         }
         self.zoh.discretize(self.model.f0(), self.ts)?;

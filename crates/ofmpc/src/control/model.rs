@@ -196,14 +196,14 @@ impl LinearLikeModel {
 impl LinearLikeModel {
     /// `b ← H⁻¹ b` with the Cholesky factor of the last update (`n` values;
     /// a shorter or longer slice is left as it is). Allocation-free.
-    /// Adds `diag(d)` to `C` (friction `D(q̇) q̇` in the linear-like form)
-    /// and recomputes `f0 = −H⁻¹(C + D)`. Allocation-free.
-    pub(crate) fn add_damping(&mut self, d: &[f64]) -> Result<(), ModelError> {
-        check_len("d", d.len(), self.n)?;
-        for (i, di) in d.iter().enumerate() {
-            self.c[(i, i)] += di;
+    /// Adds a known torque `f` to `g` (a bias the drives must overcome, e.g.
+    /// friction), so that `τ = H u + g + f`. Allocation-free.
+    pub(crate) fn add_bias_torque(&mut self, f: &[f64]) -> Result<(), ModelError> {
+        check_len("f", f.len(), self.n)?;
+        for (g, fi) in self.g.iter_mut().zip(f) {
+            *g += fi;
         }
-        self.set_f0_from_terms()
+        Ok(())
     }
 
     pub(crate) fn solve_h_in_place(&self, b: &mut [f64]) {

@@ -107,7 +107,8 @@ pub struct MpcSettings {
     /// the limits come from the controller's [`super::DriveModel`]. Default off.
     pub torque_limits: bool,
     /// Use the drives' friction estimates (Coulomb, viscous) of the
-    /// [`super::DriveModel`] in the torque sent to the drives. Default off.
+    /// [`super::DriveModel`]: the estimated friction at the reference's
+    /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). Default off.
     pub friction_compensation: bool,
     /// Predict the measured state forward over the measurement delay with the
     /// model before optimizing. Default off.
