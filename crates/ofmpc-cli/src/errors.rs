@@ -60,6 +60,7 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
                 }
             ),
             PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
+            PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
             PlantSettingsError::Noise { kind, value } => format!(
                 "[plant] {} = {value}",
                 match kind {

@@ -51,6 +51,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 mpc.friction_compensation = true;
             }
         }
+        "sensing" | "sensing-obs" | "sensing-nodelay" => {
+            plant.encoder_counts = 1 << 22;
+            plant.velocity_from_encoder = true;
+            plant.delay_samples = if case == "sensing-nodelay" { 0 } else { 1 };
+            mpc.delay_compensation = case != "sensing";
+            mpc.state_observer = case != "sensing";
+        }
         _ => {}
     }
     let exp = Experiment {
@@ -67,6 +74,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for k in 0..r.record.len() {
             for i in 0..n {
                 ratio = ratio.max(r.record.tau[k * n + i].abs() / robot.joints()[i].limits.effort);
+            }
+        }
+        if std::env::var_os("TRACE").is_some() {
+            let len = r.record.len();
+            for i in 0..n {
+                let e: Vec<f64> = (len.saturating_sub(200)..len)
+                    .map(|k| r.record.joint_error(k, i))
+                    .collect();
+                let (lo, hi) = e
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+                let qd: f64 = (len.saturating_sub(200)..len)
+                    .map(|k| r.record.qd[k * n + i].abs())
+                    .fold(0.0, f64::max);
+                println!(
+                    "  joint {} last 2 s: e in [{lo:.3e}, {hi:.3e}]  max|qd| {qd:.3e}",
+                    i + 1
+                );
             }
         }
         println!(

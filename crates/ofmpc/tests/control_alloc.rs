@@ -138,3 +138,24 @@ fn constrained_steps_with_friction_compensation_allocate_nothing() {
         assert_eq!(after - before, 0, "{kind}: {} allocations", after - before);
     }
 }
+
+/// The state observer's update (with delay compensation) allocates nothing.
+#[test]
+fn observer_updates_allocate_nothing() {
+    use ofmpc::control::StateObserver;
+    let mut model = CoupledModel::new(6, 1);
+    let n = 6;
+    let mut obs = StateObserver::new(n, 0.01, 2, 0.7);
+    let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+    obs.reset(&x0);
+    let mut y = x0.clone();
+    let tau = vec![0.1; n];
+    let before = allocations();
+    for k in 0..100 {
+        y[0] = x0[0] + 1e-3 * k as f64;
+        let est = obs.update(&mut model, &y).unwrap();
+        assert!(est.iter().all(|v| v.is_finite()));
+        obs.record_torque(&tau);
+    }
+    assert_eq!(allocations() - before, 0);
+}

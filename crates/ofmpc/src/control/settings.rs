@@ -110,9 +110,15 @@ pub struct MpcSettings {
     /// [`super::DriveModel`]: the estimated friction at the reference's
     /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). Default off.
     pub friction_compensation: bool,
-    /// Predict the measured state forward over the measurement delay with the
-    /// model before optimizing. Default off.
+    /// Predict the state forward over the measurement delay with the model
+    /// and the observer's disturbance estimate before optimizing (implies
+    /// `state_observer`). Default off.
     pub delay_compensation: bool,
+    /// Estimate the state with a [`super::StateObserver`] (position,
+    /// velocity, disturbance) from the measured positions instead of using
+    /// the measured state directly. Default off; on whenever
+    /// `delay_compensation` is.
+    pub state_observer: bool,
 }
 
 impl Default for MpcSettings {
@@ -127,6 +133,7 @@ impl Default for MpcSettings {
             torque_limits: false,
             friction_compensation: false,
             delay_compensation: false,
+            state_observer: false,
         }
     }
 }

@@ -3,7 +3,7 @@
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
-use crate::control::Controller;
+use crate::control::{Controller, StateObserver};
 use crate::dynamics::JointSpaceDynamics;
 use crate::reference::JointReference;
 use serde::{Deserialize, Serialize};
@@ -92,6 +92,24 @@ pub fn run_closed_loop(
     settings: &LoopSettings,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
+    run_closed_loop_with(
+        controller, model, plant, reference, settings, None, progress,
+    )
+}
+
+/// [`run_closed_loop`] with an optional state observer between the sensors
+/// and the controller: the controller gets the observer's estimate of the
+/// current state instead of the (delayed, position-derived) measurement.
+/// The record keeps the measurement.
+pub fn run_closed_loop_with(
+    controller: &mut dyn Controller,
+    model: &mut dyn JointSpaceDynamics,
+    plant: &mut Plant,
+    reference: &JointReference,
+    settings: &LoopSettings,
+    mut observer: Option<&mut StateObserver>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> RunResult {
     let start = Instant::now();
     let n = reference.dof();
     let ts = reference.ts();
@@ -110,6 +128,10 @@ pub fn run_closed_loop(
     let mut preview = vec![0.0; horizon * n];
     let mut outcome = RunOutcome::Completed;
     plant.measure(&mut x);
+    let mut x_est = x.clone();
+    if let Some(o) = observer.as_deref_mut() {
+        o.reset(&x);
+    }
     if let Err(e) = controller.reset(&x) {
         return RunResult {
             record: rec,
@@ -129,7 +151,19 @@ pub fn run_closed_loop(
         let w = reference.q(k);
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();
-        let status = controller.step(model, &x, w, &preview, &mut tau);
+        let status = match observer.as_deref_mut() {
+            Some(o) => match o.update(model, &x) {
+                Ok(est) => {
+                    x_est.copy_from_slice(est);
+                    controller.step(model, &x_est, w, &preview, &mut tau)
+                }
+                Err(e) => Err(e),
+            },
+            None => controller.step(model, &x, w, &preview, &mut tau),
+        };
+        if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &status) {
+            o.record_torque(&tau);
+        }
         let us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
             outcome = RunOutcome::Failed {

@@ -8,11 +8,16 @@ mod metrics;
 mod outcome;
 mod plant;
 
-pub use closed_loop::{record_columns, run_closed_loop, LoopSettings, RunResult};
+pub use closed_loop::{
+    record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunResult,
+};
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use outcome::{
     ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, MAX_RECORD_VALUES,
     MAX_SUBSTEPS,
 };
-pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError};
+pub use plant::{
+    FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
+    MAX_DELAY_SAMPLES,
+};
