@@ -61,6 +61,9 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
             ),
             PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
             PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
+            PlantSettingsError::Fault {
+                index, what, value, ..
+            } => format!("[plant] faults[{index}].{what} = {value}"),
             PlantSettingsError::Noise { kind, value } => format!(
                 "[plant] {} = {value}",
                 match kind {

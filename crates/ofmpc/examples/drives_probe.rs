@@ -58,14 +58,55 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mpc.delay_compensation = case != "sensing";
             mpc.state_observer = case != "sensing";
         }
+        "glitch" | "dropout" | "glitch-nocheck" | "drop" => {
+            let joint: usize = std::env::var("JOINT")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1);
+            let t: f64 = std::env::var("T")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(2.0);
+            plant.faults = vec![if case == "drop" {
+                ofmpc::sim::Fault::TorqueDrop {
+                    t,
+                    joint,
+                    fraction: 0.0,
+                    duration_s: 0.5,
+                }
+            } else if case.starts_with("glitch") {
+                ofmpc::sim::Fault::EncoderGlitch {
+                    t,
+                    joint,
+                    offset_rad: 0.01,
+                }
+            } else {
+                ofmpc::sim::Fault::EncoderDropout {
+                    t,
+                    joint,
+                    duration_s: std::env::var("DUR")
+                        .ok()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(0.3),
+                }
+            }];
+            plant.torque_limits = true;
+            mpc.torque_limits = true;
+        }
         _ => {}
     }
+    let check = !case.ends_with("nocheck");
+    println!("path {} s", reference.duration());
     let exp = Experiment {
         robot: robot.clone(),
         reference,
         mpc,
         plant,
-        loop_settings: Default::default(),
+        loop_settings: ofmpc::sim::LoopSettings {
+            plausibility_check: check,
+            safe_stop: check,
+            ..Default::default()
+        },
     };
     for kind in ControllerKind::ALL {
         let (r, m) = exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})?;
@@ -74,6 +115,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for k in 0..r.record.len() {
             for i in 0..n {
                 ratio = ratio.max(r.record.tau[k * n + i].abs() / robot.joints()[i].limits.effort);
+            }
+        }
+        if let Some(j) = std::env::var("AROUND")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+        {
+            let step: usize = std::env::var("EVERY")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1);
+            for k in (j.saturating_sub(3)..(j + 6 * step).min(r.record.len())).step_by(step) {
+                println!(
+                    "  k {k} q1 {:.6} qd {:.4?} tau {:.2?}",
+                    r.record.q[k * n],
+                    &r.record.qd[k * n..k * n + n],
+                    &r.record.tau[k * n..k * n + n]
+                );
             }
         }
         if std::env::var_os("TRACE").is_some() {

@@ -7,6 +7,7 @@ mod experiment;
 mod metrics;
 mod outcome;
 mod plant;
+mod supervisor;
 
 pub use closed_loop::{
     record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunResult,
@@ -18,6 +19,9 @@ pub use outcome::{
     MAX_SUBSTEPS,
 };
 pub use plant::{
-    FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
+    Fault, FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
     MAX_DELAY_SAMPLES,
+};
+pub use supervisor::{
+    StopReason, BRAKE_TIME, FROZEN_SAMPLES, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
 };

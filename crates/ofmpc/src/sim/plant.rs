@@ -35,6 +35,72 @@ pub struct PlantSettings {
     pub velocity_from_encoder: bool,
     /// The measurement the controller sees is this many control periods old.
     pub delay_samples: usize,
+    /// Injected faults (encoder glitch, encoder dropout, torque drop).
+    pub faults: Vec<Fault>,
+}
+
+/// An injected fault of one joint, from time `t` on. In TOML:
+/// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[non_exhaustive]
+pub enum Fault {
+    /// The measured position is off by `offset_rad` on one sample (the
+    /// first measurement at or after `t`).
+    EncoderGlitch {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Offset (rad).
+        offset_rad: f64,
+    },
+    /// The joint's measurement (position and velocity) is frozen at its last
+    /// value for `duration_s`.
+    EncoderDropout {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Duration (s).
+        duration_s: f64,
+    },
+    /// The drive delivers `fraction` of the commanded torque for `duration_s`.
+    TorqueDrop {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Delivered fraction, in [0, 1].
+        fraction: f64,
+        /// Duration (s).
+        duration_s: f64,
+    },
+}
+
+impl Fault {
+    /// Start time, 0-based joint and duration (0 for a glitch).
+    fn span(&self) -> (f64, usize, f64) {
+        match *self {
+            Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
+            Fault::EncoderDropout {
+                t,
+                joint,
+                duration_s,
+            }
+            | Fault::TorqueDrop {
+                t,
+                joint,
+                duration_s,
+                ..
+            } => (t, joint.wrapping_sub(1), duration_s),
+        }
+    }
+
+    fn active(&self, now: f64) -> bool {
+        let (t, _, d) = self.span();
+        now >= t - 1e-9 && now < t + d - 1e-9
+    }
 }
 
 /// Largest accepted measurement delay (control periods).
@@ -54,6 +120,7 @@ impl Default for PlantSettings {
             seed: 1,
             velocity_from_encoder: false,
             delay_samples: 0,
+            faults: Vec::new(),
         }
     }
 }
@@ -139,6 +206,19 @@ pub enum PlantSettingsError {
         /// The value.
         value: f64,
     },
+    /// A fault names no joint of the robot, or has a bad time, duration,
+    /// offset or fraction.
+    #[error("fault {} is invalid: {what} = {value} ({requirement})", index + 1)]
+    Fault {
+        /// 0-based index in the list.
+        index: usize,
+        /// Which value.
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// What it must be.
+        requirement: &'static str,
+    },
     /// The measurement delay is too long.
     #[error("the measurement delay is {0} samples: at most {MAX_DELAY_SAMPLES}")]
     Delay(usize),
@@ -206,6 +286,39 @@ impl PlantSettings {
                 .find(|(_, x)| !x.is_finite() || **x < 0.0)
             {
                 return Err(PlantSettingsError::FrictionValue { kind, index, value });
+            }
+        }
+        for (index, f) in self.faults.iter().enumerate() {
+            let (t, j, d) = f.span();
+            let bad = |what, value: f64, requirement| {
+                Err(PlantSettingsError::Fault {
+                    index,
+                    what,
+                    value,
+                    requirement,
+                })
+            };
+            if j >= n {
+                return bad(
+                    "joint",
+                    j.wrapping_add(1) as f64,
+                    "a joint number from 1 to n",
+                );
+            }
+            if !(t.is_finite() && t >= 0.0) {
+                return bad("t", t, "a finite time >= 0 s");
+            }
+            if !(d.is_finite() && d >= 0.0) {
+                return bad("duration_s", d, "a finite duration >= 0 s");
+            }
+            match *f {
+                Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
+                    return bad("offset_rad", offset_rad, "a finite angle");
+                }
+                Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
+                    return bad("fraction", fraction, "between 0 and 1");
+                }
+                _ => {}
             }
         }
         if self.delay_samples > MAX_DELAY_SAMPLES {
@@ -313,6 +426,10 @@ pub struct Plant {
     measured_once: bool,
     /// The last control period passed to [`Plant::step`] (s).
     last_ts: f64,
+    /// Per fault: an encoder glitch already happened.
+    fired: Vec<bool>,
+    /// The last measurement before the delay line (for frozen encoders).
+    last_meas: Vec<f64>,
 }
 
 impl Plant {
@@ -324,6 +441,7 @@ impl Plant {
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
         let ring_len = (settings.delay_samples + 1) * 2 * n;
+        let n_faults = settings.faults.len();
         Ok(Self {
             viscous: per_joint(&settings.viscous_friction, n),
             coulomb: per_joint(&settings.coulomb_friction, n),
@@ -346,6 +464,8 @@ impl Plant {
             prev_qm: z.clone(),
             measured_once: false,
             last_ts: 0.0,
+            fired: vec![false; n_faults],
+            last_meas: vec![0.0; 2 * n],
             tmp_v: z,
         })
     }
@@ -413,6 +533,26 @@ impl Plant {
             }
             x[n + i] = v;
         }
+        let now = self.t;
+        for (f, fired) in self.settings.faults.iter().zip(self.fired.iter_mut()) {
+            match *f {
+                Fault::EncoderGlitch {
+                    t,
+                    joint,
+                    offset_rad,
+                } if !*fired && now >= t - 1e-9 => {
+                    *fired = true;
+                    x[joint - 1] += offset_rad;
+                }
+                Fault::EncoderDropout { joint, .. } if self.measured_once && f.active(now) => {
+                    let i = joint - 1;
+                    x[i] = self.last_meas[i];
+                    x[n + i] = self.last_meas[n + i];
+                }
+                _ => {}
+            }
+        }
+        self.last_meas.copy_from_slice(&x[..2 * n]);
         self.prev_qm.copy_from_slice(&x[..n]);
         let d = self.settings.delay_samples;
         if d > 0 {
@@ -470,6 +610,16 @@ impl Plant {
             } else {
                 tau[i]
             };
+        }
+        for f in &self.settings.faults {
+            if let Fault::TorqueDrop {
+                joint, fraction, ..
+            } = *f
+            {
+                if f.active(self.t) {
+                    self.tau[joint - 1] *= fraction;
+                }
+            }
         }
         let steps = substeps(ts, self.settings.substep)?;
         let h = ts / steps as f64;
