@@ -51,6 +51,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 mpc.friction_compensation = true;
             }
         }
+        "all" => {
+            let text: String = robot
+                .joints()
+                .iter()
+                .map(|j| format!("[joints.{}]\ncoulomb_nm = 0.8\nviscous_nms = 0.0\n", j.name))
+                .collect();
+            robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+            mpc.friction_compensation = std::env::var_os("NOCOMP").is_none();
+            mpc.torque_limits = true;
+            mpc.delay_compensation = true;
+            plant.torque_limits = true;
+            plant.coulomb_friction = vec![std::env::var("FRIC")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1.0)];
+            plant.encoder_counts = 1 << 22;
+            plant.velocity_from_encoder = true;
+            plant.delay_samples = 1;
+        }
         "sensing" | "sensing-obs" | "sensing-nodelay" => {
             plant.encoder_counts = 1 << 22;
             plant.velocity_from_encoder = true;
@@ -95,7 +114,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         _ => {}
     }
-    let check = !case.ends_with("nocheck");
+    let check = !case.ends_with("nocheck") && std::env::var_os("NOCHECK").is_none();
     println!("path {} s", reference.duration());
     let exp = Experiment {
         robot: robot.clone(),

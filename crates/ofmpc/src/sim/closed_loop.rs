@@ -218,12 +218,24 @@ pub fn run_closed_loop_with(
             }
         }
         let status = if let Some((_, _, law, _, _)) = stop.as_mut() {
-            law.step(model, &x, ts, &mut tau)
-                .map(|_| crate::control::StepInfo {
-                    cost: 0.0,
-                    r_diag_ratio: 1.0,
-                    zoh_squarings: 0,
-                })
+            let stepped = match observer.as_deref_mut() {
+                Some(o) => match o.update(model, &x) {
+                    Ok(est) => {
+                        x_est.copy_from_slice(est);
+                        law.step(model, &x, &x_est, ts, &mut tau)
+                    }
+                    Err(e) => Err(e),
+                },
+                None => law.step(model, &x, &x, ts, &mut tau),
+            };
+            if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &stepped) {
+                o.record_torque(&tau);
+            }
+            stepped.map(|_| crate::control::StepInfo {
+                cost: 0.0,
+                r_diag_ratio: 1.0,
+                zoh_squarings: 0,
+            })
         } else {
             match observer.as_deref_mut() {
                 Some(o) => match o.update(model, &x) {

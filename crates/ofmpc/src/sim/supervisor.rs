@@ -6,8 +6,10 @@
 //! * a position jump `|y − (q_a + q̇_a τ + ½ q̈_a τ²)|` (`τ = m Ts`, `q̈_a` the
 //!   last accepted velocity change per time) beyond a tenth of what the speed
 //!   limit allows in those samples (`0.1 · v_max · τ`) is rejected: the loop
-//!   uses the prediction instead; more than [`MAX_REJECTED`] rejections in a
-//!   row make the measurement implausible;
+//!   uses the prediction instead, unless the raw sample agrees with the
+//!   previous raw one (`|y − (y₋₁ + q̇₋₁ Ts)|` within the same bound: the
+//!   motion is real and the prediction was off); more than [`MAX_REJECTED`]
+//!   rejections in a row make the measurement implausible;
 //! * a velocity off its prediction `q̇_a + q̈_a τ` by more than `0.1 · v_max`
 //!   per sample is rejected (the prediction is used);
 //! * a position that does not change at all for [`FROZEN_SAMPLES`] samples
@@ -105,6 +107,7 @@ pub(crate) struct Plausibility {
     rejected: Vec<usize>,
     frozen: Vec<usize>,
     prev_raw: Vec<f64>,
+    prev_raw_v: Vec<f64>,
     /// Rejected samples so far (positions and velocities).
     pub rejections: usize,
 }
@@ -122,6 +125,7 @@ impl Plausibility {
             rejected: vec![0; n],
             frozen: vec![0; n],
             prev_raw: x0[..n].to_vec(),
+            prev_raw_v: x0[n..2 * n].to_vec(),
             rejections: 0,
         }
     }
@@ -139,7 +143,10 @@ impl Plausibility {
             } else {
                 self.frozen[i] = 0;
             }
+            let prev_raw = self.prev_raw[i];
+            let prev_raw_v = self.prev_raw_v[i];
             self.prev_raw[i] = raw_q;
+            self.prev_raw_v[i] = raw_v;
             if self.frozen[i] >= FROZEN_SAMPLES && reason.is_none() {
                 reason = Some(StopReason::FrozenEncoder { joint: i });
             }
@@ -154,7 +161,11 @@ impl Plausibility {
             let v_pred = self.v_a[i] + self.acc_a[i] * dt;
             let tol = 0.1 * self.vmax[i] * dt;
             let jump = (raw_q - pred).abs();
-            if jump > tol || jump.is_nan() {
+            // After a rejection, two raw samples that agree with each other
+            // (the motion is real, the prediction was off) are accepted.
+            let consistent = self.rejected[i] > 0
+                && (raw_q - (prev_raw + prev_raw_v * ts)).abs() <= 0.1 * self.vmax[i] * ts;
+            if (jump > tol || jump.is_nan()) && !consistent {
                 self.rejections += 1;
                 self.rejected[i] += 1;
                 self.m[i] += 1;
@@ -172,7 +183,7 @@ impl Plausibility {
             self.rejected[i] = 0;
             self.m[i] = 1;
             self.q_a[i] = raw_q;
-            if (raw_v - v_pred).abs() <= 0.1 * self.vmax[i] * steps {
+            if consistent || (raw_v - v_pred).abs() <= 0.1 * self.vmax[i] * steps {
                 self.acc_a[i] = (raw_v - self.v_a[i]) / dt;
                 self.v_a[i] = raw_v;
             } else {
@@ -271,11 +282,14 @@ impl SafeStop {
         stop
     }
 
-    /// One sample of the stop from the (checked) measurement `x`: writes the
-    /// braking or holding torque into `tau`.
+    /// One sample of the stop: `raw` is the measurement (frozen encoders are
+    /// recognised on it), `x` the state to brake (the observer's estimate
+    /// when there is one, else `raw`); writes the braking or holding torque
+    /// into `tau`.
     pub fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
+        raw: &[f64],
         x: &[f64],
         ts: f64,
         tau: &mut [f64],
@@ -293,14 +307,14 @@ impl SafeStop {
             )?;
         }
         for i in 0..n {
-            if self.dead_reckoned[i] && x[i].to_bits() != self.last_raw[i].to_bits() {
+            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
                 // The encoder is back: hold where the joint really is.
                 self.dead_reckoned[i] = false;
                 if let Some(h) = self.hold.as_mut().filter(|h| !h.is_empty()) {
                     h[i] = x[i] + x[n + i] * BRAKE_TIME;
                 }
             }
-            self.last_raw[i] = x[i];
+            self.last_raw[i] = raw[i];
             if self.dead_reckoned[i] {
                 self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
                 self.v[i] += self.w[i] * ts;
