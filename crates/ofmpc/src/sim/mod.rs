@@ -11,6 +11,7 @@ mod supervisor;
 
 pub use closed_loop::{
     record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunResult,
+    SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
