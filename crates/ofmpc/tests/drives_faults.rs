@@ -112,6 +112,9 @@ fn an_encoder_dropout_ends_in_a_safe_stop_at_rest_within_half_a_second() {
         assert!(within_limits);
         assert_eq!(m.status, RunStatus::Stopped);
         assert_eq!(m.stopped_at_s, Some(*t));
+        let json = serde_json::to_value(&m).unwrap();
+        assert_eq!(json["status"], "stopped");
+        assert!(json["reason"].as_str().unwrap().contains("encoder"));
         // The stop's torques respect the drives' limits.
         let peaks = peak_torques(&r);
         for (i, j) in robot.joints().iter().enumerate() {
