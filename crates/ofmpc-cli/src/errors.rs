@@ -2,6 +2,7 @@
 //! scenario key (or command-line flag) that set the offending value, followed
 //! by the library's explanation. The library never names keys or flags.
 
+use ofmpc::control::{DriveQuantity, SettingsError};
 use ofmpc::sim::{
     ExperimentError, FrictionKind, LoopSettingsError, NoiseKind, PlantError, PlantSettingsError,
 };
@@ -63,6 +64,10 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
                 }
             ),
             PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
+            PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
+            PlantSettingsError::Fault {
+                index, what, value, ..
+            } => format!("[plant] faults[{index}].{what} = {value}"),
             PlantSettingsError::Noise { kind, value } => format!(
                 "[plant] {} = {value}",
                 match kind {
@@ -72,6 +77,19 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
             ),
             _ => "[plant]".into(),
         },
+        ExperimentError::Mpc(SettingsError::DriveModelLength { what, .. })
+        | ExperimentError::Mpc(SettingsError::DriveModelValue { what, .. }) => format!(
+            "the drives file's {}",
+            match what {
+                DriveQuantity::MaxTorque => "max_torque_nm",
+                DriveQuantity::Coulomb => "coulomb_nm",
+                DriveQuantity::Viscous => "viscous_nms",
+                _ => "values",
+            }
+        ),
+        ExperimentError::Mpc(SettingsError::DrivesUnsupported(_)) => {
+            "[mpc] torque_limits / friction_compensation".into()
+        }
         ExperimentError::Mpc(_) => "[mpc]".into(),
         ExperimentError::TooManySamples { .. } => {
             "the program's duration with [simulation] hold_s at [mpc] ts".into()

@@ -93,3 +93,69 @@ fn steps_allocate_nothing() {
     };
     count_steps(&mut LinearModel::example2(), &diagonal);
 }
+
+/// With torque limits that bind (the QP runs) and friction compensation on,
+/// the step still allocates nothing.
+#[test]
+fn constrained_steps_with_friction_compensation_allocate_nothing() {
+    use ofmpc::control::DriveModel;
+    let settings = MpcSettings {
+        torque_limits: true,
+        friction_compensation: true,
+        ..Default::default()
+    };
+    let mut model = CoupledModel::new(6, 1);
+    let n = 6;
+    let drives = DriveModel {
+        max_torque_nm: vec![0.5; n],
+        coulomb_nm: vec![0.8; n],
+        viscous_nms: vec![0.1; n],
+        coulomb_velocity_rad_s: 1e-3,
+    };
+    for kind in ControllerKind::ALL {
+        let mut ctrl = new_controller(kind, n, &settings).unwrap();
+        ctrl.set_drive_model(&drives).unwrap();
+        let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+        ctrl.reset(&x0).unwrap();
+        let mut x = x0.clone();
+        let wk = vec![0.3; n];
+        let preview: Vec<f64> = (0..n * settings.horizon)
+            .map(|i| 0.3 + 0.01 * (i / n) as f64)
+            .collect();
+        let mut tau = vec![0.0; n];
+        let mut active = 0;
+        let before = allocations();
+        for k in 0..100 {
+            for (i, xi) in x.iter_mut().enumerate() {
+                *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
+            }
+            ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+            active += usize::from(ctrl.qp_status().is_some_and(|s| s.active));
+            assert!(tau.iter().all(|t| t.abs() <= 0.5), "{kind}: {tau:?}");
+        }
+        let after = allocations();
+        assert!(active > 0, "{kind}: the limits never bound");
+        assert_eq!(after - before, 0, "{kind}: {} allocations", after - before);
+    }
+}
+
+/// The state observer's update (with delay compensation) allocates nothing.
+#[test]
+fn observer_updates_allocate_nothing() {
+    use ofmpc::control::StateObserver;
+    let mut model = CoupledModel::new(6, 1);
+    let n = 6;
+    let mut obs = StateObserver::new(n, 0.01, 2, 0.7);
+    let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+    obs.reset(&x0);
+    let mut y = x0.clone();
+    let tau = vec![0.1; n];
+    let before = allocations();
+    for k in 0..100 {
+        y[0] = x0[0] + 1e-3 * k as f64;
+        let est = obs.update(&mut model, &y).unwrap();
+        assert!(est.iter().all(|v| v.is_finite()));
+        obs.record_torque(&tau);
+    }
+    assert_eq!(allocations() - before, 0);
+}

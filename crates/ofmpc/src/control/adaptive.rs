@@ -128,6 +128,12 @@ impl Controller for AdaptiveMpc {
     fn increments(&self) -> &[f64] {
         self.inner.increments()
     }
+    fn set_drive_model(&mut self, drives: &super::DriveModel) -> Result<(), SettingsError> {
+        self.inner.set_drive_model(drives)
+    }
+    fn qp_status(&self) -> Option<super::QpStatus> {
+        self.inner.qp_status()
+    }
     fn payload_estimate(&self) -> Option<f64> {
         Some(self.model_pi[0])
     }

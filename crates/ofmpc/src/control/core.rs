@@ -27,7 +27,9 @@
 //! `t ≤ t'` and zero below: column block `t'` ends at row `g·n·t'` with `g`
 //! groups of rows per level.
 
+use super::constrained::TorqueLimitQp;
 use super::dense::gemm;
+use super::drive_model::DriveModel;
 use super::lsq::{LsqError, LsqInfo, LsqWorkspace};
 use super::model::LinearLikeModel;
 use super::prediction::Predictions;
@@ -70,6 +72,17 @@ macro_rules! impl_controller {
 
             fn increments(&self) -> &[f64] {
                 &self.core.du
+            }
+
+            fn set_drive_model(
+                &mut self,
+                drives: &$crate::control::DriveModel,
+            ) -> Result<(), $crate::control::SettingsError> {
+                self.core.set_drive_model(drives)
+            }
+
+            fn qp_status(&self) -> Option<$crate::control::QpStatus> {
+                self.core.qp.as_ref().map(|q| q.status)
             }
 
             fn step(
@@ -138,6 +151,14 @@ pub(crate) struct Core {
     pub v1: Vec<f64>,
     pub v2: Vec<f64>,
     pub v3: Vec<f64>,
+    /// Incremental algorithm (`u_k = u_{k−1} + Δu_k`) or positional.
+    pub incremental: bool,
+    /// The drives as the controller models them ([`Core::set_drive_model`]).
+    pub drives: Option<DriveModel>,
+    /// Torque-limit QP, when `torque_limits` is on and a drive model is set.
+    pub qp: Option<Box<TorqueLimitQp>>,
+    /// Per-joint friction feed-forward `F̂(v_ref)` of the current sample.
+    pub damping: Vec<f64>,
 }
 
 impl Core {
@@ -152,7 +173,13 @@ impl Core {
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
         let m = groups * p;
-        let (lsq, stage) = match settings.solver.for_horizon(nh) {
+        // The torque-limit QP (constrained.rs) works on the dense system.
+        let solver = if settings.torque_limits {
+            Solver::DenseQr
+        } else {
+            settings.solver.for_horizon(nh)
+        };
+        let (lsq, stage) = match solver {
             Solver::DenseQr | Solver::Auto => {
                 if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
                     return Err(SettingsError::TooLarge {
@@ -239,7 +266,43 @@ impl Core {
             v1: vec![0.0; p],
             v2: vec![0.0; p],
             v3: vec![0.0; p],
+            incremental,
+            drives: None,
+            qp: None,
+            damping: vec![0.0; n],
         })
+    }
+
+    /// Gives the controller the drives' limits and friction estimates; with
+    /// `torque_limits` on, sizes the QP workspace (this allocates; `step`
+    /// then does not).
+    pub fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        drives.validate(self.n)?;
+        self.qp = if self.settings.torque_limits {
+            // With torque limits the dense system is always built (Core::new).
+            let Some(lsq) = self.lsq.as_ref() else {
+                return Err(SettingsError::DrivesUnsupported("structured solver"));
+            };
+            Some(Box::new(TorqueLimitQp::new(
+                self.n,
+                self.nh,
+                lsq.rows(),
+                self.incremental,
+                &drives.max_torque_nm,
+            )))
+        } else {
+            None
+        };
+        self.drives = Some(drives.clone());
+        Ok(())
+    }
+
+    /// True when the torque of joint `i` at this sample was held at its
+    /// limit by the QP (for the anti-windup of the integrators).
+    pub fn saturated(&self, i: usize) -> bool {
+        self.qp
+            .as_ref()
+            .is_some_and(|q| q.status.active && q.saturated.get(i).copied().unwrap_or(false))
     }
 
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
@@ -271,6 +334,19 @@ impl Core {
         check_finite("w_k", w_k)?;
         check_finite("preview", preview)?;
         self.model.update(model, &x[..n], &x[n..])?;
+        if self.settings.friction_compensation {
+            if let Some(d) = &self.drives {
+                // Friction feed-forward along the planned motion: the
+                // estimate F(v) = F_v v + F_c tanh(v/v_s) at the reference's
+                // velocity v = (w_{k+1} − w_k)/Ts, added to g so that
+                // τ = H u + g + F(v) (Eq. (15)); bounded by F_c + F_v|v|.
+                for (i, di) in self.damping.iter_mut().enumerate() {
+                    let v = (preview[i] - w_k[i]) / self.ts;
+                    *di = d.damping(i, v) * v;
+                }
+                self.model.add_bias_torque(&self.damping)?;
+            }
+        }
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if self.lsq.is_some() {
             self.pred
@@ -370,6 +446,11 @@ impl Core {
             .lsq
             .as_mut()
             .ok_or(StepError::Internal("dense solve without its workspace"))?;
+        if let Some(qp) = self.qp.as_mut() {
+            // The torque-limit QP works on the dense system (constrained.rs).
+            let (a, b) = lsq.system_mut();
+            qp.capture(a, b);
+        }
         let info = lsq.solve()?;
         for (dst, src) in self
             .du
@@ -460,7 +541,19 @@ impl Core {
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
             *u = if incremental { prev + d } else { *d };
         }
+        if let (Some(qp), Some(lsq)) = (self.qp.as_mut(), self.lsq.as_ref()) {
+            // Torque limits over the horizon (constrained.rs), on the dense
+            // system's solution; unchanged when the unconstrained solution
+            // respects them.
+            qp.enforce(&self.model, lsq.solution(), &self.u_prev, &mut self.u_new);
+        }
         self.model.torque(&self.u_new, &mut self.tau_new)?;
+        if let Some(qp) = self.qp.as_ref().filter(|q| q.status.active) {
+            // Rounding guard only: the QP keeps a relative margin of 1e-9.
+            for (t, lim) in self.tau_new.iter_mut().zip(qp.limits()) {
+                *t = t.clamp(-lim, *lim);
+            }
+        }
         if let Some(index) = self
             .u_new
             .iter()

@@ -19,11 +19,14 @@
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
 
 pub mod adaptive;
+pub mod constrained;
 pub(crate) mod core;
 pub(crate) mod dense;
+pub mod drive_model;
 pub mod first;
 pub mod lsq;
 pub mod model;
+pub mod observer;
 pub mod prediction;
 pub mod second;
 pub mod settings;
@@ -40,9 +43,12 @@ use serde::{Deserialize, Serialize};
 use crate::dynamics::JointSpaceDynamics;
 
 pub use adaptive::AdaptiveMpc;
+pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
+pub use drive_model::{DriveModel, DriveQuantity};
 pub use first::FirstMpc;
 pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, ModelError};
+pub use observer::StateObserver;
 pub use prediction::Predictions;
 pub use second::SecondMpc;
 pub use settings::{MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON};
@@ -221,6 +227,17 @@ pub trait Controller {
     /// `u_{k+j}` (usual controller), `j = 0..N`; only block 0 is applied.
     /// Zero before the first step.
     fn increments(&self) -> &[f64];
+    /// Gives the controller the drives' torque limits and friction estimates
+    /// (used when the settings' torque limits or friction compensation are
+    /// on). Allocates (sizes the constrained solver); call before a run.
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        let _ = drives;
+        Err(SettingsError::DrivesUnsupported(self.kind().name()))
+    }
+    /// What the torque-limit QP did at the last step (`None` without limits).
+    fn qp_status(&self) -> Option<QpStatus> {
+        None
+    }
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);

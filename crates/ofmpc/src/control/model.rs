@@ -193,6 +193,26 @@ impl LinearLikeModel {
     }
 }
 
+impl LinearLikeModel {
+    /// `b ← H⁻¹ b` with the Cholesky factor of the last update (`n` values;
+    /// a shorter or longer slice is left as it is). Allocation-free.
+    /// Adds a known torque `f` to `g` (a bias the drives must overcome, e.g.
+    /// friction), so that `τ = H u + g + f`. Allocation-free.
+    pub(crate) fn add_bias_torque(&mut self, f: &[f64]) -> Result<(), ModelError> {
+        check_len("f", f.len(), self.n)?;
+        for (g, fi) in self.g.iter_mut().zip(f) {
+            *g += fi;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn solve_h_in_place(&self, b: &mut [f64]) {
+        if b.len() == self.n {
+            cholesky_solve_in_place(self.n, self.chol.as_slice(), b);
+        }
+    }
+}
+
 fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), ModelError> {
     if got == expected {
         Ok(())

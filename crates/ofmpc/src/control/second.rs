@@ -113,7 +113,13 @@ impl SecondMpc {
         }
         let info = c.solve()?;
         let out = c.finish(x, true, info, tau)?;
-        c.ebar.copy_from_slice(&c.ebar_new);
+        // Anti-windup (conditional integration): the aggregated error of a
+        // joint whose torque the limits hold is not accumulated.
+        for i in 0..n {
+            if !c.saturated(i) {
+                c.ebar[i] = c.ebar_new[i];
+            }
+        }
         Ok(out)
     }
 }

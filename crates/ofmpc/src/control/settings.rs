@@ -156,6 +156,23 @@ pub struct MpcSettings {
     /// flange centre (kg, default 0: the paper's model knows no payload).
     /// Robust tuning over a payload range centres the model inside it.
     pub model_payload_kg: f64,
+    /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
+    /// horizon as constraints of the optimization ([`super::constrained`]);
+    /// the limits come from the controller's [`super::DriveModel`]. Default off.
+    pub torque_limits: bool,
+    /// Use the drives' friction estimates (Coulomb, viscous) of the
+    /// [`super::DriveModel`]: the estimated friction at the reference's
+    /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). Default off.
+    pub friction_compensation: bool,
+    /// Predict the state forward over the measurement delay with the model
+    /// and the observer's disturbance estimate before optimizing (implies
+    /// `state_observer`). Default off.
+    pub delay_compensation: bool,
+    /// Estimate the state with a [`super::StateObserver`] (position,
+    /// velocity, disturbance) from the measured positions instead of using
+    /// the measured state directly. Default off; on whenever
+    /// `delay_compensation` is.
+    pub state_observer: bool,
 }
 
 impl Default for MpcSettings {
@@ -169,6 +186,10 @@ impl Default for MpcSettings {
             q_u: Weight::Scalar(1e-4),
             solver: Solver::default(),
             model_payload_kg: 0.0,
+            torque_limits: false,
+            friction_compensation: false,
+            delay_compensation: false,
+            state_observer: false,
         }
     }
 }
@@ -191,7 +212,8 @@ impl MpcSettings {
             return Err(SettingsError::ZeroDof);
         }
         self.check(Some(dof))?;
-        if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
+        // With torque limits the dense system is always built (the QP uses it).
+        if self.torque_limits || self.solver.for_horizon(self.horizon) == Solver::DenseQr {
             let p = self.horizon.saturating_mul(dof);
             let rows = p.saturating_mul(3);
             if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
@@ -294,6 +316,30 @@ pub enum SettingsError {
         /// Its length.
         second_len: usize,
     },
+    /// The drive model has another number of joints than the controller.
+    #[error("the drive data give {got} values of the {what} but the robot has {expected} joints")]
+    DriveModelLength {
+        /// Which quantity.
+        what: super::drive_model::DriveQuantity,
+        /// Joints.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A drive-model value is out of range.
+    #[error("the {what} of joint {} is {value}: limits must be > 0 (or infinite), friction finite and >= 0", index + 1)]
+    DriveModelValue {
+        /// Which quantity.
+        what: super::drive_model::DriveQuantity,
+        /// 0-based joint.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// Torque limits or friction compensation are enabled but the controller
+    /// was given no drive model, or cannot use one.
+    #[error("the {0} controller does not support torque limits or friction compensation")]
+    DrivesUnsupported(&'static str),
     /// A controller for zero joints was requested.
     #[error("the robot has 0 joints: a controller needs at least one")]
     ZeroDof,

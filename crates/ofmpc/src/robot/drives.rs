@@ -6,6 +6,8 @@
 //! armature_kgm2 = 1.0      # added to H[0][0]
 //! max_torque_nm = 290.0    # symmetric peak torque
 //! max_speed_rad_s = 3.49   # symmetric speed limit
+//! coulomb_nm = 1.0         # Coulomb friction estimate (friction compensation)
+//! viscous_nms = 0.5        # viscous friction estimate (friction compensation)
 //! ```
 //!
 //! Keys ending in `_source` and a `[meta]` table are documentation and ignored.
@@ -58,7 +60,8 @@ pub enum DrivesError {
     },
 }
 
-const JOINT_KEYS: &str = "armature_kgm2, max_torque_nm, max_speed_rad_s (or a *_source note)";
+const JOINT_KEYS: &str =
+    "armature_kgm2, max_torque_nm, max_speed_rad_s, coulomb_nm, viscous_nms (or a *_source note)";
 
 /// The drive data of one joint; absent values leave the URDF's in place.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -69,6 +72,10 @@ pub struct DriveData {
     pub max_torque_nm: Option<f64>,
     /// Maximum joint speed, symmetric (rad/s).
     pub max_speed_rad_s: Option<f64>,
+    /// Coulomb friction estimate (N·m), used by friction compensation.
+    pub coulomb_nm: Option<f64>,
+    /// Viscous friction estimate (N·m·s/rad), used by friction compensation.
+    pub viscous_nms: Option<f64>,
     #[serde(flatten)]
     other: BTreeMap<String, toml::Value>,
 }
@@ -129,24 +136,18 @@ impl Drives {
                 ("armature_kgm2", d.armature_kgm2),
                 ("max_torque_nm", d.max_torque_nm),
                 ("max_speed_rad_s", d.max_speed_rad_s),
+                ("coulomb_nm", d.coulomb_nm),
+                ("viscous_nms", d.viscous_nms),
             ] {
+                let nonneg = matches!(key, "armature_kgm2" | "coulomb_nm" | "viscous_nms");
                 if let Some(v) = v {
-                    let ok = v.is_finite()
-                        && if key == "armature_kgm2" {
-                            v >= 0.0
-                        } else {
-                            v > 0.0
-                        };
+                    let ok = v.is_finite() && if nonneg { v >= 0.0 } else { v > 0.0 };
                     if !ok {
                         return Err(DrivesError::Value {
                             joint: name.clone(),
                             key,
                             value: v,
-                            requirement: if key == "armature_kgm2" {
-                                "≥ 0"
-                            } else {
-                                "> 0"
-                            },
+                            requirement: if nonneg { "≥ 0" } else { "> 0" },
                         }
                         .into());
                     }

@@ -67,6 +67,11 @@ pub struct Joint {
     pub limits: JointLimits,
     /// Reflected rotor inertia of the drive (kg·m²), added to `H[i][i]`.
     pub armature: f64,
+    /// Coulomb friction estimate of the drive (N·m), for the controllers'
+    /// friction compensation (the simulated plant has its own friction).
+    pub coulomb_nm: f64,
+    /// Viscous friction estimate of the drive (N·m·s/rad), likewise.
+    pub viscous_nms: f64,
 }
 
 /// A rigid payload attached at the flange: mass, centre of mass and inertia
@@ -229,6 +234,12 @@ impl Robot {
             }
             if let Some(v) = d.max_speed_rad_s {
                 j.limits.velocity = v;
+            }
+            if let Some(v) = d.coulomb_nm {
+                j.coulomb_nm = v;
+            }
+            if let Some(v) = d.viscous_nms {
+                j.viscous_nms = v;
             }
         }
         Ok(names

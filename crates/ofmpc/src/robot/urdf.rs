@@ -160,6 +160,8 @@ fn moving_joint(
             effort,
         },
         armature: 0.0,
+        coulomb_nm: 0.0,
+        viscous_nms: 0.0,
     })
 }
 

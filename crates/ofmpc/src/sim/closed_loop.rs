@@ -3,7 +3,8 @@
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
-use crate::control::Controller;
+use super::supervisor::{Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED};
+use crate::control::{Controller, StateObserver};
 use crate::dynamics::JointSpaceDynamics;
 use crate::reference::JointReference;
 use serde::{Deserialize, Serialize};
@@ -30,10 +31,20 @@ pub struct LoopSettings {
     /// start. The controllers are not told.
     #[serde(skip)]
     pub pick_up_at_s: Option<f64>,
+    /// Check each measurement for plausibility (jumps, frozen encoders;
+    /// `supervisor` module) and replace rejected values by predictions.
+    pub plausibility_check: bool,
+    /// On divergence, a failed controller step or an implausible
+    /// measurement, bring the robot to a safe stop (brake, hold) and record
+    /// [`SAFE_STOP_RECORD_S`] more seconds, instead of ending the run.
+    pub safe_stop: bool,
 }
 
 /// Longest identification phase at rest (s).
 pub const MAX_IDENTIFICATION_S: f64 = 1.0;
+
+/// How long the loop records after a safe stop began (s).
+pub const SAFE_STOP_RECORD_S: f64 = 1.0;
 
 impl Default for LoopSettings {
     fn default() -> Self {
@@ -43,6 +54,8 @@ impl Default for LoopSettings {
             steady_window_s: 0.5,
             identification_s: 0.5,
             pick_up_at_s: None,
+            plausibility_check: false,
+            safe_stop: false,
         }
     }
 }
@@ -94,6 +107,16 @@ impl LoopSettings {
     }
 }
 
+/// The state the stop starts from: the observer's estimate when there is
+/// one, else the (checked) measurement.
+fn x_est_or(x: &[f64], est: &[f64], observed: bool) -> Vec<f64> {
+    if observed {
+        est.to_vec()
+    } else {
+        x.to_vec()
+    }
+}
+
 /// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
 /// flange and its reference (6), the step time.
 pub fn record_columns(n: usize) -> usize {
@@ -133,6 +156,7 @@ pub fn run_closed_loop(
         reference,
         settings,
         &RunEvents::default(),
+        None,
         progress,
     )
 }
@@ -147,12 +171,18 @@ pub struct RunEvents {
     pub pick_up: Option<(f64, crate::robot::Payload)>,
 }
 
-/// [`run_closed_loop`] with a pre-roll at rest and a payload picked up
-/// mid-path. During the pre-roll the reference and its preview are the
-/// path's first point; a divergence or failure there is reported at a
-/// negative time (`−pre_roll·Ts ≤ t < 0`). The record holds the path and the
-/// hold; for a controller that identifies the payload it also holds the
-/// mass estimate after each step.
+/// [`run_closed_loop`] with a pre-roll at rest, a payload picked up
+/// mid-path, and an optional state observer between the sensors and the
+/// controller.
+///
+/// During the pre-roll the reference and its preview are the path's first
+/// point; a divergence or failure there is reported at a negative time
+/// (`−pre_roll·Ts ≤ t < 0`). The record holds the path and the hold; for a
+/// controller that identifies the payload it also holds the mass estimate
+/// after each step. With an observer the controller gets the observer's
+/// estimate of the current state instead of the (delayed, position-derived)
+/// measurement; the record keeps the measurement.
+#[allow(clippy::too_many_arguments)]
 pub fn run_closed_loop_with(
     controller: &mut dyn Controller,
     model: &mut dyn JointSpaceDynamics,
@@ -160,6 +190,7 @@ pub fn run_closed_loop_with(
     reference: &JointReference,
     settings: &LoopSettings,
     events: &RunEvents,
+    mut observer: Option<&mut StateObserver>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
     let start = Instant::now();
@@ -175,8 +206,7 @@ pub fn run_closed_loop_with(
         0
     };
     let mut rec = Record::with_capacity(n, capacity);
-    let adaptive = controller.payload_estimate().is_some();
-    if adaptive {
+    if controller.payload_estimate().is_some() {
         rec.payload_mass_est.reserve(capacity);
     }
     let mut picked = false;
@@ -185,6 +215,10 @@ pub fn run_closed_loop_with(
     let mut preview = vec![0.0; horizon * n];
     let mut outcome = RunOutcome::Completed;
     plant.measure(&mut x);
+    let mut x_est = x.clone();
+    if let Some(o) = observer.as_deref_mut() {
+        o.reset(&x);
+    }
     if let Err(e) = controller.reset(&x) {
         return RunResult {
             record: rec,
@@ -205,7 +239,17 @@ pub fn run_closed_loop_with(
         for block in preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
         }
-        if let Err(e) = controller.step(model, &x, w0, &preview, &mut tau) {
+        let stepped = match observer.as_deref_mut() {
+            Some(o) => match o.update(model, &x) {
+                Ok(est) => {
+                    x_est.copy_from_slice(est);
+                    controller.step(model, &x_est, w0, &preview, &mut tau)
+                }
+                Err(e) => Err(e),
+            },
+            None => controller.step(model, &x, w0, &preview, &mut tau),
+        };
+        if let Err(e) = stepped {
             return RunResult {
                 record: rec,
                 outcome: RunOutcome::Failed {
@@ -214,6 +258,9 @@ pub fn run_closed_loop_with(
                 },
                 wall_s: start.elapsed().as_secs_f64(),
             };
+        }
+        if let Some(o) = observer.as_deref_mut() {
+            o.record_torque(&tau);
         }
         if let Err(e) = plant.step(&tau, ts) {
             return RunResult {
@@ -241,9 +288,32 @@ pub fn run_closed_loop_with(
             };
         }
     }
-    for k in 0..total {
+    if events.pre_roll > 0 {
+        plant.measure(&mut x);
+    }
+    let robot = plant.robot();
+    let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+    let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
+    let lower = robot.lower_limits();
+    let upper = robot.upper_limits();
+    let mut check = settings
+        .plausibility_check
+        .then(|| Plausibility::new(&vmax, &x));
+    // The safe stop: (start time, reason, the stop law, last time moving).
+    let mut stop: Option<(f64, StopReason, SafeStop, f64, bool)> = None;
+    // The last FROZEN_SAMPLES + 1 checked measurements and FROZEN_SAMPLES
+    // torques (oldest first), to replay a frozen joint from its last good one.
+    let hist = FROZEN_SAMPLES;
+    let mut x_hist = vec![0.0; (hist + 1) * 2 * n];
+    let mut tau_hist = vec![0.0; hist * n];
+    for slot in x_hist.chunks_exact_mut(2 * n) {
+        slot.copy_from_slice(&x);
+    }
+    let mut end = total;
+    let mut k = 0;
+    while k < end {
         let t = k as f64 * ts;
-        if k > 0 || events.pre_roll > 0 {
+        if k > 0 {
             plant.measure(&mut x);
         }
         if let Some((t_pick, payload)) = events.pick_up {
@@ -259,25 +329,102 @@ pub fn run_closed_loop_with(
                 }
             }
         }
+        let mut trigger = None;
+        // During a stop the stop law judges the encoders itself (frozen
+        // joints are dead-reckoned until they change again).
+        if let Some(c) = check.as_mut().filter(|_| stop.is_none()) {
+            trigger = c.check(&mut x, ts);
+        }
+        x_hist.copy_within(2 * n.., 0);
+        let last = x_hist.len() - 2 * n;
+        x_hist[last..].copy_from_slice(&x);
         let flange = plant.flange_position();
         let w = reference.q(k);
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();
-        let status = controller.step(model, &x, w, &preview, &mut tau);
+        if stop.is_none() {
+            if let Some(reason) = trigger.filter(|_| settings.safe_stop) {
+                let frozen = match reason {
+                    StopReason::FrozenEncoder { joint } => {
+                        Some((joint, &x_hist[..2 * n], &tau_hist[..]))
+                    }
+                    _ => None,
+                };
+                let start = x_est_or(&x, &x_est, observer.is_some());
+                let law = SafeStop::new(&tau_max, &start, frozen, model, ts);
+                stop = Some((t, reason, law, t, true));
+                end = k + (SAFE_STOP_RECORD_S / ts).round() as usize;
+            }
+        }
+        let status = if let Some((_, _, law, _, _)) = stop.as_mut() {
+            let stepped = match observer.as_deref_mut() {
+                Some(o) => match o.update(model, &x) {
+                    Ok(est) => {
+                        x_est.copy_from_slice(est);
+                        law.step(model, &x, &x_est, ts, &mut tau)
+                    }
+                    Err(e) => Err(e),
+                },
+                None => law.step(model, &x, &x, ts, &mut tau),
+            };
+            if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &stepped) {
+                o.record_torque(&tau);
+            }
+            stepped.map(|_| crate::control::StepInfo {
+                cost: 0.0,
+                r_diag_ratio: 1.0,
+                zoh_squarings: 0,
+            })
+        } else {
+            match observer.as_deref_mut() {
+                Some(o) => match o.update(model, &x) {
+                    Ok(est) => {
+                        x_est.copy_from_slice(est);
+                        controller.step(model, &x_est, w, &preview, &mut tau)
+                    }
+                    Err(e) => Err(e),
+                },
+                None => controller.step(model, &x, w, &preview, &mut tau),
+            }
+        };
+        if stop.is_none() {
+            if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &status) {
+                o.record_torque(&tau);
+            }
+        }
         let us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
-            outcome = RunOutcome::Failed {
-                t,
-                cause: RunFailure::Controller(e),
-            };
-            break;
+            if settings.safe_stop && stop.is_none() {
+                // Brake from here on (this sample holds the last torque).
+                let law = SafeStop::new(&tau_max, &x, None, model, ts);
+                stop = Some((t, StopReason::ControllerFailed(e), law, t, true));
+                end = k + (SAFE_STOP_RECORD_S / ts).round() as usize;
+            } else {
+                outcome = RunOutcome::Failed {
+                    t,
+                    cause: RunFailure::Controller(e),
+                };
+                break;
+            }
         }
+        tau_hist.copy_within(n.., 0);
+        let last = tau_hist.len() - n;
+        tau_hist[last..].copy_from_slice(&tau);
         if let Err(e) = plant.step(&tau, ts) {
             outcome = RunOutcome::Failed {
                 t,
                 cause: RunFailure::Plant(e),
             };
             break;
+        }
+        if let Some((_, _, _, moving_until, within)) = stop.as_mut() {
+            if plant.qd().iter().any(|v| v.abs() >= REST_SPEED) {
+                *moving_until = t + ts;
+            }
+            let q = plant.q();
+            if (0..n).any(|i| q[i] < lower[i] || q[i] > upper[i]) {
+                *within = false;
+            }
         }
         rec.t.push(t);
         rec.q.extend_from_slice(&x[..n]);
@@ -297,19 +444,40 @@ pub fn run_closed_loop_with(
             };
             break;
         }
-        if let Some(joint) =
-            (0..n).find(|&i| rec.joint_error(k, i).abs() > settings.divergence_threshold_rad)
-        {
-            outcome = RunOutcome::Diverged {
-                t,
-                joint,
-                error_rad: rec.joint_error(k, joint),
-                threshold_rad: settings.divergence_threshold_rad,
-            };
-            break;
+        if stop.is_none() {
+            if let Some(joint) =
+                (0..n).find(|&i| rec.joint_error(k, i).abs() > settings.divergence_threshold_rad)
+            {
+                let error_rad = rec.joint_error(k, joint);
+                if settings.safe_stop {
+                    let law = SafeStop::new(&tau_max, &x, None, model, ts);
+                    stop = Some((t, StopReason::Diverged { joint, error_rad }, law, t, true));
+                    end = k + 1 + (SAFE_STOP_RECORD_S / ts).round() as usize;
+                } else {
+                    outcome = RunOutcome::Diverged {
+                        t,
+                        joint,
+                        error_rad,
+                        threshold_rad: settings.divergence_threshold_rad,
+                    };
+                    break;
+                }
+            }
         }
         if k % 100 == 0 {
-            progress(k, total);
+            progress(k.min(total), total);
+        }
+        k += 1;
+    }
+    if let Some((t, reason, _, moving_until, within_limits)) = stop {
+        if outcome.is_completed() {
+            let last = rec.t.last().copied().unwrap_or(t) + ts;
+            outcome = RunOutcome::Stopped {
+                t,
+                reason,
+                at_rest_after_s: (moving_until < last - 1e-9).then_some(moving_until - t),
+                within_limits,
+            };
         }
     }
     progress(total, total);

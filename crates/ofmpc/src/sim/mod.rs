@@ -7,10 +7,11 @@ mod experiment;
 mod metrics;
 mod outcome;
 mod plant;
+mod supervisor;
 
 pub use closed_loop::{
     record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
-    MAX_IDENTIFICATION_S,
+    MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
@@ -18,4 +19,10 @@ pub use outcome::{
     ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, MAX_RECORD_VALUES,
     MAX_SUBSTEPS,
 };
-pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError};
+pub use plant::{
+    Fault, FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
+    MAX_DELAY_SAMPLES,
+};
+pub use supervisor::{
+    StopReason, BRAKE_TIME, FROZEN_SAMPLES, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
+};

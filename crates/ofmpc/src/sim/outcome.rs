@@ -2,6 +2,7 @@
 //! the offending values, so that callers (the CLI, bindings) word them.
 
 use super::plant::{PlantError, PlantSettingsError};
+use super::supervisor::StopReason;
 use crate::control::{SettingsError, StepError};
 use crate::robot::ModelError;
 use serde::Serialize;
@@ -28,15 +29,19 @@ pub enum RunStatus {
     /// The run could not go on: a controller step or the plant's integration
     /// failed. Its metrics cover what was recorded before.
     Failed,
+    /// The loop brought the robot to a safe stop (divergence, a failed step
+    /// or an implausible measurement, with the safe stop enabled).
+    Stopped,
 }
 
 impl RunStatus {
-    /// `"ok"`, `"diverged"` or `"failed"`.
+    /// `"ok"`, `"diverged"`, `"failed"` or `"stopped"`.
     pub fn name(self) -> &'static str {
         match self {
             RunStatus::Ok => "ok",
             RunStatus::Diverged => "diverged",
             RunStatus::Failed => "failed",
+            RunStatus::Stopped => "stopped",
         }
     }
 }
@@ -93,6 +98,18 @@ pub enum RunOutcome {
         /// What failed.
         cause: RunFailure,
     },
+    /// The loop stopped the robot safely from `t` on (braking, then hold).
+    Stopped {
+        /// Time the stop began (s).
+        t: f64,
+        /// Why.
+        reason: StopReason,
+        /// How long after `t` the robot came to rest (every true joint speed
+        /// below the rest speed until the end of the record), if it did.
+        at_rest_after_s: Option<f64>,
+        /// The true joint positions stayed within the joint limits.
+        within_limits: bool,
+    },
 }
 
 impl RunOutcome {
@@ -102,13 +119,16 @@ impl RunOutcome {
             RunOutcome::Completed => RunStatus::Ok,
             RunOutcome::Diverged { .. } => RunStatus::Diverged,
             RunOutcome::Failed { .. } => RunStatus::Failed,
+            RunOutcome::Stopped { .. } => RunStatus::Stopped,
         }
     }
     /// When the run was stopped early (s), `None` when it completed.
     pub fn stopped_at(&self) -> Option<f64> {
         match self {
             RunOutcome::Completed => None,
-            RunOutcome::Diverged { t, .. } | RunOutcome::Failed { t, .. } => Some(*t),
+            RunOutcome::Diverged { t, .. }
+            | RunOutcome::Failed { t, .. }
+            | RunOutcome::Stopped { t, .. } => Some(*t),
         }
     }
     /// True when it completed.
@@ -133,6 +153,22 @@ impl fmt::Display for RunOutcome {
                 joint + 1
             ),
             RunOutcome::Failed { t, cause } => write!(f, "failed at t = {t:.3} s: {cause}"),
+            RunOutcome::Stopped {
+                t,
+                reason,
+                at_rest_after_s,
+                within_limits,
+            } => {
+                write!(f, "stopped safely from t = {t:.3} s: {reason}; ")?;
+                match at_rest_after_s {
+                    Some(d) => write!(f, "at rest {d:.3} s later")?,
+                    None => f.write_str("not at rest by the end of the record")?,
+                }
+                if !within_limits {
+                    f.write_str(", beyond a joint limit")?;
+                }
+                Ok(())
+            }
         }
     }
 }

@@ -29,7 +29,82 @@ pub struct PlantSettings {
     pub encoder_counts: u64,
     /// Seed of the measurement noise.
     pub seed: u64,
+    /// Derive the measured velocity from the measured (noisy, quantized)
+    /// positions by a backward difference over the control period, as a
+    /// drive without a tachometer does.
+    pub velocity_from_encoder: bool,
+    /// The measurement the controller sees is this many control periods old.
+    pub delay_samples: usize,
+    /// Injected faults (encoder glitch, encoder dropout, torque drop).
+    pub faults: Vec<Fault>,
 }
+
+/// An injected fault of one joint, from time `t` on. In TOML:
+/// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[non_exhaustive]
+pub enum Fault {
+    /// The measured position is off by `offset_rad` on one sample (the
+    /// first measurement at or after `t`).
+    EncoderGlitch {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Offset (rad).
+        offset_rad: f64,
+    },
+    /// The joint's measurement (position and velocity) is frozen at its last
+    /// value for `duration_s`.
+    EncoderDropout {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Duration (s).
+        duration_s: f64,
+    },
+    /// The drive delivers `fraction` of the commanded torque for `duration_s`.
+    TorqueDrop {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Delivered fraction, in [0, 1].
+        fraction: f64,
+        /// Duration (s).
+        duration_s: f64,
+    },
+}
+
+impl Fault {
+    /// Start time, 0-based joint and duration (0 for a glitch).
+    fn span(&self) -> (f64, usize, f64) {
+        match *self {
+            Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
+            Fault::EncoderDropout {
+                t,
+                joint,
+                duration_s,
+            }
+            | Fault::TorqueDrop {
+                t,
+                joint,
+                duration_s,
+                ..
+            } => (t, joint.wrapping_sub(1), duration_s),
+        }
+    }
+
+    fn active(&self, now: f64) -> bool {
+        let (t, _, d) = self.span();
+        now >= t - 1e-9 && now < t + d - 1e-9
+    }
+}
+
+/// Largest accepted measurement delay (control periods).
+pub const MAX_DELAY_SAMPLES: usize = 1000;
 
 impl Default for PlantSettings {
     fn default() -> Self {
@@ -43,6 +118,9 @@ impl Default for PlantSettings {
             velocity_noise: 0.0,
             encoder_counts: 0,
             seed: 1,
+            velocity_from_encoder: false,
+            delay_samples: 0,
+            faults: Vec::new(),
         }
     }
 }
@@ -128,6 +206,22 @@ pub enum PlantSettingsError {
         /// The value.
         value: f64,
     },
+    /// A fault names no joint of the robot, or has a bad time, duration,
+    /// offset or fraction.
+    #[error("fault {} is invalid: {what} = {value} ({requirement})", index + 1)]
+    Fault {
+        /// 0-based index in the list.
+        index: usize,
+        /// Which value.
+        what: &'static str,
+        /// The value.
+        value: f64,
+        /// What it must be.
+        requirement: &'static str,
+    },
+    /// The measurement delay is too long.
+    #[error("the measurement delay is {0} samples: at most {MAX_DELAY_SAMPLES}")]
+    Delay(usize),
     /// The velocity scale of the smoothed Coulomb friction is not > 0.
     #[error("the Coulomb friction's velocity scale is {0} rad/s: it must be finite and > 0")]
     CoulombVelocity(f64),
@@ -193,6 +287,42 @@ impl PlantSettings {
             {
                 return Err(PlantSettingsError::FrictionValue { kind, index, value });
             }
+        }
+        for (index, f) in self.faults.iter().enumerate() {
+            let (t, j, d) = f.span();
+            let bad = |what, value: f64, requirement| {
+                Err(PlantSettingsError::Fault {
+                    index,
+                    what,
+                    value,
+                    requirement,
+                })
+            };
+            if j >= n {
+                return bad(
+                    "joint",
+                    j.wrapping_add(1) as f64,
+                    "a joint number from 1 to n",
+                );
+            }
+            if !(t.is_finite() && t >= 0.0) {
+                return bad("t", t, "a finite time >= 0 s");
+            }
+            if !(d.is_finite() && d >= 0.0) {
+                return bad("duration_s", d, "a finite duration >= 0 s");
+            }
+            match *f {
+                Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
+                    return bad("offset_rad", offset_rad, "a finite angle");
+                }
+                Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
+                    return bad("fraction", fraction, "between 0 and 1");
+                }
+                _ => {}
+            }
+        }
+        if self.delay_samples > MAX_DELAY_SAMPLES {
+            return Err(PlantSettingsError::Delay(self.delay_samples));
         }
         let cv = self.coulomb_velocity;
         if !(cv.is_finite() && cv > 0.0) {
@@ -288,6 +418,18 @@ pub struct Plant {
     tmp_v: Vec<f64>,
     backup: Vec<f64>,
     rng: Gauss,
+    /// Delay line of measurements, `(D + 1) × 2n`, and its next slot.
+    ring: Vec<f64>,
+    ring_next: usize,
+    /// Measured positions of the previous sample (encoder velocity).
+    prev_qm: Vec<f64>,
+    measured_once: bool,
+    /// The last control period passed to [`Plant::step`] (s).
+    last_ts: f64,
+    /// Per fault: an encoder glitch already happened.
+    fired: Vec<bool>,
+    /// The last measurement before the delay line (for frozen encoders).
+    last_meas: Vec<f64>,
 }
 
 impl Plant {
@@ -298,6 +440,8 @@ impl Plant {
         settings.validate(n)?;
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
+        let ring_len = (settings.delay_samples + 1) * 2 * n;
+        let n_faults = settings.faults.len();
         Ok(Self {
             viscous: per_joint(&settings.viscous_friction, n),
             coulomb: per_joint(&settings.coulomb_friction, n),
@@ -315,6 +459,13 @@ impl Plant {
             k: std::array::from_fn(|_| z.clone()),
             tmp_q: z.clone(),
             backup: vec![0.0; 2 * n],
+            ring: vec![0.0; ring_len],
+            ring_next: 0,
+            prev_qm: z.clone(),
+            measured_once: false,
+            last_ts: 0.0,
+            fired: vec![false; n_faults],
+            last_meas: vec![0.0; 2 * n],
             tmp_v: z,
         })
     }
@@ -356,8 +507,11 @@ impl Plant {
         &self.tau
     }
 
-    /// The measured state `x = [q, q̇]` (noise and encoder quantization applied)
-    /// written into `x` (2n).
+    /// The measured state `x = [q, q̇]` (noise and encoder quantization
+    /// applied; the velocity a backward difference of the measured positions
+    /// with `velocity_from_encoder`; `delay_samples` periods old) written into
+    /// `x` (2n). Call it once per control period: each call is one sample of
+    /// the sensors. Allocation-free.
     pub fn measure(&mut self, x: &mut [f64]) {
         let n = self.q.len();
         let res = if self.settings.encoder_counts > 0 {
@@ -375,11 +529,56 @@ impl Plant {
             }
             x[i] = q;
             let mut v = self.qd[i];
-            if self.settings.velocity_noise > 0.0 {
+            if self.settings.velocity_from_encoder {
+                // At the first sample the robot is at rest (it starts so).
+                v = if self.measured_once && self.last_ts > 0.0 {
+                    (q - self.prev_qm[i]) / self.last_ts
+                } else {
+                    0.0
+                };
+            } else if self.settings.velocity_noise > 0.0 {
                 v += self.settings.velocity_noise * self.rng.next();
             }
             x[n + i] = v;
         }
+        let now = self.t;
+        for (f, fired) in self.settings.faults.iter().zip(self.fired.iter_mut()) {
+            match *f {
+                Fault::EncoderGlitch {
+                    t,
+                    joint,
+                    offset_rad,
+                } if !*fired && now >= t - 1e-9 => {
+                    *fired = true;
+                    x[joint - 1] += offset_rad;
+                }
+                Fault::EncoderDropout { joint, .. } if self.measured_once && f.active(now) => {
+                    let i = joint - 1;
+                    x[i] = self.last_meas[i];
+                    x[n + i] = self.last_meas[n + i];
+                }
+                _ => {}
+            }
+        }
+        self.last_meas.copy_from_slice(&x[..2 * n]);
+        self.prev_qm.copy_from_slice(&x[..n]);
+        let d = self.settings.delay_samples;
+        if d > 0 {
+            let w = 2 * n;
+            if !self.measured_once {
+                for slot in self.ring.chunks_exact_mut(w) {
+                    slot.copy_from_slice(&x[..w]);
+                }
+            }
+            let slots = d + 1;
+            let at = self.ring_next;
+            self.ring[at * w..(at + 1) * w].copy_from_slice(&x[..w]);
+            self.ring_next = (at + 1) % slots;
+            // The oldest slot is the one written next.
+            let old = self.ring_next;
+            x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
+        }
+        self.measured_once = true;
     }
 
     /// Friction torque at velocity `v` of joint `i` (opposes motion).
@@ -420,6 +619,16 @@ impl Plant {
                 tau[i]
             };
         }
+        for f in &self.settings.faults {
+            if let Fault::TorqueDrop {
+                joint, fraction, ..
+            } = *f
+            {
+                if f.active(self.t) {
+                    self.tau[joint - 1] *= fraction;
+                }
+            }
+        }
         let steps = substeps(ts, self.settings.substep)?;
         let h = ts / steps as f64;
         self.backup[..n].copy_from_slice(&self.q);
@@ -431,6 +640,7 @@ impl Plant {
             return r;
         }
         self.t += ts;
+        self.last_ts = ts;
         Ok(())
     }
 
@@ -566,6 +776,43 @@ mod tests {
         assert!(p.step(&[f64::NAN; 6], 0.01).is_err());
         assert!(PlantSettings {
             viscous_friction: vec![1.0, 2.0],
+            ..Default::default()
+        }
+        .validate(6)
+        .is_err());
+    }
+
+    #[test]
+    fn delayed_measurement_and_encoder_velocity() {
+        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
+        let s = PlantSettings {
+            delay_samples: 2,
+            velocity_from_encoder: true,
+            ..Default::default()
+        };
+        let mut p = Plant::new(Robot::irb140(), s, &q0).unwrap();
+        let mut truth: Vec<Vec<f64>> = Vec::new();
+        let mut x = [0.0; 12];
+        for k in 0..6usize {
+            truth.push(p.q().to_vec());
+            p.measure(&mut x);
+            // The position seen is that of max(k − 2, 0).
+            let want = &truth[k.saturating_sub(2)];
+            assert_eq!(&x[..6], &want[..], "k = {k}");
+            // The velocity is the backward difference of those positions.
+            let prev = &truth[k.saturating_sub(3)];
+            for i in 0..6 {
+                let v = if k >= 3 {
+                    (want[i] - prev[i]) / 0.01
+                } else {
+                    0.0
+                };
+                assert!((x[6 + i] - v).abs() < 1e-12, "k = {k}, joint {i}");
+            }
+            p.step(&[0.0; 6], 0.01).unwrap();
+        }
+        assert!(PlantSettings {
+            delay_samples: MAX_DELAY_SAMPLES + 1,
             ..Default::default()
         }
         .validate(6)

@@ -1,0 +1,188 @@
+//! Probe runs for the drives/sensors issue (#11): prints metrics of variants
+//! of the paper's experiment. `cargo run --release -p ofmpc --example drives_probe -- CASE`.
+
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::sim::{Experiment, PlantSettings};
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let case = std::env::args().nth(1).unwrap_or_default();
+    let mass: f64 = std::env::args()
+        .nth(2)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(0.25);
+    let scale: f64 = std::env::args()
+        .nth(3)
+        .map(|s| s.parse())
+        .transpose()?
+        .unwrap_or(1.0);
+    let mut robot = Robot::irb140();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    let mut mpc = MpcSettings::default();
+    let mut plant = PlantSettings::default();
+    match case.as_str() {
+        "limits" | "limits-plant" => {
+            // Lower limits: scale of the peak torques.
+            let text: String = robot
+                .joints()
+                .iter()
+                .take(1)
+                .map(|j| format!("[joints.{}]\nmax_torque_nm = {}\n", j.name, scale))
+                .collect();
+            robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+            plant.torque_limits = true;
+            mpc.torque_limits = case == "limits";
+        }
+        "friction" | "friction-comp" => {
+            plant.coulomb_friction = vec![1.0];
+            if case == "friction-comp" {
+                let text: String = robot
+                    .joints()
+                    .iter()
+                    .map(|j| format!("[joints.{}]\ncoulomb_nm = {}\n", j.name, 0.8 * scale))
+                    .collect();
+                robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+                mpc.friction_compensation = true;
+            }
+        }
+        "all" => {
+            let text: String = robot
+                .joints()
+                .iter()
+                .map(|j| format!("[joints.{}]\ncoulomb_nm = 0.8\nviscous_nms = 0.0\n", j.name))
+                .collect();
+            robot.apply_drives(&Drives::from_toml_str(&text)?)?;
+            mpc.friction_compensation = std::env::var_os("NOCOMP").is_none();
+            mpc.torque_limits = true;
+            mpc.delay_compensation = true;
+            plant.torque_limits = true;
+            plant.coulomb_friction = vec![std::env::var("FRIC")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1.0)];
+            plant.encoder_counts = 1 << 22;
+            plant.velocity_from_encoder = true;
+            plant.delay_samples = 1;
+        }
+        "sensing" | "sensing-obs" | "sensing-nodelay" => {
+            plant.encoder_counts = 1 << 22;
+            plant.velocity_from_encoder = true;
+            plant.delay_samples = if case == "sensing-nodelay" { 0 } else { 1 };
+            mpc.delay_compensation = case != "sensing";
+            mpc.state_observer = case != "sensing";
+        }
+        "glitch" | "dropout" | "glitch-nocheck" | "drop" => {
+            let joint: usize = std::env::var("JOINT")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1);
+            let t: f64 = std::env::var("T")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(2.0);
+            plant.faults = vec![if case == "drop" {
+                ofmpc::sim::Fault::TorqueDrop {
+                    t,
+                    joint,
+                    fraction: 0.0,
+                    duration_s: 0.5,
+                }
+            } else if case.starts_with("glitch") {
+                ofmpc::sim::Fault::EncoderGlitch {
+                    t,
+                    joint,
+                    offset_rad: 0.01,
+                }
+            } else {
+                ofmpc::sim::Fault::EncoderDropout {
+                    t,
+                    joint,
+                    duration_s: std::env::var("DUR")
+                        .ok()
+                        .and_then(|v| v.parse().ok())
+                        .unwrap_or(0.3),
+                }
+            }];
+            plant.torque_limits = true;
+            mpc.torque_limits = true;
+        }
+        _ => {}
+    }
+    let check = !case.ends_with("nocheck") && std::env::var_os("NOCHECK").is_none();
+    println!("path {} s", reference.duration());
+    let exp = Experiment {
+        robot: robot.clone(),
+        reference,
+        mpc,
+        plant,
+        loop_settings: ofmpc::sim::LoopSettings {
+            plausibility_check: check,
+            safe_stop: check,
+            ..Default::default()
+        },
+    };
+    for kind in ControllerKind::ALL {
+        let (r, m) = exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})?;
+        let n = 6;
+        let mut ratio: f64 = 0.0;
+        for k in 0..r.record.len() {
+            for i in 0..n {
+                ratio = ratio.max(r.record.tau[k * n + i].abs() / robot.joints()[i].limits.effort);
+            }
+        }
+        if let Some(j) = std::env::var("AROUND")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+        {
+            let step: usize = std::env::var("EVERY")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1);
+            for k in (j.saturating_sub(3)..(j + 6 * step).min(r.record.len())).step_by(step) {
+                println!(
+                    "  k {k} q1 {:.6} qd {:.4?} tau {:.2?}",
+                    r.record.q[k * n],
+                    &r.record.qd[k * n..k * n + n],
+                    &r.record.tau[k * n..k * n + n]
+                );
+            }
+        }
+        if std::env::var_os("TRACE").is_some() {
+            let len = r.record.len();
+            for i in 0..n {
+                let e: Vec<f64> = (len.saturating_sub(200)..len)
+                    .map(|k| r.record.joint_error(k, i))
+                    .collect();
+                let (lo, hi) = e
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(*v), b.max(*v)));
+                let qd: f64 = (len.saturating_sub(200)..len)
+                    .map(|k| r.record.qd[k * n + i].abs())
+                    .fold(0.0, f64::max);
+                println!(
+                    "  joint {} last 2 s: e in [{lo:.3e}, {hi:.3e}]  max|qd| {qd:.3e}",
+                    i + 1
+                );
+            }
+        }
+        println!(
+            "{:8} rms {:8.4} mm max {:8.4} mm steady {:10.3e} mm  steady joint {:10.3e}  max|tau|/lim {:.4} tau_max {:?} step {:6.1} us {}",
+            m.controller,
+            m.cartesian_error_rms_mm,
+            m.cartesian_error_max_mm,
+            m.steady_cartesian_error_mm,
+            m.steady_joint_error_max_rad.iter().cloned().fold(0.0, f64::max),
+            ratio,
+            m.torque_max_nm.iter().map(|v| (v * 10.0).round() / 10.0).collect::<Vec<_>>(),
+            m.step_time_us.median,
+            r.outcome
+        );
+    }
+    Ok(())
+}

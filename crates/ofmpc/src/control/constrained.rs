@@ -1,0 +1,576 @@
+//! Torque limits as constraints of the predictive controllers' optimization.
+//!
+//! Every controller minimizes `‖𝒜 ΔU − b‖²` (Eq. (37), (39), (43)). Over the
+//! horizon the model gives the torque `τ_{k+j} = H u_{k+j} + g` (Eq. (15),
+//! `H`, `g` frozen at `x_k` like the rest of the linear-like model), with
+//! `u_{k+j} = u_{k−1} + Σ_{i≤j} Δu_{k+i}` for the incremental algorithms and
+//! `u_{k+j}` itself for the usual one. The drive limits `|τ_{k+j,i}| ≤ τmax_i`
+//! are therefore linear inequalities in `ΔU`. With the change of variables
+//!
+//! ```text
+//! z_j = H u_{k+j}  (= τ_{k+j} − g),   j = 0..N−1,
+//! ```
+//!
+//! which is one-to-one (`Δu_{k+j} = H⁻¹(z_j − z_{j−1})`, `z_{−1} = H u_{k−1}`),
+//! they become a box, `−τmax − g ≤ z_j ≤ τmax − g`, and the problem a
+//! box-constrained least-squares problem
+//!
+//! ```text
+//! min ½ zᵀ P z − cᵀ z   s.t.  lo ≤ z ≤ hi,    P = (𝒜T)ᵀ(𝒜T), c = (𝒜T)ᵀ(b − 𝒜e),
+//! ```
+//!
+//! with `ΔU = T z + e`. [`solve_box_qp`] solves it by a primal active-set
+//! method on `P` (Cholesky of the free block per iteration): every iterate is
+//! feasible, so when the bounded iteration count runs out the current iterate
+//! still respects the limits (the fallback), only its cost is not minimal.
+//! Warm start: the unconstrained optimum clipped to the box, with the clipped
+//! entries as the first active set.
+//!
+//! When the unconstrained solution already satisfies the limits over the
+//! whole horizon nothing is changed: the step is bit-identical to the
+//! unconstrained controller.
+//!
+//! Why not a general conic solver (Clarabel): its setup allocates on every
+//! new problem data, and the step must not allocate; the box structure in
+//! `z` makes a dense active-set method of ~200 lines sufficient and
+//! preallocated (`p = N·n = 60` unknowns for the IRB 140 at `N = 10`).
+
+use super::model::{cholesky_in_place, cholesky_solve_in_place, LinearLikeModel};
+
+/// Relative margin kept inside the limits so that rounding in `τ = H u + g`
+/// never crosses them.
+const MARGIN: f64 = 1e-9;
+
+/// What the constrained step did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct QpStatus {
+    /// The unconstrained solution violated a limit and the QP was solved.
+    pub active: bool,
+    /// Active-set iterations used.
+    pub iterations: u32,
+    /// The iteration bound was reached (or a factorization failed): the
+    /// returned input is feasible but not optimal.
+    pub fallback: bool,
+}
+
+/// Preallocated workspace of the constrained step for `n` joints, horizon `N`,
+/// and `m` rows of `𝒜`.
+#[derive(Debug, Clone)]
+pub(crate) struct TorqueLimitQp {
+    n: usize,
+    nh: usize,
+    m: usize,
+    incremental: bool,
+    tau_max: Vec<f64>,
+    a: Vec<f64>,
+    b: Vec<f64>,
+    hinv: Vec<f64>,
+    bz: Vec<f64>,
+    hess: Vec<f64>,
+    lin: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    z: Vec<f64>,
+    state: Vec<i8>,
+    work: BoxQpWork,
+    u_seq: Vec<f64>,
+    /// Per joint: the torque at sample `k` is at its limit.
+    pub saturated: Vec<bool>,
+    /// What the last step did.
+    pub status: QpStatus,
+}
+
+impl TorqueLimitQp {
+    /// Buffers for the system `𝒜` (`m × N·n`, column-major) of a controller.
+    pub fn new(n: usize, nh: usize, m: usize, incremental: bool, tau_max: &[f64]) -> Self {
+        let p = n * nh;
+        Self {
+            n,
+            nh,
+            m,
+            incremental,
+            tau_max: tau_max.to_vec(),
+            a: vec![0.0; m * p],
+            b: vec![0.0; m],
+            hinv: vec![0.0; n * n],
+            bz: vec![0.0; m * p],
+            hess: vec![0.0; p * p],
+            lin: vec![0.0; p],
+            lo: vec![0.0; p],
+            hi: vec![0.0; p],
+            z: vec![0.0; p],
+            state: vec![0; p],
+            work: BoxQpWork::new(p),
+            u_seq: vec![0.0; p],
+            saturated: vec![false; n],
+            status: QpStatus::default(),
+        }
+    }
+
+    /// The limits `τmax` (n values).
+    pub fn limits(&self) -> &[f64] {
+        &self.tau_max
+    }
+
+    /// Keeps a copy of `𝒜` and `b` before the least-squares solve overwrites them.
+    pub fn capture(&mut self, a: &[f64], b: &[f64]) {
+        self.a.copy_from_slice(a);
+        self.b.copy_from_slice(b);
+    }
+
+    /// Column of `Δu_{k+j}` entry `i` in the permuted layout of `𝒜`
+    /// (unknown block `t' = N − j`, see `core.rs`).
+    #[inline]
+    fn col(&self, j: usize, i: usize) -> usize {
+        (self.nh - 1 - j) * self.n + i
+    }
+
+    /// Checks the unconstrained solution `sol` (layout of `𝒜`'s columns)
+    /// against the limits over the horizon; when it violates one, solves the
+    /// QP and writes the constrained `u_k` into `u_new`. `u_prev` is
+    /// `u_{k−1}` (incremental algorithms). Allocation-free.
+    pub fn enforce(
+        &mut self,
+        model: &LinearLikeModel,
+        sol: &[f64],
+        u_prev: &[f64],
+        u_new: &mut [f64],
+    ) {
+        let (n, nh, m) = (self.n, self.nh, self.m);
+        let p = n * nh;
+        self.status = QpStatus::default();
+        self.saturated.fill(false);
+        // u_{k+j} over the horizon from the unconstrained solution.
+        for j in 0..nh {
+            for i in 0..n {
+                let d = sol[self.col(j, i)];
+                self.u_seq[j * n + i] = if !self.incremental {
+                    d
+                } else if j == 0 {
+                    u_prev[i] + d
+                } else {
+                    self.u_seq[(j - 1) * n + i] + d
+                };
+            }
+        }
+        let h = model.h().as_slice();
+        let g = model.g().as_slice();
+        let mut violated = false;
+        for j in 0..nh {
+            let u = &self.u_seq[j * n..(j + 1) * n];
+            for i in 0..n {
+                let mut z = 0.0;
+                for l in 0..n {
+                    z += h[l * n + i] * u[l];
+                }
+                self.z[j * n + i] = z;
+                let lim = self.tau_max[i];
+                if lim.is_finite() && (z + g[i]).abs() > lim {
+                    violated = true;
+                }
+            }
+        }
+        if !violated {
+            return;
+        }
+        self.status.active = true;
+        // H⁻¹ column by column.
+        self.hinv.fill(0.0);
+        for c in 0..n {
+            let col = &mut self.hinv[c * n..(c + 1) * n];
+            col[c] = 1.0;
+            model.solve_h_in_place(col);
+        }
+        // B = 𝒜 T: column (j, c) = Σ_l (A[:, d_j,l] − A[:, d_{j+1},l]) H⁻¹[l, c]
+        // (incremental); A[:, d_j,l] H⁻¹[l, c] (usual).
+        let col = |j: usize, i: usize| (nh - 1 - j) * n + i;
+        for j in 0..nh {
+            for c in 0..n {
+                let bc = col(j, c);
+                let out = &mut self.bz[bc * m..bc * m + m];
+                out.fill(0.0);
+                for l in 0..n {
+                    let w = self.hinv[c * n + l];
+                    let c0 = col(j, l);
+                    for (o, a) in out.iter_mut().zip(&self.a[c0 * m..c0 * m + m]) {
+                        *o += w * a;
+                    }
+                    if self.incremental && j + 1 < nh {
+                        let c1 = col(j + 1, l);
+                        for (o, a) in out.iter_mut().zip(&self.a[c1 * m..c1 * m + m]) {
+                            *o -= w * a;
+                        }
+                    }
+                }
+            }
+        }
+        // b' = b − 𝒜 e, e = −u_{k−1} in the block of Δu_k (incremental).
+        if self.incremental {
+            for l in 0..n {
+                let c0 = self.col(0, l);
+                let w = u_prev[l];
+                for (bb, a) in self.b.iter_mut().zip(&self.a[c0 * m..c0 * m + m]) {
+                    *bb += w * a;
+                }
+            }
+        }
+        // P = BᵀB and c = Bᵀb'. Column block t' of 𝒜 (and of B) is zero below
+        // row (m/N)·t' (block upper-triangular profile, core.rs).
+        let per_level = m / nh;
+        let end = |c: usize| per_level * (c / n + 1);
+        for c1 in 0..p {
+            let b1 = &self.bz[c1 * m..c1 * m + end(c1)];
+            for c2 in c1..p {
+                let len = end(c1).min(end(c2));
+                let b2 = &self.bz[c2 * m..c2 * m + len];
+                let s: f64 = b1[..len].iter().zip(b2).map(|(x, y)| x * y).sum();
+                self.hess[c2 * p + c1] = s;
+                self.hess[c1 * p + c2] = s;
+            }
+            self.lin[c1] = b1.iter().zip(&self.b).map(|(x, y)| x * y).sum();
+        }
+        // The box and the warm start (the unconstrained z, clipped).
+        for j in 0..nh {
+            for i in 0..n {
+                let lim = self.tau_max[i] * (1.0 - MARGIN);
+                let k = self.col(j, i);
+                let (lo, hi) = if lim.is_finite() {
+                    (-lim - g[i], lim - g[i])
+                } else {
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                };
+                self.lo[k] = lo;
+                self.hi[k] = hi;
+                let zj = self.z[j * n + i];
+                self.work.z0[k] = zj;
+            }
+        }
+        self.z.copy_from_slice(&self.work.z0);
+        let info = solve_box_qp(
+            p,
+            &self.hess,
+            &self.lin,
+            &self.lo,
+            &self.hi,
+            &mut self.z,
+            &mut self.state,
+            &mut self.work,
+            (4 * p) as u32,
+        );
+        self.status.iterations = info.0;
+        self.status.fallback = !info.1;
+        // u_k = H⁻¹ z_0.
+        for i in 0..n {
+            let k = self.col(0, i);
+            u_new[i] = self.z[k];
+            self.saturated[i] = self.state[k] != 0;
+        }
+        model.solve_h_in_place(u_new);
+    }
+}
+
+/// Preallocated work of [`solve_box_qp`] for up to `p` unknowns.
+#[derive(Debug, Clone)]
+pub struct BoxQpWork {
+    free: Vec<usize>,
+    k: Vec<f64>,
+    l: Vec<f64>,
+    rhs: Vec<f64>,
+    grad: Vec<f64>,
+    z0: Vec<f64>,
+}
+
+impl BoxQpWork {
+    /// Buffers for `p` unknowns.
+    pub fn new(p: usize) -> Self {
+        Self {
+            free: vec![0; p],
+            k: vec![0.0; p * p],
+            l: vec![0.0; p * p],
+            rhs: vec![0.0; p],
+            grad: vec![0.0; p],
+            z0: vec![0.0; p],
+        }
+    }
+}
+
+/// Minimizes `½ zᵀ P z − cᵀ z` subject to `lo ≤ z ≤ hi` (`P` symmetric
+/// positive definite, `p × p` column-major; `lo ≤ hi`, infinite bounds
+/// allowed) by a primal active-set method.
+///
+/// `z` holds the starting point on entry (it is clipped to the box; the
+/// clipped entries form the first active set) and the result on exit;
+/// `state[i]` is `−1`/`+1` when `z_i` ends at its lower/upper bound, else 0.
+/// Every iterate is feasible and none increases the cost, so when the
+/// iteration bound `max_iter` is reached `z` is a feasible point no worse than
+/// the clipped start. Returns (iterations, converged). Allocation-free.
+#[allow(clippy::too_many_arguments)]
+pub fn solve_box_qp(
+    p: usize,
+    hess: &[f64],
+    lin: &[f64],
+    lo: &[f64],
+    hi: &[f64],
+    z: &mut [f64],
+    state: &mut [i8],
+    w: &mut BoxQpWork,
+    max_iter: u32,
+) -> (u32, bool) {
+    for i in 0..p {
+        state[i] = 0;
+        if z[i] <= lo[i] {
+            z[i] = lo[i];
+            state[i] = -1;
+        } else if z[i] >= hi[i] {
+            z[i] = hi[i];
+            state[i] = 1;
+        }
+    }
+    let scale = lin.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+        + (0..p).fold(0.0f64, |a, i| a.max(hess[i * p + i].abs()));
+    let tol = 1e-11 * scale.max(f64::MIN_POSITIVE);
+    let mut it = 0u32;
+    while it < max_iter {
+        it += 1;
+        // Free set and the reduced system P_FF z_F = c_F − P_FA z_A.
+        let mut nf = 0;
+        for i in 0..p {
+            if state[i] == 0 {
+                w.free[nf] = i;
+                nf += 1;
+            }
+        }
+        for (a, &fa) in w.free[..nf].iter().enumerate() {
+            let mut r = lin[fa];
+            for i in 0..p {
+                if state[i] != 0 {
+                    r -= hess[i * p + fa] * z[i];
+                }
+            }
+            w.rhs[a] = r;
+            for (b, &fb) in w.free[..nf].iter().enumerate() {
+                w.k[b * nf + a] = hess[fb * p + fa];
+            }
+        }
+        if nf > 0 {
+            if cholesky_in_place(nf, &w.k[..nf * nf], &mut w.l[..nf * nf]).is_err() {
+                return (it, false);
+            }
+            cholesky_solve_in_place(nf, &w.l[..nf * nf], &mut w.rhs[..nf]);
+        }
+        // Largest step towards the subproblem's optimum that stays in the box.
+        let mut alpha = 1.0f64;
+        let mut block: Option<(usize, i8)> = None;
+        for (a, &fa) in w.free[..nf].iter().enumerate() {
+            let d = w.rhs[a] - z[fa];
+            if d < 0.0 && w.rhs[a] < lo[fa] {
+                let s = (lo[fa] - z[fa]) / d;
+                if s < alpha {
+                    alpha = s.max(0.0);
+                    block = Some((fa, -1));
+                }
+            } else if d > 0.0 && w.rhs[a] > hi[fa] {
+                let s = (hi[fa] - z[fa]) / d;
+                if s < alpha {
+                    alpha = s.max(0.0);
+                    block = Some((fa, 1));
+                }
+            }
+        }
+        for (a, &fa) in w.free[..nf].iter().enumerate() {
+            z[fa] = if block.is_none() {
+                w.rhs[a]
+            } else {
+                (z[fa] + alpha * (w.rhs[a] - z[fa])).clamp(lo[fa], hi[fa])
+            };
+        }
+        if let Some((i, s)) = block {
+            z[i] = if s < 0 { lo[i] } else { hi[i] };
+            state[i] = s;
+            continue;
+        }
+        // Optimal on this active set: check the multipliers (gradient signs).
+        let mut worst = tol;
+        let mut release = None;
+        for i in 0..p {
+            if state[i] == 0 {
+                continue;
+            }
+            let mut gi = -lin[i];
+            for (r, zr) in z.iter().enumerate() {
+                gi += hess[i * p + r] * zr;
+            }
+            w.grad[i] = gi;
+            // At the lower bound the cost must not decrease upwards (g ≥ 0),
+            // at the upper bound not downwards (g ≤ 0).
+            let v = if state[i] < 0 { -gi } else { gi };
+            if v > worst {
+                worst = v;
+                release = Some(i);
+            }
+        }
+        match release {
+            Some(i) => state[i] = 0,
+            None => return (it, true),
+        }
+    }
+    (it, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lcg(s: &mut u64) -> f64 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((*s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    }
+
+    fn cost(p: usize, h: &[f64], c: &[f64], z: &[f64]) -> f64 {
+        let mut s = 0.0;
+        for i in 0..p {
+            for j in 0..p {
+                s += 0.5 * z[i] * h[j * p + i] * z[j];
+            }
+            s -= c[i] * z[i];
+        }
+        s
+    }
+
+    /// Brute force: every assignment of {lower, free, upper} to the `p`
+    /// unknowns, the equality-constrained optimum of each, the best feasible.
+    fn brute(p: usize, h: &[f64], c: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> {
+        let mut best = (f64::INFINITY, vec![0.0; p]);
+        let combos = 3usize.pow(p as u32);
+        for code in 0..combos {
+            let mut st = vec![0i8; p];
+            let mut cc = code;
+            for s in st.iter_mut() {
+                *s = (cc % 3) as i8 - 1;
+                cc /= 3;
+            }
+            let mut z = vec![0.0; p];
+            for i in 0..p {
+                if st[i] < 0 {
+                    z[i] = lo[i];
+                } else if st[i] > 0 {
+                    z[i] = hi[i];
+                }
+            }
+            let free: Vec<usize> = (0..p).filter(|&i| st[i] == 0).collect();
+            let nf = free.len();
+            if nf > 0 {
+                let k = nalgebra::DMatrix::from_fn(nf, nf, |a, b| h[free[b] * p + free[a]]);
+                let r = nalgebra::DVector::from_fn(nf, |a, _| {
+                    c[free[a]]
+                        - (0..p)
+                            .filter(|&i| st[i] != 0)
+                            .map(|i| h[i * p + free[a]] * z[i])
+                            .sum::<f64>()
+                });
+                let sol = k.cholesky().unwrap().solve(&r);
+                for (a, &f) in free.iter().enumerate() {
+                    z[f] = sol[a];
+                }
+            }
+            if (0..p).all(|i| z[i] >= lo[i] - 1e-12 && z[i] <= hi[i] + 1e-12) {
+                let f = cost(p, h, c, &z);
+                if f < best.0 {
+                    best = (f, z);
+                }
+            }
+        }
+        best.1
+    }
+
+    #[test]
+    fn box_qp_matches_brute_force_enumeration() {
+        let mut s = 7u64;
+        for trial in 0..200 {
+            let p = 1 + trial % 6;
+            // P = MᵀM + εI, condition up to ~1e4.
+            let mut mm = vec![0.0; p * p];
+            for v in mm.iter_mut() {
+                *v = lcg(&mut s);
+            }
+            let mut h = vec![0.0; p * p];
+            for i in 0..p {
+                for j in 0..p {
+                    h[j * p + i] = (0..p).map(|r| mm[i * p + r] * mm[j * p + r]).sum();
+                }
+                h[i * p + i] += 1e-3;
+            }
+            let c: Vec<f64> = (0..p).map(|_| 3.0 * lcg(&mut s)).collect();
+            let lo: Vec<f64> = (0..p).map(|_| -0.5 - lcg(&mut s).abs()).collect();
+            let hi: Vec<f64> = (0..p)
+                .map(|i| {
+                    if i == 0 && trial % 5 == 0 {
+                        f64::INFINITY
+                    } else {
+                        0.2 + lcg(&mut s).abs()
+                    }
+                })
+                .collect();
+            let expect = brute(p, &h, &c, &lo, &hi);
+            let mut z: Vec<f64> = (0..p).map(|_| 5.0 * lcg(&mut s)).collect();
+            let mut st = vec![0i8; p];
+            let mut w = BoxQpWork::new(p);
+            let (_, ok) = solve_box_qp(p, &h, &c, &lo, &hi, &mut z, &mut st, &mut w, 100);
+            assert!(ok, "trial {trial}: not converged");
+            for i in 0..p {
+                assert!(z[i] >= lo[i] && z[i] <= hi[i], "trial {trial}: infeasible");
+            }
+            let (f, fb) = (cost(p, &h, &c, &z), cost(p, &h, &c, &expect));
+            assert!(
+                f <= fb + 1e-9 * (1.0 + fb.abs()),
+                "trial {trial}: active set {f} vs brute force {fb}"
+            );
+            for i in 0..p {
+                assert!(
+                    (z[i] - expect[i]).abs() < 1e-6 * (1.0 + expect[i].abs()),
+                    "trial {trial}: z[{i}] {} vs {}",
+                    z[i],
+                    expect[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn box_qp_out_of_iterations_is_feasible_and_no_worse_than_the_clipped_start() {
+        let mut s = 11u64;
+        let p = 6;
+        let mut h = vec![0.0; p * p];
+        for i in 0..p {
+            for j in 0..p {
+                h[j * p + i] = if i == j {
+                    2.0
+                } else {
+                    0.9 + 0.05 * lcg(&mut s)
+                };
+            }
+        }
+        for i in 0..p {
+            for j in 0..i {
+                h[j * p + i] = h[i * p + j];
+            }
+        }
+        let c: Vec<f64> = (0..p)
+            .map(|i| if i % 2 == 0 { 9.0 } else { -9.0 })
+            .collect();
+        let lo = vec![-1.0; p];
+        let hi = vec![1.0; p];
+        let start: Vec<f64> = vec![0.0; p];
+        let f0 = cost(p, &h, &c, &start);
+        for max_iter in 1..4 {
+            let mut z = start.clone();
+            let mut st = vec![0i8; p];
+            let mut w = BoxQpWork::new(p);
+            solve_box_qp(p, &h, &c, &lo, &hi, &mut z, &mut st, &mut w, max_iter);
+            assert!(z.iter().all(|v| (-1.0..=1.0).contains(v)));
+            assert!(cost(p, &h, &c, &z) <= f0 + 1e-12);
+        }
+    }
+}

@@ -1,0 +1,363 @@
+//! Supervision of the closed loop: a plausibility check of each measurement
+//! and a safe stop (decelerate on a torque-limited braking law, then hold).
+//!
+//! Plausibility, per joint, against the last accepted measurement `(q_a, q̇_a)`
+//! `m` samples ago:
+//! * a position jump `|y − (q_a + q̇_a τ + ½ q̈_a τ²)|` (`τ = m Ts`, `q̈_a` the
+//!   last accepted velocity change per time) beyond a tenth of what the speed
+//!   limit allows in those samples (`0.1 · v_max · τ`) is rejected: the loop
+//!   uses the prediction instead, unless the raw sample agrees with the
+//!   previous raw one (`|y − (y₋₁ + q̇₋₁ Ts)|` within the same bound: the
+//!   motion is real and the prediction was off); more than [`MAX_REJECTED`]
+//!   rejections in a row make the measurement implausible;
+//! * a velocity off its prediction `q̇_a + q̈_a τ` by more than `0.1 · v_max`
+//!   per sample is rejected (the prediction is used);
+//! * a position that does not change at all for [`FROZEN_SAMPLES`] samples
+//!   while the joint moves (`|q̇_a| Ts ≥` [`MOVING_STEP_RAD`]) is a frozen
+//!   encoder.
+//!
+//! The safe stop (category-1-like): each joint brakes towards
+//! `q_stop = q + q̇ T_b` (where `a = −q̇/T_b` would stop it) and holds there,
+//! `a = −(q − q_stop)/T_b² − 2 q̇/T_b` (critically damped), `τ = H a + C q̇ + g`
+//! of the controller's model clamped to the drives' limits. A joint whose
+//! encoder is frozen is dead-reckoned through the model from its last good
+//! measurement under the torques applied since.
+
+use crate::control::{LinearLikeModel, StepError};
+use crate::dynamics::JointSpaceDynamics;
+use std::fmt;
+
+/// Rejections in a row after which a measurement is implausible.
+pub const MAX_REJECTED: usize = 3;
+/// Samples without any change of a moving joint's position: a frozen encoder.
+pub const FROZEN_SAMPLES: usize = 3;
+/// Expected motion per sample (rad) above which a joint counts as moving.
+pub const MOVING_STEP_RAD: f64 = 1e-5;
+/// Speed below which a joint is at rest (rad/s).
+pub const REST_SPEED: f64 = 1e-3;
+/// Braking time constant `T_b` (s).
+pub const BRAKE_TIME: f64 = 0.03;
+
+/// Why the loop stopped the robot.
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum StopReason {
+    /// A joint error passed the divergence threshold.
+    Diverged {
+        /// 0-based joint.
+        joint: usize,
+        /// The error (rad).
+        error_rad: f64,
+    },
+    /// A controller step failed.
+    ControllerFailed(StepError),
+    /// A joint's measurement kept jumping beyond the plausible.
+    ImplausibleMeasurement {
+        /// 0-based joint.
+        joint: usize,
+        /// The jump from the prediction (rad).
+        jump_rad: f64,
+        /// The tolerance (rad).
+        tolerance_rad: f64,
+    },
+    /// A moving joint's encoder stopped changing.
+    FrozenEncoder {
+        /// 0-based joint.
+        joint: usize,
+    },
+}
+
+impl fmt::Display for StopReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StopReason::Diverged { joint, error_rad } => write!(
+                f,
+                "the error of joint {} reached {error_rad:.4} rad (divergence)",
+                joint + 1
+            ),
+            StopReason::ControllerFailed(e) => write!(f, "the controller step failed: {e}"),
+            StopReason::ImplausibleMeasurement {
+                joint,
+                jump_rad,
+                tolerance_rad,
+            } => write!(
+                f,
+                "the measurement of joint {} jumped {jump_rad:.3e} rad from its prediction, beyond {tolerance_rad:.3e} rad, {} samples in a row",
+                joint + 1,
+                MAX_REJECTED + 1
+            ),
+            StopReason::FrozenEncoder { joint } => write!(
+                f,
+                "the encoder of joint {} stopped changing while the joint moved",
+                joint + 1
+            ),
+        }
+    }
+}
+
+/// The plausibility check of the measurements (module docs).
+#[derive(Debug, Clone)]
+pub(crate) struct Plausibility {
+    n: usize,
+    vmax: Vec<f64>,
+    q_a: Vec<f64>,
+    v_a: Vec<f64>,
+    acc_a: Vec<f64>,
+    m: Vec<usize>,
+    rejected: Vec<usize>,
+    frozen: Vec<usize>,
+    prev_raw: Vec<f64>,
+    prev_raw_v: Vec<f64>,
+    /// Rejected samples so far (positions and velocities).
+    pub rejections: usize,
+}
+
+impl Plausibility {
+    pub fn new(vmax: &[f64], x0: &[f64]) -> Self {
+        let n = vmax.len();
+        Self {
+            n,
+            vmax: vmax.to_vec(),
+            q_a: x0[..n].to_vec(),
+            v_a: x0[n..2 * n].to_vec(),
+            acc_a: vec![0.0; n],
+            m: vec![1; n],
+            rejected: vec![0; n],
+            frozen: vec![0; n],
+            prev_raw: x0[..n].to_vec(),
+            prev_raw_v: x0[n..2 * n].to_vec(),
+            rejections: 0,
+        }
+    }
+
+    /// Checks `x` (2n), replaces rejected values by their predictions, and
+    /// says when the measurement cannot be trusted any more.
+    pub fn check(&mut self, x: &mut [f64], ts: f64) -> Option<StopReason> {
+        let n = self.n;
+        let mut reason = None;
+        for i in 0..n {
+            let (raw_q, raw_v) = (x[i], x[n + i]);
+            let moving = self.v_a[i].abs() * ts >= MOVING_STEP_RAD;
+            if raw_q.to_bits() == self.prev_raw[i].to_bits() && moving {
+                self.frozen[i] += 1;
+            } else {
+                self.frozen[i] = 0;
+            }
+            let prev_raw = self.prev_raw[i];
+            let prev_raw_v = self.prev_raw_v[i];
+            self.prev_raw[i] = raw_q;
+            self.prev_raw_v[i] = raw_v;
+            if self.frozen[i] >= FROZEN_SAMPLES && reason.is_none() {
+                reason = Some(StopReason::FrozenEncoder { joint: i });
+            }
+            if !self.vmax[i].is_finite() {
+                self.q_a[i] = raw_q;
+                self.v_a[i] = raw_v;
+                continue;
+            }
+            let steps = self.m[i] as f64;
+            let dt = ts * steps;
+            let pred = self.q_a[i] + self.v_a[i] * dt + 0.5 * self.acc_a[i] * dt * dt;
+            let v_pred = self.v_a[i] + self.acc_a[i] * dt;
+            let tol = 0.1 * self.vmax[i] * dt;
+            let jump = (raw_q - pred).abs();
+            // After a rejection, two raw samples that agree with each other
+            // (the motion is real, the prediction was off) are accepted.
+            let consistent = self.rejected[i] > 0
+                && (raw_q - (prev_raw + prev_raw_v * ts)).abs() <= 0.1 * self.vmax[i] * ts;
+            if (jump > tol || jump.is_nan()) && !consistent {
+                self.rejections += 1;
+                self.rejected[i] += 1;
+                self.m[i] += 1;
+                x[i] = pred;
+                x[n + i] = v_pred;
+                if self.rejected[i] > MAX_REJECTED && reason.is_none() {
+                    reason = Some(StopReason::ImplausibleMeasurement {
+                        joint: i,
+                        jump_rad: jump,
+                        tolerance_rad: tol,
+                    });
+                }
+                continue;
+            }
+            self.rejected[i] = 0;
+            self.m[i] = 1;
+            self.q_a[i] = raw_q;
+            if consistent || (raw_v - v_pred).abs() <= 0.1 * self.vmax[i] * steps {
+                self.acc_a[i] = (raw_v - self.v_a[i]) / dt;
+                self.v_a[i] = raw_v;
+            } else {
+                // Keep the motion predicted from the last accepted velocity.
+                self.rejections += 1;
+                x[n + i] = v_pred;
+                self.v_a[i] = v_pred;
+            }
+        }
+        reason
+    }
+}
+
+/// `a = f0 q̇ + H⁻¹(τ − g)` of the model at `(q, q̇)` (Eq. (6)–(7)).
+fn model_accel(
+    lin: &mut LinearLikeModel,
+    model: &mut dyn JointSpaceDynamics,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    a: &mut [f64],
+) -> Result<(), StepError> {
+    let n = q.len();
+    lin.update(model, q, v)?;
+    lin.input_from_torque(tau, a)?;
+    let f0 = lin.f0().as_slice();
+    for c in 0..n {
+        for r in 0..n {
+            a[r] += f0[c * n + r] * v[c];
+        }
+    }
+    Ok(())
+}
+
+/// The safe stop's state (module docs).
+#[derive(Debug, Clone)]
+pub(crate) struct SafeStop {
+    n: usize,
+    tau_max: Vec<f64>,
+    model: LinearLikeModel,
+    q: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    hold: Option<Vec<f64>>,
+    dead_reckoned: Vec<bool>,
+    last_raw: Vec<f64>,
+    w: Vec<f64>,
+    /// The torque of the previous stop sample (dead reckoning).
+    tau_prev: Vec<f64>,
+}
+
+impl SafeStop {
+    /// Starts from the measured state `x` (2n). A joint in `frozen` is
+    /// dead-reckoned until its measurement changes again, starting from the
+    /// replay of `last_good` (the state measured before the freeze) under the
+    /// torques applied since (`torques`, n each, oldest first) through the
+    /// model.
+    pub fn new(
+        tau_max: &[f64],
+        x: &[f64],
+        frozen: Option<(usize, &[f64], &[f64])>,
+        model: &mut dyn JointSpaceDynamics,
+        ts: f64,
+    ) -> Self {
+        let n = tau_max.len();
+        let mut stop = Self {
+            n,
+            tau_max: tau_max.to_vec(),
+            model: LinearLikeModel::new(n),
+            q: x[..n].to_vec(),
+            v: x[n..2 * n].to_vec(),
+            a: vec![0.0; n],
+            hold: Some(Vec::with_capacity(n)),
+            dead_reckoned: vec![false; n],
+            last_raw: x[..n].to_vec(),
+            w: vec![0.0; n],
+            tau_prev: vec![0.0; n],
+        };
+        if let Some((j, last_good, torques)) = frozen {
+            stop.dead_reckoned[j] = true;
+            let mut q = last_good[..n].to_vec();
+            let mut v = last_good[n..2 * n].to_vec();
+            for tau in torques.chunks_exact(n) {
+                if model_accel(&mut stop.model, model, &q, &v, tau, &mut stop.a).is_err() {
+                    break;
+                }
+                for i in 0..n {
+                    q[i] += v[i] * ts + 0.5 * stop.a[i] * ts * ts;
+                    v[i] += stop.a[i] * ts;
+                }
+            }
+            stop.q[j] = q[j];
+            stop.v[j] = v[j];
+            stop.a.fill(0.0);
+        }
+        stop
+    }
+
+    /// One sample of the stop: `raw` is the measurement (frozen encoders are
+    /// recognised on it), `x` the state to brake (the observer's estimate
+    /// when there is one, else `raw`); writes the braking or holding torque
+    /// into `tau`.
+    pub fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        raw: &[f64],
+        x: &[f64],
+        ts: f64,
+        tau: &mut [f64],
+    ) -> Result<(), StepError> {
+        let n = self.n;
+        if self.dead_reckoned.iter().any(|d| *d) {
+            // The acceleration the last torque gave, by the model.
+            model_accel(
+                &mut self.model,
+                model,
+                &self.q,
+                &self.v,
+                &self.tau_prev,
+                &mut self.w,
+            )?;
+        }
+        for i in 0..n {
+            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
+                // The encoder is back: hold where the joint really is.
+                self.dead_reckoned[i] = false;
+                if let Some(h) = self.hold.as_mut().filter(|h| !h.is_empty()) {
+                    h[i] = x[i] + x[n + i] * BRAKE_TIME;
+                }
+            }
+            self.last_raw[i] = raw[i];
+            if self.dead_reckoned[i] {
+                self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
+                self.v[i] += self.w[i] * ts;
+            } else {
+                self.q[i] = x[i];
+                self.v[i] = x[n + i];
+            }
+        }
+        // Brake towards where the braking started plus its run-out, then
+        // hold there: a = −ω²(q − q_stop) − 2ω q̇ (critically damped).
+        let hold = self.hold.get_or_insert_with(Vec::new);
+        if hold.is_empty() {
+            hold.extend(self.q.iter().zip(&self.v).map(|(q, v)| q + v * BRAKE_TIME));
+        }
+        let w = 1.0 / BRAKE_TIME;
+        for i in 0..n {
+            self.a[i] = -w * w * (self.q[i] - hold[i]) - 2.0 * w * self.v[i];
+        }
+        // τ = H a + C q̇ + g = H (a − f0 q̇) + g (f0 = −H⁻¹C, Eq. (6)).
+        self.model.update(model, &self.q, &self.v)?;
+        let f0 = self.model.f0().as_slice();
+        for r in 0..n {
+            let mut s = self.a[r];
+            for c in 0..n {
+                s -= f0[c * n + r] * self.v[c];
+            }
+            self.w[r] = s;
+        }
+        let h = self.model.h().as_slice();
+        let g = self.model.g().as_slice();
+        for (r, t) in tau.iter_mut().enumerate() {
+            let mut s = g[r];
+            for c in 0..n {
+                s += h[c * n + r] * self.w[c];
+            }
+            let lim = self.tau_max[r];
+            *t = if lim.is_finite() {
+                s.clamp(-lim, lim)
+            } else {
+                s
+            };
+        }
+        self.tau_prev.copy_from_slice(tau);
+        Ok(())
+    }
+}

@@ -1,0 +1,148 @@
+//! Everything at once (#11 item 5): torque limits in the controller and the
+//! plant, Coulomb friction with the controller's 20 %-off estimate, a 22-bit
+//! encoder with encoder-derived velocity and one sample of delay (observer
+//! and delay compensation), an encoder glitch, the plausibility check and the
+//! safe stop; and random combinations of them, which never panic.
+
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::reference::{build_reference, JointReference, Orientation};
+use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::sim::{Experiment, Fault, LoopSettings, PlantSettings, RunStatus};
+use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use proptest::prelude::*;
+
+fn robot_with_friction_estimate() -> Robot {
+    let mut robot = Robot::irb140();
+    let text: String = (1..=6)
+        .map(|j| format!("[joints.joint_{j}]\ncoulomb_nm = 0.8\nviscous_nms = 0.0\n"))
+        .collect();
+    robot
+        .apply_drives(&Drives::from_toml_str(&text).unwrap())
+        .unwrap();
+    robot
+}
+
+#[test]
+fn all_effects_together_on_the_paper_path() {
+    let robot = robot_with_friction_estimate();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let exp = Experiment {
+        robot,
+        reference,
+        mpc: MpcSettings {
+            torque_limits: true,
+            friction_compensation: true,
+            delay_compensation: true,
+            ..Default::default()
+        },
+        plant: PlantSettings {
+            torque_limits: true,
+            coulomb_friction: vec![1.0],
+            encoder_counts: 1 << 22,
+            velocity_from_encoder: true,
+            delay_samples: 1,
+            faults: vec![Fault::EncoderGlitch {
+                t: 2.0,
+                joint: 1,
+                offset_rad: 0.01,
+            }],
+            ..Default::default()
+        },
+        loop_settings: LoopSettings {
+            plausibility_check: true,
+            safe_stop: true,
+            ..Default::default()
+        },
+    };
+    for kind in ControllerKind::ALL {
+        let (r, m) = exp
+            .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
+            .unwrap();
+        // The second algorithm's friction hunting on the wrist (open, see the
+        // README) trips the plausibility check here: it is stopped safely.
+        if kind == ControllerKind::Second {
+            assert!(
+                matches!(m.status, RunStatus::Ok | RunStatus::Stopped),
+                "{}",
+                r.outcome
+            );
+        } else {
+            assert!(r.outcome.is_completed(), "{kind}: {}", r.outcome);
+        }
+        assert!(r
+            .record
+            .q
+            .iter()
+            .chain(&r.record.qd)
+            .chain(&r.record.tau)
+            .all(|v| v.is_finite()));
+        for (i, j) in exp.robot.joints().iter().enumerate() {
+            assert!(
+                m.torque_max_nm[i] <= j.limits.effort,
+                "{kind}: joint {}",
+                i + 1
+            );
+        }
+        if kind == ControllerKind::First {
+            assert!(
+                m.cartesian_error_rms_mm < 0.1,
+                "{kind}: {}",
+                m.cartesian_error_rms_mm
+            );
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_combinations_never_panic(
+        kind in 0usize..3, limits in any::<bool>(), plant_limits in any::<bool>(),
+        friction in 0.0f64..2.0, compensate in any::<bool>(), encoder_bits in prop_oneof![Just(0u32), 12u32..24],
+        from_encoder in any::<bool>(), delay in 0usize..3, observe in any::<bool>(), supervise in any::<bool>(),
+        fault in 0usize..4, fault_joint in 1usize..7, fault_t in 0.0f64..0.8, payload in 0.0f64..2.0,
+    ) {
+        let q = vec![0.2, 0.5, -0.3, 0.4, 0.9, -0.2];
+        let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
+        let faults = match fault {
+            1 => vec![Fault::EncoderGlitch { t: fault_t, joint: fault_joint, offset_rad: 0.01 }],
+            2 => vec![Fault::EncoderDropout { t: fault_t, joint: fault_joint, duration_s: 0.1 }],
+            3 => vec![Fault::TorqueDrop { t: fault_t, joint: fault_joint, fraction: 0.3, duration_s: 0.2 }],
+            _ => Vec::new(),
+        };
+        let exp = Experiment {
+            robot: robot_with_friction_estimate(),
+            reference,
+            mpc: MpcSettings {
+                torque_limits: limits,
+                friction_compensation: compensate,
+                delay_compensation: observe,
+                ..Default::default()
+            },
+            plant: PlantSettings {
+                torque_limits: plant_limits,
+                coulomb_friction: vec![friction],
+                encoder_counts: if encoder_bits == 0 { 0 } else { 1u64 << encoder_bits },
+                velocity_from_encoder: from_encoder,
+                delay_samples: delay,
+                faults,
+                ..Default::default()
+            },
+            loop_settings: LoopSettings { hold_s: 0.8, plausibility_check: supervise, safe_stop: supervise, ..Default::default() },
+        };
+        let (r, m) = exp
+            .run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {})
+            .unwrap();
+        prop_assert_eq!(m.status, r.outcome.status());
+        prop_assert_eq!(m.stopped_at_s, r.outcome.stopped_at());
+        prop_assert!(r.record.q.iter().chain(&r.record.tau).all(|x| x.is_finite()));
+        if supervise {
+            // With the safe stop nothing ends as "diverged".
+            prop_assert!(m.status != RunStatus::Diverged);
+        }
+    }
+}
