@@ -5,9 +5,9 @@
 use crate::output::plot::{
     Figure, Panel, Series, Series3d, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
 };
-use ofmpc::reference::JointReference;
+use ofmpc::motion::reference::JointReference;
+use ofmpc::motion::trajectory::{CartesianSample, CartesianTrajectory};
 use ofmpc::sim::{Record, RunMetrics};
-use ofmpc::trajectory::{CartesianSample, CartesianTrajectory};
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];

@@ -5,13 +5,23 @@ use crate::cli::TrajectoryArgs;
 use crate::figures;
 use crate::output::atomic::write_atomic;
 use crate::output::plot::render_both;
-use crate::scenario::{load_robot, parse_profile, read_program};
-use crate::tables::reference_csv;
+use crate::scenario::{
+    load_robot, parse_mode, parse_profile, plan_error_message, read_program, SettingNames,
+};
 use anyhow::Context;
-use ofmpc::gcode::{parse, ParseOptions};
-use ofmpc::reference::{build_reference, Orientation};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::ParseOptions;
+use ofmpc::motion::{plan, Orientation, PlanOptions, TimingOptions};
 use std::path::Path;
+
+/// The command line's names of the planning settings.
+const FLAGS: SettingNames = SettingNames {
+    speed: "--speed",
+    accel: "--accel",
+    jerk: "--jerk",
+    tolerance: "--tolerance",
+    ts: "--ts",
+    origin: "--origin X,Y,Z (mm)",
+};
 
 /// Parses, times and maps the program; writes the CSV and the figure.
 pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
@@ -26,17 +36,6 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let program =
-        parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    for w in &program.warnings {
-        eprintln!("warning: {name}: {w}");
-    }
-    let timing = TimingOptions {
-        profile: parse_profile(&a.profile)?,
-        max_speed: a.speed,
-        max_accel: a.accel,
-    };
-    let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
     let orientation = match &a.rpy {
         Some(t) => {
             let v = parse_vector("--rpy", t, Some(3))?;
@@ -48,14 +47,31 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => Orientation::AtZero,
     };
-    let reference = build_reference(&robot, &traj, orientation, a.ts)
-        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    write_atomic(&a.out, reference_csv(&reference).as_bytes())
+    let options = PlanOptions {
+        parse: ParseOptions { origin },
+        timing: TimingOptions {
+            profile: parse_profile(&a.profile)?,
+            max_speed: a.speed,
+            max_accel: a.accel,
+            max_jerk: a.jerk,
+            blend_tolerance: a.tolerance * 1e-3,
+            default_mode: parse_mode(&a.mode, "--mode")?,
+        },
+        orientation,
+        ts: a.ts,
+    };
+    let planned = plan(&text, &robot, &options)
+        .map_err(|e| anyhow::anyhow!("{name}: {}", plan_error_message(&e, &FLAGS)))?;
+    for w in &planned.program.warnings {
+        eprintln!("warning: {name}: {w}");
+    }
+    let (traj, reference) = (&planned.trajectory, &planned.reference);
+    write_atomic(&a.out, crate::tables::reference_csv(reference).as_bytes())
         .with_context(|| format!("writing {}", a.out.display()))?;
     let stem = a.out.with_extension("");
     let fig = render_both(&figures::path(
         &format!("{name}: path and joint reference"),
-        &reference,
+        reference,
     ))?;
     let png = stem.with_file_name(format!(
         "{}_path.png",
@@ -68,7 +84,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     write_atomic(&svg, fig.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
     let cart = render_both(&figures::cartesian_reference(
         &format!("{name}: Cartesian reference"),
-        &traj,
+        traj,
         a.ts,
     ))?;
     let cpng = png.with_file_name(
@@ -81,8 +97,9 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     write_atomic(&csvg, cart.svg.as_bytes())
         .with_context(|| format!("writing {}", csvg.display()))?;
     println!(
-        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {})",
+        "{name}: {} segments ({} blended runs), {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {})",
         traj.segments().len(),
+        planned.diagnostics.runs,
         traj.duration(),
         reference.len(),
         a.ts,

@@ -22,8 +22,9 @@
 //! | `G90` / `G91` | absolute (default) / incremental coordinates |
 //! | `G91.1` | arc centres relative to the start point (the default and only mode) |
 //! | `G40` `G49` `G80` `G94` | cancel / default modes: accepted, no effect |
-//! | `G61` `G61.1` `G64` | blending modes: warning, every segment runs rest to rest anyway |
-//! | `F` | feed (mm/min or in/min, in the units active at each move), the peak path speed of `G01 G02 G03` moves |
+//! | `G61` `G61.1` | exact stop: every move runs rest to rest (the paper's septic law) |
+//! | `G64 P…` / `G64` | blending: corners are rounded within `P` (program units) or the planner's default tolerance, the path does not stop at corners it can blend; see [`crate::motion`] |
+//! | `F` | feed (mm/min or in/min, in the units active at each move): under `G61` the peak path speed of `G01 G02 G03` moves, under `G64` their cruise speed |
 //! | `M02` `M30` | end of program; anything after it is ignored (with a warning) |
 //! | other `M`, `S`, `T`, `O` | warning, no effect on the path |
 //!
@@ -56,7 +57,8 @@ mod codes;
 mod interpreter;
 mod lexer;
 
-use crate::path::Segment;
+use crate::motion::segment::Segment;
+use crate::motion::PathMode;
 use interpreter::Interpreter;
 use lexer::{lex_line, Lexed};
 use nalgebra::Vector3;
@@ -123,9 +125,13 @@ pub enum MoveKind {
     Path {
         /// The geometry.
         segment: Segment,
-        /// Peak path speed from the `F` word (m/s); `None` for `G00` and when no `F` was given
-        /// (then the trajectory's speed limit applies).
+        /// Programmed feed from the `F` word (m/s); `None` for `G00` and when no `F` was given
+        /// (then the planner's speed limit applies). Under `G61` it is the move's peak speed,
+        /// under `G64` its cruise speed.
         feed: Option<f64>,
+        /// Path mode in force (`G61` / `G64 P…`); `None` when the program selected neither
+        /// (the planner's default applies).
+        mode: Option<PathMode>,
     },
     /// Hold the position.
     Dwell {

@@ -6,6 +6,7 @@
 //! armature_kgm2 = 1.0      # added to H[0][0]
 //! max_torque_nm = 290.0    # symmetric peak torque
 //! max_speed_rad_s = 3.49   # symmetric speed limit
+//! max_accel_rad_s2 = 12.0  # symmetric acceleration limit (motion planning)
 //! ```
 //!
 //! Keys ending in `_source` and a `[meta]` table are documentation and ignored.
@@ -23,6 +24,8 @@ pub struct DriveData {
     pub max_torque_nm: Option<f64>,
     /// Maximum joint speed, symmetric (rad/s).
     pub max_speed_rad_s: Option<f64>,
+    /// Maximum joint acceleration, symmetric (rad/s²), for the motion planner.
+    pub max_accel_rad_s2: Option<f64>,
     #[serde(flatten)]
     other: BTreeMap<String, toml::Value>,
 }
@@ -52,7 +55,7 @@ impl Drives {
             for key in d.other.keys() {
                 if !key.ends_with("_source") {
                     return Err(ModelError::Drives(format!(
-                        "[joints.{name}]: unknown key '{key}': expected armature_kgm2, max_torque_nm, max_speed_rad_s (or a *_source note)"
+                        "[joints.{name}]: unknown key '{key}': expected armature_kgm2, max_torque_nm, max_speed_rad_s, max_accel_rad_s2 (or a *_source note)"
                     )));
                 }
             }
@@ -60,6 +63,7 @@ impl Drives {
                 ("armature_kgm2", d.armature_kgm2),
                 ("max_torque_nm", d.max_torque_nm),
                 ("max_speed_rad_s", d.max_speed_rad_s),
+                ("max_accel_rad_s2", d.max_accel_rad_s2),
             ] {
                 if let Some(v) = v {
                     let ok = v.is_finite()

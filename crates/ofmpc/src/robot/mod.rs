@@ -12,6 +12,7 @@ mod urdf;
 pub use drives::{DriveData, Drives};
 pub use error::ModelError;
 
+use crate::ik::OpwParameters;
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 
@@ -44,6 +45,9 @@ pub struct JointLimits {
     pub velocity: f64,
     /// Torque or force limit, symmetric (N·m or N); infinite when unknown.
     pub effort: f64,
+    /// Acceleration limit, symmetric (rad/s² or m/s²); infinite when unknown (URDF has
+    /// none: it comes from a drives file). The motion planner keeps blended runs within it.
+    pub acceleration: f64,
 }
 
 /// One moving joint and the rigid body it moves.
@@ -147,6 +151,8 @@ pub struct Robot {
     payload: Option<Payload>,
     /// Inertia of each body in its joint frame, payload included on the last one.
     bodies: Vec<Inertia>,
+    /// Closed-form (OPW) kinematic parameters, when the arm has them.
+    opw: Option<OpwParameters>,
 }
 
 impl Robot {
@@ -157,7 +163,21 @@ impl Robot {
             .expect("the built-in IRB 140 drives file is valid");
         r.apply_drives(&d)
             .expect("the built-in drives match the built-in URDF");
+        r.opw = Some(OpwParameters::irb140());
         r
+    }
+
+    /// The arm's closed-form (OPW) kinematic parameters, if it has them: the motion planner
+    /// then uses the analytic inverse kinematics, else the numeric one. The built-in IRB 140
+    /// has them ([`OpwParameters::irb140`]); a robot loaded from a URDF has none.
+    pub fn opw_parameters(&self) -> Option<&OpwParameters> {
+        self.opw.as_ref()
+    }
+
+    /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
+    /// robot's forward kinematics (flange frame) exactly; the caller is responsible.
+    pub fn set_opw_parameters(&mut self, opw: Option<OpwParameters>) {
+        self.opw = opw;
     }
 
     /// A built-in robot by name (`irb140`).
@@ -198,6 +218,7 @@ impl Robot {
             gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
             payload: None,
             bodies,
+            opw: None,
         }
     }
 
@@ -222,6 +243,9 @@ impl Robot {
             }
             if let Some(v) = d.max_speed_rad_s {
                 j.limits.velocity = v;
+            }
+            if let Some(a) = d.max_accel_rad_s2 {
+                j.limits.acceleration = a;
             }
         }
         Ok(())

@@ -180,6 +180,7 @@ impl<'a> Walker<'a> {
             upper,
             velocity: positive_or_inf(l.velocity),
             effort: positive_or_inf(l.effort),
+            acceleration: f64::INFINITY,
         };
         self.joints.push(Joint {
             name: j.name.clone(),

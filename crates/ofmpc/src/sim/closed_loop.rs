@@ -4,7 +4,7 @@ use super::metrics::Record;
 use super::plant::Plant;
 use crate::control::Controller;
 use crate::dynamics::JointSpaceDynamics;
-use crate::reference::JointReference;
+use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 

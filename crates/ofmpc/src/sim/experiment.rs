@@ -7,7 +7,7 @@ use super::metrics::{compute, RunMetrics};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{new_controller, ControllerKind, MpcSettings};
 use crate::dynamics::RobotDynamics;
-use crate::reference::JointReference;
+use crate::motion::JointReference;
 use crate::robot::{Payload, Robot};
 
 /// Everything a run needs but the controller kind and the payload.
