@@ -224,7 +224,7 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
             Segment::Line { a, b } if d_in > 0.0 || d_out > 0.0 => {
                 let u = (b - a).normalize();
                 let (p0, p1) = (a + u * d_in, b - u * d_out);
-                if (p1 - p0).dot(&u) > 1e-12 {
+                if (p1 - p0).dot(&u) > 1e-9 {
                     push(
                         &mut pieces,
                         Geometry::Segment(Segment::line(p0, p1)),

@@ -362,7 +362,7 @@ pub fn plan_program(
         }
         for (s, w) in scale.iter_mut().zip(worst) {
             if w.0 > 1.0 {
-                *s *= 0.97 / w.0;
+                *s *= 0.995 / w.0;
             }
         }
     }

@@ -42,6 +42,10 @@ use nalgebra::Vector3;
 /// Largest node spacing of the grid (m).
 pub const GRID_STEP: f64 = 1e-3;
 
+/// Pieces shorter than this (m) get no grid nodes of their own (the interval that spans them
+/// covers them): finite differences over tinier intervals would be noise.
+pub const MIN_NODE_SPACING: f64 = 1e-5;
+
 /// Largest number of grid nodes of one run; beyond it the spacing grows.
 pub const MAX_GRID_NODES: usize = 2_000_000;
 
@@ -254,7 +258,16 @@ pub(crate) fn time_run(
     let mut nodes: Vec<Node> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let len = p.geometry.length();
-        let m = ((len / step).ceil() as usize).max(2);
+        let last_piece = k + 1 == pieces.len();
+        let tiny = len < MIN_NODE_SPACING;
+        if tiny && !(p.stop_after || last_piece || k == 0) {
+            continue;
+        }
+        let m = if tiny {
+            1
+        } else {
+            ((len / step).ceil() as usize).max(2)
+        };
         let first = if k == 0 { 0 } else { 1 };
         for i in first..=m {
             let local = len * i as f64 / m as f64;
@@ -349,34 +362,24 @@ pub(crate) fn time_run(
         });
         node.xbar = cap;
     }
-    // Erode the velocity limits by the distance the filter window spans.
+    // Erode the velocity limits by the distance the filter window spans: at most
+    // `R0 = T_j v_top` anywhere, and at most `T_j` times the largest speed limit within `R0`
+    // locally.
     let t_j = 2.0 * a_max / limits.max_jerk;
     let v_top = nodes.iter().map(|n| n.xbar.sqrt()).fold(0.0, f64::max);
-    let reach = v_top * t_j;
-    let mut eroded = vec![0.0; nn];
-    {
-        let mut deque: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
-        let mut right = 0;
-        for i in 0..nn {
-            while right < nn && nodes[right].s <= nodes[i].s + reach {
-                while deque
-                    .back()
-                    .is_some_and(|&b| nodes[b].xbar >= nodes[right].xbar)
-                {
-                    deque.pop_back();
-                }
-                deque.push_back(right);
-                right += 1;
-            }
-            while deque
-                .front()
-                .is_some_and(|&f| nodes[f].s < nodes[i].s - reach)
-            {
-                deque.pop_front();
-            }
-            eroded[i] = deque.front().map_or(nodes[i].xbar, |&f| nodes[f].xbar);
-        }
-    }
+    let r0 = v_top * t_j;
+    let xbar: Vec<f64> = nodes.iter().map(|n| n.xbar).collect();
+    let svals: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    let local_max = sliding(&svals, &xbar, r0, |a, b| a >= b);
+    let tree = MinTree::new(&xbar);
+    let eroded: Vec<f64> = (0..nn)
+        .map(|i| {
+            let reach = t_j * local_max[i].sqrt();
+            let lo = svals.partition_point(|&s| s < svals[i] - reach);
+            let hi = svals.partition_point(|&s| s <= svals[i] + reach);
+            tree.min(lo, hi.max(lo + 1))
+        })
+        .collect();
     // Backward pass: controllable sets [0, k_i].
     let mut kset = vec![0.0; nn];
     for i in (0..nn.saturating_sub(1)).rev() {
@@ -485,4 +488,66 @@ pub(crate) fn time_run(
         v: v_out,
         step: h,
     })
+}
+
+/// For each `i`, the extreme (by `keep(a, b)`: `a` dominates `b`) of `values[j]` over
+/// `|s_j − s_i| ≤ reach` (`s` sorted): a monotone deque, O(n).
+fn sliding(s: &[f64], values: &[f64], reach: f64, keep: impl Fn(f64, f64) -> bool) -> Vec<f64> {
+    let n = s.len();
+    let mut out = vec![0.0; n];
+    let mut deque: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
+    let mut right = 0;
+    for i in 0..n {
+        while right < n && s[right] <= s[i] + reach {
+            while deque
+                .back()
+                .is_some_and(|&b| keep(values[right], values[b]))
+            {
+                deque.pop_back();
+            }
+            deque.push_back(right);
+            right += 1;
+        }
+        while deque.front().is_some_and(|&f| s[f] < s[i] - reach) {
+            deque.pop_front();
+        }
+        out[i] = deque.front().map_or(values[i], |&f| values[f]);
+    }
+    out
+}
+
+/// Range minimum over a fixed array: a bottom-up segment tree.
+struct MinTree {
+    n: usize,
+    t: Vec<f64>,
+}
+
+impl MinTree {
+    fn new(v: &[f64]) -> Self {
+        let n = v.len();
+        let mut t = vec![f64::INFINITY; 2 * n];
+        t[n..].copy_from_slice(v);
+        for i in (1..n).rev() {
+            t[i] = t[2 * i].min(t[2 * i + 1]);
+        }
+        Self { n, t }
+    }
+    /// Minimum of `v[lo..hi]`.
+    fn min(&self, lo: usize, hi: usize) -> f64 {
+        let (mut l, mut r) = (lo + self.n, hi.min(self.n) + self.n);
+        let mut m = f64::INFINITY;
+        while l < r {
+            if l & 1 == 1 {
+                m = m.min(self.t[l]);
+                l += 1;
+            }
+            if r & 1 == 1 {
+                r -= 1;
+                m = m.min(self.t[r]);
+            }
+            l >>= 1;
+            r >>= 1;
+        }
+        m
+    }
 }
