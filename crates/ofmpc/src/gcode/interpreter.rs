@@ -47,7 +47,7 @@ impl Interpreter {
                     0,
                     GcodeErrorKind::InvalidOption,
                     "",
-                    format!("ParseOptions::origin must be finite, got {o:?}"),
+                    format!("the part origin (work offset) must be finite, got {o:?} m"),
                     "give the part origin in metres",
                 ));
             }
@@ -512,7 +512,7 @@ impl Interpreter {
                 self.warn(
                     line,
                     g10.col,
-                    "the program sets the G54 offset: ParseOptions::origin is not used",
+                    "the program sets the G54 offset itself (G10 L2 P1): the part origin given with the reading options is not used",
                 );
             }
             self.offsets[0] = [0.0; 3];

@@ -237,7 +237,9 @@ pub fn arc_tolerance(inch: bool) -> f64 {
 /// Parse a program text. See the module documentation for the language.
 pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> {
     let mut it = Interpreter::new(options)?;
-    for (i, raw) in text.lines().enumerate() {
+    // A UTF-8 byte-order mark (Windows editors write one) is not part of the program.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    for (i, raw) in lines(text).enumerate() {
         let line_no = i + 1;
         if it.ended {
             it.note_ignored(line_no, raw);
@@ -259,6 +261,26 @@ pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> 
         }
     }
     it.finish()
+}
+
+/// The lines of `text`, ended by `\n`, `\r\n` or a lone `\r` (old Mac, some controllers),
+/// without their terminators.
+fn lines(text: &str) -> impl Iterator<Item = &str> {
+    let mut rest = Some(text);
+    std::iter::from_fn(move || {
+        let t = rest?;
+        match t.find(['\n', '\r']) {
+            Some(i) => {
+                let skip = if t[i..].starts_with("\r\n") { 2 } else { 1 };
+                rest = Some(&t[i + skip..]).filter(|r| !r.is_empty());
+                Some(&t[..i])
+            }
+            None => {
+                rest = None;
+                (!t.is_empty()).then_some(t)
+            }
+        }
+    })
 }
 
 /// A [`GcodeError`] (shared by the submodules).
