@@ -72,7 +72,8 @@ pub struct TrajectoryArgs {
     pub mode: String,
     /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figures go beside it:
     /// `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and
-    /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4).
+    /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4),
+    /// `<stem>_speed.png/.svg` (top view, path speed, joint speeds against their limits).
     #[arg(long)]
     pub out: PathBuf,
 }

@@ -96,8 +96,23 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     let csvg = cpng.with_extension("svg");
     write_atomic(&csvg, cart.svg.as_bytes())
         .with_context(|| format!("writing {}", csvg.display()))?;
+    let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+    let motion = render_both(&figures::motion_profile(
+        &format!("{name}: path speed and joint speeds"),
+        reference,
+        &limits,
+    ))?;
+    let mpng = png.with_file_name(
+        png.file_name()
+            .map(|n| n.to_string_lossy().replace("_path.png", "_speed.png"))
+            .unwrap_or_default(),
+    );
+    write_atomic(&mpng, &motion.png).with_context(|| format!("writing {}", mpng.display()))?;
+    let msvg = mpng.with_extension("svg");
+    write_atomic(&msvg, motion.svg.as_bytes())
+        .with_context(|| format!("writing {}", msvg.display()))?;
     println!(
-        "{name}: {} segments ({} blended runs), {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {})",
+        "{name}: {} segments ({} blended runs), {:.3} s, {} samples at Ts = {} s → {} (+ {}, {}, {}, {}, {}, {})",
         traj.segments().len(),
         planned.diagnostics.runs,
         traj.duration(),
@@ -107,7 +122,9 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         png.display(),
         svg.display(),
         cpng.display(),
-        csvg.display()
+        csvg.display(),
+        mpng.display(),
+        msvg.display()
     );
     Ok(())
 }

@@ -9,7 +9,7 @@
 //! 3. timing ([`trajectory`]): `G61` moves rest to rest with the paper's septic law
 //!    ([`timelaw`]); `G64` runs time-optimally under the feed, path acceleration and jerk
 //!    and every joint's speed and acceleration limit ([`topp`]);
-//! 4. [`reference`]: inverse kinematics (analytic when the robot declares OPW parameters,
+//! 4. [`reference`](mod@reference): inverse kinematics (analytic when the robot declares OPW parameters,
 //!    else numeric) sampled every `Ts`, checked against the joint limits.
 //!
 //! `G61` (exact stop) is the default of programs that select neither mode, so that the
