@@ -22,7 +22,8 @@ fn exercise(text: &str) {
             }
         }
         Err(e) => {
-            let lines: Vec<&str> = text.lines().collect();
+            // Lines end at \n, \r\n or a lone \r (the reader's rule).
+            let lines: Vec<&str> = text.split("\r\n").flat_map(|l| l.split(['\n', '\r'])).collect();
             if e.line > 0 {
                 let line = lines.get(e.line - 1).expect("error line inside the text");
                 assert!(
