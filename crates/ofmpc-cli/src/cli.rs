@@ -1,5 +1,6 @@
 //! Command-line arguments (clap). The commands live in `commands/`.
 
+use crate::scenario::{mode_name, profile_name};
 use clap::{Args, Parser, Subcommand};
 use ofmpc::motion::{PlanOptions, TimingOptions};
 use std::path::PathBuf;
@@ -50,7 +51,7 @@ pub struct TrajectoryArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub rpy: Option<String>,
     /// Time law of each exact-stop (G61) move: `septic` (the paper's) or `quintic`.
-    #[arg(long, default_value = "septic")]
+    #[arg(long, default_value = profile_name(TimingOptions::default().profile))]
     pub profile: String,
     /// Path speed (m/s) of moves without an F word: the peak speed under G61, the
     /// cruise speed under G64.
@@ -68,7 +69,7 @@ pub struct TrajectoryArgs {
     /// Path mode of programs that select neither G61 nor G64: `G61` (exact stop, the
     /// default: the paper's program runs as published) or `G64` (blend corners within
     /// --tolerance).
-    #[arg(long, default_value = "G61")]
+    #[arg(long, default_value = mode_name(TimingOptions::default().default_mode))]
     pub mode: String,
     /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`); the figures go beside it:
     /// `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and

@@ -94,12 +94,12 @@ impl Default for TimingSection {
     fn default() -> Self {
         let d = TimingOptions::default();
         Self {
-            profile: "septic".into(),
+            profile: profile_name(d.profile).into(),
             max_speed_m_s: d.max_speed,
             max_accel_m_s2: d.max_accel,
             max_jerk_m_s3: d.max_jerk,
             tolerance_mm: d.blend_tolerance * 1e3,
-            mode: "G61".into(),
+            mode: mode_name(d.default_mode).into(),
         }
     }
 }
@@ -212,6 +212,22 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
             .with_context(|| format!("applying {}", d.display()))?;
     }
     Ok(robot)
+}
+
+/// The name of a profile, as [`parse_profile`] reads it.
+pub const fn profile_name(p: Profile) -> &'static str {
+    match p {
+        Profile::Septic => "septic",
+        Profile::Quintic => "quintic",
+    }
+}
+
+/// The name of a path mode, as [`parse_mode`] reads it (the tolerance is a separate setting).
+pub const fn mode_name(m: PathMode) -> &'static str {
+    match m {
+        PathMode::ExactStop => "G61",
+        PathMode::Blend { .. } => "G64",
+    }
 }
 
 /// Parses `septic` / `quintic`.

@@ -91,3 +91,31 @@ fn sample_count_errors_name_the_flag_or_the_line() {
     let e = fails(&["--speed", "0"], &g);
     assert!(e.contains("--speed"), "{e}");
 }
+
+#[test]
+fn the_command_line_and_scenario_defaults_are_the_librarys() {
+    use clap::Parser;
+    use ofmpc::motion::{PlanOptions, TimingOptions};
+    use ofmpc_cli::cli::{Cli, Command as Cmd};
+    use ofmpc_cli::scenario::{parse_mode, parse_profile, ScenarioFile};
+    let cli = Cli::parse_from(["ofmpc", "trajectory", "paper", "--out", "x.csv"]);
+    let Cmd::Trajectory(a) = cli.command else {
+        panic!("not the trajectory command")
+    };
+    let (d, p) = (TimingOptions::default(), PlanOptions::default());
+    assert_eq!(parse_profile(&a.profile).unwrap(), d.profile);
+    assert_eq!(parse_mode(&a.mode, "--mode").unwrap(), d.default_mode);
+    assert_eq!(
+        (a.speed, a.accel, a.jerk, a.ts),
+        (d.max_speed, d.max_accel, d.max_jerk, p.ts)
+    );
+    assert!((a.tolerance * 1e-3 - d.blend_tolerance).abs() < 1e-15);
+    let s = ScenarioFile::default().timing;
+    assert_eq!(parse_profile(&s.profile).unwrap(), d.profile);
+    assert_eq!(parse_mode(&s.mode, "mode").unwrap(), d.default_mode);
+    assert_eq!(
+        (s.max_speed_m_s, s.max_accel_m_s2, s.max_jerk_m_s3),
+        (d.max_speed, d.max_accel, d.max_jerk)
+    );
+    assert!((s.tolerance_mm * 1e-3 - d.blend_tolerance).abs() < 1e-15);
+}

@@ -23,7 +23,10 @@ fn exercise(text: &str) {
         }
         Err(e) => {
             // Lines end at \n, \r\n or a lone \r (the reader's rule).
-            let lines: Vec<&str> = text.split("\r\n").flat_map(|l| l.split(['\n', '\r'])).collect();
+            let lines: Vec<&str> = text
+                .split("\r\n")
+                .flat_map(|l| l.split(['\n', '\r']))
+                .collect();
             if e.line > 0 {
                 let line = lines.get(e.line - 1).expect("error line inside the text");
                 assert!(
