@@ -119,3 +119,14 @@ fn the_command_line_and_scenario_defaults_are_the_librarys() {
     );
     assert!((s.tolerance_mm * 1e-3 - d.blend_tolerance).abs() < 1e-15);
 }
+
+#[test]
+fn inspect_robot_shows_the_joint_acceleration_limits_of_the_drives() {
+    let o = ofmpc(&["inspect", "robot"]);
+    assert!(o.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let acc: Vec<f64> = (0..6)
+        .map(|i| v["joints"][i]["max_accel"].as_f64().unwrap())
+        .collect();
+    assert_eq!(acc, [13.0, 18.0, 32.0, 160.0, 180.0, 160.0]);
+}

@@ -384,3 +384,24 @@ fn huge_sample_counts_are_refused_before_allocating_with_their_cause() {
     let e = plan(&format!("G64\n{base}G1 X600 F0.0001\n"), &robot, &d).unwrap_err();
     assert!(e.to_string().contains("program line 3"), "{e}");
 }
+
+#[test]
+fn joint_acceleration_limits_hold_on_every_sample() {
+    // Joint 1 limited to 0.5 rad/s² (and 1 rad/s): a square around the robot's front at
+    // F30000 must slow its accelerations down to what joint 1 allows.
+    let mut robot = Robot::irb140();
+    let drives = ofmpc::robot::Drives::from_toml_str(
+        "[joints.joint_1]\nmax_speed_rad_s = 1.0\nmax_accel_rad_s2 = 0.5\n",
+    )
+    .unwrap();
+    robot.apply_drives(&drives).unwrap();
+    let text = "G64 P0.5\nG0 X400 Y-150 Z400\nG1 Y150 F30000\nX550\nY-150\nX400\n";
+    let p = plan_ok(text, &robot);
+    let (wv, wa) = assert_joint_limits(&p, &robot);
+    assert!(wa > 0.8, "the acceleration limit binds: {wa}");
+    eprintln!(
+        "joint-1 acceleration limited: {:.3} s, speed/limit {wv:.3}, accel/limit {wa:.3}, {:?}",
+        p.trajectory.duration(),
+        p.diagnostics
+    );
+}

@@ -162,6 +162,15 @@ pub enum JointQuantity {
     Acceleration,
 }
 
+impl std::fmt::Display for JointQuantity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            JointQuantity::Speed => "speed",
+            JointQuantity::Acceleration => "acceleration",
+        })
+    }
+}
+
 /// Why a program could not be planned.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -191,7 +200,7 @@ pub enum PlanError {
     },
     /// A blended run's reference still exceeds a joint limit after replanning with scaled
     /// limits.
-    #[error("joint {joint} reaches {value:.3} at program line {line}, above its {quantity:?} limit {limit:.3}, after {attempts} timing attempts")]
+    #[error("joint {joint} reaches {value:.3} at program line {line}, above its {quantity} limit {limit:.3}, after {attempts} timing attempts")]
     JointLimit {
         /// Joint number, 1-based.
         joint: usize,

@@ -11,6 +11,9 @@
 //! - a velocity limit `x ≤ x̄_i`: the cruise speed (feed) `x ≤ F²`, the centripetal
 //!   acceleration `κ x ≤ a_max`, and each joint's speed `|q'_j(s)| √x ≤ v_j`, with
 //!   `q'(s) = dq/ds` from the inverse kinematics at the nodes (finite differences);
+//! - the velocity-dependent part of each joint's acceleration within its limit,
+//!   `|q''_j(s)| x ≤ A_j` (conservative: the tangential acceleration could cancel it at one
+//!   point, but not over a short blend sampled by a few nodes, nor after the filter);
 //! - an admissible control interval `[u_lo(x), u_hi(x)]`: the tangential acceleration
 //!   `|u| ≤ a_max` and each joint's acceleration `|q'_j u + q''_j x| ≤ A_j`
 //!   (`q̈ = q' s̈ + q'' ṡ²`), linear in `(u, x)` as in TOPP-RA (Pham & Pham 2018);
@@ -353,7 +356,27 @@ pub(crate) fn time_run(
             nodes[i].ddq = ddq;
         }
     }
-    // Acceleration feasibility caps the velocity limit too.
+    // Acceleration feasibility caps the velocity limit too. The velocity-dependent part of
+    // each joint's acceleration alone must fit its limit, `|q''_j| x ≤ A_j`: cancelling it
+    // with the tangential acceleration (`u = −q''x/q'`) holds at one node of the grid but not
+    // over a blend a few nodes long, and not after the jerk filter.
+    // `q''` from three nodes straddling a curvature jump (line → blend) is about half the
+    // blend's: take the largest of each node and its neighbours.
+    let peak_ddq: Vec<Vec<f64>> = (0..nn)
+        .map(|i| {
+            let around = &nodes[i.saturating_sub(1)..(i + 2).min(nn)];
+            (0..nodes[i].ddq.len())
+                .map(|j| around.iter().map(|n| n.ddq[j].abs()).fold(0.0, f64::max))
+                .collect()
+        })
+        .collect();
+    for (node, peak) in nodes.iter_mut().zip(&peak_ddq) {
+        for (j, d2) in peak.iter().enumerate() {
+            if *d2 > 0.0 {
+                node.xbar = node.xbar.min(acc[j] / d2);
+            }
+        }
+    }
     for node in nodes.iter_mut() {
         let n = &*node;
         let cap = bisect(n.xbar, |x| {
