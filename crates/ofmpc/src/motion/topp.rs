@@ -574,3 +574,67 @@ impl MinTree {
         m
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pseudo-random numbers in [0, 1).
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn range_minimum_and_sliding_extremes_match_brute_force() {
+        let mut seed = 7;
+        let n = 300;
+        let v: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let mut s = vec![0.0];
+        for _ in 1..n {
+            let last = *s.last().unwrap();
+            s.push(last + 0.01 * lcg(&mut seed) + 1e-4);
+        }
+        let tree = MinTree::new(&v);
+        for lo in (0..n).step_by(7) {
+            for hi in (lo + 1..=n).step_by(5) {
+                let brute = v[lo..hi].iter().copied().fold(f64::INFINITY, f64::min);
+                assert_eq!(tree.min(lo, hi), brute);
+            }
+        }
+        for reach in [0.0, 0.013, 0.2] {
+            let max = sliding(&s, &v, reach, |a, b| a >= b);
+            let min = sliding(&s, &v, reach, |a, b| a <= b);
+            for i in 0..n {
+                let window = (0..n).filter(|&j| (s[j] - s[i]).abs() <= reach);
+                let (bmax, bmin) =
+                    window.fold((f64::MIN, f64::MAX), |(a, b), j| (a.max(v[j]), b.min(v[j])));
+                assert_eq!((max[i], min[i]), (bmax, bmin), "i {i} reach {reach}");
+            }
+        }
+    }
+
+    #[test]
+    fn admissible_controls_respect_every_joint_and_bisection_finds_the_edge() {
+        let node = Node {
+            s: 0.0,
+            xbar: 1.0,
+            dq: vec![2.0, -1.0],
+            ddq: vec![10.0, 0.0],
+            stop: false,
+            line: 1,
+        };
+        let acc = [4.0, 3.0];
+        let (lo, hi) = controls(&node, 0.1, 2.5, &acc);
+        // Joint 1: |2u + 1| ≤ 4 → u ∈ [−2.5, 1.5]; joint 2: |u| ≤ 3; path: |u| ≤ 2.5.
+        assert!((lo + 2.5).abs() < 1e-15 && (hi - 1.5).abs() < 1e-15);
+        // Largest x with a non-empty interval: 2u + 10x ∈ [−4, 4] with u ≥ −2.5 → x ≤ 0.9.
+        let x = bisect(1.0, |x| {
+            let (l, h) = controls(&node, x, 2.5, &acc);
+            l <= h
+        });
+        assert!((x - 0.9).abs() < 1e-9, "{x}");
+    }
+}
