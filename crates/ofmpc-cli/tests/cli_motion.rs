@@ -130,3 +130,26 @@ fn inspect_robot_shows_the_joint_acceleration_limits_of_the_drives() {
         .collect();
     assert_eq!(acc, [13.0, 18.0, 32.0, 160.0, 180.0, 160.0]);
 }
+
+#[test]
+fn scenario_planning_errors_name_the_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("s.toml");
+    std::fs::write(&s, "[timing]\nmax_accel_m_s2 = 1e-12\n").unwrap();
+    let out = dir.path().join("o");
+    let o = ofmpc(&["run", s.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("[timing] max_accel_m_s2") && e.contains("path acceleration limit"),
+        "{e}"
+    );
+    assert!(!out.exists());
+    std::fs::write(&s, "[timing]\nmode = \"G65\"\n").unwrap();
+    let o = ofmpc(&["run", s.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("[timing] mode") && e.contains("G64"),
+        "{e}"
+    );
+}
