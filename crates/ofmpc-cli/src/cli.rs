@@ -1,6 +1,8 @@
 //! Command-line arguments (clap). The commands live in `commands/`.
 
+use crate::scenario::{mode_name, profile_name};
 use clap::{Args, Parser, Subcommand};
+use ofmpc::motion::{PlanOptions, TimingOptions};
 use std::path::PathBuf;
 
 /// Offset-free model predictive control of industrial robots.
@@ -58,26 +60,39 @@ pub struct TrajectoryArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub origin: Option<String>,
     /// Sample period (s).
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = PlanOptions::default().ts)]
     pub ts: f64,
     /// Constant flange orientation as roll,pitch,yaw in degrees (base frame,
     /// R = Rz·Ry·Rx); default: the flange orientation at q = 0.
     #[arg(long, allow_hyphen_values = true)]
     pub rpy: Option<String>,
-    /// Time law of each segment: `septic` (the paper's) or `quintic`.
-    #[arg(long, default_value = "septic")]
+    /// Time law of each exact-stop (G61) move: `septic` (the paper's) or `quintic`.
+    #[arg(long, default_value = profile_name(TimingOptions::default().profile))]
     pub profile: String,
-    /// Path speed limit (m/s) of moves without an F word.
-    #[arg(long, default_value_t = 0.5)]
+    /// Path speed (m/s) of moves without an F word: the peak speed under G61, the
+    /// cruise speed under G64.
+    #[arg(long, default_value_t = TimingOptions::default().max_speed)]
     pub speed: f64,
     /// Path acceleration limit (m/s²).
-    #[arg(long, default_value_t = 2.5)]
+    #[arg(long, default_value_t = TimingOptions::default().max_accel)]
     pub accel: f64,
+    /// Path jerk limit (m/s³) of blended (G64) moves.
+    #[arg(long, default_value_t = TimingOptions::default().max_jerk)]
+    pub jerk: f64,
+    /// Corner tolerance (mm) of G64 without P.
+    #[arg(long, default_value_t = TimingOptions::default().blend_tolerance * 1e3)]
+    pub tolerance: f64,
+    /// Path mode of programs that select neither G61 nor G64: `G61` (exact stop, the
+    /// default: the paper's program runs as published) or `G64` (blend corners within
+    /// --tolerance).
+    #[arg(long, default_value = mode_name(TimingOptions::default().default_mode))]
+    pub mode: String,
     /// Output CSV (`t,x,y,z,q1..qn,qd1..qdn`; SI units: t in s, x,y,z in m (flange position,
     /// base frame), q in rad (m for a prismatic joint), qd in rad/s (m/s)); the figures go
-    /// beside it: `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)) and
-    /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4).
-    /// The five files appear together or not at all; an existing file that is an input, a
+    /// beside it: `<stem>_path.png/.svg` (XY, 3-D and side views, q(t)),
+    /// `<stem>_cartesian.png/.svg` (position, velocity, acceleration; the paper's Fig. 4) and
+    /// `<stem>_speed.png/.svg` (top view, path speed, joint speeds against their limits).
+    /// The files appear together or not at all; an existing file that is an input, a
     /// folder, a device, a FIFO or a symbolic link is never replaced.
     #[arg(long, default_value = "ofmpc-out/reference.csv")]
     pub out: PathBuf,

@@ -5,9 +5,9 @@
 use crate::output::plot::{
     Figure, Panel, Series, Series3d, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
 };
-use ofmpc::reference::JointReference;
+use ofmpc::motion::reference::JointReference;
+use ofmpc::motion::trajectory::{CartesianSample, CartesianTrajectory};
 use ofmpc::sim::{Record, RunMetrics};
-use ofmpc::trajectory::{CartesianSample, CartesianTrajectory};
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
@@ -302,5 +302,56 @@ pub fn identification(
         .push(Series::dashed("true", t_all, truth, COLOR_REFERENCE));
     f.panels.push(err);
     f.panels.push(mass);
+    f
+}
+
+/// The motion as the planner timed it: top view of the flange path, path speed against
+/// time, and each joint's speed as a fraction of its limit (`limits`, rad/s; the dashed
+/// line at 1 is the limit).
+pub fn motion_profile(title: &str, reference: &JointReference, limits: &[f64]) -> Figure {
+    let k = reference.len();
+    let ts = reference.ts();
+    let t: Vec<f64> = (0..k).map(|s| s as f64 * ts).collect();
+    let p: Vec<[f64; 3]> = (0..k).map(|s| reference.position(s)).collect();
+    let mut f = Figure::new(title, 3);
+    let mut top = Panel::new("top view (XY)", "x (mm)", "y (mm)");
+    top.equal_aspect = true;
+    top.series.push(Series::line(
+        "flange path",
+        p.iter().map(|q| q[0] * 1e3).collect(),
+        p.iter().map(|q| q[1] * 1e3).collect(),
+        COLOR_REFERENCE,
+    ));
+    f.panels.push(top);
+    let speed: Vec<f64> = (0..k)
+        .map(|s| {
+            let (a, b) = (p[s.saturating_sub(1)], p[(s + 1).min(k - 1)]);
+            let dt = ts * ((s + 1).min(k - 1) - s.saturating_sub(1)).max(1) as f64;
+            ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt() / dt
+                * 1e3
+        })
+        .collect();
+    let mut sp = Panel::new("path speed", "t (s)", "speed (mm/s)");
+    sp.series
+        .push(Series::line("|v|", t.clone(), speed, COLOR_REFERENCE));
+    f.panels.push(sp);
+    let mut jv = Panel::new("joint speed / limit", "t (s)", "|q̇ᵢ| / q̇ᵢ,max");
+    for (i, lim) in limits.iter().enumerate().take(reference.dof()) {
+        let y = (0..k).map(|s| reference.qd(s)[i].abs() / lim).collect();
+        jv.series.push(Series::line(
+            format!("q{}", i + 1),
+            t.clone(),
+            y,
+            JOINT_COLORS[i % JOINT_COLORS.len()],
+        ));
+    }
+    let t_end = t.last().copied().unwrap_or(0.0);
+    jv.series.push(Series::dashed(
+        "limit",
+        vec![0.0, t_end],
+        vec![1.0, 1.0],
+        COLOR_USUAL,
+    ));
+    f.panels.push(jv);
     f
 }

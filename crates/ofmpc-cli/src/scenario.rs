@@ -7,12 +7,16 @@
 use anyhow::{bail, Context};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
+use ofmpc::motion::reference::ReferenceFailure;
+use ofmpc::motion::timelaw::Profile;
+use ofmpc::motion::trajectory::{TimingLimit, TrajectoryError};
+use ofmpc::motion::{
+    plan, CartesianTrajectory, Orientation, PathMode, PlanError, PlanOptions, SampleCause,
+    TimingOptions,
+};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings};
-use ofmpc::timelaw::Profile;
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -80,19 +84,28 @@ pub struct ProgramSection {
 pub struct TimingSection {
     /// `"septic"` (the paper's: acceleration a 5th-order polynomial) or `"quintic"`.
     pub profile: String,
-    /// Path speed limit (m/s) of moves without an F word.
+    /// Path speed (m/s) of moves without an F word (peak under G61, cruise under G64).
     pub max_speed_m_s: f64,
     /// Path acceleration limit (m/s²).
     pub max_accel_m_s2: f64,
+    /// Path jerk limit (m/s³) of blended (G64) moves.
+    pub max_jerk_m_s3: f64,
+    /// Corner tolerance (mm) of G64 without P.
+    pub tolerance_mm: f64,
+    /// Path mode of programs that select neither: `"G61"` (exact stop) or `"G64"`.
+    pub mode: String,
 }
 
 impl Default for TimingSection {
     fn default() -> Self {
         let d = TimingOptions::default();
         Self {
-            profile: "septic".into(),
+            profile: profile_name(d.profile).into(),
             max_speed_m_s: d.max_speed,
             max_accel_m_s2: d.max_accel,
+            max_jerk_m_s3: d.max_jerk,
+            tolerance_mm: d.blend_tolerance * 1e3,
+            mode: mode_name(d.default_mode).into(),
         }
     }
 }
@@ -223,12 +236,94 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     Ok(robot)
 }
 
+/// The name of a profile, as [`parse_profile`] reads it.
+pub const fn profile_name(p: Profile) -> &'static str {
+    match p {
+        Profile::Septic => "septic",
+        Profile::Quintic => "quintic",
+    }
+}
+
+/// The name of a path mode, as [`parse_mode`] reads it (the tolerance is a separate setting).
+pub const fn mode_name(m: PathMode) -> &'static str {
+    match m {
+        PathMode::ExactStop => "G61",
+        PathMode::Blend { .. } => "G64",
+    }
+}
+
 /// Parses `septic` / `quintic`.
 pub fn parse_profile(s: &str) -> anyhow::Result<Profile> {
     match s.to_ascii_lowercase().as_str() {
         "septic" | "paper" => Ok(Profile::Septic),
         "quintic" => Ok(Profile::Quintic),
         _ => bail!("profile '{s}': use 'septic' (the paper's) or 'quintic'"),
+    }
+}
+
+/// Parses a path mode: `G61` (exact stop) or `G64` (blend). `what` names the setting.
+pub fn parse_mode(s: &str, what: &str) -> anyhow::Result<PathMode> {
+    match s.to_ascii_uppercase().as_str() {
+        "G61" | "EXACT" => Ok(PathMode::ExactStop),
+        "G64" | "BLEND" => Ok(PathMode::Blend { tolerance: None }),
+        _ => bail!("{what} '{s}': use 'G61' (exact stop) or 'G64' (blend corners)"),
+    }
+}
+
+/// How a front end names the planning settings in its messages.
+pub struct SettingNames {
+    /// Path speed limit.
+    pub speed: &'static str,
+    /// Path acceleration limit.
+    pub accel: &'static str,
+    /// Path jerk limit.
+    pub jerk: &'static str,
+    /// Default corner tolerance.
+    pub tolerance: &'static str,
+    /// Sample period.
+    pub ts: &'static str,
+    /// Work offset of programs that set none.
+    pub origin: &'static str,
+}
+
+/// The scenario file's names of the planning settings.
+pub const SCENARIO_KEYS: SettingNames = SettingNames {
+    speed: "[timing] max_speed_m_s",
+    accel: "[timing] max_accel_m_s2",
+    jerk: "[timing] max_jerk_m_s3",
+    tolerance: "[timing] tolerance_mm",
+    ts: "[mpc] ts",
+    origin: "[program] origin_mm",
+};
+
+/// A planning error in the front end's words: the library's message, followed by the
+/// setting (flag or key) to change where the library names one.
+pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
+    let setting = match e {
+        PlanError::SamplePeriod(_) => Some(names.ts),
+        PlanError::TooManySamples { cause, .. } => match cause {
+            SampleCause::PathSpeed { .. } => Some(names.speed),
+            SampleCause::PathAcceleration { .. } => Some(names.accel),
+            SampleCause::SamplePeriod => Some(names.ts),
+            _ => None,
+        },
+        PlanError::Timing(TrajectoryError::InvalidLimit { limit, .. }) => Some(match limit {
+            TimingLimit::PathSpeed => names.speed,
+            TimingLimit::PathAcceleration => names.accel,
+            TimingLimit::PathJerk => names.jerk,
+            _ => names.tolerance,
+        }),
+        PlanError::Reference(r) => match &r.failure {
+            ReferenceFailure::Ik(_) | ReferenceFailure::BranchLimit { .. } => Some(names.origin),
+            ReferenceFailure::JointSpeed { .. } => Some(names.speed),
+            ReferenceFailure::SamplePeriod(_) => Some(names.ts),
+            _ => None,
+        },
+        _ => None,
+    };
+    match setting {
+        Some(s) => format!("{e} (setting: {s})"),
+        None => e.to_string(),
     }
 }
 
@@ -287,20 +382,6 @@ impl Scenario {
             .program
             .origin_mm
             .map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
-        let program = parse(&text, &ParseOptions { origin })
-            .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
-        let warnings = program
-            .warnings
-            .iter()
-            .map(|w| format!("{program_name}: {w}"))
-            .collect();
-        let timing = TimingOptions {
-            profile: parse_profile(&f.timing.profile)?,
-            max_speed: f.timing.max_speed_m_s,
-            max_accel: f.timing.max_accel_m_s2,
-        };
-        let trajectory = CartesianTrajectory::new(&program, &timing)
-            .map_err(|e| anyhow::anyhow!("[timing] {e}"))?;
         let orientation = match f.orientation.rpy_deg {
             None => Orientation::AtZero,
             Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
@@ -309,8 +390,29 @@ impl Scenario {
                 y.to_radians(),
             )),
         };
-        let reference = build_reference(&robot, &trajectory, orientation, f.mpc.ts)
-            .map_err(|e| anyhow::anyhow!("{program_name}: {e}"))?;
+        let options = PlanOptions {
+            parse: ParseOptions { origin },
+            timing: TimingOptions {
+                profile: parse_profile(&f.timing.profile)?,
+                max_speed: f.timing.max_speed_m_s,
+                max_accel: f.timing.max_accel_m_s2,
+                max_jerk: f.timing.max_jerk_m_s3,
+                blend_tolerance: f.timing.tolerance_mm * 1e-3,
+                default_mode: parse_mode(&f.timing.mode, "[timing] mode")?,
+            },
+            orientation,
+            ts: f.mpc.ts,
+        };
+        let planned = plan(&text, &robot, &options).map_err(|e| {
+            anyhow::anyhow!("{program_name}: {}", plan_error_message(&e, &SCENARIO_KEYS))
+        })?;
+        let warnings = planned
+            .program
+            .warnings
+            .iter()
+            .map(|w| format!("{program_name}: {w}"))
+            .collect();
+        let (trajectory, reference) = (planned.trajectory, planned.reference);
         let experiment = Experiment {
             robot,
             reference,

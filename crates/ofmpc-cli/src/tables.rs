@@ -1,6 +1,6 @@
 //! Text outputs: CSV time series and the summary table.
 
-use ofmpc::reference::JointReference;
+use ofmpc::motion::JointReference;
 use ofmpc::sim::{Record, RunMetrics};
 use std::fmt::Write as _;
 

@@ -6,10 +6,9 @@ use crate::errors::to_py;
 use crate::robot::PyRobot;
 use nalgebra::UnitQuaternion;
 use numpy::{PyArray1, PyArray2};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, JointReference, Orientation};
-use ofmpc::timelaw::Profile;
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
+use ofmpc::motion::timelaw::Profile;
+use ofmpc::motion::{plan as motion_plan, JointReference, Orientation, PlanOptions, TimingOptions};
 use pyo3::prelude::*;
 
 /// A joint reference w_k sampled every `ts` seconds along a program.
@@ -141,16 +140,6 @@ pub fn plan(
     let robot = robot.robot().clone();
     let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
     py.detach(move || {
-        let options = ParseOptions {
-            origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
-        };
-        let program = parse(&text, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
-        let timing = TimingOptions {
-            profile,
-            max_speed,
-            max_accel,
-        };
-        let path = CartesianTrajectory::new(&program, &timing).map_err(to_py)?;
         let orientation = match rpy_deg {
             None => Orientation::AtZero,
             Some((r, p, y)) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
@@ -159,8 +148,23 @@ pub fn plan(
                 y.to_radians(),
             )),
         };
-        let reference = build_reference(&robot, &path, orientation, ts)
-            .map_err(|e| to_py(format!("{name}: {e}")))?;
+        let options = PlanOptions {
+            parse: ParseOptions {
+                origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
+            },
+            timing: TimingOptions {
+                profile,
+                max_speed,
+                max_accel,
+                ..TimingOptions::default()
+            },
+            orientation,
+            ts,
+        };
+        // The library's one planning entry point (parse, blend, time, IK).
+        let planned =
+            motion_plan(&text, &robot, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
+        let (program, reference) = (planned.program, planned.reference);
         Ok(PyReference {
             reference,
             warnings: program

@@ -3,10 +3,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, PlantSettings};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let case = std::env::args().nth(1).unwrap_or_default();

@@ -2,11 +2,10 @@
 //! `cargo run --release -p ofmpc --example paper_quick -- 0.25`.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::Experiment;
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let payload: f64 = std::env::args()
@@ -15,9 +14,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .transpose()?
         .unwrap_or(0.25);
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    let reference = plan(PAPER_TABLE1, &robot, &PlanOptions::default())?.reference;
     let exp = Experiment {
         robot,
         reference,

@@ -21,10 +21,10 @@ use std::time::{Duration, Instant};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{quantile, Plant, PlantSettings};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 /// Counts the allocations of the calling thread (a thread-local counter: other
 /// threads' allocations do not count).

@@ -2,9 +2,9 @@
 use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::Robot;
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = Robot::irb140();

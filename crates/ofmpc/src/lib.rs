@@ -1,8 +1,8 @@
 //! # ofmpc — offset-free model predictive control of serial robots
 //!
 //! Pure computation, no printing. Data flow, one module per concept:
-//! G-code text → [`gcode`] → path segments → timed Cartesian reference → joint
-//! reference (IK) → controller (robot model) → torque → plant (robot model +
+//! G-code text → [`gcode`] → [`motion`] (path segments, corner blending, timing, joint
+//! reference by IK; one entry point [`motion::plan`]) → controller (robot model) → torque → plant (robot model +
 //! payload) → measurement → record → metrics.
 //!
 //! Equations are referenced as in the paper ("Predictive Control for Offset-Free
@@ -12,19 +12,17 @@
 //!
 //! ```
 //! use ofmpc::control::{ControllerKind, MpcSettings};
-//! use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-//! use ofmpc::reference::{build_reference, Orientation};
+//! use ofmpc::gcode::PAPER_TABLE1;
+//! use ofmpc::motion::{plan, PlanOptions};
 //! use ofmpc::robot::{Payload, Robot};
 //! use ofmpc::sim::Experiment;
-//! use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 //!
-//! let robot = Robot::irb140(); // built in, with its drives' armature
-//! let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-//! let path = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-//! let reference = build_reference(&robot, &path, Orientation::AtZero, 0.01)?;
+//! let robot = Robot::irb140(); // built in, with its drives and its analytic IK parameters
+//! // G-code → blended, timed path → joint reference (IK), sampled every 10 ms:
+//! let plan = plan(PAPER_TABLE1, &robot, &PlanOptions::default())?;
 //! let experiment = Experiment {
 //!     robot, // the controller's model: it does not know the payload
-//!     reference,
+//!     reference: plan.reference,
 //!     mpc: MpcSettings::default(), // the paper's tuning
 //!     plant: Default::default(),
 //!     loop_settings: Default::default(), // 2 s hold after the path
@@ -49,10 +47,7 @@ pub mod dynamics;
 pub mod gcode;
 pub mod ident;
 pub mod ik;
-pub mod path;
-pub mod reference;
+pub mod motion;
 pub mod robot;
 pub mod sim;
 pub mod spatial;
-pub mod timelaw;
-pub mod trajectory;

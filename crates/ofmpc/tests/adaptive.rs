@@ -5,10 +5,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, RunMetrics, RunStatus};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Experiment {
     let program = parse(program, &ParseOptions { origin }).unwrap();
@@ -199,7 +199,7 @@ fn a_robot_that_is_not_an_irb140() {
 
 mod never_panics {
     use super::*;
-    use ofmpc::reference::JointReference;
+    use ofmpc::motion::reference::JointReference;
     use ofmpc::sim::PlantSettings;
     use proptest::prelude::*;
 

@@ -3,7 +3,7 @@
 //! algorithms remove it.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::reference::JointReference;
+use ofmpc::motion::JointReference;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, RunOutcome, RunStatus};
 

@@ -12,10 +12,10 @@ use ofmpc::control::{
 };
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{run_closed_loop, LoopSettings, Plant, PlantSettings};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 /// `‖a − b‖₂ / ‖b‖₂`.
 fn rel(a: &[f64], b: &[f64]) -> f64 {

@@ -6,10 +6,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, JointReference, Orientation};
+use ofmpc::motion::reference::{build_reference, JointReference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, Fault, LoopSettings, PlantSettings, RunStatus};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 use proptest::prelude::*;
 
 fn robot_with_friction_estimate() -> Robot {

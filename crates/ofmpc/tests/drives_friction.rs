@@ -10,10 +10,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn run(kind: ControllerKind, compensate: bool) -> RunMetrics {
     let mut robot = Robot::irb140();

@@ -6,10 +6,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunOutcome, RunResult};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 fn run(kind: ControllerKind, observer: bool) -> (RunResult, RunMetrics) {
     let robot = Robot::irb140();

@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use ofmpc::gcode::{parse, MoveKind, ParseOptions};
-use ofmpc::path::{Plane, Segment};
+use ofmpc::motion::segment::{Plane, Segment};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

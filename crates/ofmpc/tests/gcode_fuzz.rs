@@ -3,7 +3,7 @@
 //! into a trajectory with finite samples, and every error points into the text.
 
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use proptest::prelude::*;
 
 /// Parse; on success time and sample it; on failure check that the position is in the text.
@@ -22,7 +22,11 @@ fn exercise(text: &str) {
             }
         }
         Err(e) => {
-            let lines: Vec<&str> = text.lines().collect();
+            // Lines end at \n, \r\n or a lone \r (the reader's rule).
+            let lines: Vec<&str> = text
+                .split("\r\n")
+                .flat_map(|l| l.split(['\n', '\r']))
+                .collect();
             if e.line > 0 {
                 let line = lines.get(e.line - 1).expect("error line inside the text");
                 assert!(

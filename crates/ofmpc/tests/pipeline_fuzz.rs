@@ -4,10 +4,10 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, JointReference, Orientation};
+use ofmpc::motion::reference::{build_reference, JointReference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, ExperimentError, LoopSettings, PlantSettings, RunStatus};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 use proptest::prelude::*;
 
 fn mutate(text: &str, edits: &[(usize, u8)]) -> String {

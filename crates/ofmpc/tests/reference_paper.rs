@@ -2,9 +2,9 @@
 
 use ofmpc::dynamics::{forward_kinematics, Workspace};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::reference::{build_reference, Orientation};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::Robot;
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
 
 #[test]
 fn ik_along_the_paper_path_is_exact_within_limits_and_speed() {

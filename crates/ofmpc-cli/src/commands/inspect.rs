@@ -82,6 +82,7 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
                 "upper": j.limits.upper,
                 "max_speed": j.limits.velocity,
                 "max_effort": j.limits.effort,
+                "max_accel": j.limits.acceleration,
                 "armature_kgm2": j.armature,
                 "body_mass_kg": body.mass,
                 "body_com_m": [com.x, com.y, com.z],

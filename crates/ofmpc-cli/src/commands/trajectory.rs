@@ -6,17 +6,29 @@ use crate::figures;
 use crate::output::atomic::{check_destinations, Input};
 use crate::output::console;
 use crate::output::plot::render_both;
-use crate::scenario::{load_robot, parse_profile, read_program};
+use crate::scenario::{
+    load_robot, parse_mode, parse_profile, plan_error_message, read_program, SettingNames,
+};
 use crate::tables::reference_csv;
 use anyhow::Context;
-use ofmpc::gcode::{parse, ParseOptions};
-use ofmpc::reference::{build_reference, Orientation};
-use ofmpc::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::ParseOptions;
+use ofmpc::motion::{plan, Orientation, PlanOptions, TimingOptions};
 use std::path::{Path, PathBuf};
 
+/// The command line's names of the planning settings.
+const FLAGS: SettingNames = SettingNames {
+    speed: "--speed",
+    accel: "--accel",
+    jerk: "--jerk",
+    tolerance: "--tolerance",
+    ts: "--ts",
+    origin: "--origin X,Y,Z (mm)",
+};
+
 /// The files `trajectory --out DIR/NAME.csv` writes: the CSV and, beside it,
-/// `NAME_path.png/.svg` and `NAME_cartesian.png/.svg`. Returns the folder and the file names.
-fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 5])> {
+/// `NAME_path.png/.svg`, `NAME_cartesian.png/.svg` and `NAME_speed.png/.svg`. Returns the
+/// folder and the file names.
+fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 7])> {
     let name = out
         .file_name()
         .filter(|_| !out.as_os_str().to_string_lossy().ends_with('/'))
@@ -40,6 +52,8 @@ fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 5])> {
         PathBuf::from(format!("{stem}_path.svg")),
         PathBuf::from(format!("{stem}_cartesian.png")),
         PathBuf::from(format!("{stem}_cartesian.svg")),
+        PathBuf::from(format!("{stem}_speed.png")),
+        PathBuf::from(format!("{stem}_speed.svg")),
     ];
     Ok((dir, files))
 }
@@ -74,17 +88,6 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let program =
-        parse(&text, &ParseOptions { origin }).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
-    for w in &program.warnings {
-        console::warn(&format!("{name}: {w}"));
-    }
-    let timing = TimingOptions {
-        profile: parse_profile(&a.profile)?,
-        max_speed: a.speed,
-        max_accel: a.accel,
-    };
-    let traj = CartesianTrajectory::new(&program, &timing).map_err(|e| anyhow::anyhow!("{e}"))?;
     let orientation = match &a.rpy {
         Some(t) => {
             let v = parse_fixed("--rpy", t, 3, "roll,pitch,yaw in degrees", "0,90,0")?;
@@ -96,24 +99,49 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => Orientation::AtZero,
     };
-    let reference = build_reference(&robot, &traj, orientation, a.ts)
-        .map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    let options = PlanOptions {
+        parse: ParseOptions { origin },
+        timing: TimingOptions {
+            profile: parse_profile(&a.profile)?,
+            max_speed: a.speed,
+            max_accel: a.accel,
+            max_jerk: a.jerk,
+            blend_tolerance: a.tolerance * 1e-3,
+            default_mode: parse_mode(&a.mode, "--mode")?,
+        },
+        orientation,
+        ts: a.ts,
+    };
+    let planned = plan(&text, &robot, &options)
+        .map_err(|e| anyhow::anyhow!("{name}: {}", plan_error_message(&e, &FLAGS)))?;
+    for w in &planned.program.warnings {
+        console::warn(&format!("{name}: {w}"));
+    }
+    let (traj, reference) = (&planned.trajectory, &planned.reference);
     let fig = render_both(&figures::path(
         &format!("{name}: path and joint reference"),
-        &reference,
+        reference,
     ))?;
     let cart = render_both(&figures::cartesian_reference(
         &format!("{name}: Cartesian reference"),
-        &traj,
+        traj,
         a.ts,
     ))?;
-    // All five files as one set: they appear together or not at all.
+    let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+    let speed = render_both(&figures::motion_profile(
+        &format!("{name}: path speed and joint speeds"),
+        reference,
+        &limits,
+    ))?;
+    // All seven files as one set: they appear together or not at all.
     let mut dir = super::experiment::open_output(&out_dir, inputs, &files)?;
-    dir.write(&files[0], reference_csv(&reference).as_bytes())?;
+    dir.write(&files[0], reference_csv(reference).as_bytes())?;
     dir.write(&files[1], &fig.png)?;
     dir.write(&files[2], fig.svg.as_bytes())?;
     dir.write(&files[3], &cart.png)?;
     dir.write(&files[4], cart.svg.as_bytes())?;
+    dir.write(&files[5], &speed.png)?;
+    dir.write(&files[6], speed.svg.as_bytes())?;
     dir.commit()
         .with_context(|| format!("moving the results into {}", out_dir.display()))?;
     let shown: Vec<String> = files
@@ -121,8 +149,9 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         .map(|f| a.out.with_file_name(f).display().to_string())
         .collect();
     console::println(&format!(
-        "{name}: {} segments, {:.3} s, {} samples at Ts = {} s → {} (+ {})",
+        "{name}: {} segments ({} blended runs), {:.3} s, {} samples at Ts = {} s → {} (+ {})",
         traj.segments().len(),
+        planned.diagnostics.runs,
         traj.duration(),
         reference.len(),
         a.ts,

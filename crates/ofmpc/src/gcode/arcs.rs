@@ -5,7 +5,7 @@ use super::codes::{Args, Motion};
 use super::interpreter::Interpreter;
 use super::lexer::Word;
 use super::{arc_tolerance, err, GcodeError, GcodeErrorKind};
-use crate::path::{ArcDirection, ArcError, Plane, Segment, CLOSED_ARC_TOLERANCE};
+use crate::motion::segment::{ArcDirection, ArcError, Plane, Segment, CLOSED_ARC_TOLERANCE};
 use nalgebra::Vector3;
 
 impl Interpreter {

@@ -2,7 +2,7 @@
 
 use super::lexer::Word;
 use super::{err, GcodeError, GcodeErrorKind};
-use crate::path::Plane;
+use crate::motion::segment::Plane;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Motion {
@@ -33,10 +33,12 @@ pub(super) enum GCode {
     Inch(bool),
     Wcs(usize),
     Absolute(bool),
+    /// G61 / G61.1: exact stop at the end of every move.
+    ExactStop,
+    /// G64: blend corners (tolerance from P).
+    Blend,
     /// Accepted, no effect.
     NoOp,
-    /// Accepted with a warning.
-    Ignored(&'static str),
 }
 
 impl GCode {
@@ -50,7 +52,8 @@ impl GCode {
             GCode::Inch(_) => 6,
             GCode::Wcs(_) => 12,
             GCode::Absolute(_) => 3,
-            GCode::NoOp | GCode::Ignored(_) => 255,
+            GCode::ExactStop | GCode::Blend => 13,
+            GCode::NoOp => 255,
         }
     }
 }
@@ -64,7 +67,7 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
             GcodeErrorKind::UnknownCode,
             w.text,
             format!("unknown G code {}", w.text),
-            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G54-G59 G90 G91",
+            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G54-G59 G61 G64 G90 G91",
         )
     };
     if (w.value * 10.0 - tenths).abs() > 1e-9 {
@@ -97,9 +100,8 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
         900 => GCode::Absolute(true),
         910 => GCode::Absolute(false),
         911 | 400 | 490 | 800 | 940 => GCode::NoOp,
-        610 | 611 | 640 => {
-            GCode::Ignored("path blending mode ignored: every segment runs rest to rest")
-        }
+        610 | 611 => GCode::ExactStop,
+        640 => GCode::Blend,
         901 => {
             return Err(unsupported(
                 "G90.1 (absolute arc centres) is not supported",

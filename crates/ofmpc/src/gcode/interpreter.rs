@@ -7,7 +7,8 @@ use super::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, Program,
     MIN_MOVE_LENGTH,
 };
-use crate::path::{ArcDirection, Plane, Segment};
+use crate::motion::segment::{ArcDirection, Plane, Segment};
+use crate::motion::PathMode;
 use nalgebra::Vector3;
 
 /// Modal state of the reader while it walks the program, and the moves produced so far.
@@ -32,6 +33,8 @@ pub(super) struct Interpreter {
     pub(super) ended: bool,
     pub(super) seen_content: bool,
     pub(super) warned_ignored: bool,
+    /// Path mode selected by G61 / G64; `None` until the program selects one.
+    pub(super) mode: Option<PathMode>,
 }
 
 impl Interpreter {
@@ -44,7 +47,7 @@ impl Interpreter {
                     0,
                     GcodeErrorKind::InvalidOption,
                     "",
-                    format!("ParseOptions::origin must be finite, got {o:?}"),
+                    format!("the part origin (work offset) must be finite, got {o:?} m"),
                     "give the part origin in metres",
                 ));
             }
@@ -68,6 +71,7 @@ impl Interpreter {
             ended: false,
             seen_content: false,
             warned_ignored: false,
+            mode: None,
         })
     }
 
@@ -242,17 +246,13 @@ impl Interpreter {
                 self.warn(line, w.col, msg.clone());
             }
         }
-        for (g, w) in &gcodes {
-            if let GCode::Ignored(msg) = g {
-                self.warn(line, w.col, format!("{}: {msg}", w.text));
-            }
-        }
 
         // Modal settings, in LinuxCNC's order: units, plane, distance mode, feed.
         let mut explicit_motion = None;
         let mut dwell = None;
         let mut set_offset = None;
         let mut wcs = None;
+        let mut blend = None;
         for &(g, w) in &gcodes {
             match g {
                 GCode::Inch(b) => self.inch = b,
@@ -262,7 +262,9 @@ impl Interpreter {
                 GCode::Dwell => dwell = Some(w),
                 GCode::SetOffset => set_offset = Some(w),
                 GCode::Wcs(k) => wcs = Some(k),
-                GCode::NoOp | GCode::Ignored(_) => {}
+                GCode::ExactStop => self.mode = Some(PathMode::ExactStop),
+                GCode::Blend => blend = Some(w),
+                GCode::NoOp => {}
             }
         }
         if let Some(f) = arg('F') {
@@ -277,6 +279,26 @@ impl Interpreter {
                 ));
             }
             self.feed = Some(f.value);
+        }
+        if let Some(g64) = blend {
+            let tolerance = match arg('P') {
+                Some(p) if dwell.is_none() && set_offset.is_none() => {
+                    if p.value < 0.0 {
+                        return Err(err(
+                            line,
+                            p.col,
+                            InvalidValue,
+                            p.text,
+                            "the G64 path tolerance must not be negative",
+                            "give the largest corner deviation in program units, e.g. G64 P0.05",
+                        ));
+                    }
+                    Some(p.value * self.scale())
+                }
+                _ => None,
+            };
+            let _ = g64;
+            self.mode = Some(PathMode::Blend { tolerance });
         }
         let non_modal = dwell.or(set_offset);
         if let (Some(nm), Some((_, mw))) = (non_modal, explicit_motion) {
@@ -305,6 +327,9 @@ impl Interpreter {
             }
         };
         let motion_mode = explicit_motion.map(|(m, _)| m).or(self.motion);
+        if blend.is_some() && dwell.is_none() && set_offset.is_none() {
+            use_letters("P");
+        }
         if dwell.is_some() {
             use_letters("PX");
         } else if set_offset.is_some() {
@@ -331,8 +356,8 @@ impl Interpreter {
                         "add G02 or G03, or remove the word",
                     ),
                     'P' => (
-                        "P is only used by G04 (dwell) and G10 here".to_string(),
-                        "remove P (arcs with several turns are not supported: program each turn)",
+                        "P is only used by G04 (dwell), G10 and G64 here".to_string(),
+                        "remove P (G64 P<tolerance> sets the corner tolerance; arcs with several turns are not supported: program each turn)",
                     ),
                     'L' => ("L is only used by G10 L2".to_string(), "remove the L word"),
                     _ => (format!("{c} is not used here"), "remove the word"),
@@ -487,7 +512,7 @@ impl Interpreter {
                 self.warn(
                     line,
                     g10.col,
-                    "the program sets the G54 offset: ParseOptions::origin is not used",
+                    "the program sets the G54 offset itself (G10 L2 P1): the part origin given with the reading options is not used",
                 );
             }
             self.offsets[0] = [0.0; 3];
@@ -624,7 +649,11 @@ impl Interpreter {
         self.pos = Some(segment.end());
         self.moves.push(Move {
             line,
-            kind: MoveKind::Path { segment, feed },
+            kind: MoveKind::Path {
+                segment,
+                feed,
+                mode: self.mode,
+            },
         });
         Ok(())
     }

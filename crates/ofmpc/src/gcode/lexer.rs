@@ -49,7 +49,22 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
             break;
         }
         if c == '(' {
-            match chars.iter().skip(i + 1).position(|&(_, ch)| ch == ')') {
+            match chars
+                .iter()
+                .skip(i + 1)
+                .position(|&(_, ch)| ch == ')' || ch == '(')
+            {
+                Some(k) if chars.get(i + 1 + k).is_some_and(|&(_, ch)| ch == '(') => {
+                    let inner = i + 1 + k;
+                    return Err(err(
+                        line,
+                        inner + 1,
+                        Syntax,
+                        &raw[byte_at(i)..],
+                        "nested comment: a comment in ( ) contains another `(`",
+                        "comments do not nest: remove the inner parentheses, or use ; for a comment to the end of the line",
+                    ));
+                }
                 Some(k) => {
                     i += k + 2;
                     continue;
@@ -101,6 +116,36 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
                     format!("{letter} has no number"),
                     hint,
                 ));
+            }
+            // Exponent notation (1e300, 2.5E-3) is not G-code: say so and show the number in
+            // decimal, rather than reading the `E` as the next word.
+            if matches!(chars.get(j), Some(&(_, 'e' | 'E'))) {
+                let mut k = j + 1;
+                if matches!(chars.get(k), Some(&(_, '+' | '-'))) {
+                    k += 1;
+                }
+                if matches!(chars.get(k), Some(&(_, ch)) if ch.is_ascii_digit()) {
+                    while matches!(chars.get(k), Some(&(_, ch)) if ch.is_ascii_digit()) {
+                        k += 1;
+                    }
+                    let written = &raw[byte_at(num_start)..byte_at(k)];
+                    let hint = match written.parse::<f64>() {
+                        Ok(v) if v.is_finite() && v.abs() <= MAX_WORD_VALUE => {
+                            format!("write the number in decimal: {letter}{v}")
+                        }
+                        _ => format!(
+                            "write the number in decimal; {written} is also beyond the largest magnitude accepted, {MAX_WORD_VALUE}"
+                        ),
+                    };
+                    return Err(err(
+                        line,
+                        col,
+                        Syntax,
+                        &raw[byte_at(i)..byte_at(k)],
+                        "exponent notation is not G-code",
+                        hint,
+                    ));
+                }
             }
             let number = &raw[byte_at(num_start)..byte_at(j)];
             let value: f64 = number.parse().map_err(|_| {

@@ -22,8 +22,9 @@
 //! | `G90` / `G91` | absolute (default) / incremental coordinates |
 //! | `G91.1` | arc centres relative to the start point (the default and only mode) |
 //! | `G40` `G49` `G80` `G94` | cancel / default modes: accepted, no effect |
-//! | `G61` `G61.1` `G64` | blending modes: warning, every segment runs rest to rest anyway |
-//! | `F` | feed (mm/min or in/min, in the units active at each move), the peak path speed of `G01 G02 G03` moves |
+//! | `G61` `G61.1` | exact stop: every move runs rest to rest (the paper's septic law) |
+//! | `G64 P…` / `G64` | blending: corners are rounded within `P` (program units) or the planner's default tolerance, the path does not stop at corners it can blend; see [`crate::motion`] |
+//! | `F` | feed (mm/min or in/min, in the units active at each move): under `G61` the peak path speed of `G01 G02 G03` moves, under `G64` their cruise speed |
 //! | `M02` `M30` | end of program; anything after it is ignored (with a warning) |
 //! | other `M`, `S`, `T`, `O` | warning, no effect on the path |
 //!
@@ -56,7 +57,8 @@ mod codes;
 mod interpreter;
 mod lexer;
 
-use crate::path::Segment;
+use crate::motion::segment::Segment;
+use crate::motion::PathMode;
 use interpreter::Interpreter;
 use lexer::{lex_line, Lexed};
 use nalgebra::Vector3;
@@ -123,9 +125,13 @@ pub enum MoveKind {
     Path {
         /// The geometry.
         segment: Segment,
-        /// Peak path speed from the `F` word (m/s); `None` for `G00` and when no `F` was given
-        /// (then the trajectory's speed limit applies).
+        /// Programmed feed from the `F` word (m/s); `None` for `G00` and when no `F` was given
+        /// (then the planner's speed limit applies). Under `G61` it is the move's peak speed,
+        /// under `G64` its cruise speed.
         feed: Option<f64>,
+        /// Path mode in force (`G61` / `G64 P…`); `None` when the program selected neither
+        /// (the planner's default applies).
+        mode: Option<PathMode>,
     },
     /// Hold the position.
     Dwell {
@@ -231,7 +237,9 @@ pub fn arc_tolerance(inch: bool) -> f64 {
 /// Parse a program text. See the module documentation for the language.
 pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> {
     let mut it = Interpreter::new(options)?;
-    for (i, raw) in text.lines().enumerate() {
+    // A UTF-8 byte-order mark (Windows editors write one) is not part of the program.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    for (i, raw) in lines(text).enumerate() {
         let line_no = i + 1;
         if it.ended {
             it.note_ignored(line_no, raw);
@@ -253,6 +261,26 @@ pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> 
         }
     }
     it.finish()
+}
+
+/// The lines of `text`, ended by `\n`, `\r\n` or a lone `\r` (old Mac, some controllers),
+/// without their terminators.
+fn lines(text: &str) -> impl Iterator<Item = &str> {
+    let mut rest = Some(text);
+    std::iter::from_fn(move || {
+        let t = rest?;
+        match t.find(['\n', '\r']) {
+            Some(i) => {
+                let skip = if t[i..].starts_with("\r\n") { 2 } else { 1 };
+                rest = Some(&t[i + skip..]).filter(|r| !r.is_empty());
+                Some(&t[..i])
+            }
+            None => {
+                rest = None;
+                (!t.is_empty()).then_some(t)
+            }
+        }
+    })
 }
 
 /// A [`GcodeError`] (shared by the submodules).

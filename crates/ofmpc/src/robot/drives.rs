@@ -8,6 +8,7 @@
 //! max_speed_rad_s = 3.49   # symmetric speed limit
 //! coulomb_nm = 1.0         # Coulomb friction estimate (friction compensation)
 //! viscous_nms = 0.5        # viscous friction estimate (friction compensation)
+//! max_accel_rad_s2 = 12.0  # symmetric acceleration limit (motion planning)
 //! ```
 //!
 //! Keys ending in `_source` and a `[meta]` table are documentation and ignored.
@@ -61,7 +62,7 @@ pub enum DrivesError {
 }
 
 const JOINT_KEYS: &str =
-    "armature_kgm2, max_torque_nm, max_speed_rad_s, coulomb_nm, viscous_nms (or a *_source note)";
+    "armature_kgm2, max_torque_nm, max_speed_rad_s, max_accel_rad_s2, coulomb_nm, viscous_nms (or a *_source note)";
 
 /// The drive data of one joint; absent values leave the URDF's in place.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize)]
@@ -76,6 +77,8 @@ pub struct DriveData {
     pub coulomb_nm: Option<f64>,
     /// Viscous friction estimate (N·m·s/rad), used by friction compensation.
     pub viscous_nms: Option<f64>,
+    /// Maximum joint acceleration, symmetric (rad/s²), for the motion planner.
+    pub max_accel_rad_s2: Option<f64>,
     #[serde(flatten)]
     other: BTreeMap<String, toml::Value>,
 }
@@ -138,6 +141,7 @@ impl Drives {
                 ("max_speed_rad_s", d.max_speed_rad_s),
                 ("coulomb_nm", d.coulomb_nm),
                 ("viscous_nms", d.viscous_nms),
+                ("max_accel_rad_s2", d.max_accel_rad_s2),
             ] {
                 let nonneg = matches!(key, "armature_kgm2" | "coulomb_nm" | "viscous_nms");
                 if let Some(v) = v {

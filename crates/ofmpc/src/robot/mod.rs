@@ -12,6 +12,7 @@ mod urdf;
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 
+use crate::ik::OpwParameters;
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 
@@ -44,6 +45,9 @@ pub struct JointLimits {
     pub velocity: f64,
     /// Torque or force limit, symmetric (N·m or N); infinite when unknown.
     pub effort: f64,
+    /// Acceleration limit, symmetric (rad/s² or m/s²); infinite when unknown (URDF has
+    /// none: it comes from a drives file). The motion planner keeps blended runs within it.
+    pub acceleration: f64,
 }
 
 /// One moving joint and the rigid body it moves.
@@ -156,6 +160,8 @@ pub struct Robot {
     bodies: Vec<Inertia>,
     /// What the description said that is not modelled.
     warnings: Vec<UrdfWarning>,
+    /// Closed-form (OPW) kinematic parameters, when the arm has them.
+    opw: Option<OpwParameters>,
 }
 
 impl Robot {
@@ -166,7 +172,21 @@ impl Robot {
             .expect("the built-in IRB 140 drives file is valid");
         r.apply_drives(&d)
             .expect("the built-in drives match the built-in URDF");
+        r.opw = Some(OpwParameters::irb140());
         r
+    }
+
+    /// The arm's closed-form (OPW) kinematic parameters, if it has them: the motion planner
+    /// then uses the analytic inverse kinematics, else the numeric one. The built-in IRB 140
+    /// has them ([`OpwParameters::irb140`]); a robot loaded from a URDF has none.
+    pub fn opw_parameters(&self) -> Option<&OpwParameters> {
+        self.opw.as_ref()
+    }
+
+    /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
+    /// robot's forward kinematics (flange frame) exactly; the caller is responsible.
+    pub fn set_opw_parameters(&mut self, opw: Option<OpwParameters>) {
+        self.opw = opw;
     }
 
     /// A built-in robot by name (`irb140`).
@@ -208,6 +228,7 @@ impl Robot {
             payload: None,
             bodies,
             warnings: Vec::new(),
+            opw: None,
         }
     }
 
@@ -240,6 +261,9 @@ impl Robot {
             }
             if let Some(v) = d.viscous_nms {
                 j.viscous_nms = v;
+            }
+            if let Some(a) = d.max_accel_rad_s2 {
+                j.limits.acceleration = a;
             }
         }
         Ok(names

@@ -158,6 +158,7 @@ fn moving_joint(
             upper,
             velocity,
             effort,
+            acceleration: f64::INFINITY,
         },
         armature: 0.0,
         coulomb_nm: 0.0,

@@ -6,7 +6,7 @@ use super::plant::Plant;
 use super::supervisor::{Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED};
 use crate::control::{Controller, StateObserver};
 use crate::dynamics::JointSpaceDynamics;
-use crate::reference::JointReference;
+use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 

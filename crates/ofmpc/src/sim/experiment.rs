@@ -16,7 +16,7 @@ use crate::control::{new_controller, ControllerKind, DriveModel, MpcSettings, St
 /// 0.7 → 3.0e-6, 0.85 → 2.0e-6 rad but Cartesian RMS 0.068 mm (0.012 at 0.7).
 pub const OBSERVER_POLE: f64 = 0.7;
 use crate::dynamics::RobotDynamics;
-use crate::reference::JointReference;
+use crate::motion::JointReference;
 use crate::robot::{ModelError, Payload, Robot};
 
 /// Everything a run needs but the controller kind and the payload.

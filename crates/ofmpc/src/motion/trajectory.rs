@@ -1,29 +1,43 @@
-//! Timed Cartesian reference: a parsed [`Program`] with a rest-to-rest [`TimeLaw`] on every
-//! segment (section IV of the paper: "time parameterized with 5th order polynomial of
-//! acceleration").
+//! Timed Cartesian reference: a parsed [`Program`] timed move by move.
 //!
-//! Each path segment starts and ends at rest, so velocity and acceleration are continuous
-//! (zero) at every join; with [`Profile::Septic`] the jerk is too. Dwells hold the position.
+//! Under `G61` (exact stop, the default) every path move runs rest to rest with a
+//! [`TimeLaw`] (section IV of the paper: "time parameterized with 5th order polynomial of
+//! acceleration"): velocity and acceleration are continuous (zero) at every join; with
+//! [`Profile::Septic`] the jerk is too, and the move's feed is its peak speed. Consecutive
+//! moves under `G64` form a *run*: their corners are blended ([`crate::motion::blend`]) and
+//! the run is timed as fast as the path and joint limits allow, with the feed as cruise
+//! speed, from rest to rest ([`crate::motion::topp`]). Dwells hold the position.
 //! Orientation is not handled here (it is constant in the paper's experiments).
 //!
 //! [`CartesianTrajectory::sample`] allocates nothing and is meant to be called every control
 //! step.
 
 use crate::gcode::{MoveKind, Program};
-use crate::path::Segment;
-use crate::timelaw::{Profile, TimeLaw};
+use crate::motion::blend::{blend, PathMode, RunMove};
+use crate::motion::reference::{ReferenceError, MAX_PLAN_VALUES};
+use crate::motion::segment::Segment;
+use crate::motion::timelaw::{Profile, TimeLaw};
+use crate::motion::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
 use nalgebra::Vector3;
 
-/// Limits and profile used to time a program.
+/// Limits, profile and path mode used to time a program.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TimingOptions {
-    /// Rest-to-rest profile of every segment. Default: [`Profile::Septic`] (the paper's).
+    /// Rest-to-rest profile of every `G61` move. Default: [`Profile::Septic`] (the paper's).
     pub profile: Profile,
-    /// Peak path speed (m/s) of moves without an `F` word. Default 0.5.
+    /// Path speed (m/s) of moves without an `F` word (`G00`, and `G01`–`G03` before any `F`):
+    /// the peak speed under `G61`, the cruise speed under `G64`. Default 0.5.
     pub max_speed: f64,
-    /// Peak path (tangential) acceleration (m/s²) of every move, also those with `F`.
-    /// Default 2.5.
+    /// Path acceleration limit (m/s²) of every move, also those with `F`: tangential under
+    /// `G61`; tangential and, separately, centripetal under `G64`. Default 2.5.
     pub max_accel: f64,
+    /// Path jerk limit (m/s³) of `G64` runs. Default 50.
+    pub max_jerk: f64,
+    /// Corner tolerance (m) of `G64` without `P`. Default 0.1 mm.
+    pub blend_tolerance: f64,
+    /// Path mode of programs that select neither `G61` nor `G64` (until they do). Default:
+    /// [`PathMode::ExactStop`], so that the paper's program runs as published.
+    pub default_mode: PathMode,
 }
 
 impl Default for TimingOptions {
@@ -32,38 +46,80 @@ impl Default for TimingOptions {
             profile: Profile::Septic,
             max_speed: 0.5,
             max_accel: 2.5,
+            max_jerk: 50.0,
+            blend_tolerance: 1e-4,
+            default_mode: PathMode::ExactStop,
         }
+    }
+}
+
+/// A timing limit of [`TimingOptions`], named in errors (the caller maps it to its own words).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum TimingLimit {
+    /// The path speed limit (m/s).
+    PathSpeed,
+    /// The path acceleration limit (m/s²).
+    PathAcceleration,
+    /// The path jerk limit (m/s³).
+    PathJerk,
+    /// The default corner tolerance (m).
+    BlendTolerance,
+}
+
+impl std::fmt::Display for TimingLimit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            TimingLimit::PathSpeed => "path speed limit (m/s)",
+            TimingLimit::PathAcceleration => "path acceleration limit (m/s²)",
+            TimingLimit::PathJerk => "path jerk limit (m/s³)",
+            TimingLimit::BlendTolerance => "default corner tolerance (m)",
+        })
     }
 }
 
 /// Why a trajectory could not be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum TrajectoryError {
-    /// A timing limit is not a positive finite number.
-    #[error("TimingOptions::{name} must be positive and finite, got {value} (give it in SI units: m/s or m/s²)")]
+    /// A timing limit is not a positive finite number (the tolerance may be 0).
+    #[error("the {limit} must be positive and finite, got {value}")]
     InvalidLimit {
-        /// Field name.
-        name: &'static str,
+        /// Which limit.
+        limit: TimingLimit,
         /// The value given.
         value: f64,
     },
-    /// A move of the program carries an invalid feed or dwell (not produced by
+    /// A move of the program carries an invalid feed, dwell or tolerance (not produced by
     /// [`crate::gcode::parse`]; possible for hand-built programs).
     #[error("the move from program line {line} has an invalid {what} ({value}): it must be positive and finite")]
     InvalidMove {
         /// Source line of the move.
         line: usize,
-        /// "feed" or "dwell time".
+        /// "feed", "dwell time" or "tolerance".
         what: &'static str,
         /// The value.
         value: f64,
+    },
+    /// A blended run passes a pose the robot cannot take (joint-limited timing only).
+    #[error("{0}")]
+    Joint(ReferenceError),
+    /// Timing a blended run would store more values than [`MAX_PLAN_VALUES`].
+    #[error("timing the blended moves near program line {line} needs {count:.3e} values, above the limit of {limit}: the path is too slow for its length (a joint limit near a singularity, or a very small feed)")]
+    TooManySamples {
+        /// The slowest part's program line.
+        line: usize,
+        /// Values needed.
+        count: f64,
+        /// The limit.
+        limit: usize,
     },
 }
 
 /// What a timed segment does.
 #[derive(Debug, Clone, PartialEq)]
 pub enum TimedKind {
-    /// Travel along `segment` with arc length `law.eval(t − start_time).s`.
+    /// Travel along `segment` with arc length `law.eval(t − start_time).s` (`G61`).
     Path {
         /// Geometry.
         segment: Segment,
@@ -75,6 +131,8 @@ pub enum TimedKind {
         /// Held point (m).
         position: Vector3<f64>,
     },
+    /// Consecutive `G64` moves, blended and timed together from rest to rest.
+    Run(Box<Run>),
 }
 
 /// One timed piece of the trajectory.
@@ -86,7 +144,7 @@ pub struct TimedSegment {
     pub start_time: f64,
     /// End time (s).
     pub end_time: f64,
-    /// Source line of the program block.
+    /// Source line of the program block (the first move's, for a run).
     pub line: usize,
 }
 
@@ -106,7 +164,7 @@ pub struct CartesianSample {
     pub line: usize,
 }
 
-/// A program timed with rest-to-rest laws.
+/// A timed program.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CartesianTrajectory {
     start: Vector3<f64>,
@@ -115,27 +173,100 @@ pub struct CartesianTrajectory {
     duration: f64,
 }
 
+/// What a pending group of moves is.
+enum Step<'a> {
+    Exact(&'a Segment, f64),
+    Dwell(f64),
+}
+
 impl CartesianTrajectory {
-    /// Time every move of `program`.
+    /// Time every move of `program` under the path limits only (no joint limits; see
+    /// [`crate::motion::plan`] for the planner that also respects the robot's joints).
     ///
-    /// Each path move takes the shortest duration whose peak path speed stays within its
+    /// Each `G61` move takes the shortest duration whose peak path speed stays within its
     /// feed (`F`, overriding `max_speed` for that move) or else `max_speed`, and whose peak
     /// path acceleration stays within `max_accel` ([`Profile::min_duration`]).
     pub fn new(program: &Program, options: &TimingOptions) -> Result<Self, TrajectoryError> {
-        for (name, value) in [
-            ("max_speed", options.max_speed),
-            ("max_accel", options.max_accel),
+        Self::plan(program, options, None)
+    }
+
+    pub(crate) fn plan(
+        program: &Program,
+        options: &TimingOptions,
+        mut joints: Option<&mut JointConstraints<'_>>,
+    ) -> Result<Self, TrajectoryError> {
+        for (limit, value) in [
+            (TimingLimit::PathSpeed, options.max_speed),
+            (TimingLimit::PathAcceleration, options.max_accel),
+            (TimingLimit::PathJerk, options.max_jerk),
         ] {
             if !(value > 0.0 && value.is_finite()) {
-                return Err(TrajectoryError::InvalidLimit { name, value });
+                return Err(TrajectoryError::InvalidLimit { limit, value });
             }
+        }
+        if !(options.blend_tolerance >= 0.0 && options.blend_tolerance.is_finite()) {
+            return Err(TrajectoryError::InvalidLimit {
+                limit: TimingLimit::BlendTolerance,
+                value: options.blend_tolerance,
+            });
         }
         let mut segments = Vec::with_capacity(program.moves.len());
         let mut t = 0.0;
         let mut pos = program.start;
+        let mut run: Vec<RunMove> = Vec::new();
+        let flush = |run: &mut Vec<RunMove>,
+                     segments: &mut Vec<TimedSegment>,
+                     t: &mut f64,
+                     joints: Option<&mut JointConstraints<'_>>|
+         -> Result<(), TrajectoryError> {
+            if run.is_empty() {
+                return Ok(());
+            }
+            let line = run[0].line;
+            let pieces = blend(run);
+            run.clear();
+            let timed = time_run(
+                pieces,
+                PathLimits {
+                    max_accel: options.max_accel,
+                    max_jerk: options.max_jerk,
+                },
+                joints,
+            )
+            .map_err(|e| match e {
+                RunError::Joint {
+                    line,
+                    position,
+                    failure,
+                } => TrajectoryError::Joint(ReferenceError {
+                    line,
+                    time: *t,
+                    position: [position.x, position.y, position.z],
+                    failure,
+                }),
+                RunError::TooManySamples { count, line } => TrajectoryError::TooManySamples {
+                    line,
+                    count,
+                    limit: MAX_PLAN_VALUES,
+                },
+            })?;
+            let dt = timed.duration();
+            segments.push(TimedSegment {
+                kind: TimedKind::Run(Box::new(timed)),
+                start_time: *t,
+                end_time: *t + dt,
+                line,
+            });
+            *t += dt;
+            Ok(())
+        };
         for m in &program.moves {
-            let (kind, dt) = match &m.kind {
-                MoveKind::Path { segment, feed } => {
+            let step = match &m.kind {
+                MoveKind::Path {
+                    segment,
+                    feed,
+                    mode,
+                } => {
                     let speed = match feed {
                         Some(f) if !(f.is_finite() && *f > 0.0) => {
                             return Err(TrajectoryError::InvalidMove {
@@ -147,21 +278,27 @@ impl CartesianTrajectory {
                         Some(f) => *f,
                         None => options.max_speed,
                     };
-                    let law = TimeLaw::fastest(
-                        options.profile,
-                        segment.length(),
-                        speed,
-                        options.max_accel,
-                    );
                     pos = segment.end();
-                    let dt = law.duration;
-                    (
-                        TimedKind::Path {
-                            segment: segment.clone(),
-                            law,
-                        },
-                        dt,
-                    )
+                    match mode.unwrap_or(options.default_mode) {
+                        PathMode::ExactStop => Step::Exact(segment, speed),
+                        PathMode::Blend { tolerance } => {
+                            let tolerance = tolerance.unwrap_or(options.blend_tolerance);
+                            if !(tolerance >= 0.0 && tolerance.is_finite()) {
+                                return Err(TrajectoryError::InvalidMove {
+                                    line: m.line,
+                                    what: "tolerance",
+                                    value: tolerance,
+                                });
+                            }
+                            run.push(RunMove {
+                                segment: segment.clone(),
+                                feed: speed,
+                                tolerance,
+                                line: m.line,
+                            });
+                            continue;
+                        }
+                    }
                 }
                 MoveKind::Dwell { seconds } => {
                     if !(seconds.is_finite() && *seconds > 0.0) {
@@ -171,8 +308,28 @@ impl CartesianTrajectory {
                             value: *seconds,
                         });
                     }
-                    (TimedKind::Dwell { position: pos }, *seconds)
+                    Step::Dwell(*seconds)
                 }
+            };
+            flush(&mut run, &mut segments, &mut t, joints.as_deref_mut())?;
+            let (kind, dt) = match step {
+                Step::Exact(segment, speed) => {
+                    let law = TimeLaw::fastest(
+                        options.profile,
+                        segment.length(),
+                        speed,
+                        options.max_accel,
+                    );
+                    let dt = law.duration;
+                    (
+                        TimedKind::Path {
+                            segment: segment.clone(),
+                            law,
+                        },
+                        dt,
+                    )
+                }
+                Step::Dwell(seconds) => (TimedKind::Dwell { position: pos }, seconds),
             };
             segments.push(TimedSegment {
                 kind,
@@ -182,6 +339,7 @@ impl CartesianTrajectory {
             });
             t += dt;
         }
+        flush(&mut run, &mut segments, &mut t, joints)?;
         Ok(CartesianTrajectory {
             start: program.start,
             start_line: program.start_line,
@@ -212,6 +370,14 @@ impl CartesianTrajectory {
         &self.segments
     }
 
+    /// Whether time `t` falls inside a blended (`G64`) run.
+    pub fn in_run(&self, t: f64) -> bool {
+        let k = self.segments.partition_point(|s| s.end_time < t);
+        self.segments
+            .get(k)
+            .is_some_and(|s| matches!(s.kind, TimedKind::Run(_)) && t >= s.start_time)
+    }
+
     /// The reference at time `t` (s). Before 0 (or NaN): the start point at rest; after the
     /// end: the last point at rest.
     pub fn sample(&self, t: f64) -> CartesianSample {
@@ -234,6 +400,16 @@ impl CartesianTrajectory {
         let Some(piece) = self.segments.get(k) else {
             return rest(self.start, None, self.start_line);
         };
+        if let TimedKind::Run(run) = &piece.kind {
+            let st = run.state(t - piece.start_time);
+            return CartesianSample {
+                position: st.position,
+                velocity: st.velocity,
+                acceleration: st.acceleration,
+                segment: Some(k),
+                line: st.line,
+            };
+        }
         let (position, velocity, acceleration) = piece_state(piece, t);
         CartesianSample {
             position,
@@ -243,6 +419,54 @@ impl CartesianTrajectory {
             line: piece.line,
         }
     }
+
+    /// The piece and the reason that make the trajectory long: the line of the longest timed
+    /// piece and what limits it.
+    pub(crate) fn longest_piece(
+        &self,
+        options: &TimingOptions,
+        program: &Program,
+    ) -> Option<(usize, LongCause)> {
+        let piece = self
+            .segments
+            .iter()
+            .max_by(|a, b| (a.end_time - a.start_time).total_cmp(&(b.end_time - b.start_time)))?;
+        let cause = match &piece.kind {
+            TimedKind::Dwell { .. } => LongCause::Dwell,
+            TimedKind::Run(_) => LongCause::Feed,
+            TimedKind::Path { segment, law } => {
+                let feed = program
+                    .moves
+                    .iter()
+                    .find(|m| m.line == piece.line)
+                    .and_then(|m| match &m.kind {
+                        MoveKind::Path { feed, .. } => *feed,
+                        MoveKind::Dwell { .. } => None,
+                    });
+                let speed = feed.unwrap_or(options.max_speed);
+                let t_speed = law.profile.peak_velocity_factor() * segment.length() / speed;
+                if t_speed >= law.duration * (1.0 - 1e-12) {
+                    if feed.is_some() {
+                        LongCause::Feed
+                    } else {
+                        LongCause::PathSpeed
+                    }
+                } else {
+                    LongCause::PathAcceleration
+                }
+            }
+        };
+        Some((piece.line, cause))
+    }
+}
+
+/// What makes the longest piece long.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LongCause {
+    Dwell,
+    Feed,
+    PathSpeed,
+    PathAcceleration,
 }
 
 /// Position, velocity and acceleration of `piece` at absolute time `t` (clamped to the piece).
@@ -257,6 +481,10 @@ fn piece_state(piece: &TimedSegment, t: f64) -> (Vector3<f64>, Vector3<f64>, Vec
                 tangent * st.speed,
                 tangent * st.accel + segment.curvature(st.s) * (st.speed * st.speed),
             )
+        }
+        TimedKind::Run(run) => {
+            let st = run.state(t - piece.start_time);
+            (st.position, st.velocity, st.acceleration)
         }
     }
 }
@@ -404,10 +632,10 @@ mod tests {
     fn invalid_options_and_moves() {
         let p = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
         for (speed, accel, name) in [
-            (0.0, 1.0, "max_speed"),
-            (f64::NAN, 1.0, "max_speed"),
-            (1.0, -2.0, "max_accel"),
-            (1.0, f64::INFINITY, "max_accel"),
+            (0.0, 1.0, TimingLimit::PathSpeed),
+            (f64::NAN, 1.0, TimingLimit::PathSpeed),
+            (1.0, -2.0, TimingLimit::PathAcceleration),
+            (1.0, f64::INFINITY, TimingLimit::PathAcceleration),
         ] {
             let opts = TimingOptions {
                 max_speed: speed,
@@ -415,7 +643,7 @@ mod tests {
                 ..TimingOptions::default()
             };
             match CartesianTrajectory::new(&p, &opts) {
-                Err(TrajectoryError::InvalidLimit { name: n, .. }) => assert_eq!(n, name),
+                Err(TrajectoryError::InvalidLimit { limit, .. }) => assert_eq!(limit, name),
                 other => panic!("{other:?}"),
             }
         }

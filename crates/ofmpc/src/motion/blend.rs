@@ -1,0 +1,356 @@
+//! Corner blending under `G64 P<tol>`: consecutive moves are joined by circular arcs that
+//! leave each corner by at most the tolerance, so the path need not stop there.
+//!
+//! A corner between two straight lines with unit directions `u₁`, `u₂` turns by
+//! `θ = acos(u₁·u₂)`. It is replaced by the circular arc of radius `R` tangent to both lines
+//! at distance `d = R tan(θ/2)` from the corner; the arc's midpoint, its farthest point from
+//! the corner, lies `R (1/cos(θ/2) − 1)` from it (LinuxCNC's circular blend). With the
+//! tolerance `tol`: `R = tol cos(θ/2) / (1 − cos(θ/2))`; `d` is also capped at half of each
+//! line, so that neighbouring blends never overlap (on a fine polygon the blends then meet and
+//! the path becomes the circle through the edges' midpoints). The blend is tangent-continuous
+//! (G1); its curvature `1/R` starts at the tangent points.
+//!
+//! Joins that are already tangent-continuous (angle below [`TANGENT_ANGLE`]) are passed
+//! without a stop. Corners that involve an arc (G02/G03) are not rounded: the path stops
+//! there (exact stop), as it does at a tolerance of 0 and at reversals.
+
+use crate::motion::segment::Segment;
+use nalgebra::Vector3;
+
+/// Angle (rad) below which two moves count as tangent-continuous: no blend, no stop.
+pub const TANGENT_ANGLE: f64 = 1e-6;
+
+/// Turning angle (rad) above which a corner counts as a reversal: the path stops there.
+pub const REVERSAL_ANGLE: f64 = std::f64::consts::PI - 1e-3;
+
+/// How consecutive moves are joined.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum PathMode {
+    /// `G61`: every move runs rest to rest with the septic law (the paper's).
+    #[default]
+    ExactStop,
+    /// `G64 P<tol>`: corners are rounded within `tolerance` (m) and the path does not stop
+    /// where it does not have to; `None` (`G64` without `P`): the planner's default tolerance.
+    Blend {
+        /// Largest distance (m) between the path and a programmed corner.
+        tolerance: Option<f64>,
+    },
+}
+
+/// A circular arc in any plane: `p(φ) = c + R (cos φ e₁ + sin φ e₂)`, `φ = s/R ∈ [0, sweep]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CornerArc {
+    /// Centre (m).
+    pub center: Vector3<f64>,
+    /// Radius (m), > 0.
+    pub radius: f64,
+    /// Unit vector from the centre to the start point.
+    pub e1: Vector3<f64>,
+    /// Unit tangent at the start point (⊥ `e1`).
+    pub e2: Vector3<f64>,
+    /// Angle swept (rad), in `(0, π)`.
+    pub sweep: f64,
+}
+
+impl CornerArc {
+    /// The blend of the corner `corner` between incoming direction `u1` and outgoing `u2`
+    /// (unit vectors) with tangent distance `d`; `None` for a straight or reversing corner.
+    pub fn new(corner: Vector3<f64>, u1: Vector3<f64>, u2: Vector3<f64>, d: f64) -> Option<Self> {
+        let cos = u1.dot(&u2).clamp(-1.0, 1.0);
+        let theta = cos.acos();
+        if !(TANGENT_ANGLE..=REVERSAL_ANGLE).contains(&theta) || d.is_nan() || d <= 0.0 {
+            return None;
+        }
+        let m = (u2 - u1 * cos).normalize(); // in the plane, ⊥ u1, towards the inside
+        let radius = d / (theta / 2.0).tan();
+        let start = corner - u1 * d;
+        let center = start + m * radius;
+        Some(Self {
+            center,
+            radius,
+            e1: -m,
+            e2: u1,
+            sweep: theta,
+        })
+    }
+
+    /// Arc length (m).
+    pub fn length(&self) -> f64 {
+        self.radius * self.sweep
+    }
+
+    fn angle(&self, s: f64) -> f64 {
+        (s / self.radius).clamp(0.0, self.sweep)
+    }
+
+    /// Point at arc length `s` (clamped).
+    pub fn point(&self, s: f64) -> Vector3<f64> {
+        let phi = self.angle(s);
+        self.center + (self.e1 * phi.cos() + self.e2 * phi.sin()) * self.radius
+    }
+
+    /// Unit tangent at arc length `s`.
+    pub fn tangent(&self, s: f64) -> Vector3<f64> {
+        let phi = self.angle(s);
+        self.e2 * phi.cos() - self.e1 * phi.sin()
+    }
+
+    /// Curvature vector `d²p/ds²` at arc length `s` (towards the centre, norm `1/R`).
+    pub fn curvature(&self, s: f64) -> Vector3<f64> {
+        let phi = self.angle(s);
+        -(self.e1 * phi.cos() + self.e2 * phi.sin()) / self.radius
+    }
+}
+
+/// The geometry of one piece of a blended path.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Geometry {
+    /// A programmed move, or the part of a line that the blends leave.
+    Segment(Segment),
+    /// A corner blend.
+    Corner(CornerArc),
+}
+
+impl Geometry {
+    /// Length (m).
+    pub fn length(&self) -> f64 {
+        match self {
+            Geometry::Segment(s) => s.length(),
+            Geometry::Corner(c) => c.length(),
+        }
+    }
+    /// Point at arc length `s`.
+    pub fn point(&self, s: f64) -> Vector3<f64> {
+        match self {
+            Geometry::Segment(g) => g.point(s),
+            Geometry::Corner(c) => c.point(s),
+        }
+    }
+    /// Unit tangent at arc length `s`.
+    pub fn tangent(&self, s: f64) -> Vector3<f64> {
+        match self {
+            Geometry::Segment(g) => g.tangent(s),
+            Geometry::Corner(c) => c.tangent(s),
+        }
+    }
+    /// Curvature vector at arc length `s`.
+    pub fn curvature(&self, s: f64) -> Vector3<f64> {
+        match self {
+            Geometry::Segment(g) => g.curvature(s),
+            Geometry::Corner(c) => c.curvature(s),
+        }
+    }
+}
+
+/// One piece of a blended path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Piece {
+    /// Geometry.
+    pub geometry: Geometry,
+    /// Cruise speed (m/s): the move's feed, or the smaller of both feeds on a blend.
+    pub feed: f64,
+    /// Source line (a blend belongs to the move that enters the corner).
+    pub line: usize,
+    /// Arc length (m) of the piece's start along the run.
+    pub start: f64,
+    /// The path must be at rest at the end of this piece (an unblended corner).
+    pub stop_after: bool,
+}
+
+/// One programmed move of a run, as input to [`blend`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunMove {
+    /// Geometry.
+    pub segment: Segment,
+    /// Cruise speed (m/s).
+    pub feed: f64,
+    /// Corner tolerance (m) at the end of this move.
+    pub tolerance: f64,
+    /// Source line.
+    pub line: usize,
+}
+
+/// Rounds the corners of a sequence of consecutive moves (see the module documentation).
+/// The run starts and ends at rest; pieces come out in path order with their start arc
+/// lengths.
+pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
+    let m = moves.len();
+    // Tangent distance at the corner after move k (0: no blend).
+    let mut d = vec![0.0; m];
+    let mut stop = vec![false; m];
+    for k in 0..m.saturating_sub(1) {
+        let (a, b) = (&moves[k], &moves[k + 1]);
+        let u1 = a.segment.tangent(a.segment.length());
+        let u2 = b.segment.tangent(0.0);
+        let theta = u1.dot(&u2).clamp(-1.0, 1.0).acos();
+        if theta < TANGENT_ANGLE {
+            continue;
+        }
+        let both_lines =
+            matches!(a.segment, Segment::Line { .. }) && matches!(b.segment, Segment::Line { .. });
+        if !both_lines || theta > REVERSAL_ANGLE {
+            stop[k] = true;
+            continue;
+        }
+        let half = theta / 2.0;
+        let dev_per_radius = 1.0 / half.cos() - 1.0;
+        let d_tol = a.tolerance / dev_per_radius * half.tan();
+        let dk = d_tol
+            .min(a.segment.length() / 2.0)
+            .min(b.segment.length() / 2.0);
+        if dk > 1e-12 {
+            d[k] = dk;
+        } else {
+            stop[k] = true;
+        }
+    }
+    let mut pieces: Vec<Piece> = Vec::with_capacity(2 * m);
+    let push =
+        |pieces: &mut Vec<Piece>, geometry: Geometry, feed: f64, line: usize, stop_after: bool| {
+            let start = pieces.last().map_or(0.0, |p| p.start + p.geometry.length());
+            pieces.push(Piece {
+                geometry,
+                feed,
+                line,
+                start,
+                stop_after,
+            });
+        };
+    for k in 0..m {
+        let mv = &moves[k];
+        let d_in = if k > 0 { d[k - 1] } else { 0.0 };
+        let d_out = d[k];
+        match &mv.segment {
+            Segment::Line { a, b } if d_in > 0.0 || d_out > 0.0 => {
+                let u = (b - a).normalize();
+                let (p0, p1) = (a + u * d_in, b - u * d_out);
+                if (p1 - p0).dot(&u) > 1e-9 {
+                    push(
+                        &mut pieces,
+                        Geometry::Segment(Segment::line(p0, p1)),
+                        mv.feed,
+                        mv.line,
+                        false,
+                    );
+                }
+            }
+            seg => push(
+                &mut pieces,
+                Geometry::Segment(seg.clone()),
+                mv.feed,
+                mv.line,
+                stop[k],
+            ),
+        }
+        if d_out > 0.0 {
+            let next = &moves[k + 1];
+            let u1 = mv.segment.tangent(mv.segment.length());
+            let u2 = next.segment.tangent(0.0);
+            if let Some(c) = CornerArc::new(mv.segment.end(), u1, u2, d_out) {
+                push(
+                    &mut pieces,
+                    Geometry::Corner(c),
+                    mv.feed.min(next.feed),
+                    mv.line,
+                    false,
+                );
+            }
+        } else if stop[k] {
+            if let Some(last) = pieces.last_mut() {
+                last.stop_after = true;
+            }
+        }
+    }
+    pieces
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn v(x: f64, y: f64, z: f64) -> Vector3<f64> {
+        Vector3::new(x, y, z)
+    }
+
+    fn dist_to_segment(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> f64 {
+        let u = b - a;
+        let t = ((p - a).dot(&u) / u.norm_squared()).clamp(0.0, 1.0);
+        (p - (a + u * t)).norm()
+    }
+
+    fn line_move(a: Vector3<f64>, b: Vector3<f64>, tol: f64) -> RunMove {
+        RunMove {
+            segment: Segment::line(a, b),
+            feed: 0.1,
+            tolerance: tol,
+            line: 1,
+        }
+    }
+
+    /// The blended path is continuous with a continuous tangent, the corner arc keeps within
+    /// the tolerance of the corner (dense scan), and reaches it (the tolerance is used).
+    #[test]
+    fn square_corner_within_tolerance_and_tangent_continuous() {
+        for (tol, turn) in [(0.5e-3, 90f64), (0.05e-3, 30.0), (1e-3, 150.0), (2e-3, 5.0)] {
+            let t = turn.to_radians();
+            let a = v(0.0, 0.0, 0.0);
+            let c = v(0.1, 0.0, 0.0);
+            let b = c + v(t.cos(), t.sin(), 0.3 * t.sin()).normalize() * 0.1;
+            let pieces = blend(&[line_move(a, c, tol), line_move(c, b, tol)]);
+            assert_eq!(pieces.len(), 3, "{turn}");
+            let mut worst: f64 = 0.0;
+            for w in pieces.windows(2) {
+                let (p, q) = (&w[0], &w[1]);
+                let l = p.geometry.length();
+                assert!((p.geometry.point(l) - q.geometry.point(0.0)).norm() < 1e-15);
+                assert!((p.geometry.tangent(l) - q.geometry.tangent(0.0)).norm() < 1e-12);
+                assert!((q.start - (p.start + l)).abs() < 1e-15);
+            }
+            let arc = &pieces[1].geometry;
+            for i in 0..=1000 {
+                let s = arc.length() * i as f64 / 1000.0;
+                worst = worst.max(dist_to_segment(arc.point(s), a, c).min(dist_to_segment(
+                    arc.point(s),
+                    c,
+                    b,
+                )));
+                // Finite-difference tangent and curvature.
+                let h = 1e-7;
+                let fd = (arc.point(s + h) - arc.point(s - h)) / (2.0 * h);
+                if s > h && s < arc.length() - h {
+                    assert!((fd - arc.tangent(s)).norm() < 1e-7);
+                    let fdk = (arc.tangent(s + h) - arc.tangent(s - h)) / (2.0 * h);
+                    assert!((fdk - arc.curvature(s)).norm() < 1e-5 * arc.curvature(s).norm());
+                }
+            }
+            // Off the polygon by at most the tolerance; the arc's midpoint is exactly `tol` from
+            // the corner (the tolerance is used, LinuxCNC's meaning of P).
+            assert!(worst <= tol * (1.0 + 1e-9), "{turn}: {worst} > {tol}");
+            // (unless half a line is shorter than the tangent distance: then the blend uses
+            // half the line, here at 5°).
+            let half = (c - a).normalize().dot(&(b - c).normalize()).acos() / 2.0;
+            let d = (tol / (1.0 / half.cos() - 1.0) * half.tan()).min(0.05);
+            let expected = d / half.tan() * (1.0 / half.cos() - 1.0);
+            let mid = (arc.point(arc.length() / 2.0) - c).norm();
+            assert!(expected <= tol * (1.0 + 1e-12));
+            assert!(
+                (mid - expected).abs() < 1e-12,
+                "{turn}: {mid} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn tangent_joins_pass_and_arcs_and_reversals_stop() {
+        let a = v(0.0, 0.0, 0.0);
+        let b = v(0.1, 0.0, 0.0);
+        let c = v(0.2, 0.0, 0.0);
+        let p = blend(&[line_move(a, b, 1e-3), line_move(b, c, 1e-3)]);
+        assert_eq!(p.len(), 2);
+        assert!(p.iter().all(|q| !q.stop_after));
+        let p = blend(&[line_move(a, b, 1e-3), line_move(b, a, 1e-3)]);
+        assert!(p[0].stop_after && p.len() == 2);
+        let p = blend(&[line_move(a, b, 0.0), line_move(b, v(0.1, 0.1, 0.0), 0.0)]);
+        assert!(p[0].stop_after && p.len() == 2, "zero tolerance stops");
+    }
+}

@@ -1,0 +1,378 @@
+//! Motion planning: a G-code program → a blended, timed Cartesian path → the joint reference
+//! the controllers follow. One entry point, [`plan`] (or [`plan_program`] for a parsed
+//! program), assembles the pipeline:
+//!
+//! 1. [`crate::gcode::parse`]: program text → [`Program`] (start point, [`segment`]s, feeds,
+//!    dwells, path modes `G61` / `G64 P…`);
+//! 2. [`blend`]: under `G64` the corners between consecutive lines are rounded within the
+//!    tolerance;
+//! 3. timing ([`trajectory`]): `G61` moves rest to rest with the paper's septic law
+//!    ([`timelaw`]); `G64` runs time-optimally under the feed, path acceleration and jerk
+//!    and every joint's speed and acceleration limit ([`topp`]);
+//! 4. [`reference`](mod@reference): inverse kinematics (analytic when the robot declares OPW parameters,
+//!    else numeric) sampled every `Ts`, checked against the joint limits.
+//!
+//! `G61` (exact stop) is the default of programs that select neither mode, so that the
+//! paper's Table I program runs exactly as published; `G64` without `P` rounds corners within
+//! [`TimingOptions::blend_tolerance`] (0.1 mm).
+//!
+//! ```
+//! use ofmpc::motion::{plan, PlanOptions};
+//! use ofmpc::robot::Robot;
+//!
+//! let robot = Robot::irb140();
+//! let program = "G21 G90 G64 P0.5\nG0 X500 Y-100 Z400\nG1 X600 F6000\nY0\nX500\nY-100\n";
+//! let plan = plan(program, &robot, &PlanOptions::default())?;
+//! let r = &plan.reference; // joint reference sampled every 10 ms
+//! assert!(r.len() > 100);
+//! // The square's corners are rounded within 0.5 mm: the path never stops between them.
+//! let mid = (r.len() / 4..3 * r.len() / 4).map(|k| r.qd(k).iter().map(|v| v.abs()).sum::<f64>());
+//! assert!(mid.fold(f64::INFINITY, f64::min) > 1e-3);
+//! # Ok::<(), ofmpc::motion::PlanError>(())
+//! ```
+
+pub mod blend;
+pub mod reference;
+pub mod segment;
+pub mod timelaw;
+pub mod topp;
+pub mod trajectory;
+
+pub use blend::PathMode;
+pub use reference::{JointReference, Orientation, ReferenceError, MAX_PLAN_VALUES};
+pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
+
+use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
+use crate::robot::Robot;
+use reference::{build_reference, sample_count, values_per_sample, JointMap, ReferenceFailure};
+use topp::JointConstraints;
+use trajectory::LongCause;
+
+/// Everything [`plan`] needs besides the program and the robot. Every field has the
+/// library's default; the command line takes its defaults from here.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanOptions {
+    /// How the program is read (work offset).
+    pub parse: ParseOptions,
+    /// Path limits, profile and path mode.
+    pub timing: TimingOptions,
+    /// Flange orientation along the path. Default: as at q = 0.
+    pub orientation: Orientation,
+    /// Sample period of the joint reference (s). Default 0.01 (the paper's).
+    pub ts: f64,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        Self {
+            parse: ParseOptions::default(),
+            timing: TimingOptions::default(),
+            orientation: Orientation::AtZero,
+            ts: 0.01,
+        }
+    }
+}
+
+/// Numbers that describe a plan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanDiagnostics {
+    /// Duration of the path (s).
+    pub duration: f64,
+    /// Number of blended (`G64`) runs.
+    pub runs: usize,
+    /// Factor applied to the joint speed and acceleration limits by the last replan of the
+    /// runs (1 when the first plan kept every sample within the limits).
+    pub limit_scale: [f64; 2],
+    /// Number of timing attempts.
+    pub attempts: usize,
+    /// Largest joint speed over the runs' samples, as a fraction of its limit.
+    pub peak_speed_ratio: f64,
+    /// Largest joint acceleration over the runs' samples, as a fraction of its limit.
+    pub peak_accel_ratio: f64,
+}
+
+/// A planned program: the parsed program, the timed Cartesian path, the joint reference.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    /// The program as read (its warnings included).
+    pub program: Program,
+    /// The timed Cartesian path.
+    pub trajectory: CartesianTrajectory,
+    /// The joint reference, sampled every `ts`.
+    pub reference: JointReference,
+    /// Diagnostics.
+    pub diagnostics: PlanDiagnostics,
+}
+
+/// What makes a plan too large to sample.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum SampleCause {
+    /// The feed (`F`) of a move on this program line is too small for its length.
+    Feed {
+        /// Program line.
+        line: usize,
+    },
+    /// The dwell (`G04`) on this program line is too long.
+    Dwell {
+        /// Program line.
+        line: usize,
+    },
+    /// The path speed limit ([`TimingOptions::max_speed`]) is too small.
+    PathSpeed {
+        /// The slowest move's program line.
+        line: usize,
+    },
+    /// The path acceleration limit is too small.
+    PathAcceleration {
+        /// The slowest move's program line.
+        line: usize,
+    },
+    /// The sample period is too small for the path's duration.
+    SamplePeriod,
+}
+
+impl std::fmt::Display for SampleCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SampleCause::Feed { line } => {
+                write!(f, "the feed of program line {line} is too small for its move")
+            }
+            SampleCause::Dwell { line } => write!(f, "the dwell of program line {line} is too long"),
+            SampleCause::PathSpeed { line } => write!(
+                f,
+                "the path speed limit is too small (the slowest move is on program line {line})"
+            ),
+            SampleCause::PathAcceleration { line } => write!(
+                f,
+                "the path acceleration limit is too small (the slowest move is on program line {line})"
+            ),
+            SampleCause::SamplePeriod => f.write_str("the sample period is too small"),
+        }
+    }
+}
+
+/// Which joint limit a plan could not keep.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum JointQuantity {
+    /// Speed (rad/s).
+    Speed,
+    /// Acceleration (rad/s²).
+    Acceleration,
+}
+
+impl std::fmt::Display for JointQuantity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            JointQuantity::Speed => "speed",
+            JointQuantity::Acceleration => "acceleration",
+        })
+    }
+}
+
+/// Why a program could not be planned.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// The program text is wrong.
+    #[error("{0}")]
+    Program(GcodeError),
+    /// The timing options or a move are invalid, or a blended run cannot be timed.
+    #[error("{0}")]
+    Timing(TrajectoryError),
+    /// The path cannot be followed in joint space.
+    #[error("{0}")]
+    Reference(ReferenceError),
+    /// The sample period is not positive and finite.
+    #[error("the sample period must be positive and finite, got {0} s")]
+    SamplePeriod(f64),
+    /// The joint reference would need more values than [`MAX_PLAN_VALUES`]; nothing was
+    /// allocated.
+    #[error("the joint reference would need {count:.3e} values (samples × columns), above the limit of {limit}: {cause}")]
+    TooManySamples {
+        /// What makes it large.
+        cause: SampleCause,
+        /// Values needed.
+        count: f64,
+        /// The limit.
+        limit: usize,
+    },
+    /// A blended run's reference still exceeds a joint limit after replanning with scaled
+    /// limits.
+    #[error("joint {joint} reaches {value:.3} at program line {line}, above its {quantity} limit {limit:.3}, after {attempts} timing attempts")]
+    JointLimit {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Which limit.
+        quantity: JointQuantity,
+        /// The value reached.
+        value: f64,
+        /// The limit.
+        limit: f64,
+        /// Program line.
+        line: usize,
+        /// Attempts made.
+        attempts: usize,
+    },
+}
+
+/// Largest number of timing attempts of [`plan_program`] (the first and the replans with
+/// scaled joint limits).
+pub const MAX_TIMING_ATTEMPTS: usize = 6;
+
+/// Parses `text` and plans it: see [`plan_program`].
+pub fn plan(text: &str, robot: &Robot, options: &PlanOptions) -> Result<Plan, PlanError> {
+    let program = parse(text, &options.parse).map_err(PlanError::Program)?;
+    plan_program(program, robot, options)
+}
+
+/// Plans a parsed program for `robot`: blends and times it ([`CartesianTrajectory`]), maps
+/// it to joint space and samples it every `options.ts` ([`JointReference`]).
+///
+/// Blended runs respect every joint's speed and acceleration limit on every sample of the
+/// reference: the timing uses them, and if the sampled reference still exceeds one (the
+/// jerk filter mixes neighbouring accelerations) the runs are timed again with the limits
+/// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. `G61` moves are checked for joint
+/// speed only (as in the paper). Before it allocates the reference the planner checks its
+/// size against [`MAX_PLAN_VALUES`].
+pub fn plan_program(
+    program: Program,
+    robot: &Robot,
+    options: &PlanOptions,
+) -> Result<Plan, PlanError> {
+    let ts = options.ts;
+    if !(ts.is_finite() && ts > 0.0) {
+        return Err(PlanError::SamplePeriod(ts));
+    }
+    let n = robot.dof();
+    let has_runs = program.moves.iter().any(|m| {
+        matches!(&m.kind, MoveKind::Path { mode, .. }
+            if matches!(mode.unwrap_or(options.timing.default_mode), PathMode::Blend { .. }))
+    });
+    let velocity: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+    let acceleration: Vec<f64> = robot
+        .joints()
+        .iter()
+        .map(|j| j.limits.acceleration)
+        .collect();
+    let mut map = if has_runs {
+        Some(JointMap::new(robot, options.orientation).map_err(|e| {
+            PlanError::Reference(ReferenceError {
+                line: program.start_line,
+                time: 0.0,
+                position: program.start.into(),
+                failure: ReferenceFailure::Ik(e),
+            })
+        })?)
+    } else {
+        None
+    };
+    let mut scale = [1.0f64; 2];
+    let mut attempts = 0;
+    loop {
+        attempts += 1;
+        let trajectory = match map.as_mut() {
+            Some(map) => {
+                let mut jc = JointConstraints {
+                    map,
+                    velocity: velocity.iter().map(|v| v * scale[0]).collect(),
+                    acceleration: acceleration.iter().map(|a| a * scale[1]).collect(),
+                };
+                CartesianTrajectory::plan(&program, &options.timing, Some(&mut jc))
+            }
+            None => CartesianTrajectory::plan(&program, &options.timing, None),
+        }
+        .map_err(PlanError::Timing)?;
+        let count = sample_count(trajectory.duration(), ts) * values_per_sample(n) as f64;
+        if count.is_nan() || count > MAX_PLAN_VALUES as f64 {
+            let at_default = sample_count(trajectory.duration(), PlanOptions::default().ts)
+                * values_per_sample(n) as f64;
+            let cause = if ts < PlanOptions::default().ts && at_default <= MAX_PLAN_VALUES as f64 {
+                SampleCause::SamplePeriod
+            } else {
+                match trajectory.longest_piece(&options.timing, &program) {
+                    Some((line, LongCause::Dwell)) => SampleCause::Dwell { line },
+                    Some((line, LongCause::Feed)) => SampleCause::Feed { line },
+                    Some((line, LongCause::PathSpeed)) => SampleCause::PathSpeed { line },
+                    Some((line, LongCause::PathAcceleration)) => {
+                        SampleCause::PathAcceleration { line }
+                    }
+                    None => SampleCause::SamplePeriod,
+                }
+            };
+            return Err(PlanError::TooManySamples {
+                cause,
+                count,
+                limit: MAX_PLAN_VALUES,
+            });
+        }
+        let reference = build_reference(robot, &trajectory, options.orientation, ts)
+            .map_err(PlanError::Reference)?;
+        // Worst joint speed and acceleration over the runs' samples, relative to the limits.
+        let mut worst = [(0.0f64, 0usize, 0usize); 2];
+        if has_runs {
+            for k in 0..reference.len() {
+                if !trajectory.in_run(k as f64 * ts) {
+                    continue;
+                }
+                for i in 0..n {
+                    let rv = reference.qd(k)[i].abs() / velocity[i];
+                    let ra = reference.qdd(k)[i].abs() / acceleration[i];
+                    if rv > worst[0].0 {
+                        worst[0] = (rv, i, k);
+                    }
+                    if ra > worst[1].0 {
+                        worst[1] = (ra, i, k);
+                    }
+                }
+            }
+        }
+        let ok = worst.iter().all(|w| w.0 <= 1.0 + 1e-9);
+        if ok || attempts >= MAX_TIMING_ATTEMPTS {
+            if !ok {
+                let (q, (ratio, i, k)) = if worst[0].0 > 1.0 + 1e-9 {
+                    (JointQuantity::Speed, worst[0])
+                } else {
+                    (JointQuantity::Acceleration, worst[1])
+                };
+                let limit = if q == JointQuantity::Speed {
+                    velocity[i]
+                } else {
+                    acceleration[i]
+                };
+                return Err(PlanError::JointLimit {
+                    joint: i + 1,
+                    quantity: q,
+                    value: ratio * limit,
+                    limit,
+                    line: reference.line(k),
+                    attempts,
+                });
+            }
+            let diagnostics = PlanDiagnostics {
+                duration: trajectory.duration(),
+                runs: trajectory
+                    .segments()
+                    .iter()
+                    .filter(|s| matches!(s.kind, trajectory::TimedKind::Run(_)))
+                    .count(),
+                limit_scale: scale,
+                attempts,
+                peak_speed_ratio: worst[0].0,
+                peak_accel_ratio: worst[1].0,
+            };
+            return Ok(Plan {
+                program,
+                trajectory,
+                reference,
+                diagnostics,
+            });
+        }
+        for (s, w) in scale.iter_mut().zip(worst) {
+            if w.0 > 1.0 {
+                *s *= 0.995 / w.0;
+            }
+        }
+    }
+}

@@ -1,0 +1,484 @@
+//! The joint reference the controllers follow: `w_k = q_ref(k Ts)`, sampled
+//! once before the run, with its preview `w_{k+1..k+N}` (the last value held
+//! past the end of the path), its velocity and acceleration, and the flange
+//! position it corresponds to.
+//!
+//! [`build_reference`] maps a timed Cartesian path to joint space by inverse
+//! kinematics: analytic (OPW) when the robot declares its OPW parameters
+//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric (damped
+//! least squares seeded by the previous sample).
+
+use crate::dynamics::RobotDynamics;
+use crate::ik::{ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings};
+use crate::motion::trajectory::CartesianTrajectory;
+use crate::robot::Robot;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+
+/// Largest number of values (samples × columns) planning may allocate for one reference or
+/// one timed path: 50 million (400 MB of `f64`). Planning checks the count before it
+/// allocates and reports what makes it large.
+pub const MAX_PLAN_VALUES: usize = 50_000_000;
+
+/// Values stored per sample of a reference of `n` joints: q, q̇, q̈ (3n), the flange position
+/// (3) and the program line (1).
+pub const fn values_per_sample(n: usize) -> usize {
+    3 * n + 4
+}
+
+/// What went wrong at one sample of the path.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ReferenceFailure {
+    /// The inverse kinematics failed (unreachable pose, joint limit, ...).
+    #[error("{0}; move the part into the workspace with a work offset (G10 L2 P1 X.. Y.. Z..), or change the orientation")]
+    Ik(IkError),
+    /// Following the path continuously would take a joint outside its range; the only
+    /// solutions within the limits are another arm configuration (a jump).
+    #[error(
+        "joint {joint} ({name}) would have to reach {:.1}°, outside its range [{:.1}°, {:.1}°], to follow the path \
+         (the only solutions within the limits are another arm configuration, a jump); move the part with a \
+         work offset (G10 L2 P1 X.. Y.. Z..), or change the orientation",
+        value.to_degrees(), lower.to_degrees(), upper.to_degrees()
+    )]
+    BranchLimit {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// Value the joint would need (rad).
+        value: f64,
+        /// Lower limit (rad).
+        lower: f64,
+        /// Upper limit (rad).
+        upper: f64,
+    },
+    /// A joint would move faster than its speed limit.
+    #[error(
+        "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s; lower \
+         the path speed or acceleration, plan the program with blending (G64), or move the part away from the \
+         wrist singularity with a work offset"
+    )]
+    JointSpeed {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// Speed needed (rad/s).
+        speed: f64,
+        /// Its limit (rad/s).
+        limit: f64,
+    },
+    /// The sample period is not positive and finite.
+    #[error("the sample period must be positive and finite, got {0} s")]
+    SamplePeriod(f64),
+    /// Sampling the path would need more values than [`MAX_PLAN_VALUES`].
+    #[error("sampling the path needs {count:.3e} values, above the limit of {limit}; shorten the program, raise the speed or the sample period")]
+    TooManySamples {
+        /// Values needed.
+        count: f64,
+        /// The limit.
+        limit: usize,
+    },
+}
+
+/// Why a path cannot be followed in joint space: where (program line, time, flange
+/// position) and what ([`ReferenceFailure`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "program line {line} (t = {time:.3} s), flange at ({:.1}, {:.1}, {:.1}) mm: {failure}",
+    position[0] * 1e3, position[1] * 1e3, position[2] * 1e3
+)]
+pub struct ReferenceError {
+    /// Program line of the failing sample.
+    pub line: usize,
+    /// Time of the failing sample (s).
+    pub time: f64,
+    /// Requested flange position (m, base frame).
+    pub position: [f64; 3],
+    /// What failed.
+    pub failure: ReferenceFailure,
+}
+
+/// How the flange orientation along the path is chosen: constant.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Orientation {
+    /// The flange orientation of the robot at q = 0 (the IRB 140: tool axis
+    /// along base +x, as in the paper).
+    #[default]
+    AtZero,
+    /// A fixed rotation of the flange in the base frame.
+    Fixed(UnitQuaternion<f64>),
+}
+
+enum Ik {
+    Analytic(Box<IkSolver>),
+    Numeric(Box<NumericIk>),
+}
+
+/// Flange positions → joint positions along a path, each solution the one nearest to the
+/// previous (the first nearest to q = 0), with a constant orientation. Shared by the
+/// reference sampler and the planner's joint-limit grid.
+pub(crate) struct JointMap {
+    fk: RobotDynamics,
+    ik: Ik,
+    rotation: UnitQuaternion<f64>,
+    prev: Vec<f64>,
+    robot: Robot,
+}
+
+impl JointMap {
+    pub(crate) fn new(robot: &Robot, orientation: Orientation) -> Result<Self, IkError> {
+        let n = robot.dof();
+        let mut fk = RobotDynamics::new(robot.clone());
+        let rotation = match orientation {
+            Orientation::AtZero => fk.flange_pose(&vec![0.0; n]).rotation,
+            Orientation::Fixed(r) => r,
+        };
+        let lower = robot.lower_limits();
+        let upper = robot.upper_limits();
+        let ik = match robot.opw_parameters() {
+            Some(opw) if n == 6 => {
+                let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
+                let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
+                Ik::Analytic(Box::new(IkSolver::new(*opw, lo, up)?))
+            }
+            _ => {
+                let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
+                let up: Vec<f64> = upper.iter().map(|v| v.min(1e6)).collect();
+                Ik::Numeric(Box::new(NumericIk::new(
+                    n,
+                    &lo,
+                    &up,
+                    NumericIkSettings::default(),
+                )?))
+            }
+        };
+        Ok(Self {
+            fk,
+            ik,
+            rotation,
+            prev: vec![0.0; n],
+            robot: robot.clone(),
+        })
+    }
+
+    /// Restarts from q = 0 (the next solution is the one nearest to it).
+    pub(crate) fn reset(&mut self) {
+        self.prev.fill(0.0);
+    }
+
+    /// The joint positions at flange position `p`, nearest to the previous solution; they
+    /// become the previous solution.
+    pub(crate) fn solve(&mut self, p: &Vector3<f64>) -> Result<&[f64], ReferenceFailure> {
+        let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
+        match &mut self.ik {
+            Ik::Analytic(s) => {
+                let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
+                let q = s.solve_near(&pose, &hint).map_err(ReferenceFailure::Ik)?;
+                self.prev.copy_from_slice(&q);
+            }
+            Ik::Numeric(num) => {
+                let mut x = self.prev.clone();
+                num.solve(&mut self.fk, &pose, &mut x)
+                    .map_err(ReferenceFailure::Ik)?;
+                self.prev = x;
+            }
+        }
+        Ok(&self.prev)
+    }
+
+    /// When the analytic solution jumps to another configuration, whether the continuous
+    /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
+    /// the real reason for the jump.
+    fn branch_limit(&self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
+        let Ik::Analytic(s) = &self.ik else {
+            return None;
+        };
+        let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
+        let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
+        let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
+        let q = wide.solve_near(&pose, &hint).ok()?;
+        self.robot.joints().iter().enumerate().find_map(|(i, j)| {
+            (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
+                ReferenceFailure::BranchLimit {
+                    joint: i + 1,
+                    name: j.name.clone(),
+                    value: q[i],
+                    lower: j.limits.lower,
+                    upper: j.limits.upper,
+                }
+            })
+        })
+    }
+
+    /// Exact joint velocity `J(q)⁻¹ [v; 0]` at the current solution (six joints, regular
+    /// Jacobian), else `None`.
+    fn velocity(&mut self, v: &Vector3<f64>, jac: &mut nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
+        if self.prev.len() != 6 {
+            return None;
+        }
+        let q = self.prev.clone();
+        self.fk.flange_jacobian(&q, jac);
+        let rhs = nalgebra::DVector::from_column_slice(&[v.x, v.y, v.z, 0.0, 0.0, 0.0]);
+        match jac.clone().lu().solve(&rhs) {
+            Some(x) if x.iter().all(|y| y.is_finite()) => Some(x.iter().copied().collect()),
+            _ => None,
+        }
+    }
+}
+
+/// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …
+/// up to and including the end).
+pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
+    (duration / ts - 1e-9).ceil().max(0.0) + 1.0
+}
+
+/// Maps the timed path to joint space, sampled every `ts` seconds from t = 0
+/// to the end of the path, with constant flange `orientation`.
+///
+/// Checks every sample: reachable, within the joint limits, and each joint's
+/// step within its speed limit times `ts`. The first sample takes the
+/// solution closest to q = 0 (within limits); each later one the solution
+/// closest to the previous sample. Refuses, before allocating, a path that
+/// needs more than [`MAX_PLAN_VALUES`] values.
+pub fn build_reference(
+    robot: &Robot,
+    trajectory: &CartesianTrajectory,
+    orientation: Orientation,
+    ts: f64,
+) -> Result<JointReference, ReferenceError> {
+    let n = robot.dof();
+    let start = trajectory.start();
+    let fail = |line: usize, time: f64, p: Vector3<f64>, failure| ReferenceError {
+        line,
+        time,
+        position: [p.x, p.y, p.z],
+        failure,
+    };
+    let first_line = trajectory.sample(0.0).line;
+    if !(ts.is_finite() && ts > 0.0) {
+        return Err(fail(
+            first_line,
+            0.0,
+            start,
+            ReferenceFailure::SamplePeriod(ts),
+        ));
+    }
+    let count = sample_count(trajectory.duration(), ts);
+    let values = count * values_per_sample(n) as f64;
+    if values.is_nan() || values > MAX_PLAN_VALUES as f64 {
+        return Err(fail(
+            first_line,
+            0.0,
+            start,
+            ReferenceFailure::TooManySamples {
+                count: values,
+                limit: MAX_PLAN_VALUES,
+            },
+        ));
+    }
+    let steps = count as usize;
+    let mut map = JointMap::new(robot, orientation)
+        .map_err(|e| fail(first_line, 0.0, start, ReferenceFailure::Ik(e)))?;
+    let mut q = Vec::with_capacity(steps * n);
+    let mut position = Vec::with_capacity(steps);
+    let mut lines = Vec::with_capacity(steps);
+    let mut prev = vec![0.0; n];
+    let mut jac = nalgebra::DMatrix::zeros(6, n);
+    let mut exact_qd = Vec::with_capacity(if n == 6 { steps * n } else { 0 });
+    let mut exact_ok = true;
+    for k in 0..steps {
+        let t = (k as f64 * ts).min(trajectory.duration());
+        let sample = trajectory.sample(t);
+        let p = sample.position;
+        let sol = map
+            .solve(&p)
+            .map_err(|e| fail(sample.line, t, p, e))?
+            .to_vec();
+        if k > 0 {
+            // Blended runs are timed at the joint speed limits, which the mean speed over a
+            // step may exceed by rounding: 1 % slack there (a jump to another arm
+            // configuration is far larger; the planner checks the exact speeds itself).
+            let slack = if trajectory.in_run(t) { 1.01 } else { 1.0 };
+            for (i, j) in robot.joints().iter().enumerate() {
+                let speed = (sol[i] - prev[i]).abs() / ts;
+                if speed > j.limits.velocity * slack {
+                    let failure = map.branch_limit(&p, &prev).unwrap_or_else(|| {
+                        ReferenceFailure::JointSpeed {
+                            joint: i + 1,
+                            name: j.name.clone(),
+                            speed,
+                            limit: j.limits.velocity,
+                        }
+                    });
+                    return Err(fail(sample.line, t, p, failure));
+                }
+            }
+        }
+        // Exact joint velocity where the Jacobian is square and regular:
+        // J(q) q̇ = [ṗ; ω] with ω = 0 (constant orientation).
+        if n == 6 && exact_ok {
+            match map.velocity(&sample.velocity, &mut jac) {
+                Some(v) => exact_qd.extend(v),
+                None => exact_ok = false,
+            }
+        }
+        q.extend_from_slice(&sol);
+        position.push([p.x, p.y, p.z]);
+        lines.push(sample.line);
+        prev.copy_from_slice(&sol);
+    }
+    // At least one sample (steps ≥ 1), sizes consistent: cannot fail.
+    let mut r = JointReference::from_samples(n, ts, q, position, lines)
+        .ok_or_else(|| fail(first_line, 0.0, start, ReferenceFailure::SamplePeriod(ts)))?;
+    if n == 6 && exact_ok && exact_qd.len() == r.qd.len() {
+        r.qd = exact_qd;
+    }
+    Ok(r)
+}
+
+/// A joint reference sampled at `ts`. Vectors are stored row-major (`k·n + i`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct JointReference {
+    n: usize,
+    ts: f64,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    position: Vec<[f64; 3]>,
+    line: Vec<usize>,
+}
+
+impl JointReference {
+    /// A reference from its samples: `q` (K·n values), the flange positions
+    /// (K) and the program line of each sample (K). Velocities and
+    /// accelerations are central differences of `q` (zero at the ends, where
+    /// the path is at rest). [`build_reference`] replaces the velocities by
+    /// the exact `J(q)⁻¹ ṗ` for six-joint robots.
+    ///
+    /// Returns `None` when the sizes disagree, `K = 0` or `ts ≤ 0`.
+    pub fn from_samples(
+        n: usize,
+        ts: f64,
+        q: Vec<f64>,
+        position: Vec<[f64; 3]>,
+        line: Vec<usize>,
+    ) -> Option<Self> {
+        let k = position.len();
+        if n == 0 || k == 0 || q.len() != k * n || line.len() != k || !(ts > 0.0 && ts.is_finite())
+        {
+            return None;
+        }
+        let mut qd = vec![0.0; k * n];
+        let mut qdd = vec![0.0; k * n];
+        for s in 1..k.saturating_sub(1) {
+            for i in 0..n {
+                let (a, b, c) = (q[(s - 1) * n + i], q[s * n + i], q[(s + 1) * n + i]);
+                qd[s * n + i] = (c - a) / (2.0 * ts);
+                qdd[s * n + i] = (c - 2.0 * b + a) / (ts * ts);
+            }
+        }
+        Some(Self {
+            n,
+            ts,
+            q,
+            qd,
+            qdd,
+            position,
+            line,
+        })
+    }
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+    /// Sample period (s).
+    pub fn ts(&self) -> f64 {
+        self.ts
+    }
+    /// Number of samples K (the path; the hold is not included).
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// Always false: a reference has at least one sample.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+    /// Duration of the path (s): `(K − 1) Ts`.
+    pub fn duration(&self) -> f64 {
+        (self.len() - 1) as f64 * self.ts
+    }
+    fn clamp(&self, k: usize) -> usize {
+        k.min(self.len() - 1)
+    }
+    /// `w_k` (n values); past the end, the last sample.
+    pub fn q(&self, k: usize) -> &[f64] {
+        let k = self.clamp(k);
+        &self.q[k * self.n..(k + 1) * self.n]
+    }
+    /// Reference velocity at sample `k` (n values); past the end, the last
+    /// sample's (the path ends at rest: zero).
+    pub fn qd(&self, k: usize) -> &[f64] {
+        let k = self.clamp(k);
+        &self.qd[k * self.n..(k + 1) * self.n]
+    }
+    /// Reference acceleration at sample `k` (n values); past the end, the
+    /// last sample's (zero).
+    pub fn qdd(&self, k: usize) -> &[f64] {
+        let k = self.clamp(k);
+        &self.qdd[k * self.n..(k + 1) * self.n]
+    }
+    /// Flange position of the reference at sample `k` (m, base frame).
+    pub fn position(&self, k: usize) -> [f64; 3] {
+        self.position[self.clamp(k)]
+    }
+    /// Program line of sample `k`.
+    pub fn line(&self, k: usize) -> usize {
+        self.line[self.clamp(k)]
+    }
+    /// Writes the preview `w_{k+1}, …, w_{k+N}` into `out` (N·n values, `N =
+    /// out.len() / n`), holding the last value past the end. Allocation-free.
+    pub fn preview(&self, k: usize, horizon: usize, out: &mut [f64]) {
+        let n = self.n;
+        for j in 0..horizon.min(out.len() / n) {
+            out[j * n..(j + 1) * n].copy_from_slice(self.q(k + 1 + j));
+        }
+    }
+    /// All samples of `q`, row-major.
+    pub fn q_all(&self) -> &[f64] {
+        &self.q
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn preview_holds_the_last_value_and_differences_are_exact_for_parabolas() {
+        let ts = 0.1;
+        let k = 11;
+        let q: Vec<f64> = (0..k)
+            .flat_map(|s| {
+                let t = s as f64 * ts;
+                [t * t, -t]
+            })
+            .collect();
+        let r = JointReference::from_samples(2, ts, q, vec![[0.0; 3]; k], vec![1; k]).unwrap();
+        assert!(
+            (r.qd(5)[0] - 1.0).abs() < 1e-12
+                && (r.qdd(5)[0] - 2.0).abs() < 1e-9
+                && (r.qd(5)[1] + 1.0).abs() < 1e-12
+        );
+        let mut p = vec![0.0; 6];
+        r.preview(9, 3, &mut p);
+        assert_eq!(&p[0..2], r.q(10));
+        assert_eq!(&p[2..4], r.q(10));
+        assert_eq!(&p[4..6], r.q(10));
+        assert!((r.duration() - 1.0).abs() < 1e-12);
+        assert!(
+            JointReference::from_samples(2, ts, vec![0.0; 3], vec![[0.0; 3]; 2], vec![1; 2])
+                .is_none()
+        );
+    }
+}

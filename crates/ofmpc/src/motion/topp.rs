@@ -1,0 +1,640 @@
+//! Time-optimal timing of a blended run under path and joint limits (TOPP by reachability),
+//! followed by a jerk-limiting filter.
+//!
+//! # Method
+//!
+//! The run (a blended path from rest to rest, [`crate::motion::blend`]) is gridded in arc
+//! length `s` (nodes at most [`GRID_STEP`] apart, at least two intervals per piece, every
+//! piece boundary a node). With the state `x = ṡ²` and the control `u = s̈` (constant between
+//! nodes, so `x_{i+1} = x_i + 2 Δs_i u_i`), each node has
+//!
+//! - a velocity limit `x ≤ x̄_i`: the cruise speed (feed) `x ≤ F²`, the centripetal
+//!   acceleration `κ x ≤ a_max`, and each joint's speed `|q'_j(s)| √x ≤ v_j`, with
+//!   `q'(s) = dq/ds` from the inverse kinematics at the nodes (finite differences);
+//! - the velocity-dependent part of each joint's acceleration within its limit,
+//!   `|q''_j(s)| x ≤ A_j` (conservative: the tangential acceleration could cancel it at one
+//!   point, but not over a short blend sampled by a few nodes, nor after the filter);
+//! - an admissible control interval `[u_lo(x), u_hi(x)]`: the tangential acceleration
+//!   `|u| ≤ a_max` and each joint's acceleration `|q'_j u + q''_j x| ≤ A_j`
+//!   (`q̈ = q' s̈ + q'' ṡ²`), linear in `(u, x)` as in TOPP-RA (Pham & Pham 2018);
+//! - rest (`x = 0`) at the run's ends and at corners that cannot be blended.
+//!
+//! A backward pass computes the largest controllable state `k_i` (the largest `x ≤ x̄_i`
+//! from which some admissible `u` reaches `[0, k_{i+1}]`; `u_lo` is convex and `u_hi`
+//! concave in `x`, so the sets are intervals `[0, k_i]` found by bisection); a forward pass
+//! takes the largest admissible step `x_{i+1} = min(k_{i+1}, x_i + 2Δs u_hi(x_i))`. This is
+//! the time-optimal profile for the discretized problem, bang-bang in `s̈`.
+//!
+//! # Jerk limit
+//!
+//! Between stops the profile `ṡ(t)` is then averaged over a sliding window of
+//! `T_j = 2 a_max / j_max` (a box filter, as in FIR-based interpolators of CNCs): the filtered
+//! acceleration `(ṡ(t) − ṡ(t − T_j)) / T_j` stays within `a_max`, its jerk
+//! `(s̈(t) − s̈(t − T_j)) / T_j` within `j_max`, the distance is unchanged, each section still
+//! starts and ends at rest, and the run lasts `T_j` longer per section. Because the filtered
+//! position at `t` lies within `F_max T_j` of every position the window averages, the
+//! velocity limits are eroded by that distance before the passes, so the filtered speed stays
+//! within them. The filter may mix accelerations of neighbouring positions: the caller checks
+//! the joint accelerations of the sampled reference and, if needed, replans with scaled
+//! limits ([`crate::motion::plan`]).
+
+use crate::motion::blend::Piece;
+use crate::motion::reference::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use nalgebra::Vector3;
+
+/// Largest node spacing of the grid (m).
+pub const GRID_STEP: f64 = 1e-3;
+
+/// Pieces shorter than this (m) get no grid nodes of their own (the interval that spans them
+/// covers them): finite differences over tinier intervals would be noise.
+pub const MIN_NODE_SPACING: f64 = 1e-5;
+
+/// Largest number of grid nodes of one run; beyond it the spacing grows.
+pub const MAX_GRID_NODES: usize = 2_000_000;
+
+/// Time step (s) of the stored timing of a run.
+pub const RUN_STEP: f64 = 1e-3;
+
+/// Joint constraints of the timing: the map from flange positions to joints and the limits.
+pub(crate) struct JointConstraints<'a> {
+    pub(crate) map: &'a mut JointMap,
+    /// Speed limits (rad/s), already scaled.
+    pub(crate) velocity: Vec<f64>,
+    /// Acceleration limits (rad/s²), already scaled.
+    pub(crate) acceleration: Vec<f64>,
+}
+
+/// Path limits of the timing.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PathLimits {
+    pub(crate) max_accel: f64,
+    pub(crate) max_jerk: f64,
+}
+
+/// Why a run could not be timed.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum RunError {
+    /// The inverse kinematics failed at a grid node.
+    Joint {
+        line: usize,
+        position: Vector3<f64>,
+        failure: ReferenceFailure,
+    },
+    /// The stored timing would exceed [`MAX_PLAN_VALUES`].
+    TooManySamples { count: f64, line: usize },
+}
+
+/// A blended run with its timing: `s(t)` stored every [`RUN_STEP`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Run {
+    pieces: Vec<Piece>,
+    length: f64,
+    /// Filtered arc length at `k h`.
+    s: Vec<f64>,
+    /// Filtered path speed at `k h`.
+    v: Vec<f64>,
+    step: f64,
+}
+
+/// State of a run at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RunState {
+    /// Position (m).
+    pub position: Vector3<f64>,
+    /// Velocity (m/s).
+    pub velocity: Vector3<f64>,
+    /// Acceleration (m/s²).
+    pub acceleration: Vector3<f64>,
+    /// Arc length along the run (m).
+    pub s: f64,
+    /// Path speed (m/s).
+    pub speed: f64,
+    /// Source line.
+    pub line: usize,
+}
+
+impl Run {
+    /// Duration (s).
+    pub fn duration(&self) -> f64 {
+        (self.s.len().saturating_sub(1)) as f64 * self.step
+    }
+    /// Length (m).
+    pub fn length(&self) -> f64 {
+        self.length
+    }
+    /// The blended pieces.
+    pub fn pieces(&self) -> &[Piece] {
+        &self.pieces
+    }
+    /// End point.
+    pub fn end(&self) -> Vector3<f64> {
+        self.pieces
+            .last()
+            .map_or_else(Vector3::zeros, |p| p.geometry.point(p.geometry.length()))
+    }
+    /// Start point.
+    pub fn start(&self) -> Vector3<f64> {
+        self.pieces
+            .first()
+            .map_or_else(Vector3::zeros, |p| p.geometry.point(0.0))
+    }
+
+    /// Arc length, speed and acceleration at time `t` (clamped): cubic Hermite between the
+    /// stored samples.
+    fn path_state(&self, t: f64) -> (f64, f64, f64) {
+        let last = self.s.len() - 1;
+        if t.is_nan() || t <= 0.0 {
+            return (self.s[0], 0.0, 0.0);
+        }
+        let x = t / self.step;
+        if x >= last as f64 {
+            return (self.s[last], 0.0, 0.0);
+        }
+        let k = (x.floor() as usize).min(last - 1);
+        let tau = x - k as f64;
+        let h = self.step;
+        let (p0, p1, m0, m1) = (self.s[k], self.s[k + 1], self.v[k] * h, self.v[k + 1] * h);
+        let t2 = tau * tau;
+        let t3 = t2 * tau;
+        let s = (2.0 * t3 - 3.0 * t2 + 1.0) * p0
+            + (t3 - 2.0 * t2 + tau) * m0
+            + (-2.0 * t3 + 3.0 * t2) * p1
+            + (t3 - t2) * m1;
+        let ds = (6.0 * t2 - 6.0 * tau) * p0
+            + (3.0 * t2 - 4.0 * tau + 1.0) * m0
+            + (-6.0 * t2 + 6.0 * tau) * p1
+            + (3.0 * t2 - 2.0 * tau) * m1;
+        let dds = (12.0 * tau - 6.0) * p0
+            + (6.0 * tau - 4.0) * m0
+            + (-12.0 * tau + 6.0) * p1
+            + (6.0 * tau - 2.0) * m1;
+        (s, ds / h, dds / (h * h))
+    }
+
+    /// The run at time `t` since its start (clamped to the run).
+    pub fn state(&self, t: f64) -> RunState {
+        let (s, v, a) = self.path_state(t);
+        let k = self
+            .pieces
+            .partition_point(|p| p.start <= s)
+            .saturating_sub(1)
+            .min(self.pieces.len() - 1);
+        let p = &self.pieces[k];
+        let local = s - p.start;
+        let tangent = p.geometry.tangent(local);
+        RunState {
+            position: p.geometry.point(local),
+            velocity: tangent * v,
+            acceleration: tangent * a + p.geometry.curvature(local) * (v * v),
+            s,
+            speed: v,
+            line: p.line,
+        }
+    }
+}
+
+/// Node data of the grid.
+struct Node {
+    s: f64,
+    /// Velocity limit `x̄` (before erosion).
+    xbar: f64,
+    /// `q'` and `q''` per joint (empty without joint constraints).
+    dq: Vec<f64>,
+    ddq: Vec<f64>,
+    stop: bool,
+    line: usize,
+}
+
+/// Admissible `[u_lo, u_hi]` at node `n` and state `x` (`lo > hi` when none).
+fn controls(n: &Node, x: f64, a_max: f64, acc: &[f64]) -> (f64, f64) {
+    let (mut lo, mut hi) = (-a_max, a_max);
+    for j in 0..n.dq.len() {
+        let (c, e, a) = (n.dq[j], n.ddq[j] * x, acc[j]);
+        if c.abs() > 1e-12 {
+            let (b1, b2) = ((-a - e) / c, (a - e) / c);
+            lo = lo.max(b1.min(b2));
+            hi = hi.min(b1.max(b2));
+        } else if e.abs() > a {
+            return (1.0, -1.0);
+        }
+    }
+    (lo, hi)
+}
+
+/// Largest `x ∈ [0, xmax]` with `pred(x)`, for a predicate true at 0 and on an interval.
+fn bisect(xmax: f64, pred: impl Fn(f64) -> bool) -> f64 {
+    if pred(xmax) {
+        return xmax;
+    }
+    let (mut a, mut b) = (0.0, xmax);
+    for _ in 0..60 {
+        let m = 0.5 * (a + b);
+        if pred(m) {
+            a = m;
+        } else {
+            b = m;
+        }
+        if b - a <= 1e-12 * xmax {
+            break;
+        }
+    }
+    a
+}
+
+/// Times a blended run (see the module documentation).
+pub(crate) fn time_run(
+    pieces: Vec<Piece>,
+    limits: PathLimits,
+    joints: Option<&mut JointConstraints<'_>>,
+) -> Result<Run, RunError> {
+    let length = pieces.last().map_or(0.0, |p| p.start + p.geometry.length());
+    let total_nodes: f64 = pieces
+        .iter()
+        .map(|p| (p.geometry.length() / GRID_STEP).ceil().max(2.0))
+        .sum();
+    let step = if total_nodes > MAX_GRID_NODES as f64 {
+        GRID_STEP * total_nodes / MAX_GRID_NODES as f64
+    } else {
+        GRID_STEP
+    };
+    // Nodes: piece boundaries and interior points.
+    let mut nodes: Vec<Node> = Vec::new();
+    for (k, p) in pieces.iter().enumerate() {
+        let len = p.geometry.length();
+        let last_piece = k + 1 == pieces.len();
+        let tiny = len < MIN_NODE_SPACING;
+        if tiny && !(p.stop_after || last_piece || k == 0) {
+            continue;
+        }
+        let m = if tiny {
+            1
+        } else {
+            ((len / step).ceil() as usize).max(2)
+        };
+        let first = if k == 0 { 0 } else { 1 };
+        for i in first..=m {
+            let local = len * i as f64 / m as f64;
+            let at_end = i == m;
+            let next = pieces.get(k + 1).filter(|_| at_end);
+            let mut kappa = p.geometry.curvature(local).norm();
+            let mut feed = p.feed;
+            if let Some(nx) = next {
+                kappa = kappa.max(nx.geometry.curvature(0.0).norm());
+                feed = feed.min(nx.feed);
+            }
+            if i == 0 {
+                feed = feed.min(p.feed);
+            }
+            let mut xbar = feed * feed;
+            if kappa > 0.0 {
+                xbar = xbar.min(limits.max_accel / kappa);
+            }
+            nodes.push(Node {
+                s: p.start + local,
+                xbar,
+                dq: Vec::new(),
+                ddq: Vec::new(),
+                stop: (k == 0 && i == 0) || (at_end && (p.stop_after || next.is_none())),
+                line: p.line,
+            });
+        }
+    }
+    let nn = nodes.len();
+    let a_max = limits.max_accel;
+    let acc: Vec<f64> = joints
+        .as_ref()
+        .map_or_else(Vec::new, |j| j.acceleration.clone());
+    let acc: &[f64] = &acc;
+    // Joint derivatives along s.
+    if let Some(jc) = joints {
+        jc.map.reset();
+        let nj = jc.velocity.len();
+        let mut q = vec![0.0; nn * nj];
+        for (i, node) in nodes.iter().enumerate() {
+            let k = pieces
+                .partition_point(|p| p.start <= node.s)
+                .saturating_sub(1);
+            let p = &pieces[k];
+            let pos = p.geometry.point(node.s - p.start);
+            let sol = jc.map.solve(&pos).map_err(|failure| RunError::Joint {
+                line: node.line,
+                position: pos,
+                failure,
+            })?;
+            q[i * nj..(i + 1) * nj].copy_from_slice(sol);
+        }
+        for i in 0..nn {
+            let (dq, ddq): (Vec<f64>, Vec<f64>) = (0..nj)
+                .map(|j| {
+                    let qa = |k: usize| q[k * nj + j];
+                    if nn < 3 {
+                        let h = nodes[nn - 1].s - nodes[0].s;
+                        return ((qa(nn - 1) - qa(0)) / h, 0.0);
+                    }
+                    let c = i.clamp(1, nn - 2);
+                    let (h1, h2) = (nodes[c].s - nodes[c - 1].s, nodes[c + 1].s - nodes[c].s);
+                    let (y0, y1, y2) = (qa(c - 1), qa(c), qa(c + 1));
+                    let d2 = 2.0 * (y0 / (h1 * (h1 + h2)) - y1 / (h1 * h2) + y2 / (h2 * (h1 + h2)));
+                    let d1 = if i == 0 {
+                        (y1 - y0) / h1 - d2 * h1 / 2.0
+                    } else if i == nn - 1 {
+                        (y2 - y1) / h2 + d2 * h2 / 2.0
+                    } else {
+                        -h2 / (h1 * (h1 + h2)) * y0
+                            + (h2 - h1) / (h1 * h2) * y1
+                            + h1 / (h2 * (h1 + h2)) * y2
+                    };
+                    (d1, d2)
+                })
+                .unzip();
+            for (j, d) in dq.iter().enumerate() {
+                if d.abs() > 0.0 {
+                    nodes[i].xbar = nodes[i].xbar.min((jc.velocity[j] / d).powi(2));
+                }
+            }
+            nodes[i].dq = dq;
+            nodes[i].ddq = ddq;
+        }
+    }
+    // Acceleration feasibility caps the velocity limit too. The velocity-dependent part of
+    // each joint's acceleration alone must fit its limit, `|q''_j| x ≤ A_j`: cancelling it
+    // with the tangential acceleration (`u = −q''x/q'`) holds at one node of the grid but not
+    // over a blend a few nodes long, and not after the jerk filter.
+    // `q''` from three nodes straddling a curvature jump (line → blend) is about half the
+    // blend's: take the largest of each node and its neighbours.
+    let peak_ddq: Vec<Vec<f64>> = (0..nn)
+        .map(|i| {
+            let around = &nodes[i.saturating_sub(1)..(i + 2).min(nn)];
+            (0..nodes[i].ddq.len())
+                .map(|j| around.iter().map(|n| n.ddq[j].abs()).fold(0.0, f64::max))
+                .collect()
+        })
+        .collect();
+    for (node, peak) in nodes.iter_mut().zip(&peak_ddq) {
+        for (j, d2) in peak.iter().enumerate() {
+            if *d2 > 0.0 {
+                node.xbar = node.xbar.min(acc[j] / d2);
+            }
+        }
+    }
+    for node in nodes.iter_mut() {
+        let n = &*node;
+        let cap = bisect(n.xbar, |x| {
+            let (lo, hi) = controls(n, x, a_max, acc);
+            lo <= hi
+        });
+        node.xbar = cap;
+    }
+    // Erode the velocity limits by the distance the filter window spans: at most
+    // `R0 = T_j v_top` anywhere, and at most `T_j` times the largest speed limit within `R0`
+    // locally.
+    let t_j = 2.0 * a_max / limits.max_jerk;
+    let v_top = nodes.iter().map(|n| n.xbar.sqrt()).fold(0.0, f64::max);
+    let r0 = v_top * t_j;
+    let xbar: Vec<f64> = nodes.iter().map(|n| n.xbar).collect();
+    let svals: Vec<f64> = nodes.iter().map(|n| n.s).collect();
+    let local_max = sliding(&svals, &xbar, r0, |a, b| a >= b);
+    let tree = MinTree::new(&xbar);
+    let eroded: Vec<f64> = (0..nn)
+        .map(|i| {
+            let reach = t_j * local_max[i].sqrt();
+            let lo = svals.partition_point(|&s| s < svals[i] - reach);
+            let hi = svals.partition_point(|&s| s <= svals[i] + reach);
+            tree.min(lo, hi.max(lo + 1))
+        })
+        .collect();
+    // Backward pass: controllable sets [0, k_i].
+    let mut kset = vec![0.0; nn];
+    for i in (0..nn.saturating_sub(1)).rev() {
+        let n = &nodes[i];
+        if n.stop {
+            continue;
+        }
+        let d = nodes[i + 1].s - n.s;
+        let knext = kset[i + 1];
+        kset[i] = bisect(eroded[i], |x| {
+            let (lo, hi) = controls(n, x, a_max, acc);
+            lo <= hi && x + 2.0 * d * lo <= knext
+        });
+    }
+    // Forward pass.
+    let mut x = vec![0.0; nn];
+    for i in 0..nn.saturating_sub(1) {
+        let d = nodes[i + 1].s - nodes[i].s;
+        let (_, hi) = controls(&nodes[i], x[i], a_max, acc);
+        x[i + 1] = kset[i + 1].min((x[i] + 2.0 * d * hi).max(0.0));
+        if !nodes[i + 1].stop {
+            x[i + 1] = x[i + 1].max(1e-12);
+        }
+    }
+    // Sections between stops: integrate, sample, filter.
+    let window = ((t_j / RUN_STEP).round() as usize).max(1);
+    let h = RUN_STEP;
+    let mut bounds = vec![0];
+    bounds.extend((1..nn).filter(|&i| nodes[i].stop));
+    // Count the samples first (bounded allocation).
+    let mut times = vec![0.0; nn];
+    for i in 0..nn - 1 {
+        let d = nodes[i + 1].s - nodes[i].s;
+        let v = x[i].sqrt() + x[i + 1].sqrt();
+        times[i + 1] = times[i] + if v > 0.0 { 2.0 * d / v } else { f64::INFINITY };
+    }
+    let mut count = 0.0;
+    for w in bounds.windows(2) {
+        count += ((times[w[1]] - times[w[0]]) / h).ceil() + window as f64;
+    }
+    if count.is_nan() || 2.0 * count > MAX_PLAN_VALUES as f64 {
+        let line = (0..nn - 1)
+            .max_by(|&a, &b| (times[a + 1] - times[a]).total_cmp(&(times[b + 1] - times[b])))
+            .map_or(0, |i| nodes[i].line);
+        return Err(RunError::TooManySamples {
+            count: 2.0 * count,
+            line,
+        });
+    }
+    let mut s_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
+    let mut v_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
+    s_out.push(0.0);
+    v_out.push(0.0);
+    for w in bounds.windows(2) {
+        let (i0, i1) = (w[0], w[1]);
+        let t0 = times[i0];
+        let dur = times[i1] - t0;
+        let steps = (dur / h).ceil() as usize;
+        // Unfiltered s at k h.
+        let mut raw = Vec::with_capacity(steps + 1);
+        let mut iv = i0;
+        for k in 0..=steps {
+            let t = (k as f64 * h).min(dur) + t0;
+            while iv + 1 < i1 && times[iv + 1] <= t {
+                iv += 1;
+            }
+            let tau = t - times[iv];
+            let d = nodes[iv + 1].s - nodes[iv].s;
+            let u = (x[iv + 1] - x[iv]) / (2.0 * d);
+            let s = nodes[iv].s + x[iv].sqrt() * tau + 0.5 * u * tau * tau;
+            raw.push(s.clamp(nodes[iv].s, nodes[iv + 1].s));
+        }
+        let s_end = nodes[i1].s;
+        raw[steps] = s_end;
+        // Box filter: mean of raw[k − window + 1 ..= k], raw before 0 = start, after = end.
+        let get = |k: isize| -> f64 {
+            if k < 0 {
+                nodes[i0].s
+            } else {
+                raw[(k as usize).min(steps)]
+            }
+        };
+        let total = steps + window - 1;
+        let mut sum: f64 = (0..window as isize).map(|j| get(-j)).sum();
+        let mut filtered = Vec::with_capacity(total + 1);
+        filtered.push(sum / window as f64);
+        for k in 1..=total as isize {
+            sum += get(k) - get(k - window as isize);
+            filtered.push(sum / window as f64);
+        }
+        filtered[0] = nodes[i0].s;
+        filtered[total] = s_end;
+        for k in 1..=total {
+            s_out.push(filtered[k]);
+            v_out.push(if k == total {
+                0.0
+            } else {
+                (filtered[k + 1] - filtered[k - 1]) / (2.0 * h)
+            });
+        }
+    }
+    Ok(Run {
+        pieces,
+        length,
+        s: s_out,
+        v: v_out,
+        step: h,
+    })
+}
+
+/// For each `i`, the extreme (by `keep(a, b)`: `a` dominates `b`) of `values[j]` over
+/// `|s_j − s_i| ≤ reach` (`s` sorted): a monotone deque, O(n).
+fn sliding(s: &[f64], values: &[f64], reach: f64, keep: impl Fn(f64, f64) -> bool) -> Vec<f64> {
+    let n = s.len();
+    let mut out = vec![0.0; n];
+    let mut deque: std::collections::VecDeque<usize> = std::collections::VecDeque::new();
+    let mut right = 0;
+    for i in 0..n {
+        while right < n && s[right] <= s[i] + reach {
+            while deque
+                .back()
+                .is_some_and(|&b| keep(values[right], values[b]))
+            {
+                deque.pop_back();
+            }
+            deque.push_back(right);
+            right += 1;
+        }
+        while deque.front().is_some_and(|&f| s[f] < s[i] - reach) {
+            deque.pop_front();
+        }
+        out[i] = deque.front().map_or(values[i], |&f| values[f]);
+    }
+    out
+}
+
+/// Range minimum over a fixed array: a bottom-up segment tree.
+struct MinTree {
+    n: usize,
+    t: Vec<f64>,
+}
+
+impl MinTree {
+    fn new(v: &[f64]) -> Self {
+        let n = v.len();
+        let mut t = vec![f64::INFINITY; 2 * n];
+        t[n..].copy_from_slice(v);
+        for i in (1..n).rev() {
+            t[i] = t[2 * i].min(t[2 * i + 1]);
+        }
+        Self { n, t }
+    }
+    /// Minimum of `v[lo..hi]`.
+    fn min(&self, lo: usize, hi: usize) -> f64 {
+        let (mut l, mut r) = (lo + self.n, hi.min(self.n) + self.n);
+        let mut m = f64::INFINITY;
+        while l < r {
+            if l & 1 == 1 {
+                m = m.min(self.t[l]);
+                l += 1;
+            }
+            if r & 1 == 1 {
+                r -= 1;
+                m = m.min(self.t[r]);
+            }
+            l >>= 1;
+            r >>= 1;
+        }
+        m
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pseudo-random numbers in [0, 1).
+    fn lcg(seed: &mut u64) -> f64 {
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*seed >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    #[test]
+    fn range_minimum_and_sliding_extremes_match_brute_force() {
+        let mut seed = 7;
+        let n = 300;
+        let v: Vec<f64> = (0..n).map(|_| lcg(&mut seed)).collect();
+        let mut s = vec![0.0];
+        for _ in 1..n {
+            let last = *s.last().unwrap();
+            s.push(last + 0.01 * lcg(&mut seed) + 1e-4);
+        }
+        let tree = MinTree::new(&v);
+        for lo in (0..n).step_by(7) {
+            for hi in (lo + 1..=n).step_by(5) {
+                let brute = v[lo..hi].iter().copied().fold(f64::INFINITY, f64::min);
+                assert_eq!(tree.min(lo, hi), brute);
+            }
+        }
+        for reach in [0.0, 0.013, 0.2] {
+            let max = sliding(&s, &v, reach, |a, b| a >= b);
+            let min = sliding(&s, &v, reach, |a, b| a <= b);
+            for i in 0..n {
+                let window = (0..n).filter(|&j| (s[j] - s[i]).abs() <= reach);
+                let (bmax, bmin) =
+                    window.fold((f64::MIN, f64::MAX), |(a, b), j| (a.max(v[j]), b.min(v[j])));
+                assert_eq!((max[i], min[i]), (bmax, bmin), "i {i} reach {reach}");
+            }
+        }
+    }
+
+    #[test]
+    fn admissible_controls_respect_every_joint_and_bisection_finds_the_edge() {
+        let node = Node {
+            s: 0.0,
+            xbar: 1.0,
+            dq: vec![2.0, -1.0],
+            ddq: vec![10.0, 0.0],
+            stop: false,
+            line: 1,
+        };
+        let acc = [4.0, 3.0];
+        let (lo, hi) = controls(&node, 0.1, 2.5, &acc);
+        // Joint 1: |2u + 1| ≤ 4 → u ∈ [−2.5, 1.5]; joint 2: |u| ≤ 3; path: |u| ≤ 2.5.
+        assert!((lo + 2.5).abs() < 1e-15 && (hi - 1.5).abs() < 1e-15);
+        // Largest x with a non-empty interval: 2u + 10x ∈ [−4, 4] with u ≥ −2.5 → x ≤ 0.9.
+        let x = bisect(1.0, |x| {
+            let (l, h) = controls(&node, x, 2.5, &acc);
+            l <= h
+        });
+        assert!((x - 0.9).abs() < 1e-9, "{x}");
+    }
+}

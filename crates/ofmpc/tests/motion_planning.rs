@@ -1,0 +1,407 @@
+//! The motion planner as a CNC user sees it: G61 exact stop (the paper's law, unchanged),
+//! G64 P blending within the tolerance, time-optimal timing under path and joint limits,
+//! long programs that never stop, and bounded allocation.
+
+use nalgebra::Vector3;
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::motion::reference::build_reference;
+use ofmpc::motion::{
+    plan, CartesianTrajectory, Orientation, Plan, PlanError, PlanOptions, SampleCause,
+    TimingOptions, MAX_PLAN_VALUES,
+};
+use ofmpc::robot::Robot;
+use std::fmt::Write;
+
+fn plan_ok(text: &str, robot: &Robot) -> Plan {
+    plan(text, robot, &PlanOptions::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Every sample of the reference within every joint's speed and acceleration limit.
+fn assert_joint_limits(p: &Plan, robot: &Robot) -> (f64, f64) {
+    let r = &p.reference;
+    let (mut worst_v, mut worst_a) = (0.0f64, 0.0f64);
+    for k in 0..r.len() {
+        for (i, j) in robot.joints().iter().enumerate() {
+            let (v, a) = (r.qd(k)[i].abs(), r.qdd(k)[i].abs());
+            assert!(
+                v <= j.limits.velocity * (1.0 + 1e-9),
+                "joint {} speed {v} > {} at sample {k}",
+                i + 1,
+                j.limits.velocity
+            );
+            assert!(
+                a <= j.limits.acceleration * (1.0 + 1e-9),
+                "joint {} acceleration {a} > {} at sample {k}",
+                i + 1,
+                j.limits.acceleration
+            );
+            worst_v = worst_v.max(v / j.limits.velocity);
+            worst_a = worst_a.max(a / j.limits.acceleration);
+        }
+    }
+    (worst_v, worst_a)
+}
+
+fn dist_to_segment(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> f64 {
+    let u = b - a;
+    let t = ((p - a).dot(&u) / u.norm_squared()).clamp(0.0, 1.0);
+    (p - (a + u * t)).norm()
+}
+
+/// Largest distance (m) of the trajectory, sampled every `dt`, from the polygon `corners`.
+fn deviation(tr: &CartesianTrajectory, corners: &[Vector3<f64>], dt: f64) -> f64 {
+    let n = (tr.duration() / dt).ceil() as usize;
+    (0..=n)
+        .map(|k| {
+            let p = tr.sample(k as f64 * dt).position;
+            corners
+                .windows(2)
+                .map(|w| dist_to_segment(p, w[0], w[1]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A closed polygon program around (x, y) = (cx, cy) mm at z mm, starting at angle 0.
+fn polygon(n: usize, radius_mm: f64, feed: f64, mode: &str) -> (String, Vec<Vector3<f64>>) {
+    let (cx, cy, z) = (500.0, 0.0, 400.0);
+    let mut text = format!("G21 G90 {mode}\n");
+    let mut corners = Vec::new();
+    for k in 0..=n {
+        let a = std::f64::consts::TAU * k as f64 / n as f64;
+        let (x, y) = (cx + radius_mm * a.cos(), cy + radius_mm * a.sin());
+        corners.push(Vector3::new(x, y, z) * 1e-3);
+        if k == 0 {
+            writeln!(text, "G0 X{x:.6} Y{y:.6} Z{z}").unwrap();
+        } else if k == 1 {
+            writeln!(text, "G1 X{x:.6} Y{y:.6} F{feed}").unwrap();
+        } else {
+            writeln!(text, "X{x:.6} Y{y:.6}").unwrap();
+        }
+    }
+    (text, corners)
+}
+
+#[test]
+fn the_papers_program_is_planned_exactly_as_before() {
+    // G61 (the default): the entry point gives bit for bit the reference of the
+    // rest-to-rest pipeline assembled by hand.
+    let robot = Robot::irb140();
+    let p = plan_ok(PAPER_TABLE1, &robot);
+    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
+    let r = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    assert_eq!(p.trajectory, traj);
+    assert_eq!(p.reference, r);
+    assert_eq!(p.diagnostics.runs, 0);
+    // The septic law's duration of the eight moves at 0.5 m/s and 2.5 m/s² (as before
+    // this planner existed: 11.623 s).
+    assert!(
+        (traj.duration() - 11.6228).abs() < 1e-4,
+        "{}",
+        traj.duration()
+    );
+}
+
+#[test]
+fn circle_polygon_blends_within_tolerance_at_the_programmed_feed() {
+    // 360 segments approximating a circle of radius 100 mm, F6000 (0.1 m/s), G64 P0.05.
+    let robot = Robot::irb140();
+    let (text, corners) = polygon(360, 100.0, 6000.0, "G64 P0.05");
+    let p = plan_ok(&text, &robot);
+    let tr = &p.trajectory;
+    let dev = deviation(tr, &corners, 1e-3);
+    assert!(dev <= 0.05e-3, "deviation {} mm", dev * 1e3);
+    let length: f64 = corners.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let f = 0.1;
+    assert!(
+        tr.duration() <= 1.2 * length / f + 1.0,
+        "duration {} s for {} s at F",
+        tr.duration(),
+        length / f
+    );
+    // Between the end of the first segment and the start of the last, never below F/2.
+    let seg = length / 360.0;
+    let mut min_speed = f64::INFINITY;
+    let mut s = 0.0;
+    let n = (tr.duration() / 1e-3) as usize;
+    let mut prev = tr.sample(0.0).position;
+    for k in 1..=n {
+        let smp = tr.sample(k as f64 * 1e-3);
+        s += (smp.position - prev).norm();
+        prev = smp.position;
+        if s > seg && s < length - seg {
+            min_speed = min_speed.min(smp.velocity.norm());
+        }
+    }
+    assert!(min_speed >= 0.5 * f, "min speed {min_speed} m/s");
+    assert_joint_limits(&p, &robot);
+    eprintln!(
+        "circle: deviation {:.4} mm, duration {:.3} s (L/F = {:.3} s), min speed {:.4} m/s",
+        dev * 1e3,
+        tr.duration(),
+        length / f,
+        min_speed
+    );
+}
+
+#[test]
+fn square_keeps_moving_through_corners_under_g64_and_stops_under_g61() {
+    let robot = Robot::irb140();
+    let square =
+        |mode: &str| format!("G21 G90 {mode}\nG0 X450 Y-50 Z400\nG1 X550 F3000\nY50\nX450\nY-50\n");
+    let corners: Vec<Vector3<f64>> = [
+        (450.0, -50.0),
+        (550.0, -50.0),
+        (550.0, 50.0),
+        (450.0, 50.0),
+        (450.0, -50.0),
+    ]
+    .iter()
+    .map(|&(x, y)| Vector3::new(x, y, 400.0) * 1e-3)
+    .collect();
+    let blended = plan_ok(&square("G64 P0.5"), &robot);
+    let exact = plan_ok(&square("G61"), &robot);
+    // Speed near each interior corner: the slowest sample within 5 mm of it.
+    let slowest_near = |tr: &CartesianTrajectory, c: Vector3<f64>| {
+        let n = (tr.duration() / 1e-3) as usize;
+        (0..=n)
+            .map(|k| tr.sample(k as f64 * 1e-3))
+            .filter(|s| (s.position - c).norm() < 5e-3)
+            .map(|s| s.velocity.norm())
+            .fold(f64::INFINITY, f64::min)
+    };
+    for c in &corners[1..4] {
+        let vb = slowest_near(&blended.trajectory, *c);
+        let ve = slowest_near(&exact.trajectory, *c);
+        assert!(vb > 0.01, "G64 slows to {vb} m/s at a corner");
+        assert!(ve < 1e-6, "G61 does not stop at a corner: {ve} m/s");
+    }
+    let dev = deviation(&blended.trajectory, &corners, 1e-3);
+    assert!(dev <= 0.5e-3 && dev > 0.1e-3, "deviation {} mm", dev * 1e3);
+    assert!(blended.trajectory.duration() < exact.trajectory.duration());
+    assert_joint_limits(&blended, &robot);
+    eprintln!(
+        "square: G64 P0.5 {:.3} s, deviation {:.3} mm; G61 {:.3} s",
+        blended.trajectory.duration(),
+        dev * 1e3,
+        exact.trajectory.duration()
+    );
+}
+
+#[test]
+fn straight_line_duration_is_near_the_jerk_limited_optimum() {
+    // One 300 mm line under G64 at F6000 (0.1 m/s), 2.5 m/s², 50 m/s³: the 1-D jerk-limited
+    // minimum time is L/v + 2√(v/j) (v < a²/j: the acceleration never saturates).
+    let robot = Robot::irb140();
+    let p = plan_ok("G64\nG0 X400 Y-150 Z400\nG1 Y150 F6000\n", &robot);
+    let (l, v, j): (f64, f64, f64) = (0.3, 0.1, 50.0);
+    let optimum = l / v + 2.0 * (v / j).sqrt();
+    let d = p.trajectory.duration();
+    assert!(
+        d >= optimum * (1.0 - 1e-3),
+        "{d} beats the optimum {optimum}"
+    );
+    assert!(d <= 1.03 * optimum, "{d} vs optimum {optimum}");
+    // Path speed, acceleration and jerk within their limits on a 1 ms grid.
+    let h = 1e-3;
+    let n = (d / h) as usize;
+    let speed: Vec<f64> = (0..=n)
+        .map(|k| p.trajectory.sample(k as f64 * h).velocity.norm())
+        .collect();
+    for w in speed.windows(3) {
+        assert!(w[1] <= v * (1.0 + 1e-6));
+        assert!(((w[2] - w[0]) / (2.0 * h)).abs() <= 2.5 * 1.01);
+    }
+    for w in speed.windows(4) {
+        let jerk = (w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0]) / (h * h) / 1.0;
+        assert!(jerk.abs() <= j * 1.05 + 1.0, "jerk {jerk}");
+    }
+    eprintln!("line: {d:.4} s, jerk-limited optimum {optimum:.4} s");
+}
+
+#[test]
+fn a_feed_beyond_the_joints_is_slowed_where_needed() {
+    // Joint 1 limited to 0.2 rad/s: a line across the front of the robot at x = 0.4 m needs
+    // q1' ≈ 1/0.4 rad/m, so about 0.08 m/s at most, far below F30000 (0.5 m/s).
+    let mut robot = Robot::irb140();
+    let drives =
+        ofmpc::robot::Drives::from_toml_str("[joints.joint_1]\nmax_speed_rad_s = 0.2\n").unwrap();
+    robot.apply_drives(&drives).unwrap();
+    let text = "G64\nG0 X400 Y-150 Z400\nG1 Y150 F30000\n";
+    let p = plan_ok(text, &robot);
+    let (wv, wa) = assert_joint_limits(&p, &robot);
+    assert!(wv > 0.95, "the joint speed limit is reached: {wv}");
+    // Brute force: the time at the joint-limited speed, scanned along the line with the
+    // analytic IK every 0.1 mm, is a lower bound; the plan is within a few percent of it
+    // (plus the ramps at the ends: v/a and the jerk filter 2a/j).
+    let opw = robot.opw_parameters().unwrap();
+    let mut ws = ofmpc::dynamics::Workspace::new(&robot);
+    let rot0 = ofmpc::dynamics::forward_kinematics(&robot, &mut ws, &[0.0; 6])
+        .unwrap()
+        .rot;
+    let rotation = nalgebra::UnitQuaternion::from_matrix(&rot0);
+    let n = 3000;
+    let ds = 0.3 / n as f64;
+    let q_at = |y: f64| {
+        let pose =
+            nalgebra::Isometry3::from_parts(nalgebra::Translation3::new(0.4, y, 0.4), rotation);
+        let sols = opw.inverse(&pose);
+        sols.as_slice()
+            .iter()
+            .min_by(|a, b| {
+                let d = |q: &[f64; 6]| q.iter().map(|x| x * x).sum::<f64>();
+                d(a).total_cmp(&d(b))
+            })
+            .copied()
+            .unwrap()
+    };
+    let mut bound = 0.0;
+    for k in 0..n {
+        let y = -0.15 + (k as f64 + 0.5) * ds;
+        let (qa, qb) = (q_at(y - ds / 2.0), q_at(y + ds / 2.0));
+        let mut vmax: f64 = 0.5;
+        for (i, jt) in robot.joints().iter().enumerate() {
+            let dq = ((qb[i] - qa[i]) / ds).abs();
+            if dq > 0.0 {
+                vmax = vmax.min(jt.limits.velocity / dq);
+            }
+        }
+        bound += ds / vmax;
+    }
+    let d = p.trajectory.duration();
+    let ramps = 0.1 / 2.5 + 2.0 * 2.5 / 50.0;
+    assert!(d >= bound * (1.0 - 1e-3), "{d} beats the bound {bound}");
+    assert!(d <= 1.03 * bound + ramps, "{d} vs bound {bound}");
+    eprintln!(
+        "joint-limited line: {d:.3} s, brute-force bound {bound:.3} s (+ ramps {ramps:.2} s), peak speed/limit {wv:.4}, accel/limit {wa:.4}"
+    );
+}
+
+/// A CAM-like program: `n` segments of about 1 mm along a wavy circle.
+fn long_program(n: usize) -> String {
+    let mut text = String::from("G21 G90 G64 P0.01\n");
+    for k in 0..=n {
+        let a = k as f64 * 0.01; // 1 mm at r = 100 mm
+        let r = 100.0 + 10.0 * (7.0 * a).sin();
+        let (x, y) = (500.0 + r * a.cos(), r * a.sin());
+        let z = 400.0 + 5.0 * (3.0 * a).sin();
+        if k == 0 {
+            writeln!(text, "G0 X{x:.4} Y{y:.4} Z{z:.4}").unwrap();
+        } else if k == 1 {
+            writeln!(text, "G1 X{x:.4} Y{y:.4} Z{z:.4} F6000").unwrap();
+        } else {
+            writeln!(text, "X{x:.4} Y{y:.4} Z{z:.4}").unwrap();
+        }
+    }
+    text
+}
+
+#[test]
+fn ten_thousand_short_segments_never_stop() {
+    let robot = Robot::irb140();
+    let p = plan_ok(&long_program(10_000), &robot);
+    assert_eq!(p.program.moves.len(), 10_000);
+    assert_eq!(p.diagnostics.runs, 1);
+    let r = &p.reference;
+    // Between the first and the last 20 mm the flange never slows below half the feed.
+    let speed = |k: usize| {
+        let (a, b) = (r.position(k - 1), r.position(k + 1));
+        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2) + (b[2] - a[2]).powi(2)).sqrt()
+            / (2.0 * r.ts())
+    };
+    let skip = (0.02 / 0.1 / r.ts()) as usize;
+    let min = (skip..r.len() - skip)
+        .map(speed)
+        .fold(f64::INFINITY, f64::min);
+    assert!(min > 0.05, "slows to {min} m/s");
+    assert_joint_limits(&p, &robot);
+}
+
+#[test]
+fn huge_sample_counts_are_refused_before_allocating_with_their_cause() {
+    let robot = Robot::irb140();
+    let base = "G0 X500 Y0 Z400\n";
+    let err = |text: &str, options: &PlanOptions| match plan(text, &robot, options) {
+        Err(PlanError::TooManySamples {
+            cause,
+            count,
+            limit,
+        }) => {
+            assert!(count > limit as f64 && limit == MAX_PLAN_VALUES);
+            cause
+        }
+        other => panic!("{:?}", other.map(|p| p.diagnostics)),
+    };
+    let d = PlanOptions::default();
+    assert_eq!(
+        err(&format!("{base}G1 X600 F0.0001\n"), &d),
+        SampleCause::Feed { line: 2 }
+    );
+    assert_eq!(
+        err(&format!("{base}G1 X600\nG04 P100000000\n"), &d),
+        SampleCause::Dwell { line: 3 }
+    );
+    let tiny_ts = PlanOptions {
+        ts: 1e-9,
+        ..PlanOptions::default()
+    };
+    assert_eq!(
+        err(&format!("{base}G1 X600\n"), &tiny_ts),
+        SampleCause::SamplePeriod
+    );
+    let tiny_accel = PlanOptions {
+        timing: TimingOptions {
+            max_accel: 1e-12,
+            ..TimingOptions::default()
+        },
+        ..PlanOptions::default()
+    };
+    assert_eq!(
+        err(&format!("{base}G1 X600\n"), &tiny_accel),
+        SampleCause::PathAcceleration { line: 2 }
+    );
+    let tiny_speed = PlanOptions {
+        timing: TimingOptions {
+            max_speed: 1e-9,
+            ..TimingOptions::default()
+        },
+        ..PlanOptions::default()
+    };
+    assert_eq!(
+        err(&format!("{base}G0 X600\n"), &tiny_speed),
+        SampleCause::PathSpeed { line: 2 }
+    );
+    // The message names the cause, the count and the limit, and no internal name.
+    let e = plan(&format!("{base}G1 X600 F0.0001\n"), &robot, &d).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("program line 2") && m.contains("feed") && m.contains("50000000"),
+        "{m}"
+    );
+    assert!(!m.contains("::") && !m.contains("max_"), "{m}");
+    // Under G64 the run's own timing is bounded too.
+    let e = plan(&format!("G64\n{base}G1 X600 F0.0001\n"), &robot, &d).unwrap_err();
+    assert!(e.to_string().contains("program line 3"), "{e}");
+}
+
+#[test]
+fn joint_acceleration_limits_hold_on_every_sample() {
+    // Joint 1 limited to 0.5 rad/s² (and 1 rad/s): a square around the robot's front at
+    // F30000 must slow its accelerations down to what joint 1 allows.
+    let mut robot = Robot::irb140();
+    let drives = ofmpc::robot::Drives::from_toml_str(
+        "[joints.joint_1]\nmax_speed_rad_s = 1.0\nmax_accel_rad_s2 = 0.5\n",
+    )
+    .unwrap();
+    robot.apply_drives(&drives).unwrap();
+    let text = "G64 P0.5\nG0 X400 Y-150 Z400\nG1 Y150 F30000\nX550\nY-150\nX400\n";
+    let p = plan_ok(text, &robot);
+    let (wv, wa) = assert_joint_limits(&p, &robot);
+    assert!(wa > 0.8, "the acceleration limit binds: {wa}");
+    eprintln!(
+        "joint-1 acceleration limited: {:.3} s, speed/limit {wv:.3}, accel/limit {wa:.3}, {:?}",
+        p.trajectory.duration(),
+        p.diagnostics
+    );
+}
