@@ -2,9 +2,8 @@
 //! `cargo run --release -p ofmpc --example adaptive_quick -- 2 [pick_up_s]`.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings};
 
@@ -13,9 +12,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let payload: f64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(2.0);
     let pick_up: Option<f64> = args.next().map(|s| s.parse()).transpose()?;
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    // The library's one planning entry point (parse, time, IK).
+    let ts = 0.01;
+    let reference = plan(
+        PAPER_TABLE1,
+        &robot,
+        &PlanOptions {
+            ts,
+            ..PlanOptions::default()
+        },
+    )?
+    .reference;
     let exp = Experiment {
         robot,
         reference,

@@ -2,9 +2,8 @@
 //! of the paper's experiment. `cargo run --release -p ofmpc --example drives_probe -- CASE`.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, PlantSettings};
 
@@ -21,9 +20,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .transpose()?
         .unwrap_or(1.0);
     let mut robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    // The library's one planning entry point (parse, time, IK).
+    let ts = 0.01;
+    let reference = plan(
+        PAPER_TABLE1,
+        &robot,
+        &PlanOptions {
+            ts,
+            ..PlanOptions::default()
+        },
+    )?
+    .reference;
     let mut mpc = MpcSettings::default();
     let mut plant = PlantSettings::default();
     match case.as_str() {

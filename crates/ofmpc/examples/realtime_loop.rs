@@ -20,9 +20,8 @@ use std::time::{Duration, Instant};
 
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings};
 use ofmpc::dynamics::RobotDynamics;
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{quantile, Plant, PlantSettings};
 
@@ -65,9 +64,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // ---- Set-up: everything that allocates happens here, once.
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-    let path = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-    let reference = build_reference(&robot, &path, Orientation::AtZero, TS)?;
+    // The library's one planning entry point (parse, time, IK).
+    let ts = TS;
+    let reference = plan(
+        PAPER_TABLE1,
+        &robot,
+        &PlanOptions {
+            ts,
+            ..PlanOptions::default()
+        },
+    )?
+    .reference;
     let settings = MpcSettings {
         ts: TS,
         ..MpcSettings::default() // horizon 10 (10 ms ahead), the paper's weights

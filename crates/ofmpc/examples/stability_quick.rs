@@ -1,16 +1,23 @@
 //! `cargo run --release -p ofmpc --example stability_quick`
 use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::Robot;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default())?;
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default())?;
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)?;
+    // The library's one planning entry point (parse, time, IK).
+    let ts = 0.01;
+    let reference = plan(
+        PAPER_TABLE1,
+        &robot,
+        &PlanOptions {
+            ts,
+            ..PlanOptions::default()
+        },
+    )?
+    .reference;
     let q0 = reference.q(0).to_vec();
     let opts = StabilityOptions::default();
     let poses: Vec<&[f64]> = (0..reference.len())

@@ -43,7 +43,10 @@ pub fn run_name(kind: ControllerKind, payload: &Payload) -> String {
     format!("{}_m{}", kind_name(kind), mass_label(payload.mass))
 }
 
-/// The payload mass as written in run names (see [`run_name`]).
+/// The payload mass as written in run names (see [`run_name`]): its
+/// shortest round-trip form when that has at most 12 characters, else rounded
+/// to 6 significant digits (`0.30000000000000004` → `0.3`), in exponent form
+/// when even that is long (`1e-300`).
 pub fn mass_label(mass: f64) -> String {
     let m = if mass == 0.0 { 0.0 } else { mass }; // -0 → 0
     let short = format!("{m}");
@@ -51,6 +54,10 @@ pub fn mass_label(mass: f64) -> String {
         return short;
     }
     let e = format!("{m:.5e}");
+    let rounded = format!("{}", e.parse::<f64>().unwrap_or(m));
+    if rounded.len() <= 12 {
+        return rounded;
+    }
     // Trim trailing zeros of the mantissa: 1.50000e300 → 1.5e300.
     match e.split_once('e') {
         Some((mant, exp)) => {
@@ -177,5 +184,24 @@ impl Experiment {
             &result.outcome,
         );
         Ok((result, metrics))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::mass_label;
+
+    #[test]
+    fn mass_labels_are_short_and_distinct_where_it_matters() {
+        assert_eq!(mass_label(0.25), "0.25");
+        assert_eq!(mass_label(-0.0), "0");
+        assert_eq!(mass_label(6.0), "6");
+        assert_eq!(mass_label(0.1 + 0.2), "0.3");
+        assert_eq!(mass_label(1e-300), "1e-300");
+        assert_eq!(mass_label(1.5e300), "1.5e300");
+        assert_eq!(mass_label(1.0 / 3.0), "0.333333");
+        for m in [1e-300, 1e300, 0.1 + 0.2, 123456.789012345, f64::MAX] {
+            assert!(mass_label(m).len() <= 13, "{m}: {}", mass_label(m));
+        }
     }
 }
