@@ -581,7 +581,9 @@ fn option_messages_and_trajectory_default_out() {
             "ofmpc-out/reference_cartesian.png",
             "ofmpc-out/reference_cartesian.svg",
             "ofmpc-out/reference_path.png",
-            "ofmpc-out/reference_path.svg"
+            "ofmpc-out/reference_path.svg",
+            "ofmpc-out/reference_speed.png",
+            "ofmpc-out/reference_speed.svg"
         ]
     );
 }

@@ -3,8 +3,7 @@
 //! step) performs no heap allocation (counted per thread) and never panics,
 //! also on failed steps and with a model that has no rigid-body behind it.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+mod alloc_counter;
 
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepError};
@@ -12,32 +11,10 @@ use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Plant, PlantSettings};
 
-struct Counting;
-
-thread_local! {
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        System.realloc(ptr, layout, new_size)
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
 
-fn allocations() -> usize {
-    ALLOCS.with(|c| c.get())
-}
+use alloc_counter::allocations;
 
 /// A model with no rigid body behind it (the adaptive step must refuse it).
 struct Opaque(RobotDynamics);

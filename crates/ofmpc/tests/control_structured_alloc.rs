@@ -3,41 +3,18 @@
 //! allocator, per thread), with the structured solver at long horizons and
 //! the dense QR named explicitly.
 
-mod common;
+mod alloc_counter;
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
+mod common;
 
 use common::{CoupledModel, TwoLinkArm};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, Solver, Weight};
 use ofmpc::dynamics::JointSpaceDynamics;
 
-struct Counting;
-
-thread_local! {
-    static ALLOCS: Cell<usize> = const { Cell::new(0) };
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCS.with(|c| c.set(c.get() + 1));
-        System.realloc(ptr, layout, new_size)
-    }
-}
-
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
 
-fn allocations() -> usize {
-    ALLOCS.with(|c| c.get())
-}
+use alloc_counter::allocations;
 
 fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
     let n = model.dof();
