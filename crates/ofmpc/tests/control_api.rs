@@ -6,7 +6,7 @@ mod common;
 use common::CoupledModel;
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{
-    new_controller, Controller, ControllerKind, ModelError, MpcSettings, SettingsError, StepError,
+    new_controller, Controller, ControllerKind, MpcSettings, SettingsError, StepError, TermsError,
     Weight, ZohError,
 };
 use ofmpc::dynamics::JointSpaceDynamics;
@@ -322,7 +322,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                         Fault::Indefinite => {
                             assert!(matches!(
                                 e,
-                                StepError::Model(ModelError::InertiaNotPositiveDefinite {
+                                StepError::Model(TermsError::InertiaNotPositiveDefinite {
                                     pivot: 1,
                                     ..
                                 })
@@ -330,7 +330,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                         }
                         Fault::NanGravity => assert!(matches!(
                             e,
-                            StepError::Model(ModelError::NonFiniteTerm { .. })
+                            StepError::Model(TermsError::NonFiniteTerm { .. })
                         )),
                         _ => assert!(matches!(
                             e,
@@ -343,7 +343,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 let e = twin.step(&mut wrong, x, &wk, &preview, &mut t).unwrap_err();
                 assert!(matches!(
                     e,
-                    StepError::Model(ModelError::DofMismatch {
+                    StepError::Model(TermsError::DofMismatch {
                         expected: 3,
                         got: 2
                     })

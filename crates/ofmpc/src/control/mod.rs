@@ -47,7 +47,7 @@ pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
 pub use drive_model::{DriveModel, DriveQuantity};
 pub use first::FirstMpc;
 pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
-pub use model::{LinearLikeModel, ModelError};
+pub use model::{LinearLikeModel, TermsError};
 pub use observer::StateObserver;
 pub use prediction::Predictions;
 pub use second::SecondMpc;
@@ -181,7 +181,7 @@ pub enum StepError {
     },
     /// The robot model is unusable at this state (dof, non-finite, H not SPD).
     #[error(transparent)]
-    Model(#[from] ModelError),
+    Model(#[from] TermsError),
     /// The discretization failed (`f0·Ts` too large or overflow).
     #[error(transparent)]
     Discretization(#[from] ZohError),

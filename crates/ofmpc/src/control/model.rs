@@ -8,7 +8,7 @@ use crate::dynamics::JointSpaceDynamics;
 
 /// Why the model terms of one sample cannot be used.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum ModelError {
+pub enum TermsError {
     /// The robot model has another number of joints than the controller.
     #[error("the robot model has {got} joints but the controller was built for {expected}: build the controller with the model's dof()")]
     DofMismatch {
@@ -84,9 +84,9 @@ impl LinearLikeModel {
         model: &mut dyn JointSpaceDynamics,
         q: &[f64],
         qd: &[f64],
-    ) -> Result<(), ModelError> {
+    ) -> Result<(), TermsError> {
         if model.dof() != self.n {
-            return Err(ModelError::DofMismatch {
+            return Err(TermsError::DofMismatch {
                 expected: self.n,
                 got: model.dof(),
             });
@@ -104,7 +104,7 @@ impl LinearLikeModel {
         h: &DMatrix<f64>,
         c: &DMatrix<f64>,
         g: &DVector<f64>,
-    ) -> Result<(), ModelError> {
+    ) -> Result<(), TermsError> {
         let n = self.n;
         for (what, shape, want) in [
             ("H", h.shape(), (n, n)),
@@ -112,7 +112,7 @@ impl LinearLikeModel {
             ("g", (g.len(), 1), (n, 1)),
         ] {
             if shape != want {
-                return Err(ModelError::WrongLength {
+                return Err(TermsError::WrongLength {
                     what,
                     expected: want.0 * want.1,
                     got: shape.0 * shape.1,
@@ -125,14 +125,14 @@ impl LinearLikeModel {
         self.set_f0_from_terms()
     }
 
-    fn set_f0_from_terms(&mut self) -> Result<(), ModelError> {
+    fn set_f0_from_terms(&mut self) -> Result<(), TermsError> {
         for (term, s) in [
             ("H", self.h.as_slice()),
             ("C", self.c.as_slice()),
             ("g", self.g.as_slice()),
         ] {
             if let Some(index) = s.iter().position(|v| !v.is_finite()) {
-                return Err(ModelError::NonFiniteTerm { term, index });
+                return Err(TermsError::NonFiniteTerm { term, index });
             }
         }
         cholesky_in_place(self.n, self.h.as_slice(), self.chol.as_mut_slice())?;
@@ -169,7 +169,7 @@ impl LinearLikeModel {
 
     /// Torques from the acceleration-like input: `τ = H u + g` (Eq. (15)),
     /// with the `H`, `g` of the last update. Slices of length `n`.
-    pub fn torque(&self, u: &[f64], tau: &mut [f64]) -> Result<(), ModelError> {
+    pub fn torque(&self, u: &[f64], tau: &mut [f64]) -> Result<(), TermsError> {
         let n = self.n;
         check_len("u", u.len(), n)?;
         check_len("tau", tau.len(), n)?;
@@ -182,7 +182,7 @@ impl LinearLikeModel {
 
     /// The input `u = H⁻¹(τ − g)` of Eq. (7) for given torques (inverse of
     /// [`LinearLikeModel::torque`]). Slices of length `n`.
-    pub fn input_from_torque(&self, tau: &[f64], u: &mut [f64]) -> Result<(), ModelError> {
+    pub fn input_from_torque(&self, tau: &[f64], u: &mut [f64]) -> Result<(), TermsError> {
         check_len("tau", tau.len(), self.n)?;
         check_len("u", u.len(), self.n)?;
         for ((ui, ti), gi) in u.iter_mut().zip(tau).zip(self.g.iter()) {
@@ -198,7 +198,7 @@ impl LinearLikeModel {
     /// a shorter or longer slice is left as it is). Allocation-free.
     /// Adds a known torque `f` to `g` (a bias the drives must overcome, e.g.
     /// friction), so that `τ = H u + g + f`. Allocation-free.
-    pub(crate) fn add_bias_torque(&mut self, f: &[f64]) -> Result<(), ModelError> {
+    pub(crate) fn add_bias_torque(&mut self, f: &[f64]) -> Result<(), TermsError> {
         check_len("f", f.len(), self.n)?;
         for (g, fi) in self.g.iter_mut().zip(f) {
             *g += fi;
@@ -213,11 +213,11 @@ impl LinearLikeModel {
     }
 }
 
-fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), ModelError> {
+fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), TermsError> {
     if got == expected {
         Ok(())
     } else {
-        Err(ModelError::WrongLength {
+        Err(TermsError::WrongLength {
             what,
             expected,
             got,
@@ -227,7 +227,7 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Mode
 
 /// Cholesky factorization `H = L Lᵀ` of an n×n SPD matrix (column-major,
 /// lower triangle read), written into the lower triangle of `l`.
-pub(crate) fn cholesky_in_place(n: usize, h: &[f64], l: &mut [f64]) -> Result<(), ModelError> {
+pub(crate) fn cholesky_in_place(n: usize, h: &[f64], l: &mut [f64]) -> Result<(), TermsError> {
     l[..n * n].copy_from_slice(&h[..n * n]);
     for j in 0..n {
         // Column j: l_jj = sqrt(h_jj − Σ_k<j l_jk²), l_ij = (h_ij − Σ_k<j l_ik l_jk)/l_jj.
@@ -243,7 +243,7 @@ pub(crate) fn cholesky_in_place(n: usize, h: &[f64], l: &mut [f64]) -> Result<()
         let d = l[j * n + j];
         // Also catches NaN.
         if d.is_nan() || d <= 0.0 || d.is_infinite() {
-            return Err(ModelError::InertiaNotPositiveDefinite { pivot: j, value: d });
+            return Err(TermsError::InertiaNotPositiveDefinite { pivot: j, value: d });
         }
         let d = d.sqrt();
         l[j * n + j] = d;
@@ -319,12 +319,12 @@ mod tests {
         let h = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
         assert!(matches!(
             m.set_terms(&h, &c, &g),
-            Err(ModelError::InertiaNotPositiveDefinite { pivot: 1, .. })
+            Err(TermsError::InertiaNotPositiveDefinite { pivot: 1, .. })
         ));
         let h = DMatrix::from_row_slice(2, 2, &[1.0, f64::NAN, f64::NAN, 1.0]);
         assert!(matches!(
             m.set_terms(&h, &c, &g),
-            Err(ModelError::NonFiniteTerm { term: "H", .. })
+            Err(TermsError::NonFiniteTerm { term: "H", .. })
         ));
     }
 }
