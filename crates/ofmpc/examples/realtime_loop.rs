@@ -99,7 +99,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut misses = 0usize;
     let mut failure: Option<(usize, ofmpc::control::StepError)> = None;
     let mut worst_error = 0.0f64;
-    plant.measure(&mut x);
+    plant.measure(&mut x)?;
     controller.reset(&x)?;
     let period = Duration::from_secs_f64(TS);
 
@@ -110,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for k in 0..total {
         let woke = Instant::now();
         lateness_us[k] = woke.saturating_duration_since(release).as_secs_f64() * 1e6;
-        plant.measure(&mut x); // in a real system: read the encoders
+        plant.measure(&mut x)?; // in a real system: read the encoders
         let w = reference.q(k);
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();

@@ -54,14 +54,14 @@ fn adaptive_steps_allocate_nothing() {
         let mut model = RobotDynamics::new(robot.clone());
         let mut plant = Plant::new(loaded.clone(), PlantSettings::default(), &q0).unwrap();
         let mut x = vec![0.0; 12];
-        plant.measure(&mut x);
+        plant.measure(&mut x).unwrap();
         ctrl.reset(&x).unwrap();
         let preview = q0.repeat(settings.horizon);
         let mut tau = vec![0.0; 6];
         let bad_x = vec![f64::NAN; 12];
         let before = allocations();
         for _ in 0..150 {
-            plant.measure(&mut x);
+            plant.measure(&mut x).unwrap();
             ctrl.step(&mut model, &x, &q0, &preview, &mut tau).unwrap();
             plant.step(&tau, settings.ts).unwrap();
             assert!(ctrl

@@ -152,7 +152,7 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
     let ts = 0.01;
     let mut x_prev = vec![0.0; 2 * n];
     let mut x = vec![0.0; 2 * n];
-    plant.measure(&mut x_prev);
+    plant.measure(&mut x_prev).unwrap();
     for k in 0..400 {
         // Computed torque on the true model along sinusoids + a PD term.
         let t = k as f64 * ts;
@@ -169,7 +169,7 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
             .unwrap()
             .clone();
         plant.step(tau.as_slice(), ts).unwrap();
-        plant.measure(&mut x);
+        plant.measure(&mut x).unwrap();
         assert!(est.update(&mut model, &x_prev, &x, tau.as_slice(), ts));
         // The controller's model follows the estimate.
         model

@@ -214,7 +214,16 @@ pub fn run_closed_loop_with(
     let mut tau = vec![0.0; n];
     let mut preview = vec![0.0; horizon * n];
     let mut outcome = RunOutcome::Completed;
-    plant.measure(&mut x);
+    if let Err(e) = plant.measure(&mut x) {
+        return RunResult {
+            record: rec,
+            outcome: RunOutcome::Failed {
+                t: 0.0,
+                cause: RunFailure::Plant(e),
+            },
+            wall_s: start.elapsed().as_secs_f64(),
+        };
+    }
     let mut x_est = x.clone();
     if let Some(o) = observer.as_deref_mut() {
         o.reset(&x);
@@ -234,7 +243,16 @@ pub fn run_closed_loop_with(
     for j in 0..events.pre_roll {
         let t = -((events.pre_roll - j) as f64) * ts;
         if j > 0 {
-            plant.measure(&mut x);
+            if let Err(e) = plant.measure(&mut x) {
+                return RunResult {
+                    record: rec,
+                    outcome: RunOutcome::Failed {
+                        t,
+                        cause: RunFailure::Plant(e),
+                    },
+                    wall_s: start.elapsed().as_secs_f64(),
+                };
+            }
         }
         for block in preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
@@ -289,7 +307,16 @@ pub fn run_closed_loop_with(
         }
     }
     if events.pre_roll > 0 {
-        plant.measure(&mut x);
+        if let Err(e) = plant.measure(&mut x) {
+            return RunResult {
+                record: rec,
+                outcome: RunOutcome::Failed {
+                    t: 0.0,
+                    cause: RunFailure::Plant(e),
+                },
+                wall_s: start.elapsed().as_secs_f64(),
+            };
+        }
     }
     let robot = plant.robot();
     let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
@@ -314,7 +341,13 @@ pub fn run_closed_loop_with(
     while k < end {
         let t = k as f64 * ts;
         if k > 0 {
-            plant.measure(&mut x);
+            if let Err(e) = plant.measure(&mut x) {
+                outcome = RunOutcome::Failed {
+                    t,
+                    cause: RunFailure::Plant(e),
+                };
+                break;
+            }
         }
         if let Some((t_pick, payload)) = events.pick_up {
             // The payload is there from the first sample at or after t_pick.

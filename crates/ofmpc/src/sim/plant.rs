@@ -254,6 +254,14 @@ pub enum PlantError {
     /// dynamics failed.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The measurement buffer does not have `2n` entries.
+    #[error("the measurement buffer has {got} entries but the plant measures {expected} (q and q̇ of every joint)")]
+    MeasurementLength {
+        /// `2n`.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
     /// The state stopped being finite during the integration (the state is
     /// left as before the step).
     #[error("the simulated state of joint {} stopped being finite during the integration: the torque or the motion is beyond what the model can integrate", joint + 1)]
@@ -511,9 +519,15 @@ impl Plant {
     /// applied; the velocity a backward difference of the measured positions
     /// with `velocity_from_encoder`; `delay_samples` periods old) written into
     /// `x` (2n). Call it once per control period: each call is one sample of
-    /// the sensors. Allocation-free.
-    pub fn measure(&mut self, x: &mut [f64]) {
+    /// the sensors. Allocation-free; `x` of another length is an error.
+    pub fn measure(&mut self, x: &mut [f64]) -> Result<(), PlantError> {
         let n = self.q.len();
+        if x.len() != 2 * n {
+            return Err(PlantError::MeasurementLength {
+                expected: 2 * n,
+                got: x.len(),
+            });
+        }
         let res = if self.settings.encoder_counts > 0 {
             2.0 * std::f64::consts::PI / self.settings.encoder_counts as f64
         } else {
@@ -579,6 +593,7 @@ impl Plant {
             x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
         }
         self.measured_once = true;
+        Ok(())
     }
 
     /// Friction torque at velocity `v` of joint `i` (opposes motion).
@@ -768,12 +783,21 @@ mod tests {
         assert_eq!(p.applied_torque()[1], -500.0);
         assert_eq!(p.applied_torque()[5], 16.0);
         let mut x = [0.0; 12];
-        p.measure(&mut x);
+        p.measure(&mut x).unwrap();
         let res = 2.0 * std::f64::consts::PI / 1000.0;
         for v in &x[..6] {
             assert!(((v / res).round() * res - v).abs() < 1e-12, "quantized");
         }
         assert!(p.step(&[f64::NAN; 6], 0.01).is_err());
+        // A measurement buffer of another length is an error, not a panic.
+        let mut short = [0.0; 11];
+        assert!(matches!(
+            p.measure(&mut short),
+            Err(PlantError::MeasurementLength {
+                expected: 12,
+                got: 11
+            })
+        ));
         assert!(PlantSettings {
             viscous_friction: vec![1.0, 2.0],
             ..Default::default()
@@ -795,7 +819,7 @@ mod tests {
         let mut x = [0.0; 12];
         for k in 0..6usize {
             truth.push(p.q().to_vec());
-            p.measure(&mut x);
+            p.measure(&mut x).unwrap();
             // The position seen is that of max(k − 2, 0).
             let want = &truth[k.saturating_sub(2)];
             assert_eq!(&x[..6], &want[..], "k = {k}");
