@@ -4,7 +4,7 @@ use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
 use super::supervisor::{Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED};
-use crate::control::{Controller, StateObserver};
+use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
@@ -107,14 +107,31 @@ impl LoopSettings {
     }
 }
 
-/// The state the stop starts from: the observer's estimate when there is
-/// one, else the (checked) measurement.
-fn x_est_or(x: &[f64], est: &[f64], observed: bool) -> Vec<f64> {
-    if observed {
-        est.to_vec()
-    } else {
-        x.to_vec()
+/// The state the controller acts on: the observer's estimate (updated from
+/// the measurement `x` and copied into `x_est`) when there is an observer,
+/// else the measurement itself.
+fn observed<'a>(
+    observer: Option<&mut StateObserver>,
+    model: &mut dyn JointSpaceDynamics,
+    x: &'a [f64],
+    x_est: &'a mut [f64],
+) -> Result<&'a [f64], StepError> {
+    match observer {
+        Some(o) => {
+            x_est.copy_from_slice(o.update(model, x)?);
+            Ok(x_est)
+        }
+        None => Ok(x),
     }
+}
+
+/// A safe stop in progress: when it began, why, the last time a joint was
+/// still moving, and whether every joint stayed within its limits.
+struct Stopping {
+    t: f64,
+    reason: StopReason,
+    moving_until: f64,
+    within_limits: bool,
 }
 
 /// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
@@ -214,29 +231,21 @@ pub fn run_closed_loop_with(
     let mut tau = vec![0.0; n];
     let mut preview = vec![0.0; horizon * n];
     let mut outcome = RunOutcome::Completed;
+    // A run that ends before the path starts.
+    let early = |record: Record, t: f64, cause: RunFailure| RunResult {
+        record,
+        outcome: RunOutcome::Failed { t, cause },
+        wall_s: start.elapsed().as_secs_f64(),
+    };
     if let Err(e) = plant.measure(&mut x) {
-        return RunResult {
-            record: rec,
-            outcome: RunOutcome::Failed {
-                t: 0.0,
-                cause: RunFailure::Plant(e),
-            },
-            wall_s: start.elapsed().as_secs_f64(),
-        };
+        return early(rec, 0.0, RunFailure::Plant(e));
     }
     let mut x_est = x.clone();
     if let Some(o) = observer.as_deref_mut() {
         o.reset(&x);
     }
     if let Err(e) = controller.reset(&x) {
-        return RunResult {
-            record: rec,
-            outcome: RunOutcome::Failed {
-                t: 0.0,
-                cause: RunFailure::Reset(e),
-            },
-            wall_s: start.elapsed().as_secs_f64(),
-        };
+        return early(rec, 0.0, RunFailure::Reset(e));
     }
     // The identification phase at rest on the first point.
     let w0 = reference.q(0);
@@ -244,51 +253,22 @@ pub fn run_closed_loop_with(
         let t = -((events.pre_roll - j) as f64) * ts;
         if j > 0 {
             if let Err(e) = plant.measure(&mut x) {
-                return RunResult {
-                    record: rec,
-                    outcome: RunOutcome::Failed {
-                        t,
-                        cause: RunFailure::Plant(e),
-                    },
-                    wall_s: start.elapsed().as_secs_f64(),
-                };
+                return early(rec, t, RunFailure::Plant(e));
             }
         }
         for block in preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
         }
-        let stepped = match observer.as_deref_mut() {
-            Some(o) => match o.update(model, &x) {
-                Ok(est) => {
-                    x_est.copy_from_slice(est);
-                    controller.step(model, &x_est, w0, &preview, &mut tau)
-                }
-                Err(e) => Err(e),
-            },
-            None => controller.step(model, &x, w0, &preview, &mut tau),
-        };
+        let stepped = observed(observer.as_deref_mut(), model, &x, &mut x_est)
+            .and_then(|xs| controller.step(model, xs, w0, &preview, &mut tau));
         if let Err(e) = stepped {
-            return RunResult {
-                record: rec,
-                outcome: RunOutcome::Failed {
-                    t,
-                    cause: RunFailure::Controller(e),
-                },
-                wall_s: start.elapsed().as_secs_f64(),
-            };
+            return early(rec, t, RunFailure::Controller(e));
         }
         if let Some(o) = observer.as_deref_mut() {
             o.record_torque(&tau);
         }
         if let Err(e) = plant.step(&tau, ts) {
-            return RunResult {
-                record: rec,
-                outcome: RunOutcome::Failed {
-                    t,
-                    cause: RunFailure::Plant(e),
-                },
-                wall_s: start.elapsed().as_secs_f64(),
-            };
+            return early(rec, t, RunFailure::Plant(e));
         }
         if let Some(joint) = (0..n).find(|&i| {
             let e = w0[i] - plant.q()[i];
@@ -308,14 +288,7 @@ pub fn run_closed_loop_with(
     }
     if events.pre_roll > 0 {
         if let Err(e) = plant.measure(&mut x) {
-            return RunResult {
-                record: rec,
-                outcome: RunOutcome::Failed {
-                    t: 0.0,
-                    cause: RunFailure::Plant(e),
-                },
-                wall_s: start.elapsed().as_secs_f64(),
-            };
+            return early(rec, 0.0, RunFailure::Plant(e));
         }
     }
     let robot = plant.robot();
@@ -326,8 +299,10 @@ pub fn run_closed_loop_with(
     let mut check = settings
         .plausibility_check
         .then(|| Plausibility::new(&vmax, &x));
-    // The safe stop: (start time, reason, the stop law, last time moving).
-    let mut stop: Option<(f64, StopReason, SafeStop, f64, bool)> = None;
+    // The stop law is sized here, before the loop: starting a stop allocates nothing.
+    let mut law = settings.safe_stop.then(|| SafeStop::new(&tau_max));
+    let mut stop: Option<Stopping> = None;
+    let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
     // The last FROZEN_SAMPLES + 1 checked measurements and FROZEN_SAMPLES
     // torques (oldest first), to replay a frozen joint from its last good one.
     let hist = FROZEN_SAMPLES;
@@ -375,63 +350,48 @@ pub fn run_closed_loop_with(
         let w = reference.q(k);
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();
-        if stop.is_none() {
-            if let Some(reason) = trigger.filter(|_| settings.safe_stop) {
-                let frozen = match reason {
-                    StopReason::FrozenEncoder { joint } => {
-                        Some((joint, &x_hist[..2 * n], &tau_hist[..]))
-                    }
-                    _ => None,
-                };
-                let start = x_est_or(&x, &x_est, observer.is_some());
-                let law = SafeStop::new(&tau_max, &start, frozen, model, ts);
-                stop = Some((t, reason, law, t, true));
-                end = k + (SAFE_STOP_RECORD_S / ts).round() as usize;
-            }
-        }
-        let status = if let Some((_, _, law, _, _)) = stop.as_mut() {
-            let stepped = match observer.as_deref_mut() {
-                Some(o) => match o.update(model, &x) {
-                    Ok(est) => {
-                        x_est.copy_from_slice(est);
-                        law.step(model, &x, &x_est, ts, &mut tau)
-                    }
-                    Err(e) => Err(e),
-                },
-                None => law.step(model, &x, &x, ts, &mut tau),
+        if let (None, Some(reason), Some(law)) = (&stop, trigger, law.as_mut()) {
+            let frozen = match reason {
+                StopReason::FrozenEncoder { joint } => {
+                    Some((joint, &x_hist[..2 * n], &tau_hist[..]))
+                }
+                _ => None,
             };
-            if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &stepped) {
-                o.record_torque(&tau);
-            }
-            stepped.map(|_| crate::control::StepInfo {
-                cost: 0.0,
-                r_diag_ratio: 1.0,
-                zoh_squarings: 0,
-            })
-        } else {
-            match observer.as_deref_mut() {
-                Some(o) => match o.update(model, &x) {
-                    Ok(est) => {
-                        x_est.copy_from_slice(est);
-                        controller.step(model, &x_est, w, &preview, &mut tau)
-                    }
-                    Err(e) => Err(e),
-                },
-                None => controller.step(model, &x, w, &preview, &mut tau),
-            }
-        };
-        if stop.is_none() {
-            if let (Some(o), Ok(_)) = (observer.as_deref_mut(), &status) {
-                o.record_torque(&tau);
-            }
+            // From the observer's estimate when there is one.
+            let from = if observer.is_some() { &x_est } else { &x };
+            law.begin(from, frozen, model, ts);
+            stop = Some(Stopping {
+                t,
+                reason,
+                moving_until: t,
+                within_limits: true,
+            });
+            end = k + stop_samples;
+        }
+        let status =
+            observed(observer.as_deref_mut(), model, &x, &mut x_est).and_then(|xs| {
+                match (&stop, law.as_mut()) {
+                    (Some(_), Some(law)) => law.step(model, &x, xs, ts, &mut tau).map(|_| ()),
+                    _ => controller
+                        .step(model, xs, w, &preview, &mut tau)
+                        .map(|_| ()),
+                }
+            });
+        if let (Some(o), Ok(())) = (observer.as_deref_mut(), &status) {
+            o.record_torque(&tau);
         }
         let us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
-            if settings.safe_stop && stop.is_none() {
+            if let (None, Some(law)) = (&stop, law.as_mut()) {
                 // Brake from here on (this sample holds the last torque).
-                let law = SafeStop::new(&tau_max, &x, None, model, ts);
-                stop = Some((t, StopReason::ControllerFailed(e), law, t, true));
-                end = k + (SAFE_STOP_RECORD_S / ts).round() as usize;
+                law.begin(&x, None, model, ts);
+                stop = Some(Stopping {
+                    t,
+                    reason: StopReason::ControllerFailed(e),
+                    moving_until: t,
+                    within_limits: true,
+                });
+                end = k + stop_samples;
             } else {
                 outcome = RunOutcome::Failed {
                     t,
@@ -450,13 +410,13 @@ pub fn run_closed_loop_with(
             };
             break;
         }
-        if let Some((_, _, _, moving_until, within)) = stop.as_mut() {
+        if let Some(s) = stop.as_mut() {
             if plant.qd().iter().any(|v| v.abs() >= REST_SPEED) {
-                *moving_until = t + ts;
+                s.moving_until = t + ts;
             }
             let q = plant.q();
             if (0..n).any(|i| q[i] < lower[i] || q[i] > upper[i]) {
-                *within = false;
+                s.within_limits = false;
             }
         }
         rec.t.push(t);
@@ -482,10 +442,15 @@ pub fn run_closed_loop_with(
                 (0..n).find(|&i| rec.joint_error(k, i).abs() > settings.divergence_threshold_rad)
             {
                 let error_rad = rec.joint_error(k, joint);
-                if settings.safe_stop {
-                    let law = SafeStop::new(&tau_max, &x, None, model, ts);
-                    stop = Some((t, StopReason::Diverged { joint, error_rad }, law, t, true));
-                    end = k + 1 + (SAFE_STOP_RECORD_S / ts).round() as usize;
+                if let Some(law) = law.as_mut() {
+                    law.begin(&x, None, model, ts);
+                    stop = Some(Stopping {
+                        t,
+                        reason: StopReason::Diverged { joint, error_rad },
+                        moving_until: t,
+                        within_limits: true,
+                    });
+                    end = k + 1 + stop_samples;
                 } else {
                     outcome = RunOutcome::Diverged {
                         t,
@@ -502,14 +467,14 @@ pub fn run_closed_loop_with(
         }
         k += 1;
     }
-    if let Some((t, reason, _, moving_until, within_limits)) = stop {
+    if let Some(s) = stop {
         if outcome.is_completed() {
-            let last = rec.t.last().copied().unwrap_or(t) + ts;
+            let last = rec.t.last().copied().unwrap_or(s.t) + ts;
             outcome = RunOutcome::Stopped {
-                t,
-                reason,
-                at_rest_after_s: (moving_until < last - 1e-9).then_some(moving_until - t),
-                within_limits,
+                t: s.t,
+                reason: s.reason,
+                at_rest_after_s: (s.moving_until < last - 1e-9).then_some(s.moving_until - s.t),
+                within_limits: s.within_limits,
             };
         }
     }

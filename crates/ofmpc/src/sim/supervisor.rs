@@ -218,7 +218,9 @@ fn model_accel(
     Ok(())
 }
 
-/// The safe stop's state (module docs).
+/// The safe stop's state (module docs). Sized once before the loop
+/// ([`SafeStop::new`]); [`SafeStop::begin`] and [`SafeStop::step`] allocate
+/// nothing.
 #[derive(Debug, Clone)]
 pub(crate) struct SafeStop {
     n: usize,
@@ -227,59 +229,78 @@ pub(crate) struct SafeStop {
     q: Vec<f64>,
     v: Vec<f64>,
     a: Vec<f64>,
-    hold: Option<Vec<f64>>,
+    /// Where the joints are held (capacity n; empty until the first stop sample).
+    hold: Vec<f64>,
     dead_reckoned: Vec<bool>,
     last_raw: Vec<f64>,
     w: Vec<f64>,
     /// The torque of the previous stop sample (dead reckoning).
     tau_prev: Vec<f64>,
+    /// Position and velocity of the replay of a frozen joint ([`SafeStop::begin`]).
+    replay_q: Vec<f64>,
+    replay_v: Vec<f64>,
 }
 
 impl SafeStop {
-    /// Starts from the measured state `x` (2n). A joint in `frozen` is
+    /// A stop law for drives with these torque limits (n of them).
+    pub fn new(tau_max: &[f64]) -> Self {
+        let n = tau_max.len();
+        Self {
+            n,
+            tau_max: tau_max.to_vec(),
+            model: LinearLikeModel::new(n),
+            q: vec![0.0; n],
+            v: vec![0.0; n],
+            a: vec![0.0; n],
+            hold: Vec::with_capacity(n),
+            dead_reckoned: vec![false; n],
+            last_raw: vec![0.0; n],
+            w: vec![0.0; n],
+            tau_prev: vec![0.0; n],
+            replay_q: vec![0.0; n],
+            replay_v: vec![0.0; n],
+        }
+    }
+
+    /// Starts a stop from the measured state `x` (2n). A joint in `frozen` is
     /// dead-reckoned until its measurement changes again, starting from the
     /// replay of `last_good` (the state measured before the freeze) under the
     /// torques applied since (`torques`, n each, oldest first) through the
     /// model.
-    pub fn new(
-        tau_max: &[f64],
+    pub fn begin(
+        &mut self,
         x: &[f64],
         frozen: Option<(usize, &[f64], &[f64])>,
         model: &mut dyn JointSpaceDynamics,
         ts: f64,
-    ) -> Self {
-        let n = tau_max.len();
-        let mut stop = Self {
-            n,
-            tau_max: tau_max.to_vec(),
-            model: LinearLikeModel::new(n),
-            q: x[..n].to_vec(),
-            v: x[n..2 * n].to_vec(),
-            a: vec![0.0; n],
-            hold: Some(Vec::with_capacity(n)),
-            dead_reckoned: vec![false; n],
-            last_raw: x[..n].to_vec(),
-            w: vec![0.0; n],
-            tau_prev: vec![0.0; n],
-        };
+    ) {
+        let n = self.n;
+        self.q.copy_from_slice(&x[..n]);
+        self.v.copy_from_slice(&x[n..2 * n]);
+        self.a.fill(0.0);
+        self.hold.clear();
+        self.dead_reckoned.fill(false);
+        self.last_raw.copy_from_slice(&x[..n]);
+        self.w.fill(0.0);
+        self.tau_prev.fill(0.0);
         if let Some((j, last_good, torques)) = frozen {
-            stop.dead_reckoned[j] = true;
-            let mut q = last_good[..n].to_vec();
-            let mut v = last_good[n..2 * n].to_vec();
+            self.dead_reckoned[j] = true;
+            let (rq, rv) = (&mut self.replay_q, &mut self.replay_v);
+            rq.copy_from_slice(&last_good[..n]);
+            rv.copy_from_slice(&last_good[n..2 * n]);
             for tau in torques.chunks_exact(n) {
-                if model_accel(&mut stop.model, model, &q, &v, tau, &mut stop.a).is_err() {
+                if model_accel(&mut self.model, model, rq, rv, tau, &mut self.a).is_err() {
                     break;
                 }
                 for i in 0..n {
-                    q[i] += v[i] * ts + 0.5 * stop.a[i] * ts * ts;
-                    v[i] += stop.a[i] * ts;
+                    rq[i] += rv[i] * ts + 0.5 * self.a[i] * ts * ts;
+                    rv[i] += self.a[i] * ts;
                 }
             }
-            stop.q[j] = q[j];
-            stop.v[j] = v[j];
-            stop.a.fill(0.0);
+            self.q[j] = rq[j];
+            self.v[j] = rv[j];
+            self.a.fill(0.0);
         }
-        stop
     }
 
     /// One sample of the stop: `raw` is the measurement (frozen encoders are
@@ -310,8 +331,8 @@ impl SafeStop {
             if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
                 // The encoder is back: hold where the joint really is.
                 self.dead_reckoned[i] = false;
-                if let Some(h) = self.hold.as_mut().filter(|h| !h.is_empty()) {
-                    h[i] = x[i] + x[n + i] * BRAKE_TIME;
+                if !self.hold.is_empty() {
+                    self.hold[i] = x[i] + x[n + i] * BRAKE_TIME;
                 }
             }
             self.last_raw[i] = raw[i];
@@ -325,13 +346,15 @@ impl SafeStop {
         }
         // Brake towards where the braking started plus its run-out, then
         // hold there: a = −ω²(q − q_stop) − 2ω q̇ (critically damped).
-        let hold = self.hold.get_or_insert_with(Vec::new);
-        if hold.is_empty() {
-            hold.extend(self.q.iter().zip(&self.v).map(|(q, v)| q + v * BRAKE_TIME));
+        if self.hold.is_empty() {
+            // Within its capacity: no allocation.
+            let (q, v) = (&self.q, &self.v);
+            self.hold
+                .extend(q.iter().zip(v).map(|(q, v)| q + v * BRAKE_TIME));
         }
         let w = 1.0 / BRAKE_TIME;
         for i in 0..n {
-            self.a[i] = -w * w * (self.q[i] - hold[i]) - 2.0 * w * self.v[i];
+            self.a[i] = -w * w * (self.q[i] - self.hold[i]) - 2.0 * w * self.v[i];
         }
         // τ = H a + C q̇ + g = H (a − f0 q̇) + g (f0 = −H⁻¹C, Eq. (6)).
         self.model.update(model, &self.q, &self.v)?;
