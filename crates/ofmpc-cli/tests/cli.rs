@@ -2,54 +2,14 @@
 //! `metrics.json`, the time series contract (an independent replay), the
 //! report in a real browser, and clear errors on bad input.
 
+mod bin;
+use bin::*;
+
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Plant, PlantSettings};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-
-fn ofmpc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ofmpc"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run ofmpc")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = ofmpc(args);
-    assert!(
-        o.status.success(),
-        "ofmpc {args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn fails(args: &[&str]) -> String {
-    let o = ofmpc(args);
-    assert!(!o.status.success(), "ofmpc {args:?} should fail");
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!err.contains("panicked"), "{err}");
-    err
-}
-
-fn run<'a>(metrics: &'a Value, name: &str) -> &'a Value {
-    metrics["runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["name"] == name)
-        .unwrap_or_else(|| panic!("no run {name}"))
-}
-
-fn max_of(v: &Value) -> f64 {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .fold(0.0, f64::max)
-}
+use std::process::{Command, Stdio};
 
 fn parse_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
     let text = std::fs::read_to_string(path).unwrap();

@@ -1,16 +1,10 @@
 //! `ofmpc trajectory` with the motion planner: G61 against G64 on a corner program through
 //! the CSV contract (`t,x,y,z,q1..qn,qd1..qdn`), and clear errors that name the flag.
 
-use std::path::Path;
-use std::process::{Command, Output, Stdio};
+mod bin;
+use bin::*;
 
-fn ofmpc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ofmpc"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run ofmpc")
-}
+use std::path::Path;
 
 fn csv(path: &Path) -> Vec<Vec<f64>> {
     let text = std::fs::read_to_string(path).unwrap();

@@ -3,27 +3,15 @@
 //! signals, concurrent runs, relative paths, earlier results, bad option values. Each test checks
 //! the exit status, the message and the file system before and after.
 
+mod bin;
+use bin::*;
+
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
-
-const BIN: &str = env!("CARGO_BIN_EXE_ofmpc");
-
-fn ofmpc_in(cwd: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .args(args)
-        .current_dir(cwd)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run ofmpc")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// Exit status 2, no panic, and the message on stderr.
 fn fails_in(cwd: &Path, args: &[&str]) -> String {

@@ -2,56 +2,11 @@
 //! (names, metrics.json, timeseries.csv), a pick-up, `analyze stability`,
 //! the report's computed margins on another robot, `tune` and `run --payload`.
 
+mod bin;
+use bin::*;
+
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-
-fn ofmpc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ofmpc"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run ofmpc")
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = ofmpc(args);
-    assert!(
-        o.status.success(),
-        "ofmpc {args:?} failed: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn fails(args: &[&str]) -> String {
-    let o = ofmpc(args);
-    assert!(!o.status.success(), "ofmpc {args:?} should fail");
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!err.contains("panicked"), "{err}");
-    err
-}
-
-fn metrics(dir: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(dir.join("metrics.json")).unwrap()).unwrap()
-}
-
-fn run<'a>(m: &'a Value, name: &str) -> &'a Value {
-    m["runs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["name"] == name)
-        .unwrap_or_else(|| panic!("no run {name}"))
-}
-
-fn max_of(v: &Value) -> f64 {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|x| x.as_f64().unwrap())
-        .fold(0.0, f64::max)
-}
 
 fn test_data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))

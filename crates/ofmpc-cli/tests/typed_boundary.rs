@@ -2,23 +2,11 @@
 //! user as the scenario's words, with exit statuses that scripts can rely on
 //! (0 ok or diverged, 1 some run failed, 2 nothing was run).
 
+mod bin;
+use bin::*;
+
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-
-fn ofmpc(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ofmpc"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("run ofmpc")
-}
-
-fn stderr(o: &Output) -> String {
-    let e = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!e.contains("panicked"), "{e}");
-    e
-}
 
 fn scenario(dir: &Path, body: &str) -> String {
     let p = dir.join("s.toml");
