@@ -106,7 +106,7 @@ pub enum Solver {
 }
 
 /// Smallest horizon for which [`Solver::Auto`] picks the structured solver.
-pub const STRUCTURED_FROM_HORIZON: usize = 30;
+pub const STRUCTURED_FROM_HORIZON: usize = 20;
 
 impl Solver {
     /// The serde name (`"dense-qr"`, `"structured"` or `"auto"`).
@@ -150,7 +150,7 @@ pub struct MpcSettings {
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
     /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
-    /// N = 30, the structured solver from there on; both give the same `ΔU`).
+    /// N = 20, the structured solver from there on; both give the same `ΔU`).
     pub solver: Solver,
     /// The payload the controllers' model assumes, a point mass at the
     /// flange centre (kg, default 0: the paper's model knows no payload).

@@ -234,9 +234,9 @@ impl StageLq {
 
     #[inline(always)]
     fn solve_impl(&mut self) -> Result<StageInfo, StageError> {
-        let (nu, nz, nq, nh, ld) = (self.nu, self.nz, self.nq, self.nh, self.ld);
+        let (nu, nz, nq, nh) = (self.nu, self.nz, self.nq, self.nh);
         let cols = nu + nz + 1;
-        let (cs, ms) = (self.cs, self.ms);
+        let cs = self.cs;
         let rhs = nu + nz;
         // [B A] row-major.
         for (i, row) in self.ba.chunks_exact_mut(cs).enumerate() {
@@ -262,124 +262,21 @@ impl StageLq {
         let mut converged: Option<usize> = None;
         let mut factorized = 0;
         for j in (0..nh).rev() {
-            if let (Some(src), true) = (converged, j > 0) {
+            if j == 0 {
+                factorized += 1;
+                acc += self.first_stage();
+            } else if let Some(src) = converged {
                 acc += self.reused_stage(j, src);
                 if !(acc.is_finite() && self.l_vec.iter().all(|v| v.is_finite())) {
                     return Err(StageError::NonFinite);
                 }
                 continue;
-            }
-            factorized += 1;
-            // Rows of the diagonal part: nu (+ nq for j ≥ 1).
-            let top = if j == 0 { nu } else { nu + nq };
-            // One stage after an unchanged L, this stage probably repeats
-            // it: carry the unit vectors of the right-hand side's inputs
-            // through its reflections (columns cs.., the map M).
-            let extend = self.reuse_converged && streak >= 1 && j > 1;
-            let width = if extend { ms } else { cs };
-            let m = &mut self.m;
-            m[..top * ms].fill(0.0);
-            for i in 0..nu {
-                m[i * ms + i] = self.rd[i];
-            }
-            if j > 0 {
-                for i in 0..nq {
-                    let q = self.qd[i];
-                    let row = &mut m[(nu + i) * ms..(nu + i + 1) * ms];
-                    row[nu + i] = q;
-                    row[rhs] = q * self.r[(j - 1) * nq + i];
-                }
-            }
-            // Dense rows: row i = Σ_{k ≥ i} L[i,k] [B A | −c_j][k] and l_{j+1}.
-            let cj = &self.c[j * nz..(j + 1) * nz];
-            for (i, (row, lrow)) in m[top * ms..(top + nz) * ms]
-                .chunks_exact_mut(ms)
-                .zip(self.l_mat.chunks_exact(nz))
-                .enumerate()
-            {
-                row.fill(0.0);
-                let li = &lrow[i..];
-                accumulate_rows(&mut row[..cs], li, &self.ba[i * cs..], cs, 0);
-                row[rhs] = if self.c_zero {
-                    self.l_vec[i]
-                } else {
-                    self.l_vec[i] - dot(li, &cj[i..])
-                };
-            }
-            if extend {
-                // Input i of the right-hand side is row nu + i.
-                for i in 0..nq + nz {
-                    m[(nu + i) * ms + cs + i] = 1.0;
-                }
-            }
-            // Householder on the columns with a diagonal pivot row.
-            for k in 0..top {
-                householder_rows(
-                    m,
-                    (ms, width),
-                    k,
-                    (k, top, top + nz),
-                    &mut self.hv,
-                    &mut self.hw,
-                );
-            }
-            if j > 0 {
-                // The remaining z columns: pivot k is dense row k − top, at row k.
-                for k in top..nu + nz {
-                    householder_rows(
-                        m,
-                        (ms, width),
-                        k,
-                        (k, k + 1, top + nz),
-                        &mut self.hv,
-                        &mut self.hw,
-                    );
-                }
-                // L_j: row c is row nu + c from column nu + c on; how much it
-                // moved from L_{j+1}.
-                let (mut change, mut size) = (0.0f64, 0.0f64);
-                for (c, lrow) in self.l_mat.chunks_exact_mut(nz).enumerate() {
-                    let row = &m[(nu + c) * ms..(nu + c + 1) * ms];
-                    lrow[..c].fill(0.0);
-                    for (old, new) in lrow[c..].iter_mut().zip(&row[nu + c..rhs]) {
-                        change = change.max((*old - new).abs());
-                        size = size.max(new.abs());
-                        *old = *new;
-                    }
-                    self.l_vec[c] = row[rhs];
-                }
-                streak = if change <= CONVERGED_RTOL * size {
-                    streak + 1
-                } else {
-                    0
-                };
-                if extend && streak >= 2 {
-                    // M (column-major, stride lds) from the carried columns.
-                    let lds = self.bvec.len();
-                    for (i, col) in self.mmap.chunks_exact_mut(lds).enumerate() {
-                        for (r, o) in col[..ld].iter_mut().enumerate() {
-                            *o = m[r * ms + cs + i];
-                        }
-                    }
-                    converged = Some(j);
-                }
-                // Rows below the pivots: residual only.
-                for row in nu + nz..top + nz {
-                    let e = m[row * ms + rhs];
-                    acc += e * e;
-                }
             } else {
-                // j = 0: z_0 is known, the remaining rows are residual.
-                for row in m[top * ms..(top + nz) * ms].chunks_exact(ms) {
-                    let e = dot(&row[nu..rhs], &self.z0) - row[rhs];
-                    acc += e * e;
-                }
+                factorized += 1;
+                acc += self.full_stage(j, &mut streak, &mut converged);
             }
-            // Keep [R_vv R_vz ρ] of this stage.
-            let dst = &mut self.vrows[j * nu * cols..(j + 1) * nu * cols];
-            for (d, row) in dst.chunks_exact_mut(cols).zip(self.m.chunks_exact(ms)) {
-                d.copy_from_slice(&row[..cols]);
-            }
+            // [R_vv R_vz ρ] of this stage (in vrows).
+            let dst = &self.vrows[j * nu * cols..(j + 1) * nu * cols];
             for i in 0..nu {
                 let d = dst[i * cols + i].abs();
                 dmax = dmax.max(d);
@@ -401,8 +298,213 @@ impl StageLq {
                 factorized_stages: factorized,
             });
         }
-        let _ = ld;
-        // Forward pass.
+        self.forward_pass();
+        if !self.sol.iter().all(|v| v.is_finite()) {
+            return Err(StageError::NonFinite);
+        }
+        Ok(StageInfo {
+            residual_sq: acc,
+            r_diag_ratio: dmax / dmin,
+            r_max: dmax,
+            factorized_stages: factorized,
+        })
+    }
+
+    /// Stage `j ≥ 1` factorized in full: the stacked matrix, its Householder
+    /// QR, `L_j`, `l_j`, `[R_vv R_vz ρ]` into `vrows`; counts the stages that
+    /// left `L` unchanged (`streak`) and, when a stage repeats the previous
+    /// one, sets `converged` and the map `M`. Returns `‖e_j‖²`.
+    #[inline(always)]
+    fn full_stage(&mut self, j: usize, streak: &mut usize, converged: &mut Option<usize>) -> f64 {
+        let (nu, nz, nq, ld) = (self.nu, self.nz, self.nq, self.ld);
+        let cols = nu + nz + 1;
+        let (cs, ms) = (self.cs, self.ms);
+        let rhs = nu + nz;
+        let mut acc = 0.0;
+        {
+            // Rows of the diagonal part.
+            let top = nu + nq;
+            // One stage after an unchanged L, this stage probably repeats
+            // it: carry the unit vectors of the right-hand side's inputs
+            // through its reflections (columns cs.., the map M).
+            let extend = self.reuse_converged && *streak >= 1 && j > 1;
+            let width = if extend { ms } else { cs };
+            let m = &mut self.m;
+            m[..top * ms].fill(0.0);
+            for i in 0..nu {
+                m[i * ms + i] = self.rd[i];
+            }
+            for i in 0..nq {
+                let q = self.qd[i];
+                let row = &mut m[(nu + i) * ms..(nu + i + 1) * ms];
+                row[nu + i] = q;
+                row[rhs] = q * self.r[(j - 1) * nq + i];
+            }
+            // Dense rows: row i = Σ_{k ≥ i} L[i,k] [B A | −c_j][k] and l_{j+1}.
+            // At the last stage L_N = [D S; 0]: only its first nq rows are
+            // non-zero, the reflections skip the others.
+            let active = if j + 1 == self.nh && !extend {
+                nq.min(nz)
+            } else {
+                nz
+            };
+            let cj = &self.c[j * nz..(j + 1) * nz];
+            for (i, (row, lrow)) in m[top * ms..(top + nz) * ms]
+                .chunks_exact_mut(ms)
+                .zip(self.l_mat.chunks_exact(nz))
+                .enumerate()
+            {
+                row.fill(0.0);
+                if i >= active {
+                    continue;
+                }
+                let li = &lrow[i..];
+                accumulate_rows(&mut row[..cs], li, &self.ba[i * cs..], cs, 0);
+                row[rhs] = if self.c_zero {
+                    self.l_vec[i]
+                } else {
+                    self.l_vec[i] - dot(li, &cj[i..])
+                };
+            }
+            if extend {
+                // Input i of the right-hand side is row nu + i.
+                for i in 0..nq + nz {
+                    m[(nu + i) * ms + cs + i] = 1.0;
+                }
+            }
+            // Householder on the columns with a diagonal pivot row.
+            for k in 0..top {
+                householder_rows(
+                    m,
+                    (ms, width),
+                    k,
+                    (k, top, top + active),
+                    &mut self.hv,
+                    &mut self.hw,
+                );
+            }
+            // The remaining z columns: pivot k is dense row k − top, at row k
+            // (nothing below it to annihilate from row top + active on).
+            for k in (top..nu + nz).take_while(|k| k + 1 < top + active) {
+                householder_rows(
+                    m,
+                    (ms, width),
+                    k,
+                    (k, k + 1, top + active),
+                    &mut self.hv,
+                    &mut self.hw,
+                );
+            }
+            // L_j: row c is row nu + c from column nu + c on; how much it
+            // moved from L_{j+1}.
+            let (mut change, mut size) = (0.0f64, 0.0f64);
+            for (c, lrow) in self.l_mat.chunks_exact_mut(nz).enumerate() {
+                let row = &m[(nu + c) * ms..(nu + c + 1) * ms];
+                lrow[..c].fill(0.0);
+                for (old, new) in lrow[c..].iter_mut().zip(&row[nu + c..rhs]) {
+                    change = change.max((*old - new).abs());
+                    size = size.max(new.abs());
+                    *old = *new;
+                }
+                self.l_vec[c] = row[rhs];
+            }
+            *streak = if change <= CONVERGED_RTOL * size {
+                *streak + 1
+            } else {
+                0
+            };
+            if extend && *streak >= 2 {
+                // M (column-major, stride lds) from the carried columns.
+                let lds = self.bvec.len();
+                for (i, col) in self.mmap.chunks_exact_mut(lds).enumerate() {
+                    for (r, o) in col[..ld].iter_mut().enumerate() {
+                        *o = m[r * ms + cs + i];
+                    }
+                }
+                *converged = Some(j);
+            }
+            // Rows below the pivots: residual only.
+            for row in nu + nz..top + nz {
+                let e = m[row * ms + rhs];
+                acc += e * e;
+            }
+        }
+        // Keep [R_vv R_vz ρ] of this stage.
+        let dst = &mut self.vrows[j * nu * cols..(j + 1) * nu * cols];
+        for (d, row) in dst.chunks_exact_mut(cols).zip(self.m.chunks_exact(ms)) {
+            d.copy_from_slice(&row[..cols]);
+        }
+        acc
+    }
+
+    /// Stage 0, where `z_0` is known: the least-squares problem in `v_0`
+    /// alone, `min ‖R v‖² + ‖L_1 B v − (l_1 − L_1 (A z_0 + c_0))‖²`, by the
+    /// Householder QR of `[R; L_1 B]` with that right-hand side (columns
+    /// `0..nu` and `nu` of the stacked matrix, 8-wide blocks). Stores
+    /// `[R_vv 0 ρ_0]` (the `z_0` term is in `ρ_0`) and returns `‖e_0‖²`.
+    #[inline(always)]
+    fn first_stage(&mut self) -> f64 {
+        let (nu, nz) = (self.nu, self.nz);
+        let cols = nu + nz + 1;
+        let (cs, ms) = (self.cs, self.ms);
+        let width = (nu + 1).next_multiple_of(8);
+        // t = A z_0 + c_0 (z_next as work).
+        if self.c_zero {
+            self.z_next.fill(0.0);
+        } else {
+            self.z_next.copy_from_slice(&self.c[..nz]);
+        }
+        accumulate_rows(&mut self.z_next, &self.z0, &self.a, nz, 0);
+        let m = &mut self.m;
+        for (i, row) in m[..(nu + nz) * ms].chunks_exact_mut(ms).enumerate() {
+            row[..width].fill(0.0);
+            if i < nu {
+                row[i] = self.rd[i];
+            }
+        }
+        for (i, (row, lrow)) in m[nu * ms..(nu + nz) * ms]
+            .chunks_exact_mut(ms)
+            .zip(self.l_mat.chunks_exact(nz))
+            .enumerate()
+        {
+            let li = &lrow[i..];
+            // [B A] rows hold B in their first nu columns.
+            let prod = &mut self.hw[..width];
+            prod.fill(0.0);
+            accumulate_rows(prod, li, &self.ba[i * cs..], cs, 0);
+            row[..nu].copy_from_slice(&prod[..nu]);
+            row[nu] = self.l_vec[i] - dot(li, &self.z_next[i..]);
+        }
+        for k in 0..nu {
+            householder_rows(
+                m,
+                (ms, width),
+                k,
+                (k, nu, nu + nz),
+                &mut self.hv,
+                &mut self.hw,
+            );
+        }
+        let acc: f64 = m[nu * ms..(nu + nz) * ms]
+            .chunks_exact(ms)
+            .map(|row| row[nu] * row[nu])
+            .sum();
+        let dst = &mut self.vrows[..nu * cols];
+        for (d, row) in dst.chunks_exact_mut(cols).zip(m.chunks_exact(ms)) {
+            d[..nu].copy_from_slice(&row[..nu]);
+            d[nu..nu + nz].fill(0.0);
+            d[nu + nz] = row[nu];
+        }
+        acc
+    }
+
+    /// `v_j = R_vv⁻¹(ρ_j − R_vz z_j)`, `z_{j+1} = A z_j + B v_j + c_j` from
+    /// `z_0`, into `sol`.
+    #[inline(always)]
+    fn forward_pass(&mut self) {
+        let (nu, nz, nh) = (self.nu, self.nz, self.nh);
+        let cols = nu + nz + 1;
+        let rhs = nu + nz;
         self.z.copy_from_slice(&self.z0);
         for j in 0..nh {
             let vr = &self.vrows[j * nu * cols..(j + 1) * nu * cols];
@@ -429,15 +531,6 @@ impl StageLq {
                 std::mem::swap(&mut self.z, &mut self.z_next);
             }
         }
-        if !self.sol.iter().all(|v| v.is_finite()) {
-            return Err(StageError::NonFinite);
-        }
-        Ok(StageInfo {
-            residual_sq: acc,
-            r_diag_ratio: dmax / dmin,
-            r_max: dmax,
-            factorized_stages: factorized,
-        })
     }
 
     /// Stage `j ≥ 1` with the factorization of the converged stage `src`
