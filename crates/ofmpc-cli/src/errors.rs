@@ -48,6 +48,13 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
                 format!("[simulation] identification_s = {value}")
             }
             LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
+            LoopSettingsError::FaultTime { index, value } => {
+                format!("[faults] nan_at_s[{index}] = {value}")
+            }
+            LoopSettingsError::DropoutInterval { index, from, to } => {
+                format!("[faults] dropout_s[{index}] = [{from}, {to}]")
+            }
+            LoopSettingsError::MaxJointError(v) => format!("[safety] max_joint_error_rad = {v}"),
             _ => "[simulation]".into(),
         },
         ExperimentError::Plant(PlantError::Settings(p)) => match p {

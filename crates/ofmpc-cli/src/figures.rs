@@ -66,6 +66,65 @@ pub fn joints_and_torques(title: &str, rec: &Record) -> Figure {
     f
 }
 
+/// Drive load: `|τ_i| / τmax_i` of several runs against time, one panel per
+/// joint with the limit (1) dashed; joints without a finite limit are left out.
+pub fn torque_ratios(title: &str, runs: &[(&str, &Record)], limits: &[f64]) -> Figure {
+    let mut f = Figure::new(title, 2);
+    for (i, &lim) in limits.iter().enumerate() {
+        if !(lim.is_finite() && lim > 0.0) {
+            continue;
+        }
+        let mut p = Panel::new(
+            format!("joint {}", i + 1),
+            "t (s)",
+            format!("|τ{}| / τmax", i + 1),
+        );
+        if let Some((_, rec)) = runs.first() {
+            let t = rec.t.clone();
+            let ones = vec![1.0; t.len()];
+            p.series
+                .push(Series::dashed("limit", t, ones, COLOR_REFERENCE));
+        }
+        for (name, rec) in runs {
+            let r = (0..rec.len())
+                .map(|k| rec.tau[k * rec.n + i].abs() / lim)
+                .collect();
+            p.series.push(Series::line(
+                *name,
+                rec.t.clone(),
+                r,
+                controller_color(name),
+            ));
+        }
+        f.panels.push(p);
+    }
+    f
+}
+
+/// What the controller was given minus the true position, per joint (gaps:
+/// lost or invalid measurements).
+pub fn measurement_errors(title: &str, rec: &Record) -> Figure {
+    let mut f = Figure::new(title, 2);
+    for i in 0..rec.n {
+        let mut p = Panel::new(
+            format!("joint {}", i + 1),
+            "t (s)",
+            format!("q_meas{0} − q{0} (rad)", i + 1),
+        );
+        let d = (0..rec.len())
+            .map(|k| rec.q_meas[k * rec.n + i] - rec.q[k * rec.n + i])
+            .collect();
+        p.series.push(Series::line(
+            "measured − true",
+            rec.t.clone(),
+            d,
+            JOINT_COLORS[i % JOINT_COLORS.len()],
+        ));
+        f.panels.push(p);
+    }
+    f
+}
+
 /// Fig. 6/7: joint errors e_i = w_i − q_i of several runs, one panel per joint.
 pub fn joint_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
     let n = runs.first().map_or(0, |(_, r)| r.n);

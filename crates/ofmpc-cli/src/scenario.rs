@@ -16,7 +16,7 @@ use ofmpc::motion::{
     TimingOptions,
 };
 use ofmpc::robot::{Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings, PlantSettings};
+use ofmpc::sim::{Experiment, LoopSettings, MeasurementFaults, PlantSettings};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -144,6 +144,33 @@ pub struct ScenarioFile {
     pub simulation: LoopSettings,
     /// `[plant]`: integration and the effects the model leaves out.
     pub plant: PlantSettings,
+    /// `[faults]`: invalid and missing measurements.
+    pub faults: FaultsSection,
+    /// `[safety]`: the safe stop on a joint error limit.
+    pub safety: SafetySection,
+}
+
+/// `[faults]`: the measurement is NaN at the samples at `nan_at_s` (s, path
+/// time); no measurement arrives in the intervals `dropout_s = [[from, to], …]`.
+/// The controller runs on its own prediction over them; metrics.json counts
+/// them (`faults`).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FaultsSection {
+    /// Times of invalid (NaN) measurements (s).
+    pub nan_at_s: Vec<f64>,
+    /// Intervals without a measurement, `[from, to]` (s).
+    pub dropout_s: Vec<[f64; 2]>,
+}
+
+/// `[safety]`: when a joint's error passes `max_joint_error_rad`, the robot
+/// brakes to rest and holds within its torque limits; the run ends "stopped".
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SafetySection {
+    /// Joint error limit (rad); off when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_joint_error_rad: Option<f64>,
 }
 
 impl Default for ScenarioFile {
@@ -159,6 +186,8 @@ impl Default for ScenarioFile {
             mpc: MpcSettings::default(),
             simulation: LoopSettings::default(),
             plant: PlantSettings::default(),
+            faults: FaultsSection::default(),
+            safety: SafetySection::default(),
         }
     }
 }
@@ -358,6 +387,11 @@ impl Scenario {
             .map_err(|e| anyhow::anyhow!("[mpc] {e}"))?;
         let mut loop_settings = f.simulation.clone();
         loop_settings.pick_up_at_s = f.payload.pick_up_at_s;
+        loop_settings.max_joint_error_rad = f.safety.max_joint_error_rad;
+        loop_settings.measurement_faults = MeasurementFaults {
+            nan_at_s: f.faults.nan_at_s.clone(),
+            dropout_s: f.faults.dropout_s.clone(),
+        };
         loop_settings
             .validate()
             .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e.into())))?;

@@ -17,8 +17,11 @@ fn num(s: &mut String, x: f64) {
 
 /// `timeseries.csv` of a run: `t`, `q1..qn`, `qd1..qdn`, `tau1..taun`,
 /// `qref1..qrefn`, `e1..en` (= qref − q), `x,y,z` (true flange), `xref,yref,zref`,
-/// `ex,ey,ez` (= ref − true). SI units (s, rad, rad/s, N·m, m). Row k holds
-/// the state measured at t_k and the torque applied over [t_k, t_k + Ts).
+/// `ex,ey,ez` (= ref − true), `payload_mass_est_kg` (adaptive controllers), and
+/// when a measurement effect or fault is on `q_meas1..n`, `qd_meas1..n`: what
+/// the controller was given (NaN where the measurement was invalid or
+/// missing). SI units (s, rad, rad/s, N·m, m). Row k holds the plant's true
+/// state at t_k and the torque applied over [t_k, t_k + Ts).
 /// Numbers are printed at full precision (shortest round-trip form).
 /// Runs of a controller that identifies the payload online (the adaptive
 /// variants) have one more column, `payload_mass_est_kg`: the mass its model
@@ -36,6 +39,16 @@ pub fn timeseries_csv(rec: &Record) -> String {
     s.push_str(",x,y,z,xref,yref,zref,ex,ey,ez");
     if with_mass {
         s.push_str(",payload_mass_est_kg");
+    }
+    let with_meas = rec.has_measurement()
+        && rec.q_meas.len() == rec.len() * n
+        && rec.qd_meas.len() == rec.len() * n;
+    if with_meas {
+        for prefix in ["q_meas", "qd_meas"] {
+            for i in 1..=n {
+                let _ = write!(s, ",{prefix}{i}");
+            }
+        }
     }
     s.push('\n');
     for k in 0..rec.len() {
@@ -58,6 +71,14 @@ pub fn timeseries_csv(rec: &Record) -> String {
         if with_mass {
             s.push(',');
             num(&mut s, rec.payload_mass_est[k]);
+        }
+        if with_meas {
+            for v in [&rec.q_meas, &rec.qd_meas] {
+                for x in &v[k * n..(k + 1) * n] {
+                    s.push(',');
+                    num(&mut s, *x);
+                }
+            }
         }
         s.push('\n');
     }

@@ -347,6 +347,79 @@ pub fn execute(
             )?;
         }
     }
+    let effects = drive_effects(scenario);
+    if !effects.is_empty() {
+        report.heading("Drives, sensors and faults");
+        report.paragraph(format!(
+            "This scenario turns on: {}. Counters over each run: `faults` = samples whose \
+             measurement was missing, invalid or implausible (the controller ran on its \
+             model's prediction), `saturated samples` = samples at which the commanded torque \
+             of some joint reached its limit, `max |τ|/τmax` = the largest commanded torque \
+             relative to its limit.",
+            effects.join("; ")
+        ));
+        report.table(Table {
+            caption: "Drives, sensors and faults per run".into(),
+            header: [
+                "run",
+                "status",
+                "faults",
+                "saturated samples",
+                "max |τ|/τmax",
+                "how it ended",
+            ]
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+            rows: runs
+                .iter()
+                .map(|r| {
+                    let m = &r.metrics;
+                    vec![
+                        m.name.clone(),
+                        m.status.to_string(),
+                        m.faults.to_string(),
+                        m.saturated_samples.to_string(),
+                        format!("{:.3}", m.max_torque_ratio),
+                        m.reason.clone(),
+                    ]
+                })
+                .collect(),
+        });
+        let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
+        for p in &payloads {
+            let these: Vec<(&str, &ofmpc::sim::Record)> = runs
+                .iter()
+                .filter(|r| r.payload.mass == p.mass)
+                .map(|r| (kind_name(r.kind), &r.result.record))
+                .collect();
+            let label = mass_label(p.mass);
+            figure(
+                &mut dir,
+                &mut report,
+                &format!("torque_ratios_m{label}"),
+                &format!("Commanded torque relative to the drives' limits, payload {label} kg"),
+                &figures::torque_ratios(
+                    &format!("|τ| / τmax, payload {label} kg"),
+                    &these,
+                    &limits,
+                ),
+            )?;
+        }
+        for r in runs.iter().filter(|r| r.result.record.has_measurement()) {
+            let name = &r.metrics.name;
+            figure(
+                &mut dir,
+                &mut report,
+                &format!("{name}/measurement_error"),
+                &format!("{name}: what the controller was given minus the true position (gaps: lost measurements)"),
+                &figures::measurement_errors(
+                    &format!("{name}: measured − true position"),
+                    &r.result.record,
+                ),
+            )?;
+        }
+    }
     if payloads.len() >= 3 {
         report.heading("Payload sweep");
         figure(
@@ -469,4 +542,82 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
          The adaptive variants identify the payload and keep α near 1; `ofmpc tune` finds weights for a payload range.",
     );
     text
+}
+
+/// The drive, sensor and fault effects a scenario turns on, in its words
+/// (empty: the paper's ideal drives and sensors).
+fn drive_effects(scenario: &Scenario) -> Vec<String> {
+    let f = &scenario.file;
+    let (mpc, plant, sim) = (&f.mpc, &f.plant, &f.simulation);
+    let mut e = Vec::new();
+    let mut on = |cond: bool, text: String| {
+        if cond {
+            e.push(text);
+        }
+    };
+    on(
+        mpc.torque_limits,
+        "[mpc] torque_limits (QP over the horizon)".into(),
+    );
+    on(
+        mpc.friction_compensation,
+        "[mpc] friction_compensation".into(),
+    );
+    on(mpc.delay_compensation, "[mpc] delay_compensation".into());
+    on(mpc.state_observer, "[mpc] state_observer".into());
+    on(
+        plant.torque_limits,
+        "[plant] torque_limits (saturation)".into(),
+    );
+    on(
+        !plant.coulomb_friction.is_empty(),
+        format!(
+            "[plant] coulomb_friction = {:?} N·m",
+            plant.coulomb_friction
+        ),
+    );
+    on(
+        !plant.viscous_friction.is_empty(),
+        format!(
+            "[plant] viscous_friction = {:?} N·m·s/rad",
+            plant.viscous_friction
+        ),
+    );
+    on(
+        plant.encoder_counts > 0,
+        format!("[plant] encoder_counts = {}", plant.encoder_counts),
+    );
+    on(
+        plant.velocity_from_encoder,
+        "[plant] velocity_from_encoder".into(),
+    );
+    on(
+        plant.delay_samples > 0,
+        format!("[plant] delay_samples = {}", plant.delay_samples),
+    );
+    on(
+        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
+        "[plant] measurement noise".into(),
+    );
+    on(
+        !plant.faults.is_empty(),
+        format!("[plant] faults ({})", plant.faults.len()),
+    );
+    on(
+        !f.faults.nan_at_s.is_empty(),
+        format!("[faults] nan_at_s = {:?}", f.faults.nan_at_s),
+    );
+    on(
+        !f.faults.dropout_s.is_empty(),
+        format!("[faults] dropout_s = {:?}", f.faults.dropout_s),
+    );
+    on(
+        sim.plausibility_check,
+        "[simulation] plausibility_check".into(),
+    );
+    on(sim.safe_stop, "[simulation] safe_stop".into());
+    if let Some(v) = f.safety.max_joint_error_rad {
+        e.push(format!("[safety] max_joint_error_rad = {v}"));
+    }
+    e
 }

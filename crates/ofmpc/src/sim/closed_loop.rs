@@ -3,7 +3,9 @@
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
-use super::supervisor::{Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED};
+use super::supervisor::{
+    MeasurementGuard, Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED,
+};
 use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
@@ -38,6 +40,69 @@ pub struct LoopSettings {
     /// measurement, bring the robot to a safe stop (brake, hold) and record
     /// [`SAFE_STOP_RECORD_S`] more seconds, instead of ending the run.
     pub safe_stop: bool,
+    /// A safety function: when the error of a joint (of the state the
+    /// controller is given) passes this (rad), the robot is brought to a
+    /// safe stop as with [`Self::safe_stop`] and the run ends "stopped".
+    /// `None`: off.
+    #[serde(skip)]
+    pub max_joint_error_rad: Option<f64>,
+    /// Invalid and missing measurements (the controller runs on its own
+    /// prediction over them).
+    #[serde(skip)]
+    pub measurement_faults: MeasurementFaults,
+}
+
+/// Faults of the measurement channel, at path times: at the sample at (or
+/// first after) each `nan_at_s` the measurement is NaN; in each
+/// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
+/// loop then hands the controller a model prediction
+/// ([`super::supervisor`]) and counts the fault.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MeasurementFaults {
+    /// Times of single invalid (NaN) measurements (s).
+    pub nan_at_s: Vec<f64>,
+    /// Intervals without measurements, `[from, to)` (s).
+    pub dropout_s: Vec<[f64; 2]>,
+}
+
+impl MeasurementFaults {
+    /// No fault.
+    pub fn is_empty(&self) -> bool {
+        self.nan_at_s.is_empty() && self.dropout_s.is_empty()
+    }
+
+    /// Whether the measurement of the sample at `t` (period `ts`) is lost.
+    pub fn lost_at(&self, t: f64, ts: f64) -> bool {
+        let eps = 1e-9 * ts;
+        self.nan_at_s
+            .iter()
+            .any(|&f| t >= f - eps && t < f + ts - eps)
+            || self
+                .dropout_s
+                .iter()
+                .any(|&[from, to]| t >= from - eps && t < to - eps)
+    }
+
+    fn validate(&self) -> Result<(), LoopSettingsError> {
+        if let Some((index, &value)) = self
+            .nan_at_s
+            .iter()
+            .enumerate()
+            .find(|(_, t)| !(t.is_finite() && **t >= 0.0))
+        {
+            return Err(LoopSettingsError::FaultTime { index, value });
+        }
+        if let Some((index, &[from, to])) = self
+            .dropout_s
+            .iter()
+            .enumerate()
+            .find(|(_, [a, b])| !(a.is_finite() && b.is_finite() && *a >= 0.0 && a < b))
+        {
+            return Err(LoopSettingsError::DropoutInterval { index, from, to });
+        }
+        Ok(())
+    }
 }
 
 /// Longest identification phase at rest (s).
@@ -56,6 +121,8 @@ impl Default for LoopSettings {
             pick_up_at_s: None,
             plausibility_check: false,
             safe_stop: false,
+            max_joint_error_rad: None,
+            measurement_faults: MeasurementFaults::default(),
         }
     }
 }
@@ -93,7 +160,12 @@ impl LoopSettings {
                 return Err(LoopSettingsError::PickUpTime(t));
             }
         }
-        Ok(())
+        if let Some(e) = self.max_joint_error_rad {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(LoopSettingsError::MaxJointError(e));
+            }
+        }
+        self.measurement_faults.validate()
     }
 
     /// Samples of the identification phase at the control period `ts`.
@@ -135,9 +207,10 @@ struct Stopping {
 }
 
 /// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
-/// flange and its reference (6), the step time.
-pub fn record_columns(n: usize) -> usize {
-    4 * n + 8
+/// flange and its reference (6), the step time, and with `measured` the
+/// measurement as the controller got it (2n).
+pub fn record_columns(n: usize, measured: bool) -> usize {
+    4 * n + 8 + if measured { 2 * n } else { 0 }
 }
 
 /// The outcome of one run.
@@ -215,7 +288,10 @@ pub fn run_closed_loop_with(
     let ts = reference.ts();
     let horizon = controller.horizon();
     let total = reference.len().saturating_add(settings.hold_samples(ts));
-    let capacity = if total.saturating_mul(record_columns(n)) <= MAX_RECORD_VALUES {
+    // What the controller gets differs from the true state: record it too.
+    let measured =
+        !(plant.settings().measurement_is_ideal() && settings.measurement_faults.is_empty());
+    let capacity = if total.saturating_mul(record_columns(n, measured)) <= MAX_RECORD_VALUES {
         total
     } else {
         // The caller did not check the bound ([`super::Experiment::run`]
@@ -225,6 +301,10 @@ pub fn run_closed_loop_with(
     let mut rec = Record::with_capacity(n, capacity);
     if controller.payload_estimate().is_some() {
         rec.payload_mass_est.reserve(capacity);
+    }
+    if measured {
+        rec.q_meas.reserve(capacity * n);
+        rec.qd_meas.reserve(capacity * n);
     }
     let mut picked = false;
     let mut x = vec![0.0; 2 * n];
@@ -299,8 +379,12 @@ pub fn run_closed_loop_with(
     let mut check = settings
         .plausibility_check
         .then(|| Plausibility::new(&vmax, &x));
+    let mut guard = MeasurementGuard::new(&x, plant.settings().delay_samples);
+    let faults = &settings.measurement_faults;
+    let mut x_true = vec![0.0; 2 * n];
     // The stop law is sized here, before the loop: starting a stop allocates nothing.
-    let mut law = settings.safe_stop.then(|| SafeStop::new(&tau_max));
+    let mut law = (settings.safe_stop || settings.max_joint_error_rad.is_some())
+        .then(|| SafeStop::new(&tau_max));
     let mut stop: Option<Stopping> = None;
     let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
     // The last FROZEN_SAMPLES + 1 checked measurements and FROZEN_SAMPLES
@@ -337,11 +421,36 @@ pub fn run_closed_loop_with(
                 }
             }
         }
+        x_true[..n].copy_from_slice(plant.q());
+        x_true[n..].copy_from_slice(plant.qd());
+        if faults.lost_at(t, ts) {
+            x.fill(f64::NAN);
+        }
+        if measured {
+            rec.q_meas.extend_from_slice(&x[..n]);
+            rec.qd_meas.extend_from_slice(&x[n..]);
+        }
+        // A missing or invalid measurement: the controller runs on the
+        // model's prediction.
+        let mut fault = guard.check(model, &mut x, ts);
         let mut trigger = None;
         // During a stop the stop law judges the encoders itself (frozen
         // joints are dead-reckoned until they change again).
         if let Some(c) = check.as_mut().filter(|_| stop.is_none()) {
+            let before = c.rejections;
             trigger = c.check(&mut x, ts);
+            fault |= c.rejections > before;
+        }
+        rec.faults += usize::from(fault);
+        if let (None, None, Some(limit)) = (&stop, &trigger, settings.max_joint_error_rad) {
+            let w = reference.q(k);
+            if let Some(joint) = (0..n).find(|&i| (w[i] - x[i]).abs() > limit) {
+                trigger = Some(StopReason::JointErrorLimit {
+                    joint,
+                    error_rad: w[joint] - x[joint],
+                    limit_rad: limit,
+                });
+            }
         }
         x_hist.copy_within(2 * n.., 0);
         let last = x_hist.len() - 2 * n;
@@ -380,6 +489,16 @@ pub fn run_closed_loop_with(
         if let (Some(o), Ok(())) = (observer.as_deref_mut(), &status) {
             o.record_torque(&tau);
         }
+        guard.record_torque(&tau);
+        let mut saturated = false;
+        for (t, lim) in tau.iter().zip(&tau_max) {
+            if lim.is_finite() && *lim > 0.0 {
+                let r = t.abs() / lim;
+                rec.max_torque_ratio = rec.max_torque_ratio.max(r);
+                saturated |= r >= 1.0 - 1e-9;
+            }
+        }
+        rec.saturated_samples += usize::from(saturated);
         let us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
             if let (None, Some(law)) = (&stop, law.as_mut()) {
@@ -420,8 +539,8 @@ pub fn run_closed_loop_with(
             }
         }
         rec.t.push(t);
-        rec.q.extend_from_slice(&x[..n]);
-        rec.qd.extend_from_slice(&x[n..]);
+        rec.q.extend_from_slice(&x_true[..n]);
+        rec.qd.extend_from_slice(&x_true[n..]);
         rec.tau.extend_from_slice(plant.applied_torque());
         rec.q_ref.extend_from_slice(w);
         rec.flange_ref.push(reference.position(k));

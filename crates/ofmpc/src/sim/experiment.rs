@@ -100,7 +100,11 @@ impl Experiment {
             .reference
             .len()
             .saturating_add(self.loop_settings.hold_samples(ts));
-        let columns = record_columns(n);
+        let columns = record_columns(
+            n,
+            !(self.plant.measurement_is_ideal()
+                && self.loop_settings.measurement_faults.is_empty()),
+        );
         let values = samples.saturating_mul(columns);
         if values > MAX_RECORD_VALUES {
             return Err(ExperimentError::TooManySamples {

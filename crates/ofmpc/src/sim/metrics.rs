@@ -4,19 +4,28 @@
 use super::outcome::{RunOutcome, RunStatus};
 use serde::Serialize;
 
-/// The recorded time series of one run. Row `k` holds the state measured at
-/// `t_k` and the torque applied over `[t_k, t_k + Ts)`; vectors are stored
-/// row-major (`k·n + i`).
+/// The recorded time series of one run. Row `k` holds the plant's true state
+/// at `t_k`, what the controller was given as its measurement when that
+/// differs (`q_meas`, `qd_meas`), and the torque applied over
+/// `[t_k, t_k + Ts)`; vectors are stored row-major (`k·n + i`). Counters of
+/// faults and saturation cover the whole run.
 #[derive(Debug, Clone, Default)]
 pub struct Record {
     /// Number of joints.
     pub n: usize,
     /// Sample times (s).
     pub t: Vec<f64>,
-    /// Measured joint positions (rad).
+    /// True joint positions (rad).
     pub q: Vec<f64>,
-    /// Measured joint velocities (rad/s).
+    /// True joint velocities (rad/s).
     pub qd: Vec<f64>,
+    /// The measured positions as they reached the controller (rad; NaN where
+    /// the measurement was invalid or missing), when a measurement effect or
+    /// fault is on; empty otherwise (the measurement is then `q`).
+    pub q_meas: Vec<f64>,
+    /// The measured velocities as they reached the controller (rad/s), as
+    /// `q_meas`.
+    pub qd_meas: Vec<f64>,
     /// Torque applied over the sample period (N·m), after saturation.
     pub tau: Vec<f64>,
     /// Joint reference w_k (rad).
@@ -30,6 +39,15 @@ pub struct Record {
     /// The payload mass the controller's model carries after each step (kg),
     /// for controllers that identify it online; empty otherwise.
     pub payload_mass_est: Vec<f64>,
+    /// Samples whose measurement was missing, invalid or implausible and
+    /// was replaced by a prediction.
+    pub faults: usize,
+    /// Samples at which the commanded torque of some joint reached its
+    /// limit (`|τ_i| ≥ (1 − 1e-9)·τmax_i`).
+    pub saturated_samples: usize,
+    /// Largest `|τ_i| / τmax_i` of the commanded torque over joints and
+    /// samples (0 without finite limits).
+    pub max_torque_ratio: f64,
 }
 
 impl Record {
@@ -46,7 +64,18 @@ impl Record {
             flange_ref: Vec::with_capacity(capacity),
             step_us: Vec::with_capacity(capacity),
             payload_mass_est: Vec::new(),
+            q_meas: Vec::new(),
+            qd_meas: Vec::new(),
+            faults: 0,
+            saturated_samples: 0,
+            max_torque_ratio: 0.0,
         }
+    }
+
+    /// Whether the measurement the controller was given is recorded apart
+    /// from the true state.
+    pub fn has_measurement(&self) -> bool {
+        !self.q_meas.is_empty()
     }
     /// Number of samples.
     pub fn len(&self) -> usize {
@@ -135,6 +164,14 @@ pub struct RunMetrics {
     /// The final payload mass identified online (kg); `None` (`null`) for
     /// controllers that do not identify it.
     pub payload_estimate_kg: Option<f64>,
+    /// Samples whose measurement was missing, invalid or implausible (the
+    /// controller ran on its prediction).
+    pub faults: usize,
+    /// Samples at which the commanded torque of some joint was at its limit.
+    pub saturated_samples: usize,
+    /// Largest `|τ_i| / τmax_i` of the commanded torque over joints and
+    /// samples (0 without finite limits).
+    pub max_torque_ratio: f64,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -242,6 +279,9 @@ pub fn compute(
         reason: outcome.to_string(),
         stopped_at_s: outcome.stopped_at(),
         payload_estimate_kg: rec.payload_mass_est.last().copied(),
+        faults: rec.faults,
+        saturated_samples: rec.saturated_samples,
+        max_torque_ratio: rec.max_torque_ratio,
     }
 }
 

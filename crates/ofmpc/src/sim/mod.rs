@@ -10,8 +10,8 @@ mod plant;
 mod supervisor;
 
 pub use closed_loop::{
-    record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
-    MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
+    record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, MeasurementFaults,
+    RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};

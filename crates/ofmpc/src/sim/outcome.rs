@@ -204,6 +204,29 @@ pub enum LoopSettingsError {
     /// The pick-up time is negative or not finite.
     #[error("the payload pick-up time is {0} s: it must be a finite time ≥ 0 s")]
     PickUpTime(f64),
+    /// A time of an invalid (NaN) measurement is negative or not finite.
+    #[error("invalid-measurement time {index} is {value} s: it must be a finite time ≥ 0 s")]
+    FaultTime {
+        /// 0-based position in the list.
+        index: usize,
+        /// The time (s).
+        value: f64,
+    },
+    /// A measurement dropout interval is not `0 ≤ from < to`, finite.
+    #[error(
+        "dropout interval {index} is [{from}, {to}] s: it must be finite with 0 ≤ start < end"
+    )]
+    DropoutInterval {
+        /// 0-based position in the list.
+        index: usize,
+        /// Start (s).
+        from: f64,
+        /// End (s).
+        to: f64,
+    },
+    /// The safety limit on the joint error is not a positive angle.
+    #[error("the joint error limit of the safe stop is {0} rad: it must be a finite angle > 0")]
+    MaxJointError(f64),
 }
 
 /// Why an experiment cannot be run.

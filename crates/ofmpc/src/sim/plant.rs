@@ -272,6 +272,23 @@ pub enum PlantError {
 }
 
 impl PlantSettings {
+    /// True when the controller is given the plant's exact state: no noise,
+    /// no encoder quantization, no encoder-derived velocity, no delay and no
+    /// encoder fault.
+    pub fn measurement_is_ideal(&self) -> bool {
+        self.position_noise == 0.0
+            && self.velocity_noise == 0.0
+            && self.encoder_counts == 0
+            && !self.velocity_from_encoder
+            && self.delay_samples == 0
+            && !self.faults.iter().any(|f| {
+                matches!(
+                    f,
+                    Fault::EncoderGlitch { .. } | Fault::EncoderDropout { .. }
+                )
+            })
+    }
+
     /// Checks the settings against a robot with `n` joints.
     pub fn validate(&self, n: usize) -> Result<(), PlantSettingsError> {
         if !(self.substep.is_finite() && self.substep > 0.0) {
@@ -481,6 +498,10 @@ impl Plant {
     /// The plant's robot (with its payload).
     pub fn robot(&self) -> &Robot {
         &self.robot
+    }
+    /// The plant's settings.
+    pub fn settings(&self) -> &PlantSettings {
+        &self.settings
     }
     /// Attaches (or with `None`, removes) the payload at the flange from now
     /// on: a part picked up or put down. The state is unchanged.

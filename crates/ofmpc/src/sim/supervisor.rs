@@ -49,6 +49,15 @@ pub enum StopReason {
         /// The error (rad).
         error_rad: f64,
     },
+    /// A joint error passed the safety limit (`max_joint_error_rad`).
+    JointErrorLimit {
+        /// 0-based joint.
+        joint: usize,
+        /// The error (rad), of the state the controller was given.
+        error_rad: f64,
+        /// The limit (rad).
+        limit_rad: f64,
+    },
     /// A controller step failed.
     ControllerFailed(StepError),
     /// A joint's measurement kept jumping beyond the plausible.
@@ -73,6 +82,15 @@ impl fmt::Display for StopReason {
             StopReason::Diverged { joint, error_rad } => write!(
                 f,
                 "the error of joint {} reached {error_rad:.4} rad (divergence)",
+                joint + 1
+            ),
+            StopReason::JointErrorLimit {
+                joint,
+                error_rad,
+                limit_rad,
+            } => write!(
+                f,
+                "the error of joint {} reached {error_rad:.4} rad, beyond the safety limit of {limit_rad} rad",
                 joint + 1
             ),
             StopReason::ControllerFailed(e) => write!(f, "the controller step failed: {e}"),
@@ -194,6 +212,107 @@ impl Plausibility {
             }
         }
         reason
+    }
+}
+
+/// Stands in for a missing or invalid (non-finite) measurement: the state
+/// the controller was last given, advanced one period through the
+/// controller's model under the torque that produced the current
+/// measurement (`delay` samples older with a delayed measurement), plus the
+/// acceleration the model has been missing lately (a filtered disturbance,
+/// learnt on the valid samples: an unknown payload biases the model). The
+/// controller then runs on this prediction; every such sample counts as a
+/// fault. Sized once ([`MeasurementGuard::new`]); allocation-free after.
+#[derive(Debug, Clone)]
+pub(crate) struct MeasurementGuard {
+    n: usize,
+    delay: usize,
+    lin: LinearLikeModel,
+    /// The last state handed on (2n).
+    x_prev: Vec<f64>,
+    /// Torques of the last `delay + 1` samples (ring) and how many were recorded.
+    tau_hist: Vec<f64>,
+    recorded: usize,
+    a: Vec<f64>,
+    /// Acceleration the model misses (filtered), rad/s².
+    dist: Vec<f64>,
+    /// Samples whose measurement was replaced.
+    pub faults: usize,
+}
+
+/// Gain of the disturbance filter of [`MeasurementGuard`] per sample.
+const DISTURBANCE_GAIN: f64 = 0.3;
+
+impl MeasurementGuard {
+    /// A guard for a robot at rest at `x0` (2n: the prior for a first
+    /// measurement that is already invalid), measurements `delay` samples old.
+    pub fn new(x0: &[f64], delay: usize) -> Self {
+        let n = x0.len() / 2;
+        Self {
+            n,
+            delay,
+            lin: LinearLikeModel::new(n),
+            x_prev: x0.to_vec(),
+            tau_hist: vec![0.0; (delay + 1) * n],
+            recorded: 0,
+            a: vec![0.0; n],
+            dist: vec![0.0; n],
+            faults: 0,
+        }
+    }
+
+    /// Replaces the non-finite entries of `x` (2n) by the prediction (both
+    /// position and velocity of such a joint); returns whether it did.
+    pub fn check(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64], ts: f64) -> bool {
+        let n = self.n;
+        let bad = |i: usize, x: &[f64]| !(x[i].is_finite() && x[n + i].is_finite());
+        let invalid = (0..n).any(|i| bad(i, x));
+        // The model's acceleration from the last state under the torque
+        // applied at sample k − 1 − delay (none yet: no prediction).
+        let slots = self.delay + 1;
+        let predicted = self.recorded > self.delay && {
+            let slot = (self.recorded - 1 - self.delay) % slots;
+            let (q, v) = self.x_prev.split_at(n);
+            let tau = &self.tau_hist[slot * n..(slot + 1) * n];
+            model_accel(&mut self.lin, model, q, v, tau, &mut self.a).is_ok()
+                && self.a.iter().all(|a| a.is_finite())
+        };
+        if !invalid {
+            if predicted {
+                for i in 0..n {
+                    let seen = (x[n + i] - self.x_prev[n + i]) / ts;
+                    let d = seen - self.a[i];
+                    if d.is_finite() {
+                        self.dist[i] += DISTURBANCE_GAIN * (d - self.dist[i]);
+                    }
+                }
+            }
+            self.x_prev.copy_from_slice(x);
+            return false;
+        }
+        self.faults += 1;
+        for i in 0..n {
+            if bad(i, x) {
+                let a = if predicted {
+                    self.a[i] + self.dist[i]
+                } else {
+                    0.0
+                };
+                let (q, v) = (self.x_prev[i], self.x_prev[n + i]);
+                x[i] = q + v * ts + 0.5 * a * ts * ts;
+                x[n + i] = v + a * ts;
+            }
+        }
+        self.x_prev.copy_from_slice(x);
+        true
+    }
+
+    /// The torque commanded at the current sample (n values).
+    pub fn record_torque(&mut self, tau: &[f64]) {
+        let n = self.n;
+        let slot = self.recorded % (self.delay + 1);
+        self.tau_hist[slot * n..(slot + 1) * n].copy_from_slice(tau);
+        self.recorded += 1;
     }
 }
 

@@ -1,0 +1,123 @@
+//! Issue #11 at the CLI: the `[faults]` and `[safety]` tables, metrics.json's
+//! `faults`, `saturated_samples` and `max_torque_ratio`, timeseries.csv's
+//! true state beside `q_meas`/`qd_meas`, the report's drives section, and
+//! bad values named by their keys.
+
+mod bin;
+use bin::*;
+
+use std::path::Path;
+
+fn scenario(dir: &Path, body: &str) -> String {
+    let p = dir.join("s.toml");
+    std::fs::write(&p, body).unwrap();
+    p.display().to_string()
+}
+
+fn rows(path: &Path) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    (header, rows)
+}
+
+#[test]
+fn faults_and_safety_tables_reach_metrics_timeseries_and_report() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = scenario(
+        tmp.path(),
+        r#"
+title = "faults"
+controllers = ["second"]
+[payload]
+masses_kg = [0.25]
+[faults]
+nan_at_s = [1.0, 3.0]
+dropout_s = [[2.0, 2.1]]
+[safety]
+max_joint_error_rad = 0.1
+"#,
+    );
+    let out = tmp.path().join("out");
+    ok(&["run", &s, "--out", out.to_str().unwrap()]);
+    let m = metrics(&out);
+    let r = run(&m, "second_m0.25");
+    assert_eq!(r["status"], "ok");
+    assert_eq!(r["faults"], 12);
+    assert_eq!(r["saturated_samples"], 0);
+    let ratio = r["max_torque_ratio"].as_f64().unwrap();
+    assert!(ratio > 0.0 && ratio < 1.0, "{ratio}");
+    let (header, data) = rows(&out.join("second_m0.25/timeseries.csv"));
+    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+    let (q1, qm1, qdm6) = (col("q1"), col("q_meas1"), col("qd_meas6"));
+    assert_eq!(qdm6, header.len() - 1, "q_meas/qd_meas come last");
+    let lost: Vec<&str> = data
+        .iter()
+        .filter(|r| r[qm1] == "NaN")
+        .map(|r| r[0].as_str())
+        .collect();
+    assert_eq!(lost.len(), 12);
+    assert_eq!((lost[0], lost[11]), ("1", "3"));
+    // NaN is allowed in the measurement columns only.
+    for r in &data {
+        for (i, v) in r.iter().enumerate() {
+            if i < col("q_meas1") {
+                assert!(v.parse::<f64>().unwrap().is_finite(), "{} = {v}", header[i]);
+            }
+        }
+        assert!(r[q1].parse::<f64>().is_ok());
+    }
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("Drives, sensors and faults"));
+    // The effective scenario keeps the tables.
+    let eff = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    assert!(
+        eff.contains("[faults]") && eff.contains("nan_at_s = [1.0, 3.0]"),
+        "{eff}"
+    );
+    assert!(eff.contains("max_joint_error_rad = 0.1"), "{eff}");
+}
+
+#[test]
+fn an_ideal_measurement_adds_no_columns() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = scenario(
+        tmp.path(),
+        "controllers = [\"first\"]\n[payload]\nmasses_kg = [0.0]\n[simulation]\nhold_s = 0.5\n",
+    );
+    let out = tmp.path().join("out");
+    ok(&["run", &s, "--out", out.to_str().unwrap()]);
+    let (header, _) = rows(&out.join("first_m0/timeseries.csv"));
+    assert!(!header.iter().any(|h| h.contains("meas")), "{header:?}");
+    let m = metrics(&out);
+    assert_eq!(run(&m, "first_m0")["faults"], 0);
+}
+
+#[test]
+fn bad_fault_and_safety_values_name_their_keys() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (body, key) in [
+        (
+            "[faults]\nnan_at_s = [1.0, -2.0]\n",
+            "[faults] nan_at_s[1] = -2",
+        ),
+        (
+            "[faults]\ndropout_s = [[3.0, 2.0]]\n",
+            "[faults] dropout_s[0] = [3, 2]",
+        ),
+        (
+            "[safety]\nmax_joint_error_rad = -0.1\n",
+            "[safety] max_joint_error_rad = -0.1",
+        ),
+        ("[faults]\nnan_at = [1.0]\n", "nan_at"),
+    ] {
+        let s = scenario(tmp.path(), body);
+        let o = ofmpc(&["run", &s, "--out", tmp.path().join("o").to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{body}");
+        let e = stderr(&o);
+        assert!(e.contains(key), "{body}: {e}");
+    }
+}
