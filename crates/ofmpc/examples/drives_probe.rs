@@ -121,6 +121,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         _ => {}
     }
+    if let Some(v) = std::env::var("QDU")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        mpc.q_du = ofmpc::control::Weight::Scalar(v);
+    }
+    if let Some(v) = std::env::var("QDY")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        mpc.q_dy = ofmpc::control::Weight::Scalar(v);
+    }
     let check = !case.ends_with("nocheck") && std::env::var_os("NOCHECK").is_none();
     println!("path {} s", reference.duration());
     let exp = Experiment {
@@ -160,6 +172,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
+        if let Some(j) = std::env::var("DUMP")
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok())
+        {
+            if m.controller == "second" {
+                let len = r.record.len();
+                for k in len - 40..len {
+                    println!(
+                        "  k {k} e {:+.3e} qd {:+.3e} tau {:+.4}",
+                        r.record.joint_error(k, j - 1),
+                        r.record.qd[k * n + j - 1],
+                        r.record.tau[k * n + j - 1]
+                    );
+                }
+            }
+        }
         if std::env::var_os("TRACE").is_some() {
             let len = r.record.len();
             for i in 0..n {
@@ -178,6 +206,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
         }
+        println!(
+            "  saturated_samples {} max_torque_ratio {:.4} faults {}",
+            m.saturated_samples, m.max_torque_ratio, m.faults
+        );
         println!(
             "{:8} rms {:8.4} mm max {:8.4} mm steady {:10.3e} mm  steady joint {:10.3e}  max|tau|/lim {:.4} tau_max {:?} step {:6.1} us {}",
             m.controller,
