@@ -127,6 +127,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         mpc.q_du = ofmpc::control::Weight::Scalar(v);
     }
+    if let Some(v) = std::env::var("MODEL_PAYLOAD").ok().and_then(|v| v.parse::<f64>().ok()) {
+        mpc.model_payload_kg = v;
+    }
     if let Some(v) = std::env::var("QDY")
         .ok()
         .and_then(|v| v.parse::<f64>().ok())
