@@ -59,6 +59,8 @@ pub struct QpStatus {
 pub(crate) struct TorqueLimitQp {
     n: usize,
     nh: usize,
+    /// Constraint horizon: the torques `j < nc` are limited.
+    nc: usize,
     m: usize,
     incremental: bool,
     tau_max: Vec<f64>,
@@ -81,12 +83,21 @@ pub(crate) struct TorqueLimitQp {
 }
 
 impl TorqueLimitQp {
-    /// Buffers for the system `𝒜` (`m × N·n`, column-major) of a controller.
-    pub fn new(n: usize, nh: usize, m: usize, incremental: bool, tau_max: &[f64]) -> Self {
+    /// Buffers for the system `𝒜` (`m × N·n`, column-major) of a controller
+    /// whose first `nc` torques (`1 ≤ nc ≤ nh`) are limited.
+    pub fn new(
+        n: usize,
+        nh: usize,
+        nc: usize,
+        m: usize,
+        incremental: bool,
+        tau_max: &[f64],
+    ) -> Self {
         let p = n * nh;
         Self {
             n,
             nh,
+            nc: nc.clamp(1, nh.max(1)),
             m,
             incremental,
             tau_max: tau_max.to_vec(),
@@ -165,7 +176,7 @@ impl TorqueLimitQp {
                 }
                 self.z[j * n + i] = z;
                 let lim = self.tau_max[i];
-                if lim.is_finite() && (z + g[i]).abs() > lim {
+                if j < self.nc && lim.is_finite() && (z + g[i]).abs() > lim {
                     violated = true;
                 }
             }
@@ -234,7 +245,7 @@ impl TorqueLimitQp {
             for i in 0..n {
                 let lim = self.tau_max[i] * (1.0 - MARGIN);
                 let k = self.col(j, i);
-                let (lo, hi) = if lim.is_finite() {
+                let (lo, hi) = if lim.is_finite() && j < self.nc {
                     (-lim - g[i], lim - g[i])
                 } else {
                     (f64::NEG_INFINITY, f64::INFINITY)

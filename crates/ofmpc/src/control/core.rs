@@ -286,6 +286,7 @@ impl Core {
             Some(Box::new(TorqueLimitQp::new(
                 self.n,
                 self.nh,
+                self.settings.constraint_horizon.unwrap_or(self.nh),
                 lsq.rows(),
                 self.incremental,
                 &drives.max_torque_nm,

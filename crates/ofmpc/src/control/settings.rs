@@ -160,6 +160,18 @@ pub struct MpcSettings {
     /// horizon as constraints of the optimization ([`super::constrained`]);
     /// the limits come from the controller's [`super::DriveModel`]. Default off.
     pub torque_limits: bool,
+    /// With `torque_limits`: constrain (and check) only the first `N_c`
+    /// torques of the horizon, `1 ≤ N_c ≤ N`; `None` (default): all `N`.
+    /// The tail of an unconstrained plan often passes a limit that the
+    /// applied torques never reach (its last inputs only serve the last
+    /// predicted errors, and the frozen model is least accurate there):
+    /// measured on the paper's path with joint 1 limited 0.4 % below its
+    /// peak, the second algorithm's QP was active on ≈ 440 of 1364 steps with
+    /// `N_c = N`, and its RMS error 4.4× that without limits; with `N_c = 5`,
+    /// 1.0×. With limits that bind hard, the full horizon foresees more
+    /// (see the README's table).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraint_horizon: Option<usize>,
     /// Use the drives' friction estimates (Coulomb, viscous) of the
     /// [`super::DriveModel`]: the estimated friction at the reference's
     /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). Default off.
@@ -187,6 +199,7 @@ impl Default for MpcSettings {
             solver: Solver::default(),
             model_payload_kg: 0.0,
             torque_limits: false,
+            constraint_horizon: None,
             friction_compensation: false,
             delay_compensation: false,
             state_observer: false,
@@ -237,6 +250,14 @@ impl MpcSettings {
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
         }
+        if let Some(nc) = self.constraint_horizon {
+            if nc == 0 || nc > self.horizon {
+                return Err(SettingsError::ConstraintHorizon {
+                    value: nc,
+                    horizon: self.horizon,
+                });
+            }
+        }
         // Diagonals must agree among themselves even when n is not known yet.
         let mut common: Option<(&'static str, usize)> = None;
         for (name, w, positive) in [
@@ -276,6 +297,14 @@ pub enum SettingsError {
     /// `horizon` is 0 or too large.
     #[error("prediction horizon {0} is invalid: it must be between 1 and {MAX_HORIZON} samples (the paper uses 10)")]
     BadHorizon(usize),
+    /// The constraint horizon is 0 or longer than the prediction horizon.
+    #[error("the constraint horizon is {value} samples: it must be between 1 and the prediction horizon ({horizon})")]
+    ConstraintHorizon {
+        /// The constraint horizon.
+        value: usize,
+        /// The prediction horizon.
+        horizon: usize,
+    },
     /// A weight entry is negative, zero where it must be positive, or not finite.
     #[error("weight {name}[{index}] = {value} is invalid: it must be {requirement}")]
     BadWeight {
