@@ -144,5 +144,74 @@ fn parts(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, steps, solve, parts);
+/// One step with the torque-limit QP active (#11): limits at 90 % of the
+/// unconstrained step's torques (+0.1 N·m), so that the QP runs on every
+/// iteration (the controller is reset each time: identical steps), against
+/// the same step without limits. Ids `step_limits_irb140/<kind>-{qp,free}`.
+fn limits(c: &mut Criterion) {
+    use ofmpc::control::DriveModel;
+    let n = 6;
+    let mut group = c.benchmark_group("step_limits_irb140");
+    group.warm_up_time(Duration::from_millis(300));
+    group.measurement_time(Duration::from_secs(1));
+    group.sample_size(20);
+    let x = vec![
+        -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
+    ];
+    let nh = 10;
+    let wk: Vec<f64> = x[..n].iter().map(|q| q + 1e-3).collect();
+    let preview: Vec<f64> = (0..nh)
+        .flat_map(|j| x[..n].iter().map(move |q| q + 1e-3 * (j + 2) as f64))
+        .collect();
+    for kind in [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+    ] {
+        let mut model = RobotDynamics::new(Robot::irb140());
+        let free_settings = MpcSettings {
+            solver: Solver::DenseQr,
+            ..MpcSettings::default()
+        };
+        let mut free = new_controller(kind, n, &free_settings).unwrap();
+        let mut tau = vec![0.0; n];
+        free.reset(&x).unwrap();
+        free.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        let mut drives = DriveModel::from_robot(&Robot::irb140());
+        for (l, t) in drives.max_torque_nm.iter_mut().zip(&tau) {
+            *l = 0.9 * t.abs() + 0.1;
+        }
+        let s = MpcSettings {
+            torque_limits: true,
+            ..MpcSettings::default()
+        };
+        let mut ctrl = new_controller(kind, n, &s).unwrap();
+        ctrl.set_drive_model(&drives).unwrap();
+        ctrl.reset(&x).unwrap();
+        ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        assert!(
+            ctrl.qp_status().is_some_and(|q| q.active),
+            "{kind}: QP not active"
+        );
+        group.bench_function(format!("{}-qp", kind.name()), |b| {
+            b.iter(|| {
+                ctrl.reset(&x).unwrap();
+                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
+                    .unwrap();
+                black_box(&tau);
+            })
+        });
+        group.bench_function(format!("{}-free", kind.name()), |b| {
+            b.iter(|| {
+                free.reset(&x).unwrap();
+                free.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
+                    .unwrap();
+                black_box(&tau);
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, steps, solve, parts, limits);
 criterion_main!(benches);

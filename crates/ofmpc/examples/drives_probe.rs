@@ -127,7 +127,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         mpc.q_du = ofmpc::control::Weight::Scalar(v);
     }
-    if let Some(v) = std::env::var("MODEL_PAYLOAD").ok().and_then(|v| v.parse::<f64>().ok()) {
+    if let Some(v) = std::env::var("MODEL_PAYLOAD")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
         mpc.model_payload_kg = v;
     }
     if let Some(v) = std::env::var("QDY")
@@ -189,6 +192,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         r.record.tau[k * n + j - 1]
                     );
                 }
+            }
+        }
+        if std::env::var_os("ERRLOG").is_some() && m.controller == "second" {
+            for k in (0..r.record.len()).step_by(
+                std::env::var("EVERY")
+                    .ok()
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(5),
+            ) {
+                let c = r.record.cartesian_error(k);
+                let e = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
+                let sat = (0..n).any(|i| {
+                    r.record.tau[k * n + i].abs() >= robot.joints()[i].limits.effort * (1.0 - 1e-9)
+                });
+                println!(
+                    "  t {:.2} e {:.4} mm e1 {:+.2e} tau1 {:.2}{}",
+                    r.record.t[k],
+                    e,
+                    r.record.joint_error(k, 0),
+                    r.record.tau[k * n],
+                    if sat { " SAT" } else { "" }
+                );
             }
         }
         if std::env::var_os("TRACE").is_some() {

@@ -19,7 +19,11 @@
 //! min ½ zᵀ P z − cᵀ z   s.t.  lo ≤ z ≤ hi,    P = (𝒜T)ᵀ(𝒜T), c = (𝒜T)ᵀ(b − 𝒜e),
 //! ```
 //!
-//! with `ΔU = T z + e`. [`solve_box_qp`] solves it by a primal active-set
+//! with `ΔU = T z + e`. The unconstrained solve has already factored
+//! `𝒜 = Q [R1; 0]`, `Qᵀb = [c1; c2]`, so `‖𝒜ΔU − b‖² = ‖R1 ΔU − c1‖² + ‖c2‖²`:
+//! the QP is built from the `p × p` triangle `R1` and `c1` (`P = (R1T)ᵀ(R1T)`,
+//! `c = (R1T)ᵀ(c1 − R1 e)`), not from the `3p × p` system, and nothing is
+//! copied before the solve. [`solve_box_qp`] solves it by a primal active-set
 //! method on `P` (Cholesky of the free block per iteration): every iterate is
 //! feasible, so when the bounded iteration count runs out the current iterate
 //! still respects the limits (the fallback), only its cost is not minimal.
@@ -35,6 +39,7 @@
 //! `z` makes a dense active-set method of ~200 lines sufficient and
 //! preallocated (`p = N·n = 60` unknowns for the IRB 140 at `N = 10`).
 
+use super::lsq::LsqWorkspace;
 use super::model::{cholesky_in_place, cholesky_solve_in_place, LinearLikeModel};
 
 /// Relative margin kept inside the limits so that rounding in `τ = H u + g`
@@ -61,10 +66,9 @@ pub(crate) struct TorqueLimitQp {
     nh: usize,
     /// Constraint horizon: the torques `j < nc` are limited.
     nc: usize,
-    m: usize,
     incremental: bool,
     tau_max: Vec<f64>,
-    a: Vec<f64>,
+    /// `c1 − R1 e` (p).
     b: Vec<f64>,
     hinv: Vec<f64>,
     bz: Vec<f64>,
@@ -83,28 +87,19 @@ pub(crate) struct TorqueLimitQp {
 }
 
 impl TorqueLimitQp {
-    /// Buffers for the system `𝒜` (`m × N·n`, column-major) of a controller
-    /// whose first `nc` torques (`1 ≤ nc ≤ nh`) are limited.
-    pub fn new(
-        n: usize,
-        nh: usize,
-        nc: usize,
-        m: usize,
-        incremental: bool,
-        tau_max: &[f64],
-    ) -> Self {
+    /// Buffers for a controller with `n` joints and horizon `nh` whose first
+    /// `nc` torques (`1 ≤ nc ≤ nh`) are limited.
+    pub fn new(n: usize, nh: usize, nc: usize, incremental: bool, tau_max: &[f64]) -> Self {
         let p = n * nh;
         Self {
             n,
             nh,
             nc: nc.clamp(1, nh.max(1)),
-            m,
             incremental,
             tau_max: tau_max.to_vec(),
-            a: vec![0.0; m * p],
-            b: vec![0.0; m],
+            b: vec![0.0; p],
             hinv: vec![0.0; n * n],
-            bz: vec![0.0; m * p],
+            bz: vec![0.0; p * p],
             hess: vec![0.0; p * p],
             lin: vec![0.0; p],
             lo: vec![0.0; p],
@@ -123,12 +118,6 @@ impl TorqueLimitQp {
         &self.tau_max
     }
 
-    /// Keeps a copy of `𝒜` and `b` before the least-squares solve overwrites them.
-    pub fn capture(&mut self, a: &[f64], b: &[f64]) {
-        self.a.copy_from_slice(a);
-        self.b.copy_from_slice(b);
-    }
-
     /// Column of `Δu_{k+j}` entry `i` in the permuted layout of `𝒜`
     /// (unknown block `t' = N − j`, see `core.rs`).
     #[inline]
@@ -136,19 +125,22 @@ impl TorqueLimitQp {
         (self.nh - 1 - j) * self.n + i
     }
 
-    /// Checks the unconstrained solution `sol` (layout of `𝒜`'s columns)
-    /// against the limits over the horizon; when it violates one, solves the
-    /// QP and writes the constrained `u_k` into `u_new`. `u_prev` is
-    /// `u_{k−1}` (incremental algorithms). Allocation-free.
+    /// Checks the unconstrained solution of the solved least-squares system
+    /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
+    /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`
+    /// and writes the constrained `u_k` into `u_new`. `u_prev` is `u_{k−1}`
+    /// (incremental algorithms). Allocation-free.
     pub fn enforce(
         &mut self,
         model: &LinearLikeModel,
-        sol: &[f64],
+        lsq: &LsqWorkspace,
         u_prev: &[f64],
         u_new: &mut [f64],
     ) {
-        let (n, nh, m) = (self.n, self.nh, self.m);
+        let (n, nh) = (self.n, self.nh);
         let p = n * nh;
+        let m = p;
+        let sol = lsq.solution();
         self.status = QpStatus::default();
         self.saturated.fill(false);
         // u_{k+j} over the horizon from the unconstrained solution.
@@ -192,8 +184,9 @@ impl TorqueLimitQp {
             col[c] = 1.0;
             model.solve_h_in_place(col);
         }
-        // B = 𝒜 T: column (j, c) = Σ_l (A[:, d_j,l] − A[:, d_{j+1},l]) H⁻¹[l, c]
-        // (incremental); A[:, d_j,l] H⁻¹[l, c] (usual).
+        // B = R1 T: column (j, c) = Σ_l (R[:, d_j,l] − R[:, d_{j+1},l]) H⁻¹[l, c]
+        // (incremental); R[:, d_j,l] H⁻¹[l, c] (usual). Column d of R1 is
+        // non-zero in rows 0..=d only.
         let col = |j: usize, i: usize| (nh - 1 - j) * n + i;
         for j in 0..nh {
             for c in 0..n {
@@ -202,33 +195,30 @@ impl TorqueLimitQp {
                 out.fill(0.0);
                 for l in 0..n {
                     let w = self.hinv[c * n + l];
-                    let c0 = col(j, l);
-                    for (o, a) in out.iter_mut().zip(&self.a[c0 * m..c0 * m + m]) {
-                        *o += w * a;
+                    for (o, r) in out.iter_mut().zip(lsq.r_column(col(j, l))) {
+                        *o += w * r;
                     }
                     if self.incremental && j + 1 < nh {
-                        let c1 = col(j + 1, l);
-                        for (o, a) in out.iter_mut().zip(&self.a[c1 * m..c1 * m + m]) {
-                            *o -= w * a;
+                        for (o, r) in out.iter_mut().zip(lsq.r_column(col(j + 1, l))) {
+                            *o -= w * r;
                         }
                     }
                 }
             }
         }
-        // b' = b − 𝒜 e, e = −u_{k−1} in the block of Δu_k (incremental).
+        // b' = c1 − R1 e, e = −u_{k−1} in the block of Δu_k (incremental).
+        self.b.copy_from_slice(&lsq.transformed_rhs()[..p]);
         if self.incremental {
             for l in 0..n {
-                let c0 = self.col(0, l);
                 let w = u_prev[l];
-                for (bb, a) in self.b.iter_mut().zip(&self.a[c0 * m..c0 * m + m]) {
-                    *bb += w * a;
+                for (bb, r) in self.b.iter_mut().zip(lsq.r_column(col(0, l))) {
+                    *bb += w * r;
                 }
             }
         }
-        // P = BᵀB and c = Bᵀb'. Column block t' of 𝒜 (and of B) is zero below
-        // row (m/N)·t' (block upper-triangular profile, core.rs).
-        let per_level = m / nh;
-        let end = |c: usize| per_level * (c / n + 1);
+        // P = BᵀB and c = Bᵀb'. Column block t' of R1 (and of B) is zero
+        // below row n·t' (upper triangular).
+        let end = |c: usize| n * (c / n + 1);
         for c1 in 0..p {
             let b1 = &self.bz[c1 * m..c1 * m + end(c1)];
             for c2 in c1..p {

@@ -280,14 +280,13 @@ impl Core {
         drives.validate(self.n)?;
         self.qp = if self.settings.torque_limits {
             // With torque limits the dense system is always built (Core::new).
-            let Some(lsq) = self.lsq.as_ref() else {
+            if self.lsq.is_none() {
                 return Err(SettingsError::DrivesUnsupported("structured solver"));
-            };
+            }
             Some(Box::new(TorqueLimitQp::new(
                 self.n,
                 self.nh,
                 self.settings.constraint_horizon.unwrap_or(self.nh),
-                lsq.rows(),
                 self.incremental,
                 &drives.max_torque_nm,
             )))
@@ -447,11 +446,6 @@ impl Core {
             .lsq
             .as_mut()
             .ok_or(StepError::Internal("dense solve without its workspace"))?;
-        if let Some(qp) = self.qp.as_mut() {
-            // The torque-limit QP works on the dense system (constrained.rs).
-            let (a, b) = lsq.system_mut();
-            qp.capture(a, b);
-        }
         let info = lsq.solve()?;
         for (dst, src) in self
             .du
@@ -546,7 +540,7 @@ impl Core {
             // Torque limits over the horizon (constrained.rs), on the dense
             // system's solution; unchanged when the unconstrained solution
             // respects them.
-            qp.enforce(&self.model, lsq.solution(), &self.u_prev, &mut self.u_new);
+            qp.enforce(&self.model, lsq, &self.u_prev, &mut self.u_new);
         }
         self.model.torque(&self.u_new, &mut self.tau_new)?;
         if let Some(qp) = self.qp.as_ref().filter(|q| q.status.active) {

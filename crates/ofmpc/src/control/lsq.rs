@@ -185,6 +185,13 @@ impl LsqWorkspace {
         &self.a[self.m * self.p..]
     }
 
+    /// After [`LsqWorkspace::solve`]: column `j < p` of `R1`, its rows
+    /// `0..=j` (the rest is zero; the storage below holds reflectors).
+    pub fn r_column(&self, j: usize) -> &[f64] {
+        let j = j.min(self.p.saturating_sub(1));
+        &self.a[j * self.m..j * self.m + j + 1]
+    }
+
     /// After [`LsqWorkspace::solve`]: entry `(i, j)` of `R1`, `i ≤ j < p`.
     pub fn r(&self, i: usize, j: usize) -> f64 {
         if i <= j && j < self.p {
