@@ -379,8 +379,8 @@ pub fn run_closed_loop_with(
     let mut check = settings
         .plausibility_check
         .then(|| Plausibility::new(&vmax, &x));
-    let mut guard = MeasurementGuard::new(&x, plant.settings().delay_samples);
     let faults = &settings.measurement_faults;
+    let mut guard = MeasurementGuard::new(&x, plant.settings().delay_samples, !faults.is_empty());
     let mut x_true = vec![0.0; 2 * n];
     // The stop law is sized here, before the loop: starting a stop allocates nothing.
     let mut law = (settings.safe_stop || settings.max_joint_error_rad.is_some())

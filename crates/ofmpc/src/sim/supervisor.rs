@@ -236,6 +236,9 @@ pub(crate) struct MeasurementGuard {
     a: Vec<f64>,
     /// Acceleration the model misses (filtered), rad/s².
     dist: Vec<f64>,
+    /// Learn `dist` on every valid sample (one model evaluation per sample):
+    /// only when measurements can be lost.
+    track: bool,
     /// Samples whose measurement was replaced.
     pub faults: usize,
 }
@@ -245,8 +248,9 @@ const DISTURBANCE_GAIN: f64 = 0.3;
 
 impl MeasurementGuard {
     /// A guard for a robot at rest at `x0` (2n: the prior for a first
-    /// measurement that is already invalid), measurements `delay` samples old.
-    pub fn new(x0: &[f64], delay: usize) -> Self {
+    /// measurement that is already invalid), measurements `delay` samples
+    /// old; `track`: measurements can be lost (learn the disturbance).
+    pub fn new(x0: &[f64], delay: usize, track: bool) -> Self {
         let n = x0.len() / 2;
         Self {
             n,
@@ -257,6 +261,7 @@ impl MeasurementGuard {
             recorded: 0,
             a: vec![0.0; n],
             dist: vec![0.0; n],
+            track,
             faults: 0,
         }
     }
@@ -267,6 +272,10 @@ impl MeasurementGuard {
         let n = self.n;
         let bad = |i: usize, x: &[f64]| !(x[i].is_finite() && x[n + i].is_finite());
         let invalid = (0..n).any(|i| bad(i, x));
+        if !invalid && !self.track {
+            self.x_prev.copy_from_slice(x);
+            return false;
+        }
         // The model's acceleration from the last state under the torque
         // applied at sample k − 1 − delay (none yet: no prediction).
         let slots = self.delay + 1;
