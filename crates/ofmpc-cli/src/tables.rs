@@ -1,7 +1,7 @@
 //! Text outputs: CSV time series and the summary table.
 
 use ofmpc::motion::JointReference;
-use ofmpc::sim::{Record, RunMetrics};
+use ofmpc::sim::{Record, RunMetrics, RunStatus};
 use std::fmt::Write as _;
 
 /// Writes `x` at full precision (it parses back to the same bits): plain
@@ -157,9 +157,12 @@ pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
                 fmt_opt(m.steady_cartesian_error_mm, 4),
                 fmt_opt(steady_joint, 4),
                 fmt_opt(m.step_time_us.median, 1),
-                match m.diverged_at_s {
-                    Some(t) => format!("DIVERGED at {t:.2} s"),
-                    None => "ok".into(),
+                match (m.status, m.stopped_at_s) {
+                    (RunStatus::Ok, _) => "ok".into(),
+                    (RunStatus::Diverged, Some(t)) => format!("DIVERGED at {t:.2} s"),
+                    (RunStatus::Failed, Some(t)) => format!("FAILED at {t:.2} s"),
+                    (RunStatus::Stopped, Some(t)) => format!("STOPPED at {t:.2} s"),
+                    (status, _) => status.to_string().to_uppercase(),
                 },
             ]
         })

@@ -121,3 +121,29 @@ fn bad_fault_and_safety_values_name_their_keys() {
         assert!(e.contains(key), "{body}: {e}");
     }
 }
+
+/// The safety limit at the CLI: a run that would diverge ends "stopped", the
+/// summary says so (not "ok"), and the process exits 0 (the run did what it
+/// was told).
+#[test]
+fn a_stopped_run_is_reported_as_stopped() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = scenario(
+        tmp.path(),
+        "controllers = [\"second\"]\n[payload]\nmasses_kg = [6.0]\n[plant]\ntorque_limits = true\n[safety]\nmax_joint_error_rad = 0.05\n",
+    );
+    let out = tmp.path().join("out");
+    let stdout = ok(&["run", &s, "--out", out.to_str().unwrap()]);
+    assert!(stdout.contains("STOPPED at"), "{stdout}");
+    let m = metrics(&out);
+    let r = run(&m, "second_m6");
+    assert_eq!(r["status"], "stopped");
+    assert!(
+        r["reason"].as_str().unwrap().contains("safety limit"),
+        "{}",
+        r["reason"]
+    );
+    // The controller asked for more than the limits before the stop (no
+    // limits in the controller here): the counter is of the commanded torque.
+    assert!(r["max_torque_ratio"].as_f64().unwrap() > 1.0);
+}
