@@ -280,11 +280,7 @@ pub fn execute(
     )?;
     report.heading("Tracking errors of the three controllers (the paper's Fig. 6 and 7)");
     for p in &payloads {
-        let these: Vec<(&str, &ofmpc::sim::Record)> = runs
-            .iter()
-            .filter(|r| r.payload.mass == p.mass)
-            .map(|r| (kind_name(r.kind), &r.result.record))
-            .collect();
+        let these = records_with_mass(&runs, p.mass);
         let label = if p.mass == 0.0 {
             "exact model (no payload)".to_string()
         } else {
@@ -323,11 +319,7 @@ pub fn execute(
             }
         ));
         for p in &payloads {
-            let these: Vec<(&str, &ofmpc::sim::Record)> = runs
-                .iter()
-                .filter(|r| r.payload.mass == p.mass)
-                .map(|r| (kind_name(r.kind), &r.result.record))
-                .collect();
+            let these = records_with_mass(&runs, p.mass);
             let m = p.mass;
             let label = mass_label(m);
             let truth = move |t: f64| match pick_up {
@@ -388,11 +380,7 @@ pub fn execute(
         });
         let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
         for p in &payloads {
-            let these: Vec<(&str, &ofmpc::sim::Record)> = runs
-                .iter()
-                .filter(|r| r.payload.mass == p.mass)
-                .map(|r| (kind_name(r.kind), &r.result.record))
-                .collect();
+            let these = records_with_mass(&runs, p.mass);
             let label = mass_label(p.mass);
             figure(
                 &mut dir,
@@ -620,4 +608,12 @@ fn drive_effects(scenario: &Scenario) -> Vec<String> {
         e.push(format!("[safety] max_joint_error_rad = {v}"));
     }
     e
+}
+
+/// `(controller, record)` of the runs with payload `mass`, in run order.
+fn records_with_mass(runs: &[Run], mass: f64) -> Vec<(&'static str, &ofmpc::sim::Record)> {
+    runs.iter()
+        .filter(|r| r.payload.mass == mass)
+        .map(|r| (kind_name(r.kind), &r.result.record))
+        .collect()
 }
