@@ -111,7 +111,8 @@ fn no_figure_has_clipped_text_or_a_legend_over_data() {
     fs::write(
         d.join("s.toml"),
         "title = \"Layout check\"\n[payload]\nmasses_kg = [0.0, 0.30000000000000004, 6.0]\n\
-         [simulation]\nhold_s = 0.3\nsteady_window_s = 0.1\n",
+         [simulation]\nhold_s = 0.3\nsteady_window_s = 0.1\n\
+         [plant]\ntorque_limits = true\n[faults]\nnan_at_s = [0.5]\n",
     )
     .unwrap();
     let run = |args: &[&str]| {
@@ -140,8 +141,9 @@ fn no_figure_has_clipped_text_or_a_legend_over_data() {
     let mut svgs = Vec::new();
     all_files(&d.join("o"), "svg", &mut svgs);
     svgs.sort();
-    // 2 + 2 per payload + sweep + 2 per run + 3 of trajectory.
-    assert_eq!(svgs.len(), 2 + 2 * 3 + 1 + 2 * 9 + 3, "{svgs:?}");
+    // 2 + 2 per payload + sweep + 2 per run + 3 of trajectory, and the
+    // drives section: torque ratios per payload, measurement error per run.
+    assert_eq!(svgs.len(), 2 + 2 * 3 + 1 + 2 * 9 + 3 + 3 + 9, "{svgs:?}");
     let mut checked_legends = 0;
     let mut checked_title = false;
     for svg_path in &svgs {
