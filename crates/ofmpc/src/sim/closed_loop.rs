@@ -56,7 +56,7 @@ pub struct LoopSettings {
 /// first after) each `nan_at_s` the measurement is NaN; in each
 /// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
 /// loop then hands the controller a model prediction
-/// ([`super::supervisor`]) and counts the fault.
+/// (the supervisor module) and counts the fault.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct MeasurementFaults {
