@@ -47,12 +47,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mpc.torque_limits = case == "limits";
         }
         "friction" | "friction-comp" => {
-            plant.coulomb_friction = vec![1.0];
+            // FRIC: the plant's Coulomb friction (N·m), 1 by default.
+            plant.coulomb_friction = vec![std::env::var("FRIC")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1.0)];
             if case == "friction-comp" {
                 let text: String = robot
                     .joints()
                     .iter()
-                    .map(|j| format!("[joints.{}]\ncoulomb_nm = {}\n", j.name, 0.8 * scale))
+                    .map(|j| {
+                        let visc = if std::env::var_os("VISC0").is_some() {
+                            "viscous_nms = 0.0\n"
+                        } else {
+                            ""
+                        };
+                        format!("[joints.{}]\ncoulomb_nm = {}\n{visc}", j.name, 0.8 * scale)
+                    })
                     .collect();
                 robot.apply_drives(&Drives::from_toml_str(&text)?)?;
                 mpc.friction_compensation = true;
@@ -127,7 +138,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         mpc.q_du = ofmpc::control::Weight::Scalar(v);
     }
-    if let Some(v) = std::env::var("MODEL_PAYLOAD").ok().and_then(|v| v.parse::<f64>().ok()) {
+    if let Some(v) = std::env::var("MODEL_PAYLOAD")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
         mpc.model_payload_kg = v;
     }
     if let Some(v) = std::env::var("QDY")
