@@ -1,5 +1,11 @@
 //! Probe runs for the drives/sensors issue (#11): prints metrics of variants
 //! of the paper's experiment. `cargo run --release -p ofmpc --example drives_probe -- CASE`.
+//!
+//! Knobs (environment): `NOCHECK` (plausibility check and safe stop off),
+//! `QDU`, `QDY` (weights), `HORIZON` (N), `MODEL_PAYLOAD` (kg); for
+//! `friction`/`friction-comp`: `FRIC` (the plant's Coulomb friction, N·m,
+//! default 1), `VISC0` (viscous estimates 0, as `tests/drives_friction.rs`);
+//! `DUMP=j`, `TRACE`, `AROUND=k` print samples.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
@@ -137,6 +143,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|v| v.parse::<f64>().ok())
     {
         mpc.q_du = ofmpc::control::Weight::Scalar(v);
+    }
+    if let Some(v) = std::env::var("HORIZON")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        mpc.horizon = v;
     }
     if let Some(v) = std::env::var("MODEL_PAYLOAD")
         .ok()
