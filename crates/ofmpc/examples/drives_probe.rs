@@ -1,5 +1,11 @@
 //! Probe runs for the drives/sensors issue (#11): prints metrics of variants
 //! of the paper's experiment. `cargo run --release -p ofmpc --example drives_probe -- CASE`.
+//!
+//! Knobs (environment): `NOCHECK` (plausibility check and safe stop off),
+//! `QDU`, `QDY` (weights), `HORIZON` (N), `MODEL_PAYLOAD` (kg); for
+//! `friction`/`friction-comp`: `FRIC` (the plant's Coulomb friction, N·m,
+//! default 1), `VISC0` (viscous estimates 0, as `tests/drives_friction.rs`);
+//! `DUMP=j`, `TRACE`, `AROUND=k` print samples.
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
@@ -47,12 +53,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             mpc.torque_limits = case == "limits";
         }
         "friction" | "friction-comp" => {
-            plant.coulomb_friction = vec![1.0];
+            // FRIC: the plant's Coulomb friction (N·m), 1 by default.
+            plant.coulomb_friction = vec![std::env::var("FRIC")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(1.0)];
             if case == "friction-comp" {
                 let text: String = robot
                     .joints()
                     .iter()
-                    .map(|j| format!("[joints.{}]\ncoulomb_nm = {}\n", j.name, 0.8 * scale))
+                    .map(|j| {
+                        let visc = if std::env::var_os("VISC0").is_some() {
+                            "viscous_nms = 0.0\n"
+                        } else {
+                            ""
+                        };
+                        format!("[joints.{}]\ncoulomb_nm = {}\n{visc}", j.name, 0.8 * scale)
+                    })
                     .collect();
                 robot.apply_drives(&Drives::from_toml_str(&text)?)?;
                 mpc.friction_compensation = true;
@@ -126,6 +143,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|v| v.parse::<f64>().ok())
     {
         mpc.q_du = ofmpc::control::Weight::Scalar(v);
+    }
+    if let Some(v) = std::env::var("HORIZON")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        mpc.horizon = v;
     }
     if let Some(v) = std::env::var("MODEL_PAYLOAD")
         .ok()

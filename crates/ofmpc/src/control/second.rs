@@ -58,6 +58,9 @@ impl SecondMpc {
         for (((e, prev), w), yi) in c.ebar_new.iter_mut().zip(&c.ebar).zip(w_k).zip(y) {
             *e = prev + (w - yi);
         }
+        if c.settings.friction_compensation {
+            restart_in_hold(n, w_k, y, preview, &mut c.ebar_new);
+        }
         if let Some(st) = c.stage.as_mut() {
             // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
             // w_{k+i}) − ē_k, so Q_YW s_j is the first row of Eq. (39):
@@ -121,5 +124,43 @@ impl SecondMpc {
             }
         }
         Ok(out)
+    }
+}
+
+/// Friction (hold) rule of the aggregated error, on with
+/// [`MpcSettings::friction_compensation`]: on a joint whose reference rests
+/// over the whole horizon (`w_{k+j} = w_k`, `j = 1..N`, exactly), `ē_k`
+/// restarts from the current error, `ē_k = w_k − y_k`, instead of carrying the
+/// past sum.
+///
+/// Why: under Coulomb friction the sum of the past errors is what drives the
+/// second algorithm's stick–slip hunting at rest (it keeps asking for the
+/// integral to be paid back, i.e. an overshoot to the other side, where the
+/// joint sticks again). The incremental input `u_k = u_{k−1} + Δu_k` alone
+/// keeps the hold offset-free (as in the first algorithm: at an equilibrium
+/// `ē_k = e_k` must vanish for `Δu_k = 0` to be optimal); while the reference
+/// moves, `ē` is the paper's, so ramps stay offset-free.
+fn restart_in_hold(n: usize, w_k: &[f64], y: &[f64], preview: &[f64], ebar: &mut [f64]) {
+    for (i, ((e, w), yi)) in ebar.iter_mut().zip(w_k).zip(y).enumerate() {
+        if preview.chunks_exact(n).all(|p| p[i] == *w) {
+            *e = w - yi;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::restart_in_hold;
+
+    #[test]
+    fn aggregated_error_restarts_only_where_the_reference_rests_over_the_horizon() {
+        // Two joints, N = 3: joint 0 rests, joint 1 moves at the last step.
+        let w = [1.0, 2.0];
+        let y = [0.9, 1.5];
+        let preview = [1.0, 2.0, 1.0, 2.0, 1.0, 2.1];
+        let mut ebar = [5.0, 7.0];
+        restart_in_hold(2, &w, &y, &preview, &mut ebar);
+        assert!((ebar[0] - 0.1).abs() < 1e-15);
+        assert_eq!(ebar[1], 7.0);
     }
 }

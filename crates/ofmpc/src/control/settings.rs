@@ -174,7 +174,11 @@ pub struct MpcSettings {
     pub constraint_horizon: Option<usize>,
     /// Use the drives' friction estimates (Coulomb, viscous) of the
     /// [`super::DriveModel`]: the estimated friction at the reference's
-    /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). Default off.
+    /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). With it,
+    /// the second algorithm restarts its aggregated error from the current
+    /// error (`ē_k = w_k − y_k`) on a joint whose reference rests over the
+    /// whole horizon, which removes its stick–slip hunting in a hold (the
+    /// incremental input keeps the hold offset-free). Default off.
     pub friction_compensation: bool,
     /// Predict the state forward over the measurement delay with the model
     /// and the observer's disturbance estimate before optimizing (implies
