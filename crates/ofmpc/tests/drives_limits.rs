@@ -175,16 +175,25 @@ fn a_limit_just_below_the_peak_costs_little_tracking() {
     }
 }
 
-/// A shorter constraint horizon (`constraint_horizon = 5` of N = 10) for a
-/// limit just below the peak: the tail of the second algorithm's plan no
-/// longer activates the QP for torques that are never applied, and its RMS
-/// stays within 3× of the run without limits (measured 2.2× at 26 N·m and
-/// 1.0× at 26.3 N·m, against 5.6× and 4.4× with the full horizon), with
-/// |τ| ≤ τmax on every sample and no steady error.
+/// The saturation scenario: joint 1 limited to 26 N·m (the paper's
+/// path with 0.25 kg asks 26.4 N·m there, so the unconstrained controllers
+/// exceed it), limits in the plant and in the controllers with a constraint
+/// horizon of 5 (of N = 10). Every controller keeps |τ| ≤ τmax on every
+/// sample, completes, has no steady error (the incremental ones; the usual
+/// one keeps its payload offset), and its Cartesian RMS stays within
+/// 3× of the run without limits (measured: usual 1.0×, first 1.0×, second
+/// 2.2×; with the full horizon the second's is 5.6×, see the previous test:
+/// the tail of its plan activates the QP for torques never applied). At
+/// 26.3 N·m the second's ratio is 1.0×.
 #[test]
-fn a_shorter_constraint_horizon_keeps_the_second_within_3x() {
-    let (_, free) = run(ControllerKind::Second, None, false, false);
-    for (limit, bound) in [(26.0, 3.0), (26.3, 1.5)] {
+fn the_saturation_scenario_stays_within_3x_with_a_constraint_horizon() {
+    for (kind, limit, bound) in [
+        (ControllerKind::Usual, 26.0, 3.0),
+        (ControllerKind::First, 26.0, 3.0),
+        (ControllerKind::Second, 26.0, 3.0),
+        (ControllerKind::Second, 26.3, 1.5),
+    ] {
+        let (_, free) = run(kind, None, false, false);
         let robot = robot_with_joint1_limit(Some(limit));
         let exp = Experiment {
             reference: paper_reference(&robot),
@@ -201,21 +210,33 @@ fn a_shorter_constraint_horizon_keeps_the_second_within_3x() {
             loop_settings: LoopSettings::default(),
         };
         let (r, m) = exp
-            .run(
-                ControllerKind::Second,
-                &Payload::point_mass(0.25),
-                &mut |_, _| {},
-            )
+            .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
             .unwrap();
-        assert!(r.outcome.is_completed(), "{limit}: {}", r.outcome);
+        assert!(r.outcome.is_completed(), "{kind} {limit}: {}", r.outcome);
         let ratio = m.cartesian_error_rms_mm / free.cartesian_error_rms_mm;
-        assert!(ratio <= bound, "{limit} N·m: RMS ratio {ratio}");
-        assert!(m.max_torque_ratio <= 1.0 + 1e-9 && m.saturated_samples > 0);
+        assert!(ratio <= bound, "{kind} {limit} N·m: RMS ratio {ratio}");
+        assert!(
+            m.max_torque_ratio <= 1.0 + 1e-9,
+            "{kind}: {}",
+            m.max_torque_ratio
+        );
+        assert!(m.saturated_samples > 0, "{kind}: the limit must bind");
         let steady = m
             .steady_joint_error_max_rad
             .iter()
             .fold(0.0, |a: f64, v| a.max(*v));
-        assert!(steady <= 1e-9, "{limit}: steady {steady:e}");
+        // The incremental algorithms are offset-free; the usual one keeps the
+        // offset the unknown payload gives it without limits too.
+        let free_steady = free
+            .steady_joint_error_max_rad
+            .iter()
+            .fold(0.0, |a: f64, v| a.max(*v));
+        let bound = if kind == ControllerKind::Usual {
+            free_steady * (1.0 + 1e-6)
+        } else {
+            1e-9
+        };
+        assert!(steady <= bound, "{kind} {limit}: steady {steady:e}");
     }
     // A constraint horizon longer than the prediction horizon is refused.
     let bad = MpcSettings {
