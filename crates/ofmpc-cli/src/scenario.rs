@@ -240,7 +240,8 @@ pub struct Scenario {
 /// Loads a robot by name or URDF path, with an optional drives file.
 pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
     let path = Path::new(model);
-    let mut robot = if model.ends_with(".urdf") || path.is_file() {
+    let from_urdf = model.ends_with(".urdf") || path.is_file();
+    let mut robot = if from_urdf {
         let robot = Robot::from_urdf_file(path)?;
         for w in robot.warnings() {
             crate::output::console::warn(&format!("{}: {w}", path.display()));
@@ -256,9 +257,14 @@ pub fn load_robot(model: &str, drives: Option<&Path>) -> anyhow::Result<Robot> {
             .with_context(|| format!("applying {}", d.display()))?;
         if !unset.is_empty() {
             crate::output::console::warn(&format!(
-                "{} sets nothing for joint(s) {}: they keep the URDF's limits and have no armature",
+                "{} sets nothing for joint(s) {}: they keep {}",
                 d.display(),
-                unset.join(", ")
+                unset.join(", "),
+                if from_urdf {
+                    "the URDF's limits and have no armature"
+                } else {
+                    "the built-in robot's drive data"
+                }
             ));
         }
     }

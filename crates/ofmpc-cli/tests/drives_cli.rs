@@ -147,3 +147,45 @@ fn a_stopped_run_is_reported_as_stopped() {
     // limits in the controller here): the counter is of the commanded torque.
     assert!(r["max_torque_ratio"].as_f64().unwrap() > 1.0);
 }
+
+/// The three example scenarios of issue #11 run as shipped and show what
+/// their comments promise.
+#[test]
+fn the_drive_examples_run_and_meet_their_targets() {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples");
+    let tmp = tempfile::tempdir().unwrap();
+    let go = |name: &str| {
+        let out = tmp.path().join(name);
+        let file = examples.join(format!("{name}.toml"));
+        ok(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+        assert!(report.contains("Drives, sensors and faults"), "{name}");
+        metrics(&out)
+    };
+    let m = go("drives-saturation");
+    for name in ["usual_m0.25", "first_m0.25", "second_m0.25"] {
+        let r = run(&m, name);
+        assert_eq!(r["status"], "ok", "{name}");
+        assert!(
+            r["max_torque_ratio"].as_f64().unwrap() <= 1.0 + 1e-9,
+            "{name}"
+        );
+        assert!(r["saturated_samples"].as_u64().unwrap() > 0, "{name}");
+    }
+    let m = go("drives-friction");
+    let second = run(&m, "second_m0.25")["steady_cartesian_error_mm"]
+        .as_f64()
+        .unwrap();
+    assert!(second <= 1e-3, "second steady {second} mm");
+    let m = go("drives-faults");
+    for name in ["first_m0.25", "second_m0.25"] {
+        assert_eq!(run(&m, name)["faults"], 12, "{name}");
+        assert_eq!(run(&m, name)["status"], "ok", "{name}");
+    }
+    assert_eq!(run(&m, "second_m6")["status"], "stopped");
+}
