@@ -159,6 +159,9 @@ pub struct MpcSettings {
     /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
     /// horizon as constraints of the optimization ([`super::constrained`]);
     /// the limits come from the controller's [`super::DriveModel`]. Default off.
+    /// The QP is built from the dense system's QR factor, so with limits the
+    /// controller solves the dense system whatever [`Self::solver`] says (its
+    /// cost grows as `N³`: ≈ 5 ms per step at N = 100 on the IRB 140).
     pub torque_limits: bool,
     /// With `torque_limits`: constrain (and check) only the first `N_c`
     /// torques of the horizon, `1 ≤ N_c ≤ N`; `None` (default): all `N`.
