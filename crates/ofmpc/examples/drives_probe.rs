@@ -8,7 +8,9 @@
 //! `DUMP=j`, `TRACE`, `AROUND=k` print samples; `WIN=k0 WJ=j` (`WLEN`,
 //! `WCTRL`, default 60 samples of the second) prints reference, error,
 //! velocity and torque of joint j from sample k0; `SUBSTEP` (the plant's
-//! RK4 substep, s) and `PLANT_VS` (its Coulomb velocity scale, rad/s).
+//! RK4 substep, s) and `PLANT_VS` (its Coulomb velocity scale, rad/s);
+//! `DELAY` (the plant's measurement delay, samples); `OBSFRIC`
+//! (`observer_friction` on); `OBS` (`state_observer` on).
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
@@ -176,6 +178,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|v| v.parse::<f64>().ok())
     {
         plant.coulomb_velocity = v;
+    }
+    if let Some(v) = std::env::var("DELAY")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        plant.delay_samples = v;
+    }
+    if std::env::var_os("OBS").is_some() {
+        mpc.state_observer = true;
+    }
+    if std::env::var_os("OBSFRIC").is_some() {
+        mpc.observer_friction = true;
     }
     let check = !case.ends_with("nocheck") && std::env::var_os("NOCHECK").is_none();
     println!("path {} s", reference.duration());
