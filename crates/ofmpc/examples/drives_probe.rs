@@ -5,7 +5,12 @@
 //! `QDU`, `QDY` (weights), `HORIZON` (N), `MODEL_PAYLOAD` (kg); for
 //! `friction`/`friction-comp`: `FRIC` (the plant's Coulomb friction, N·m,
 //! default 1), `VISC0` (viscous estimates 0, as `tests/drives_friction.rs`);
-//! `DUMP=j`, `TRACE`, `AROUND=k` print samples.
+//! `DUMP=j`, `TRACE`, `AROUND=k` print samples; `WIN=k0 WJ=j` (`WLEN`,
+//! `WCTRL`, default 60 samples of the second) prints reference, error,
+//! velocity and torque of joint j from sample k0; `SUBSTEP` (the plant's
+//! RK4 substep, s) and `PLANT_VS` (its Coulomb velocity scale, rad/s);
+//! `DELAY` (the plant's measurement delay, samples); `OBSFRIC`
+//! (`observer_friction` on); `OBS` (`state_observer` on).
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
@@ -162,6 +167,30 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     {
         mpc.q_dy = ofmpc::control::Weight::Scalar(v);
     }
+    if let Some(v) = std::env::var("SUBSTEP")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        plant.substep = v;
+    }
+    if let Some(v) = std::env::var("PLANT_VS")
+        .ok()
+        .and_then(|v| v.parse::<f64>().ok())
+    {
+        plant.coulomb_velocity = v;
+    }
+    if let Some(v) = std::env::var("DELAY")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        plant.delay_samples = v;
+    }
+    if std::env::var_os("OBS").is_some() {
+        mpc.state_observer = true;
+    }
+    if std::env::var_os("OBSFRIC").is_some() {
+        mpc.observer_friction = true;
+    }
     let check = !case.ends_with("nocheck") && std::env::var_os("NOCHECK").is_none();
     println!("path {} s", reference.duration());
     let exp = Experiment {
@@ -213,6 +242,36 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         r.record.joint_error(k, j - 1),
                         r.record.qd[k * n + j - 1],
                         r.record.tau[k * n + j - 1]
+                    );
+                }
+            }
+        }
+        if let (Some(k0), Some(j)) = (
+            std::env::var("WIN")
+                .ok()
+                .and_then(|v| v.parse::<usize>().ok()),
+            std::env::var("WJ")
+                .ok()
+                .and_then(|v| v.parse::<usize>().ok()),
+        ) {
+            // WIN=k0 WJ=j: samples k0..k0+WLEN of joint j (reference, true
+            // position and velocity, torque) of the controller WCTRL (second).
+            let want = std::env::var("WCTRL").unwrap_or_else(|_| "second".into());
+            let len: usize = std::env::var("WLEN")
+                .ok()
+                .and_then(|v| v.parse().ok())
+                .unwrap_or(60);
+            if m.controller == want {
+                let i = j - 1;
+                for k in k0..(k0 + len).min(r.record.len()) {
+                    let w = r.record.q_ref[k * n + i];
+                    let wn = r.record.q_ref[((k + 1).min(r.record.len() - 1)) * n + i];
+                    println!(
+                        "  k {k} w {w:+.6} vref {:+.4e} e {:+.3e} qd {:+.4e} tau {:+.4}",
+                        (wn - w) / ts,
+                        w - r.record.q[k * n + i],
+                        r.record.qd[k * n + i],
+                        r.record.tau[k * n + i]
                     );
                 }
             }

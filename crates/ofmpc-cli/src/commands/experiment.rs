@@ -553,6 +553,7 @@ fn drive_effects(scenario: &Scenario) -> Vec<String> {
     );
     on(mpc.delay_compensation, "[mpc] delay_compensation".into());
     on(mpc.state_observer, "[mpc] state_observer".into());
+    on(mpc.observer_friction, "[mpc] observer_friction".into());
     on(
         plant.torque_limits,
         "[plant] torque_limits (saturation)".into(),

@@ -37,6 +37,10 @@ pub struct StateObserver {
     tmp_q: Vec<f64>,
     tmp_v: Vec<f64>,
     out: Vec<f64>,
+    /// Friction estimates per joint (Coulomb N·m, viscous N·m·s/rad); empty:
+    /// none (the disturbance carries the friction).
+    coulomb: Vec<f64>,
+    viscous: Vec<f64>,
 }
 
 /// Characteristic polynomial `z³ + c2 z² + c1 z + c0` of a 3×3 row-major matrix.
@@ -118,6 +122,22 @@ impl StateObserver {
             tmp_q: vec![0.0; n],
             tmp_v: vec![0.0; n],
             out: vec![0.0; 2 * n],
+            coulomb: Vec::new(),
+            viscous: Vec::new(),
+        }
+    }
+
+    /// Lets the observer's model carry the drives' friction estimates
+    /// (Coulomb `coulomb[i]` N·m, viscous `viscous[i]` N·m·s/rad; n values
+    /// each, else ignored) instead of leaving all of the friction to the
+    /// disturbance estimate. The Coulomb part is stick-aware per joint: the
+    /// friction torque that stops the joint within the step, bounded by
+    /// `±F_c` (`F = clamp(H_ii v⁺/Ts, −F_c, F_c)`, `v⁺` the velocity the
+    /// step reaches without it).
+    pub fn set_friction(&mut self, coulomb: &[f64], viscous: &[f64]) {
+        if coulomb.len() == self.n && viscous.len() == self.n {
+            self.coulomb = coulomb.to_vec();
+            self.viscous = viscous.to_vec();
         }
     }
 
@@ -166,6 +186,19 @@ impl StateObserver {
         }
         for (a, d) in self.acc.iter_mut().zip(&self.dist) {
             *a += d;
+        }
+        if !self.coulomb.is_empty() {
+            let h = self.model.h();
+            let ts = self.ts;
+            for i in 0..n {
+                let hii = h[(i, i)];
+                if hii.is_finite() && hii > 0.0 {
+                    let v_next = v[i] + self.acc[i] * ts;
+                    let fc = self.coulomb[i];
+                    let f = (hii * v_next / ts).clamp(-fc, fc) + self.viscous[i] * v[i];
+                    self.acc[i] -= f / hii;
+                }
+            }
         }
         Ok(())
     }

@@ -192,6 +192,16 @@ pub struct MpcSettings {
     /// the measured state directly. Default off; on whenever
     /// `delay_compensation` is.
     pub state_observer: bool,
+    /// The state observer's model carries the drives' friction estimates
+    /// (Coulomb, viscous, of the [`super::DriveModel`]; the Coulomb part
+    /// stick-aware: the torque that stops the joint within the step, bounded
+    /// by `±F̂_c`) instead of leaving all of the friction to its disturbance
+    /// estimate, which cannot follow a sign change of the friction within a
+    /// sample. Only with an observer (`state_observer` or
+    /// `delay_compensation`). Default off. Estimates above the true friction
+    /// make it worse (the observer then predicts a stick where the joint
+    /// slides): see the README's drives section.
+    pub observer_friction: bool,
 }
 
 impl Default for MpcSettings {
@@ -210,6 +220,7 @@ impl Default for MpcSettings {
             friction_compensation: false,
             delay_compensation: false,
             state_observer: false,
+            observer_friction: false,
         }
     }
 }

@@ -166,7 +166,12 @@ impl Experiment {
             } else {
                 0
             };
-            StateObserver::new(n, self.mpc.ts, delay, OBSERVER_POLE)
+            let mut o = StateObserver::new(n, self.mpc.ts, delay, OBSERVER_POLE);
+            if self.mpc.observer_friction {
+                let d = DriveModel::from_robot(&self.robot);
+                o.set_friction(&d.coulomb_nm, &d.viscous_nms);
+            }
+            o
         });
         let result = run_closed_loop_with(
             controller.as_mut(),

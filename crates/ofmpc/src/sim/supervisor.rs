@@ -11,7 +11,13 @@
 //!   motion is real and the prediction was off); more than [`MAX_REJECTED`]
 //!   rejections in a row make the measurement implausible;
 //! * a velocity off its prediction `q̇_a + q̈_a τ` by more than `0.1 · v_max`
-//!   per sample is rejected (the prediction is used);
+//!   per sample is rejected (the prediction is used), unless it explains the
+//!   accepted position better than the prediction does
+//!   (`|y − q_a − ½(q̇_a + q̇) τ|` no larger with the measured velocity than
+//!   with the predicted one): friction can stop or release a light joint
+//!   within a sample, faster than the constant-acceleration prediction
+//!   allows, and handing the controller the prediction then (a joint still
+//!   moving, as it stuck) makes it brake against a motion that is not there;
 //! * a position that does not change at all for [`FROZEN_SAMPLES`] samples
 //!   while the joint moves (`|q̇_a| Ts ≥` [`MOVING_STEP_RAD`]) is a frozen
 //!   encoder.
@@ -200,8 +206,18 @@ impl Plausibility {
             }
             self.rejected[i] = 0;
             self.m[i] = 1;
+            let q_a_old = self.q_a[i];
             self.q_a[i] = raw_q;
-            if consistent || (raw_v - v_pred).abs() <= 0.1 * self.vmax[i] * steps {
+            // A velocity off its prediction is still real when it explains
+            // the accepted position better than the prediction does
+            // (trapezoid over the interval): a joint that friction stops
+            // (or releases) within a sample changes its velocity faster
+            // than the constant-acceleration prediction allows.
+            let explains = |v: f64| (raw_q - q_a_old - 0.5 * (self.v_a[i] + v) * dt).abs();
+            if consistent
+                || (raw_v - v_pred).abs() <= 0.1 * self.vmax[i] * steps
+                || explains(raw_v) <= explains(v_pred)
+            {
                 self.acc_a[i] = (raw_v - self.v_a[i]) / dt;
                 self.v_a[i] = raw_v;
             } else {
