@@ -189,3 +189,19 @@ fn the_drive_examples_run_and_meet_their_targets() {
     }
     assert_eq!(run(&m, "second_m6")["status"], "stopped");
 }
+
+/// A plant substep too coarse for its Coulomb friction is warned about, with
+/// a substep that resolves it.
+#[test]
+fn a_coarse_substep_under_friction_is_warned_about() {
+    let tmp = tempfile::tempdir().unwrap();
+    let s = scenario(
+        tmp.path(),
+        "controllers = [\"first\"]\n[payload]\nmasses_kg = [0.0]\n[simulation]\nhold_s = 0.3\nsteady_window_s = 0.3\n[plant]\ncoulomb_friction = [1.0]\n",
+    );
+    let o = ofmpc(&["run", &s, "--out", tmp.path().join("o").to_str().unwrap()]);
+    assert!(o.status.success());
+    let e = stderr(&o);
+    assert!(e.contains("[plant] substep = 0.001 s is coarser"), "{e}");
+    assert!(e.contains("use substep = 2.000e-4 s"), "{e}");
+}
