@@ -758,6 +758,67 @@ mod tests {
     use super::*;
     use crate::dynamics::{gravity, kinetic_energy, potential_energy};
 
+    /// The friction's time constant at rest is min H_ii·v_s/F_c (brute force
+    /// from the CRBA diagonal), and a substep of 4 of them resolves a joint's
+    /// sticking: from rest, under a torque 10 % below the Coulomb level, the
+    /// wrist creeps at v_s·atanh(0.9) as the exact solution does (a substep
+    /// of 40 of them does not).
+    #[test]
+    fn coulomb_time_constant_bounds_the_substep_that_resolves_sticking() {
+        let q0 = [0.0, 0.3, -0.2, 0.0, 0.5, 0.0];
+        let settings = PlantSettings {
+            coulomb_friction: vec![1.0],
+            ..Default::default()
+        };
+        let robot = Robot::irb140();
+        let mut ws = Workspace::new(&robot);
+        let h = crate::dynamics::crba(&robot, &mut ws, &q0).unwrap().clone();
+        let expect = (0..6)
+            .map(|i| h[(i, i)] * 1e-3 / 1.0)
+            .fold(f64::INFINITY, f64::min);
+        let mut p = Plant::new(robot.clone(), settings.clone(), &q0).unwrap();
+        let tau_c = p.coulomb_time_constant().unwrap().unwrap();
+        assert!(
+            (tau_c - expect).abs() <= 1e-12 * expect,
+            "{tau_c} vs {expect}"
+        );
+        let none = Plant::new(robot.clone(), PlantSettings::default(), &q0)
+            .unwrap()
+            .coulomb_time_constant()
+            .unwrap();
+        assert_eq!(none, None);
+        // Creep of the wrist (joint 6) under gravity compensation plus 0.9 N·m.
+        let g: Vec<f64> = crate::dynamics::gravity(&robot, &mut ws, &q0)
+            .unwrap()
+            .iter()
+            .copied()
+            .collect();
+        let creep = |substep: f64| {
+            let s = PlantSettings {
+                substep,
+                ..settings.clone()
+            };
+            let mut p = Plant::new(robot.clone(), s, &q0).unwrap();
+            let mut tau = g.clone();
+            tau[5] += 0.9;
+            for _ in 0..5 {
+                p.step(&tau, 0.01).unwrap();
+            }
+            p.qd()[5]
+        };
+        let exact = 1e-3 * 0.9f64.atanh();
+        let resolved = creep(1e-2 / (1e-2 / (4.0 * tau_c)).ceil());
+        assert!(
+            (resolved - exact).abs() <= 0.05 * exact,
+            "{resolved} vs {exact}"
+        );
+        let coarse = creep(1e-2 / (1e-2 / (40.0 * tau_c)).ceil());
+        assert!(
+            (coarse - exact).abs() > 0.05 * exact,
+            "coarse {coarse} vs {exact}"
+        );
+    }
+
     #[test]
     fn gravity_compensated_robot_stays_at_rest() {
         let robot = Robot::irb140();
