@@ -6,7 +6,7 @@
 
 use anyhow::{bail, Context};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
-use ofmpc::control::{ControllerKind, MpcSettings, Solver};
+use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::reference::ReferenceFailure;
 use ofmpc::motion::timelaw::Profile;
@@ -459,13 +459,6 @@ impl Scenario {
             f.mpc.ts,
         ) {
             warnings.push(w);
-        }
-        if f.mpc.torque_limits && f.mpc.solver == Solver::Structured {
-            warnings.push(format!(
-                "[mpc] solver = \"structured\" with torque_limits = true: the torque-limit QP is built on \
-                 the dense system, so the dense QR is used (its cost grows as N³; horizon = {})",
-                f.mpc.horizon
-            ));
         }
         let (trajectory, reference) = (planned.trajectory, planned.reference);
         let experiment = Experiment {

@@ -250,3 +250,58 @@ fn the_saturation_scenario_stays_within_3x_with_a_constraint_horizon() {
         .to_string()
         .contains("constraint horizon is 11"));
 }
+
+/// Torque limits with the structured solver: the QP runs on the condensed
+/// problem of the first `constraint_horizon` inputs (the rest of the horizon
+/// optimized out by the recursion's cost-to-go) and gives the dense QP's
+/// torques, at N = 10 and at N = 40 (where the structured recursion reuses
+/// its converged stages).
+#[test]
+fn structured_torque_limits_equal_the_dense_ones() {
+    use ofmpc::control::Solver;
+    for nh in [10, 40] {
+        let mut taus = Vec::new();
+        for solver in [Solver::DenseQr, Solver::Structured] {
+            let robot = robot_with_joint1_limit(Some(26.0));
+            let exp = Experiment {
+                reference: paper_reference(&robot),
+                robot,
+                mpc: MpcSettings {
+                    horizon: nh,
+                    solver,
+                    torque_limits: true,
+                    constraint_horizon: Some(5),
+                    ..Default::default()
+                },
+                plant: PlantSettings {
+                    torque_limits: true,
+                    ..Default::default()
+                },
+                loop_settings: LoopSettings::default(),
+            };
+            let (r, m) = exp
+                .run(
+                    ControllerKind::Second,
+                    &Payload::point_mass(0.25),
+                    &mut |_, _| {},
+                )
+                .unwrap();
+            assert!(
+                r.outcome.is_completed(),
+                "N = {nh} {solver:?}: {}",
+                r.outcome
+            );
+            assert!(m.max_torque_ratio <= 1.0 + 1e-9 && m.saturated_samples > 0);
+            taus.push(r.record.tau);
+        }
+        let scale = taus[0].iter().fold(0.0f64, |a, t| a.max(t.abs()));
+        let diff = taus[0]
+            .iter()
+            .zip(&taus[1])
+            .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+        assert!(
+            diff <= 1e-6 * scale,
+            "N = {nh}: torques differ by {diff:e} (scale {scale})"
+        );
+    }
+}

@@ -125,6 +125,46 @@ impl TorqueLimitQp {
         (self.nh - 1 - j) * self.n + i
     }
 
+    /// Whether the plan `du` (natural order: block `j` is `Δu_{k+j}`, or
+    /// `u_{k+j}`) passes a limit in its first `nc` torques. Allocation-free.
+    pub fn violates(&mut self, model: &LinearLikeModel, du: &[f64], u_prev: &[f64]) -> bool {
+        let n = self.n;
+        let h = model.h().as_slice();
+        let g = model.g().as_slice();
+        let u = &mut self.u_seq[..n];
+        for (j, d) in du.chunks_exact(n).take(self.nc).enumerate() {
+            for i in 0..n {
+                u[i] = if !self.incremental {
+                    d[i]
+                } else if j == 0 {
+                    u_prev[i] + d[i]
+                } else {
+                    u[i] + d[i]
+                };
+            }
+            for i in 0..n {
+                let lim = self.tau_max[i];
+                if !lim.is_finite() {
+                    continue;
+                }
+                let mut z = g[i];
+                for l in 0..n {
+                    z += h[l * n + i] * u[l];
+                }
+                if z.abs() > lim {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// Marks a step on which the QP did not run.
+    pub fn clear(&mut self) {
+        self.status = QpStatus::default();
+        self.saturated.fill(false);
+    }
+
     /// Checks the unconstrained solution of the solved least-squares system
     /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
     /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`

@@ -135,6 +135,12 @@ pub(crate) struct Core {
     pub lsq: Option<LsqWorkspace>,
     /// The stage-wise problem (solver "structured" only).
     pub stage: Option<StageLq>,
+    /// With the structured solver and torque limits: the condensed problem
+    /// of the constrained head of the horizon (`StageLq::condense_head`),
+    /// formed and factored only on steps whose plan passes a limit
+    /// (`head_ready`).
+    pub head: Option<LsqWorkspace>,
+    pub head_ready: bool,
     /// The whole solution of the last step in natural order: block `j` is
     /// `Δu_{k+j}` (or `u_{k+j}` for the usual controller), `j = 0..N`.
     pub du: Vec<f64>,
@@ -174,11 +180,7 @@ impl Core {
         let p = nh * n;
         let m = groups * p;
         // The torque-limit QP (constrained.rs) works on the dense system.
-        let solver = if settings.torque_limits {
-            Solver::DenseQr
-        } else {
-            settings.solver.for_horizon(nh)
-        };
+        let solver = settings.solver.for_horizon(nh);
         let (lsq, stage) = match solver {
             Solver::DenseQr | Solver::Auto => {
                 if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
@@ -224,6 +226,9 @@ impl Core {
                 if incremental {
                     settings.q_dy.fill(&mut st.qd[n..]);
                 }
+                if settings.torque_limits {
+                    st.set_head(settings.constraint_horizon.unwrap_or(nh));
+                }
                 (None, Some(st))
             }
         };
@@ -248,6 +253,28 @@ impl Core {
             model: LinearLikeModel::new(n),
             zoh: Zoh::new(n),
             pred: Predictions::new(2 * n, n, n, if stage.is_some() { 0 } else { nh }),
+            head: match (&stage, settings.torque_limits) {
+                (Some(st), true) => {
+                    let nc = settings.constraint_horizon.unwrap_or(nh).clamp(1, nh);
+                    let (m, p) = StageLq::head_dims(st.nu, st.nz, st.nq, nc);
+                    if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
+                        return Err(SettingsError::TooLarge {
+                            rows: m,
+                            cols: p,
+                            limit: MAX_ENTRIES,
+                        });
+                    }
+                    Some(
+                        LsqWorkspace::new(m, p).map_err(|_| SettingsError::TooLarge {
+                            rows: m,
+                            cols: p,
+                            limit: MAX_ENTRIES,
+                        })?,
+                    )
+                }
+                _ => None,
+            },
+            head_ready: false,
             lsq,
             stage,
             du: vec![0.0; p],
@@ -279,14 +306,20 @@ impl Core {
     pub fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
         drives.validate(self.n)?;
         self.qp = if self.settings.torque_limits {
-            // With torque limits the dense system is always built (Core::new).
-            if self.lsq.is_none() {
+            // The dense system, or the structured solver's condensed head of
+            // nc stages (Core::new).
+            let nc = self.settings.constraint_horizon.unwrap_or(self.nh);
+            let blocks = if self.lsq.is_some() {
+                self.nh
+            } else if self.head.is_some() {
+                nc.clamp(1, self.nh)
+            } else {
                 return Err(SettingsError::DrivesUnsupported("structured solver"));
-            }
+            };
             Some(Box::new(TorqueLimitQp::new(
                 self.n,
-                self.nh,
-                self.settings.constraint_horizon.unwrap_or(self.nh),
+                blocks,
+                nc,
                 self.incremental,
                 &drives.max_torque_nm,
             )))
@@ -303,6 +336,17 @@ impl Core {
         self.qp
             .as_ref()
             .is_some_and(|q| q.status.active && q.saturated.get(i).copied().unwrap_or(false))
+    }
+
+    /// Commits `ē_k` (second algorithm) with anti-windup (conditional
+    /// integration): the aggregated error of a joint whose torque the limits
+    /// hold is not accumulated.
+    pub fn commit_ebar(&mut self) {
+        for i in 0..self.n {
+            if !self.saturated(i) {
+                self.ebar[i] = self.ebar_new[i];
+            }
+        }
     }
 
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
@@ -516,6 +560,17 @@ impl Core {
             .into());
         }
         self.du.copy_from_slice(st.solution());
+        // Torque limits: a plan that passes one in the constrained head gets
+        // the head condensed and factored for the QP (finish).
+        self.head_ready = false;
+        if let (Some(qp), Some(head)) = (self.qp.as_mut(), self.head.as_mut()) {
+            if qp.violates(&self.model, &self.du, &self.u_prev) {
+                let (a, b) = head.system_mut();
+                st.condense_head(a, b);
+                head.solve()?;
+                self.head_ready = true;
+            }
+        }
         Ok(LsqInfo {
             residual_sq: info.residual_sq,
             r_diag_ratio: info.r_diag_ratio,
@@ -536,11 +591,20 @@ impl Core {
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
             *u = if incremental { prev + d } else { *d };
         }
-        if let (Some(qp), Some(lsq)) = (self.qp.as_mut(), self.lsq.as_ref()) {
-            // Torque limits over the horizon (constrained.rs), on the dense
-            // system's solution; unchanged when the unconstrained solution
-            // respects them.
-            qp.enforce(&self.model, lsq, &self.u_prev, &mut self.u_new);
+        // Torque limits over the horizon (constrained.rs): on the dense
+        // system, or on the structured solver's condensed head when its plan
+        // passed a limit; unchanged when the unconstrained solution respects
+        // them.
+        let source = if self.stage.is_some() {
+            self.head.as_ref().filter(|_| self.head_ready)
+        } else {
+            self.lsq.as_ref()
+        };
+        if let Some(qp) = self.qp.as_mut() {
+            match source {
+                Some(lsq) => qp.enforce(&self.model, lsq, &self.u_prev, &mut self.u_new),
+                None => qp.clear(),
+            }
         }
         self.model.torque(&self.u_new, &mut self.tau_new)?;
         if let Some(qp) = self.qp.as_ref().filter(|q| q.status.active) {

@@ -81,7 +81,7 @@ impl SecondMpc {
             c.fill_stage_model()?;
             let info = c.solve_structured()?;
             let out = c.finish(x, true, info, tau)?;
-            c.ebar.copy_from_slice(&c.ebar_new);
+            c.commit_ebar();
             return Ok(out);
         }
         c.build_matrix(TopBlocks::G2PlusG3);
@@ -116,13 +116,7 @@ impl SecondMpc {
         }
         let info = c.solve()?;
         let out = c.finish(x, true, info, tau)?;
-        // Anti-windup (conditional integration): the aggregated error of a
-        // joint whose torque the limits hold is not accumulated.
-        for i in 0..n {
-            if !c.saturated(i) {
-                c.ebar[i] = c.ebar_new[i];
-            }
-        }
+        c.commit_ebar();
         Ok(out)
     }
 }

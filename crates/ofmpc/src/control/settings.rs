@@ -159,9 +159,12 @@ pub struct MpcSettings {
     /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
     /// horizon as constraints of the optimization ([`super::constrained`]);
     /// the limits come from the controller's [`super::DriveModel`]. Default off.
-    /// The QP is built from the dense system's QR factor, so with limits the
-    /// controller solves the dense system whatever [`Self::solver`] says (its
-    /// cost grows as `N³`: ≈ 5 ms per step at N = 100 on the IRB 140).
+    /// With the dense solver the QP is built from the dense system's QR
+    /// factor; with the structured one, on the steps whose plan passes a
+    /// limit, from the condensed problem of the first `constraint_horizon`
+    /// inputs (the rest of the horizon optimized out exactly by the
+    /// recursion's cost-to-go): keep `constraint_horizon` short at long
+    /// horizons.
     pub torque_limits: bool,
     /// With `torque_limits`: constrain (and check) only the first `N_c`
     /// torques of the horizon, `1 ≤ N_c ≤ N`; `None` (default): all `N`.
@@ -243,10 +246,24 @@ impl MpcSettings {
             return Err(SettingsError::ZeroDof);
         }
         self.check(Some(dof))?;
-        // With torque limits the dense system is always built (the QP uses it).
-        if self.torque_limits || self.solver.for_horizon(self.horizon) == Solver::DenseQr {
+        if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
             let p = self.horizon.saturating_mul(dof);
             let rows = p.saturating_mul(3);
+            if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
+                return Err(SettingsError::TooLarge {
+                    rows,
+                    cols: p,
+                    limit: MAX_SYSTEM_ENTRIES,
+                });
+            }
+        } else if self.torque_limits {
+            // The structured solver's condensed head (constrained.rs; the
+            // second algorithm's state: 4n, of which 2n weighted).
+            let nc = self.constraint_horizon.unwrap_or(self.horizon);
+            let p = nc.saturating_mul(dof);
+            let rows = p
+                .saturating_add(nc.saturating_sub(1).saturating_mul(2 * dof))
+                .saturating_add(4 * dof);
             if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
                 return Err(SettingsError::TooLarge {
                     rows,

@@ -118,6 +118,18 @@ pub(crate) struct StageLq {
     /// Reuse the factorization of converged stages (on by default; off
     /// factorizes every stage, for tests).
     pub reuse_converged: bool,
+    /// With a constraint head ([`StageLq::set_head`]): the first `nc` stages
+    /// are condensed on demand; the cost-to-go `(L, l)` from stage `nc` is
+    /// kept by each solve.
+    head: usize,
+    kept_l: Vec<f64>,
+    kept_lvec: Vec<f64>,
+    /// Condensing work: `∂z_j/∂v` (nz × nc·nu, column-major) and the affine
+    /// part of `z_j`, for the current and the next stage.
+    zs: Vec<f64>,
+    zs_next: Vec<f64>,
+    za: Vec<f64>,
+    za_next: Vec<f64>,
     /// Right-hand side column of a reused stage (`ld` rows, padded to a
     /// multiple of 8).
     bvec: Vec<f64>,
@@ -183,6 +195,13 @@ impl StageLq {
             z_next: vec![0.0; nz],
             sol: vec![0.0; nh * nu],
             reuse_converged: true,
+            head: 0,
+            kept_l: Vec::new(),
+            kept_lvec: Vec::new(),
+            zs: Vec::new(),
+            zs_next: Vec::new(),
+            za: Vec::new(),
+            za_next: Vec::new(),
             bvec: vec![0.0; ld.next_multiple_of(8)],
             mmap: vec![0.0; ld.next_multiple_of(8) * (nq + nz)],
             bin: vec![0.0; nq + nz],
@@ -254,6 +273,9 @@ impl StageLq {
             self.l_mat[i * nz + i] = self.qd[i];
             self.l_vec[i] = self.qd[i] * self.r[(nh - 1) * nq + i];
         }
+        if self.head == nh {
+            self.keep_cost_to_go();
+        }
         let mut acc = 0.0;
         let (mut dmax, mut dmin) = (0.0f64, f64::INFINITY);
         // Consecutive stages that left L unchanged; the stage whose
@@ -270,10 +292,16 @@ impl StageLq {
                 if !(acc.is_finite() && self.l_vec.iter().all(|v| v.is_finite())) {
                     return Err(StageError::NonFinite);
                 }
+                if j == self.head {
+                    self.keep_cost_to_go();
+                }
                 continue;
             } else {
                 factorized += 1;
                 acc += self.full_stage(j, &mut streak, &mut converged);
+                if j == self.head {
+                    self.keep_cost_to_go();
+                }
             }
             // [R_vv R_vz ρ] of this stage (in vrows).
             let dst = &self.vrows[j * nu * cols..(j + 1) * nu * cols];
@@ -308,6 +336,111 @@ impl StageLq {
             r_max: dmax,
             factorized_stages: factorized,
         })
+    }
+
+    /// Sizes the constraint head: the first `nc` stages (`1 ≤ nc ≤ nh`) can
+    /// be condensed by [`StageLq::condense_head`] after each solve. Allocates.
+    pub fn set_head(&mut self, nc: usize) {
+        let nc = nc.clamp(1, self.nh.max(1));
+        let (nu, nz) = (self.nu, self.nz);
+        self.head = nc;
+        self.kept_l = vec![0.0; nz * nz];
+        self.kept_lvec = vec![0.0; nz];
+        self.zs = vec![0.0; nz * nc * nu];
+        self.zs_next = vec![0.0; nz * nc * nu];
+        self.za = vec![0.0; nz];
+        self.za_next = vec![0.0; nz];
+    }
+
+    /// Rows and columns of the condensed head problem (`m`, `p`).
+    pub fn head_dims(nu: usize, nz: usize, nq: usize, nc: usize) -> (usize, usize) {
+        (nc * nu + (nc - 1) * nq + nz, nc * nu)
+    }
+
+    fn keep_cost_to_go(&mut self) {
+        if self.kept_l.len() == self.l_mat.len() {
+            self.kept_l.copy_from_slice(&self.l_mat);
+            self.kept_lvec.copy_from_slice(&self.l_vec);
+        }
+    }
+
+    /// After a solve: the least-squares problem of the first `nc` inputs
+    /// with the rest of the horizon optimized out, written into `a` (m × p,
+    /// column-major, `(m, p)` = [`StageLq::head_dims`]) and `b`:
+    ///
+    /// ```text
+    /// min Σ_{j<nc} ‖R v_j‖² + Σ_{1≤j<nc} ‖D (S z_j − r_j)‖² + ‖L_nc z_nc − l_nc‖²
+    /// ```
+    ///
+    /// (the cost-to-go from stage `nc` is the recursion's own factor), with
+    /// `z_j` eliminated. Its unknowns are laid out as the dense system's:
+    /// block `nc − 1 − j` is `v_j`. Its minimizer is the structured
+    /// solution's `v_0 … v_{nc−1}`; with constraints on those inputs only,
+    /// it is the whole constrained problem. Allocation-free.
+    pub fn condense_head(&mut self, a: &mut [f64], b: &mut [f64]) {
+        let (nu, nz, nq, nc) = (self.nu, self.nz, self.nq, self.head);
+        if nc == 0 {
+            return;
+        }
+        let (m, p) = Self::head_dims(nu, nz, nq, nc);
+        if a.len() < m * p || b.len() < m {
+            return;
+        }
+        a[..m * p].fill(0.0);
+        b[..m].fill(0.0);
+        let col = |j: usize, i: usize| (nc - 1 - j) * nu + i;
+        for j in 0..nc {
+            for i in 0..nu {
+                a[col(j, i) * m + j * nu + i] = self.rd[i];
+            }
+        }
+        self.zs.fill(0.0);
+        self.za.copy_from_slice(&self.z0);
+        for j in 0..nc {
+            // z_{j+1} = A z_j + B v_j + c_j.
+            self.zs_next.fill(0.0);
+            for (out, zc) in self
+                .zs_next
+                .chunks_exact_mut(nz)
+                .zip(self.zs.chunks_exact(nz))
+            {
+                accumulate_rows(out, zc, &self.a, nz, 0);
+            }
+            for i in 0..nu {
+                let c = col(j, i);
+                self.zs_next[c * nz..(c + 1) * nz].copy_from_slice(&self.b[i * nz..(i + 1) * nz]);
+            }
+            if self.c_zero {
+                self.za_next.fill(0.0);
+            } else {
+                self.za_next.copy_from_slice(&self.c[j * nz..(j + 1) * nz]);
+            }
+            accumulate_rows(&mut self.za_next, &self.za, &self.a, nz, 0);
+            std::mem::swap(&mut self.zs, &mut self.zs_next);
+            std::mem::swap(&mut self.za, &mut self.za_next);
+            let t = j + 1;
+            if t < nc {
+                // D (S z_t − r_t): r_t is target block t − 1.
+                let base = nc * nu + (t - 1) * nq;
+                for i in 0..nq {
+                    let q = self.qd[i];
+                    for c in 0..p {
+                        a[c * m + base + i] = q * self.zs[c * nz + i];
+                    }
+                    b[base + i] = q * (self.r[(t - 1) * nq + i] - self.za[i]);
+                }
+            } else {
+                // ‖L z_nc − l‖, L upper triangular (row-major).
+                let base = nc * nu + (nc - 1) * nq;
+                for i in 0..nz {
+                    let lrow = &self.kept_l[i * nz + i..(i + 1) * nz];
+                    for c in 0..p {
+                        a[c * m + base + i] = dot(lrow, &self.zs[c * nz + i..(c + 1) * nz]);
+                    }
+                    b[base + i] = self.kept_lvec[i] - dot(lrow, &self.za[i..]);
+                }
+            }
+        }
     }
 
     /// Stage `j ≥ 1` factorized in full: the stacked matrix, its Householder
@@ -886,6 +1019,49 @@ mod tests {
                     .map(|(a, b)| (a - b).abs())
                     .fold(0.0, f64::max);
                 assert!(diff <= 1e-9 * scale, "reuse vs brute force: {diff:e}");
+            }
+        }
+    }
+
+    /// The condensed head (first nc inputs, the rest optimized out by the
+    /// recursion's cost-to-go) has the structured solution's first inputs as
+    /// its least-squares minimizer, with and without converged-stage reuse.
+    #[test]
+    fn the_condensed_head_has_the_same_minimizer() {
+        let mut seed = 29;
+        for (nu, nz, nq, nh, nc, contract) in [
+            (2, 4, 2, 8, 3, false),
+            (3, 6, 3, 6, 6, false),
+            (6, 24, 12, 40, 5, true),
+        ] {
+            let mut st = random_problem(nu, nz, nq, nh, &mut seed);
+            if contract {
+                let norm = DMatrix::from_column_slice(nz, nz, &st.a).norm();
+                for v in st.a.iter_mut() {
+                    *v *= 0.6 / norm;
+                }
+            }
+            st.set_head(nc);
+            st.solve().unwrap();
+            let (m, p) = StageLq::head_dims(nu, nz, nq, nc);
+            let (mut a, mut b) = (vec![0.0; m * p], vec![0.0; m]);
+            st.condense_head(&mut a, &mut b);
+            let am = DMatrix::from_column_slice(m, p, &a);
+            let x = am
+                .clone()
+                .svd(true, true)
+                .solve(&DVector::from_column_slice(&b), 1e-14)
+                .unwrap();
+            let scale = st.solution().iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for j in 0..nc {
+                for i in 0..nu {
+                    let got = x[(nc - 1 - j) * nu + i];
+                    let want = st.solution()[j * nu + i];
+                    assert!(
+                        (got - want).abs() <= 1e-9 * scale,
+                        "{nu} {nz} {nh} {nc}: v_{j}[{i}] {got} vs {want}"
+                    );
+                }
             }
         }
     }
