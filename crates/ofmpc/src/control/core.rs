@@ -179,7 +179,8 @@ impl Core {
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
         let m = groups * p;
-        // The torque-limit QP (constrained.rs) works on the dense system.
+        // The torque-limit QP (constrained.rs) works on the dense system, or on
+        // the structured solver's condensed head (`head`, below).
         let solver = settings.solver.for_horizon(nh);
         let (lsq, stage) = match solver {
             Solver::DenseQr | Solver::Auto => {
