@@ -72,15 +72,26 @@ fn steps_allocate_nothing() {
 }
 
 /// With torque limits that bind (the QP runs) and friction compensation on,
-/// the step still allocates nothing.
+/// the step still allocates nothing: with the dense solver, and with the
+/// structured one (its condensed head formed and factored on the step).
 #[test]
 fn constrained_steps_with_friction_compensation_allocate_nothing() {
+    for solver in [
+        ofmpc::control::Solver::DenseQr,
+        ofmpc::control::Solver::Structured,
+    ] {
+        constrained_steps_allocate_nothing(MpcSettings {
+            torque_limits: true,
+            friction_compensation: true,
+            solver,
+            constraint_horizon: Some(4),
+            ..Default::default()
+        });
+    }
+}
+
+fn constrained_steps_allocate_nothing(settings: MpcSettings) {
     use ofmpc::control::DriveModel;
-    let settings = MpcSettings {
-        torque_limits: true,
-        friction_compensation: true,
-        ..Default::default()
-    };
     let mut model = CoupledModel::new(6, 1);
     let n = 6;
     let drives = DriveModel {
