@@ -37,6 +37,28 @@ fn robot_with_joint1_limit(limit: Option<f64>) -> Robot {
     robot
 }
 
+/// Joint 1 limited to `limit` N·m in the plant and in the controllers, whose
+/// QP constrains the first 5 torques (`constraint_horizon`), horizon `nh`.
+fn limited_experiment(limit: f64, nh: usize, solver: ofmpc::control::Solver) -> Experiment {
+    let robot = robot_with_joint1_limit(Some(limit));
+    Experiment {
+        reference: paper_reference(&robot),
+        robot,
+        mpc: MpcSettings {
+            horizon: nh,
+            solver,
+            torque_limits: true,
+            constraint_horizon: Some(5),
+            ..Default::default()
+        },
+        plant: PlantSettings {
+            torque_limits: true,
+            ..Default::default()
+        },
+        loop_settings: LoopSettings::default(),
+    }
+}
+
 fn run(
     kind: ControllerKind,
     limit: Option<f64>,
@@ -194,21 +216,7 @@ fn the_saturation_scenario_stays_within_3x_with_a_constraint_horizon() {
         (ControllerKind::Second, 26.3, 1.5),
     ] {
         let (_, free) = run(kind, None, false, false);
-        let robot = robot_with_joint1_limit(Some(limit));
-        let exp = Experiment {
-            reference: paper_reference(&robot),
-            robot,
-            mpc: MpcSettings {
-                torque_limits: true,
-                constraint_horizon: Some(5),
-                ..Default::default()
-            },
-            plant: PlantSettings {
-                torque_limits: true,
-                ..Default::default()
-            },
-            loop_settings: LoopSettings::default(),
-        };
+        let exp = limited_experiment(limit, 10, ofmpc::control::Solver::Auto);
         let (r, m) = exp
             .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
             .unwrap();
@@ -262,23 +270,7 @@ fn structured_torque_limits_equal_the_dense_ones() {
     for nh in [10, 40] {
         let mut taus = Vec::new();
         for solver in [Solver::DenseQr, Solver::Structured] {
-            let robot = robot_with_joint1_limit(Some(26.0));
-            let exp = Experiment {
-                reference: paper_reference(&robot),
-                robot,
-                mpc: MpcSettings {
-                    horizon: nh,
-                    solver,
-                    torque_limits: true,
-                    constraint_horizon: Some(5),
-                    ..Default::default()
-                },
-                plant: PlantSettings {
-                    torque_limits: true,
-                    ..Default::default()
-                },
-                loop_settings: LoopSettings::default(),
-            };
+            let exp = limited_experiment(26.0, nh, solver);
             let (r, m) = exp
                 .run(
                     ControllerKind::Second,
