@@ -452,6 +452,23 @@ impl Scenario {
             .iter()
             .map(|w| format!("{program_name}: {w}"))
             .collect();
+        if f.mpc.observer_friction && !(f.mpc.state_observer || f.mpc.delay_compensation) {
+            warnings.push(
+                "[mpc] observer_friction = true without an observer (state_observer or \
+                 delay_compensation): it has no effect"
+                    .into(),
+            );
+        }
+        if f.mpc.friction_compensation {
+            let d = ofmpc::control::DriveModel::from_robot(&robot);
+            if d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0) {
+                warnings.push(
+                    "[mpc] friction_compensation = true but the robot's drives give no friction \
+                     estimate (coulomb_nm, viscous_nms): nothing is compensated"
+                        .into(),
+                );
+            }
+        }
         if let Some(w) = friction_substep_warning(
             &robot,
             &f.plant,

@@ -205,3 +205,29 @@ fn a_coarse_substep_under_friction_is_warned_about() {
     assert!(e.contains("[plant] substep = 0.001 s is coarser"), "{e}");
     assert!(e.contains("use substep = 2.000e-4 s"), "{e}");
 }
+
+/// Settings that would silently do nothing are warned about: an observer's
+/// friction model without an observer, friction compensation without
+/// friction estimates.
+#[test]
+fn settings_without_effect_are_warned_about() {
+    let tmp = tempfile::tempdir().unwrap();
+    let zero: String = (1..=6)
+        .map(|j| format!("[joints.joint_{j}]\ncoulomb_nm = 0.0\nviscous_nms = 0.0\n"))
+        .collect();
+    std::fs::write(tmp.path().join("zero.toml"), zero).unwrap();
+    let s = scenario(
+        tmp.path(),
+        "controllers = [\"first\"]\n[robot]\ndrives = \"zero.toml\"\n[payload]\nmasses_kg = [0.0]\n\
+         [simulation]\nhold_s = 0.3\nsteady_window_s = 0.3\n\
+         [mpc]\nobserver_friction = true\nfriction_compensation = true\n",
+    );
+    let o = ofmpc(&["run", &s, "--out", tmp.path().join("o").to_str().unwrap()]);
+    assert!(o.status.success());
+    let e = stderr(&o);
+    assert!(
+        e.contains("observer_friction = true without an observer"),
+        "{e}"
+    );
+    assert!(e.contains("give no friction estimate"), "{e}");
+}
