@@ -4,10 +4,11 @@
 //! and delay compensation), an encoder glitch, the plausibility check and the
 //! safe stop; and random combinations of them, which never panic.
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, JointReference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
+use ofmpc::motion::reference::JointReference;
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, Fault, LoopSettings, PlantSettings, RunStatus};
 use proptest::prelude::*;
@@ -26,9 +27,7 @@ fn robot_with_friction_estimate() -> Robot {
 #[test]
 fn all_effects_together_on_the_paper_path() {
     let robot = robot_with_friction_estimate();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     let exp = Experiment {
         robot,
         reference,

@@ -4,10 +4,9 @@
 //! holding the plant's true state beside what the controller was given, and
 //! the safe stop on a joint error limit (`max_joint_error_rad`).
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{
     Experiment, LoopSettings, LoopSettingsError, MeasurementFaults, PlantSettings, RunMetrics,
@@ -20,9 +19,7 @@ fn experiment(
     plant: PlantSettings,
     ls: LoopSettings,
 ) -> Experiment {
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     Experiment {
         robot,
         reference,

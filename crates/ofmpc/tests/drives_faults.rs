@@ -3,10 +3,9 @@
 //! plausibility check and the safe stop on. The faults hit at t = 2 s, while
 //! every joint moves.
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
     Experiment, Fault, LoopSettings, PlantSettings, RunMetrics, RunOutcome, RunResult, RunStatus,
@@ -15,9 +14,7 @@ use ofmpc::sim::{
 
 fn run(kind: ControllerKind, faults: Vec<Fault>, supervised: bool) -> (RunResult, RunMetrics) {
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     let exp = Experiment {
         robot,
         reference,

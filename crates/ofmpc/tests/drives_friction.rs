@@ -13,10 +13,9 @@
 //! not resolved and the steady errors read 1e4 times smaller: 6.3e-9 and
 //! 1.0e-8 mm.)
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics};
 
@@ -36,9 +35,7 @@ fn run_n(
     robot
         .apply_drives(&Drives::from_toml_str(&text).unwrap())
         .unwrap();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     let exp = Experiment {
         robot,
         reference,

@@ -4,18 +4,11 @@
 //! |τ| ≤ τmax on every sample, stay offset-free, and do not wind up where the
 //! plant alone saturating makes the incremental algorithms diverge.
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, JointReference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunOutcome, RunResult};
-
-fn paper_reference(robot: &Robot) -> JointReference {
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    build_reference(robot, &traj, Orientation::AtZero, 0.01).unwrap()
-}
 
 /// The IRB 140 with joint 1's peak torque set to `limit` N·m (the paper's
 /// path needs 26.4 N·m there with 0.25 kg).
@@ -42,7 +35,7 @@ fn robot_with_joint1_limit(limit: Option<f64>) -> Robot {
 fn limited_experiment(limit: f64, nh: usize, solver: ofmpc::control::Solver) -> Experiment {
     let robot = robot_with_joint1_limit(Some(limit));
     Experiment {
-        reference: paper_reference(&robot),
+        reference: common::paper_reference(&robot),
         robot,
         mpc: MpcSettings {
             horizon: nh,
@@ -67,7 +60,7 @@ fn run(
 ) -> (RunResult, RunMetrics) {
     let robot = robot_with_joint1_limit(limit);
     let exp = Experiment {
-        reference: paper_reference(&robot),
+        reference: common::paper_reference(&robot),
         robot,
         mpc: MpcSettings {
             torque_limits: mpc_limits,

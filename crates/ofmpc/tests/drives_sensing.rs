@@ -4,18 +4,15 @@
 //! state observer and delay compensation the second algorithm holds and its
 //! steady joint error is ≤ 5e-6 rad.
 
+mod common;
+
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunOutcome, RunResult};
 
 fn run(kind: ControllerKind, observer: bool) -> (RunResult, RunMetrics) {
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     let exp = Experiment {
         robot,
         reference,

@@ -5,13 +5,12 @@
 //! its length: nothing in the per-sample path allocates (the record is sized
 //! before the loop). Counted per thread by a global allocator.
 
+mod common;
+
 mod alloc_counter;
 
 use alloc_counter::allocations_during;
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, MeasurementFaults, PlantSettings};
 
@@ -20,9 +19,7 @@ static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
 
 fn experiment(hold_s: f64) -> Experiment {
     let robot = Robot::irb140();
-    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    let reference = common::paper_reference(&robot);
     Experiment {
         robot,
         reference,

@@ -129,34 +129,49 @@ impl TorqueLimitQp {
     /// `u_{k+j}`) passes a limit in its first `nc` torques. Allocation-free.
     pub fn violates(&mut self, model: &LinearLikeModel, du: &[f64], u_prev: &[f64]) -> bool {
         let n = self.n;
-        let h = model.h().as_slice();
-        let g = model.g().as_slice();
-        let u = &mut self.u_seq[..n];
-        for (j, d) in du.chunks_exact(n).take(self.nc).enumerate() {
+        self.plan_torques(model, u_prev, |j, i| du[j * n + i])
+    }
+
+    /// `u_{k+j}` and `z_j = H u_{k+j}` (`u_seq`, `z`) of a plan whose block
+    /// `j`, entry `i` is `d(j, i)` (`Δu_{k+j}` or `u_{k+j}`), `j < nh`; true
+    /// when a torque `z_j + g` of the first `nc` passes its limit.
+    fn plan_torques(
+        &mut self,
+        model: &LinearLikeModel,
+        u_prev: &[f64],
+        d: impl Fn(usize, usize) -> f64,
+    ) -> bool {
+        let (n, nh) = (self.n, self.nh);
+        for j in 0..nh {
             for i in 0..n {
-                u[i] = if !self.incremental {
-                    d[i]
+                let dji = d(j, i);
+                self.u_seq[j * n + i] = if !self.incremental {
+                    dji
                 } else if j == 0 {
-                    u_prev[i] + d[i]
+                    u_prev[i] + dji
                 } else {
-                    u[i] + d[i]
+                    self.u_seq[(j - 1) * n + i] + dji
                 };
             }
+        }
+        let h = model.h().as_slice();
+        let g = model.g().as_slice();
+        let mut violated = false;
+        for j in 0..nh {
+            let u = &self.u_seq[j * n..(j + 1) * n];
             for i in 0..n {
-                let lim = self.tau_max[i];
-                if !lim.is_finite() {
-                    continue;
-                }
-                let mut z = g[i];
+                let mut z = 0.0;
                 for l in 0..n {
                     z += h[l * n + i] * u[l];
                 }
-                if z.abs() > lim {
-                    return true;
+                self.z[j * n + i] = z;
+                let lim = self.tau_max[i];
+                if j < self.nc && lim.is_finite() && (z + g[i]).abs() > lim {
+                    violated = true;
                 }
             }
         }
-        false
+        violated
     }
 
     /// Marks a step on which the QP did not run.
@@ -183,36 +198,9 @@ impl TorqueLimitQp {
         let sol = lsq.solution();
         self.status = QpStatus::default();
         self.saturated.fill(false);
-        // u_{k+j} over the horizon from the unconstrained solution.
-        for j in 0..nh {
-            for i in 0..n {
-                let d = sol[self.col(j, i)];
-                self.u_seq[j * n + i] = if !self.incremental {
-                    d
-                } else if j == 0 {
-                    u_prev[i] + d
-                } else {
-                    self.u_seq[(j - 1) * n + i] + d
-                };
-            }
-        }
-        let h = model.h().as_slice();
+        // u_{k+j} and H u_{k+j} over the horizon from the unconstrained solution.
+        let violated = self.plan_torques(model, u_prev, |j, i| sol[(nh - 1 - j) * n + i]);
         let g = model.g().as_slice();
-        let mut violated = false;
-        for j in 0..nh {
-            let u = &self.u_seq[j * n..(j + 1) * n];
-            for i in 0..n {
-                let mut z = 0.0;
-                for l in 0..n {
-                    z += h[l * n + i] * u[l];
-                }
-                self.z[j * n + i] = z;
-                let lim = self.tau_max[i];
-                if j < self.nc && lim.is_finite() && (z + g[i]).abs() > lim {
-                    violated = true;
-                }
-            }
-        }
         if !violated {
             return;
         }

@@ -542,24 +542,7 @@ impl Core {
         // The dense solver's rank test: |R_ii| > max(m, p)·ε·max|R_jj|, with
         // the columns numbered as in the dense system (Δu_{k+N−1} first).
         let tol = (g * nh * n) as f64 * f64::EPSILON * info.r_max;
-        let (mut rank, mut first_bad) = (0, None);
-        for (column, d) in st.r_diagonal_dense_order().enumerate() {
-            if d > tol {
-                rank += 1;
-            } else if first_bad.is_none() {
-                first_bad = Some((column, d));
-            }
-        }
-        if let Some((column, value)) = first_bad {
-            return Err(LsqError::RankDeficient {
-                column,
-                value,
-                tolerance: tol,
-                rank,
-                p: nh * n,
-            }
-            .into());
-        }
+        super::lsq::rank_test(st.r_diagonal_dense_order(), tol)?;
         self.du.copy_from_slice(st.solution());
         // Torque limits: a plan that passes one in the constrained head gets
         // the head condensed and factored for the QP (finish).

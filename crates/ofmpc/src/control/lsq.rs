@@ -219,30 +219,11 @@ impl LsqWorkspace {
         );
         // Rank check on the diagonal of R1.
         let tol = (m.max(p) as f64) * f64::EPSILON * rmax;
-        let mut rmin = f64::INFINITY;
-        let mut first_bad = None;
-        let mut rank = 0;
-        for c in 0..p {
-            let d = self.a[c * m + c].abs();
-            rmin = rmin.min(d);
-            if d > tol {
-                rank += 1;
-            } else if first_bad.is_none() {
-                first_bad = Some((c, d));
-            }
-        }
+        let rmin = (0..p).fold(f64::INFINITY, |r, c| r.min(self.a[c * m + c].abs()));
         if !rmax.is_finite() {
             return Err(LsqError::NonFiniteResult);
         }
-        if let Some((column, value)) = first_bad {
-            return Err(LsqError::RankDeficient {
-                column,
-                value,
-                tolerance: tol,
-                rank,
-                p,
-            });
-        }
+        rank_test((0..p).map(|c| self.a[c * m + c].abs()), tol)?;
         let residual_sq = back_substitute(&self.a, m, p, &mut self.x);
         if !residual_sq.is_finite() || self.x.iter().any(|v| !v.is_finite()) {
             return Err(LsqError::NonFiniteResult);
@@ -251,6 +232,31 @@ impl LsqWorkspace {
             residual_sq,
             r_diag_ratio: rmax / rmin,
         })
+    }
+}
+
+/// The rank test on the diagonal of `R1`: every `|R_ii|` (`diag`, in
+/// column order) above `tol`, else the first column that is not, with the
+/// numerical rank. Shared by the dense and the structured solver.
+pub(crate) fn rank_test(diag: impl Iterator<Item = f64>, tol: f64) -> Result<(), LsqError> {
+    let (mut rank, mut p, mut first_bad) = (0, 0, None);
+    for (column, d) in diag.enumerate() {
+        p += 1;
+        if d > tol {
+            rank += 1;
+        } else if first_bad.is_none() {
+            first_bad = Some((column, d));
+        }
+    }
+    match first_bad {
+        Some((column, value)) => Err(LsqError::RankDeficient {
+            column,
+            value,
+            tolerance: tol,
+            rank,
+            p,
+        }),
+        None => Ok(()),
     }
 }
 

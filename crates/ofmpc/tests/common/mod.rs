@@ -371,3 +371,15 @@ pub fn brute(ad: &DMatrix<f64>, bd: &DMatrix<f64>, n: usize, nh: usize) -> Brute
     }
     r
 }
+
+/// The paper's path (Table I) for `robot` at Ts = 10 ms, through the
+/// library's one planning entry point (`ofmpc::motion::plan`).
+pub fn paper_reference(robot: &ofmpc::robot::Robot) -> ofmpc::motion::JointReference {
+    ofmpc::motion::plan(
+        ofmpc::gcode::PAPER_TABLE1,
+        robot,
+        &ofmpc::motion::PlanOptions::default(),
+    )
+    .unwrap()
+    .reference
+}
