@@ -95,12 +95,27 @@ fn solve(c: &mut Criterion) {
         };
         let a: Vec<f64> = (0..m * p).map(|_| rnd()).collect();
         let b: Vec<f64> = (0..m).map(|_| rnd()).collect();
-        for (name, prof) in [("dense", vec![m; p]), ("profile", profile)] {
-            let mut ws = LsqWorkspace::with_profile(m, p, prof).unwrap();
+        // The incremental algorithms' layout after the tracking rows'
+        // reduction (control/tracking.rs): 2 row groups per level.
+        let m2 = 2 * p;
+        let reduced: Vec<usize> = (0..p).map(|col| 2 * n * (col / n + 1)).collect();
+        eprintln!(
+            "N = {nh}: reduced {m2}x{p}, flops {:.3} M",
+            lsq_flops(p, &reduced) as f64 / 1e6
+        );
+        for (name, rows, prof) in [
+            ("dense", m, vec![m; p]),
+            ("profile", m, profile),
+            ("reduced", m2, reduced),
+        ] {
+            let mut ws = LsqWorkspace::with_profile(rows, p, prof).unwrap();
+            // A random (m2 × p) system: the first rows·p entries as a matrix.
+            let a = &a[..rows * p];
+            let b = &b[..rows];
             group.bench_function(BenchmarkId::new(name, nh), |bch| {
                 bch.iter(|| {
-                    ws.matrix_mut().copy_from_slice(&a);
-                    ws.rhs_mut().copy_from_slice(&b);
+                    ws.matrix_mut().copy_from_slice(a);
+                    ws.rhs_mut().copy_from_slice(b);
                     black_box(ws.solve().unwrap());
                 })
             });

@@ -417,7 +417,7 @@ fn horizon_size_limit_is_checked_by_validation() {
         matches!(
             e,
             SettingsError::TooLarge {
-                rows: 18000,
+                rows: 12000,
                 cols: 6000,
                 ..
             }

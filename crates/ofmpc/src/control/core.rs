@@ -20,12 +20,18 @@
 //! * unknown block `t' = 1..N` is `Δu_{k+N−t'}` (reversed order: `Δu_k`, the
 //!   one applied, is the last block);
 //! * row "level" `t = 1..N` holds, in this order, the `Q_YW` rows of block row
-//!   `j = N+1−t`, the `Q_ΔY` rows of block row `j` (incremental only), and the
-//!   `Q_ΔU` (or `Q_U`) rows of unknown block `t`.
+//!   `j = N+1−t` and the `Q_U` rows of unknown block `t` (usual controller).
 //!
-//! Block `(t, t')` is then `[Q_YW G[t'−t]; Q_ΔY G1[t'−t]; δ_{tt'} Q_ΔU]` for
-//! `t ≤ t'` and zero below: column block `t'` ends at row `g·n·t'` with `g`
-//! groups of rows per level.
+//! Block `(t, t')` is then `[Q_YW G[t'−t]; δ_{tt'} Q_U]` for `t ≤ t'` and zero
+//! below: column block `t'` ends at row `2·n·t'`.
+//!
+//! The incremental algorithms' two tracking groups `[Q_YW S G1; Q_ΔY G1]`
+//! (`S G1 = G2` or `G2 + G3`) are first halved by a constant orthogonal
+//! transformation ([`super::tracking`]) into `n` rows per block row,
+//! `(L G1)[j, l] = Σ_{l ≤ j' ≤ j} L[j, j'] G1[j' − l]` (output by output),
+//! which keeps the profile: level `t` holds those rows of block row
+//! `j = N+1−t`, then the `Q_ΔU` rows of unknown block `t`. Same minimizer,
+//! `J_min` and `R1` as the paper's system with half its rows.
 
 use super::constrained::TorqueLimitQp;
 use super::dense::gemm;
@@ -35,6 +41,7 @@ use super::model::LinearLikeModel;
 use super::prediction::Predictions;
 use super::settings::{MpcSettings, SettingsError, Solver};
 use super::structured::{StageError, StageLq};
+use super::tracking::TrackingRows;
 use super::zoh::Zoh;
 use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -103,23 +110,14 @@ pub(crate) use impl_controller;
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
 const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;
 
-/// Which generator multiplies `Q_YW` in the first row group of `𝒜`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum TopBlocks {
-    /// `G1` (usual controller, positional `G` of Eq. (43)).
-    G1,
-    /// `G2` (first algorithm, Eq. (37)).
-    G2,
-    /// `G2 + G3` (second algorithm, Eq. (39)).
-    G2PlusG3,
-}
-
 #[derive(Debug, Clone)]
 pub(crate) struct Core {
     pub n: usize,
     pub nh: usize,
     pub ts: f64,
-    /// Row groups per level: 3 (incremental) or 2 (usual).
+    /// Rows of the paper's system per unknown: 3 (incremental, Eq. (37),
+    /// (39)) or 2 (usual, Eq. (43)); the rank tests of both solvers use
+    /// `groups·N·n` as the row count of their tolerance.
     pub groups: usize,
     pub settings: MpcSettings,
     /// Diagonals of the square-root weights: Q_YW, Q_ΔY, Q_ΔU (or Q_U).
@@ -128,11 +126,18 @@ pub(crate) struct Core {
     pub w_bot: Vec<f64>,
     pub model: LinearLikeModel,
     pub zoh: Zoh,
-    /// `F1` and the `G` generators; its `F2`, `F3` are not maintained (the
-    /// controllers form `F2 Δx`, `F3 Δx` from `F1 Δx` by running sums).
+    /// `F1` and the `G1` generator; its `F2`, `F3` and the `G2`, `G3`
+    /// generators are not maintained (the controllers form `F2 Δx`, `F3 Δx`
+    /// from `F1 Δx` by running sums, and `G2`, `G3` enter through `G1`).
     pub pred: Predictions,
     /// The dense system (solver "dense-qr" only).
     pub lsq: Option<LsqWorkspace>,
+    /// The incremental algorithms' reduction of their two tracking row
+    /// groups (solver "dense-qr" only).
+    pub tracking: Option<TrackingRows>,
+    /// `Σ ‖d_i‖²` of the last [`Core::reduce_rhs`]: the part of `J_min`
+    /// outside the reduced system.
+    pub tracking_residual: f64,
     /// The stage-wise problem (solver "structured" only).
     pub stage: Option<StageLq>,
     /// With the structured solver and torque limits: the condensed problem
@@ -144,8 +149,6 @@ pub(crate) struct Core {
     /// The whole solution of the last step in natural order: block `j` is
     /// `Δu_{k+j}` (or `u_{k+j}` for the usual controller), `j = 0..N`.
     pub du: Vec<f64>,
-    /// Generator of G2 + G3 (N·n × n), second algorithm only.
-    pub g23: Vec<f64>,
     pub x_prev: Vec<f64>,
     pub u_prev: Vec<f64>,
     pub ebar: Vec<f64>,
@@ -178,27 +181,31 @@ impl Core {
         let nh = settings.horizon;
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
-        let m = groups * p;
+        // The dense system has 2 row groups per level (incremental: after the
+        // tracking rows' reduction, module docs).
+        let m = 2 * p;
         // The torque-limit QP (constrained.rs) works on the dense system, or on
         // the structured solver's condensed head (`head`, below).
         let solver = settings.solver.for_horizon(nh);
         let (lsq, stage) = match solver {
             Solver::DenseQr | Solver::Auto => {
-                if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
+                let total = dense_entries(n, nh, incremental);
+                if !matches!(total, Some(e) if e <= MAX_ENTRIES) {
                     return Err(SettingsError::TooLarge {
                         rows: m,
                         cols: p,
                         limit: MAX_ENTRIES,
                     });
                 }
-                let row_end: Vec<usize> = (0..p).map(|c| groups * n * (c / n + 1)).collect();
-                let lsq = LsqWorkspace::with_profile(m, p, row_end).map_err(|_| {
+                let row_end: Vec<usize> = (0..p).map(|c| 2 * n * (c / n + 1)).collect();
+                let mut lsq = LsqWorkspace::with_profile(m, p, row_end).map_err(|_| {
                     SettingsError::TooLarge {
                         rows: m,
                         cols: p,
                         limit: MAX_ENTRIES,
                     }
                 })?;
+                lsq.set_rank_rows(groups * p);
                 (Some(lsq), None)
             }
             Solver::Structured => {
@@ -276,14 +283,21 @@ impl Core {
                 _ => None,
             },
             head_ready: false,
+            tracking: match (&lsq, kind.base()) {
+                (Some(_), ControllerKind::First | ControllerKind::Second) => {
+                    Some(TrackingRows::new(
+                        &diag(&settings.q_yw),
+                        &diag(&settings.q_dy),
+                        nh,
+                        kind.base() == ControllerKind::Second,
+                    ))
+                }
+                _ => None,
+            },
+            tracking_residual: 0.0,
             lsq,
             stage,
             du: vec![0.0; p],
-            g23: if incremental {
-                vec![0.0; p * n]
-            } else {
-                Vec::new()
-            },
             x_prev: vec![0.0; 2 * n],
             u_prev: vec![0.0; n],
             ebar: vec![0.0; n],
@@ -395,7 +409,7 @@ impl Core {
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if self.lsq.is_some() {
             self.pred
-                .update_f1_and_generators_from_zoh(&self.zoh)
+                .update_f1_and_g1_from_zoh(&self.zoh)
                 .map_err(|_| StepError::Internal("prediction shapes"))?;
         }
         for ((d, a), b) in self.dx.iter_mut().zip(x).zip(&self.x_prev) {
@@ -404,26 +418,12 @@ impl Core {
         Ok(())
     }
 
-    /// Writes `𝒜` in the permuted layout (module docs).
-    pub fn build_matrix(&mut self, top: TopBlocks) {
-        let (n, nh, g) = (self.n, self.nh, self.groups);
+    /// Writes `𝒜` of the usual controller, `[Q_YW G1; Q_U]`, in the permuted
+    /// layout (module docs).
+    pub fn build_matrix(&mut self) {
+        let (n, nh) = (self.n, self.nh);
         let p = nh * n;
-        if top == TopBlocks::G2PlusG3 {
-            for ((s, a), b) in self
-                .g23
-                .iter_mut()
-                .zip(self.pred.g2_gen().as_slice())
-                .zip(self.pred.g3_gen().as_slice())
-            {
-                *s = a + b;
-            }
-        }
-        let top_gen: &[f64] = match top {
-            TopBlocks::G1 => self.pred.g1_gen().as_slice(),
-            TopBlocks::G2 => self.pred.g2_gen().as_slice(),
-            TopBlocks::G2PlusG3 => &self.g23,
-        };
-        let mid_gen = self.pred.g1_gen().as_slice();
+        let top_gen = self.pred.g1_gen().as_slice();
         let Some(lsq) = self.lsq.as_mut() else {
             return;
         };
@@ -432,14 +432,13 @@ impl Core {
         // Column (t', jj) at level t holds the blocks of lag t' − t, so it is
         // the last t' levels of column (N, jj): write the last column block
         // (all N levels), then copy its tails into the other blocks.
-        let gn = g * n;
+        let gn = 2 * n;
         let (head, last) = a.split_at_mut((p - n) * m);
         for (jj, col) in last.chunks_exact_mut(m).enumerate() {
             let top_src = &top_gen[jj * p..jj * p + p];
-            let mid_src = &mid_gen[jj * p..jj * p + p];
             for (t, level) in col[..gn * nh].chunks_exact_mut(gn).enumerate() {
                 let d = nh - 1 - t; // lag N − t
-                let (top_rows, rest) = level.split_at_mut(n);
+                let (top_rows, bot_rows) = level.split_at_mut(n);
                 for ((r, s), w) in top_rows
                     .iter_mut()
                     .zip(&top_src[d * n..d * n + n])
@@ -447,19 +446,6 @@ impl Core {
                 {
                     *r = w * s;
                 }
-                let bot_rows = if g == 3 {
-                    let (mid_rows, bot) = rest.split_at_mut(n);
-                    for ((r, s), w) in mid_rows
-                        .iter_mut()
-                        .zip(&mid_src[d * n..d * n + n])
-                        .zip(&self.w_mid)
-                    {
-                        *r = w * s;
-                    }
-                    bot
-                } else {
-                    rest
-                };
                 bot_rows.fill(0.0);
                 if d == 0 {
                     bot_rows[jj] = self.w_bot[jj];
@@ -478,6 +464,42 @@ impl Core {
         }
     }
 
+    /// Writes `𝒜` of an incremental algorithm in the permuted layout with the
+    /// reduced tracking rows (module docs): at level `t` (block row
+    /// `j = N+1−t`) and unknown block `t'` (`Δu_{k+l−1}`, `l = N+1−t'`), row
+    /// `i` holds `Σ_{l ≤ j' ≤ j} L_i[j, j'] G1[j' − l]_{i,·}`, then the `Q_ΔU`
+    /// rows.
+    pub fn build_reduced_matrix(&mut self) {
+        if let (Some(lsq), Some(tr)) = (self.lsq.as_mut(), self.tracking.as_mut()) {
+            let m = lsq.rows();
+            tr.write_rows(
+                self.pred.g1_gen().as_slice(),
+                &self.w_bot,
+                lsq.matrix_mut(),
+                m,
+            );
+        }
+    }
+
+    /// Transforms the incremental algorithms' tracking right-hand side
+    /// ([`TrackingRows::b`], filled by the controller) and writes the
+    /// reduced `b` (module docs); keeps `Σ ‖d_i‖²` for `J_min`.
+    pub fn reduce_rhs(&mut self) -> Result<(), StepError> {
+        let n = self.n;
+        let nh = self.nh;
+        let (Some(lsq), Some(tr)) = (self.lsq.as_mut(), self.tracking.as_mut()) else {
+            return Err(StepError::Internal("dense solve without its workspace"));
+        };
+        self.tracking_residual = tr.transform_rhs();
+        let b = lsq.rhs_mut();
+        for (tl, level) in b[..2 * n * nh].chunks_exact_mut(2 * n).enumerate() {
+            let (rows, du) = level.split_at_mut(n);
+            rows.copy_from_slice(tr.c(nh - 1 - tl));
+            du.fill(0.0);
+        }
+        Ok(())
+    }
+
     /// `out = F·v` for an N·n × 2n prediction matrix `F`.
     pub fn f_times(f: &[f64], v: &[f64], rows: usize, out: &mut [f64]) {
         gemm(rows, v.len(), 1, 1.0, f, v, 0.0, out);
@@ -491,7 +513,8 @@ impl Core {
             .lsq
             .as_mut()
             .ok_or(StepError::Internal("dense solve without its workspace"))?;
-        let info = lsq.solve()?;
+        let mut info = lsq.solve()?;
+        info.residual_sq += self.tracking_residual;
         for (dst, src) in self
             .du
             .chunks_exact_mut(n)
@@ -617,6 +640,21 @@ impl Core {
             zoh_squarings: self.zoh.squarings(),
         })
     }
+}
+
+/// The `f64` entries the dense solver holds for `n` joints and horizon `nh`:
+/// the system `[𝒜 | b]` (2·N·n rows) and, for the incremental algorithms,
+/// the tracking rows' constant factors ([`TrackingRows::entries`]); `None`
+/// on overflow. [`MpcSettings::validate_for_dof`] checks the same number.
+pub(crate) fn dense_entries(n: usize, nh: usize, incremental: bool) -> Option<usize> {
+    let p = nh.checked_mul(n)?;
+    let system = p.checked_mul(2)?.checked_mul(p + 1)?;
+    let extra = if incremental {
+        TrackingRows::entries(n, nh)?
+    } else {
+        0
+    };
+    system.checked_add(extra)
 }
 
 pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), StepError> {

@@ -8,7 +8,7 @@
 //!
 //! It removes the steady error for constant references.
 
-use super::core::{impl_controller, Core, TopBlocks};
+use super::core::{impl_controller, Core};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
 use super::{ControllerKind, StepError, StepInfo};
@@ -57,30 +57,29 @@ impl FirstMpc {
             let info = c.solve_structured()?;
             return c.finish(x, true, info, tau);
         }
-        c.build_matrix(TopBlocks::G2);
-        let (n, nh, g) = (c.n, c.nh, c.groups);
+        c.build_reduced_matrix();
+        let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx: block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i]).
         prefix_sums(n, &c.v1, &mut c.v2, None);
         let y = &x[..n];
-        let b = c
-            .lsq
+        let b = &mut c
+            .tracking
             .as_mut()
             .ok_or(StepError::Internal("dense solve without its workspace"))?
-            .rhs_mut();
-        for j in 1..=nh {
-            let base = (nh - j) * g * n;
-            let o = (j - 1) * n;
+            .b;
+        let (b_top, b_mid) = b.split_at_mut(rows);
+        for j in 0..nh {
+            let o = j * n;
             for i in 0..n {
                 // Eq. (37), first row: Q_YW (W − F_I y_k − F2 Δx_k)
-                b[base + i] = c.w_top[i] * (preview[o + i] - y[i] - c.v2[o + i]);
-                // second row: Q_ΔY (−F1 Δx_k)
-                b[base + n + i] = -c.w_mid[i] * c.v1[o + i];
-                // third row: 0
-                b[base + 2 * n + i] = 0.0;
+                b_top[o + i] = c.w_top[i] * (preview[o + i] - y[i] - c.v2[o + i]);
+                // second row: Q_ΔY (−F1 Δx_k); the third (Q_ΔU) is 0.
+                b_mid[o + i] = -c.w_mid[i] * c.v1[o + i];
             }
         }
+        c.reduce_rhs()?;
         let info = c.solve()?;
         c.finish(x, true, info, tau)
     }

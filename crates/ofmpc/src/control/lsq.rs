@@ -53,7 +53,8 @@ pub enum LsqError {
         column: usize,
         /// Its `|R_ii|`.
         value: f64,
-        /// Threshold `max(m, p)·ε·max|R_jj|`.
+        /// Threshold `max(m, p)·ε·max|R_jj|` (`m` of the system it stands for,
+        /// [`LsqWorkspace::set_rank_rows`]).
         tolerance: f64,
         /// Number of pivots above the threshold.
         rank: usize,
@@ -72,6 +73,8 @@ pub enum LsqError {
 pub struct LsqWorkspace {
     m: usize,
     p: usize,
+    /// Row count in the rank test's tolerance (`m` unless set).
+    rank_rows: usize,
     /// Column-major m×(p+1): `[𝒜 | b]`, overwritten by `R1`, reflectors, `[c1; c2]`.
     a: Vec<f64>,
     row_end: Vec<usize>,
@@ -133,12 +136,21 @@ impl LsqWorkspace {
         Ok(Self {
             m,
             p,
+            rank_rows: m,
             a: vec![0.0; m * (p + 1)],
             row_end,
             tau: vec![0.0; p],
             x: vec![0.0; p],
             vbuf: vec![0.0; VBUF_PER_ROW * PANEL * (m + 4)],
         })
+    }
+
+    /// Uses `rows` instead of `m` in the rank test's tolerance
+    /// `max(rows, p)·ε·max|R_jj|`: for a system that stands for a taller one
+    /// by an orthogonal transformation of its rows (same `R1`), so that both
+    /// decide the rank alike.
+    pub fn set_rank_rows(&mut self, rows: usize) {
+        self.rank_rows = rows;
     }
 
     /// Rows `m`.
@@ -218,7 +230,7 @@ impl LsqWorkspace {
             &mut self.vbuf,
         );
         // Rank check on the diagonal of R1.
-        let tol = (m.max(p) as f64) * f64::EPSILON * rmax;
+        let tol = (self.rank_rows.max(p) as f64) * f64::EPSILON * rmax;
         let rmin = (0..p).fold(f64::INFINITY, |r, c| r.min(self.a[c * m + c].abs()));
         if !rmax.is_finite() {
             return Err(LsqError::NonFiniteResult);

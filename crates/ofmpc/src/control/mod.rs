@@ -32,6 +32,7 @@ pub mod second;
 pub mod settings;
 pub(crate) mod simd;
 pub(crate) mod structured;
+pub(crate) mod tracking;
 pub mod usual;
 pub mod zoh;
 

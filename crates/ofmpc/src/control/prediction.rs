@@ -139,19 +139,17 @@ impl Predictions {
     /// `C A^j = [I, K_j]` with `K_j = K_{j−1} E + Φ1`, `K_0 = 0`, and
     /// `C A^d B = Φ2 + K_d Φ1`. Needs `nx = 2n`, `nu = ny = n`.
     pub fn update_from_zoh(&mut self, zoh: &Zoh) -> Result<(), PredictionError> {
-        self.update_f1_and_generators_from_zoh(zoh)?;
-        self.accumulate_f();
+        self.update_f1_and_g1_from_zoh(zoh)?;
+        self.accumulate();
         Ok(())
     }
 
     /// The part of [`Predictions::update_from_zoh`] the controllers need:
-    /// `F1` and the generators of `G1`, `G2`, `G3`. `F2` and `F3` are left
-    /// as they were (the controllers form `F2 Δx`, `F3 Δx` from `F1 Δx` by
-    /// the same running sums, see [`prefix_sums`]).
-    pub(crate) fn update_f1_and_generators_from_zoh(
-        &mut self,
-        zoh: &Zoh,
-    ) -> Result<(), PredictionError> {
+    /// `F1` and the generator of `G1`. `F2`, `F3` and the generators of
+    /// `G2`, `G3` are left as they were (the controllers form `F2 Δx`,
+    /// `F3 Δx` from `F1 Δx` by the same running sums, see [`prefix_sums`], and
+    /// `G2`, `G3` enter their systems through `G1`, see `tracking.rs`).
+    pub(crate) fn update_f1_and_g1_from_zoh(&mut self, zoh: &Zoh) -> Result<(), PredictionError> {
         let n = zoh.dof();
         let nh = self.horizon;
         check_shape("(nx, nu) of the ZOH model", (self.nx, self.nu), (2 * n, n))?;
@@ -165,11 +163,7 @@ impl Predictions {
         let k = self.k.as_mut_slice();
         let k_next = self.k_next.as_mut_slice();
         let f = self.f1.as_mut_slice();
-        let (g1, g2, g3) = (
-            self.g1.as_mut_slice(),
-            self.g2.as_mut_slice(),
-            self.g3.as_mut_slice(),
-        );
+        let g1 = self.g1.as_mut_slice();
         // F1 = [F_I, K]: the left half is the constant block column of I.
         for (i, col) in f[..n * rows].chunks_exact_mut(rows).enumerate() {
             col.fill(0.0);
@@ -202,20 +196,7 @@ impl Predictions {
                 super::dense::axpy(phi1[col * n + m], km, &mut gc[n..]);
             }
         }
-        // g2_d = g2_{d−1} + g1_d, g3_d = g3_{d−1} + g2_{d−1}, g3_0 = 0.
-        for ((c1, c2), c3) in g1
-            .chunks_exact(rows)
-            .zip(g2.chunks_exact_mut(rows))
-            .zip(g3.chunks_exact_mut(rows))
-        {
-            prefix_sums(n, c1, c2, Some(c3));
-        }
         Ok(())
-    }
-
-    /// F2, F3 from F1.
-    fn accumulate_f(&mut self) {
-        Self::running_sums(self.ny, self.horizon, &self.f1, &mut self.f2, &mut self.f3);
     }
 
     /// F2, F3 from F1 and the G2, G3 generators from G1's.
@@ -410,8 +391,8 @@ pub fn fill_w_s(n: usize, preview: &[f64], out: &mut [f64]) -> Result<(), Predic
 mod tests {
     use super::*;
 
-    /// The controllers' path (F1 and the generators, then running sums of
-    /// `F1 v`) reproduces the full update: the same generators, and `F2 v`,
+    /// The controllers' path (F1 and the G1 generator, then running sums of
+    /// `F1 v`) reproduces the full update: the same `F1` and `G1`, and `F2 v`,
     /// `F3 v` of the accumulated matrices.
     #[test]
     fn generator_path_and_running_sums_match_the_full_update() {
@@ -423,11 +404,9 @@ mod tests {
         let mut full = Predictions::new(2 * n, n, n, nh);
         full.update_from_zoh(&zoh).unwrap();
         let mut part = Predictions::new(2 * n, n, n, nh);
-        part.update_f1_and_generators_from_zoh(&zoh).unwrap();
+        part.update_f1_and_g1_from_zoh(&zoh).unwrap();
         assert_eq!(full.f1(), part.f1());
         assert_eq!(full.g1_gen(), part.g1_gen());
-        assert_eq!(full.g2_gen(), part.g2_gen());
-        assert_eq!(full.g3_gen(), part.g3_gen());
         let v = nalgebra::DVector::<f64>::from_fn(2 * n, |i, _| (i as f64 * 0.9).sin());
         let f1v = full.f1() * &v;
         let (mut s2, mut s3) = (vec![0.0; nh * n], vec![0.0; nh * n]);

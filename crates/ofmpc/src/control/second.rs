@@ -11,7 +11,7 @@
 //!
 //! It removes the steady error for constant and ramp references.
 
-use super::core::{impl_controller, Core, TopBlocks};
+use super::core::{impl_controller, Core};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
 use super::{ControllerKind, StepError, StepInfo};
@@ -51,7 +51,7 @@ impl SecondMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
-        let (n, nh, g) = (c.n, c.nh, c.groups);
+        let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         let y = &x[..n];
         // Eq. (34): e_k = w_k − y_k, ē_k = ē_{k−1} + e_k (committed on success).
@@ -84,7 +84,7 @@ impl SecondMpc {
             c.commit_ebar();
             return Ok(out);
         }
-        c.build_matrix(TopBlocks::G2PlusG3);
+        c.build_reduced_matrix();
         // v1 = F1 Δx, v2 = (F2 + F3) Δx.
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx, F3 Δx by block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i],
@@ -95,25 +95,25 @@ impl SecondMpc {
         }
         // W_s block j = Σ_{i<j} w_{k+i}: running sum.
         self.ws.fill(0.0);
-        let b = c
-            .lsq
+        let b = &mut c
+            .tracking
             .as_mut()
             .ok_or(StepError::Internal("dense solve without its workspace"))?
-            .rhs_mut();
+            .b;
+        let (b_top, b_mid) = b.split_at_mut(rows);
         for j in 1..=nh {
-            let base = (nh - j) * g * n;
             let o = (j - 1) * n;
             let jf = j as f64; // F_I + F_II has block j = j·I
             for i in 0..n {
-                b[base + i] = c.w_top[i]
+                b_top[o + i] = c.w_top[i]
                     * (preview[o + i] + self.ws[i] + c.ebar_new[i] - jf * y[i] - c.v2[o + i]);
-                b[base + n + i] = -c.w_mid[i] * c.v1[o + i];
-                b[base + 2 * n + i] = 0.0;
+                b_mid[o + i] = -c.w_mid[i] * c.v1[o + i];
             }
             for (s, w) in self.ws.iter_mut().zip(&preview[o..o + n]) {
                 *s += w;
             }
         }
+        c.reduce_rhs()?;
         let info = c.solve()?;
         let out = c.finish(x, true, info, tau)?;
         c.commit_ebar();

@@ -239,7 +239,8 @@ impl MpcSettings {
     /// [`MpcSettings::validate`] plus: every diagonal weight has `dof` entries,
     /// and the dense least-squares system of the horizon fits in
     /// [`MAX_SYSTEM_ENTRIES`] when the dense solver is used (checked here,
-    /// once, for the largest of the three controllers' systems: `3·N·n` rows),
+    /// once, for the largest of the three controllers' systems: an
+    /// incremental algorithm's, `2·N·n` rows and its tracking reduction),
     /// so that a setting that validates also builds.
     pub fn validate_for_dof(&self, dof: usize) -> Result<(), SettingsError> {
         if dof == 0 {
@@ -248,8 +249,9 @@ impl MpcSettings {
         self.check(Some(dof))?;
         if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
             let p = self.horizon.saturating_mul(dof);
-            let rows = p.saturating_mul(3);
-            if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
+            let rows = p.saturating_mul(2);
+            let entries = super::core::dense_entries(dof, self.horizon, true);
+            if !matches!(entries, Some(e) if e <= MAX_SYSTEM_ENTRIES) {
                 return Err(SettingsError::TooLarge {
                     rows,
                     cols: p,

@@ -4,7 +4,7 @@
 //! `F = [CA; …; CA^N]`, `G[j,l] = C A^{j−l} B`. It has no integrator and keeps
 //! a steady offset under a model mismatch.
 
-use super::core::{impl_controller, Core, TopBlocks};
+use super::core::{impl_controller, Core};
 use super::settings::{MpcSettings, SettingsError};
 use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -44,8 +44,8 @@ impl UsualMpc {
             let info = c.solve_structured()?;
             return c.finish(x, false, info, tau);
         }
-        c.build_matrix(TopBlocks::G1);
-        let (n, nh, g) = (c.n, c.nh, c.groups);
+        c.build_matrix();
+        let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         // v1 = F x_k (positional prediction from the full state).
         Core::f_times(c.pred.f1().as_slice(), x, rows, &mut c.v1);
@@ -56,7 +56,7 @@ impl UsualMpc {
             .rhs_mut();
         b.fill(0.0);
         for j in 1..=nh {
-            let base = (nh - j) * g * n;
+            let base = (nh - j) * 2 * n; // level N − j: [Q_YW rows; Q_U rows]
             let o = (j - 1) * n;
             for i in 0..n {
                 b[base + i] = c.w_top[i] * (preview[o + i] - c.v1[o + i]);
