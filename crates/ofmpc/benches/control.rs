@@ -19,7 +19,8 @@ use std::time::Duration;
 /// One whole step (model terms, f0, ZOH, the least-squares problem and its
 /// solve) for every controller, both solvers, N = 5 … 200. Benchmark ids:
 /// `step_irb140/<controller>-<solver>/<N>`. `OFMPC_BENCH_KINDS=second`
-/// restricts the controllers, `OFMPC_BENCH_MAX_N=100` the horizons.
+/// restricts the controllers, `OFMPC_BENCH_MAX_N=100` the horizons, and
+/// `OFMPC_BENCH_HORIZONS=15,20,25` replaces them (the solvers' crossover).
 fn steps(c: &mut Criterion) {
     let n = 6;
     let mut group = c.benchmark_group("step_irb140");
@@ -34,7 +35,14 @@ fn steps(c: &mut Criterion) {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(200);
-    for nh in [5usize, 10, 20, 50, 100, 200] {
+    let horizons: Vec<usize> = match std::env::var("OFMPC_BENCH_HORIZONS") {
+        Ok(list) => list
+            .split(',')
+            .filter_map(|h| h.trim().parse().ok())
+            .collect(),
+        Err(_) => vec![5, 10, 20, 50, 100, 200],
+    };
+    for nh in horizons {
         if nh > max_n {
             continue;
         }

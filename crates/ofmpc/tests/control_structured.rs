@@ -389,37 +389,53 @@ fn structured_equals_dense_qr_along_the_paper_path() {
     }
 }
 
-/// `solver = "auto"` (the default) is the dense QR below
-/// `STRUCTURED_FROM_HORIZON` and the structured solver from there on: its
-/// ΔU is bit for bit the one of the solver it stands for.
+/// `solver = "auto"` (the default) is the dense QR below the controller's
+/// crossover (`structured_from_horizon`) and the structured solver from there
+/// on: its ΔU is bit for bit the one of the solver it stands for.
 #[test]
 fn auto_solver_is_dense_for_short_and_structured_for_long_horizons() {
-    use ofmpc::control::STRUCTURED_FROM_HORIZON;
+    use ofmpc::control::{structured_from_horizon, STRUCTURED_FROM_HORIZON};
     assert_eq!(MpcSettings::default().solver, Solver::Auto);
     let n = 6;
     let mut model = RobotDynamics::new(Robot::irb140());
     let mut rng = Rng(37);
-    for (nh, expected) in [
-        (10, Solver::DenseQr),
-        (STRUCTURED_FROM_HORIZON - 1, Solver::DenseQr),
-        (STRUCTURED_FROM_HORIZON, Solver::Structured),
-        (60, Solver::Structured),
+    for kind in [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
     ] {
-        assert_eq!(Solver::Auto.for_horizon(nh), expected);
-        let (xp, x, w, p) = random_sample(n, nh, &[0.1, 0.8, -0.4, 0.2, 0.5, 0.1], &mut rng);
-        let mut out = Vec::new();
-        for solver in [Solver::Auto, expected] {
-            let s = MpcSettings {
-                horizon: nh,
-                solver,
-                ..MpcSettings::default()
-            };
-            let mut c = new_controller(ControllerKind::Second, n, &s).unwrap();
-            c.reset(&xp).unwrap();
-            let mut tau = vec![0.0; n];
-            c.step(&mut model, &x, &w, &p, &mut tau).unwrap();
-            out.push(c.increments().to_vec());
+        let from = structured_from_horizon(kind);
+        assert!(from <= STRUCTURED_FROM_HORIZON);
+        for (nh, expected) in [
+            (10, Solver::DenseQr),
+            (from - 1, Solver::DenseQr),
+            (from, Solver::Structured),
+            (60, Solver::Structured),
+        ] {
+            assert_eq!(Solver::Auto.for_controller(kind, nh), expected);
+            let (xp, x, w, p) = random_sample(n, nh, &[0.1, 0.8, -0.4, 0.2, 0.5, 0.1], &mut rng);
+            let mut out = Vec::new();
+            for solver in [Solver::Auto, expected] {
+                let s = MpcSettings {
+                    horizon: nh,
+                    solver,
+                    ..MpcSettings::default()
+                };
+                let mut c = new_controller(kind, n, &s).unwrap();
+                c.reset(&xp).unwrap();
+                let mut tau = vec![0.0; n];
+                c.step(&mut model, &x, &w, &p, &mut tau).unwrap();
+                out.push(c.increments().to_vec());
+            }
+            assert_eq!(out[0], out[1], "{kind} N = {nh}");
         }
-        assert_eq!(out[0], out[1], "N = {nh}");
     }
+    assert_eq!(
+        Solver::Auto.for_horizon(STRUCTURED_FROM_HORIZON - 1),
+        Solver::DenseQr
+    );
+    assert_eq!(
+        Solver::Auto.for_horizon(STRUCTURED_FROM_HORIZON),
+        Solver::Structured
+    );
 }

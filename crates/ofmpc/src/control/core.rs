@@ -186,7 +186,7 @@ impl Core {
         let m = 2 * p;
         // The torque-limit QP (constrained.rs) works on the dense system, or on
         // the structured solver's condensed head (`head`, below).
-        let solver = settings.solver.for_horizon(nh);
+        let solver = settings.solver.for_controller(kind, nh);
         let (lsq, stage) = match solver {
             Solver::DenseQr | Solver::Auto => {
                 let total = dense_entries(n, nh, incremental);

@@ -52,7 +52,9 @@ pub use model::{LinearLikeModel, TermsError};
 pub use observer::StateObserver;
 pub use prediction::Predictions;
 pub use second::SecondMpc;
-pub use settings::{MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON};
+pub use settings::{
+    structured_from_horizon, MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON,
+};
 pub use usual::UsualMpc;
 pub use zoh::{Zoh, ZohError};
 

@@ -3,6 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::ControllerKind;
+
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
 
@@ -98,15 +100,35 @@ pub enum Solver {
     /// The same problem as a stage-wise LQ problem solved by a square-root
     /// (Householder QR) Riccati recursion: `O(N·n³)` flops per sample.
     Structured,
-    /// The faster of the two for the horizon (the default): the dense QR for
-    /// `N <` [`STRUCTURED_FROM_HORIZON`], the structured solver from there on
-    /// (the crossover measured by `cargo bench --bench control` on the IRB 140).
+    /// The faster of the two for the controller and horizon (the default):
+    /// the dense QR for `N <` [`structured_from_horizon`], the structured
+    /// solver from there on (the crossovers measured by `cargo bench --bench
+    /// control` on the IRB 140).
     #[default]
     Auto,
 }
 
-/// Smallest horizon for which [`Solver::Auto`] picks the structured solver.
-pub const STRUCTURED_FROM_HORIZON: usize = 20;
+/// Smallest horizon for which [`Solver::Auto`] picks the structured solver
+/// for the second algorithm, the largest of the three crossovers (see
+/// [`structured_from_horizon`]); [`Solver::for_horizon`] uses it when the
+/// controller is not known.
+pub const STRUCTURED_FROM_HORIZON: usize = 24;
+
+/// Smallest horizon for which [`Solver::Auto`] picks the structured solver
+/// for the controller `kind` (its base algorithm): where the two solvers'
+/// step times cross on the IRB 140 (criterion medians, `OFMPC_BENCH_HORIZONS=
+/// 15,17,19,20,21,23,25 cargo bench --bench control -- step_irb140/`): usual
+/// ≈ 16 (26.7 µs each at 15), first ≈ 20 (50.2 / 50.6 µs at 19), second ≈ 24
+/// (79.6 / 81.1 µs at 23). The incremental algorithms' dense system is halved
+/// by their tracking rows' reduction, their stage-wise state is 3n or 4n
+/// against the usual's 2n: hence the later crossovers.
+pub fn structured_from_horizon(kind: ControllerKind) -> usize {
+    match kind.base() {
+        ControllerKind::Usual => 16,
+        ControllerKind::First => 20,
+        _ => STRUCTURED_FROM_HORIZON,
+    }
+}
 
 impl Solver {
     /// The serde name (`"dense-qr"`, `"structured"` or `"auto"`).
@@ -118,11 +140,22 @@ impl Solver {
         }
     }
 
-    /// The solver used at `horizon`: [`Solver::Auto`] resolved, the others
-    /// unchanged.
+    /// The solver used at `horizon` when the controller is not known:
+    /// [`Solver::Auto`] resolved with [`STRUCTURED_FROM_HORIZON`] (the dense
+    /// QR wherever some controller would use it), the others unchanged.
     pub fn for_horizon(self, horizon: usize) -> Solver {
         match self {
             Solver::Auto if horizon < STRUCTURED_FROM_HORIZON => Solver::DenseQr,
+            Solver::Auto => Solver::Structured,
+            other => other,
+        }
+    }
+
+    /// The solver controller `kind` uses at `horizon`: [`Solver::Auto`]
+    /// resolved with [`structured_from_horizon`], the others unchanged.
+    pub fn for_controller(self, kind: ControllerKind, horizon: usize) -> Solver {
+        match self {
+            Solver::Auto if horizon < structured_from_horizon(kind) => Solver::DenseQr,
             Solver::Auto => Solver::Structured,
             other => other,
         }
