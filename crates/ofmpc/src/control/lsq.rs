@@ -14,7 +14,7 @@
 //! unknowns so that their block-triangular `𝒜` has such a profile.
 
 use super::dense::{all_finite, axpy, dot};
-use super::simd::Avx2Fma;
+use super::simd::{AlignedBuf, Avx2Fma};
 
 /// Widest panel of columns whose reflectors are applied together.
 const PANEL: usize = 8;
@@ -76,12 +76,12 @@ pub struct LsqWorkspace {
     /// Row count in the rank test's tolerance (`m` unless set).
     rank_rows: usize,
     /// Column-major m×(p+1): `[𝒜 | b]`, overwritten by `R1`, reflectors, `[c1; c2]`.
-    a: Vec<f64>,
+    a: AlignedBuf,
     row_end: Vec<usize>,
     tau: Vec<f64>,
     x: Vec<f64>,
     /// The reflectors of one panel, explicit and interleaved (AVX2 kernels).
-    vbuf: Vec<f64>,
+    vbuf: AlignedBuf,
 }
 
 /// The shape or profile given to [`LsqWorkspace::new`] is not usable.
@@ -137,11 +137,11 @@ impl LsqWorkspace {
             m,
             p,
             rank_rows: m,
-            a: vec![0.0; m * (p + 1)],
+            a: AlignedBuf::zeros(m * (p + 1)),
             row_end,
             tau: vec![0.0; p],
             x: vec![0.0; p],
-            vbuf: vec![0.0; VBUF_PER_ROW * PANEL * (m + 4)],
+            vbuf: AlignedBuf::zeros(VBUF_PER_ROW * PANEL * (m + 4)),
         })
     }
 

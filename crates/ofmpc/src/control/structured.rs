@@ -58,7 +58,7 @@
 //! stages as one product with `M` each (`O((nu + nz + nq)·(nq + nz))` flops
 //! instead of `O((nu + nz)²·nz)`). Stage 0 is always factorized in full.
 
-use super::simd::Avx2Fma;
+use super::simd::{AlignedBuf, Avx2Fma};
 
 /// Largest change of `L` between consecutive stages, relative to `max|L|`,
 /// at which the recursion counts as converged: 32 ε, above the rounding
@@ -95,21 +95,21 @@ pub(crate) struct StageLq {
     /// 8-wide blocks, none on a scalar tail), then `nq + nz` columns (padded
     /// to a multiple of 8) that carry the unit vectors of the right-hand
     /// side's inputs when a stage is about to converge. Row stride `ms`.
-    m: Vec<f64>,
+    m: AlignedBuf,
     ld: usize,
     cs: usize,
     ms: usize,
     /// `[B A 0]` row-major (nz rows, stride `cs`, zero from column nu + nz).
-    ba: Vec<f64>,
+    ba: AlignedBuf,
     /// Current `L` (nz×nz row-major, upper triangular) and `l`.
-    l_mat: Vec<f64>,
+    l_mat: AlignedBuf,
     l_vec: Vec<f64>,
     /// Householder work: the reflector vector and `vᵀM`.
-    hv: Vec<f64>,
-    hw: Vec<f64>,
+    hv: AlignedBuf,
+    hw: AlignedBuf,
     /// Per stage `j`: the `nu` rows `[R_vv R_vz ρ]`, row-major
     /// nu × (nu + nz + 1).
-    vrows: Vec<f64>,
+    vrows: AlignedBuf,
     /// Forward pass: current and next state.
     z: Vec<f64>,
     z_next: Vec<f64>,
@@ -132,11 +132,11 @@ pub(crate) struct StageLq {
     za_next: Vec<f64>,
     /// Right-hand side column of a reused stage (`ld` rows, padded to a
     /// multiple of 8).
-    bvec: Vec<f64>,
+    bvec: AlignedBuf,
     /// The converged stage's map `M` (ld × (nq + nz), column-major, column
     /// stride `ld` rounded up to a multiple of 8, zero padding) and its
     /// input `[D r_j; l_{j+1} − L c_j]`.
-    mmap: Vec<f64>,
+    mmap: AlignedBuf,
     bin: Vec<f64>,
 }
 
@@ -181,16 +181,16 @@ impl StageLq {
             c: vec![0.0; nh * nz],
             c_zero: true,
             z0: vec![0.0; nz],
-            m: vec![0.0; ld * ms],
+            m: AlignedBuf::zeros(ld * ms),
             ld,
             cs,
             ms,
-            ba: vec![0.0; nz * cols.next_multiple_of(8)],
-            hv: vec![0.0; ld],
-            hw: vec![0.0; ms],
-            l_mat: vec![0.0; nz * nz],
+            ba: AlignedBuf::zeros(nz * cols.next_multiple_of(8)),
+            hv: AlignedBuf::zeros(ld),
+            hw: AlignedBuf::zeros(ms),
+            l_mat: AlignedBuf::zeros(nz * nz),
             l_vec: vec![0.0; nz],
-            vrows: vec![0.0; nh * nu * cols],
+            vrows: AlignedBuf::zeros(nh * nu * cols),
             z: vec![0.0; nz],
             z_next: vec![0.0; nz],
             sol: vec![0.0; nh * nu],
@@ -202,8 +202,8 @@ impl StageLq {
             zs_next: Vec::new(),
             za: Vec::new(),
             za_next: Vec::new(),
-            bvec: vec![0.0; ld.next_multiple_of(8)],
-            mmap: vec![0.0; ld.next_multiple_of(8) * (nq + nz)],
+            bvec: AlignedBuf::zeros(ld.next_multiple_of(8)),
+            mmap: AlignedBuf::zeros(ld.next_multiple_of(8) * (nq + nz)),
             bin: vec![0.0; nq + nz],
         }
     }
