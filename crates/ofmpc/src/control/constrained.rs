@@ -22,7 +22,7 @@
 //! with `ΔU = T z + e`. The unconstrained solve has already factored
 //! `𝒜 = Q [R1; 0]`, `Qᵀb = [c1; c2]`, so `‖𝒜ΔU − b‖² = ‖R1 ΔU − c1‖² + ‖c2‖²`:
 //! the QP is built from the `p × p` triangle `R1` and `c1` (`P = (R1T)ᵀ(R1T)`,
-//! `c = (R1T)ᵀ(c1 − R1 e)`), not from the `3p × p` system, and nothing is
+//! `c = (R1T)ᵀ(c1 − R1 e)`), not from the stacked `2p × p` system, and nothing is
 //! copied before the solve. [`solve_box_qp`] solves it by a primal active-set
 //! method on `P` (Cholesky of the free block per iteration): every iterate is
 //! feasible, so when the bounded iteration count runs out the current iterate

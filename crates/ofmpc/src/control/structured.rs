@@ -68,9 +68,10 @@ use super::simd::{AlignedBuf, Avx2Fma};
 /// Measured on the IRB 140, second algorithm (ΔU against the dense QR,
 /// relative; a few states of the paper's path): Ts = 1 ms, N = 100:
 /// 1.1e-11 with 32 ε, 1.7e-11 with 1e-12, 2.0e-10 with 1e-11; N = 200:
-/// 1.5e-10 / 1.6e-10 / 6.6e-10. Against 32 ε it saves ≈ 3 factorized
-/// stages at Ts = 10 ms (step at N = 100: 95 → 86 µs) and ≈ 10 at 1 ms (the
-/// 1 kHz paper run: median 332 → 285 µs, tracking unchanged to 12 digits).
+/// 1.5e-10 / 1.6e-10 / 6.6e-10. Against 32 ε it factorizes 16 instead of
+/// 18 stages at Ts = 10 ms (step at N = 100: 95 → 86 µs) and 66 instead of
+/// 78 at 1 ms (the 1 kHz paper run: median 332 → 285 µs, tracking unchanged
+/// to 12 digits).
 pub(crate) const CONVERGED_RTOL: f64 = 1e-12;
 
 /// The stage-wise problem and its square-root Riccati workspace, sized once.
