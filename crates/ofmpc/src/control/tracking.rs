@@ -303,6 +303,62 @@ mod tests {
         })
     }
 
+    /// The reduced rows written by `write_rows` (every block-size path: the
+    /// register-held sums for n = 4…7, the general loop below and above them,
+    /// the entry-by-entry fallback beyond MAX_DOF) equal `L_i G1_i` computed
+    /// directly, in the permuted layout, with the `Q_ΔU` rows on the diagonal.
+    #[test]
+    fn written_rows_are_l_times_g1_in_the_permuted_layout() {
+        let mut seed = 3u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        for (n, nh, ramp) in [
+            (2, 4, true),
+            (6, 10, true),
+            (6, 3, false),
+            (7, 5, true),
+            (13, 3, false),
+        ] {
+            let q_yw: Vec<f64> = (0..n).map(|_| 1.0 + rnd()).collect();
+            let q_dy: Vec<f64> = (0..n).map(|_| 0.5 + rnd()).collect();
+            let w_du: Vec<f64> = (0..n).map(|_| 0.1 + rnd().abs()).collect();
+            let mut t = TrackingRows::new(&q_yw, &q_dy, nh, ramp);
+            let p = nh * n;
+            // G1 generator: N·n × n column-major, block d rows d·n..(d+1)·n.
+            let g1: Vec<f64> = (0..p * n).map(|_| rnd()).collect();
+            let gen = |d: usize, i: usize, col: usize| g1[col * p + d * n + i];
+            let m = 2 * p;
+            let mut a = vec![f64::NAN; m * p];
+            t.write_rows(&g1, &w_du, &mut a, m);
+            for tc in 0..nh {
+                let l = nh - 1 - tc;
+                for col in 0..n {
+                    let column = &a[(tc * n + col) * m..(tc * n + col + 1) * m];
+                    for tl in 0..=tc {
+                        let j = nh - 1 - tl;
+                        for i in 0..n {
+                            let want: f64 = (l..=j)
+                                .map(|jp| t.l_row(j, jp)[i] * gen(jp - l, i, col))
+                                .sum();
+                            let got = column[tl * 2 * n + i];
+                            assert!(
+                                (got - want).abs() <= 1e-13 * (1.0 + want.abs()),
+                                "n {n} N {nh}: ({tl}, {i}) x ({tc}, {col}): {got} vs {want}"
+                            );
+                            let du = column[tl * 2 * n + n + i];
+                            let want_du = if tl == tc && i == col { w_du[col] } else { 0.0 };
+                            assert_eq!(du, want_du);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// `Q_iᵀ M_i = [L_i; 0]` with `Q_i` orthogonal and `L_i` lower
     /// triangular, and the transformed right-hand side keeps the norm.
     #[test]
