@@ -33,26 +33,20 @@ use nalgebra::DMatrix;
 #[cfg(target_arch = "x86_64")]
 use super::simd::Avx2Fma;
 
-/// Joints up to which a block of `L G1` is summed in registers (n² entries
-/// on the stack).
-const MAX_DOF: usize = 12;
-const MAX_BLOCK: usize = MAX_DOF * MAX_DOF;
-
 /// The constant factors of the reduction for `n` outputs and horizon `N`,
 /// and the per-step work buffer of the right-hand side.
 #[derive(Debug, Clone)]
 pub(crate) struct TrackingRows {
     n: usize,
     nh: usize,
-    /// `L_i[j][j']` at `(j·N + j')·n + i` (zero for `j' > j`).
-    l: Vec<f64>,
-    /// `diag(L_·[j][j'])` as an n×n column-major block of its diagonal
+    /// `diag(L_·[j][j'])` (zero for `j' > j`) as an n×n column-major block of its diagonal
     /// repeated in every column (`L_i[j][j']` at `(j·N + j')·n² + col·n + i`), so
     /// that a row-scaled block of `G1` is one elementwise product.
     lrep: Vec<f64>,
     /// The `G1` generator of the current step as N contiguous n×n blocks.
     gblk: Vec<f64>,
-
+    /// One n×n block of `L G1` (joint counts without a fixed-size kernel).
+    blks: Vec<f64>,
     /// Rows of `Q_iᵀ`: entry `(r, s)` at `(r·2N + s)·n + i`; rows `0..N` give
     /// `c_i`, rows `N..2N` give `d_i`.
     qt: Vec<f64>,
@@ -110,9 +104,9 @@ impl TrackingRows {
         Self {
             n,
             nh,
-            l,
             lrep,
             gblk: vec![0.0; nh * n * n],
+            blks: vec![0.0; n * n],
             qt,
             b: vec![0.0; 2 * nh * n],
             cd: vec![0.0; 2 * nh * n],
@@ -122,18 +116,20 @@ impl TrackingRows {
     /// The `f64` entries a reduction for `n` outputs and horizon `nh` holds
     /// (`None` on overflow), for the callers' size limits.
     pub(crate) fn entries(n: usize, nh: usize) -> Option<usize> {
-        // l: N²n, lrep: N²n², qt: 4N²n, gblk: Nn², b and cd: 4Nn.
+        // lrep: N²n², qt: 4N²n, gblk: Nn², blks: n², b and cd: 4Nn.
         let nn = nh.checked_mul(nh)?;
         nn.checked_mul(n)?
-            .checked_mul(n + 5)?
-            .checked_add(nh.checked_mul(n)?.checked_mul(n + 4)?)
+            .checked_mul(n + 4)?
+            .checked_add(nh.checked_mul(n)?.checked_mul(n + 4)?)?
+            .checked_add(n.checked_mul(n)?)
     }
 
-    /// `L_i[j][j']` for all outputs `i` (n entries).
+    /// `L_i[j][j']` for all outputs `i` (n entries: column 0 of the
+    /// repeated block).
     #[cfg(test)]
     pub(crate) fn l_row(&self, j: usize, jp: usize) -> &[f64] {
-        let o = (j * self.nh + jp) * self.n;
-        &self.l[o..o + self.n]
+        let o = (j * self.nh + jp) * self.n * self.n;
+        &self.lrep[o..o + self.n]
     }
 
     /// Takes the `G1` generator of this step (N·n × n column-major, block `d`
@@ -162,9 +158,9 @@ impl TrackingRows {
     }
 
     #[cfg(target_arch = "x86_64")]
-    fn write_rows_avx2(&self, _token: Avx2Fma, w_du: &[f64], a: &mut [f64], m: usize) {
+    fn write_rows_avx2(&mut self, _token: Avx2Fma, w_du: &[f64], a: &mut [f64], m: usize) {
         #[target_feature(enable = "avx2,fma")]
-        unsafe fn inner(t: &TrackingRows, w_du: &[f64], a: &mut [f64], m: usize) {
+        unsafe fn inner(t: &mut TrackingRows, w_du: &[f64], a: &mut [f64], m: usize) {
             t.write_rows_generic::<true>(w_du, a, m);
         }
         // SAFETY: the token proves that the CPU supports AVX2 and FMA, the
@@ -174,58 +170,48 @@ impl TrackingRows {
 
     /// [`TrackingRows::write_rows`] after [`TrackingRows::load_g1`]; block
     /// `(j, l)` of `L G1` is `Σ_{l ≤ j' ≤ j} diag(L_·[j][j']) G1[j' − l]`:
-    /// elementwise products of contiguous n×n blocks.
+    /// elementwise products of contiguous n×n blocks, summed in registers for
+    /// n = 4…7 and stored straight into the columns.
     #[inline(always)]
-    fn write_rows_generic<const FMA: bool>(&self, w_du: &[f64], a: &mut [f64], m: usize) {
+    fn write_rows_generic<const FMA: bool>(&mut self, w_du: &[f64], a: &mut [f64], m: usize) {
         let (n, nh) = (self.n, self.nh);
         let nn = n * n;
-        let mut blk = [0.0f64; MAX_BLOCK];
         for tc in 0..nh {
             let l = nh - 1 - tc;
             let cols = &mut a[tc * n * m..(tc + 1) * n * m];
+            // The column block's levels 0..=tc: zeros (the Q_ΔU rows) in one
+            // contiguous fill per column, then the blocks of L G1, then the
+            // diagonal Q_ΔU entries.
+            for column in cols.chunks_exact_mut(m) {
+                column[..2 * n * (tc + 1)].fill(0.0);
+            }
             for tl in 0..=tc {
                 let j = nh - 1 - tl;
-                if nn <= MAX_BLOCK {
-                    let len = (j - l + 1) * nn;
-                    let lbase = (j * nh + l) * nn;
-                    let (lr, g) = (&self.lrep[lbase..lbase + len], &self.gblk[..len]);
-                    match n {
-                        6 => sum_products::<36, FMA>(lr, g, &mut blk),
-                        5 => sum_products::<25, FMA>(lr, g, &mut blk),
-                        7 => sum_products::<49, FMA>(lr, g, &mut blk),
-                        4 => sum_products::<16, FMA>(lr, g, &mut blk),
-                        _ => {
-                            let acc = &mut blk[..nn];
-                            acc.fill(0.0);
-                            for (lr, g) in lr.chunks_exact(nn).zip(g.chunks_exact(nn)) {
-                                for ((o, x), y) in acc.iter_mut().zip(lr).zip(g) {
-                                    *o += x * y;
-                                }
+                let len = (j - l + 1) * nn;
+                let lbase = (j * nh + l) * nn;
+                let (lr, g) = (&self.lrep[lbase..lbase + len], &self.gblk[..len]);
+                let off = tl * 2 * n;
+                match n {
+                    6 => sum_products_into::<6, 36, FMA>(lr, g, cols, m, off),
+                    5 => sum_products_into::<5, 25, FMA>(lr, g, cols, m, off),
+                    7 => sum_products_into::<7, 49, FMA>(lr, g, cols, m, off),
+                    4 => sum_products_into::<4, 16, FMA>(lr, g, cols, m, off),
+                    _ => {
+                        let out = &mut self.blks[..nn];
+                        out.fill(0.0);
+                        for (lr, g) in lr.chunks_exact(nn).zip(g.chunks_exact(nn)) {
+                            for ((o, x), y) in out.iter_mut().zip(lr).zip(g) {
+                                *o += x * y;
                             }
                         }
-                    }
-                }
-                for (col, column) in cols.chunks_exact_mut(m).enumerate() {
-                    let level = &mut column[tl * 2 * n..(tl + 1) * 2 * n];
-                    let (rows, du) = level.split_at_mut(n);
-                    if nn <= MAX_BLOCK {
-                        rows.copy_from_slice(&blk[col * n..col * n + n]);
-                    } else {
-                        // Robots with more than MAX_DOF joints: entry by entry.
-                        for (i, r) in rows.iter_mut().enumerate() {
-                            *r = (l..=j)
-                                .map(|jp| {
-                                    self.l[(j * nh + jp) * n + i]
-                                        * self.gblk[(jp - l) * nn + col * n + i]
-                                })
-                                .sum();
+                        for (column, src) in cols.chunks_exact_mut(m).zip(out.chunks_exact(n)) {
+                            column[off..off + n].copy_from_slice(src);
                         }
                     }
-                    du.fill(0.0);
-                    if tl == tc {
-                        du[col] = w_du[col];
-                    }
                 }
+            }
+            for (col, column) in cols.chunks_exact_mut(m).enumerate() {
+                column[2 * n * tc + n + col] = w_du[col];
             }
         }
     }
@@ -256,6 +242,42 @@ impl TrackingRows {
     #[inline]
     pub(crate) fn c(&self, j: usize) -> &[f64] {
         &self.cd[j * self.n..(j + 1) * self.n]
+    }
+}
+
+/// [`sum_products`] for an `N × N` column-major block (`NN = N²`), its
+/// column `c` stored at `cols[c·m + off..][..N]`.
+#[inline(always)]
+fn sum_products_into<const N: usize, const NN: usize, const FMA: bool>(
+    lr: &[f64],
+    g: &[f64],
+    cols: &mut [f64],
+    m: usize,
+    off: usize,
+) {
+    let mut acc = [0.0f64; NN];
+    for (x, y) in lr.chunks_exact(NN).zip(g.chunks_exact(NN)) {
+        let (x, y): (&[f64; NN], &[f64; NN]) = match (x.try_into(), y.try_into()) {
+            (Ok(x), Ok(y)) => (x, y),
+            _ => continue,
+        };
+        for k in 0..NN {
+            acc[k] = if FMA {
+                x[k].mul_add(y[k], acc[k])
+            } else {
+                acc[k] + x[k] * y[k]
+            };
+        }
+    }
+    for (c, src) in acc.chunks_exact(N).enumerate() {
+        if let Some(dst) = cols
+            .get_mut(c * m + off..)
+            .and_then(|d| d.first_chunk_mut::<N>())
+        {
+            for (d, v) in dst.iter_mut().zip(src) {
+                *d = *v;
+            }
+        }
     }
 }
 
@@ -303,10 +325,10 @@ mod tests {
         })
     }
 
-    /// The reduced rows written by `write_rows` (every block-size path: the
-    /// register-held sums for n = 4…7, the general loop below and above them,
-    /// the entry-by-entry fallback beyond MAX_DOF) equal `L_i G1_i` computed
-    /// directly, in the permuted layout, with the `Q_ΔU` rows on the diagonal.
+    /// The reduced rows written by `write_rows` (both paths: the register-held
+    /// sums for n = 4…7 and the general loop for n = 2 and 13) equal `L_i G1_i`
+    /// computed directly, in the permuted layout, with the `Q_ΔU` rows on the
+    /// diagonal.
     #[test]
     fn written_rows_are_l_times_g1_in_the_permuted_layout() {
         let mut seed = 3u64;
