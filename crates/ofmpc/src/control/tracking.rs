@@ -255,20 +255,7 @@ fn sum_products_into<const N: usize, const NN: usize, const FMA: bool>(
     m: usize,
     off: usize,
 ) {
-    let mut acc = [0.0f64; NN];
-    for (x, y) in lr.chunks_exact(NN).zip(g.chunks_exact(NN)) {
-        let (x, y): (&[f64; NN], &[f64; NN]) = match (x.try_into(), y.try_into()) {
-            (Ok(x), Ok(y)) => (x, y),
-            _ => continue,
-        };
-        for k in 0..NN {
-            acc[k] = if FMA {
-                x[k].mul_add(y[k], acc[k])
-            } else {
-                acc[k] + x[k] * y[k]
-            };
-        }
-    }
+    let acc = block_sum::<NN, FMA>(lr, g);
     for (c, src) in acc.chunks_exact(N).enumerate() {
         if let Some(dst) = cols
             .get_mut(c * m + off..)
@@ -282,10 +269,17 @@ fn sum_products_into<const N: usize, const NN: usize, const FMA: bool>(
 }
 
 /// `out[..NN] = Σ_k lr_k ⊙ g_k` over the consecutive `NN`-blocks of `lr` and
-/// `g`; the sum stays in registers (fixed size). `FMA`: fused multiply-adds
-/// (only where the CPU has them: the AVX2+FMA build).
+/// `g` ([`block_sum`]).
 #[inline(always)]
 fn sum_products<const NN: usize, const FMA: bool>(lr: &[f64], g: &[f64], out: &mut [f64]) {
+    out[..NN].copy_from_slice(&block_sum::<NN, FMA>(lr, g));
+}
+
+/// `Σ_k lr_k ⊙ g_k` over the consecutive `NN`-blocks of `lr` and `g`; the
+/// sum stays in registers (fixed size). `FMA`: fused multiply-adds (only
+/// where the CPU has them: the AVX2+FMA build).
+#[inline(always)]
+fn block_sum<const NN: usize, const FMA: bool>(lr: &[f64], g: &[f64]) -> [f64; NN] {
     let mut acc = [0.0f64; NN];
     for (x, y) in lr.chunks_exact(NN).zip(g.chunks_exact(NN)) {
         let (x, y): (&[f64; NN], &[f64; NN]) = match (x.try_into(), y.try_into()) {
@@ -300,7 +294,7 @@ fn sum_products<const NN: usize, const FMA: bool>(lr: &[f64], g: &[f64], out: &m
             };
         }
     }
-    out[..NN].copy_from_slice(&acc);
+    acc
 }
 
 #[cfg(test)]
