@@ -39,9 +39,10 @@ use super::simd::Avx2Fma;
 pub(crate) struct TrackingRows {
     n: usize,
     nh: usize,
-    /// `diag(L_·[j][j'])` (zero for `j' > j`) as an n×n column-major block of its diagonal
-    /// repeated in every column (`L_i[j][j']` at `(j·N + j')·n² + col·n + i`), so
-    /// that a row-scaled block of `G1` is one elementwise product.
+    /// `diag(L_·[j][j'])` (zero for `j' > j`) as an n×n column-major block:
+    /// the diagonal repeated in every column (`L_i[j][j']` at
+    /// `(j·N + j')·n² + col·n + i`), so that a row-scaled block of `G1` is one
+    /// elementwise product.
     lrep: Vec<f64>,
     /// The `G1` generator of the current step as N contiguous n×n blocks.
     gblk: Vec<f64>,
