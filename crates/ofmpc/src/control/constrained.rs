@@ -39,6 +39,7 @@
 //! `z` makes a dense active-set method of ~200 lines sufficient and
 //! preallocated (`p = N·n = 60` unknowns for the IRB 140 at `N = 10`).
 
+use super::dense::dot;
 use super::lsq::LsqWorkspace;
 use super::model::LinearLikeModel;
 
@@ -252,11 +253,11 @@ impl TorqueLimitQp {
             for c2 in c1..p {
                 let len = end(c1).min(end(c2));
                 let b2 = &self.bz[c2 * m..c2 * m + len];
-                let s: f64 = b1[..len].iter().zip(b2).map(|(x, y)| x * y).sum();
+                let s = dot(&b1[..len], b2);
                 self.hess[c2 * p + c1] = s;
                 self.hess[c1 * p + c2] = s;
             }
-            self.lin[c1] = b1.iter().zip(&self.b).map(|(x, y)| x * y).sum();
+            self.lin[c1] = dot(b1, &self.b);
         }
         // The box and the warm start (the unconstrained z, clipped).
         for j in 0..nh {
@@ -307,6 +308,8 @@ pub struct BoxQpWork {
     rhs: Vec<f64>,
     grad: Vec<f64>,
     z0: Vec<f64>,
+    /// `z` on the active set, zero on the free one (the reduced rhs).
+    za: Vec<f64>,
 }
 
 impl BoxQpWork {
@@ -319,6 +322,7 @@ impl BoxQpWork {
             rhs: vec![0.0; p],
             grad: vec![0.0; p],
             z0: vec![0.0; p],
+            za: vec![0.0; p],
         }
     }
 }
@@ -376,15 +380,14 @@ pub fn solve_box_qp(
     let mut it = 0u32;
     while it < max_iter {
         it += 1;
-        // The reduced system P_FF z_F = c_F − P_FA z_A.
+        // The reduced system P_FF z_F = c_F − P_FA z_A; P is symmetric, so
+        // (P_FA z_A)_a is the contiguous column f_a of P against z_A (z with
+        // the free entries zeroed).
+        for ((za, zi), st) in w.za[..p].iter_mut().zip(z.iter()).zip(state.iter()) {
+            *za = if *st != 0 { *zi } else { 0.0 };
+        }
         for (a, &fa) in w.free[..nf].iter().enumerate() {
-            let mut r = lin[fa];
-            for i in 0..p {
-                if state[i] != 0 {
-                    r -= hess[i * p + fa] * z[i];
-                }
-            }
-            w.rhs[a] = r;
+            w.rhs[a] = lin[fa] - dot(&hess[fa * p..fa * p + p], &w.za[..p]);
         }
         solve_factored(nf, p, &w.l, &mut w.rhs[..nf]);
         // Largest step towards the subproblem's optimum that stays in the box.
@@ -428,10 +431,7 @@ pub fn solve_box_qp(
             if state[i] == 0 {
                 continue;
             }
-            let mut gi = -lin[i];
-            for (r, zr) in z.iter().enumerate() {
-                gi += hess[i * p + r] * zr;
-            }
+            let gi = dot(&hess[i * p..i * p + p], &z[..p]) - lin[i];
             w.grad[i] = gi;
             // At the lower bound the cost must not decrease upwards (g ≥ 0),
             // at the upper bound not downwards (g ≤ 0).
