@@ -571,6 +571,20 @@ mod tests {
         ((*s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 
+    /// `MᵀM + eps·I` (p×p column-major) for a random `M` with entries in
+    /// [−1, 1].
+    fn random_spd(p: usize, eps: f64, s: &mut u64) -> Vec<f64> {
+        let mm: Vec<f64> = (0..p * p).map(|_| lcg(s)).collect();
+        let mut h = vec![0.0; p * p];
+        for i in 0..p {
+            for j in 0..p {
+                h[j * p + i] = (0..p).map(|r| mm[i * p + r] * mm[j * p + r]).sum();
+            }
+            h[i * p + i] += eps;
+        }
+        h
+    }
+
     fn cost(p: usize, h: &[f64], c: &[f64], z: &[f64]) -> f64 {
         let mut s = 0.0;
         for i in 0..p {
@@ -634,17 +648,7 @@ mod tests {
         for trial in 0..200 {
             let p = 1 + trial % 6;
             // P = MᵀM + εI, condition up to ~1e4.
-            let mut mm = vec![0.0; p * p];
-            for v in mm.iter_mut() {
-                *v = lcg(&mut s);
-            }
-            let mut h = vec![0.0; p * p];
-            for i in 0..p {
-                for j in 0..p {
-                    h[j * p + i] = (0..p).map(|r| mm[i * p + r] * mm[j * p + r]).sum();
-                }
-                h[i * p + i] += 1e-3;
-            }
+            let h = random_spd(p, 1e-3, &mut s);
             let c: Vec<f64> = (0..p).map(|_| 3.0 * lcg(&mut s)).collect();
             let lo: Vec<f64> = (0..p).map(|_| -0.5 - lcg(&mut s).abs()).collect();
             let hi: Vec<f64> = (0..p)
@@ -688,17 +692,7 @@ mod tests {
     fn updated_factor_equals_the_refactored_one() {
         let mut s = 5u64;
         let p = 40;
-        let mut mm = vec![0.0; p * p];
-        for v in mm.iter_mut() {
-            *v = lcg(&mut s);
-        }
-        let mut h = vec![0.0; p * p];
-        for i in 0..p {
-            for j in 0..p {
-                h[j * p + i] = (0..p).map(|r| mm[i * p + r] * mm[j * p + r]).sum();
-            }
-            h[i * p + i] += 1e-2;
-        }
+        let h = random_spd(p, 1e-2, &mut s);
         let mut free: Vec<usize> = (0..p).filter(|i| i % 3 != 0).collect();
         let mut l = vec![0.0; p * p];
         assert!(factor_free(p, &h, &free, &mut l));
