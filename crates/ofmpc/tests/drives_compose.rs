@@ -7,7 +7,6 @@
 mod common;
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::reference::JointReference;
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, Fault, LoopSettings, PlantSettings, RunStatus};
@@ -158,7 +157,6 @@ proptest! {
 /// the unchecked one, sample for sample.
 #[test]
 fn friction_stick_slip_passes_the_plausibility_check() {
-    use ofmpc::motion::{plan, PlanOptions};
     for (compensate, estimate, rms_max) in [(false, 0.8, 0.021), (true, 1.0, 0.011)] {
         let mut robot = Robot::irb140();
         let text: String = (1..=6)
@@ -167,16 +165,7 @@ fn friction_stick_slip_passes_the_plausibility_check() {
         robot
             .apply_drives(&Drives::from_toml_str(&text).unwrap())
             .unwrap();
-        let reference = plan(
-            PAPER_TABLE1,
-            &robot,
-            &PlanOptions {
-                ts: 0.01,
-                ..PlanOptions::default()
-            },
-        )
-        .unwrap()
-        .reference;
+        let reference = common::paper_reference(&robot);
         let run = |check: bool| {
             let exp = Experiment {
                 robot: robot.clone(),
@@ -228,18 +217,8 @@ fn friction_stick_slip_passes_the_plausibility_check() {
 /// first's RMS halve or better (0.20 → 0.10 mm, 0.088 → 0.032 mm).
 #[test]
 fn all_effects_with_the_friction_aware_observer_complete() {
-    use ofmpc::motion::{plan, PlanOptions};
     let robot = robot_with_friction_estimate();
-    let reference = plan(
-        PAPER_TABLE1,
-        &robot,
-        &PlanOptions {
-            ts: 0.01,
-            ..PlanOptions::default()
-        },
-    )
-    .unwrap()
-    .reference;
+    let reference = common::paper_reference(&robot);
     let exp = |observer_friction: bool| Experiment {
         robot: robot.clone(),
         reference: reference.clone(),

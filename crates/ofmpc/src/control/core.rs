@@ -730,9 +730,13 @@ fn fill_stage_constants(kind: ControllerKind, n: usize, st: &mut StageLq) {
             eye(2, 2);
         }
     }
-    st.c_zero = kind.base() != ControllerKind::Second;
-    // The second algorithm's c_j = [y_k − w_{k+j+1}; 0; 0; 0].
-    st.c_rows = if st.c_zero { 0 } else { n };
+    // The second algorithm's c_j = [y_k − w_{k+j+1}; 0; 0; 0]; the others'
+    // are zero.
+    st.c_rows = if kind.base() == ControllerKind::Second {
+        n
+    } else {
+        0
+    };
 }
 
 /// Copies the n×n column-major `src` into `dst` (column-major, `ld` rows) at

@@ -93,11 +93,10 @@ pub(crate) struct StageLq {
     pub r: Vec<f64>,
     /// Affine terms `c_j`, j = 0..N−1: block `j` (nz values each).
     pub c: Vec<f64>,
-    /// Whether the `c_j` are all zero (skips `L c`).
-    pub c_zero: bool,
-    /// Only the first `c_rows` entries of every `c_j` may be non-zero (the
-    /// second algorithm's `c_j` has its `n` tracking entries only): `L c_j`
-    /// then needs the first `c_rows` rows of the upper-triangular `L` alone.
+    /// Only the first `c_rows` entries of every `c_j` may be non-zero (0: all
+    /// `c_j` are zero and are skipped; the second algorithm's `c_j` has its
+    /// `n` tracking entries only): `L c_j` then needs the first `c_rows` rows
+    /// of the upper-triangular `L` alone.
     pub c_rows: usize,
     /// Initial state `z_0` (nz).
     pub z0: Vec<f64>,
@@ -191,8 +190,7 @@ impl StageLq {
             qd: vec![0.0; nq],
             r: vec![0.0; nh * nq],
             c: vec![0.0; nh * nz],
-            c_zero: true,
-            c_rows: nz,
+            c_rows: 0,
             z0: vec![0.0; nz],
             m: AlignedBuf::zeros(ld * ms),
             ld,
@@ -423,7 +421,7 @@ impl StageLq {
                 let c = col(j, i);
                 self.zs_next[c * nz..(c + 1) * nz].copy_from_slice(&self.b[i * nz..(i + 1) * nz]);
             }
-            if self.c_zero {
+            if self.c_rows == 0 {
                 self.za_next.fill(0.0);
             } else {
                 self.za_next.copy_from_slice(&self.c[j * nz..(j + 1) * nz]);
@@ -506,7 +504,7 @@ impl StageLq {
                 }
                 let li = &lrow[i..];
                 accumulate_rows(&mut row[..cs], li, &self.ba[i * cs..], cs, 0);
-                row[rhs] = if self.c_zero || i >= self.c_rows {
+                row[rhs] = if i >= self.c_rows {
                     self.l_vec[i]
                 } else {
                     let k = self.c_rows;
@@ -596,7 +594,7 @@ impl StageLq {
         let (cs, ms) = (self.cs, self.ms);
         let width = (nu + 1).next_multiple_of(8);
         // t = A z_0 + c_0 (z_next as work).
-        if self.c_zero {
+        if self.c_rows == 0 {
             self.z_next.fill(0.0);
         } else {
             self.z_next.copy_from_slice(&self.c[..nz]);
@@ -667,7 +665,7 @@ impl StageLq {
             }
             if j + 1 < nh {
                 // z_{j+1} = A z_j + B v_j + c_j
-                if self.c_zero {
+                if self.c_rows == 0 {
                     self.z_next.fill(0.0);
                 } else {
                     self.z_next.copy_from_slice(&self.c[j * nz..(j + 1) * nz]);
@@ -695,7 +693,7 @@ impl StageLq {
         }
         let cj = &self.c[j * nz..(j + 1) * nz];
         for (i, (o, lrow)) in lc.iter_mut().zip(self.l_mat.chunks_exact(nz)).enumerate() {
-            *o = if self.c_zero || i >= self.c_rows {
+            *o = if i >= self.c_rows {
                 self.l_vec[i]
             } else {
                 let k = self.c_rows;
@@ -912,7 +910,7 @@ mod tests {
         for v in st.c.iter_mut().chain(&mut st.z0) {
             *v = rng(seed);
         }
-        st.c_zero = false;
+        st.c_rows = nz;
         for v in st.rd.iter_mut() {
             *v = 0.1 + rng(seed).abs();
         }
@@ -1000,7 +998,7 @@ mod tests {
             }
             if c_zero {
                 st.c.fill(0.0);
-                st.c_zero = true;
+                st.c_rows = 0;
             }
             let mut full = st.clone();
             full.reuse_converged = false;
