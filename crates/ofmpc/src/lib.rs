@@ -2,8 +2,15 @@
 //!
 //! Pure computation, no printing. Data flow, one module per concept:
 //! G-code text → [`gcode`] → [`motion`] (path segments, corner blending, timing, joint
-//! reference by IK; one entry point [`motion::plan`]) → controller (robot model) → torque → plant (robot model +
-//! payload) → measurement → record → metrics.
+//! reference by IK; one entry point [`motion::plan`]) → [`control`] (the predictive
+//! controllers on their robot model) → [`sim`] (the closed loop as public stages:
+//! [`sim::Sensor`] → [`sim::Supervisor`] → [`sim::Estimator`] → controller →
+//! [`sim::Actuator`] → [`sim::Plant`] (robot + payload) → [`sim::Recorder`], composed by
+//! [`sim::ClosedLoop`]) → metrics.
+//!
+//! What most users need is re-exported here at the crate root: [`Robot`], [`Payload`],
+//! [`plan`] and [`PlanOptions`], [`ControllerKind`] and [`MpcSettings`],
+//! [`Experiment`] (one run, judged), [`ClosedLoop`] and its settings.
 //!
 //! Equations are referenced as in the paper ("Predictive Control for Offset-Free
 //! Motion of Industrial Articulated Robots"), e.g. *Eq. (39)*.
@@ -40,6 +47,13 @@
 /// The linear-algebra crate of the public API (its matrices and vectors
 /// appear in signatures): use this re-export to get the same version.
 pub use nalgebra;
+
+pub use control::{new_controller, Controller, ControllerKind, MpcSettings, StepError};
+pub use motion::{plan, JointReference, PlanOptions};
+pub use robot::{Payload, Robot};
+pub use sim::{
+    ClosedLoop, Experiment, LoopSettings, Plant, PlantSettings, RunMetrics, RunOutcome, RunResult,
+};
 
 pub mod analysis;
 pub mod control;

@@ -18,9 +18,7 @@ pub struct DriveModel {
     pub coulomb_velocity_rad_s: f64,
 }
 
-/// Default velocity scale of the smoothed Coulomb friction (rad/s), the
-/// plant's default.
-pub const DEFAULT_COULOMB_VELOCITY: f64 = 1e-3;
+pub use crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY;
 
 impl DriveModel {
     /// The robot's effort limits and its drives' friction estimates.
@@ -69,16 +67,15 @@ impl DriveModel {
     }
 
     /// The linear-like damping `d_i(q̇) = F_v + F_c tanh(q̇/v_s)/q̇` with
-    /// `d_i q̇_i` = the friction torque (its limit `F_v + F_c/v_s` at rest).
+    /// `d_i q̇_i` = the friction torque (its limit `F_v + F_c/v_s` at rest;
+    /// [`crate::dynamics::friction::damping`]).
     pub fn damping(&self, i: usize, v: f64) -> f64 {
-        let vs = self.coulomb_velocity_rad_s;
-        let x = v / vs;
-        let c = if x.abs() < 1e-6 {
-            self.coulomb_nm[i] / vs
-        } else {
-            self.coulomb_nm[i] * x.tanh() / v
-        };
-        self.viscous_nms[i] + c
+        crate::dynamics::friction::damping(
+            self.viscous_nms[i],
+            self.coulomb_nm[i],
+            self.coulomb_velocity_rad_s,
+            v,
+        )
     }
 }
 

@@ -14,6 +14,7 @@
 //! | forward dynamics (Cholesky of H) | `forward.rs` | q̈ |
 
 mod forward;
+pub mod friction;
 mod kinematics;
 mod rnea;
 mod terms;

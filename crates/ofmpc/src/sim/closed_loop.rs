@@ -1,11 +1,14 @@
 //! The closed loop: measure, control, apply the torque over one period.
 
+use super::actuator::Actuator;
+use super::estimator::Estimator;
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::Plant;
-use super::supervisor::{
-    MeasurementGuard, Plausibility, SafeStop, StopReason, FROZEN_SAMPLES, REST_SPEED,
-};
+use super::recorder::{Recorder, Sample};
+use super::schedule::{sample_at, LossSchedule};
+use super::sensor::Sensor;
+use super::supervisor::{StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
@@ -168,6 +171,16 @@ impl LoopSettings {
         self.measurement_faults.validate()
     }
 
+    /// The [`Supervisor`]'s part of these settings.
+    pub fn supervisor(&self) -> SupervisorSettings {
+        SupervisorSettings {
+            divergence_threshold_rad: self.divergence_threshold_rad,
+            plausibility_check: self.plausibility_check,
+            safe_stop: self.safe_stop,
+            max_joint_error_rad: self.max_joint_error_rad,
+        }
+    }
+
     /// Samples of the identification phase at the control period `ts`.
     pub fn identification_samples(&self, ts: f64) -> usize {
         (self.identification_s / ts).round() as usize
@@ -177,33 +190,6 @@ impl LoopSettings {
     pub fn hold_samples(&self, ts: f64) -> usize {
         (self.hold_s / ts).round() as usize
     }
-}
-
-/// The state the controller acts on: the observer's estimate (updated from
-/// the measurement `x` and copied into `x_est`) when there is an observer,
-/// else the measurement itself.
-fn observed<'a>(
-    observer: Option<&mut StateObserver>,
-    model: &mut dyn JointSpaceDynamics,
-    x: &'a [f64],
-    x_est: &'a mut [f64],
-) -> Result<&'a [f64], StepError> {
-    match observer {
-        Some(o) => {
-            x_est.copy_from_slice(o.update(model, x)?);
-            Ok(x_est)
-        }
-        None => Ok(x),
-    }
-}
-
-/// A safe stop in progress: when it began, why, the last time a joint was
-/// still moving, and whether every joint stayed within its limits.
-struct Stopping {
-    t: f64,
-    reason: StopReason,
-    moving_until: f64,
-    within_limits: bool,
 }
 
 /// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
@@ -239,16 +225,7 @@ pub fn run_closed_loop(
     settings: &LoopSettings,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
-    run_closed_loop_with(
-        controller,
-        model,
-        plant,
-        reference,
-        settings,
-        &RunEvents::default(),
-        None,
-        progress,
-    )
+    ClosedLoop::new(controller, model, plant, reference, settings, None).run(progress)
 }
 
 /// What happens in a run besides following the path.
@@ -263,15 +240,7 @@ pub struct RunEvents {
 
 /// [`run_closed_loop`] with a pre-roll at rest, a payload picked up
 /// mid-path, and an optional state observer between the sensors and the
-/// controller.
-///
-/// During the pre-roll the reference and its preview are the path's first
-/// point; a divergence or failure there is reported at a negative time
-/// (`−pre_roll·Ts ≤ t < 0`). The record holds the path and the hold; for a
-/// controller that identifies the payload it also holds the mass estimate
-/// after each step. With an observer the controller gets the observer's
-/// estimate of the current state instead of the (delayed, position-derived)
-/// measurement; the record keeps the measurement.
+/// controller: [`ClosedLoop`] with [`ClosedLoop::events`].
 #[allow(clippy::too_many_arguments)]
 pub fn run_closed_loop_with(
     controller: &mut dyn Controller,
@@ -280,327 +249,348 @@ pub fn run_closed_loop_with(
     reference: &JointReference,
     settings: &LoopSettings,
     events: &RunEvents,
-    mut observer: Option<&mut StateObserver>,
+    observer: Option<&mut StateObserver>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
-    let start = Instant::now();
-    let n = reference.dof();
-    let ts = reference.ts();
-    let horizon = controller.horizon();
-    let total = reference.len().saturating_add(settings.hold_samples(ts));
-    // What the controller gets differs from the true state: record it too.
-    let measured =
-        !(plant.settings().measurement_is_ideal() && settings.measurement_faults.is_empty());
-    let capacity = if total.saturating_mul(record_columns(n, measured)) <= MAX_RECORD_VALUES {
-        total
-    } else {
-        // The caller did not check the bound ([`super::Experiment::run`]
-        // does): grow as needed instead of reserving an absurd size.
-        0
-    };
-    let mut rec = Record::with_capacity(n, capacity);
-    if controller.payload_estimate().is_some() {
-        rec.payload_mass_est.reserve(capacity);
+    ClosedLoop::new(controller, model, plant, reference, settings, observer)
+        .events(events)
+        .run(progress)
+}
+
+/// The closed loop, composed of its stages: per sample
+/// [`Sensor`] (reading, lost samples, repair) → [`Supervisor`]
+/// (plausibility, safety limit) → [`Estimator`] (observer) → controller, or
+/// the supervisor's stop law during a safe stop → [`Actuator`] (loading) →
+/// [`Plant`] → [`Recorder`]; then the supervisor judges the run
+/// (divergence). Each stage is a public type a user's own loop can use one
+/// by one (`examples/realtime_loop.rs`).
+///
+/// During the pre-roll ([`RunEvents::pre_roll`]) the reference and its
+/// preview are the path's first point; a divergence or failure there is
+/// reported at a negative time (`−pre_roll·Ts ≤ t < 0`). The record holds
+/// the path and the hold; for a controller that identifies the payload it
+/// also holds the mass estimate after each step. With an observer the
+/// controller gets the observer's estimate of the current state instead of
+/// the (delayed, position-derived) measurement; the record keeps the
+/// measurement.
+///
+/// Every buffer is sized by [`ClosedLoop::new`]; the samples allocate
+/// nothing (the record is sized for the run).
+pub struct ClosedLoop<'a> {
+    controller: &'a mut dyn Controller,
+    model: &'a mut dyn JointSpaceDynamics,
+    plant: &'a mut Plant,
+    reference: &'a JointReference,
+    settings: &'a LoopSettings,
+    events: RunEvents,
+    estimator: Estimator<'a>,
+    sensor: Sensor,
+    supervisor: Supervisor,
+    actuator: Actuator,
+    /// The reading (2n), the true state (2n), the torque (n), the preview (N·n).
+    x: Vec<f64>,
+    x_true: Vec<f64>,
+    tau: Vec<f64>,
+    preview: Vec<f64>,
+    /// The sample of the pick-up and the payload, until it happened.
+    pick_up: Option<(usize, crate::robot::Payload)>,
+}
+
+/// How a run ends early: the outcome, recorded up to there.
+type Ended = RunOutcome;
+
+impl<'a> ClosedLoop<'a> {
+    /// The loop of `controller` (acting on its `model`) against `plant`
+    /// along `reference` and its hold, with an optional `observer` between
+    /// the sensor and the controller. Sizes every stage.
+    pub fn new(
+        controller: &'a mut dyn Controller,
+        model: &'a mut dyn JointSpaceDynamics,
+        plant: &'a mut Plant,
+        reference: &'a JointReference,
+        settings: &'a LoopSettings,
+        observer: Option<&'a mut StateObserver>,
+    ) -> Self {
+        let n = reference.dof();
+        let ts = reference.ts();
+        let horizon = controller.horizon();
+        let lost = LossSchedule::new(&settings.measurement_faults, ts);
+        let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
+        let supervisor = Supervisor::new(plant.robot(), settings.supervisor());
+        let actuator = Actuator::for_robot(plant.robot());
+        Self {
+            controller,
+            model,
+            plant,
+            reference,
+            settings,
+            events: RunEvents::default(),
+            estimator: Estimator::new(n, observer),
+            sensor,
+            supervisor,
+            actuator,
+            x: vec![0.0; 2 * n],
+            x_true: vec![0.0; 2 * n],
+            tau: vec![0.0; n],
+            preview: vec![0.0; horizon * n],
+            pick_up: None,
+        }
     }
-    if measured {
-        rec.q_meas.reserve(capacity * n);
-        rec.qd_meas.reserve(capacity * n);
+
+    /// With a pre-roll at rest and a payload picked up mid-path.
+    pub fn events(mut self, events: &RunEvents) -> Self {
+        self.events = *events;
+        let ts = self.reference.ts();
+        self.pick_up = events.pick_up.map(|(t, p)| (sample_at(t, ts), p));
+        self
     }
-    let mut picked = false;
-    let mut x = vec![0.0; 2 * n];
-    let mut tau = vec![0.0; n];
-    let mut preview = vec![0.0; horizon * n];
-    let mut outcome = RunOutcome::Completed;
-    // A run that ends before the path starts.
-    let early = |record: Record, t: f64, cause: RunFailure| RunResult {
-        record,
-        outcome: RunOutcome::Failed { t, cause },
-        wall_s: start.elapsed().as_secs_f64(),
-    };
-    if let Err(e) = plant.measure(&mut x) {
-        return early(rec, 0.0, RunFailure::Plant(e));
+
+    /// Whether the readings differ from the true state (a noisy, delayed or
+    /// faulty sensor, lost samples): they are recorded too.
+    fn measured(&self) -> bool {
+        !self.plant.settings().measurement_is_ideal() || self.sensor.loses_samples()
     }
-    let mut x_est = x.clone();
-    if let Some(o) = observer.as_deref_mut() {
-        o.reset(&x);
-    }
-    if let Err(e) = controller.reset(&x) {
-        return early(rec, 0.0, RunFailure::Reset(e));
-    }
-    // The identification phase at rest on the first point.
-    let w0 = reference.q(0);
-    for j in 0..events.pre_roll {
-        let t = -((events.pre_roll - j) as f64) * ts;
-        if j > 0 {
-            if let Err(e) = plant.measure(&mut x) {
-                return early(rec, t, RunFailure::Plant(e));
+
+    /// Runs the pre-roll, the path and the hold. `progress(k, total)` is
+    /// called every 100 samples.
+    pub fn run(mut self, progress: &mut dyn FnMut(usize, usize)) -> RunResult {
+        let start = Instant::now();
+        let n = self.reference.dof();
+        let ts = self.reference.ts();
+        let total = self
+            .reference
+            .len()
+            .saturating_add(self.settings.hold_samples(ts));
+        let measured = self.measured();
+        let capacity = if total.saturating_mul(record_columns(n, measured)) <= MAX_RECORD_VALUES {
+            total
+        } else {
+            // The caller did not check the bound ([`super::Experiment::run`]
+            // does): grow as needed instead of reserving an absurd size.
+            0
+        };
+        let estimates = self.controller.payload_estimate().is_some();
+        let mut rec = Recorder::new(n, capacity, measured, estimates);
+        let mut outcome = match self.start() {
+            Ok(()) => self.follow(total, &mut rec, progress),
+            Err(ended) => ended,
+        };
+        if let Some(s) = self.supervisor.stopping() {
+            if outcome.is_completed() {
+                let last = rec.record().t.last().copied().unwrap_or(s.t) + ts;
+                outcome = RunOutcome::Stopped {
+                    t: s.t,
+                    reason: s.reason.clone(),
+                    at_rest_after_s: (s.moving_until < last - 1e-9).then_some(s.moving_until - s.t),
+                    within_limits: s.within_limits,
+                };
             }
         }
-        for block in preview.chunks_mut(n.max(1)) {
+        progress(total, total);
+        RunResult {
+            record: rec.into_record(),
+            outcome,
+            wall_s: start.elapsed().as_secs_f64(),
+        }
+    }
+
+    /// The first reading, every stage reset to it, and the pre-roll at rest
+    /// on the path's first point.
+    fn start(&mut self) -> Result<(), Ended> {
+        let failed = |t: f64, cause: RunFailure| RunOutcome::Failed { t, cause };
+        self.plant
+            .measure(&mut self.x)
+            .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
+        self.estimator.reset(&self.x);
+        self.controller
+            .reset(&self.x)
+            .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
+        let pre_roll = self.events.pre_roll;
+        for j in 0..pre_roll {
+            let t = -((pre_roll - j) as f64) * self.reference.ts();
+            self.pre_roll_sample(j, t)?;
+        }
+        if pre_roll > 0 {
+            self.plant
+                .measure(&mut self.x)
+                .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
+        }
+        self.sensor.reset(&self.x);
+        self.supervisor.reset(&self.x);
+        Ok(())
+    }
+
+    /// Sample `j` of the pre-roll (at time `t < 0`): hold the first point.
+    fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<(), Ended> {
+        let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
+        let ts = self.reference.ts();
+        let n = self.reference.dof();
+        if j > 0 {
+            self.plant
+                .measure(&mut self.x)
+                .map_err(|e| failed(RunFailure::Plant(e)))?;
+        }
+        let reference = self.reference;
+        let w0 = reference.q(0);
+        for block in self.preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
         }
-        let stepped = observed(observer.as_deref_mut(), model, &x, &mut x_est)
-            .and_then(|xs| controller.step(model, xs, w0, &preview, &mut tau));
-        if let Err(e) = stepped {
-            return early(rec, t, RunFailure::Controller(e));
-        }
-        if let Some(o) = observer.as_deref_mut() {
-            o.record_torque(&tau);
-        }
-        if let Err(e) = plant.step(&tau, ts) {
-            return early(rec, t, RunFailure::Plant(e));
-        }
+        let controller = &mut *self.controller;
+        let (preview, tau) = (&self.preview, &mut self.tau);
+        let model = &mut *self.model;
+        self.estimator
+            .estimate(model, &self.x)
+            .and_then(|xs| controller.step(model, xs, w0, preview, tau))
+            .map_err(|e| failed(RunFailure::Controller(e)))?;
+        self.estimator.record_torque(&self.tau);
+        self.plant
+            .step(&self.tau, ts)
+            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        let threshold = self.settings.divergence_threshold_rad;
+        let q = self.plant.q();
         if let Some(joint) = (0..n).find(|&i| {
-            let e = w0[i] - plant.q()[i];
-            e.is_nan() || e.abs() > settings.divergence_threshold_rad
+            let e = w0[i] - q[i];
+            e.is_nan() || e.abs() > threshold
         }) {
-            return RunResult {
-                record: rec,
-                outcome: RunOutcome::Diverged {
-                    t,
-                    joint,
-                    error_rad: w0[joint] - plant.q()[joint],
-                    threshold_rad: settings.divergence_threshold_rad,
-                },
-                wall_s: start.elapsed().as_secs_f64(),
-            };
+            return Err(RunOutcome::Diverged {
+                t,
+                joint,
+                error_rad: w0[joint] - q[joint],
+                threshold_rad: threshold,
+            });
         }
+        Ok(())
     }
-    if events.pre_roll > 0 {
-        if let Err(e) = plant.measure(&mut x) {
-            return early(rec, 0.0, RunFailure::Plant(e));
+
+    /// The path and the hold, from the reading [`Self::start`] left.
+    fn follow(
+        &mut self,
+        total: usize,
+        rec: &mut Recorder,
+        progress: &mut dyn FnMut(usize, usize),
+    ) -> RunOutcome {
+        let ts = self.reference.ts();
+        let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
+        let mut end = total;
+        let mut k = 0;
+        while k < end {
+            match self.sample(k, rec) {
+                Ok(None) => {}
+                Ok(Some(stop_began_at)) => end = stop_began_at + stop_samples,
+                Err(ended) => return ended,
+            }
+            if k % 100 == 0 {
+                progress(k.min(total), total);
+            }
+            k += 1;
         }
+        RunOutcome::Completed
     }
-    let robot = plant.robot();
-    let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
-    let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
-    let lower = robot.lower_limits();
-    let upper = robot.upper_limits();
-    let mut check = settings
-        .plausibility_check
-        .then(|| Plausibility::new(&vmax, &x));
-    let faults = &settings.measurement_faults;
-    let mut guard = MeasurementGuard::new(&x, plant.settings().delay_samples, !faults.is_empty());
-    let mut x_true = vec![0.0; 2 * n];
-    // The stop law is sized here, before the loop: starting a stop allocates nothing.
-    let mut law = (settings.safe_stop || settings.max_joint_error_rad.is_some())
-        .then(|| SafeStop::new(&tau_max));
-    let mut stop: Option<Stopping> = None;
-    let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
-    // The last FROZEN_SAMPLES + 1 checked measurements and FROZEN_SAMPLES
-    // torques (oldest first), to replay a frozen joint from its last good one.
-    let hist = FROZEN_SAMPLES;
-    let mut x_hist = vec![0.0; (hist + 1) * 2 * n];
-    let mut tau_hist = vec![0.0; hist * n];
-    for slot in x_hist.chunks_exact_mut(2 * n) {
-        slot.copy_from_slice(&x);
-    }
-    let mut end = total;
-    let mut k = 0;
-    while k < end {
+
+    /// One sample `k` of the path or the hold. `Ok(Some(j))`: a safe stop
+    /// began, counted from sample `j`; `Err`: the run ends.
+    fn sample(&mut self, k: usize, rec: &mut Recorder) -> Result<Option<usize>, Ended> {
+        let ts = self.reference.ts();
         let t = k as f64 * ts;
-        if k > 0 {
-            if let Err(e) = plant.measure(&mut x) {
-                outcome = RunOutcome::Failed {
-                    t,
-                    cause: RunFailure::Plant(e),
-                };
-                break;
-            }
+        let n = self.reference.dof();
+        let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
+        self.sensor
+            .read(self.plant, k, k > 0, &mut self.x)
+            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
+            self.pick_up = None;
+            self.plant
+                .set_payload(Some(payload))
+                .map_err(|e| failed(RunFailure::Plant(e.into())))?;
         }
-        if let Some((t_pick, payload)) = events.pick_up {
-            // The payload is there from the first sample at or after t_pick.
-            if !picked && t >= t_pick - 1e-9 * ts {
-                picked = true;
-                if let Err(e) = plant.set_payload(Some(payload)) {
-                    outcome = RunOutcome::Failed {
-                        t,
-                        cause: RunFailure::Plant(e.into()),
-                    };
-                    break;
-                }
-            }
-        }
-        x_true[..n].copy_from_slice(plant.q());
-        x_true[n..].copy_from_slice(plant.qd());
-        if faults.lost_at(t, ts) {
-            x.fill(f64::NAN);
-        }
-        if measured {
-            rec.q_meas.extend_from_slice(&x[..n]);
-            rec.qd_meas.extend_from_slice(&x[n..]);
-        }
-        // A missing or invalid measurement: the controller runs on the
-        // model's prediction.
-        let mut fault = guard.check(model, &mut x, ts);
-        let mut trigger = None;
-        // During a stop the stop law judges the encoders itself (frozen
-        // joints are dead-reckoned until they change again).
-        if let Some(c) = check.as_mut().filter(|_| stop.is_none()) {
-            let before = c.rejections;
-            trigger = c.check(&mut x, ts);
-            fault |= c.rejections > before;
-        }
-        rec.faults += usize::from(fault);
-        if let (None, None, Some(limit)) = (&stop, &trigger, settings.max_joint_error_rad) {
-            let w = reference.q(k);
-            if let Some(joint) = (0..n).find(|&i| (w[i] - x[i]).abs() > limit) {
-                trigger = Some(StopReason::JointErrorLimit {
-                    joint,
-                    error_rad: w[joint] - x[joint],
-                    limit_rad: limit,
-                });
-            }
-        }
-        x_hist.copy_within(2 * n.., 0);
-        let last = x_hist.len() - 2 * n;
-        x_hist[last..].copy_from_slice(&x);
-        let flange = plant.flange_position();
+        self.x_true[..n].copy_from_slice(self.plant.q());
+        self.x_true[n..].copy_from_slice(self.plant.qd());
+        rec.reading(&self.x);
+        let reference = self.reference;
         let w = reference.q(k);
-        reference.preview(k, horizon, &mut preview);
+        // A missing or invalid reading: the controller runs on the model's
+        // prediction.
+        let repaired = self.sensor.repair(self.model, &mut self.x, ts);
+        let inspection = self.supervisor.inspect(&mut self.x, w, ts);
+        rec.fault(repaired || inspection.rejected);
+        let flange = self.plant.flange_position();
+        self.reference
+            .preview(k, self.controller.horizon(), &mut self.preview);
         let t0 = Instant::now();
-        if let (None, Some(reason), Some(law)) = (&stop, trigger, law.as_mut()) {
-            let frozen = match reason {
-                StopReason::FrozenEncoder { joint } => {
-                    Some((joint, &x_hist[..2 * n], &tau_hist[..]))
-                }
-                _ => None,
-            };
-            // From the observer's estimate when there is one.
-            let from = if observer.is_some() { &x_est } else { &x };
-            law.begin(from, frozen, model, ts);
-            stop = Some(Stopping {
-                t,
-                reason,
-                moving_until: t,
-                within_limits: true,
-            });
-            end = k + stop_samples;
-        }
-        let status =
-            observed(observer.as_deref_mut(), model, &x, &mut x_est).and_then(|xs| {
-                match (&stop, law.as_mut()) {
-                    (Some(_), Some(law)) => law.step(model, &x, xs, ts, &mut tau).map(|_| ()),
-                    _ => controller
-                        .step(model, xs, w, &preview, &mut tau)
-                        .map(|_| ()),
-                }
-            });
-        if let (Some(o), Ok(())) = (observer.as_deref_mut(), &status) {
-            o.record_torque(&tau);
-        }
-        guard.record_torque(&tau);
-        let mut saturated = false;
-        for (t, lim) in tau.iter().zip(&tau_max) {
-            if lim.is_finite() && *lim > 0.0 {
-                let r = t.abs() / lim;
-                rec.max_torque_ratio = rec.max_torque_ratio.max(r);
-                saturated |= r >= 1.0 - 1e-9;
+        let mut stop_began = None;
+        if let Some(reason) = inspection.trigger {
+            let from = self.estimator.last(&self.x);
+            if self.supervisor.begin_stop(t, reason, from, self.model, ts) {
+                stop_began = Some(k);
             }
         }
-        rec.saturated_samples += usize::from(saturated);
-        let us = t0.elapsed().as_secs_f64() * 1e6;
+        let status = self.control(w, ts);
+        self.sensor.record_torque(&self.tau);
+        rec.loading(self.actuator.account(&self.tau));
+        let step_us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
-            if let (None, Some(law)) = (&stop, law.as_mut()) {
-                // Brake from here on (this sample holds the last torque).
-                law.begin(&x, None, model, ts);
-                stop = Some(Stopping {
-                    t,
-                    reason: StopReason::ControllerFailed(e),
-                    moving_until: t,
-                    within_limits: true,
-                });
-                end = k + stop_samples;
-            } else {
-                outcome = RunOutcome::Failed {
-                    t,
-                    cause: RunFailure::Controller(e),
-                };
-                break;
-            }
-        }
-        tau_hist.copy_within(n.., 0);
-        let last = tau_hist.len() - n;
-        tau_hist[last..].copy_from_slice(&tau);
-        if let Err(e) = plant.step(&tau, ts) {
-            outcome = RunOutcome::Failed {
-                t,
-                cause: RunFailure::Plant(e),
-            };
-            break;
-        }
-        if let Some(s) = stop.as_mut() {
-            if plant.qd().iter().any(|v| v.abs() >= REST_SPEED) {
-                s.moving_until = t + ts;
-            }
-            let q = plant.q();
-            if (0..n).any(|i| q[i] < lower[i] || q[i] > upper[i]) {
-                s.within_limits = false;
-            }
-        }
-        rec.t.push(t);
-        rec.q.extend_from_slice(&x_true[..n]);
-        rec.qd.extend_from_slice(&x_true[n..]);
-        rec.tau.extend_from_slice(plant.applied_torque());
-        rec.q_ref.extend_from_slice(w);
-        rec.flange_ref.push(reference.position(k));
-        rec.step_us.push(us);
-        rec.flange.push(flange);
-        if let Some(m) = controller.payload_estimate() {
-            rec.payload_mass_est.push(m);
-        }
-        if let Some(joint) = (0..n).find(|&i| rec.joint_error(k, i).is_nan()) {
-            outcome = RunOutcome::Failed {
-                t,
-                cause: RunFailure::NonFiniteError { joint },
-            };
-            break;
-        }
-        if stop.is_none() {
-            if let Some(joint) =
-                (0..n).find(|&i| rec.joint_error(k, i).abs() > settings.divergence_threshold_rad)
+            let reason = StopReason::ControllerFailed(e);
+            // Brake from here on (this sample holds the last torque).
+            if !self
+                .supervisor
+                .begin_stop(t, reason, &self.x, self.model, ts)
             {
-                let error_rad = rec.joint_error(k, joint);
-                if let Some(law) = law.as_mut() {
-                    law.begin(&x, None, model, ts);
-                    stop = Some(Stopping {
-                        t,
-                        reason: StopReason::Diverged { joint, error_rad },
-                        moving_until: t,
-                        within_limits: true,
-                    });
-                    end = k + 1 + stop_samples;
-                } else {
-                    outcome = RunOutcome::Diverged {
-                        t,
-                        joint,
-                        error_rad,
-                        threshold_rad: settings.divergence_threshold_rad,
-                    };
-                    break;
-                }
+                return Err(failed(RunFailure::Controller(e)));
             }
+            stop_began = Some(k);
         }
-        if k % 100 == 0 {
-            progress(k.min(total), total);
+        self.supervisor.record_torque(&self.tau);
+        self.plant
+            .step(&self.tau, ts)
+            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        self.supervisor
+            .watch(self.plant.q(), self.plant.qd(), t, ts);
+        rec.push(&Sample {
+            t,
+            q: &self.x_true[..n],
+            qd: &self.x_true[n..],
+            tau: self.plant.applied_torque(),
+            w,
+            flange_ref: self.reference.position(k),
+            flange,
+            step_us,
+            payload_mass_est: self.controller.payload_estimate(),
+        });
+        let q = &self.x_true[..n];
+        if let Some(joint) = (0..n).find(|&i| (w[i] - q[i]).is_nan()) {
+            return Err(failed(RunFailure::NonFiniteError { joint }));
         }
-        k += 1;
+        if let Some((joint, error_rad)) = self.supervisor.divergence(w, q) {
+            let reason = StopReason::Diverged { joint, error_rad };
+            if !self
+                .supervisor
+                .begin_stop(t, reason, &self.x, self.model, ts)
+            {
+                return Err(RunOutcome::Diverged {
+                    t,
+                    joint,
+                    error_rad,
+                    threshold_rad: self.settings.divergence_threshold_rad,
+                });
+            }
+            stop_began = Some(k + 1);
+        }
+        Ok(stop_began)
     }
-    if let Some(s) = stop {
-        if outcome.is_completed() {
-            let last = rec.t.last().copied().unwrap_or(s.t) + ts;
-            outcome = RunOutcome::Stopped {
-                t: s.t,
-                reason: s.reason,
-                at_rest_after_s: (s.moving_until < last - 1e-9).then_some(s.moving_until - s.t),
-                within_limits: s.within_limits,
-            };
+
+    /// The torque of this sample into `self.tau`: the estimator's state
+    /// through the controller, or the supervisor's stop law during a stop.
+    fn control(&mut self, w: &[f64], ts: f64) -> Result<(), StepError> {
+        let model = &mut *self.model;
+        let xs = self.estimator.estimate(model, &self.x)?;
+        if self.supervisor.stopping().is_some() {
+            self.supervisor
+                .stop_torque(model, &self.x, xs, ts, &mut self.tau)?;
+        } else {
+            self.controller
+                .step(model, xs, w, &self.preview, &mut self.tau)?;
         }
-    }
-    progress(total, total);
-    RunResult {
-        record: rec,
-        outcome,
-        wall_s: start.elapsed().as_secs_f64(),
+        self.estimator.record_torque(&self.tau);
+        Ok(())
     }
 }

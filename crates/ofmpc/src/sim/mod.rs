@@ -2,16 +2,27 @@
 //! the loop that runs a controller against it, the run's typed outcome and its
 //! metrics.
 
+mod actuator;
 mod closed_loop;
+mod estimator;
 mod experiment;
 mod metrics;
 mod outcome;
 mod plant;
+mod recorder;
+mod schedule;
+mod sensor;
 mod supervisor;
 
+pub use actuator::{Actuator, Loading};
+pub use estimator::Estimator;
+pub use recorder::{Recorder, Sample};
+pub use schedule::{sample_at, LossSchedule, TIME_MATCH_TOLERANCE};
+pub use sensor::Sensor;
+
 pub use closed_loop::{
-    record_columns, run_closed_loop, run_closed_loop_with, LoopSettings, MeasurementFaults,
-    RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
+    record_columns, run_closed_loop, run_closed_loop_with, ClosedLoop, LoopSettings,
+    MeasurementFaults, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
@@ -24,5 +35,6 @@ pub use plant::{
     MAX_DELAY_SAMPLES,
 };
 pub use supervisor::{
-    StopReason, BRAKE_TIME, FROZEN_SAMPLES, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
+    Inspection, MeasurementGuard, Plausibility, SafeStop, StopReason, Stopping, Supervisor,
+    SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
 };

@@ -16,8 +16,8 @@ pub const MAX_RECORD_VALUES: usize = 100_000_000;
 /// The largest number of integration substeps per control period.
 pub const MAX_SUBSTEPS: usize = 100_000;
 
-/// The three ways a run ends, as written in `metrics.json` (`"ok"`,
-/// `"diverged"`, `"failed"`).
+/// The four ways a run ends, as written in `metrics.json` (`"ok"`,
+/// `"diverged"`, `"failed"`, `"stopped"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RunStatus {

@@ -112,7 +112,7 @@ impl Default for PlantSettings {
             substep: 1e-3,
             viscous_friction: Vec::new(),
             coulomb_friction: Vec::new(),
-            coulomb_velocity: 1e-3,
+            coulomb_velocity: crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY,
             torque_limits: false,
             position_noise: 0.0,
             velocity_noise: 0.0,
@@ -641,10 +641,16 @@ impl Plant {
         Ok(())
     }
 
-    /// Friction torque at velocity `v` of joint `i` (opposes motion).
+    /// Friction torque at velocity `v` of joint `i` (opposes motion;
+    /// [`crate::dynamics::friction::torque`]).
     #[inline]
     fn friction(&self, i: usize, v: f64) -> f64 {
-        self.viscous[i] * v + self.coulomb[i] * (v / self.settings.coulomb_velocity).tanh()
+        crate::dynamics::friction::torque(
+            self.viscous[i],
+            self.coulomb[i],
+            self.settings.coulomb_velocity,
+            v,
+        )
     }
 
     fn accel(&mut self, q_from_tmp: bool, out: usize) -> Result<(), ModelError> {

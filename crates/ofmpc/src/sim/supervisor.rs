@@ -121,7 +121,7 @@ impl fmt::Display for StopReason {
 
 /// The plausibility check of the measurements (module docs).
 #[derive(Debug, Clone)]
-pub(crate) struct Plausibility {
+pub struct Plausibility {
     n: usize,
     vmax: Vec<f64>,
     q_a: Vec<f64>,
@@ -137,6 +137,9 @@ pub(crate) struct Plausibility {
 }
 
 impl Plausibility {
+    /// A check for joints with these speed limits (`vmax`, n values; an
+    /// infinite limit turns the check off for that joint), starting from
+    /// the accepted state `x0` (2n).
     pub fn new(vmax: &[f64], x0: &[f64]) -> Self {
         let n = vmax.len();
         Self {
@@ -152,6 +155,21 @@ impl Plausibility {
             prev_raw_v: x0[n..2 * n].to_vec(),
             rejections: 0,
         }
+    }
+
+    /// Starts over from the accepted state `x0` (2n) with no rejection
+    /// counted; allocates nothing.
+    pub fn reset(&mut self, x0: &[f64]) {
+        let n = self.n;
+        self.q_a.copy_from_slice(&x0[..n]);
+        self.v_a.copy_from_slice(&x0[n..2 * n]);
+        self.acc_a.fill(0.0);
+        self.m.fill(1);
+        self.rejected.fill(0);
+        self.frozen.fill(0);
+        self.prev_raw.copy_from_slice(&x0[..n]);
+        self.prev_raw_v.copy_from_slice(&x0[n..2 * n]);
+        self.rejections = 0;
     }
 
     /// Checks `x` (2n), replaces rejected values by their predictions, and
@@ -240,7 +258,7 @@ impl Plausibility {
 /// controller then runs on this prediction; every such sample counts as a
 /// fault. Sized once ([`MeasurementGuard::new`]); allocation-free after.
 #[derive(Debug, Clone)]
-pub(crate) struct MeasurementGuard {
+pub struct MeasurementGuard {
     n: usize,
     delay: usize,
     lin: LinearLikeModel,
@@ -280,6 +298,17 @@ impl MeasurementGuard {
             track,
             faults: 0,
         }
+    }
+
+    /// Starts over at rest at `x0` (2n), nothing recorded, no fault
+    /// counted; allocates nothing.
+    pub fn reset(&mut self, x0: &[f64]) {
+        self.x_prev.copy_from_slice(x0);
+        self.tau_hist.fill(0.0);
+        self.recorded = 0;
+        self.a.fill(0.0);
+        self.dist.fill(0.0);
+        self.faults = 0;
     }
 
     /// Replaces the non-finite entries of `x` (2n) by the prediction (both
@@ -366,7 +395,7 @@ fn model_accel(
 /// ([`SafeStop::new`]); [`SafeStop::begin`] and [`SafeStop::step`] allocate
 /// nothing.
 #[derive(Debug, Clone)]
-pub(crate) struct SafeStop {
+pub struct SafeStop {
     n: usize,
     tau_max: Vec<f64>,
     model: LinearLikeModel,
@@ -526,5 +555,233 @@ impl SafeStop {
         }
         self.tau_prev.copy_from_slice(tau);
         Ok(())
+    }
+}
+
+/// What the [`Supervisor`] does: the divergence threshold it judges the
+/// run by, and the checks and the stop it may apply.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SupervisorSettings {
+    /// A joint error (reference − true position) beyond this (rad) is a
+    /// divergence: a safe stop with [`Self::safe_stop`], else the run ends.
+    pub divergence_threshold_rad: f64,
+    /// Check each measurement ([`Plausibility`]) and replace rejected values
+    /// by predictions.
+    pub plausibility_check: bool,
+    /// Stop safely ([`SafeStop`]) on a divergence, a failed controller step
+    /// or an implausible measurement, instead of ending the run.
+    pub safe_stop: bool,
+    /// A safety function: a joint error of the state the controller is
+    /// given beyond this (rad) starts a safe stop. `None`: off.
+    pub max_joint_error_rad: Option<f64>,
+}
+
+/// A safe stop in progress: when it began, why, the last time a joint was
+/// still moving, and whether every joint stayed within its limits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Stopping {
+    /// When the stop began (s, path time).
+    pub t: f64,
+    /// Why.
+    pub reason: StopReason,
+    /// The end of the last period in which a joint moved faster than
+    /// [`REST_SPEED`] (s).
+    pub moving_until: f64,
+    /// Every joint stayed within its position limits since the stop began.
+    pub within_limits: bool,
+}
+
+/// What [`Supervisor::inspect`] found in one reading.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Inspection {
+    /// Values of the reading were rejected (replaced by predictions).
+    pub rejected: bool,
+    /// A reason to stop the robot, if any.
+    pub trigger: Option<StopReason>,
+}
+
+/// The supervisor stage: judges each reading (plausibility, the safety
+/// limit on the joint error), the run (divergence), and when told, takes
+/// the robot over from the controller with the safe-stop law.
+///
+/// Sized at construction ([`Supervisor::new`]); every other method
+/// allocates nothing.
+#[derive(Debug, Clone)]
+pub struct Supervisor {
+    settings: SupervisorSettings,
+    n: usize,
+    check: Option<Plausibility>,
+    law: Option<SafeStop>,
+    stop: Option<Stopping>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    /// The last [`FROZEN_SAMPLES`] + 1 inspected readings and
+    /// [`FROZEN_SAMPLES`] commanded torques (oldest first), to replay a
+    /// frozen joint from its last good reading.
+    x_hist: Vec<f64>,
+    tau_hist: Vec<f64>,
+}
+
+impl Supervisor {
+    /// A supervisor for `robot` (its speed, position and torque limits).
+    pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
+        let n = robot.dof();
+        let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+        let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
+        let zero = vec![0.0; 2 * n];
+        Self {
+            settings,
+            n,
+            check: settings
+                .plausibility_check
+                .then(|| Plausibility::new(&vmax, &zero)),
+            law: (settings.safe_stop || settings.max_joint_error_rad.is_some())
+                .then(|| SafeStop::new(&tau_max)),
+            stop: None,
+            lower: robot.lower_limits(),
+            upper: robot.upper_limits(),
+            x_hist: vec![0.0; (FROZEN_SAMPLES + 1) * 2 * n],
+            tau_hist: vec![0.0; FROZEN_SAMPLES * n],
+        }
+    }
+
+    /// What it was built with.
+    pub fn settings(&self) -> &SupervisorSettings {
+        &self.settings
+    }
+
+    /// Starts a run from the accepted reading `x0` (2n), no stop in
+    /// progress.
+    pub fn reset(&mut self, x0: &[f64]) {
+        if let Some(c) = self.check.as_mut() {
+            c.reset(x0);
+        }
+        for slot in self.x_hist.chunks_exact_mut(2 * self.n) {
+            slot.copy_from_slice(x0);
+        }
+        self.tau_hist.fill(0.0);
+        self.stop = None;
+    }
+
+    /// Judges the reading `x` (2n, after the sensor) against the reference
+    /// `w` (n): the plausibility check (not during a stop: the stop law
+    /// judges the encoders itself), then the safety limit on the joint
+    /// error. Rejected values of `x` are replaced by their predictions.
+    pub fn inspect(&mut self, x: &mut [f64], w: &[f64], ts: f64) -> Inspection {
+        let n = self.n;
+        let mut rejected = false;
+        let mut trigger = None;
+        if let Some(c) = self.check.as_mut().filter(|_| self.stop.is_none()) {
+            let before = c.rejections;
+            trigger = c.check(x, ts);
+            rejected = c.rejections > before;
+        }
+        if let (None, None, Some(limit)) = (&self.stop, &trigger, self.settings.max_joint_error_rad)
+        {
+            if let Some(joint) = (0..n).find(|&i| (w[i] - x[i]).abs() > limit) {
+                trigger = Some(StopReason::JointErrorLimit {
+                    joint,
+                    error_rad: w[joint] - x[joint],
+                    limit_rad: limit,
+                });
+            }
+        }
+        self.x_hist.copy_within(2 * n.., 0);
+        let last = self.x_hist.len() - 2 * n;
+        self.x_hist[last..].copy_from_slice(x);
+        Inspection { rejected, trigger }
+    }
+
+    /// The stop in progress, if any.
+    pub fn stopping(&self) -> Option<&Stopping> {
+        self.stop.as_ref()
+    }
+
+    /// Whether a stop can be made (the settings ask for the stop law).
+    pub fn can_stop(&self) -> bool {
+        self.law.is_some()
+    }
+
+    /// Begins a safe stop at `t` for `reason` from the state `from` (2n);
+    /// a frozen encoder's joint is dead-reckoned from its last good reading.
+    /// Returns `false` (and does nothing) when a stop is already in
+    /// progress or the settings have no stop law.
+    pub fn begin_stop(
+        &mut self,
+        t: f64,
+        reason: StopReason,
+        from: &[f64],
+        model: &mut dyn JointSpaceDynamics,
+        ts: f64,
+    ) -> bool {
+        let n = self.n;
+        let (None, Some(law)) = (&self.stop, self.law.as_mut()) else {
+            return false;
+        };
+        let frozen = match reason {
+            StopReason::FrozenEncoder { joint } => {
+                Some((joint, &self.x_hist[..2 * n], &self.tau_hist[..]))
+            }
+            _ => None,
+        };
+        law.begin(from, frozen, model, ts);
+        self.stop = Some(Stopping {
+            t,
+            reason,
+            moving_until: t,
+            within_limits: true,
+        });
+        true
+    }
+
+    /// The stop law's torque (n) during a stop, from the raw reading `raw`
+    /// and the state `x` the controller would be given ([`SafeStop::step`]).
+    /// Call only while [`Self::stopping`].
+    pub fn stop_torque(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        raw: &[f64],
+        x: &[f64],
+        ts: f64,
+        tau: &mut [f64],
+    ) -> Result<(), StepError> {
+        match self.law.as_mut() {
+            Some(law) => law.step(model, raw, x, ts, tau),
+            None => Err(StepError::Internal("stop torque without a stop law")),
+        }
+    }
+
+    /// The torque commanded at the current sample (n values).
+    pub fn record_torque(&mut self, tau: &[f64]) {
+        let n = self.n;
+        self.tau_hist.copy_within(n.., 0);
+        let last = self.tau_hist.len() - n;
+        self.tau_hist[last..].copy_from_slice(tau);
+    }
+
+    /// Watches the robot (true `q`, `q̇`) after the period `[t, t + ts)`
+    /// during a stop: when it comes to rest, whether it stays in its limits.
+    pub fn watch(&mut self, q: &[f64], qd: &[f64], t: f64, ts: f64) {
+        if let Some(s) = self.stop.as_mut() {
+            if qd.iter().any(|v| v.abs() >= REST_SPEED) {
+                s.moving_until = t + ts;
+            }
+            if (0..self.n).any(|i| q[i] < self.lower[i] || q[i] > self.upper[i]) {
+                s.within_limits = false;
+            }
+        }
+    }
+
+    /// The first joint whose error `w − q` (reference, true position) is
+    /// beyond the divergence threshold, with the error; `None` during a
+    /// stop.
+    pub fn divergence(&self, w: &[f64], q: &[f64]) -> Option<(usize, f64)> {
+        if self.stop.is_some() {
+            return None;
+        }
+        let threshold = self.settings.divergence_threshold_rad;
+        (0..self.n)
+            .map(|i| (i, w[i] - q[i]))
+            .find(|(_, e)| e.abs() > threshold)
     }
 }

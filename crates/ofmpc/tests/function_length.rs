@@ -1,0 +1,169 @@
+//! The code reads top-down: no function of the workspace (sources, examples,
+//! benches; tests are exempt) is longer than [`MAX_LINES`] lines, signature to closing brace,
+//! outside the SIMD kernels (hand-scheduled register blocks, listed in
+//! [`KERNELS`]).
+//!
+//! The scanner is a small brace counter (strings, character literals and
+//! line comments stripped): exact for rustfmt-formatted code, which CI
+//! enforces.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// Longest function allowed (lines).
+const MAX_LINES: usize = 120;
+
+/// Files whose functions are SIMD kernels (exempt).
+const KERNELS: &[&str] = &["crates/ofmpc/src/control/lsq/avx2.rs"];
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// The line without string and character literals and without a trailing
+/// `//` comment.
+fn code_of(line: &str) -> String {
+    let mut out = String::with_capacity(line.len());
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => {
+                while let Some(d) = chars.next() {
+                    match d {
+                        '\\' => {
+                            chars.next();
+                        }
+                        '"' => break,
+                        _ => {}
+                    }
+                }
+            }
+            '\'' => {
+                // A character literal ('x', '\n', '{') or a lifetime ('a).
+                let rest: String = chars.clone().take(3).collect();
+                let lit = rest.starts_with('\\') || rest.chars().nth(1) == Some('\'');
+                if lit {
+                    while let Some(d) = chars.next() {
+                        match d {
+                            '\\' => {
+                                chars.next();
+                            }
+                            '\'' => break,
+                            _ => {}
+                        }
+                    }
+                }
+            }
+            '/' if chars.peek() == Some(&'/') => break,
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The name of the function a line declares, if it does.
+fn declared_fn(code: &str) -> Option<&str> {
+    let mut words = code.split_whitespace().peekable();
+    while let Some(w) = words.next() {
+        match w {
+            "pub" | "const" | "async" | "unsafe" | "extern" | "\"C\"" => continue,
+            w if w.starts_with("pub(") => continue,
+            "fn" => {
+                let name = words.next()?;
+                let end = name.find(['(', '<']).unwrap_or(name.len());
+                return Some(&name[..end]);
+            }
+            _ => return None,
+        }
+    }
+    None
+}
+
+/// `(name, first line, length)` of every function with a body in `text`.
+fn functions(text: &str) -> Vec<(String, usize, usize)> {
+    let lines: Vec<String> = text.lines().map(code_of).collect();
+    let mut found = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let Some(name) = declared_fn(line) else {
+            continue;
+        };
+        let mut depth = 0i64;
+        let mut opened = false;
+        'scan: for (j, l) in lines.iter().enumerate().skip(i) {
+            for c in l.chars() {
+                match c {
+                    '{' => {
+                        depth += 1;
+                        opened = true;
+                    }
+                    '}' => depth -= 1,
+                    ';' if !opened => break 'scan, // a declaration without a body
+                    _ => {}
+                }
+                if opened && depth == 0 {
+                    found.push((name.to_string(), i + 1, j - i + 1));
+                    break 'scan;
+                }
+            }
+        }
+    }
+    found
+}
+
+#[test]
+fn the_scanner_measures_what_rustfmt_writes() {
+    let text = "fn a() {\n    let s = \"}}\";\n    let c = '{';\n}\n\
+                pub(crate) fn b<T>(x: T) -> usize\nwhere\n    T: Copy,\n{\n    // }\n    1\n}\n\
+                fn decl();\n";
+    let f = functions(text);
+    assert_eq!(
+        f,
+        vec![("a".to_string(), 1, 4), ("b".to_string(), 5, 7)],
+        "{f:?}"
+    );
+}
+
+#[test]
+fn no_function_is_longer_than_the_limit() {
+    let root = workspace();
+    let mut files = Vec::new();
+    for krate in ["ofmpc", "ofmpc-cli", "ofmpc-py", "ofmpc-scenario"] {
+        for dir in ["src", "examples", "benches"] {
+            rust_files(&root.join("crates").join(krate).join(dir), &mut files);
+        }
+    }
+    assert!(files.len() > 50, "found only {} files", files.len());
+    let mut long = Vec::new();
+    for file in &files {
+        let rel = file.strip_prefix(&root).unwrap_or(file);
+        let rel_s = rel.to_string_lossy().replace('\\', "/");
+        if KERNELS.iter().any(|k| rel_s.ends_with(k)) {
+            continue;
+        }
+        let text = fs::read_to_string(file).unwrap();
+        for (name, line, len) in functions(&text) {
+            if len > MAX_LINES {
+                long.push(format!("{rel_s}:{line}: fn {name} has {len} lines"));
+            }
+        }
+    }
+    assert!(
+        long.is_empty(),
+        "functions over {MAX_LINES} lines (split them along their structure):\n{}",
+        long.join("\n")
+    );
+}
