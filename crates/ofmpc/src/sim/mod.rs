@@ -24,7 +24,7 @@ pub use closed_loop::{
     record_columns, run_closed_loop, run_closed_loop_with, ClosedLoop, LoopSettings,
     MeasurementFaults, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
-pub use experiment::{kind_name, mass_label, run_name, Experiment};
+pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use outcome::{
     ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, MAX_RECORD_VALUES,
