@@ -209,17 +209,17 @@ fn report(stats: &Stats) {
     );
     println!(
         "controller step (µs): median {:.1}  p90 {:.1}  p99 {:.1}  p99.9 {:.1}  max {:.1}",
-        pct(&step_us, 0.5),
-        pct(&step_us, 0.9),
-        pct(&step_us, 0.99),
-        pct(&step_us, 0.999),
-        pct(&step_us, 1.0)
+        pct(step_us, 0.5),
+        pct(step_us, 0.9),
+        pct(step_us, 0.99),
+        pct(step_us, 0.999),
+        pct(step_us, 1.0)
     );
     println!(
         "wake-up lateness (µs): median {:.1}  p99 {:.1}  max {:.1}",
-        pct(&lateness_us, 0.5),
-        pct(&lateness_us, 0.99),
-        pct(&lateness_us, 1.0)
+        pct(lateness_us, 0.5),
+        pct(lateness_us, 0.99),
+        pct(lateness_us, 1.0)
     );
     println!(
         "deadline misses: {misses} of {total} ({:.2} %); largest joint error {worst_error:.2e} rad; \
