@@ -460,119 +460,47 @@ impl StageLq {
     /// one, sets `converged` and the map `M`. Returns `‖e_j‖²`.
     #[inline(always)]
     fn full_stage(&mut self, j: usize, streak: &mut usize, converged: &mut Option<usize>) -> f64 {
-        let (nu, nz, nq, ld) = (self.nu, self.nz, self.nq, self.ld);
+        let (nu, nz, nq) = (self.nu, self.nz, self.nq);
         let cols = nu + nz + 1;
         let (cs, ms) = (self.cs, self.ms);
         let rhs = nu + nz;
+        let top = nu + nq;
+        // One stage after an unchanged L, this stage probably repeats
+        // it: carry the unit vectors of the right-hand side's inputs
+        // through its reflections (columns cs.., the map M).
+        let extend = self.reuse_converged && *streak >= 1 && j > 1;
+        let width = if extend { ms } else { cs };
+        let active = self.stack_stage(j, extend);
+        let m = &mut self.m;
+        // Householder on the columns with a diagonal pivot row.
+        for k in 0..top {
+            householder_rows(
+                m,
+                (ms, width),
+                k,
+                (k, top, top + active),
+                &mut self.hv,
+                &mut self.hw,
+            );
+        }
+        // The remaining z columns: pivot k is dense row k − top, at row k
+        // (nothing below it to annihilate from row top + active on).
+        for k in (top..nu + nz).take_while(|k| k + 1 < top + active) {
+            householder_rows(
+                m,
+                (ms, width),
+                k,
+                (k, k + 1, top + active),
+                &mut self.hv,
+                &mut self.hw,
+            );
+        }
+        self.take_factor(j, extend, streak, converged);
+        // Rows below the pivots: residual only.
         let mut acc = 0.0;
-        {
-            // Rows of the diagonal part.
-            let top = nu + nq;
-            // One stage after an unchanged L, this stage probably repeats
-            // it: carry the unit vectors of the right-hand side's inputs
-            // through its reflections (columns cs.., the map M).
-            let extend = self.reuse_converged && *streak >= 1 && j > 1;
-            let width = if extend { ms } else { cs };
-            let m = &mut self.m;
-            m[..top * ms].fill(0.0);
-            for i in 0..nu {
-                m[i * ms + i] = self.rd[i];
-            }
-            for i in 0..nq {
-                let q = self.qd[i];
-                let row = &mut m[(nu + i) * ms..(nu + i + 1) * ms];
-                row[nu + i] = q;
-                row[rhs] = q * self.r[(j - 1) * nq + i];
-            }
-            // Dense rows: row i = Σ_{k ≥ i} L[i,k] [B A | −c_j][k] and l_{j+1}.
-            // At the last stage L_N = [D S; 0]: only its first nq rows are
-            // non-zero, the reflections skip the others.
-            let active = if j + 1 == self.nh && !extend {
-                nq.min(nz)
-            } else {
-                nz
-            };
-            let cj = &self.c[j * nz..(j + 1) * nz];
-            for (i, (row, lrow)) in m[top * ms..(top + nz) * ms]
-                .chunks_exact_mut(ms)
-                .zip(self.l_mat.chunks_exact(nz))
-                .enumerate()
-            {
-                row.fill(0.0);
-                if i >= active {
-                    continue;
-                }
-                let li = &lrow[i..];
-                accumulate_rows(&mut row[..cs], li, &self.ba[i * cs..], cs, 0);
-                row[rhs] = if i >= self.c_rows {
-                    self.l_vec[i]
-                } else {
-                    let k = self.c_rows;
-                    self.l_vec[i] - dot(&lrow[i..k], &cj[i..k])
-                };
-            }
-            if extend {
-                // Input i of the right-hand side is row nu + i.
-                for i in 0..nq + nz {
-                    m[(nu + i) * ms + cs + i] = 1.0;
-                }
-            }
-            // Householder on the columns with a diagonal pivot row.
-            for k in 0..top {
-                householder_rows(
-                    m,
-                    (ms, width),
-                    k,
-                    (k, top, top + active),
-                    &mut self.hv,
-                    &mut self.hw,
-                );
-            }
-            // The remaining z columns: pivot k is dense row k − top, at row k
-            // (nothing below it to annihilate from row top + active on).
-            for k in (top..nu + nz).take_while(|k| k + 1 < top + active) {
-                householder_rows(
-                    m,
-                    (ms, width),
-                    k,
-                    (k, k + 1, top + active),
-                    &mut self.hv,
-                    &mut self.hw,
-                );
-            }
-            // L_j: row c is row nu + c from column nu + c on; how much it
-            // moved from L_{j+1}.
-            let (mut change, mut size) = (0.0f64, 0.0f64);
-            for (c, lrow) in self.l_mat.chunks_exact_mut(nz).enumerate() {
-                let row = &m[(nu + c) * ms..(nu + c + 1) * ms];
-                lrow[..c].fill(0.0);
-                for (old, new) in lrow[c..].iter_mut().zip(&row[nu + c..rhs]) {
-                    change = change.max((*old - new).abs());
-                    size = size.max(new.abs());
-                    *old = *new;
-                }
-                self.l_vec[c] = row[rhs];
-            }
-            *streak = if change <= CONVERGED_RTOL * size {
-                *streak + 1
-            } else {
-                0
-            };
-            if extend && *streak >= 2 {
-                // M (column-major, stride lds) from the carried columns.
-                let lds = self.bvec.len();
-                for (i, col) in self.mmap.chunks_exact_mut(lds).enumerate() {
-                    for (r, o) in col[..ld].iter_mut().enumerate() {
-                        *o = m[r * ms + cs + i];
-                    }
-                }
-                *converged = Some(j);
-            }
-            // Rows below the pivots: residual only.
-            for row in nu + nz..top + nz {
-                let e = m[row * ms + rhs];
-                acc += e * e;
-            }
+        for row in nu + nz..top + nz {
+            let e = self.m[row * ms + rhs];
+            acc += e * e;
         }
         // Keep [R_vv R_vz ρ] of this stage.
         let dst = &mut self.vrows[j * nu * cols..(j + 1) * nu * cols];
@@ -580,6 +508,111 @@ impl StageLq {
             d.copy_from_slice(&row[..cols]);
         }
         acc
+    }
+
+    /// The stacked matrix of stage `j ≥ 1` into `m`: the diagonal rows
+    /// `[R_d; Q_d | Q_d r_j]`, the dense rows
+    /// `Σ_{k ≥ i} L[i,k] [B A | −c_j][k]` with `l_{j+1}`, and with `extend`
+    /// the unit columns that carry the map `M`. Returns how many dense rows
+    /// are non-zero (at the last stage `L_N = [D S; 0]`: its first `nq`).
+    #[inline(always)]
+    fn stack_stage(&mut self, j: usize, extend: bool) -> usize {
+        let (nu, nz, nq) = (self.nu, self.nz, self.nq);
+        let (cs, ms) = (self.cs, self.ms);
+        let rhs = nu + nz;
+        // Rows of the diagonal part.
+        let top = nu + nq;
+        let m = &mut self.m;
+        m[..top * ms].fill(0.0);
+        for i in 0..nu {
+            m[i * ms + i] = self.rd[i];
+        }
+        for i in 0..nq {
+            let q = self.qd[i];
+            let row = &mut m[(nu + i) * ms..(nu + i + 1) * ms];
+            row[nu + i] = q;
+            row[rhs] = q * self.r[(j - 1) * nq + i];
+        }
+        // Dense rows: row i = Σ_{k ≥ i} L[i,k] [B A | −c_j][k] and l_{j+1}.
+        // At the last stage L_N = [D S; 0]: only its first nq rows are
+        // non-zero, the reflections skip the others.
+        let active = if j + 1 == self.nh && !extend {
+            nq.min(nz)
+        } else {
+            nz
+        };
+        let cj = &self.c[j * nz..(j + 1) * nz];
+        for (i, (row, lrow)) in m[top * ms..(top + nz) * ms]
+            .chunks_exact_mut(ms)
+            .zip(self.l_mat.chunks_exact(nz))
+            .enumerate()
+        {
+            row.fill(0.0);
+            if i >= active {
+                continue;
+            }
+            let li = &lrow[i..];
+            accumulate_rows(&mut row[..cs], li, &self.ba[i * cs..], cs, 0);
+            row[rhs] = if i >= self.c_rows {
+                self.l_vec[i]
+            } else {
+                let k = self.c_rows;
+                self.l_vec[i] - dot(&lrow[i..k], &cj[i..k])
+            };
+        }
+        if extend {
+            // Input i of the right-hand side is row nu + i.
+            for i in 0..nq + nz {
+                m[(nu + i) * ms + cs + i] = 1.0;
+            }
+        }
+        active
+    }
+
+    /// After stage `j`'s reflections: `L_j` and `l_j` from the triangular
+    /// rows, the streak of stages that left `L` unchanged (to
+    /// [`CONVERGED_RTOL`]), and with `extend` and a repeat, the map `M`
+    /// (`converged = Some(j)`).
+    #[inline(always)]
+    fn take_factor(
+        &mut self,
+        j: usize,
+        extend: bool,
+        streak: &mut usize,
+        converged: &mut Option<usize>,
+    ) {
+        let (nu, nz, ld) = (self.nu, self.nz, self.ld);
+        let (cs, ms) = (self.cs, self.ms);
+        let rhs = nu + nz;
+        let m = &self.m;
+        // L_j: row c is row nu + c from column nu + c on; how much it
+        // moved from L_{j+1}.
+        let (mut change, mut size) = (0.0f64, 0.0f64);
+        for (c, lrow) in self.l_mat.chunks_exact_mut(nz).enumerate() {
+            let row = &m[(nu + c) * ms..(nu + c + 1) * ms];
+            lrow[..c].fill(0.0);
+            for (old, new) in lrow[c..].iter_mut().zip(&row[nu + c..rhs]) {
+                change = change.max((*old - new).abs());
+                size = size.max(new.abs());
+                *old = *new;
+            }
+            self.l_vec[c] = row[rhs];
+        }
+        *streak = if change <= CONVERGED_RTOL * size {
+            *streak + 1
+        } else {
+            0
+        };
+        if extend && *streak >= 2 {
+            // M (column-major, stride lds) from the carried columns.
+            let lds = self.bvec.len();
+            for (i, col) in self.mmap.chunks_exact_mut(lds).enumerate() {
+                for (r, o) in col[..ld].iter_mut().enumerate() {
+                    *o = m[r * ms + cs + i];
+                }
+            }
+            *converged = Some(j);
+        }
     }
 
     /// Stage 0, where `z_0` is known: the least-squares problem in `v_0`
