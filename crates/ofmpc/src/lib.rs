@@ -41,6 +41,10 @@
 /// appear in signatures): use this re-export to get the same version.
 pub use nalgebra;
 
+/// Builds a predictive controller that works as configured
+/// ([`control::ControllerBuilder`]).
+pub use control::ControllerBuilder;
+
 pub mod analysis;
 pub mod control;
 pub mod dynamics;
