@@ -147,3 +147,73 @@ fn observer_updates_allocate_nothing() {
     }
     assert_eq!(allocations() - before, 0);
 }
+
+/// The built controller's step (`Mpc::step`: observer, model, solve,
+/// torque-limit QP with friction compensation, output) allocates nothing,
+/// for every kind, failed steps included.
+#[test]
+fn built_controller_steps_allocate_nothing() {
+    use ofmpc::control::{ControllerBuilder, DriveModel, ObserverSettings, StepInput};
+    let robot = ofmpc::robot::Robot::irb140();
+    let n = robot.dof();
+    let limited = MpcSettings {
+        torque_limits: true,
+        friction_compensation: true,
+        delay_compensation: true,
+        observer_friction: true,
+        constraint_horizon: Some(4),
+        ..Default::default()
+    };
+    let drives = DriveModel {
+        max_torque_nm: vec![0.5; n],
+        coulomb_nm: vec![0.8; n],
+        viscous_nms: vec![0.1; n],
+        coulomb_velocity_rad_s: 1e-3,
+    };
+    for kind in ControllerKind::WITH_ADAPTIVE {
+        for settings in [MpcSettings::default(), limited.clone()] {
+            let limits = settings.torque_limits;
+            let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());
+            if limits {
+                builder = builder.drives(drives.clone()).observer(ObserverSettings {
+                    pole: 0.7,
+                    measurement_delay: 1,
+                });
+            }
+            let mut mpc = builder.build().unwrap();
+            let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+            mpc.reset(&x0).unwrap();
+            let mut x = x0.clone();
+            let wk = vec![0.3; n];
+            let preview: Vec<f64> = (0..n * settings.horizon)
+                .map(|i| 0.3 + 0.01 * (i / n) as f64)
+                .collect();
+            let bad_x = vec![f64::NAN; 2 * n];
+            let before = allocations();
+            for k in 0..100 {
+                for (i, xi) in x.iter_mut().enumerate() {
+                    *xi = x0[i] + 0.001 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
+                }
+                let input = StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                };
+                let out = mpc.step(&input).unwrap();
+                assert!(out.tau.iter().all(|t| t.is_finite()));
+                let bad = StepInput {
+                    x: &bad_x,
+                    ..input
+                };
+                assert!(mpc.step(&bad).is_err());
+            }
+            let after = allocations();
+            assert_eq!(
+                after - before,
+                0,
+                "{kind}, limits {limits}: {} allocations",
+                after - before
+            );
+        }
+    }
+}

@@ -6,7 +6,7 @@ mod common;
 
 use common::paper_reference;
 use ofmpc::control::{
-    new_controller, BuildError, Controller, ControllerBuilder, ControllerKind, DriveModel,
+    new_controller, BuildError, ControllerBuilder, ControllerKind, DriveModel,
     FrictionUse, MpcSettings, ObserverSettings, Solver, StepError, StepInput,
 };
 use ofmpc::dynamics::RobotDynamics;
