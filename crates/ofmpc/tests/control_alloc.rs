@@ -201,10 +201,7 @@ fn built_controller_steps_allocate_nothing() {
                 };
                 let out = mpc.step(&input).unwrap();
                 assert!(out.tau.iter().all(|t| t.is_finite()));
-                let bad = StepInput {
-                    x: &bad_x,
-                    ..input
-                };
+                let bad = StepInput { x: &bad_x, ..input };
                 assert!(mpc.step(&bad).is_err());
             }
             let after = allocations();

@@ -6,8 +6,8 @@ mod common;
 
 use common::paper_reference;
 use ofmpc::control::{
-    new_controller, BuildError, ControllerBuilder, ControllerKind, DriveModel,
-    FrictionUse, MpcSettings, ObserverSettings, Solver, StepError, StepInput,
+    new_controller, BuildError, ControllerBuilder, ControllerKind, DriveModel, FrictionUse,
+    MpcSettings, ObserverSettings, Solver, StepError, StepInput,
 };
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::ident::RlsSettings;
@@ -103,7 +103,10 @@ fn refuses_friction_use_without_friction_estimates() {
         .drives(drives(6, 10.0, 0.0))
         .build()
         .unwrap_err();
-    assert_eq!(err, BuildError::NoFrictionEstimates(FrictionUse::Compensation));
+    assert_eq!(
+        err,
+        BuildError::NoFrictionEstimates(FrictionUse::Compensation)
+    );
     ControllerBuilder::new(ControllerKind::First, &robot)
         .settings(comp)
         .drives(drives(6, 10.0, 0.5))

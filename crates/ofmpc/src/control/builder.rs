@@ -119,7 +119,9 @@ pub enum BuildError {
     ConstraintHorizonWithoutLimits(usize),
     /// A payload estimator's tuning was given for a kind that identifies no
     /// payload.
-    #[error("the {0} controller identifies no payload: use an adaptive kind to run a payload estimator")]
+    #[error(
+        "the {0} controller identifies no payload: use an adaptive kind to run a payload estimator"
+    )]
     EstimatorWithoutIdentification(ControllerKind),
     /// An adaptive kind was given a model payload (assumed by the tuning or
     /// carried by the robot): the identification replaces it from the first

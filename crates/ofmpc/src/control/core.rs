@@ -114,6 +114,9 @@ const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;
 /// [`Solver::for_controller`]: every solver-specific buffer lives in its
 /// variant, so a controller matches on one value instead of testing several
 /// optional workspaces.
+// One per controller, built once: the size difference costs nothing, a box
+// would cost an indirection on every access of the stage-wise problem.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub(super) enum Backend {
     /// The stacked dense system by Householder QR ([`Solver::DenseQr`]).
