@@ -29,6 +29,18 @@ fn build(kind: ControllerKind, settings: MpcSettings) -> Result<(), BuildError> 
         .map(|_| ())
 }
 
+/// Builds `kind` for the IRB 140 with `settings` and `drives`.
+fn build_with(
+    kind: ControllerKind,
+    settings: MpcSettings,
+    drives: DriveModel,
+) -> Result<ofmpc::control::Mpc, BuildError> {
+    ControllerBuilder::new(kind, &Robot::irb140())
+        .settings(settings)
+        .drives(drives)
+        .build()
+}
+
 #[test]
 fn builds_the_paper_controllers_and_the_crate_root_reexport() {
     let robot = Robot::irb140();
@@ -62,11 +74,7 @@ fn refuses_settings_that_do_not_fit_the_robot() {
         torque_limits: true,
         ..Default::default()
     };
-    let err = ControllerBuilder::new(ControllerKind::Usual, &Robot::irb140())
-        .settings(limits)
-        .drives(bad_drives)
-        .build()
-        .unwrap_err();
+    let err = build_with(ControllerKind::Usual, limits, bad_drives).unwrap_err();
     assert!(matches!(err, BuildError::Settings(_)), "{err}");
 }
 
@@ -76,11 +84,12 @@ fn refuses_torque_limits_without_a_finite_limit() {
         torque_limits: true,
         ..Default::default()
     };
-    let err = ControllerBuilder::new(ControllerKind::Second, &Robot::irb140())
-        .settings(s.clone())
-        .drives(drives(6, f64::INFINITY, 0.0))
-        .build()
-        .unwrap_err();
+    let err = build_with(
+        ControllerKind::Second,
+        s.clone(),
+        drives(6, f64::INFINITY, 0.0),
+    )
+    .unwrap_err();
     assert_eq!(err, BuildError::NoTorqueLimits);
     // The built-in robot's drives have limits: builds, with them.
     let robot = Robot::irb140();
@@ -93,35 +102,22 @@ fn refuses_torque_limits_without_a_finite_limit() {
 
 #[test]
 fn refuses_friction_use_without_friction_estimates() {
-    let robot = Robot::irb140();
     let comp = MpcSettings {
         friction_compensation: true,
         ..Default::default()
     };
-    let err = ControllerBuilder::new(ControllerKind::First, &robot)
-        .settings(comp.clone())
-        .drives(drives(6, 10.0, 0.0))
-        .build()
-        .unwrap_err();
+    let err = build_with(ControllerKind::First, comp.clone(), drives(6, 10.0, 0.0)).unwrap_err();
     assert_eq!(
         err,
         BuildError::NoFrictionEstimates(FrictionUse::Compensation)
     );
-    ControllerBuilder::new(ControllerKind::First, &robot)
-        .settings(comp)
-        .drives(drives(6, 10.0, 0.5))
-        .build()
-        .unwrap();
+    build_with(ControllerKind::First, comp, drives(6, 10.0, 0.5)).unwrap();
     let obs = MpcSettings {
         state_observer: true,
         observer_friction: true,
         ..Default::default()
     };
-    let err = ControllerBuilder::new(ControllerKind::First, &robot)
-        .settings(obs)
-        .drives(drives(6, 10.0, 0.0))
-        .build()
-        .unwrap_err();
+    let err = build_with(ControllerKind::First, obs, drives(6, 10.0, 0.0)).unwrap_err();
     assert_eq!(err, BuildError::NoFrictionEstimates(FrictionUse::Observer));
 }
 
