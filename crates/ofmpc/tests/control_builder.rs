@@ -43,6 +43,8 @@ fn build_with(
 
 #[test]
 fn builds_the_paper_controllers_and_the_crate_root_reexport() {
+    fn send<T: Send>() {}
+    send::<ofmpc::control::Mpc>();
     let robot = Robot::irb140();
     for kind in ControllerKind::WITH_ADAPTIVE {
         let mpc = ofmpc::ControllerBuilder::new(kind, &robot).build().unwrap();

@@ -19,6 +19,37 @@
 //!
 //! with the algorithm's `u_k` (Eq. (32)/(37), (34)/(39) or (43)). The step
 //! allocates nothing; its [`StepOutput`] is sized at build.
+//!
+//! ```
+//! use ofmpc::control::{BuildError, ControllerKind, MpcSettings, StepInput};
+//! use ofmpc::robot::Robot;
+//! use ofmpc::ControllerBuilder;
+//!
+//! let robot = Robot::irb140();
+//! let settings = MpcSettings { torque_limits: true, ..MpcSettings::default() };
+//! // The drives come from the robot (its peak torques).
+//! let mut mpc = ControllerBuilder::new(ControllerKind::Second, &robot)
+//!     .settings(settings.clone())
+//!     .build()?;
+//! let x = vec![0.0; 12];
+//! mpc.reset(&x)?;
+//! let (w_k, preview) = (vec![0.0; 6], vec![0.0; 10 * 6]);
+//! let out = mpc.step(&StepInput { x: &x, w_k: &w_k, preview: &preview })?;
+//! assert_eq!(out.tau.len(), 6);
+//! assert!(out.qp_status.is_some());
+//!
+//! // A robot whose drives have no finite peak torque: refused.
+//! let unlimited = ofmpc::control::DriveModel {
+//!     max_torque_nm: vec![f64::INFINITY; 6],
+//!     ..ofmpc::control::DriveModel::from_robot(&robot)
+//! };
+//! let refused = ControllerBuilder::new(ControllerKind::Second, &robot)
+//!     .settings(settings)
+//!     .drives(unlimited)
+//!     .build();
+//! assert_eq!(refused.unwrap_err(), BuildError::NoTorqueLimits);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 use std::time::{Duration, Instant};
 

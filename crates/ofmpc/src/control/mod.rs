@@ -16,6 +16,12 @@
 //!    [`structured_from_horizon`]),
 //! 5. applies the first block and returns `τ_k = H u_k + g` (Eq. (15)).
 //!
+//! Build a controller with [`ControllerBuilder`]: it checks that the kind,
+//! the tuning, the drives and the observer fit together ([`BuildError`])
+//! and returns an [`Mpc`] that owns its model of the robot and steps with
+//! one [`StepInput`] into one [`StepOutput`]. [`new_controller`] and the
+//! [`Controller`] trait are the lower-level path it wraps.
+//!
 //! All buffers are sized at construction; [`Controller::step`] allocates
 //! nothing, never panics and reports a failed sample as a [`StepError`],
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
