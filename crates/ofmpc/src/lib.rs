@@ -9,7 +9,8 @@
 //! [`sim::ClosedLoop`]) → metrics.
 //!
 //! What most users need is re-exported here at the crate root: [`Robot`], [`Payload`],
-//! [`plan`] and [`PlanOptions`], [`ControllerKind`] and [`MpcSettings`],
+//! [`plan`] and [`PlanOptions`], [`ControllerKind`] and [`MpcSettings`], [`ControllerBuilder`]
+//! (a controller that works as configured, or a typed refusal) and its [`Mpc`],
 //! [`Experiment`] (one run, judged), [`ClosedLoop`] and its settings.
 //!
 //! Equations are referenced as in the paper ("Predictive Control for Offset-Free
@@ -48,7 +49,10 @@
 /// appear in signatures): use this re-export to get the same version.
 pub use nalgebra;
 
-pub use control::{new_controller, Controller, ControllerKind, MpcSettings, StepError};
+pub use control::{
+    new_controller, Controller, ControllerBuilder, ControllerKind, Mpc, MpcSettings, StepError,
+    StepInput, StepOutput,
+};
 pub use motion::{plan, JointReference, PlanOptions};
 pub use robot::{Payload, Robot};
 pub use sim::{

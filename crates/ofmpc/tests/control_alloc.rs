@@ -90,26 +90,35 @@ fn constrained_steps_with_friction_compensation_allocate_nothing() {
     }
 }
 
-fn constrained_steps_allocate_nothing(settings: MpcSettings) {
-    use ofmpc::control::DriveModel;
-    let mut model = CoupledModel::new(6, 1);
-    let n = 6;
-    let drives = DriveModel {
+/// Drives whose limits bind at the test states, with friction estimates.
+fn binding_drives(n: usize) -> ofmpc::control::DriveModel {
+    ofmpc::control::DriveModel {
         max_torque_nm: vec![0.5; n],
         coulomb_nm: vec![0.8; n],
         viscous_nms: vec![0.1; n],
         coulomb_velocity_rad_s: 1e-3,
-    };
+    }
+}
+
+/// `x0`, `w_k` and a preview of a reference that moves over the horizon.
+fn moving_inputs(n: usize, horizon: usize) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let x0 = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+    let preview = (0..n * horizon)
+        .map(|i| 0.3 + 0.01 * (i / n) as f64)
+        .collect();
+    (x0, vec![0.3; n], preview)
+}
+
+fn constrained_steps_allocate_nothing(settings: MpcSettings) {
+    let mut model = CoupledModel::new(6, 1);
+    let n = 6;
+    let drives = binding_drives(n);
     for kind in ControllerKind::ALL {
         let mut ctrl = new_controller(kind, n, &settings).unwrap();
         ctrl.set_drive_model(&drives).unwrap();
-        let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
+        let (x0, wk, preview) = moving_inputs(n, settings.horizon);
         ctrl.reset(&x0).unwrap();
         let mut x = x0.clone();
-        let wk = vec![0.3; n];
-        let preview: Vec<f64> = (0..n * settings.horizon)
-            .map(|i| 0.3 + 0.01 * (i / n) as f64)
-            .collect();
         let mut tau = vec![0.0; n];
         let mut active = 0;
         let before = allocations();
@@ -146,4 +155,62 @@ fn observer_updates_allocate_nothing() {
         obs.record_torque(&tau);
     }
     assert_eq!(allocations() - before, 0);
+}
+
+/// The built controller's step (`Mpc::step`: observer, model, solve,
+/// torque-limit QP with friction compensation, output) allocates nothing,
+/// for every kind, failed steps included.
+#[test]
+fn built_controller_steps_allocate_nothing() {
+    use ofmpc::control::{ControllerBuilder, ObserverSettings, StepInput};
+    let robot = ofmpc::robot::Robot::irb140();
+    let n = robot.dof();
+    let limited = MpcSettings {
+        torque_limits: true,
+        friction_compensation: true,
+        delay_compensation: true,
+        observer_friction: true,
+        constraint_horizon: Some(4),
+        ..Default::default()
+    };
+    let drives = binding_drives(n);
+    for kind in ControllerKind::WITH_ADAPTIVE {
+        for settings in [MpcSettings::default(), limited.clone()] {
+            let limits = settings.torque_limits;
+            let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());
+            if limits {
+                builder = builder.drives(drives.clone()).observer(ObserverSettings {
+                    pole: 0.7,
+                    measurement_delay: 1,
+                });
+            }
+            let mut mpc = builder.build().unwrap();
+            let (x0, wk, preview) = moving_inputs(n, settings.horizon);
+            mpc.reset(&x0).unwrap();
+            let mut x = x0.clone();
+            let bad_x = vec![f64::NAN; 2 * n];
+            let before = allocations();
+            for k in 0..100 {
+                for (i, xi) in x.iter_mut().enumerate() {
+                    *xi = x0[i] + 0.001 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
+                }
+                let input = StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                };
+                let out = mpc.step(&input).unwrap();
+                assert!(out.tau.iter().all(|t| t.is_finite()));
+                let bad = StepInput { x: &bad_x, ..input };
+                assert!(mpc.step(&bad).is_err());
+            }
+            let after = allocations();
+            assert_eq!(
+                after - before,
+                0,
+                "{kind}, limits {limits}: {} allocations",
+                after - before
+            );
+        }
+    }
 }

@@ -33,7 +33,7 @@
 //! `j = N+1−t`, then the `Q_ΔU` rows of unknown block `t`. Same minimizer,
 //! `J_min` and `R1` as the paper's system with half its rows.
 
-use super::constrained::TorqueLimitQp;
+use super::constrained::{QpStatus, TorqueLimitQp};
 use super::dense::gemm;
 use super::drive_model::DriveModel;
 use super::lsq::{LsqError, LsqInfo, LsqWorkspace};
@@ -58,15 +58,15 @@ macro_rules! impl_controller {
             }
 
             fn dof(&self) -> usize {
-                self.core.n
+                self.core.dof()
             }
 
             fn horizon(&self) -> usize {
-                self.core.nh
+                self.core.horizon()
             }
 
             fn settings(&self) -> &$crate::control::MpcSettings {
-                &self.core.settings
+                self.core.settings()
             }
 
             fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
@@ -74,11 +74,11 @@ macro_rules! impl_controller {
             }
 
             fn input(&self) -> &[f64] {
-                &self.core.u_prev
+                self.core.input()
             }
 
             fn increments(&self) -> &[f64] {
-                &self.core.du
+                self.core.increments()
             }
 
             fn set_drive_model(
@@ -89,7 +89,7 @@ macro_rules! impl_controller {
             }
 
             fn qp_status(&self) -> Option<$crate::control::QpStatus> {
-                self.core.qp.as_ref().map(|q| q.status)
+                self.core.qp_status()
             }
 
             fn step(
@@ -110,67 +110,124 @@ pub(crate) use impl_controller;
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
 const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;
 
+/// The least-squares back-end of a controller, chosen once from
+/// [`Solver::for_controller`]: every solver-specific buffer lives in its
+/// variant, so a controller matches on one value instead of testing several
+/// optional workspaces.
+// One per controller, built once: the size difference costs nothing, a box
+// would cost an indirection on every access of the stage-wise problem.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone)]
+pub(super) enum Backend {
+    /// The stacked dense system by Householder QR ([`Solver::DenseQr`]).
+    Dense(DenseBackend),
+    /// The stage-wise square-root Riccati recursion ([`Solver::Structured`]).
+    Structured(StructuredBackend),
+}
+
+/// Buffers of the dense solver (module docs: layout of `𝒜 ΔU = b`).
+#[derive(Debug, Clone)]
+pub(super) struct DenseBackend {
+    /// The dense system `[𝒜 | b]`.
+    pub(super) lsq: LsqWorkspace,
+    /// The incremental algorithms' reduction of their two tracking row
+    /// groups (`None` for the usual controller, which has one group).
+    pub(super) tracking: Option<TrackingRows>,
+    /// `Σ ‖d_i‖²` of the last [`Core::reduce_rhs`]: the part of `J_min`
+    /// outside the reduced system.
+    tracking_residual: f64,
+}
+
+/// Buffers of the structured solver.
+#[derive(Debug, Clone)]
+pub(super) struct StructuredBackend {
+    /// The stage-wise problem.
+    pub(super) stage: StageLq,
+    /// With torque limits: the condensed problem of the constrained head of
+    /// the horizon (`StageLq::condense_head`), formed and factored only on
+    /// steps whose plan passes a limit (`head_ready`).
+    head: Option<LsqWorkspace>,
+    head_ready: bool,
+}
+
+impl Backend {
+    /// The dense solver's buffers, or an internal error for the structured one.
+    pub(super) fn dense_mut(&mut self) -> Result<&mut DenseBackend, StepError> {
+        match self {
+            Backend::Dense(d) => Ok(d),
+            Backend::Structured(_) => Err(StepError::Internal("dense solve without its workspace")),
+        }
+    }
+
+    /// The incremental algorithms' tracking rows (dense solver), or an
+    /// internal error.
+    pub(super) fn tracking_mut(&mut self) -> Result<&mut TrackingRows, StepError> {
+        self.dense_mut()?
+            .tracking
+            .as_mut()
+            .ok_or(StepError::Internal("dense solve without its workspace"))
+    }
+
+    /// The stage-wise problem when the structured solver is used.
+    pub(super) fn stage_mut(&mut self) -> Option<&mut StageLq> {
+        match self {
+            Backend::Structured(s) => Some(&mut s.stage),
+            Backend::Dense(_) => None,
+        }
+    }
+}
+
+/// The state and buffers shared by the three algorithms (module docs).
 #[derive(Debug, Clone)]
 pub(crate) struct Core {
-    pub n: usize,
-    pub nh: usize,
-    pub ts: f64,
+    pub(super) n: usize,
+    pub(super) nh: usize,
+    ts: f64,
     /// Rows of the paper's system per unknown: 3 (incremental, Eq. (37),
     /// (39)) or 2 (usual, Eq. (43)); the rank tests of both solvers use
     /// `groups·N·n` as the row count of their tolerance.
-    pub groups: usize,
-    pub settings: MpcSettings,
+    groups: usize,
+    pub(super) settings: MpcSettings,
     /// Diagonals of the square-root weights: Q_YW, Q_ΔY, Q_ΔU (or Q_U).
-    pub w_top: Vec<f64>,
-    pub w_mid: Vec<f64>,
-    pub w_bot: Vec<f64>,
-    pub model: LinearLikeModel,
-    pub zoh: Zoh,
+    pub(super) w_top: Vec<f64>,
+    pub(super) w_mid: Vec<f64>,
+    w_bot: Vec<f64>,
+    model: LinearLikeModel,
+    zoh: Zoh,
     /// `F1` and the `G1` generator; its `F2`, `F3` and the `G2`, `G3`
     /// generators are not maintained (the controllers form `F2 Δx`, `F3 Δx`
     /// from `F1 Δx` by running sums, and `G2`, `G3` enter through `G1`).
-    pub pred: Predictions,
-    /// The dense system (solver "dense-qr" only).
-    pub lsq: Option<LsqWorkspace>,
-    /// The incremental algorithms' reduction of their two tracking row
-    /// groups (solver "dense-qr" only).
-    pub tracking: Option<TrackingRows>,
-    /// `Σ ‖d_i‖²` of the last [`Core::reduce_rhs`]: the part of `J_min`
-    /// outside the reduced system.
-    pub tracking_residual: f64,
-    /// The stage-wise problem (solver "structured" only).
-    pub stage: Option<StageLq>,
-    /// With the structured solver and torque limits: the condensed problem
-    /// of the constrained head of the horizon (`StageLq::condense_head`),
-    /// formed and factored only on steps whose plan passes a limit
-    /// (`head_ready`).
-    pub head: Option<LsqWorkspace>,
-    pub head_ready: bool,
+    pub(super) pred: Predictions,
+    /// The least-squares solver and its buffers.
+    pub(super) backend: Backend,
     /// The whole solution of the last step in natural order: block `j` is
     /// `Δu_{k+j}` (or `u_{k+j}` for the usual controller), `j = 0..N`.
-    pub du: Vec<f64>,
-    pub x_prev: Vec<f64>,
-    pub u_prev: Vec<f64>,
-    pub ebar: Vec<f64>,
-    pub dx: Vec<f64>,
-    pub u_new: Vec<f64>,
-    pub ebar_new: Vec<f64>,
-    pub tau_new: Vec<f64>,
+    du: Vec<f64>,
+    x_prev: Vec<f64>,
+    u_prev: Vec<f64>,
+    pub(super) ebar: Vec<f64>,
+    pub(super) dx: Vec<f64>,
+    u_new: Vec<f64>,
+    pub(super) ebar_new: Vec<f64>,
+    tau_new: Vec<f64>,
     /// N·n work vectors for F·Δx products.
-    pub v1: Vec<f64>,
-    pub v2: Vec<f64>,
-    pub v3: Vec<f64>,
+    pub(super) v1: Vec<f64>,
+    pub(super) v2: Vec<f64>,
+    pub(super) v3: Vec<f64>,
     /// Incremental algorithm (`u_k = u_{k−1} + Δu_k`) or positional.
-    pub incremental: bool,
+    incremental: bool,
     /// The drives as the controller models them ([`Core::set_drive_model`]).
-    pub drives: Option<DriveModel>,
+    drives: Option<DriveModel>,
     /// Torque-limit QP, when `torque_limits` is on and a drive model is set.
-    pub qp: Option<Box<TorqueLimitQp>>,
+    qp: Option<Box<TorqueLimitQp>>,
     /// Per-joint friction feed-forward `F̂(v_ref)` of the current sample.
-    pub damping: Vec<f64>,
+    damping: Vec<f64>,
 }
 
 impl Core {
+    /// Buffers for controller `kind` with `n` joints, after
+    /// [`MpcSettings::validate_for_dof`]; the back-end from
+    /// [`Solver::for_controller`].
     pub fn new(
         n: usize,
         settings: &MpcSettings,
@@ -181,69 +238,29 @@ impl Core {
         let nh = settings.horizon;
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
-        // The dense system has 2 row groups per level (incremental: after the
-        // tracking rows' reduction, module docs).
-        let m = 2 * p;
-        // The torque-limit QP (constrained.rs) works on the dense system, or on
-        // the structured solver's condensed head (`head`, below).
-        let solver = settings.solver.for_controller(kind, nh);
-        let (lsq, stage) = match solver {
-            Solver::DenseQr | Solver::Auto => {
-                let total = dense_entries(n, nh, incremental);
-                if !matches!(total, Some(e) if e <= MAX_ENTRIES) {
-                    return Err(SettingsError::TooLarge {
-                        rows: m,
-                        cols: p,
-                        limit: MAX_ENTRIES,
-                    });
-                }
-                let row_end: Vec<usize> = (0..p).map(|c| 2 * n * (c / n + 1)).collect();
-                let mut lsq = LsqWorkspace::with_profile(m, p, row_end).map_err(|_| {
-                    SettingsError::TooLarge {
-                        rows: m,
-                        cols: p,
-                        limit: MAX_ENTRIES,
-                    }
-                })?;
-                lsq.set_rank_rows(groups * p);
-                (Some(lsq), None)
-            }
-            Solver::Structured => {
-                let (nz, nq) = stage_dims(kind, n);
-                // The largest buffers: the N stored stage rows [R_vv R_vz ρ]
-                // (N·n × (n + nz + 1)) and the stacked stage matrix.
-                let cols = n + nz + 1;
-                let fits = |r: usize| matches!(r.checked_mul(cols), Some(e) if e <= MAX_ENTRIES);
-                if !(fits(p) && fits(n + nq + nz)) {
-                    return Err(SettingsError::TooLarge {
-                        rows: p,
-                        cols,
-                        limit: MAX_ENTRIES,
-                    });
-                }
-                let mut st = StageLq::new(n, nz, nq, nh);
-                fill_stage_constants(kind, n, &mut st);
-                // R = Q_Δu (Q_u), D = [Q_YW; Q_ΔY] (Q_YW) on the leading states.
-                let bot = if incremental {
-                    &settings.q_du
-                } else {
-                    &settings.q_u
-                };
-                bot.fill(&mut st.rd);
-                settings.q_yw.fill(&mut st.qd[..n]);
-                if incremental {
-                    settings.q_dy.fill(&mut st.qd[n..]);
-                }
-                if settings.torque_limits {
-                    st.set_head(settings.constraint_horizon.unwrap_or(nh));
-                }
-                (None, Some(st))
-            }
-        };
         let diag = |w: &super::settings::Weight| {
             let mut v = vec![0.0; n];
             w.fill(&mut v);
             v
+        };
+        // The torque-limit QP (constrained.rs) works on the dense system, or on
+        // the structured solver's condensed head (`head`).
+        let backend = match settings.solver.for_controller(kind, nh) {
+            Solver::DenseQr | Solver::Auto => Backend::Dense(DenseBackend {
+                lsq: dense_workspace(n, nh, groups, incremental)?,
+                tracking: match kind.base() {
+                    ControllerKind::First | ControllerKind::Second => Some(TrackingRows::new(
+                        &diag(&settings.q_yw),
+                        &diag(&settings.q_dy),
+                        nh,
+                        kind.base() == ControllerKind::Second,
+                    )),
+                    // The usual controller (kind.base() is never adaptive).
+                    _ => None,
+                },
+                tracking_residual: 0.0,
+            }),
+            Solver::Structured => Backend::Structured(structured_backend(n, settings, kind)?),
         };
         Ok(Self {
             n,
@@ -260,43 +277,17 @@ impl Core {
             },
             model: LinearLikeModel::new(n),
             zoh: Zoh::new(n),
-            pred: Predictions::new(2 * n, n, n, if stage.is_some() { 0 } else { nh }),
-            head: match (&stage, settings.torque_limits) {
-                (Some(st), true) => {
-                    let nc = settings.constraint_horizon.unwrap_or(nh).clamp(1, nh);
-                    let (m, p) = StageLq::head_dims(st.nu, st.nz, st.nq, nc);
-                    if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
-                        return Err(SettingsError::TooLarge {
-                            rows: m,
-                            cols: p,
-                            limit: MAX_ENTRIES,
-                        });
-                    }
-                    Some(
-                        LsqWorkspace::new(m, p).map_err(|_| SettingsError::TooLarge {
-                            rows: m,
-                            cols: p,
-                            limit: MAX_ENTRIES,
-                        })?,
-                    )
-                }
-                _ => None,
-            },
-            head_ready: false,
-            tracking: match (&lsq, kind.base()) {
-                (Some(_), ControllerKind::First | ControllerKind::Second) => {
-                    Some(TrackingRows::new(
-                        &diag(&settings.q_yw),
-                        &diag(&settings.q_dy),
-                        nh,
-                        kind.base() == ControllerKind::Second,
-                    ))
-                }
-                _ => None,
-            },
-            tracking_residual: 0.0,
-            lsq,
-            stage,
+            pred: Predictions::new(
+                2 * n,
+                n,
+                n,
+                if matches!(backend, Backend::Structured(_)) {
+                    0
+                } else {
+                    nh
+                },
+            ),
+            backend,
             du: vec![0.0; p],
             x_prev: vec![0.0; 2 * n],
             u_prev: vec![0.0; n],
@@ -315,6 +306,36 @@ impl Core {
         })
     }
 
+    /// Number of joints `n`.
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+
+    /// Prediction horizon `N`.
+    pub fn horizon(&self) -> usize {
+        self.nh
+    }
+
+    /// The settings the controller was built with.
+    pub fn settings(&self) -> &MpcSettings {
+        &self.settings
+    }
+
+    /// `u_{k−1}`: the input of the last successful step.
+    pub fn input(&self) -> &[f64] {
+        &self.u_prev
+    }
+
+    /// The optimal sequence of the last successful step (natural order).
+    pub fn increments(&self) -> &[f64] {
+        &self.du
+    }
+
+    /// What the torque-limit QP did at the last step (`None` without limits).
+    pub fn qp_status(&self) -> Option<QpStatus> {
+        self.qp.as_ref().map(|q| q.status)
+    }
+
     /// Gives the controller the drives' limits and friction estimates; with
     /// `torque_limits` on, sizes the QP workspace (this allocates; `step`
     /// then does not).
@@ -324,12 +345,12 @@ impl Core {
             // The dense system, or the structured solver's condensed head of
             // nc stages (Core::new).
             let nc = self.settings.constraint_horizon.unwrap_or(self.nh);
-            let blocks = if self.lsq.is_some() {
-                self.nh
-            } else if self.head.is_some() {
-                nc.clamp(1, self.nh)
-            } else {
-                return Err(SettingsError::DrivesUnsupported("structured solver"));
+            let blocks = match &self.backend {
+                Backend::Dense(_) => self.nh,
+                Backend::Structured(s) if s.head.is_some() => nc.clamp(1, self.nh),
+                Backend::Structured(_) => {
+                    return Err(SettingsError::DrivesUnsupported("structured solver"))
+                }
             };
             Some(Box::new(TorqueLimitQp::new(
                 self.n,
@@ -375,6 +396,18 @@ impl Core {
         Ok(())
     }
 
+    /// Refuses to step without the drive model the settings need: torque
+    /// limits without their QP would run unconstrained, friction
+    /// compensation without estimates would compensate nothing.
+    fn check_drives(&self) -> Result<(), StepError> {
+        if (self.settings.torque_limits && self.qp.is_none())
+            || (self.settings.friction_compensation && self.drives.is_none())
+        {
+            return Err(StepError::NoDriveModel);
+        }
+        Ok(())
+    }
+
     /// Input checks, model terms, `f0`, ZOH, predictions and `Δx_k`.
     pub fn prepare(
         &mut self,
@@ -392,6 +425,7 @@ impl Core {
         check_finite("x", x)?;
         check_finite("w_k", w_k)?;
         check_finite("preview", preview)?;
+        self.check_drives()?;
         self.model.update(model, &x[..n], &x[n..])?;
         if self.settings.friction_compensation {
             if let Some(d) = &self.drives {
@@ -407,7 +441,7 @@ impl Core {
             }
         }
         self.zoh.discretize(self.model.f0(), self.ts)?;
-        if self.lsq.is_some() {
+        if matches!(self.backend, Backend::Dense(_)) {
             self.pred
                 .update_f1_and_g1_from_zoh(&self.zoh)
                 .map_err(|_| StepError::Internal("prediction shapes"))?;
@@ -424,7 +458,7 @@ impl Core {
         let (n, nh) = (self.n, self.nh);
         let p = nh * n;
         let top_gen = self.pred.g1_gen().as_slice();
-        let Some(lsq) = self.lsq.as_mut() else {
+        let Backend::Dense(DenseBackend { lsq, .. }) = &mut self.backend else {
             return;
         };
         let m = lsq.rows();
@@ -470,7 +504,12 @@ impl Core {
     /// `i` holds `Σ_{l ≤ j' ≤ j} L_i[j, j'] G1[j' − l]_{i,·}`, then the `Q_ΔU`
     /// rows.
     pub fn build_reduced_matrix(&mut self) {
-        if let (Some(lsq), Some(tr)) = (self.lsq.as_mut(), self.tracking.as_mut()) {
+        if let Backend::Dense(DenseBackend {
+            lsq,
+            tracking: Some(tr),
+            ..
+        }) = &mut self.backend
+        {
             let m = lsq.rows();
             tr.write_rows(
                 self.pred.g1_gen().as_slice(),
@@ -487,10 +526,15 @@ impl Core {
     pub fn reduce_rhs(&mut self) -> Result<(), StepError> {
         let n = self.n;
         let nh = self.nh;
-        let (Some(lsq), Some(tr)) = (self.lsq.as_mut(), self.tracking.as_mut()) else {
+        let Backend::Dense(DenseBackend {
+            lsq,
+            tracking: Some(tr),
+            tracking_residual,
+        }) = &mut self.backend
+        else {
             return Err(StepError::Internal("dense solve without its workspace"));
         };
-        self.tracking_residual = tr.transform_rhs();
+        *tracking_residual = tr.transform_rhs();
         let b = lsq.rhs_mut();
         for (tl, level) in b[..2 * n * nh].chunks_exact_mut(2 * n).enumerate() {
             let (rows, du) = level.split_at_mut(n);
@@ -509,12 +553,10 @@ impl Core {
     /// in reversed block order) into `du`.
     pub fn solve(&mut self) -> Result<LsqInfo, StepError> {
         let n = self.n;
-        let lsq = self
-            .lsq
-            .as_mut()
-            .ok_or(StepError::Internal("dense solve without its workspace"))?;
+        let d = self.backend.dense_mut()?;
+        let lsq = &mut d.lsq;
         let mut info = lsq.solve()?;
-        info.residual_sq += self.tracking_residual;
+        info.residual_sq += d.tracking_residual;
         for (dst, src) in self
             .du
             .chunks_exact_mut(n)
@@ -530,7 +572,7 @@ impl Core {
     /// affine terms.
     pub fn fill_stage_model(&mut self) -> Result<(), StepError> {
         let n = self.n;
-        let st = self.stage.as_mut().ok_or(StepError::Internal(
+        let st = self.backend.stage_mut().ok_or(StepError::Internal(
             "structured solve without its workspace",
         ))?;
         let (phi1, phi2, e) = (
@@ -555,9 +597,16 @@ impl Core {
     /// caller's `z_0`, targets, affine terms) and copies its solution to `du`.
     pub fn solve_structured(&mut self) -> Result<LsqInfo, StepError> {
         let (n, nh, g) = (self.n, self.nh, self.groups);
-        let st = self.stage.as_mut().ok_or(StepError::Internal(
-            "structured solve without its workspace",
-        ))?;
+        let Backend::Structured(StructuredBackend {
+            stage: st,
+            head,
+            head_ready,
+        }) = &mut self.backend
+        else {
+            return Err(StepError::Internal(
+                "structured solve without its workspace",
+            ));
+        };
         let info = match st.solve() {
             Ok(info) => info,
             Err(StageError::NonFinite) => return Err(LsqError::NonFiniteResult.into()),
@@ -569,13 +618,13 @@ impl Core {
         self.du.copy_from_slice(st.solution());
         // Torque limits: a plan that passes one in the constrained head gets
         // the head condensed and factored for the QP (finish).
-        self.head_ready = false;
-        if let (Some(qp), Some(head)) = (self.qp.as_mut(), self.head.as_mut()) {
+        *head_ready = false;
+        if let (Some(qp), Some(head)) = (self.qp.as_mut(), head.as_mut()) {
             if qp.violates(&self.model, &self.du, &self.u_prev) {
                 let (a, b) = head.system_mut();
                 st.condense_head(a, b);
                 head.solve()?;
-                self.head_ready = true;
+                *head_ready = true;
             }
         }
         Ok(LsqInfo {
@@ -602,10 +651,9 @@ impl Core {
         // system, or on the structured solver's condensed head when its plan
         // passed a limit; unchanged when the unconstrained solution respects
         // them.
-        let source = if self.stage.is_some() {
-            self.head.as_ref().filter(|_| self.head_ready)
-        } else {
-            self.lsq.as_ref()
+        let source = match &self.backend {
+            Backend::Structured(s) => s.head.as_ref().filter(|_| s.head_ready),
+            Backend::Dense(d) => Some(&d.lsq),
         };
         if let Some(qp) = self.qp.as_mut() {
             match source {
@@ -640,6 +688,90 @@ impl Core {
             zoh_squarings: self.zoh.squarings(),
         })
     }
+}
+
+/// The dense solver's system for `n` joints and horizon `nh`: `2·N·n` rows
+/// (2 row groups per level; incremental: after the tracking rows'
+/// reduction, module docs) with the block upper-triangular profile.
+fn dense_workspace(
+    n: usize,
+    nh: usize,
+    groups: usize,
+    incremental: bool,
+) -> Result<LsqWorkspace, SettingsError> {
+    let p = nh * n;
+    let m = 2 * p;
+    let too_large = SettingsError::TooLarge {
+        rows: m,
+        cols: p,
+        limit: MAX_ENTRIES,
+    };
+    if !matches!(dense_entries(n, nh, incremental), Some(e) if e <= MAX_ENTRIES) {
+        return Err(too_large);
+    }
+    let row_end: Vec<usize> = (0..p).map(|c| 2 * n * (c / n + 1)).collect();
+    let mut lsq = LsqWorkspace::with_profile(m, p, row_end).map_err(|_| too_large)?;
+    lsq.set_rank_rows(groups * p);
+    Ok(lsq)
+}
+
+/// The structured solver's buffers for controller `kind`: the stage-wise
+/// problem with its constant part and weights, and with torque limits the
+/// condensed head of the first `constraint_horizon` stages.
+fn structured_backend(
+    n: usize,
+    settings: &MpcSettings,
+    kind: ControllerKind,
+) -> Result<StructuredBackend, SettingsError> {
+    let nh = settings.horizon;
+    let p = nh * n;
+    let incremental = kind != ControllerKind::Usual;
+    let (nz, nq) = stage_dims(kind, n);
+    // The largest buffers: the N stored stage rows [R_vv R_vz ρ]
+    // (N·n × (n + nz + 1)) and the stacked stage matrix.
+    let cols = n + nz + 1;
+    let fits = |r: usize| matches!(r.checked_mul(cols), Some(e) if e <= MAX_ENTRIES);
+    if !(fits(p) && fits(n + nq + nz)) {
+        return Err(SettingsError::TooLarge {
+            rows: p,
+            cols,
+            limit: MAX_ENTRIES,
+        });
+    }
+    let mut st = StageLq::new(n, nz, nq, nh);
+    fill_stage_constants(kind, n, &mut st);
+    // R = Q_Δu (Q_u), D = [Q_YW; Q_ΔY] (Q_YW) on the leading states.
+    let bot = if incremental {
+        &settings.q_du
+    } else {
+        &settings.q_u
+    };
+    bot.fill(&mut st.rd);
+    settings.q_yw.fill(&mut st.qd[..n]);
+    if incremental {
+        settings.q_dy.fill(&mut st.qd[n..]);
+    }
+    let head = if settings.torque_limits {
+        st.set_head(settings.constraint_horizon.unwrap_or(nh));
+        let nc = settings.constraint_horizon.unwrap_or(nh).clamp(1, nh);
+        let (m, p) = StageLq::head_dims(st.nu, st.nz, st.nq, nc);
+        let too_large = SettingsError::TooLarge {
+            rows: m,
+            cols: p,
+            limit: MAX_ENTRIES,
+        };
+        if !matches!(m.checked_mul(p + 1), Some(e) if e <= MAX_ENTRIES) {
+            return Err(too_large);
+        }
+        Some(LsqWorkspace::new(m, p).map_err(|_| too_large)?)
+    } else {
+        None
+    };
+    Ok(StructuredBackend {
+        stage: st,
+        head,
+        head_ready: false,
+    })
 }
 
 /// The `f64` entries the dense solver holds for `n` joints and horizon `nh`:

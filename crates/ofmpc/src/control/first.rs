@@ -41,7 +41,7 @@ impl FirstMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
-        if let Some(st) = c.stage.as_mut() {
+        if let Some(st) = c.backend.stage_mut() {
             // Stage-wise: z = [y − y_k; Δq; Δq̇] (deviation from the measured
             // output, as W − F_I y_k in Eq. (37)), z_0 = [0; Δx_k]; targets:
             // w_{k+j} − y_k for the first block, 0 for Δq (Q_YW (ŷ − w), Q_ΔY Δŷ).
@@ -64,11 +64,7 @@ impl FirstMpc {
         // F2 Δx: block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i]).
         prefix_sums(n, &c.v1, &mut c.v2, None);
         let y = &x[..n];
-        let b = &mut c
-            .tracking
-            .as_mut()
-            .ok_or(StepError::Internal("dense solve without its workspace"))?
-            .b;
+        let b = &mut c.backend.tracking_mut()?.b;
         let (b_top, b_mid) = b.split_at_mut(rows);
         for j in 0..nh {
             let o = j * n;

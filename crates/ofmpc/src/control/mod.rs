@@ -11,14 +11,23 @@
 //!    either as the stacked dense system by Householder QR ([`lsq`],
 //!    [`Solver::DenseQr`]) or stage-wise by a square-root Riccati recursion
 //!    whose cost is linear in `N` ([`Solver::Structured`]; by default the
-//!    faster of the two for the horizon, [`Solver::Auto`]),
+//!    faster of the two for the controller and horizon, [`Solver::Auto`]:
+//!    the structured solver from N = 16 (usual), 20 (first), 24 (second),
+//!    [`structured_from_horizon`]),
 //! 5. applies the first block and returns `τ_k = H u_k + g` (Eq. (15)).
+//!
+//! Build a controller with [`ControllerBuilder`]: it checks that the kind,
+//! the tuning, the drives and the observer fit together ([`BuildError`])
+//! and returns an [`Mpc`] that owns its model of the robot and steps with
+//! one [`StepInput`] into one [`StepOutput`]. [`new_controller`] and the
+//! [`Controller`] trait are the lower-level path it wraps.
 //!
 //! All buffers are sized at construction; [`Controller::step`] allocates
 //! nothing, never panics and reports a failed sample as a [`StepError`],
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
 
 pub mod adaptive;
+pub mod builder;
 pub mod constrained;
 pub(crate) mod core;
 pub(crate) mod dense;
@@ -44,6 +53,10 @@ use serde::{Deserialize, Serialize};
 use crate::dynamics::JointSpaceDynamics;
 
 pub use adaptive::AdaptiveMpc;
+pub use builder::{
+    BuildError, ControllerBuilder, FrictionUse, Mpc, MpcParts, ObserverSettings, StepInput,
+    StepOutput, DEFAULT_OBSERVER_POLE,
+};
 pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
 pub use drive_model::{DriveModel, DriveQuantity};
 pub use first::FirstMpc;
@@ -203,6 +216,12 @@ pub enum StepError {
     /// model, whose payload it cannot identify or update.
     #[error("an adaptive controller needs a rigid-body model of the robot to identify and update its payload")]
     NoRigidBodyModel,
+    /// The settings ask for torque limits or friction compensation but the
+    /// controller was given no drive model ([`Controller::set_drive_model`]):
+    /// it would run unconstrained, or compensate nothing. Build it with
+    /// [`ControllerBuilder`], which supplies the drives, or set them first.
+    #[error("torque limits or friction compensation are on but the controller has no drive model: give it the drives' limits and friction estimates before stepping")]
+    NoDriveModel,
     /// An internal invariant failed (a bug: please report).
     #[error("internal error in the controller: {0} (please report this bug)")]
     Internal(&'static str),
@@ -232,7 +251,9 @@ pub trait Controller {
     fn increments(&self) -> &[f64];
     /// Gives the controller the drives' torque limits and friction estimates
     /// (used when the settings' torque limits or friction compensation are
-    /// on). Allocates (sizes the constrained solver); call before a run.
+    /// on; without them such a controller refuses to step,
+    /// [`StepError::NoDriveModel`]). Allocates (sizes the constrained
+    /// solver); call before a run. [`ControllerBuilder`] does it.
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
         let _ = drives;
         Err(SettingsError::DrivesUnsupported(self.kind().name()))

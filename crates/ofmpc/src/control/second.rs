@@ -61,7 +61,7 @@ impl SecondMpc {
         if c.settings.friction_compensation {
             restart_in_hold(n, w_k, y, preview, &mut c.ebar_new);
         }
-        if let Some(st) = c.stage.as_mut() {
+        if let Some(st) = c.backend.stage_mut() {
             // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
             // w_{k+i}) − ē_k, so Q_YW s_j is the first row of Eq. (39):
             // z_0 = [−ē_k; Δq_k; 0; Δq̇_k], c_j = [y_k − w_{k+j+1}; 0; 0; 0]
@@ -95,11 +95,7 @@ impl SecondMpc {
         }
         // W_s block j = Σ_{i<j} w_{k+i}: running sum.
         self.ws.fill(0.0);
-        let b = &mut c
-            .tracking
-            .as_mut()
-            .ok_or(StepError::Internal("dense solve without its workspace"))?
-            .b;
+        let b = &mut c.backend.tracking_mut()?.b;
         let (b_top, b_mid) = b.split_at_mut(rows);
         for j in 1..=nh {
             let o = (j - 1) * n;

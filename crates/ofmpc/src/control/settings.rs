@@ -183,7 +183,9 @@ pub struct MpcSettings {
     /// Input weight `Q_u` of the usual controller, Eq. (43) (default `1e-4·I`).
     pub q_u: Weight,
     /// Least-squares solver (default [`Solver::Auto`]: the dense QR below
-    /// N = 20, the structured solver from there on; both give the same `ΔU`).
+    /// the controller's crossover, [`structured_from_horizon`] — N = 16 for
+    /// the usual controller, 20 for the first algorithm, 24 for the second —
+    /// the structured solver from there on; both give the same `ΔU`).
     pub solver: Solver,
     /// The payload the controllers' model assumes, a point mass at the
     /// flange centre (kg, default 0: the paper's model knows no payload).

@@ -36,7 +36,7 @@ impl UsualMpc {
     ) -> Result<StepInfo, StepError> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
-        if let Some(st) = c.stage.as_mut() {
+        if let Some(st) = c.backend.stage_mut() {
             // Stage-wise: z = [q; q̇], z_0 = x_k, target of q at stage j is w_{k+j}.
             st.z0.copy_from_slice(x);
             st.r.copy_from_slice(preview);
@@ -49,11 +49,7 @@ impl UsualMpc {
         let rows = nh * n;
         // v1 = F x_k (positional prediction from the full state).
         Core::f_times(c.pred.f1().as_slice(), x, rows, &mut c.v1);
-        let b = c
-            .lsq
-            .as_mut()
-            .ok_or(StepError::Internal("dense solve without its workspace"))?
-            .rhs_mut();
+        let b = c.backend.dense_mut()?.lsq.rhs_mut();
         b.fill(0.0);
         for j in 1..=nh {
             let base = (nh - j) * 2 * n; // level N − j: [Q_YW rows; Q_U rows]

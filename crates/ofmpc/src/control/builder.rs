@@ -1,0 +1,546 @@
+//! A controller that works as configured, or a typed reason why not.
+//!
+//! [`ControllerBuilder`] gathers everything a controller needs — the kind,
+//! the robot (from which the controller's own model is built), the tuning
+//! ([`MpcSettings`]), the drives ([`DriveModel`]), the state observer and the
+//! payload estimator — and [`ControllerBuilder::build`] checks that they fit
+//! together before anything runs: a setting that would silently do nothing
+//! (torque limits with no finite limit, friction compensation with no
+//! friction estimate, …) is a [`BuildError`], never a quiet fallback.
+//!
+//! The built [`Mpc`] owns its model of the robot (the nominal rigid-body
+//! model, with the payload the tuning assumes; for the adaptive kinds the
+//! copy whose payload it identifies), its drives and its observer, and runs
+//! one sample per [`Mpc::step`]:
+//!
+//! ```text
+//! x̂_k = observer(x_k) (or x_k),   τ_k = H u_k + g (+ F̂(v_ref))   (Eq. (15))
+//! ```
+//!
+//! with the algorithm's `u_k` (Eq. (32)/(37), (34)/(39) or (43)). The step
+//! allocates nothing; its [`StepOutput`] is sized at build.
+//!
+//! ```
+//! use ofmpc::control::{BuildError, ControllerKind, MpcSettings, StepInput};
+//! use ofmpc::robot::Robot;
+//! use ofmpc::ControllerBuilder;
+//!
+//! let robot = Robot::irb140();
+//! let settings = MpcSettings { torque_limits: true, ..MpcSettings::default() };
+//! // The drives come from the robot (its peak torques).
+//! let mut mpc = ControllerBuilder::new(ControllerKind::Second, &robot)
+//!     .settings(settings.clone())
+//!     .build()?;
+//! let x = vec![0.0; 12];
+//! mpc.reset(&x)?;
+//! let (w_k, preview) = (vec![0.0; 6], vec![0.0; 10 * 6]);
+//! let out = mpc.step(&StepInput { x: &x, w_k: &w_k, preview: &preview })?;
+//! assert_eq!(out.tau.len(), 6);
+//! assert!(out.qp_status.is_some());
+//!
+//! // A robot whose drives have no finite peak torque: refused.
+//! let unlimited = ofmpc::control::DriveModel {
+//!     max_torque_nm: vec![f64::INFINITY; 6],
+//!     ..ofmpc::control::DriveModel::from_robot(&robot)
+//! };
+//! let refused = ControllerBuilder::new(ControllerKind::Second, &robot)
+//!     .settings(settings)
+//!     .drives(unlimited)
+//!     .build();
+//! assert_eq!(refused.unwrap_err(), BuildError::NoTorqueLimits);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use std::time::{Duration, Instant};
+
+use super::core::{check_finite, check_len};
+use super::{
+    new_controller, AdaptiveMpc, Controller, ControllerKind, DriveModel, MpcSettings, QpStatus,
+    SettingsError, StateObserver, StepError,
+};
+use crate::dynamics::RobotDynamics;
+use crate::ident::RlsSettings;
+use crate::robot::{ModelError, Payload, Robot};
+
+/// Default pole of the state observer's error dynamics (per sample), the
+/// value measured best on the paper's path (22-bit encoder, one sample of
+/// delay): see [`ObserverSettings`].
+pub const DEFAULT_OBSERVER_POLE: f64 = 0.7;
+
+/// Tuning of the state observer ([`StateObserver`]) a controller runs when
+/// its settings ask for one ([`MpcSettings::state_observer`] or
+/// [`MpcSettings::delay_compensation`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObserverSettings {
+    /// The three poles `p` of the observer's error dynamics, in `(0, 1)`
+    /// (default [`DEFAULT_OBSERVER_POLE`]).
+    pub pole: f64,
+    /// Age of the measurement in samples `D` (default 0). With
+    /// [`MpcSettings::delay_compensation`] the observer predicts over it;
+    /// without, the estimate is of the measured sample.
+    pub measurement_delay: usize,
+}
+
+impl Default for ObserverSettings {
+    fn default() -> Self {
+        Self {
+            pole: DEFAULT_OBSERVER_POLE,
+            measurement_delay: 0,
+        }
+    }
+}
+
+/// What the drives' friction estimates were wanted for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrictionUse {
+    /// The friction feed-forward of the torque ([`MpcSettings::friction_compensation`]).
+    Compensation,
+    /// The state observer's friction model ([`MpcSettings::observer_friction`]).
+    Observer,
+}
+
+impl std::fmt::Display for FrictionUse {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            FrictionUse::Compensation => "friction compensation",
+            FrictionUse::Observer => "the observer's friction model",
+        })
+    }
+}
+
+/// Why a controller cannot be built as configured.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum BuildError {
+    /// The tuning does not fit the robot ([`MpcSettings::validate_for_dof`]),
+    /// the drive model does not ([`DriveModel::validate`]), or the payload
+    /// estimator's tuning is unusable.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The controller's model of the robot cannot carry the payload the
+    /// tuning assumes.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// Torque limits are on but no joint's drive has a finite peak torque:
+    /// the limits would never bind.
+    #[error("torque limits are on but no joint has a finite peak torque: give the drives' limits or turn the limits off")]
+    NoTorqueLimits,
+    /// Friction compensation, or the observer's friction model, is on but
+    /// every friction estimate of the drives is zero: it would do nothing.
+    #[error("{0} is on but the drives give no friction estimate (all Coulomb and viscous estimates are 0)")]
+    NoFrictionEstimates(FrictionUse),
+    /// The observer's friction model is on but the settings run no observer.
+    #[error("the observer's friction model is on but no state observer runs: turn the observer (or delay compensation) on, or the friction model off")]
+    ObserverFrictionWithoutObserver,
+    /// Observer tuning was given but the settings run no observer.
+    #[error("an observer tuning was given but no state observer runs: turn the observer (or delay compensation) on")]
+    ObserverNotEnabled,
+    /// Delay compensation is on but the measurement delay was not given.
+    #[error("delay compensation is on but the measurement delay is not known: give the observer tuning with the delay in samples")]
+    MeasurementDelayUnknown,
+    /// The observer's pole is outside `(0, 1)`.
+    #[error("the observer pole is {0}: it must lie in (0, 1)")]
+    ObserverPole(f64),
+    /// A drive model was given that no setting uses (no torque limits, no
+    /// friction compensation, no observer friction model).
+    #[error("a drive model was given but neither torque limits, friction compensation nor the observer's friction model is on: it would not be used")]
+    DrivesUnused,
+    /// A constraint horizon was given without torque limits.
+    #[error("a constraint horizon of {0} samples was given but torque limits are off: it would not be used")]
+    ConstraintHorizonWithoutLimits(usize),
+    /// A payload estimator's tuning was given for a kind that identifies no
+    /// payload.
+    #[error(
+        "the {0} controller identifies no payload: use an adaptive kind to run a payload estimator"
+    )]
+    EstimatorWithoutIdentification(ControllerKind),
+    /// An adaptive kind was given a model payload (assumed by the tuning or
+    /// carried by the robot): the identification replaces it from the first
+    /// sample on.
+    #[error("the {kind} controller identifies its payload from zero: the {mass} kg its model would assume is replaced at the first sample")]
+    PayloadWithIdentification {
+        /// The adaptive kind.
+        kind: ControllerKind,
+        /// The payload mass the model would carry (kg).
+        mass: f64,
+    },
+    /// The robot already carries a payload and the tuning assumes another:
+    /// one would silently replace the other.
+    #[error("the robot carries a {carried} kg payload and the tuning assumes another of {assumed} kg: give one of the two")]
+    TwoPayloads {
+        /// Mass of the robot's payload (kg).
+        carried: f64,
+        /// Mass the tuning assumes (kg).
+        assumed: f64,
+    },
+}
+
+/// Builds an [`Mpc`]: `ControllerBuilder::new(kind, &robot).settings(..)
+/// .drives(..).build()?`. Unset parts: the paper's tuning
+/// ([`MpcSettings::default`]), the robot's drives ([`DriveModel::from_robot`],
+/// when a setting uses them), [`ObserverSettings::default`] (without delay
+/// compensation), [`RlsSettings::default`] (adaptive kinds).
+#[derive(Debug, Clone)]
+pub struct ControllerBuilder<'r> {
+    kind: ControllerKind,
+    robot: &'r Robot,
+    settings: MpcSettings,
+    drives: Option<DriveModel>,
+    observer: Option<ObserverSettings>,
+    estimator: Option<RlsSettings>,
+}
+
+impl<'r> ControllerBuilder<'r> {
+    /// A builder of controller `kind` for `robot` (the nominal rigid-body
+    /// model the controller copies at [`Self::build`]).
+    pub fn new(kind: ControllerKind, robot: &'r Robot) -> Self {
+        Self {
+            kind,
+            robot,
+            settings: MpcSettings::default(),
+            drives: None,
+            observer: None,
+            estimator: None,
+        }
+    }
+
+    /// The tuning (default: the paper's, [`MpcSettings::default`]).
+    pub fn settings(mut self, settings: MpcSettings) -> Self {
+        self.settings = settings;
+        self
+    }
+
+    /// The drives as the controller models them (default: the robot's,
+    /// [`DriveModel::from_robot`]); refused when no setting uses them.
+    pub fn drives(mut self, drives: DriveModel) -> Self {
+        self.drives = Some(drives);
+        self
+    }
+
+    /// The state observer's tuning; needed with delay compensation (it
+    /// carries the delay), refused when the settings run no observer.
+    pub fn observer(mut self, observer: ObserverSettings) -> Self {
+        self.observer = Some(observer);
+        self
+    }
+
+    /// The payload estimator's tuning of an adaptive kind (default
+    /// [`RlsSettings::default`]); refused for the other kinds.
+    pub fn estimator(mut self, rls: RlsSettings) -> Self {
+        self.estimator = Some(rls);
+        self
+    }
+
+    /// Checks that everything fits together and builds the controller: the
+    /// buffers are sized here (this allocates; [`Mpc::step`] does not).
+    pub fn build(self) -> Result<Mpc, BuildError> {
+        let Self {
+            kind,
+            robot,
+            settings: s,
+            drives,
+            observer,
+            estimator,
+        } = self;
+        let n = robot.dof();
+        s.validate_for_dof(n)?;
+        if let Some(nc) = s.constraint_horizon.filter(|_| !s.torque_limits) {
+            return Err(BuildError::ConstraintHorizonWithoutLimits(nc));
+        }
+        // The controller's model: the robot as given, with the payload the
+        // tuning assumes (as `sim::Experiment::model_robot`).
+        let carried = robot.payload().map(|p| p.mass);
+        let assumed = (s.model_payload_kg > 0.0).then_some(s.model_payload_kg);
+        if kind.is_adaptive() {
+            if let Some(mass) = assumed.or(carried) {
+                return Err(BuildError::PayloadWithIdentification { kind, mass });
+            }
+        } else if estimator.is_some() {
+            return Err(BuildError::EstimatorWithoutIdentification(kind));
+        }
+        if let (Some(carried), Some(assumed)) = (carried, assumed) {
+            return Err(BuildError::TwoPayloads { carried, assumed });
+        }
+        let observed = s.state_observer || s.delay_compensation;
+        if s.observer_friction && !observed {
+            return Err(BuildError::ObserverFrictionWithoutObserver);
+        }
+        let observer = match (observed, observer) {
+            (false, Some(_)) => return Err(BuildError::ObserverNotEnabled),
+            (false, None) => None,
+            (true, None) if s.delay_compensation => {
+                return Err(BuildError::MeasurementDelayUnknown)
+            }
+            (true, o) => Some(o.unwrap_or_default()),
+        };
+        if let Some(o) = observer.filter(|o| !(o.pole > 0.0 && o.pole < 1.0)) {
+            return Err(BuildError::ObserverPole(o.pole));
+        }
+        let controller_drives = s.torque_limits || s.friction_compensation;
+        let drives = match drives {
+            Some(_) if !(controller_drives || s.observer_friction) => {
+                return Err(BuildError::DrivesUnused)
+            }
+            Some(d) => Some(d),
+            None if controller_drives || s.observer_friction => Some(DriveModel::from_robot(robot)),
+            None => None,
+        };
+        if let Some(d) = &drives {
+            d.validate(n)?;
+            if s.torque_limits && d.max_torque_nm.iter().all(|t| t.is_infinite()) {
+                return Err(BuildError::NoTorqueLimits);
+            }
+            let no_friction = d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0);
+            for (on, what) in [
+                (s.friction_compensation, FrictionUse::Compensation),
+                (s.observer_friction, FrictionUse::Observer),
+            ] {
+                if on && no_friction {
+                    return Err(BuildError::NoFrictionEstimates(what));
+                }
+            }
+        }
+        let mut model_robot = robot.clone();
+        if let Some(mass) = assumed {
+            model_robot.set_payload(Some(Payload::point_mass(mass)))?;
+        }
+        let mut controller: Box<dyn Controller + Send> = match estimator {
+            Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, &s, rls)?),
+            None => new_controller(kind, n, &s)?,
+        };
+        if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
+            controller.set_drive_model(d)?;
+        }
+        let observer = observer.map(|o| {
+            let delay = if s.delay_compensation {
+                o.measurement_delay
+            } else {
+                0
+            };
+            let mut obs = StateObserver::new(n, s.ts, delay, o.pole);
+            if let Some(d) = drives.as_ref().filter(|_| s.observer_friction) {
+                obs.set_friction(&d.coulomb_nm, &d.viscous_nms);
+            }
+            obs
+        });
+        Ok(Mpc {
+            kind,
+            nominal_payload: model_robot.payload().copied(),
+            model: RobotDynamics::new(model_robot),
+            controller,
+            drives,
+            observer,
+            x_est: vec![0.0; 2 * n],
+            output: StepOutput {
+                tau: vec![0.0; n].into_boxed_slice(),
+                cost: 0.0,
+                r_diag_ratio: 0.0,
+                zoh_squarings: 0,
+                qp_status: None,
+                payload_estimate: None,
+                solve_time: Duration::ZERO,
+            },
+        })
+    }
+}
+
+/// One sample's measurement and reference, borrowed (no copy).
+#[derive(Debug, Clone, Copy)]
+pub struct StepInput<'a> {
+    /// Measured state `x_k = [q_k; q̇_k]` (2n values; with an observer only
+    /// the positions are used, possibly `D` samples old).
+    pub x: &'a [f64],
+    /// Current reference `w_k` (n values).
+    pub w_k: &'a [f64],
+    /// Preview `w_{k+1}, …, w_{k+N}` (N·n values, block `j−1` is `w_{k+j}`;
+    /// past the end of a path repeat its last value).
+    pub preview: &'a [f64],
+}
+
+/// What one successful [`Mpc::step`] computed. Sized at build: the step
+/// only overwrites it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepOutput {
+    /// The torque to apply, `τ_k = H u_k + g` (Eq. (15); plus the friction
+    /// feed-forward with friction compensation), n values.
+    pub tau: Box<[f64]>,
+    /// Minimum of the cost, `J_min = c2ᵀ c2` (Eq. (42)).
+    pub cost: f64,
+    /// `max|R_ii| / min|R_ii|` of the least-squares factor.
+    pub r_diag_ratio: f64,
+    /// Doublings used by the ZOH discretization (Eq. (13)).
+    pub zoh_squarings: u32,
+    /// What the torque-limit QP did (`None` without torque limits).
+    pub qp_status: Option<QpStatus>,
+    /// The payload mass the model carries, identified online (kg; `None`
+    /// for the kinds that do not identify it).
+    pub payload_estimate: Option<f64>,
+    /// Wall time of the step (observer, model, solve and torque).
+    pub solve_time: Duration,
+}
+
+/// The parts of an [`Mpc`] for a loop that interleaves its own law (a safe
+/// stop) with the controller: the controller, its model and its observer.
+pub struct MpcParts<'a> {
+    /// The predictive controller; step it with [`MpcParts::model`].
+    pub controller: &'a mut (dyn Controller + Send),
+    /// The controller's own model of the robot.
+    pub model: &'a mut RobotDynamics,
+    /// The state observer, when the settings run one.
+    pub observer: Option<&'a mut StateObserver>,
+}
+
+/// A controller built by [`ControllerBuilder`]: it owns its model of the
+/// robot, its drives and its observer, and refuses nothing at run time that
+/// it could have refused at build.
+pub struct Mpc {
+    kind: ControllerKind,
+    controller: Box<dyn Controller + Send>,
+    model: RobotDynamics,
+    /// The model's payload at build, restored by [`Mpc::reset`] (the
+    /// adaptive kinds change it).
+    nominal_payload: Option<Payload>,
+    drives: Option<DriveModel>,
+    observer: Option<StateObserver>,
+    x_est: Vec<f64>,
+    output: StepOutput,
+}
+
+impl std::fmt::Debug for Mpc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Mpc")
+            .field("kind", &self.kind)
+            .field("dof", &self.dof())
+            .field("horizon", &self.horizon())
+            .field("observer", &self.observer.is_some())
+            .field("output", &self.output)
+            .finish()
+    }
+}
+
+impl Mpc {
+    /// One control step: the observer's estimate (when it runs) of the
+    /// measured state, then the algorithm's torque. Allocates nothing and
+    /// never panics; on error the controller's state is as before the call
+    /// (the observer's, when it runs, has taken the measurement: reset
+    /// before resuming) and the last output is kept.
+    pub fn step(&mut self, input: &StepInput<'_>) -> Result<&StepOutput, StepError> {
+        let start = Instant::now();
+        let x = match self.observer.as_mut() {
+            Some(o) => {
+                check_len("x", input.x.len(), self.x_est.len())?;
+                check_finite("x", input.x)?;
+                self.x_est
+                    .copy_from_slice(o.update(&mut self.model, input.x)?);
+                &self.x_est
+            }
+            None => input.x,
+        };
+        let info = self.controller.step(
+            &mut self.model,
+            x,
+            input.w_k,
+            input.preview,
+            &mut self.output.tau,
+        )?;
+        if let Some(o) = self.observer.as_mut() {
+            o.record_torque(&self.output.tau);
+        }
+        let out = &mut self.output;
+        out.cost = info.cost;
+        out.r_diag_ratio = info.r_diag_ratio;
+        out.zoh_squarings = info.zoh_squarings;
+        out.qp_status = self.controller.qp_status();
+        out.payload_estimate = self.controller.payload_estimate();
+        out.solve_time = start.elapsed();
+        Ok(&self.output)
+    }
+
+    /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
+    /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`, the observer at rest at
+    /// `q0`, the model's payload back to the nominal one.
+    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        self.controller.reset(x0)?;
+        if let Some(o) = self.observer.as_mut() {
+            o.reset(x0);
+        }
+        if self.kind.is_adaptive() {
+            self.model
+                .robot_mut()
+                .set_payload(self.nominal_payload)
+                .map_err(|_| StepError::Internal("the nominal payload was refused"))?;
+        }
+        self.x_est.copy_from_slice(x0);
+        Ok(())
+    }
+
+    /// Which algorithm this is.
+    pub fn kind(&self) -> ControllerKind {
+        self.kind
+    }
+
+    /// Number of joints `n`.
+    pub fn dof(&self) -> usize {
+        self.controller.dof()
+    }
+
+    /// Prediction horizon `N`.
+    pub fn horizon(&self) -> usize {
+        self.controller.horizon()
+    }
+
+    /// The tuning it was built with.
+    pub fn settings(&self) -> &MpcSettings {
+        self.controller.settings()
+    }
+
+    /// The input `u` of the last successful step, n values.
+    pub fn input(&self) -> &[f64] {
+        self.controller.input()
+    }
+
+    /// The optimal sequence of the last successful step, N·n values
+    /// ([`Controller::increments`]).
+    pub fn increments(&self) -> &[f64] {
+        self.controller.increments()
+    }
+
+    /// The output of the last successful step (zeros before the first).
+    pub fn output(&self) -> &StepOutput {
+        &self.output
+    }
+
+    /// The controller's model of the robot (for the adaptive kinds, with the
+    /// payload identified so far).
+    pub fn model(&self) -> &RobotDynamics {
+        &self.model
+    }
+
+    /// The drives as the controller models them (`None` when no setting
+    /// uses them).
+    pub fn drives(&self) -> Option<&DriveModel> {
+        self.drives.as_ref()
+    }
+
+    /// The state observer, when the settings run one.
+    pub fn observer(&self) -> Option<&StateObserver> {
+        self.observer.as_ref()
+    }
+
+    /// The state the last step acted on: the observer's estimate, when it
+    /// runs (`None` otherwise).
+    pub fn state_estimate(&self) -> Option<&[f64]> {
+        self.observer.as_ref().map(|_| self.x_est.as_slice())
+    }
+
+    /// The controller, its model and its observer, for a loop that steps
+    /// them itself around another law (as the simulator's safe stop does);
+    /// [`Mpc::step`] is that loop without the other law.
+    pub fn parts_mut(&mut self) -> MpcParts<'_> {
+        MpcParts {
+            controller: self.controller.as_mut(),
+            model: &mut self.model,
+            observer: self.observer.as_mut(),
+        }
+    }
+}
