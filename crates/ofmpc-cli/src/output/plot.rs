@@ -1843,32 +1843,8 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
     mode: LineMode,
 ) -> Result<(), PlotError> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
-    let runs: Vec<Vec<Vec<(f64, f64, f64)>>> = axes3d.series.iter().map(split_runs_3d).collect();
-    let points = || runs.iter().flatten().flatten();
-    let data = [
-        min_max(points().map(|p| p.0)),
-        min_max(points().map(|p| p.1)),
-        min_max(points().map(|p| p.2)),
-    ];
-    let axes = cube_ranges(data, 0.04).map(|r| LinearAxis::new(Some(r), 0.0, N_LABELS_3D));
-    let scale = [axes[0].scale(), axes[1].scale(), axes[2].scale()];
+    let (axes, prepared) = prepare_3d(axes3d);
     let ranges = [axes[0].range, axes[1].range, axes[2].range];
-    let prepared: Vec<Prepared3d> = axes3d
-        .series
-        .iter()
-        .zip(runs)
-        .map(|(series, runs)| Prepared3d {
-            series,
-            runs: runs
-                .into_iter()
-                .map(|r| {
-                    r.into_iter()
-                        .map(|(x, y, z)| (x * scale[0], y * scale[1], z * scale[2]))
-                        .collect()
-                })
-                .collect(),
-        })
-        .collect();
 
     let mut chart = ChartBuilder::on(area)
         .build_cartesian_3d(
@@ -1918,19 +1894,7 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
         };
         let coord = chart.as_coord_spec().clone();
         let px = |pt: &(f64, f64, f64)| coord.translate(pt);
-        // Points on the same pixel as their predecessor add nothing to a line or to markers.
-        let thin = |run: &[(f64, f64, f64)]| -> Vec<(f64, f64, f64)> {
-            let mut out: Vec<(f64, f64, f64)> = Vec::with_capacity(run.len());
-            let mut last = None;
-            for (i, pt) in run.iter().enumerate() {
-                let here = px(pt);
-                if last != Some(here) || i + 1 == run.len() {
-                    out.push(*pt);
-                }
-                last = Some(here);
-            }
-            out
-        };
+        let thin = |run: &[(f64, f64, f64)]| thin_run(run, px);
         let mut labelled = false;
         let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
             if !labelled && !s.label.is_empty() {
@@ -1976,16 +1940,77 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
         any_label |= !s.label.is_empty();
     }
     if any_label {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(190, 190, 190))
-            .label_font((FONT_FAMILY, 12))
-            .draw()
-            .map_err(err)?;
+        draw_legend(&mut chart).map_err(err)?;
     }
     Ok(())
+}
+
+/// The points of `run` that land on another pixel (`px`) than their
+/// predecessor, and the last one: the others add nothing to a line or to
+/// markers.
+fn thin_run(
+    run: &[(f64, f64, f64)],
+    px: impl Fn(&(f64, f64, f64)) -> (i32, i32),
+) -> Vec<(f64, f64, f64)> {
+    let mut out: Vec<(f64, f64, f64)> = Vec::with_capacity(run.len());
+    let mut last = None;
+    for (i, pt) in run.iter().enumerate() {
+        let here = px(pt);
+        if last != Some(here) || i + 1 == run.len() {
+            out.push(*pt);
+        }
+        last = Some(here);
+    }
+    out
+}
+
+/// The series' legend in the upper right corner of a chart.
+fn draw_legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(190, 190, 190))
+        .label_font((FONT_FAMILY, 12))
+        .draw()
+}
+
+/// The axes of a 3-D panel (a cube around the data, 4 % margin) and its
+/// series' runs in the axes' scaled units.
+fn prepare_3d(axes3d: &Axes3d) -> ([LinearAxis; 3], Vec<Prepared3d<'_>>) {
+    let runs: Vec<Vec<Vec<(f64, f64, f64)>>> = axes3d.series.iter().map(split_runs_3d).collect();
+    let points = || runs.iter().flatten().flatten();
+    let data = [
+        min_max(points().map(|p| p.0)),
+        min_max(points().map(|p| p.1)),
+        min_max(points().map(|p| p.2)),
+    ];
+    let axes = cube_ranges(data, 0.04).map(|r| LinearAxis::new(Some(r), 0.0, N_LABELS_3D));
+    let scale = [axes[0].scale(), axes[1].scale(), axes[2].scale()];
+    let prepared: Vec<Prepared3d> = axes3d
+        .series
+        .iter()
+        .zip(runs)
+        .map(|(series, runs)| Prepared3d {
+            series,
+            runs: runs
+                .into_iter()
+                .map(|r| {
+                    r.into_iter()
+                        .map(|(x, y, z)| (x * scale[0], y * scale[1], z * scale[2]))
+                        .collect()
+                })
+                .collect(),
+        })
+        .collect();
+
+    (axes, prepared)
 }
 
 /// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs are
