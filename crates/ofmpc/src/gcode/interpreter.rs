@@ -639,71 +639,19 @@ impl Interpreter {
         mode: Motion,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
-        use GcodeErrorKind::*;
-        let arg = |c| args.get(c);
-        let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
-        let xyz = [arg('X'), arg('Y'), arg('Z')];
+        let block = MotionBlock {
+            line,
+            col,
+            line_text,
+            mode,
+            args,
+        };
         let Some(pos) = self.pos else {
             // The first motion defines the start point.
-            if matches!(mode, Motion::Cw | Motion::Ccw) {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    "the first motion is an arc, but the start point is not known yet",
-                    "start with G00 X.. Y.. Z.., which sets the start point",
-                ));
-            }
-            if !self.absolute {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    "the first motion is incremental (G91), but the start point is not known yet",
-                    "give the start point in absolute coordinates (G90)",
-                ));
-            }
-            let missing: Vec<&str> = ["X", "Y", "Z"]
-                .iter()
-                .zip(xyz)
-                .filter(|(_, w)| w.is_none())
-                .map(|(n, _)| *n)
-                .collect();
-            if !missing.is_empty() {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    format!(
-                        "the first motion sets the start point and must give X, Y and Z (missing: {})",
-                        missing.join(", ")
-                    ),
-                    "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
-                ));
-            }
-            let mut p = Vector3::zeros();
-            for (a, w) in xyz.iter().enumerate() {
-                p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
-            }
-            self.pos = Some(p);
-            self.start = p;
-            self.start_line = line;
-            return Ok(());
+            return self.first_motion(&block);
         };
-        let mut target = pos;
-        for (a, w) in xyz.iter().enumerate() {
-            if let Some(w) = w {
-                target[a] = if self.absolute {
-                    w.value * scale + offset[a]
-                } else {
-                    pos[a] + w.value * scale
-                };
-            }
-        }
+        let target = self.motion_target(pos, args);
+        let scale = self.scale();
         let feed = match (mode, self.feed) {
             (Motion::Rapid, _) | (_, None) => None,
             (_, Some(f)) => Some(f * scale / 60.0),
@@ -716,40 +664,7 @@ impl Interpreter {
                 }
                 Segment::line(pos, target)
             }
-            Motion::Cw | Motion::Ccw => {
-                let dir = if mode == Motion::Cw {
-                    ArcDirection::Clockwise
-                } else {
-                    ArcDirection::CounterClockwise
-                };
-                let seg = if let Some(r) = arg('R') {
-                    if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
-                        return Err(err(
-                            line,
-                            w.col,
-                            Conflict,
-                            line_text,
-                            "an arc with both R and I/J/K",
-                            "give the centre either by R or by I/J/K offsets",
-                        ));
-                    }
-                    self.arc_by_radius(line, col, line_text, mode, pos, target, r, dir)?
-                } else {
-                    self.arc_by_centre(line, col, line_text, mode, pos, target, args, dir)?
-                };
-                let shift = (seg.end() - target).norm();
-                if shift > 1e-9 {
-                    self.warn(
-                        line,
-                        col,
-                        format!(
-                            "arc end placed on the circle, {:.6} mm from the programmed end",
-                            shift * 1e3
-                        ),
-                    );
-                }
-                seg
-            }
+            Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
         self.pos = Some(segment.end());
         self.moves.push(Move {
@@ -761,6 +676,127 @@ impl Interpreter {
             },
         });
         Ok(())
+    }
+
+    /// The first motion: sets the start point, which must be given in absolute
+    /// coordinates with all of X, Y and Z, by a straight move (G00/G01).
+    fn first_motion(&mut self, b: &MotionBlock<'_, '_, '_>) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let (line, col, line_text) = (b.line, b.col, b.line_text);
+        let arg = |c| b.args.get(c);
+        let scale = self.scale();
+        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let xyz = [arg('X'), arg('Y'), arg('Z')];
+        if matches!(b.mode, Motion::Cw | Motion::Ccw) {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                "the first motion is an arc, but the start point is not known yet",
+                "start with G00 X.. Y.. Z.., which sets the start point",
+            ));
+        }
+        if !self.absolute {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                "the first motion is incremental (G91), but the start point is not known yet",
+                "give the start point in absolute coordinates (G90)",
+            ));
+        }
+        let missing: Vec<&str> = ["X", "Y", "Z"]
+            .iter()
+            .zip(xyz)
+            .filter(|(_, w)| w.is_none())
+            .map(|(n, _)| *n)
+            .collect();
+        if !missing.is_empty() {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                format!(
+                    "the first motion sets the start point and must give X, Y and Z (missing: {})",
+                    missing.join(", ")
+                ),
+                "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
+            ));
+        }
+        let mut p = Vector3::zeros();
+        for (a, w) in xyz.iter().enumerate() {
+            p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
+        }
+        self.pos = Some(p);
+        self.start = p;
+        self.start_line = line;
+        Ok(())
+    }
+
+    /// The programmed end point of a move from `pos`: each given coordinate in the active
+    /// work offset (G90) or relative to `pos` (G91), the others unchanged.
+    fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
+        let scale = self.scale();
+        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let xyz = [args.get('X'), args.get('Y'), args.get('Z')];
+        let mut target = pos;
+        for (a, w) in xyz.iter().enumerate() {
+            if let Some(w) = w {
+                target[a] = if self.absolute {
+                    w.value * scale + offset[a]
+                } else {
+                    pos[a] + w.value * scale
+                };
+            }
+        }
+        target
+    }
+
+    /// The arc (G02/G03) from `pos` to `target`, its centre given by R or by I/J/K; warns
+    /// if its end had to be moved onto the circle.
+    fn arc_segment(
+        &mut self,
+        b: &MotionBlock<'_, '_, '_>,
+        pos: Vector3<f64>,
+        target: Vector3<f64>,
+    ) -> Result<Segment, GcodeError> {
+        let (line, col, line_text, mode) = (b.line, b.col, b.line_text, b.mode);
+        let arg = |c| b.args.get(c);
+        let dir = if mode == Motion::Cw {
+            ArcDirection::Clockwise
+        } else {
+            ArcDirection::CounterClockwise
+        };
+        let seg = if let Some(r) = arg('R') {
+            if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
+                return Err(err(
+                    line,
+                    w.col,
+                    GcodeErrorKind::Conflict,
+                    line_text,
+                    "an arc with both R and I/J/K",
+                    "give the centre either by R or by I/J/K offsets",
+                ));
+            }
+            self.arc_by_radius(line, col, line_text, mode, pos, target, r, dir)?
+        } else {
+            self.arc_by_centre(line, col, line_text, mode, pos, target, b.args, dir)?
+        };
+        let shift = (seg.end() - target).norm();
+        if shift > 1e-9 {
+            self.warn(
+                line,
+                col,
+                format!(
+                    "arc end placed on the circle, {:.6} mm from the programmed end",
+                    shift * 1e3
+                ),
+            );
+        }
+        Ok(seg)
     }
 }
 
@@ -796,4 +832,14 @@ impl LineCommands<'_, '_> {
         }
         Ok(())
     }
+}
+
+/// One motion block as [`Interpreter::motion`] executes it: where it is (line, column of
+/// the anchor word, text), its motion mode and its argument words.
+struct MotionBlock<'a, 'l, 'w> {
+    line: usize,
+    col: usize,
+    line_text: &'a str,
+    mode: Motion,
+    args: &'a Args<'l, 'w>,
 }
