@@ -94,11 +94,30 @@ impl Zoh {
         if f0.shape() != (n, n) {
             return Err(ZohError::WrongShape { n, got: f0.shape() });
         }
+        let (s, tau) = self.scaled_exponent(f0, ts)?;
+        self.taylor_sums(tau);
+        // Doublings t → 2t.
+        let mut t = tau;
+        for _ in 0..s {
+            self.double(t);
+            t *= 2.0;
+        }
+        let finite = |m: &DMatrix<f64>| m.as_slice().iter().all(|v| v.is_finite());
+        if !(finite(&self.e) && finite(&self.phi1) && finite(&self.phi2)) {
+            return Err(ZohError::Overflow);
+        }
+        Ok(())
+    }
+
+    /// Sets `X = f0·Ts / 2^s` with the fewest doublings `s` that bring `‖X‖₁` within
+    /// [`THETA`] (at most [`MAX_SQUARINGS`]); returns `s` and the scaled period
+    /// `τ = Ts / 2^s`.
+    fn scaled_exponent(&mut self, f0: &DMatrix<f64>, ts: f64) -> Result<(u32, f64), ZohError> {
         // X = f0·Ts / 2^s
         for (x, f) in self.x.as_mut_slice().iter_mut().zip(f0.as_slice()) {
             *x = f * ts;
         }
-        let norm = norm1(n, self.x.as_slice());
+        let norm = norm1(self.n, self.x.as_slice());
         if !norm.is_finite() || !ts.is_finite() {
             return Err(ZohError::BadNorm { norm });
         }
@@ -115,7 +134,13 @@ impl Zoh {
         let scale = 0.5f64.powi(s as i32);
         let tau = ts * scale;
         self.x.as_mut_slice().iter_mut().for_each(|v| *v *= scale);
+        Ok((s, tau))
+    }
 
+    /// The truncated Taylor series at the scaled interval `τ`: `E = Σ X^k/k!`,
+    /// `Φ1 = τ·Σ X^k/(k+1)!`, `Φ2 = τ²·Σ X^k/(k+2)!` (k ≤ [`TERMS`]).
+    fn taylor_sums(&mut self, tau: f64) {
+        let n = self.n;
         // Taylor sums: E = Σ X^k/k!, S1 = Σ X^k/(k+1)!, S2 = Σ X^k/(k+2)!.
         // P_k = X^k/k!; S1 gets P_k/(k+1), S2 gets P_k/((k+1)(k+2)).
         self.e.fill(0.0);
@@ -160,58 +185,53 @@ impl Zoh {
             .as_mut_slice()
             .iter_mut()
             .for_each(|v| *v *= tau * tau);
+    }
 
-        // Doublings t → 2t.
-        let mut t = tau;
-        for _ in 0..s {
-            // Φ2 ← Φ2 + E Φ2 + t Φ1
-            self.tmp.copy_from(&self.phi2);
-            gemm(
-                n,
-                n,
-                n,
-                1.0,
-                self.e.as_slice(),
-                self.phi2.as_slice(),
-                1.0,
-                self.tmp.as_mut_slice(),
-            );
-            for (d, p1) in self.tmp.as_mut_slice().iter_mut().zip(self.phi1.as_slice()) {
-                *d += t * p1;
-            }
-            std::mem::swap(&mut self.phi2, &mut self.tmp);
-            // Φ1 ← Φ1 + E Φ1
-            self.tmp.copy_from(&self.phi1);
-            gemm(
-                n,
-                n,
-                n,
-                1.0,
-                self.e.as_slice(),
-                self.phi1.as_slice(),
-                1.0,
-                self.tmp.as_mut_slice(),
-            );
-            std::mem::swap(&mut self.phi1, &mut self.tmp);
-            // E ← E E
-            gemm(
-                n,
-                n,
-                n,
-                1.0,
-                self.e.as_slice(),
-                self.e.as_slice(),
-                0.0,
-                self.tmp.as_mut_slice(),
-            );
-            std::mem::swap(&mut self.e, &mut self.tmp);
-            t *= 2.0;
+    /// One doubling of the interval `t → 2t`: `Φ2 ← Φ2 + E Φ2 + t Φ1`, `Φ1 ← Φ1 + E Φ1`,
+    /// `E ← E E`.
+    fn double(&mut self, t: f64) {
+        let n = self.n;
+        // Φ2 ← Φ2 + E Φ2 + t Φ1
+        self.tmp.copy_from(&self.phi2);
+        gemm(
+            n,
+            n,
+            n,
+            1.0,
+            self.e.as_slice(),
+            self.phi2.as_slice(),
+            1.0,
+            self.tmp.as_mut_slice(),
+        );
+        for (d, p1) in self.tmp.as_mut_slice().iter_mut().zip(self.phi1.as_slice()) {
+            *d += t * p1;
         }
-        let finite = |m: &DMatrix<f64>| m.as_slice().iter().all(|v| v.is_finite());
-        if !(finite(&self.e) && finite(&self.phi1) && finite(&self.phi2)) {
-            return Err(ZohError::Overflow);
-        }
-        Ok(())
+        std::mem::swap(&mut self.phi2, &mut self.tmp);
+        // Φ1 ← Φ1 + E Φ1
+        self.tmp.copy_from(&self.phi1);
+        gemm(
+            n,
+            n,
+            n,
+            1.0,
+            self.e.as_slice(),
+            self.phi1.as_slice(),
+            1.0,
+            self.tmp.as_mut_slice(),
+        );
+        std::mem::swap(&mut self.phi1, &mut self.tmp);
+        // E ← E E
+        gemm(
+            n,
+            n,
+            n,
+            1.0,
+            self.e.as_slice(),
+            self.e.as_slice(),
+            0.0,
+            self.tmp.as_mut_slice(),
+        );
+        std::mem::swap(&mut self.e, &mut self.tmp);
     }
 
     /// `e^{f0 Ts}`, the lower-right block of `Ad`.

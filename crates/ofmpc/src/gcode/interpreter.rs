@@ -130,9 +130,47 @@ impl Interpreter {
         raw: &str,
         words: &[Word<'_>],
     ) -> Result<(), GcodeError> {
-        use GcodeErrorKind::*;
         let line_text = raw.trim();
-        // N label: first word, non-negative integer.
+        Self::check_n_label(line, words)?;
+        let sorted = Self::sort_words(line, words)?;
+        let args = &sorted.args;
+        self.warn_ignored_words(line, &sorted);
+
+        // Modal settings, in LinuxCNC's order: units, plane, distance mode, feed.
+        let cmd = self.apply_modal_gcodes(&sorted.gcodes);
+        self.apply_feed(line, args.get('F'))?;
+        self.apply_blend(line, &cmd, args)?;
+        cmd.check_non_modal_conflict(line, line_text)?;
+
+        let motion_mode = cmd.explicit_motion.map(|(m, _)| m).or(self.motion);
+        Self::check_unused_args(line, &cmd, motion_mode, args)?;
+
+        if let Some(g10) = cmd.set_offset {
+            self.set_offset(line, g10, args)?;
+        }
+        if let Some(k) = cmd.wcs {
+            self.wcs = k;
+        }
+        if let Some(g4) = cmd.dwell {
+            self.dwell(line, line_text, g4, args)?;
+        }
+        if let Some(m) = cmd.explicit_motion {
+            self.motion = Some(m.0);
+        }
+        if cmd.dwell.is_none() && cmd.set_offset.is_none() {
+            if let Some(m) = motion_mode {
+                self.line_motion(line, line_text, words, &cmd, m, args)?;
+            }
+        }
+        if sorted.mcodes.iter().any(|(m, _)| matches!(m, MCode::End)) {
+            self.ended = true;
+        }
+        Ok(())
+    }
+
+    /// Checks the N label: if present it must be the first word and a non-negative integer.
+    fn check_n_label(line: usize, words: &[Word<'_>]) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
         for (i, w) in words.iter().enumerate() {
             if w.letter == 'N' {
                 if i != 0 {
@@ -157,7 +195,17 @@ impl Interpreter {
                 }
             }
         }
-        // Sort words.
+        Ok(())
+    }
+
+    /// Sorts a line's words into G codes, M codes and argument words (N is skipped).
+    ///
+    /// Rejects two G codes of one modal group, a letter given twice and unsupported letters.
+    fn sort_words<'l, 'w>(
+        line: usize,
+        words: &'l [Word<'w>],
+    ) -> Result<LineWords<'l, 'w>, GcodeError> {
+        use GcodeErrorKind::*;
         let mut gcodes: Vec<(GCode, &Word<'_>)> = Vec::new();
         let mut mcodes: Vec<(MCode, &Word<'_>)> = Vec::new();
         let mut args: [Option<&Word<'_>>; 13] = [None; 13];
@@ -196,44 +244,60 @@ impl Interpreter {
                         }
                         args[k] = Some(w);
                     }
-                    None => {
-                        let (message, hint) = match c {
-                            'A' | 'B' | 'C' => (
-                                format!("rotary axis word {c} is not supported"),
-                                "the tool orientation is constant; remove the word",
-                            ),
-                            'U' | 'V' | 'W' => (
-                                format!("axis word {c} is not supported"),
-                                "only X, Y and Z are robot path axes",
-                            ),
-                            'E' => (
-                                "E (extruder) words are not supported".to_string(),
-                                "this looks like 3D-printer G-code; remove the E words",
-                            ),
-                            'D' | 'H' => (
-                                format!("tool offset word {c} is not supported"),
-                                "program the tool centre point; remove the word",
-                            ),
-                            _ => (
-                                format!("the word {c} is not supported"),
-                                "supported letters: G M N X Y Z I J K R F P L S T O",
-                            ),
-                        };
-                        return Err(err(line, w.col, Unsupported, w.text, message, hint));
-                    }
+                    None => return Err(Self::unsupported_letter(line, w)),
                 },
             }
         }
-        let args = Args(args);
-        let arg = |c: char| args.get(c);
+        Ok(LineWords {
+            gcodes,
+            mcodes,
+            args: Args(args),
+        })
+    }
 
-        // Harmless words.
+    /// The error for a word whose letter the reader does not support (A, B, C, U, V, W, E, ...).
+    fn unsupported_letter(line: usize, w: &Word<'_>) -> GcodeError {
+        let c = w.letter;
+        let (message, hint) = match c {
+            'A' | 'B' | 'C' => (
+                format!("rotary axis word {c} is not supported"),
+                "the tool orientation is constant; remove the word",
+            ),
+            'U' | 'V' | 'W' => (
+                format!("axis word {c} is not supported"),
+                "only X, Y and Z are robot path axes",
+            ),
+            'E' => (
+                "E (extruder) words are not supported".to_string(),
+                "this looks like 3D-printer G-code; remove the E words",
+            ),
+            'D' | 'H' => (
+                format!("tool offset word {c} is not supported"),
+                "program the tool centre point; remove the word",
+            ),
+            _ => (
+                format!("the word {c} is not supported"),
+                "supported letters: G M N X Y Z I J K R F P L S T O",
+            ),
+        };
+        err(
+            line,
+            w.col,
+            GcodeErrorKind::Unsupported,
+            w.text,
+            message,
+            hint,
+        )
+    }
+
+    /// Warns about harmless words without effect on the path: S, T, O and the ignored M codes.
+    fn warn_ignored_words(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
         for (c, what) in [
             ('S', "spindle speed"),
             ('T', "tool"),
             ('O', "program number"),
         ] {
-            if let Some(w) = arg(c) {
+            if let Some(w) = sorted.args.get(c) {
                 self.warn(
                     line,
                     w.col,
@@ -241,38 +305,51 @@ impl Interpreter {
                 );
             }
         }
-        for (m, w) in &mcodes {
+        for (m, w) in &sorted.mcodes {
             if let MCode::Warn(msg) = m {
                 self.warn(line, w.col, msg.clone());
             }
         }
+    }
 
-        // Modal settings, in LinuxCNC's order: units, plane, distance mode, feed.
-        let mut explicit_motion = None;
-        let mut dwell = None;
-        let mut set_offset = None;
-        let mut wcs = None;
-        let mut blend = None;
-        for &(g, w) in &gcodes {
+    /// Applies the modal G codes of a line (units, plane, distance mode, G61) and collects
+    /// the ones that act on this line only (motion, G04, G10, G54..G59, G64).
+    fn apply_modal_gcodes<'l, 'w>(
+        &mut self,
+        gcodes: &[(GCode, &'l Word<'w>)],
+    ) -> LineCommands<'l, 'w> {
+        let mut cmd = LineCommands {
+            explicit_motion: None,
+            dwell: None,
+            set_offset: None,
+            wcs: None,
+            blend: None,
+        };
+        for &(g, w) in gcodes {
             match g {
                 GCode::Inch(b) => self.inch = b,
                 GCode::Plane(p) => self.plane = p,
                 GCode::Absolute(b) => self.absolute = b,
-                GCode::Motion(m) => explicit_motion = Some((m, w)),
-                GCode::Dwell => dwell = Some(w),
-                GCode::SetOffset => set_offset = Some(w),
-                GCode::Wcs(k) => wcs = Some(k),
+                GCode::Motion(m) => cmd.explicit_motion = Some((m, w)),
+                GCode::Dwell => cmd.dwell = Some(w),
+                GCode::SetOffset => cmd.set_offset = Some(w),
+                GCode::Wcs(k) => cmd.wcs = Some(k),
                 GCode::ExactStop => self.mode = Some(PathMode::ExactStop),
-                GCode::Blend => blend = Some(w),
+                GCode::Blend => cmd.blend = Some(w),
                 GCode::NoOp => {}
             }
         }
-        if let Some(f) = arg('F') {
+        cmd
+    }
+
+    /// Sets the modal feed from the F word (program units per minute; must be positive).
+    fn apply_feed(&mut self, line: usize, f: Option<&Word<'_>>) -> Result<(), GcodeError> {
+        if let Some(f) = f {
             if f.value <= 0.0 {
                 return Err(err(
                     line,
                     f.col,
-                    InvalidValue,
+                    GcodeErrorKind::InvalidValue,
                     f.text,
                     "the feed must be positive",
                     "give F in mm/min (G21) or in/min (G20), e.g. F3000",
@@ -280,14 +357,24 @@ impl Interpreter {
             }
             self.feed = Some(f.value);
         }
-        if let Some(g64) = blend {
-            let tolerance = match arg('P') {
-                Some(p) if dwell.is_none() && set_offset.is_none() => {
+        Ok(())
+    }
+
+    /// G64: selects blending, with the path tolerance from P (unless P belongs to G04 / G10).
+    fn apply_blend(
+        &mut self,
+        line: usize,
+        cmd: &LineCommands<'_, '_>,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        if cmd.blend.is_some() {
+            let tolerance = match args.get('P') {
+                Some(p) if cmd.dwell.is_none() && cmd.set_offset.is_none() => {
                     if p.value < 0.0 {
                         return Err(err(
                             line,
                             p.col,
-                            InvalidValue,
+                            GcodeErrorKind::InvalidValue,
                             p.text,
                             "the G64 path tolerance must not be negative",
                             "give the largest corner deviation in program units, e.g. G64 P0.05",
@@ -297,53 +384,23 @@ impl Interpreter {
                 }
                 _ => None,
             };
-            let _ = g64;
             self.mode = Some(PathMode::Blend { tolerance });
         }
-        let non_modal = dwell.or(set_offset);
-        if let (Some(nm), Some((_, mw))) = (non_modal, explicit_motion) {
-            return Err(err(
-                line,
-                mw.col,
-                Conflict,
-                line_text,
-                format!("{} and {} on one line", nm.text, mw.text),
-                "put the motion on its own line",
-            ));
-        }
+        Ok(())
+    }
 
-        // Which argument letters this line's command uses.
-        let mut used = [false; 13];
-        for c in ['F', 'S', 'T', 'O'] {
-            if let Some(k) = letter_index(c) {
-                used[k] = true;
-            }
-        }
-        let mut use_letters = |letters: &str| {
-            for c in letters.chars() {
-                if let Some(k) = letter_index(c) {
-                    used[k] = true;
-                }
-            }
-        };
-        let motion_mode = explicit_motion.map(|(m, _)| m).or(self.motion);
-        if blend.is_some() && dwell.is_none() && set_offset.is_none() {
-            use_letters("P");
-        }
-        if dwell.is_some() {
-            use_letters("PX");
-        } else if set_offset.is_some() {
-            use_letters("LPXYZ");
-        } else if let Some(m) = motion_mode {
-            use_letters("XYZ");
-            if matches!(m, Motion::Cw | Motion::Ccw) {
-                use_letters("IJKR");
-            }
-        }
+    /// Rejects argument words the line's command does not use (see [`Self::used_letters`]).
+    fn check_unused_args(
+        line: usize,
+        cmd: &LineCommands<'_, '_>,
+        motion_mode: Option<Motion>,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        let used = Self::used_letters(cmd, motion_mode);
         for (k, c) in ARG_LETTERS.chars().enumerate() {
             if let (Some(w), false) = (args.0[k], used[k]) {
                 let (message, hint) = match c {
-                    'X' | 'Y' | 'Z' if dwell.is_some() => (
+                    'X' | 'Y' | 'Z' if cmd.dwell.is_some() => (
                         format!("{c} is not used by G04"),
                         "G04 takes the dwell time as P (or X) seconds only",
                     ),
@@ -362,94 +419,142 @@ impl Interpreter {
                     'L' => ("L is only used by G10 L2".to_string(), "remove the L word"),
                     _ => (format!("{c} is not used here"), "remove the word"),
                 };
-                return Err(err(line, w.col, Conflict, w.text, message, hint));
-            }
-        }
-
-        if let Some(g10) = set_offset {
-            self.set_offset(line, g10, &args)?;
-        }
-        if let Some(k) = wcs {
-            self.wcs = k;
-        }
-        if let Some(g4) = dwell {
-            let (p, x) = (arg('P'), arg('X'));
-            let w = match (p, x) {
-                (Some(p), None) => p,
-                (None, Some(x)) => x,
-                (Some(_), Some(x)) => {
-                    return Err(err(
-                        line,
-                        x.col,
-                        Conflict,
-                        line_text,
-                        "G04 with both P and X",
-                        "give the dwell time once, as P seconds",
-                    ))
-                }
-                (None, None) => {
-                    return Err(err(
-                        line,
-                        g4.col,
-                        Missing,
-                        line_text,
-                        "G04 without a time",
-                        "give the dwell time in seconds, e.g. G04 P0.5",
-                    ))
-                }
-            };
-            if w.value < 0.0 {
                 return Err(err(
                     line,
                     w.col,
-                    InvalidValue,
+                    GcodeErrorKind::Conflict,
                     w.text,
-                    "negative dwell time",
-                    "give the dwell time in seconds, >= 0",
+                    message,
+                    hint,
                 ));
             }
-            if w.value > 0.0 {
-                if self.pos.is_none() {
-                    return Err(err(
-                        line,
-                        g4.col,
-                        StartPoint,
-                        line_text,
-                        "dwell before the start point is known",
-                        "start the program with G00 X.. Y.. Z..",
-                    ));
+        }
+        Ok(())
+    }
+
+    /// Which argument letters (indexed as [`ARG_LETTERS`]) this line's command uses:
+    /// F S T O always, P for G64, P X for G04, L P X Y Z for G10, else X Y Z for a motion
+    /// (and I J K R for an arc).
+    fn used_letters(cmd: &LineCommands<'_, '_>, motion_mode: Option<Motion>) -> [bool; 13] {
+        let mut used = [false; 13];
+        for c in ['F', 'S', 'T', 'O'] {
+            if let Some(k) = letter_index(c) {
+                used[k] = true;
+            }
+        }
+        let mut use_letters = |letters: &str| {
+            for c in letters.chars() {
+                if let Some(k) = letter_index(c) {
+                    used[k] = true;
                 }
-                self.moves.push(Move {
+            }
+        };
+        if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
+            use_letters("P");
+        }
+        if cmd.dwell.is_some() {
+            use_letters("PX");
+        } else if cmd.set_offset.is_some() {
+            use_letters("LPXYZ");
+        } else if let Some(m) = motion_mode {
+            use_letters("XYZ");
+            if matches!(m, Motion::Cw | Motion::Ccw) {
+                use_letters("IJKR");
+            }
+        }
+        used
+    }
+
+    /// G04: a dwell of P (or X) seconds; a positive one becomes a dwell move.
+    fn dwell(
+        &mut self,
+        line: usize,
+        line_text: &str,
+        g4: &Word<'_>,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let (p, x) = (args.get('P'), args.get('X'));
+        let w = match (p, x) {
+            (Some(p), None) => p,
+            (None, Some(x)) => x,
+            (Some(_), Some(x)) => {
+                return Err(err(
                     line,
-                    kind: MoveKind::Dwell { seconds: w.value },
-                });
+                    x.col,
+                    Conflict,
+                    line_text,
+                    "G04 with both P and X",
+                    "give the dwell time once, as P seconds",
+                ))
             }
-        }
-        if let Some(m) = explicit_motion {
-            self.motion = Some(m.0);
-        }
-        if dwell.is_none() && set_offset.is_none() {
-            let has = |c| arg(c).is_some();
-            let axes = has('X') || has('Y') || has('Z');
-            let centre = has('I') || has('J') || has('K') || has('R');
-            if let Some(m) = motion_mode {
-                let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
-                if axes || (is_arc && centre) {
-                    let anchor = explicit_motion
-                        .map(|(_, w)| w.col)
-                        .or_else(|| {
-                            words
-                                .iter()
-                                .find(|w| "XYZIJKR".contains(w.letter))
-                                .map(|w| w.col)
-                        })
-                        .unwrap_or(1);
-                    self.motion(line, anchor, line_text, m, &args)?;
-                }
+            (None, None) => {
+                return Err(err(
+                    line,
+                    g4.col,
+                    Missing,
+                    line_text,
+                    "G04 without a time",
+                    "give the dwell time in seconds, e.g. G04 P0.5",
+                ))
             }
+        };
+        if w.value < 0.0 {
+            return Err(err(
+                line,
+                w.col,
+                InvalidValue,
+                w.text,
+                "negative dwell time",
+                "give the dwell time in seconds, >= 0",
+            ));
         }
-        if mcodes.iter().any(|(m, _)| matches!(m, MCode::End)) {
-            self.ended = true;
+        if w.value > 0.0 {
+            if self.pos.is_none() {
+                return Err(err(
+                    line,
+                    g4.col,
+                    StartPoint,
+                    line_text,
+                    "dwell before the start point is known",
+                    "start the program with G00 X.. Y.. Z..",
+                ));
+            }
+            self.moves.push(Move {
+                line,
+                kind: MoveKind::Dwell { seconds: w.value },
+            });
+        }
+        Ok(())
+    }
+
+    /// Executes the line's motion in mode `m` if the line gives coordinates (or, for an arc,
+    /// a centre); errors point at the motion word, else at the first coordinate word.
+    fn line_motion(
+        &mut self,
+        line: usize,
+        line_text: &str,
+        words: &[Word<'_>],
+        cmd: &LineCommands<'_, '_>,
+        m: Motion,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        let has = |c| args.get(c).is_some();
+        let axes = has('X') || has('Y') || has('Z');
+        let centre = has('I') || has('J') || has('K') || has('R');
+        let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
+        if axes || (is_arc && centre) {
+            let anchor = cmd
+                .explicit_motion
+                .map(|(_, w)| w.col)
+                .or_else(|| {
+                    words
+                        .iter()
+                        .find(|w| "XYZIJKR".contains(w.letter))
+                        .map(|w| w.col)
+                })
+                .unwrap_or(1);
+            self.motion(line, anchor, line_text, m, args)?;
         }
         Ok(())
     }
@@ -534,71 +639,19 @@ impl Interpreter {
         mode: Motion,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
-        use GcodeErrorKind::*;
-        let arg = |c| args.get(c);
-        let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
-        let xyz = [arg('X'), arg('Y'), arg('Z')];
+        let block = MotionBlock {
+            line,
+            col,
+            line_text,
+            mode,
+            args,
+        };
         let Some(pos) = self.pos else {
             // The first motion defines the start point.
-            if matches!(mode, Motion::Cw | Motion::Ccw) {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    "the first motion is an arc, but the start point is not known yet",
-                    "start with G00 X.. Y.. Z.., which sets the start point",
-                ));
-            }
-            if !self.absolute {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    "the first motion is incremental (G91), but the start point is not known yet",
-                    "give the start point in absolute coordinates (G90)",
-                ));
-            }
-            let missing: Vec<&str> = ["X", "Y", "Z"]
-                .iter()
-                .zip(xyz)
-                .filter(|(_, w)| w.is_none())
-                .map(|(n, _)| *n)
-                .collect();
-            if !missing.is_empty() {
-                return Err(err(
-                    line,
-                    col,
-                    StartPoint,
-                    line_text,
-                    format!(
-                        "the first motion sets the start point and must give X, Y and Z (missing: {})",
-                        missing.join(", ")
-                    ),
-                    "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
-                ));
-            }
-            let mut p = Vector3::zeros();
-            for (a, w) in xyz.iter().enumerate() {
-                p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
-            }
-            self.pos = Some(p);
-            self.start = p;
-            self.start_line = line;
-            return Ok(());
+            return self.first_motion(&block);
         };
-        let mut target = pos;
-        for (a, w) in xyz.iter().enumerate() {
-            if let Some(w) = w {
-                target[a] = if self.absolute {
-                    w.value * scale + offset[a]
-                } else {
-                    pos[a] + w.value * scale
-                };
-            }
-        }
+        let target = self.motion_target(pos, args);
+        let scale = self.scale();
         let feed = match (mode, self.feed) {
             (Motion::Rapid, _) | (_, None) => None,
             (_, Some(f)) => Some(f * scale / 60.0),
@@ -611,40 +664,7 @@ impl Interpreter {
                 }
                 Segment::line(pos, target)
             }
-            Motion::Cw | Motion::Ccw => {
-                let dir = if mode == Motion::Cw {
-                    ArcDirection::Clockwise
-                } else {
-                    ArcDirection::CounterClockwise
-                };
-                let seg = if let Some(r) = arg('R') {
-                    if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
-                        return Err(err(
-                            line,
-                            w.col,
-                            Conflict,
-                            line_text,
-                            "an arc with both R and I/J/K",
-                            "give the centre either by R or by I/J/K offsets",
-                        ));
-                    }
-                    self.arc_by_radius(line, col, line_text, mode, pos, target, r, dir)?
-                } else {
-                    self.arc_by_centre(line, col, line_text, mode, pos, target, args, dir)?
-                };
-                let shift = (seg.end() - target).norm();
-                if shift > 1e-9 {
-                    self.warn(
-                        line,
-                        col,
-                        format!(
-                            "arc end placed on the circle, {:.6} mm from the programmed end",
-                            shift * 1e3
-                        ),
-                    );
-                }
-                seg
-            }
+            Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
         self.pos = Some(segment.end());
         self.moves.push(Move {
@@ -657,4 +677,169 @@ impl Interpreter {
         });
         Ok(())
     }
+
+    /// The first motion: sets the start point, which must be given in absolute
+    /// coordinates with all of X, Y and Z, by a straight move (G00/G01).
+    fn first_motion(&mut self, b: &MotionBlock<'_, '_, '_>) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let (line, col, line_text) = (b.line, b.col, b.line_text);
+        let arg = |c| b.args.get(c);
+        let scale = self.scale();
+        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let xyz = [arg('X'), arg('Y'), arg('Z')];
+        if matches!(b.mode, Motion::Cw | Motion::Ccw) {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                "the first motion is an arc, but the start point is not known yet",
+                "start with G00 X.. Y.. Z.., which sets the start point",
+            ));
+        }
+        if !self.absolute {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                "the first motion is incremental (G91), but the start point is not known yet",
+                "give the start point in absolute coordinates (G90)",
+            ));
+        }
+        let missing: Vec<&str> = ["X", "Y", "Z"]
+            .iter()
+            .zip(xyz)
+            .filter(|(_, w)| w.is_none())
+            .map(|(n, _)| *n)
+            .collect();
+        if !missing.is_empty() {
+            return Err(err(
+                line,
+                col,
+                StartPoint,
+                line_text,
+                format!(
+                    "the first motion sets the start point and must give X, Y and Z (missing: {})",
+                    missing.join(", ")
+                ),
+                "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
+            ));
+        }
+        let mut p = Vector3::zeros();
+        for (a, w) in xyz.iter().enumerate() {
+            p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
+        }
+        self.pos = Some(p);
+        self.start = p;
+        self.start_line = line;
+        Ok(())
+    }
+
+    /// The programmed end point of a move from `pos`: each given coordinate in the active
+    /// work offset (G90) or relative to `pos` (G91), the others unchanged.
+    fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
+        let scale = self.scale();
+        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let xyz = [args.get('X'), args.get('Y'), args.get('Z')];
+        let mut target = pos;
+        for (a, w) in xyz.iter().enumerate() {
+            if let Some(w) = w {
+                target[a] = if self.absolute {
+                    w.value * scale + offset[a]
+                } else {
+                    pos[a] + w.value * scale
+                };
+            }
+        }
+        target
+    }
+
+    /// The arc (G02/G03) from `pos` to `target`, its centre given by R or by I/J/K; warns
+    /// if its end had to be moved onto the circle.
+    fn arc_segment(
+        &mut self,
+        b: &MotionBlock<'_, '_, '_>,
+        pos: Vector3<f64>,
+        target: Vector3<f64>,
+    ) -> Result<Segment, GcodeError> {
+        let (line, col, line_text, mode) = (b.line, b.col, b.line_text, b.mode);
+        let arg = |c| b.args.get(c);
+        let dir = if mode == Motion::Cw {
+            ArcDirection::Clockwise
+        } else {
+            ArcDirection::CounterClockwise
+        };
+        let seg = if let Some(r) = arg('R') {
+            if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
+                return Err(err(
+                    line,
+                    w.col,
+                    GcodeErrorKind::Conflict,
+                    line_text,
+                    "an arc with both R and I/J/K",
+                    "give the centre either by R or by I/J/K offsets",
+                ));
+            }
+            self.arc_by_radius(line, col, line_text, mode, pos, target, r, dir)?
+        } else {
+            self.arc_by_centre(line, col, line_text, mode, pos, target, b.args, dir)?
+        };
+        let shift = (seg.end() - target).norm();
+        if shift > 1e-9 {
+            self.warn(
+                line,
+                col,
+                format!(
+                    "arc end placed on the circle, {:.6} mm from the programmed end",
+                    shift * 1e3
+                ),
+            );
+        }
+        Ok(seg)
+    }
+}
+
+/// The words of one line, sorted by kind (see [`Interpreter::line`]).
+struct LineWords<'l, 'w> {
+    gcodes: Vec<(GCode, &'l Word<'w>)>,
+    mcodes: Vec<(MCode, &'l Word<'w>)>,
+    args: Args<'l, 'w>,
+}
+
+/// The G codes of one line that act on that line only (modal settings are applied at once).
+struct LineCommands<'l, 'w> {
+    explicit_motion: Option<(Motion, &'l Word<'w>)>,
+    dwell: Option<&'l Word<'w>>,
+    set_offset: Option<&'l Word<'w>>,
+    wcs: Option<usize>,
+    blend: Option<&'l Word<'w>>,
+}
+
+impl LineCommands<'_, '_> {
+    /// Rejects a motion on the same line as a non-modal command (G04 or G10).
+    fn check_non_modal_conflict(&self, line: usize, line_text: &str) -> Result<(), GcodeError> {
+        let non_modal = self.dwell.or(self.set_offset);
+        if let (Some(nm), Some((_, mw))) = (non_modal, self.explicit_motion) {
+            return Err(err(
+                line,
+                mw.col,
+                GcodeErrorKind::Conflict,
+                line_text,
+                format!("{} and {} on one line", nm.text, mw.text),
+                "put the motion on its own line",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One motion block as [`Interpreter::motion`] executes it: where it is (line, column of
+/// the anchor word, text), its motion mode and its argument words.
+struct MotionBlock<'a, 'l, 'w> {
+    line: usize,
+    col: usize,
+    line_text: &'a str,
+    mode: Motion,
+    args: &'a Args<'l, 'w>,
 }

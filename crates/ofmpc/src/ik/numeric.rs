@@ -220,6 +220,51 @@ impl NumericIk {
         target: &Isometry3<f64>,
         q: &mut [f64],
     ) -> Result<NumericIkReport, IkError> {
+        self.check_inputs(&*fk, target, q)?;
+        let s = self.settings;
+        let mut st = self.start(fk, target, q)?;
+        let mut iterations = 0;
+        let converged =
+            |ep: f64, er: f64| ep <= s.position_tolerance && er <= s.orientation_tolerance;
+
+        while !converged(st.ep.norm(), st.er.norm()) && iterations < s.max_iterations {
+            iterations += 1;
+            if st.need_jacobian {
+                self.update_jacobian(fk, &mut st)?;
+            }
+            if !self.try_step(fk, target, &mut st) {
+                st.lambda *= st.nu;
+                st.nu *= 2.0;
+                if st.lambda > s.max_damping {
+                    break;
+                }
+            }
+        }
+        q.copy_from_slice(&self.q);
+        let (pe, oe) = (st.ep.norm(), st.er.norm());
+        if converged(pe, oe) {
+            Ok(NumericIkReport {
+                iterations,
+                position_error: pe,
+                orientation_error: oe,
+            })
+        } else {
+            Err(IkError::NotConverged {
+                iterations,
+                position_error: pe,
+                orientation_error: oe,
+            })
+        }
+    }
+
+    /// Checks the sizes of `q` and of the model, and that the target and the seed are
+    /// finite.
+    fn check_inputs<F: ForwardKinematics + ?Sized>(
+        &self,
+        fk: &F,
+        target: &Isometry3<f64>,
+        q: &[f64],
+    ) -> Result<(), IkError> {
         let n = self.n;
         if q.len() != n {
             return Err(IkError::DimensionMismatch {
@@ -245,101 +290,126 @@ impl NumericIk {
                 what: "seed joint vector",
             });
         }
-        let s = self.settings;
-        for (((x, &seed), &lo), &hi) in self.q.iter_mut().zip(&*q).zip(&self.lower).zip(&self.upper)
-        {
+        Ok(())
+    }
+
+    /// Clamps the seed `q` into the joint limits as the first iterate and evaluates its
+    /// pose error; the damping is set at the first Jacobian.
+    fn start<F: ForwardKinematics + ?Sized>(
+        &mut self,
+        fk: &mut F,
+        target: &Isometry3<f64>,
+        q: &[f64],
+    ) -> Result<LmState, IkError> {
+        for (((x, &seed), &lo), &hi) in self.q.iter_mut().zip(q).zip(&self.lower).zip(&self.upper) {
             *x = seed.clamp(lo, hi);
         }
         let pose = fk.flange_pose(&self.q);
-        let (mut ep, mut er) = pose_error(target, &pose);
+        let (ep, er) = pose_error(target, &pose);
         if !(ep.iter().chain(er.iter()).all(|x| x.is_finite())) {
             return Err(IkError::NonFinite {
                 what: "forward kinematics at the seed",
             });
         }
-        let mut cost = 0.5 * (ep.norm_squared() + er.norm_squared());
-        let mut lambda = f64::NAN; // set from JᵀJ at the first Jacobian
-        let mut nu = 2.0;
-        let mut need_jacobian = true;
-        let mut iterations = 0;
-        let converged =
-            |ep: f64, er: f64| ep <= s.position_tolerance && er <= s.orientation_tolerance;
-
-        while !converged(ep.norm(), er.norm()) && iterations < s.max_iterations {
-            iterations += 1;
-            if need_jacobian {
-                fk.flange_jacobian(&self.q, &mut self.jac);
-                if self.jac.shape() != (6, n) || !self.jac.iter().all(|x| x.is_finite()) {
-                    return Err(IkError::NonFinite {
-                        what: "flange Jacobian (or its shape)",
-                    });
-                }
-                self.jtj.gemm_tr(1.0, &self.jac, &self.jac, 0.0);
-                self.err.fixed_rows_mut::<3>(0).copy_from(&ep);
-                self.err.fixed_rows_mut::<3>(3).copy_from(&er);
-                self.grad.gemv_tr(1.0, &self.jac, &self.err, 0.0);
-                if lambda.is_nan() {
-                    let max_diag = (0..n).map(|i| self.jtj[(i, i)]).fold(0.0, f64::max);
-                    lambda = (s.initial_damping * max_diag).max(s.min_damping);
-                }
-                need_jacobian = false;
-            }
-            // (JᵀJ + λI) δ = Jᵀe
-            self.sys.copy_from(&self.jtj);
-            for i in 0..n {
-                self.sys[(i, i)] += lambda;
-            }
-            self.step.copy_from(&self.grad);
-            let mut accepted = false;
-            if cholesky_solve_in_place(&mut self.sys, &mut self.step) {
-                for i in 0..n {
-                    self.trial[i] = (self.q[i] + self.step[i]).clamp(self.lower[i], self.upper[i]);
-                    self.step[i] = self.trial[i] - self.q[i];
-                }
-                // Predicted reduction of ½|e|² for the (clamped) step δ:
-                // δᵀJᵀe − ½ δᵀJᵀJδ.
-                self.jtj_step.gemv(1.0, &self.jtj, &self.step, 0.0);
-                let predicted = self.step.dot(&self.grad) - 0.5 * self.step.dot(&self.jtj_step);
-                let pose = fk.flange_pose(&self.trial);
-                let (tp, tr) = pose_error(target, &pose);
-                let trial_cost = 0.5 * (tp.norm_squared() + tr.norm_squared());
-                if trial_cost.is_finite() && trial_cost < cost {
-                    if predicted > 0.0 {
-                        let rho = (cost - trial_cost) / predicted;
-                        lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                        lambda = lambda.max(s.min_damping);
-                    }
-                    nu = 2.0;
-                    self.q.copy_from_slice(&self.trial);
-                    (ep, er, cost) = (tp, tr, trial_cost);
-                    need_jacobian = true;
-                    accepted = true;
-                }
-            }
-            if !accepted {
-                lambda *= nu;
-                nu *= 2.0;
-                if lambda > s.max_damping {
-                    break;
-                }
-            }
-        }
-        q.copy_from_slice(&self.q);
-        let (pe, oe) = (ep.norm(), er.norm());
-        if converged(pe, oe) {
-            Ok(NumericIkReport {
-                iterations,
-                position_error: pe,
-                orientation_error: oe,
-            })
-        } else {
-            Err(IkError::NotConverged {
-                iterations,
-                position_error: pe,
-                orientation_error: oe,
-            })
-        }
+        let cost = 0.5 * (ep.norm_squared() + er.norm_squared());
+        Ok(LmState {
+            ep,
+            er,
+            cost,
+            lambda: f64::NAN, // set from JᵀJ at the first Jacobian
+            nu: 2.0,
+            need_jacobian: true,
+        })
     }
+
+    /// Evaluates the flange Jacobian `J` at the current iterate, `JᵀJ` and the gradient
+    /// `Jᵀe`; the first time, sets the damping `λ = max(initial_damping · max diag JᵀJ,
+    /// min_damping)`.
+    fn update_jacobian<F: ForwardKinematics + ?Sized>(
+        &mut self,
+        fk: &mut F,
+        st: &mut LmState,
+    ) -> Result<(), IkError> {
+        let (n, s) = (self.n, self.settings);
+        fk.flange_jacobian(&self.q, &mut self.jac);
+        if self.jac.shape() != (6, n) || !self.jac.iter().all(|x| x.is_finite()) {
+            return Err(IkError::NonFinite {
+                what: "flange Jacobian (or its shape)",
+            });
+        }
+        self.jtj.gemm_tr(1.0, &self.jac, &self.jac, 0.0);
+        self.err.fixed_rows_mut::<3>(0).copy_from(&st.ep);
+        self.err.fixed_rows_mut::<3>(3).copy_from(&st.er);
+        self.grad.gemv_tr(1.0, &self.jac, &self.err, 0.0);
+        if st.lambda.is_nan() {
+            let max_diag = (0..n).map(|i| self.jtj[(i, i)]).fold(0.0, f64::max);
+            st.lambda = (s.initial_damping * max_diag).max(s.min_damping);
+        }
+        st.need_jacobian = false;
+        Ok(())
+    }
+
+    /// One damped step: solves `(JᵀJ + λI) δ = Jᵀe`, clamps the trial point into the joint
+    /// limits and accepts it if it lowers `½|e|²`, updating `λ` from the ratio of actual to
+    /// predicted reduction (Nielsen's rule). Returns whether the step was accepted.
+    fn try_step<F: ForwardKinematics + ?Sized>(
+        &mut self,
+        fk: &mut F,
+        target: &Isometry3<f64>,
+        st: &mut LmState,
+    ) -> bool {
+        let (n, s) = (self.n, self.settings);
+        // (JᵀJ + λI) δ = Jᵀe
+        self.sys.copy_from(&self.jtj);
+        for i in 0..n {
+            self.sys[(i, i)] += st.lambda;
+        }
+        self.step.copy_from(&self.grad);
+        if !cholesky_solve_in_place(&mut self.sys, &mut self.step) {
+            return false;
+        }
+        for i in 0..n {
+            self.trial[i] = (self.q[i] + self.step[i]).clamp(self.lower[i], self.upper[i]);
+            self.step[i] = self.trial[i] - self.q[i];
+        }
+        // Predicted reduction of ½|e|² for the (clamped) step δ:
+        // δᵀJᵀe − ½ δᵀJᵀJδ.
+        self.jtj_step.gemv(1.0, &self.jtj, &self.step, 0.0);
+        let predicted = self.step.dot(&self.grad) - 0.5 * self.step.dot(&self.jtj_step);
+        let pose = fk.flange_pose(&self.trial);
+        let (tp, tr) = pose_error(target, &pose);
+        let trial_cost = 0.5 * (tp.norm_squared() + tr.norm_squared());
+        if !(trial_cost.is_finite() && trial_cost < st.cost) {
+            return false;
+        }
+        if predicted > 0.0 {
+            let rho = (st.cost - trial_cost) / predicted;
+            st.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+            st.lambda = st.lambda.max(s.min_damping);
+        }
+        st.nu = 2.0;
+        self.q.copy_from_slice(&self.trial);
+        (st.ep, st.er, st.cost) = (tp, tr, trial_cost);
+        st.need_jacobian = true;
+        true
+    }
+}
+
+/// State of the damped least-squares (Levenberg–Marquardt) iteration of
+/// [`NumericIk::solve`].
+struct LmState {
+    /// Position error of the current iterate.
+    ep: nalgebra::Vector3<f64>,
+    /// Orientation error (rotation vector) of the current iterate.
+    er: nalgebra::Vector3<f64>,
+    /// `½|e|²` of the current iterate.
+    cost: f64,
+    /// Damping `λ` (NaN until the first Jacobian).
+    lambda: f64,
+    /// Growth factor of `λ` after a rejected step.
+    nu: f64,
+    /// The iterate moved since the last Jacobian.
+    need_jacobian: bool,
 }
 
 #[cfg(test)]

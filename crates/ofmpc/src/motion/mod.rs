@@ -246,25 +246,10 @@ pub fn plan_program(
         return Err(PlanError::SamplePeriod(ts));
     }
     let n = robot.dof();
-    let has_runs = program.moves.iter().any(|m| {
-        matches!(&m.kind, MoveKind::Path { mode, .. }
-            if matches!(mode.unwrap_or(options.timing.default_mode), PathMode::Blend { .. }))
-    });
-    let velocity: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
-    let acceleration: Vec<f64> = robot
-        .joints()
-        .iter()
-        .map(|j| j.limits.acceleration)
-        .collect();
+    let has_runs = has_blended_runs(&program, options);
+    let limits = RobotLimits::of(robot);
     let mut map = if has_runs {
-        Some(JointMap::new(robot, options.orientation).map_err(|e| {
-            PlanError::Reference(ReferenceError {
-                line: program.start_line,
-                time: 0.0,
-                position: program.start.into(),
-                failure: ReferenceFailure::Ik(e),
-            })
-        })?)
+        Some(joint_map(&program, robot, options)?)
     } else {
         None
     };
@@ -272,83 +257,20 @@ pub fn plan_program(
     let mut attempts = 0;
     loop {
         attempts += 1;
-        let trajectory = match map.as_mut() {
-            Some(map) => {
-                let mut jc = JointConstraints {
-                    map,
-                    velocity: velocity.iter().map(|v| v * scale[0]).collect(),
-                    acceleration: acceleration.iter().map(|a| a * scale[1]).collect(),
-                };
-                CartesianTrajectory::plan(&program, &options.timing, Some(&mut jc))
-            }
-            None => CartesianTrajectory::plan(&program, &options.timing, None),
-        }
-        .map_err(PlanError::Timing)?;
-        let count = sample_count(trajectory.duration(), ts) * values_per_sample(n) as f64;
-        if count.is_nan() || count > MAX_PLAN_VALUES as f64 {
-            let at_default = sample_count(trajectory.duration(), PlanOptions::default().ts)
-                * values_per_sample(n) as f64;
-            let cause = if ts < PlanOptions::default().ts && at_default <= MAX_PLAN_VALUES as f64 {
-                SampleCause::SamplePeriod
-            } else {
-                match trajectory.longest_piece(&options.timing, &program) {
-                    Some((line, LongCause::Dwell)) => SampleCause::Dwell { line },
-                    Some((line, LongCause::Feed)) => SampleCause::Feed { line },
-                    Some((line, LongCause::PathSpeed)) => SampleCause::PathSpeed { line },
-                    Some((line, LongCause::PathAcceleration)) => {
-                        SampleCause::PathAcceleration { line }
-                    }
-                    None => SampleCause::SamplePeriod,
-                }
-            };
-            return Err(PlanError::TooManySamples {
-                cause,
-                count,
-                limit: MAX_PLAN_VALUES,
-            });
-        }
+        let trajectory = limits.time(&program, options, map.as_mut(), scale)?;
+        check_sample_count(&trajectory, &program, options, n)?;
         let reference = build_reference(robot, &trajectory, options.orientation, ts)
             .map_err(PlanError::Reference)?;
         // Worst joint speed and acceleration over the runs' samples, relative to the limits.
-        let mut worst = [(0.0f64, 0usize, 0usize); 2];
-        if has_runs {
-            for k in 0..reference.len() {
-                if !trajectory.in_run(k as f64 * ts) {
-                    continue;
-                }
-                for i in 0..n {
-                    let rv = reference.qd(k)[i].abs() / velocity[i];
-                    let ra = reference.qdd(k)[i].abs() / acceleration[i];
-                    if rv > worst[0].0 {
-                        worst[0] = (rv, i, k);
-                    }
-                    if ra > worst[1].0 {
-                        worst[1] = (ra, i, k);
-                    }
-                }
-            }
-        }
+        let worst = if has_runs {
+            limits.worst_in_runs(&trajectory, &reference, ts, n)
+        } else {
+            [(0.0f64, 0usize, 0usize); 2]
+        };
         let ok = worst.iter().all(|w| w.0 <= 1.0 + 1e-9);
         if ok || attempts >= MAX_TIMING_ATTEMPTS {
             if !ok {
-                let (q, (ratio, i, k)) = if worst[0].0 > 1.0 + 1e-9 {
-                    (JointQuantity::Speed, worst[0])
-                } else {
-                    (JointQuantity::Acceleration, worst[1])
-                };
-                let limit = if q == JointQuantity::Speed {
-                    velocity[i]
-                } else {
-                    acceleration[i]
-                };
-                return Err(PlanError::JointLimit {
-                    joint: i + 1,
-                    quantity: q,
-                    value: ratio * limit,
-                    limit,
-                    line: reference.line(k),
-                    attempts,
-                });
+                return Err(limits.limit_error(worst, &reference, attempts));
             }
             let diagnostics = PlanDiagnostics {
                 duration: trajectory.duration(),
@@ -373,6 +295,175 @@ pub fn plan_program(
             if w.0 > 1.0 {
                 *s *= 0.995 / w.0;
             }
+        }
+    }
+}
+
+/// Whether the program has blended moves (`G64`, or the default path mode if it selects
+/// none): only those are timed under the joint limits.
+fn has_blended_runs(program: &Program, options: &PlanOptions) -> bool {
+    program.moves.iter().any(|m| {
+        matches!(&m.kind, MoveKind::Path { mode, .. }
+            if matches!(mode.unwrap_or(options.timing.default_mode), PathMode::Blend { .. }))
+    })
+}
+
+/// The map from flange positions to joints used by the timing of blended runs; its errors
+/// are reported at the program's start point.
+fn joint_map(
+    program: &Program,
+    robot: &Robot,
+    options: &PlanOptions,
+) -> Result<JointMap, PlanError> {
+    JointMap::new(robot, options.orientation).map_err(|e| {
+        PlanError::Reference(ReferenceError {
+            line: program.start_line,
+            time: 0.0,
+            position: program.start.into(),
+            failure: ReferenceFailure::Ik(e),
+        })
+    })
+}
+
+/// Checks the size of the reference against [`MAX_PLAN_VALUES`] before it is allocated;
+/// the error names the likely cause ([`sample_cause`]).
+fn check_sample_count(
+    trajectory: &CartesianTrajectory,
+    program: &Program,
+    options: &PlanOptions,
+    n: usize,
+) -> Result<(), PlanError> {
+    let count = sample_count(trajectory.duration(), options.ts) * values_per_sample(n) as f64;
+    if count.is_nan() || count > MAX_PLAN_VALUES as f64 {
+        return Err(PlanError::TooManySamples {
+            cause: sample_cause(trajectory, program, options, n),
+            count,
+            limit: MAX_PLAN_VALUES,
+        });
+    }
+    Ok(())
+}
+
+/// Why the reference would be too large: a sample period below the default that the
+/// default would fit, else the longest piece's cause (dwell, feed, path limits).
+fn sample_cause(
+    trajectory: &CartesianTrajectory,
+    program: &Program,
+    options: &PlanOptions,
+    n: usize,
+) -> SampleCause {
+    let at_default = sample_count(trajectory.duration(), PlanOptions::default().ts)
+        * values_per_sample(n) as f64;
+    if options.ts < PlanOptions::default().ts && at_default <= MAX_PLAN_VALUES as f64 {
+        SampleCause::SamplePeriod
+    } else {
+        match trajectory.longest_piece(&options.timing, program) {
+            Some((line, LongCause::Dwell)) => SampleCause::Dwell { line },
+            Some((line, LongCause::Feed)) => SampleCause::Feed { line },
+            Some((line, LongCause::PathSpeed)) => SampleCause::PathSpeed { line },
+            Some((line, LongCause::PathAcceleration)) => SampleCause::PathAcceleration { line },
+            None => SampleCause::SamplePeriod,
+        }
+    }
+}
+
+/// The robot's joint speed and acceleration limits, per joint.
+struct RobotLimits {
+    velocity: Vec<f64>,
+    acceleration: Vec<f64>,
+}
+
+impl RobotLimits {
+    /// The limits of `robot`'s joints.
+    fn of(robot: &Robot) -> Self {
+        let velocity: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
+        let acceleration: Vec<f64> = robot
+            .joints()
+            .iter()
+            .map(|j| j.limits.acceleration)
+            .collect();
+        Self {
+            velocity,
+            acceleration,
+        }
+    }
+
+    /// Times the program: blended runs (with a joint map) under the joint speed and
+    /// acceleration limits scaled by `scale`, else under the path limits only.
+    fn time(
+        &self,
+        program: &Program,
+        options: &PlanOptions,
+        map: Option<&mut JointMap>,
+        scale: [f64; 2],
+    ) -> Result<CartesianTrajectory, PlanError> {
+        match map {
+            Some(map) => {
+                let mut jc = JointConstraints {
+                    map,
+                    velocity: self.velocity.iter().map(|v| v * scale[0]).collect(),
+                    acceleration: self.acceleration.iter().map(|a| a * scale[1]).collect(),
+                };
+                CartesianTrajectory::plan(program, &options.timing, Some(&mut jc))
+            }
+            None => CartesianTrajectory::plan(program, &options.timing, None),
+        }
+        .map_err(PlanError::Timing)
+    }
+
+    /// The worst joint speed and acceleration ratios to the limits over the samples of the
+    /// blended runs: `(ratio, joint, sample)` for speed, then acceleration.
+    fn worst_in_runs(
+        &self,
+        trajectory: &CartesianTrajectory,
+        reference: &JointReference,
+        ts: f64,
+        n: usize,
+    ) -> [(f64, usize, usize); 2] {
+        let mut worst = [(0.0f64, 0usize, 0usize); 2];
+        for k in 0..reference.len() {
+            if !trajectory.in_run(k as f64 * ts) {
+                continue;
+            }
+            for i in 0..n {
+                let rv = reference.qd(k)[i].abs() / self.velocity[i];
+                let ra = reference.qdd(k)[i].abs() / self.acceleration[i];
+                if rv > worst[0].0 {
+                    worst[0] = (rv, i, k);
+                }
+                if ra > worst[1].0 {
+                    worst[1] = (ra, i, k);
+                }
+            }
+        }
+        worst
+    }
+
+    /// The error for a reference that still exceeds a joint limit after the last attempt:
+    /// the speed if it is exceeded, else the acceleration.
+    fn limit_error(
+        &self,
+        worst: [(f64, usize, usize); 2],
+        reference: &JointReference,
+        attempts: usize,
+    ) -> PlanError {
+        let (q, (ratio, i, k)) = if worst[0].0 > 1.0 + 1e-9 {
+            (JointQuantity::Speed, worst[0])
+        } else {
+            (JointQuantity::Acceleration, worst[1])
+        };
+        let limit = if q == JointQuantity::Speed {
+            self.velocity[i]
+        } else {
+            self.acceleration[i]
+        };
+        PlanError::JointLimit {
+            joint: i + 1,
+            quantity: q,
+            value: ratio * limit,
+            limit,
+            line: reference.line(k),
+            attempts,
         }
     }
 }

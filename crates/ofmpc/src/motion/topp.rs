@@ -248,16 +248,48 @@ pub(crate) fn time_run(
     joints: Option<&mut JointConstraints<'_>>,
 ) -> Result<Run, RunError> {
     let length = pieces.last().map_or(0.0, |p| p.start + p.geometry.length());
+    let step = grid_step(&pieces);
+    let mut nodes = grid_nodes(&pieces, step, limits.max_accel);
+    let a_max = limits.max_accel;
+    let acc: Vec<f64> = joints
+        .as_ref()
+        .map_or_else(Vec::new, |j| j.acceleration.clone());
+    let acc: &[f64] = &acc;
+    if let Some(jc) = joints {
+        joint_derivatives(&mut nodes, &pieces, jc)?;
+    }
+    cap_by_acceleration(&mut nodes, a_max, acc);
+    let t_j = 2.0 * a_max / limits.max_jerk;
+    let eroded = eroded_limits(&nodes, t_j);
+    let kset = backward_pass(&nodes, &eroded, a_max, acc);
+    let x = forward_pass(&nodes, &kset, a_max, acc);
+    let (s_out, v_out) = sample_run(&nodes, &x, t_j)?;
+    Ok(Run {
+        pieces,
+        length,
+        s: s_out,
+        v: v_out,
+        step: RUN_STEP,
+    })
+}
+
+/// Node spacing of the grid: [`GRID_STEP`], grown so the run has at most [`MAX_GRID_NODES`].
+fn grid_step(pieces: &[Piece]) -> f64 {
     let total_nodes: f64 = pieces
         .iter()
         .map(|p| (p.geometry.length() / GRID_STEP).ceil().max(2.0))
         .sum();
-    let step = if total_nodes > MAX_GRID_NODES as f64 {
+    if total_nodes > MAX_GRID_NODES as f64 {
         GRID_STEP * total_nodes / MAX_GRID_NODES as f64
     } else {
         GRID_STEP
-    };
-    // Nodes: piece boundaries and interior points.
+    }
+}
+
+/// Grid nodes: piece boundaries and interior points at most `step` apart, with the path part
+/// of the velocity limit, `x̄ = min(F², a_max / κ)` (feed and curvature of both pieces at a
+/// boundary), and rest at the ends and after stopping pieces.
+fn grid_nodes(pieces: &[Piece], step: f64, max_accel: f64) -> Vec<Node> {
     let mut nodes: Vec<Node> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let len = p.geometry.length();
@@ -287,7 +319,7 @@ pub(crate) fn time_run(
             }
             let mut xbar = feed * feed;
             if kappa > 0.0 {
-                xbar = xbar.min(limits.max_accel / kappa);
+                xbar = xbar.min(max_accel / kappa);
             }
             nodes.push(Node {
                 s: p.start + local,
@@ -299,63 +331,93 @@ pub(crate) fn time_run(
             });
         }
     }
-    let nn = nodes.len();
-    let a_max = limits.max_accel;
-    let acc: Vec<f64> = joints
-        .as_ref()
-        .map_or_else(Vec::new, |j| j.acceleration.clone());
-    let acc: &[f64] = &acc;
-    // Joint derivatives along s.
-    if let Some(jc) = joints {
-        jc.map.reset();
-        let nj = jc.velocity.len();
-        let mut q = vec![0.0; nn * nj];
-        for (i, node) in nodes.iter().enumerate() {
-            let k = pieces
-                .partition_point(|p| p.start <= node.s)
-                .saturating_sub(1);
-            let p = &pieces[k];
-            let pos = p.geometry.point(node.s - p.start);
-            let sol = jc.map.solve(&pos).map_err(|failure| RunError::Joint {
-                line: node.line,
-                position: pos,
-                failure,
-            })?;
-            q[i * nj..(i + 1) * nj].copy_from_slice(sol);
-        }
-        for i in 0..nn {
-            let (dq, ddq): (Vec<f64>, Vec<f64>) = (0..nj)
-                .map(|j| {
-                    let qa = |k: usize| q[k * nj + j];
-                    if nn < 3 {
-                        let h = nodes[nn - 1].s - nodes[0].s;
-                        return ((qa(nn - 1) - qa(0)) / h, 0.0);
-                    }
-                    let c = i.clamp(1, nn - 2);
-                    let (h1, h2) = (nodes[c].s - nodes[c - 1].s, nodes[c + 1].s - nodes[c].s);
-                    let (y0, y1, y2) = (qa(c - 1), qa(c), qa(c + 1));
-                    let d2 = 2.0 * (y0 / (h1 * (h1 + h2)) - y1 / (h1 * h2) + y2 / (h2 * (h1 + h2)));
-                    let d1 = if i == 0 {
-                        (y1 - y0) / h1 - d2 * h1 / 2.0
-                    } else if i == nn - 1 {
-                        (y2 - y1) / h2 + d2 * h2 / 2.0
-                    } else {
-                        -h2 / (h1 * (h1 + h2)) * y0
-                            + (h2 - h1) / (h1 * h2) * y1
-                            + h1 / (h2 * (h1 + h2)) * y2
-                    };
-                    (d1, d2)
-                })
-                .unzip();
-            for (j, d) in dq.iter().enumerate() {
-                if d.abs() > 0.0 {
-                    nodes[i].xbar = nodes[i].xbar.min((jc.velocity[j] / d).powi(2));
-                }
+    nodes
+}
+
+/// Joint derivatives along `s`: `q'` and `q''` of every node from the inverse kinematics,
+/// and the joint speed limits `|q'_j| √x ≤ v_j` folded into `x̄`.
+fn joint_derivatives(
+    nodes: &mut [Node],
+    pieces: &[Piece],
+    jc: &mut JointConstraints<'_>,
+) -> Result<(), RunError> {
+    let q = joint_positions(nodes, pieces, jc)?;
+    let nj = jc.velocity.len();
+    for i in 0..nodes.len() {
+        let (dq, ddq) = finite_differences(nodes, &q, nj, i);
+        for (j, d) in dq.iter().enumerate() {
+            if d.abs() > 0.0 {
+                nodes[i].xbar = nodes[i].xbar.min((jc.velocity[j] / d).powi(2));
             }
-            nodes[i].dq = dq;
-            nodes[i].ddq = ddq;
         }
+        nodes[i].dq = dq;
+        nodes[i].ddq = ddq;
     }
+    Ok(())
+}
+
+/// Joint positions at the nodes (row-major, one row of `nj` joints per node) by the inverse
+/// kinematics of the flange positions.
+fn joint_positions(
+    nodes: &[Node],
+    pieces: &[Piece],
+    jc: &mut JointConstraints<'_>,
+) -> Result<Vec<f64>, RunError> {
+    jc.map.reset();
+    let nn = nodes.len();
+    let nj = jc.velocity.len();
+    let mut q = vec![0.0; nn * nj];
+    for (i, node) in nodes.iter().enumerate() {
+        let k = pieces
+            .partition_point(|p| p.start <= node.s)
+            .saturating_sub(1);
+        let p = &pieces[k];
+        let pos = p.geometry.point(node.s - p.start);
+        let sol = jc.map.solve(&pos).map_err(|failure| RunError::Joint {
+            line: node.line,
+            position: pos,
+            failure,
+        })?;
+        q[i * nj..(i + 1) * nj].copy_from_slice(sol);
+    }
+    Ok(q)
+}
+
+/// `q'` and `q''` of every joint at node `i`: three-point finite differences on the
+/// non-uniform grid (the end nodes use their neighbour's stencil; a two-node grid has a
+/// constant `q'` and `q'' = 0`).
+fn finite_differences(nodes: &[Node], q: &[f64], nj: usize, i: usize) -> (Vec<f64>, Vec<f64>) {
+    let nn = nodes.len();
+    (0..nj)
+        .map(|j| {
+            let qa = |k: usize| q[k * nj + j];
+            if nn < 3 {
+                let h = nodes[nn - 1].s - nodes[0].s;
+                return ((qa(nn - 1) - qa(0)) / h, 0.0);
+            }
+            let c = i.clamp(1, nn - 2);
+            let (h1, h2) = (nodes[c].s - nodes[c - 1].s, nodes[c + 1].s - nodes[c].s);
+            let (y0, y1, y2) = (qa(c - 1), qa(c), qa(c + 1));
+            let d2 = 2.0 * (y0 / (h1 * (h1 + h2)) - y1 / (h1 * h2) + y2 / (h2 * (h1 + h2)));
+            let d1 = if i == 0 {
+                (y1 - y0) / h1 - d2 * h1 / 2.0
+            } else if i == nn - 1 {
+                (y2 - y1) / h2 + d2 * h2 / 2.0
+            } else {
+                -h2 / (h1 * (h1 + h2)) * y0
+                    + (h2 - h1) / (h1 * h2) * y1
+                    + h1 / (h2 * (h1 + h2)) * y2
+            };
+            (d1, d2)
+        })
+        .unzip()
+}
+
+/// Caps the velocity limits by acceleration feasibility: `|q''_j| x ≤ A_j` with `q''` the
+/// largest of each node and its neighbours, then the largest `x` with a non-empty admissible
+/// control interval.
+fn cap_by_acceleration(nodes: &mut [Node], a_max: f64, acc: &[f64]) {
+    let nn = nodes.len();
     // Acceleration feasibility caps the velocity limit too. The velocity-dependent part of
     // each joint's acceleration alone must fit its limit, `|q''_j| x ≤ A_j`: cancelling it
     // with the tangential acceleration (`u = −q''x/q'`) holds at one node of the grid but not
@@ -385,25 +447,36 @@ pub(crate) fn time_run(
         });
         node.xbar = cap;
     }
+}
+
+/// The velocity limits eroded by the distance the filter window `t_j` spans: the smallest
+/// `x̄` within `T_j √(local max x̄)` of each node, the local maximum taken within
+/// `R0 = T_j v_top`.
+fn eroded_limits(nodes: &[Node], t_j: f64) -> Vec<f64> {
+    let nn = nodes.len();
     // Erode the velocity limits by the distance the filter window spans: at most
     // `R0 = T_j v_top` anywhere, and at most `T_j` times the largest speed limit within `R0`
     // locally.
-    let t_j = 2.0 * a_max / limits.max_jerk;
     let v_top = nodes.iter().map(|n| n.xbar.sqrt()).fold(0.0, f64::max);
     let r0 = v_top * t_j;
     let xbar: Vec<f64> = nodes.iter().map(|n| n.xbar).collect();
     let svals: Vec<f64> = nodes.iter().map(|n| n.s).collect();
     let local_max = sliding(&svals, &xbar, r0, |a, b| a >= b);
     let tree = MinTree::new(&xbar);
-    let eroded: Vec<f64> = (0..nn)
+    (0..nn)
         .map(|i| {
             let reach = t_j * local_max[i].sqrt();
             let lo = svals.partition_point(|&s| s < svals[i] - reach);
             let hi = svals.partition_point(|&s| s <= svals[i] + reach);
             tree.min(lo, hi.max(lo + 1))
         })
-        .collect();
-    // Backward pass: controllable sets [0, k_i].
+        .collect()
+}
+
+/// Backward pass: the controllable sets `[0, k_i]`, `k_i` the largest `x ≤ x̄_i` (eroded)
+/// with an admissible `u` such that `x + 2 Δs_i u_lo ≤ k_{i+1}`; zero at stops.
+fn backward_pass(nodes: &[Node], eroded: &[f64], a_max: f64, acc: &[f64]) -> Vec<f64> {
+    let nn = nodes.len();
     let mut kset = vec![0.0; nn];
     for i in (0..nn.saturating_sub(1)).rev() {
         let n = &nodes[i];
@@ -417,7 +490,13 @@ pub(crate) fn time_run(
             lo <= hi && x + 2.0 * d * lo <= knext
         });
     }
-    // Forward pass.
+    kset
+}
+
+/// Forward pass: the largest admissible step `x_{i+1} = min(k_{i+1}, x_i + 2Δs u_hi(x_i))`
+/// (kept slightly above zero except at stops).
+fn forward_pass(nodes: &[Node], kset: &[f64], a_max: f64, acc: &[f64]) -> Vec<f64> {
+    let nn = nodes.len();
     let mut x = vec![0.0; nn];
     for i in 0..nn.saturating_sub(1) {
         let d = nodes[i + 1].s - nodes[i].s;
@@ -427,18 +506,63 @@ pub(crate) fn time_run(
             x[i + 1] = x[i + 1].max(1e-12);
         }
     }
-    // Sections between stops: integrate, sample, filter.
+    x
+}
+
+/// The timing stored every [`RUN_STEP`]: for each section between stops, integrate the
+/// profile `x`, sample it and box-filter it over `t_j`. Returns the filtered `s` and `ṡ`.
+fn sample_run(nodes: &[Node], x: &[f64], t_j: f64) -> Result<(Vec<f64>, Vec<f64>), RunError> {
+    let nn = nodes.len();
     let window = ((t_j / RUN_STEP).round() as usize).max(1);
     let h = RUN_STEP;
     let mut bounds = vec![0];
     bounds.extend((1..nn).filter(|&i| nodes[i].stop));
     // Count the samples first (bounded allocation).
+    let times = node_times(nodes, x);
+    let count = sample_count(nodes, &times, &bounds, window)?;
+    let mut s_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
+    let mut v_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
+    s_out.push(0.0);
+    v_out.push(0.0);
+    for w in bounds.windows(2) {
+        let (i0, i1) = (w[0], w[1]);
+        let (raw, steps) = section_samples(nodes, x, &times, i0, i1);
+        let filtered = box_filter(&raw, steps, window, nodes[i0].s, nodes[i1].s);
+        let total = steps + window - 1;
+        for k in 1..=total {
+            s_out.push(filtered[k]);
+            v_out.push(if k == total {
+                0.0
+            } else {
+                (filtered[k + 1] - filtered[k - 1]) / (2.0 * h)
+            });
+        }
+    }
+    Ok((s_out, v_out))
+}
+
+/// Time at each node: `Δt_i = 2 Δs_i / (√x_i + √x_{i+1})` (constant `s̈` between nodes).
+fn node_times(nodes: &[Node], x: &[f64]) -> Vec<f64> {
+    let nn = nodes.len();
     let mut times = vec![0.0; nn];
     for i in 0..nn - 1 {
         let d = nodes[i + 1].s - nodes[i].s;
         let v = x[i].sqrt() + x[i + 1].sqrt();
         times[i + 1] = times[i] + if v > 0.0 { 2.0 * d / v } else { f64::INFINITY };
     }
+    times
+}
+
+/// Number of stored samples of the sections between `bounds` (filter tail included); an
+/// error naming the slowest interval's line if the timing would exceed [`MAX_PLAN_VALUES`].
+fn sample_count(
+    nodes: &[Node],
+    times: &[f64],
+    bounds: &[usize],
+    window: usize,
+) -> Result<f64, RunError> {
+    let nn = nodes.len();
+    let h = RUN_STEP;
     let mut count = 0.0;
     for w in bounds.windows(2) {
         count += ((times[w[1]] - times[w[0]]) / h).ceil() + window as f64;
@@ -452,65 +576,64 @@ pub(crate) fn time_run(
             line,
         });
     }
-    let mut s_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
-    let mut v_out: Vec<f64> = Vec::with_capacity(count as usize + 1);
-    s_out.push(0.0);
-    v_out.push(0.0);
-    for w in bounds.windows(2) {
-        let (i0, i1) = (w[0], w[1]);
-        let t0 = times[i0];
-        let dur = times[i1] - t0;
-        let steps = (dur / h).ceil() as usize;
-        // Unfiltered s at k h.
-        let mut raw = Vec::with_capacity(steps + 1);
-        let mut iv = i0;
-        for k in 0..=steps {
-            let t = (k as f64 * h).min(dur) + t0;
-            while iv + 1 < i1 && times[iv + 1] <= t {
-                iv += 1;
-            }
-            let tau = t - times[iv];
-            let d = nodes[iv + 1].s - nodes[iv].s;
-            let u = (x[iv + 1] - x[iv]) / (2.0 * d);
-            let s = nodes[iv].s + x[iv].sqrt() * tau + 0.5 * u * tau * tau;
-            raw.push(s.clamp(nodes[iv].s, nodes[iv + 1].s));
+    Ok(count)
+}
+
+/// Unfiltered `s` at `k h` over the section from node `i0` to the stop `i1` (constant `s̈`
+/// between nodes: `s = s_i + √x_i τ + u τ²/2`, `u = (x_{i+1} − x_i) / 2Δs`), ending exactly
+/// at `s_{i1}`. Returns the samples and the number of steps.
+fn section_samples(
+    nodes: &[Node],
+    x: &[f64],
+    times: &[f64],
+    i0: usize,
+    i1: usize,
+) -> (Vec<f64>, usize) {
+    let h = RUN_STEP;
+    let t0 = times[i0];
+    let dur = times[i1] - t0;
+    let steps = (dur / h).ceil() as usize;
+    // Unfiltered s at k h.
+    let mut raw = Vec::with_capacity(steps + 1);
+    let mut iv = i0;
+    for k in 0..=steps {
+        let t = (k as f64 * h).min(dur) + t0;
+        while iv + 1 < i1 && times[iv + 1] <= t {
+            iv += 1;
         }
-        let s_end = nodes[i1].s;
-        raw[steps] = s_end;
-        // Box filter: mean of raw[k − window + 1 ..= k], raw before 0 = start, after = end.
-        let get = |k: isize| -> f64 {
-            if k < 0 {
-                nodes[i0].s
-            } else {
-                raw[(k as usize).min(steps)]
-            }
-        };
-        let total = steps + window - 1;
-        let mut sum: f64 = (0..window as isize).map(|j| get(-j)).sum();
-        let mut filtered = Vec::with_capacity(total + 1);
-        filtered.push(sum / window as f64);
-        for k in 1..=total as isize {
-            sum += get(k) - get(k - window as isize);
-            filtered.push(sum / window as f64);
-        }
-        filtered[0] = nodes[i0].s;
-        filtered[total] = s_end;
-        for k in 1..=total {
-            s_out.push(filtered[k]);
-            v_out.push(if k == total {
-                0.0
-            } else {
-                (filtered[k + 1] - filtered[k - 1]) / (2.0 * h)
-            });
-        }
+        let tau = t - times[iv];
+        let d = nodes[iv + 1].s - nodes[iv].s;
+        let u = (x[iv + 1] - x[iv]) / (2.0 * d);
+        let s = nodes[iv].s + x[iv].sqrt() * tau + 0.5 * u * tau * tau;
+        raw.push(s.clamp(nodes[iv].s, nodes[iv + 1].s));
     }
-    Ok(Run {
-        pieces,
-        length,
-        s: s_out,
-        v: v_out,
-        step: h,
-    })
+    raw[steps] = nodes[i1].s;
+    (raw, steps)
+}
+
+/// Box filter of one section: the mean of `raw[k − window + 1 ..= k]` for
+/// `k = 0 ..= steps + window − 1` (`raw` before 0 = `s_start`, after `steps` = its end),
+/// pinned to `s_start` and `s_end` at both ends.
+fn box_filter(raw: &[f64], steps: usize, window: usize, s_start: f64, s_end: f64) -> Vec<f64> {
+    // Box filter: mean of raw[k − window + 1 ..= k], raw before 0 = start, after = end.
+    let get = |k: isize| -> f64 {
+        if k < 0 {
+            s_start
+        } else {
+            raw[(k as usize).min(steps)]
+        }
+    };
+    let total = steps + window - 1;
+    let mut sum: f64 = (0..window as isize).map(|j| get(-j)).sum();
+    let mut filtered = Vec::with_capacity(total + 1);
+    filtered.push(sum / window as f64);
+    for k in 1..=total as isize {
+        sum += get(k) - get(k - window as isize);
+        filtered.push(sum / window as f64);
+    }
+    filtered[0] = s_start;
+    filtered[total] = s_end;
+    filtered
 }
 
 /// For each `i`, the extreme (by `keep(a, b)`: `a` dominates `b`) of `values[j]` over

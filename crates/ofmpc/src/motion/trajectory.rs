@@ -179,6 +179,70 @@ enum Step<'a> {
     Dwell(f64),
 }
 
+/// The state [`CartesianTrajectory::plan`] builds: the timed segments so far, the time at
+/// their end, and the blended moves collected for the next run.
+struct Timeline {
+    segments: Vec<TimedSegment>,
+    t: f64,
+    run: Vec<RunMove>,
+}
+
+impl Timeline {
+    /// Appends a segment lasting `dt` from the current time and advances the time.
+    fn push(&mut self, kind: TimedKind, dt: f64, line: usize) {
+        self.segments.push(TimedSegment {
+            kind,
+            start_time: self.t,
+            end_time: self.t + dt,
+            line,
+        });
+        self.t += dt;
+    }
+
+    /// Blends and times the collected run, if any ([`time_run`]), and appends it.
+    fn flush(
+        &mut self,
+        options: &TimingOptions,
+        joints: Option<&mut JointConstraints<'_>>,
+    ) -> Result<(), TrajectoryError> {
+        if self.run.is_empty() {
+            return Ok(());
+        }
+        let line = self.run[0].line;
+        let pieces = blend(&self.run);
+        self.run.clear();
+        let t = self.t;
+        let timed = time_run(
+            pieces,
+            PathLimits {
+                max_accel: options.max_accel,
+                max_jerk: options.max_jerk,
+            },
+            joints,
+        )
+        .map_err(|e| match e {
+            RunError::Joint {
+                line,
+                position,
+                failure,
+            } => TrajectoryError::Joint(ReferenceError {
+                line,
+                time: t,
+                position: [position.x, position.y, position.z],
+                failure,
+            }),
+            RunError::TooManySamples { count, line } => TrajectoryError::TooManySamples {
+                line,
+                count,
+                limit: MAX_PLAN_VALUES,
+            },
+        })?;
+        let dt = timed.duration();
+        self.push(TimedKind::Run(Box::new(timed)), dt, line);
+        Ok(())
+    }
+}
+
 impl CartesianTrajectory {
     /// Time every move of `program` under the path limits only (no joint limits; see
     /// [`crate::motion::plan`] for the planner that also respects the robot's joints).
@@ -195,6 +259,36 @@ impl CartesianTrajectory {
         options: &TimingOptions,
         mut joints: Option<&mut JointConstraints<'_>>,
     ) -> Result<Self, TrajectoryError> {
+        Self::check_options(options)?;
+        let mut timeline = Timeline {
+            segments: Vec::with_capacity(program.moves.len()),
+            t: 0.0,
+            run: Vec::new(),
+        };
+        let mut pos = program.start;
+        for m in &program.moves {
+            if let MoveKind::Path { segment, .. } = &m.kind {
+                pos = segment.end();
+            }
+            let Some(step) = Self::move_step(m.line, &m.kind, options, &mut timeline.run)? else {
+                continue;
+            };
+            timeline.flush(options, joints.as_deref_mut())?;
+            let (kind, dt) = Self::time_step(step, options, pos);
+            timeline.push(kind, dt, m.line);
+        }
+        timeline.flush(options, joints)?;
+        Ok(CartesianTrajectory {
+            start: program.start,
+            start_line: program.start_line,
+            segments: timeline.segments,
+            duration: timeline.t,
+        })
+    }
+
+    /// Checks the path limits (positive and finite) and the blend tolerance (non-negative
+    /// and finite).
+    fn check_options(options: &TimingOptions) -> Result<(), TrajectoryError> {
         for (limit, value) in [
             (TimingLimit::PathSpeed, options.max_speed),
             (TimingLimit::PathAcceleration, options.max_accel),
@@ -210,142 +304,87 @@ impl CartesianTrajectory {
                 value: options.blend_tolerance,
             });
         }
-        let mut segments = Vec::with_capacity(program.moves.len());
-        let mut t = 0.0;
-        let mut pos = program.start;
-        let mut run: Vec<RunMove> = Vec::new();
-        let flush = |run: &mut Vec<RunMove>,
-                     segments: &mut Vec<TimedSegment>,
-                     t: &mut f64,
-                     joints: Option<&mut JointConstraints<'_>>|
-         -> Result<(), TrajectoryError> {
-            if run.is_empty() {
-                return Ok(());
-            }
-            let line = run[0].line;
-            let pieces = blend(run);
-            run.clear();
-            let timed = time_run(
-                pieces,
-                PathLimits {
-                    max_accel: options.max_accel,
-                    max_jerk: options.max_jerk,
-                },
-                joints,
-            )
-            .map_err(|e| match e {
-                RunError::Joint {
-                    line,
-                    position,
-                    failure,
-                } => TrajectoryError::Joint(ReferenceError {
-                    line,
-                    time: *t,
-                    position: [position.x, position.y, position.z],
-                    failure,
-                }),
-                RunError::TooManySamples { count, line } => TrajectoryError::TooManySamples {
-                    line,
-                    count,
-                    limit: MAX_PLAN_VALUES,
-                },
-            })?;
-            let dt = timed.duration();
-            segments.push(TimedSegment {
-                kind: TimedKind::Run(Box::new(timed)),
-                start_time: *t,
-                end_time: *t + dt,
-                line,
-            });
-            *t += dt;
-            Ok(())
-        };
-        for m in &program.moves {
-            let step = match &m.kind {
-                MoveKind::Path {
-                    segment,
-                    feed,
-                    mode,
-                } => {
-                    let speed = match feed {
-                        Some(f) if !(f.is_finite() && *f > 0.0) => {
-                            return Err(TrajectoryError::InvalidMove {
-                                line: m.line,
-                                what: "feed",
-                                value: *f,
-                            })
-                        }
-                        Some(f) => *f,
-                        None => options.max_speed,
-                    };
-                    pos = segment.end();
-                    match mode.unwrap_or(options.default_mode) {
-                        PathMode::ExactStop => Step::Exact(segment, speed),
-                        PathMode::Blend { tolerance } => {
-                            let tolerance = tolerance.unwrap_or(options.blend_tolerance);
-                            if !(tolerance >= 0.0 && tolerance.is_finite()) {
-                                return Err(TrajectoryError::InvalidMove {
-                                    line: m.line,
-                                    what: "tolerance",
-                                    value: tolerance,
-                                });
-                            }
-                            run.push(RunMove {
-                                segment: segment.clone(),
-                                feed: speed,
-                                tolerance,
-                                line: m.line,
-                            });
-                            continue;
-                        }
-                    }
-                }
-                MoveKind::Dwell { seconds } => {
-                    if !(seconds.is_finite() && *seconds > 0.0) {
+        Ok(())
+    }
+
+    /// Checks one program move (feed, blend tolerance, dwell time) and sorts it: a blended
+    /// move joins `run` (`None`), an exact-stop move or a dwell is timed on its own.
+    fn move_step<'a>(
+        line: usize,
+        kind: &'a MoveKind,
+        options: &TimingOptions,
+        run: &mut Vec<RunMove>,
+    ) -> Result<Option<Step<'a>>, TrajectoryError> {
+        let step = match kind {
+            MoveKind::Path {
+                segment,
+                feed,
+                mode,
+            } => {
+                let speed = match feed {
+                    Some(f) if !(f.is_finite() && *f > 0.0) => {
                         return Err(TrajectoryError::InvalidMove {
-                            line: m.line,
-                            what: "dwell time",
-                            value: *seconds,
-                        });
+                            line,
+                            what: "feed",
+                            value: *f,
+                        })
                     }
-                    Step::Dwell(*seconds)
-                }
-            };
-            flush(&mut run, &mut segments, &mut t, joints.as_deref_mut())?;
-            let (kind, dt) = match step {
-                Step::Exact(segment, speed) => {
-                    let law = TimeLaw::fastest(
-                        options.profile,
-                        segment.length(),
-                        speed,
-                        options.max_accel,
-                    );
-                    let dt = law.duration;
-                    (
-                        TimedKind::Path {
+                    Some(f) => *f,
+                    None => options.max_speed,
+                };
+                match mode.unwrap_or(options.default_mode) {
+                    PathMode::ExactStop => Step::Exact(segment, speed),
+                    PathMode::Blend { tolerance } => {
+                        let tolerance = tolerance.unwrap_or(options.blend_tolerance);
+                        if !(tolerance >= 0.0 && tolerance.is_finite()) {
+                            return Err(TrajectoryError::InvalidMove {
+                                line,
+                                what: "tolerance",
+                                value: tolerance,
+                            });
+                        }
+                        run.push(RunMove {
                             segment: segment.clone(),
-                            law,
-                        },
-                        dt,
-                    )
+                            feed: speed,
+                            tolerance,
+                            line,
+                        });
+                        return Ok(None);
+                    }
                 }
-                Step::Dwell(seconds) => (TimedKind::Dwell { position: pos }, seconds),
-            };
-            segments.push(TimedSegment {
-                kind,
-                start_time: t,
-                end_time: t + dt,
-                line: m.line,
-            });
-            t += dt;
+            }
+            MoveKind::Dwell { seconds } => {
+                if !(seconds.is_finite() && *seconds > 0.0) {
+                    return Err(TrajectoryError::InvalidMove {
+                        line,
+                        what: "dwell time",
+                        value: *seconds,
+                    });
+                }
+                Step::Dwell(*seconds)
+            }
+        };
+        Ok(Some(step))
+    }
+
+    /// Times an exact-stop move (the fastest time law within its speed and `max_accel`,
+    /// [`TimeLaw::fastest`]) or a dwell at `pos`; returns the segment kind and duration.
+    fn time_step(step: Step<'_>, options: &TimingOptions, pos: Vector3<f64>) -> (TimedKind, f64) {
+        match step {
+            Step::Exact(segment, speed) => {
+                let law =
+                    TimeLaw::fastest(options.profile, segment.length(), speed, options.max_accel);
+                let dt = law.duration;
+                (
+                    TimedKind::Path {
+                        segment: segment.clone(),
+                        law,
+                    },
+                    dt,
+                )
+            }
+            Step::Dwell(seconds) => (TimedKind::Dwell { position: pos }, seconds),
         }
-        flush(&mut run, &mut segments, &mut t, joints)?;
-        Ok(CartesianTrajectory {
-            start: program.start,
-            start_line: program.start_line,
-            segments,
-            duration: t,
-        })
     }
 
     /// Total duration (s).

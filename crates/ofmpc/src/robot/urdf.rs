@@ -172,136 +172,15 @@ pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
         file: String::new(),
         message: e.to_string(),
     })?;
-    let mut links: HashMap<&str, usize> = HashMap::new();
-    for (i, l) in urdf.links.iter().enumerate() {
-        if links.insert(l.name.as_str(), i).is_some() {
-            return Err(UrdfError::DuplicateLink(l.name.clone()).into());
-        }
-    }
-    // Children of each link (indices into urdf.joints), parent joint of each link.
-    let mut children: Vec<Vec<usize>> = vec![Vec::new(); urdf.links.len()];
-    let mut parent_of: Vec<Option<usize>> = vec![None; urdf.links.len()];
-    for (ji, j) in urdf.joints.iter().enumerate() {
-        let (Some(&p), Some(&c)) = (
-            links.get(j.parent.link.as_str()),
-            links.get(j.child.link.as_str()),
-        ) else {
-            return Err(UrdfError::DanglingJoint {
-                joint: j.name.clone(),
-                parent: j.parent.link.clone(),
-                child: j.child.link.clone(),
-            }
-            .into());
-        };
-        if let Some(prev) = parent_of[c] {
-            return Err(UrdfError::TwoParents {
-                link: j.child.link.clone(),
-                first: urdf.joints[prev].name.clone(),
-                second: j.name.clone(),
-            }
-            .into());
-        }
-        parent_of[c] = Some(ji);
-        children[p].push(ji);
-    }
-    let roots: Vec<usize> = (0..urdf.links.len())
-        .filter(|&l| parent_of[l].is_none())
-        .collect();
-    let root = match roots.as_slice() {
-        [r] => *r,
-        [] => return Err(UrdfError::NoRoot.into()),
-        many => {
-            return Err(UrdfError::ManyRoots {
-                roots: many.iter().map(|&l| urdf.links[l].name.clone()).collect(),
-            }
-            .into())
-        }
-    };
-    let child_link = |ji: usize| links[urdf.joints[ji].child.link.as_str()];
-
-    // Pre-order from the root (iterative); links unreachable from it are in a loop.
-    let mut order = Vec::with_capacity(urdf.links.len());
-    let mut stack = vec![root];
-    while let Some(l) = stack.pop() {
-        order.push(l);
-        stack.extend(children[l].iter().map(|&ji| child_link(ji)));
-    }
-    if order.len() != urdf.links.len() {
-        return Err(UrdfError::Unreachable(urdf.links.len() - order.len()).into());
-    }
-    // has_moving[l]: a moving joint lies at or below one of l's child joints.
-    // Reverse pre-order visits children before parents: one linear pass.
-    let mut has_moving = vec![false; urdf.links.len()];
-    for &l in order.iter().rev() {
-        has_moving[l] = children[l]
-            .iter()
-            .any(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[child_link(ji)]);
-    }
-
-    // Walk: each link sits at `pose` in the frame of body `body` (None = base).
-    let mut joints: Vec<Joint> = Vec::new();
-    let mut warnings = Vec::new();
-    let mut frames: HashMap<&str, (Option<usize>, Transform)> = HashMap::new();
-    let mut last_link: Option<(String, Transform)> = None;
-    let mut stack: Vec<(usize, Transform, Option<usize>)> =
-        vec![(root, Transform::identity(), None)];
-    while let Some((l, pose, body)) = stack.pop() {
-        let link = &urdf.links[l];
-        let inertia = link_inertia(link)?;
-        if let Some(b) = body {
-            let j = &mut joints[b];
-            j.body = j.body + inertia.to_parent(&pose);
-        }
-        frames.insert(link.name.as_str(), (body, pose));
-        let moving: Vec<usize> = children[l]
-            .iter()
-            .copied()
-            .filter(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[child_link(ji)])
-            .collect();
-        if moving.len() > 1 {
-            return Err(UrdfError::NotSerial {
-                link: link.name.clone(),
-                joints: moving
-                    .iter()
-                    .map(|&ji| urdf.joints[ji].name.clone())
-                    .collect(),
-            }
-            .into());
-        }
-        if moving.is_empty() && body.is_some() && body == joints.len().checked_sub(1) {
-            // End of the moving path, or a fixed side branch of the last body.
-            last_link = Some((link.name.clone(), pose));
-        }
-        // The main child goes on the stack first: side branches (fixed only)
-        // are finished before the chain goes on.
-        // Side branches are pushed in reverse so that they are visited in
-        // document order (the last leaf of the last body names the flange).
-        let main = moving.first().copied();
-        for ji in main.into_iter().chain(
-            children[l]
-                .iter()
-                .rev()
-                .copied()
-                .filter(|&ji| Some(ji) != main),
-        ) {
-            let j = &urdf.joints[ji];
-            if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
-                return Err(UrdfError::BadOrigin(j.name.clone()).into());
-            }
-            let placement = pose.compose(&origin(&j.origin));
-            if is_fixed(j) {
-                stack.push((child_link(ji), placement, body));
-            } else {
-                // One moving child per link: joints are numbered base to tip.
-                joints.push(moving_joint(j, placement, &mut warnings)?);
-                stack.push((
-                    child_link(ji),
-                    Transform::identity(),
-                    Some(joints.len() - 1),
-                ));
-            }
-        }
-    }
+    let tree = Tree::new(&urdf)?;
+    let root = tree.root()?;
+    let has_moving = tree.moving_below(root)?;
+    let Walk {
+        joints,
+        warnings,
+        frames,
+        last_link,
+    } = tree.walk(root, &has_moving)?;
     if joints.is_empty() {
         return Err(UrdfError::NoMovingJoint.into());
     }
@@ -333,4 +212,190 @@ pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
     let mut robot = Robot::assemble(name, joints, flange, flange_name);
     robot.warnings = warnings;
     Ok(robot)
+}
+
+/// The link tree of a URDF: link indices by name, the child joints of each link and the
+/// parent joint of each link (indices into `urdf.joints`).
+struct Tree<'u> {
+    urdf: &'u urdf_rs::Robot,
+    links: HashMap<&'u str, usize>,
+    children: Vec<Vec<usize>>,
+    parent_of: Vec<Option<usize>>,
+}
+
+/// What the walk down the tree ([`Tree::walk`]) collects.
+struct Walk<'u> {
+    /// The moving joints, base to tip, with the inertia of the bodies they carry.
+    joints: Vec<Joint>,
+    warnings: Vec<UrdfWarning>,
+    /// Each link's body (None = base) and its pose in that body's frame.
+    frames: HashMap<&'u str, (Option<usize>, Transform)>,
+    /// The last link on the last body (the flange unless a `tool0`/`flange` link exists).
+    last_link: Option<(String, Transform)>,
+}
+
+impl<'u> Tree<'u> {
+    /// Indexes the links and joints. Errors: duplicate link names, joints naming unknown
+    /// links, links with two parent joints.
+    fn new(urdf: &'u urdf_rs::Robot) -> Result<Self, UrdfError> {
+        let mut links: HashMap<&str, usize> = HashMap::new();
+        for (i, l) in urdf.links.iter().enumerate() {
+            if links.insert(l.name.as_str(), i).is_some() {
+                return Err(UrdfError::DuplicateLink(l.name.clone()));
+            }
+        }
+        // Children of each link (indices into urdf.joints), parent joint of each link.
+        let mut children: Vec<Vec<usize>> = vec![Vec::new(); urdf.links.len()];
+        let mut parent_of: Vec<Option<usize>> = vec![None; urdf.links.len()];
+        for (ji, j) in urdf.joints.iter().enumerate() {
+            let (Some(&p), Some(&c)) = (
+                links.get(j.parent.link.as_str()),
+                links.get(j.child.link.as_str()),
+            ) else {
+                return Err(UrdfError::DanglingJoint {
+                    joint: j.name.clone(),
+                    parent: j.parent.link.clone(),
+                    child: j.child.link.clone(),
+                });
+            };
+            if let Some(prev) = parent_of[c] {
+                return Err(UrdfError::TwoParents {
+                    link: j.child.link.clone(),
+                    first: urdf.joints[prev].name.clone(),
+                    second: j.name.clone(),
+                });
+            }
+            parent_of[c] = Some(ji);
+            children[p].push(ji);
+        }
+        Ok(Self {
+            urdf,
+            links,
+            children,
+            parent_of,
+        })
+    }
+
+    /// The one link without a parent joint.
+    fn root(&self) -> Result<usize, UrdfError> {
+        let urdf = self.urdf;
+        let roots: Vec<usize> = (0..urdf.links.len())
+            .filter(|&l| self.parent_of[l].is_none())
+            .collect();
+        match roots.as_slice() {
+            [r] => Ok(*r),
+            [] => Err(UrdfError::NoRoot),
+            many => Err(UrdfError::ManyRoots {
+                roots: many.iter().map(|&l| urdf.links[l].name.clone()).collect(),
+            }),
+        }
+    }
+
+    /// Index of the child link of joint `ji`.
+    fn child_link(&self, ji: usize) -> usize {
+        self.links[self.urdf.joints[ji].child.link.as_str()]
+    }
+
+    /// `has_moving[l]`: a moving joint lies at or below one of link `l`'s child joints.
+    /// Errors if some link is not reachable from `root` (a loop).
+    fn moving_below(&self, root: usize) -> Result<Vec<bool>, UrdfError> {
+        let urdf = self.urdf;
+        // Pre-order from the root (iterative); links unreachable from it are in a loop.
+        let mut order = Vec::with_capacity(urdf.links.len());
+        let mut stack = vec![root];
+        while let Some(l) = stack.pop() {
+            order.push(l);
+            stack.extend(self.children[l].iter().map(|&ji| self.child_link(ji)));
+        }
+        if order.len() != urdf.links.len() {
+            return Err(UrdfError::Unreachable(urdf.links.len() - order.len()));
+        }
+        // Reverse pre-order visits children before parents: one linear pass.
+        let mut has_moving = vec![false; urdf.links.len()];
+        for &l in order.iter().rev() {
+            has_moving[l] = self.children[l]
+                .iter()
+                .any(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[self.child_link(ji)]);
+        }
+        Ok(has_moving)
+    }
+
+    /// The child joint of link `l` on the moving path, if any; an error if there are
+    /// several (not a serial chain).
+    fn moving_child(&self, l: usize, has_moving: &[bool]) -> Result<Option<usize>, UrdfError> {
+        let urdf = self.urdf;
+        let moving: Vec<usize> = self.children[l]
+            .iter()
+            .copied()
+            .filter(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[self.child_link(ji)])
+            .collect();
+        if moving.len() > 1 {
+            return Err(UrdfError::NotSerial {
+                link: urdf.links[l].name.clone(),
+                joints: moving
+                    .iter()
+                    .map(|&ji| urdf.joints[ji].name.clone())
+                    .collect(),
+            });
+        }
+        Ok(moving.first().copied())
+    }
+
+    /// Walks the tree from `root`: each link sits at `pose` in the frame of body `body`
+    /// (None = base). Fixed joints fold into the pose, moving ones start a new body.
+    fn walk(&self, root: usize, has_moving: &[bool]) -> Result<Walk<'u>, UrdfError> {
+        let urdf = self.urdf;
+        let mut walk = Walk {
+            joints: Vec::new(),
+            warnings: Vec::new(),
+            frames: HashMap::new(),
+            last_link: None,
+        };
+        let mut stack: Vec<(usize, Transform, Option<usize>)> =
+            vec![(root, Transform::identity(), None)];
+        while let Some((l, pose, body)) = stack.pop() {
+            let link = &urdf.links[l];
+            let inertia = link_inertia(link)?;
+            if let Some(b) = body {
+                let j = &mut walk.joints[b];
+                j.body = j.body + inertia.to_parent(&pose);
+            }
+            walk.frames.insert(link.name.as_str(), (body, pose));
+            let main = self.moving_child(l, has_moving)?;
+            if main.is_none() && body.is_some() && body == walk.joints.len().checked_sub(1) {
+                // End of the moving path, or a fixed side branch of the last body.
+                walk.last_link = Some((link.name.clone(), pose));
+            }
+            // The main child goes on the stack first: side branches (fixed only)
+            // are finished before the chain goes on.
+            // Side branches are pushed in reverse so that they are visited in
+            // document order (the last leaf of the last body names the flange).
+            for ji in main.into_iter().chain(
+                self.children[l]
+                    .iter()
+                    .rev()
+                    .copied()
+                    .filter(|&ji| Some(ji) != main),
+            ) {
+                let j = &urdf.joints[ji];
+                if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
+                    return Err(UrdfError::BadOrigin(j.name.clone()));
+                }
+                let placement = pose.compose(&origin(&j.origin));
+                if is_fixed(j) {
+                    stack.push((self.child_link(ji), placement, body));
+                } else {
+                    // One moving child per link: joints are numbered base to tip.
+                    walk.joints
+                        .push(moving_joint(j, placement, &mut walk.warnings)?);
+                    stack.push((
+                        self.child_link(ji),
+                        Transform::identity(),
+                        Some(walk.joints.len() - 1),
+                    ));
+                }
+            }
+        }
+        Ok(walk)
+    }
 }
