@@ -102,6 +102,8 @@ fn functions(text: &str) -> Vec<(String, usize, usize)> {
             continue;
         };
         let mut depth = 0i64;
+        // Brackets of the signature (`[f64; 3]` holds a `;`).
+        let mut brackets = 0i64;
         let mut opened = false;
         'scan: for (j, l) in lines.iter().enumerate().skip(i) {
             for c in l.chars() {
@@ -111,7 +113,10 @@ fn functions(text: &str) -> Vec<(String, usize, usize)> {
                         opened = true;
                     }
                     '}' => depth -= 1,
-                    ';' if !opened => break 'scan, // a declaration without a body
+                    '(' | '[' if !opened => brackets += 1,
+                    ')' | ']' if !opened => brackets -= 1,
+                    // A declaration without a body.
+                    ';' if !opened && brackets == 0 => break 'scan,
                     _ => {}
                 }
                 if opened && depth == 0 {
@@ -128,11 +133,15 @@ fn functions(text: &str) -> Vec<(String, usize, usize)> {
 fn the_scanner_measures_what_rustfmt_writes() {
     let text = "fn a() {\n    let s = \"}}\";\n    let c = '{';\n}\n\
                 pub(crate) fn b<T>(x: T) -> usize\nwhere\n    T: Copy,\n{\n    // }\n    1\n}\n\
-                fn decl();\n";
+                fn decl();\nfn c(a: [f64; 3]) -> [u8; 2] {\n    [0; 2]\n}\n";
     let f = functions(text);
     assert_eq!(
         f,
-        vec![("a".to_string(), 1, 4), ("b".to_string(), 5, 7)],
+        vec![
+            ("a".to_string(), 1, 4),
+            ("b".to_string(), 5, 7),
+            ("c".to_string(), 13, 3)
+        ],
         "{f:?}"
     );
 }
