@@ -1,0 +1,117 @@
+//! The job runner: a resolved scenario turned into runs (repeats removed,
+//! every payload × controller in parallel) and their metrics. Front ends
+//! write the results (`ofmpc run`) or return them (`ofmpc.run` in Python).
+
+use crate::error::ScenarioError;
+use crate::resolve::Scenario;
+use ofmpc::control::ControllerKind;
+use ofmpc::robot::Payload;
+use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult};
+use rayon::prelude::*;
+
+/// One finished run.
+pub struct Run {
+    /// The controller.
+    pub kind: ControllerKind,
+    /// The payload the plant carried.
+    pub payload: Payload,
+    /// The record and how the run ended.
+    pub result: RunResult,
+    /// Its line of `metrics.json`.
+    pub metrics: RunMetrics,
+}
+
+/// The payloads and controllers of a scenario with repeats removed (a repeat would write the
+/// same run folder twice); `-0` counts as `0`. Returns the warnings for the repeats.
+pub fn unique_runs(scenario: &Scenario) -> (Vec<Payload>, Vec<ControllerKind>, Vec<String>) {
+    let mut warnings = Vec::new();
+    let mut payloads: Vec<Payload> = Vec::new();
+    for p in &scenario.payloads {
+        let mut p = *p;
+        p.mass += 0.0; // -0.0 → 0.0: one run folder `_m0`
+                       // Same folder name (the label rounds masses past 6 digits) = same run.
+        if payloads
+            .iter()
+            .any(|q| mass_label(q.mass) == mass_label(p.mass))
+        {
+            warnings.push(format!(
+                "the payload {} kg is listed more than once ({:?}): it is run once",
+                mass_label(p.mass),
+                scenario.file.payload.masses_kg
+            ));
+        } else {
+            payloads.push(p);
+        }
+    }
+    let mut controllers: Vec<ControllerKind> = Vec::new();
+    for k in &scenario.file.controllers {
+        if controllers.contains(k) {
+            warnings.push(format!(
+                "the controller \"{}\" is listed more than once: it is run once per payload",
+                kind_name(*k)
+            ));
+        } else {
+            controllers.push(*k);
+        }
+    }
+    warnings.dedup();
+    (payloads, controllers, warnings)
+}
+
+/// Runs every payload × controller (payloads outer, controllers inner: the
+/// order of `metrics.json`) in parallel. `progress(samples)` is called as
+/// samples are simulated.
+pub fn run_jobs(
+    scenario: &Scenario,
+    payloads: &[Payload],
+    controllers: &[ControllerKind],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Run>, ScenarioError> {
+    let exp = &scenario.experiment;
+    let jobs: Vec<(ControllerKind, Payload)> = payloads
+        .iter()
+        .flat_map(|p| controllers.iter().map(move |k| (*k, *p)))
+        .collect();
+    jobs.par_iter()
+        .map(|&(kind, payload)| {
+            let mut last = 0usize;
+            let (result, metrics) = exp
+                .run(kind, &payload, &mut |k, _| {
+                    progress((k - last) as u64);
+                    last = k;
+                })
+                .map_err(|error| ScenarioError::Run {
+                    run: run_name(kind, &payload),
+                    error,
+                })?;
+            Ok(Run {
+                kind,
+                payload,
+                result,
+                metrics,
+            })
+        })
+        .collect()
+}
+
+/// Runs a scenario as `ofmpc run` does (repeats removed; the caller warns about them
+/// from [`unique_runs`]) and returns the metrics of its runs.
+pub fn run_metrics(scenario: &Scenario) -> Result<Vec<RunMetrics>, ScenarioError> {
+    let (payloads, controllers, _) = unique_runs(scenario);
+    Ok(run_jobs(scenario, &payloads, &controllers, &|_| {})?
+        .into_iter()
+        .map(|r| r.metrics)
+        .collect())
+}
+
+/// The text of `metrics.json` for these metrics: `{"runs": [...]}`, pretty-printed.
+pub fn metrics_json(runs: &[RunMetrics]) -> Result<String, ScenarioError> {
+    #[derive(serde::Serialize)]
+    struct MetricsFile<'a> {
+        runs: &'a [RunMetrics],
+    }
+    serde_json::to_string_pretty(&MetricsFile { runs }).map_err(|e| ScenarioError::Write {
+        what: "metrics.json",
+        message: e.to_string(),
+    })
+}
