@@ -30,10 +30,7 @@ pub fn model_robot(scenario: &Scenario) -> Result<Robot, ScenarioError> {
     scenario
         .experiment
         .model_robot()
-        .map_err(|error| ScenarioError::Experiment {
-            program: None,
-            error,
-        })
+        .map_err(|error| ScenarioError::experiment(None, error))
 }
 
 /// The margin of `kind` for the robot, tuning and program of `scenario`:
@@ -43,8 +40,12 @@ pub fn margin(scenario: &Scenario, kind: ControllerKind) -> Result<Margin, Scena
     let robot = model_robot(scenario)?;
     let q0 = exp.reference.q(0);
     let opts = StabilityOptions::default();
-    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts)
-        .map_err(|source| ScenarioError::Stability { kind, source })?;
+    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts).map_err(|source| {
+        ScenarioError::Stability {
+            kind,
+            source: Box::new(source),
+        }
+    })?;
     let poses = program_poses(scenario);
     let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
     Ok(Margin {
@@ -268,11 +269,7 @@ pub fn robust_tuning(
         .min_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))
         .cloned()
         .ok_or_else(|| ScenarioError::NoRobustTuning {
-            controllers: kinds
-                .iter()
-                .map(|k| k.name())
-                .collect::<Vec<_>>()
-                .join(","),
+            controllers: kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(","),
             lo: lo_kg,
             hi: hi_kg,
         })?;

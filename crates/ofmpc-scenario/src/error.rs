@@ -64,7 +64,7 @@ pub enum ScenarioError {
     NoPayloads,
     /// The robot (built-in name or URDF) could not be loaded.
     #[error(transparent)]
-    Robot(#[from] ModelError),
+    Robot(Box<ModelError>),
     /// The drives file could not be read or applied.
     #[error("applying {}", path.display())]
     Drives {
@@ -72,13 +72,13 @@ pub enum ScenarioError {
         path: PathBuf,
         /// Why.
         #[source]
-        source: ModelError,
+        source: Box<ModelError>,
     },
     /// `[mpc]` does not fit the robot.
     #[error("[mpc] {error}")]
     Mpc {
         /// The library's error.
-        error: SettingsError,
+        error: Box<SettingsError>,
     },
     /// A payload of `[payload]` is not a physical body.
     #[error("[payload] mass {mass} kg: {error}")]
@@ -86,7 +86,7 @@ pub enum ScenarioError {
         /// The mass (kg).
         mass: f64,
         /// The library's error.
-        error: PayloadError,
+        error: Box<PayloadError>,
     },
     /// The program file could not be read.
     #[error("cannot read program {}", path.display())]
@@ -119,7 +119,7 @@ pub enum ScenarioError {
         /// The program's name.
         program: String,
         /// The library's error.
-        error: PlanError,
+        error: Box<PlanError>,
     },
     /// The experiment's settings do not fit (named by their scenario key).
     #[error("{}{}", .program.as_deref().map(|p| format!("{p}: ")).unwrap_or_default(), experiment_error(.error))]
@@ -127,7 +127,7 @@ pub enum ScenarioError {
         /// The program's name, when the error is about the planned experiment.
         program: Option<String>,
         /// The library's error.
-        error: ExperimentError,
+        error: Box<ExperimentError>,
     },
     /// A run could not start.
     #[error("{run}: {}", experiment_error(.error))]
@@ -135,7 +135,7 @@ pub enum ScenarioError {
         /// The run's name (`<controller>_m<mass>`).
         run: String,
         /// The library's error.
-        error: ExperimentError,
+        error: Box<ExperimentError>,
     },
     /// A controller's stability interval could not be computed.
     #[error("stability of {kind}")]
@@ -144,11 +144,11 @@ pub enum ScenarioError {
         kind: ControllerKind,
         /// Why.
         #[source]
-        source: StabilityError,
+        source: Box<StabilityError>,
     },
     /// A stability computation other than the interval failed.
     #[error(transparent)]
-    Analysis(#[from] StabilityError),
+    Analysis(Box<StabilityError>),
     /// Robust tuning was asked for an adaptive controller (it identifies the payload).
     #[error("{kind}: tune the non-adaptive controllers (the adaptive ones identify the payload)")]
     AdaptiveTuning {
@@ -181,6 +181,29 @@ pub enum ScenarioError {
         /// The serializer's message.
         message: String,
     },
+}
+
+impl From<ModelError> for ScenarioError {
+    fn from(e: ModelError) -> Self {
+        Self::Robot(Box::new(e))
+    }
+}
+
+impl From<StabilityError> for ScenarioError {
+    fn from(e: StabilityError) -> Self {
+        Self::Analysis(Box::new(e))
+    }
+}
+
+impl ScenarioError {
+    /// An [`ExperimentError`] about the settings, named by its scenario key (prefixed by
+    /// the program's name when it is about the planned experiment).
+    pub fn experiment(program: Option<String>, error: ExperimentError) -> Self {
+        Self::Experiment {
+            program,
+            error: Box::new(error),
+        }
+    }
 }
 
 /// How a front end names the planning settings in its messages.

@@ -227,8 +227,16 @@ impl ScenarioFile {
         if s.robot.model.ends_with(".urdf") || model.is_file() {
             s.robot.model = model.display().to_string();
         }
-        s.robot.drives = s.robot.drives.as_deref().map(|p| resolve("robot.drives", p));
-        s.program.file = s.program.file.as_deref().map(|p| resolve("program.file", p));
+        s.robot.drives = s
+            .robot
+            .drives
+            .as_deref()
+            .map(|p| resolve("robot.drives", p));
+        s.program.file = s
+            .program
+            .file
+            .as_deref()
+            .map(|p| resolve("program.file", p));
         Ok(s)
     }
 
@@ -419,7 +427,9 @@ fn set_key(doc: &mut toml::Table, o: &Override) -> Result<(), ScenarioError> {
         message,
     };
     let parts: Vec<&str> = o.key.split('.').collect();
-    let (last, path) = parts.split_last().ok_or_else(|| error("empty key".into()))?;
+    let (last, path) = parts
+        .split_last()
+        .ok_or_else(|| error("empty key".into()))?;
     let mut table = doc;
     for (i, part) in path.iter().enumerate() {
         let entry = table
@@ -461,12 +471,12 @@ fn apply_overrides(
     }
     match file {
         Some(f) => Ok(f),
-        None => ScenarioFile::deserialize(toml::Value::Table(doc)).map_err(|e| {
-            ScenarioError::Parse {
+        None => {
+            ScenarioFile::deserialize(toml::Value::Table(doc)).map_err(|e| ScenarioError::Parse {
                 origin: "scenario".into(),
                 message: e.message().trim_end().to_string(),
-            }
-        }),
+            })
+        }
     }
 }
 

@@ -53,7 +53,7 @@ pub fn load_robot(
     if let Some(d) = drives {
         let drives_error = |source| ScenarioError::Drives {
             path: d.to_path_buf(),
-            source,
+            source: Box::new(source),
         };
         let drives = Drives::from_file(d)?;
         let unset = robot.apply_drives(&drives).map_err(drives_error)?;
@@ -82,11 +82,10 @@ pub fn read_program(file: Option<&Path>) -> Result<(String, String), ScenarioErr
             PAPER_TABLE1.to_string(),
         )),
         Some(p) => {
-            let text =
-                std::fs::read_to_string(p).map_err(|source| ScenarioError::ReadProgram {
-                    path: p.to_path_buf(),
-                    source,
-                })?;
+            let text = std::fs::read_to_string(p).map_err(|source| ScenarioError::ReadProgram {
+                path: p.to_path_buf(),
+                source,
+            })?;
             Ok((p.display().to_string(), text))
         }
     }
@@ -105,12 +104,11 @@ impl Scenario {
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)
-            .map_err(|error| ScenarioError::Mpc { error })?;
+            .map_err(|error| ScenarioError::Mpc {
+                error: Box::new(error),
+            })?;
         let loop_settings = f.loop_settings();
-        let settings_error = |error: ofmpc::sim::ExperimentError| ScenarioError::Experiment {
-            program: None,
-            error,
-        };
+        let settings_error = |error| ScenarioError::experiment(None, error);
         loop_settings
             .validate()
             .map_err(|e| settings_error(e.into()))?;
@@ -126,8 +124,10 @@ impl Scenario {
                 com: Vector3::from(f.payload.com_m),
                 inertia,
             };
-            p.validate()
-                .map_err(|error| ScenarioError::Payload { mass, error })?;
+            p.validate().map_err(|error| ScenarioError::Payload {
+                mass,
+                error: Box::new(error),
+            })?;
             payloads.push(p);
         }
         let (program_name, text) = read_program(f.program.file.as_deref())?;
@@ -162,7 +162,7 @@ impl Scenario {
         };
         let planned = plan(&text, &robot, &options).map_err(|error| ScenarioError::Plan {
             program: program_name.clone(),
-            error,
+            error: Box::new(error),
         })?;
         warnings.extend(
             planned
@@ -203,10 +203,7 @@ impl Scenario {
         };
         experiment
             .validate()
-            .map_err(|error| ScenarioError::Experiment {
-                program: Some(program_name.clone()),
-                error,
-            })?;
+            .map_err(|error| ScenarioError::experiment(Some(program_name.clone()), error))?;
         Ok(Self {
             file: f.clone(),
             program_name,
@@ -227,7 +224,11 @@ impl Scenario {
     /// controllers (e.g. [`crate::unique_runs`]'s, repeats removed). Its paths are
     /// absolute when it was read by [`ScenarioFile::from_file`], so it re-runs from any
     /// working directory.
-    pub fn effective_file(&self, payloads: &[Payload], controllers: &[ControllerKind]) -> ScenarioFile {
+    pub fn effective_file(
+        &self,
+        payloads: &[Payload],
+        controllers: &[ControllerKind],
+    ) -> ScenarioFile {
         let mut file = self.file.clone();
         file.payload.masses_kg = payloads.iter().map(|p| p.mass).collect();
         file.controllers = controllers.to_vec();

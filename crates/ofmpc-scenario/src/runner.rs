@@ -82,7 +82,7 @@ pub fn run_jobs(
                 })
                 .map_err(|error| ScenarioError::Run {
                     run: run_name(kind, &payload),
-                    error,
+                    error: Box::new(error),
                 })?;
             Ok(Run {
                 kind,

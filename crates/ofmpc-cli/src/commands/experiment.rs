@@ -3,19 +3,18 @@
 //! figures and `report.html`, all through a staged directory so that a failed
 //! run leaves no half-written file.
 
-use crate::api::{run_jobs, unique_runs, Run};
 use crate::figures;
 use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
 use crate::output::plot::{render_both, Figure};
 use crate::output::report::{Image, Report, Table};
-use crate::scenario::Scenario;
 use crate::tables::{summary_rows, summary_text, timeseries_csv, SUMMARY_HEADER};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
 use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunStatus};
+use ofmpc_scenario::{metrics_json, run_jobs, unique_runs, Run, Scenario};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -192,9 +191,7 @@ pub fn execute(
         .iter()
         .flat_map(|p| controllers.iter().map(move |k| (*k, *p)))
         .collect();
-    let steps_per_run = (exp.reference.len()
-        + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize)
-        as u64;
+    let steps_per_run = scenario.samples_per_run() as u64;
     let bar = ProgressBar::new(steps_per_run * jobs.len() as u64);
     if std::io::stderr().is_terminal() {
         bar.set_style(
@@ -339,7 +336,7 @@ pub fn execute(
             )?;
         }
     }
-    let effects = drive_effects(scenario);
+    let effects = scenario.file.effects();
     if !effects.is_empty() {
         report.heading("Drives, sensors and faults");
         report.paragraph(format!(
@@ -443,18 +440,13 @@ pub fn execute(
             ),
         )?;
     }
-    #[derive(serde::Serialize)]
-    struct MetricsFile<'a> {
-        runs: &'a [RunMetrics],
-    }
-    let json = serde_json::to_string_pretty(&MetricsFile { runs: &metrics })?;
-    dir.write("metrics.json", json.as_bytes())?;
+    dir.write("metrics.json", metrics_json(&metrics)?.as_bytes())?;
     // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
     // file re-runs from any working directory.
-    let mut file = scenario.file.clone();
-    file.payload.masses_kg = payloads.iter().map(|p| p.mass).collect();
-    file.controllers = controllers.clone();
-    let effective = toml::to_string(&file).context("writing the effective scenario")?;
+    let effective = scenario
+        .effective_file(&payloads, &controllers)
+        .to_toml()
+        .context("writing the effective scenario")?;
     let effective = format!(
         "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
     );
@@ -516,7 +508,7 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
         exp.robot.name(),
     );
     for k in kinds {
-        match super::analyze::margin(scenario, k) {
+        match ofmpc_scenario::analysis::margin(scenario, k).map_err(anyhow::Error::from) {
             Ok(m) => text.push_str(&format!(
                 " the {k} algorithm is stable for an inertia ratio α = H_model/H_plant in {:.3}–{:.3}, \
                  i.e. a point payload up to {:.2} kg that the model does not know;",
@@ -530,85 +522,6 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
          The adaptive variants identify the payload and keep α near 1; `ofmpc tune` finds weights for a payload range.",
     );
     text
-}
-
-/// The drive, sensor and fault effects a scenario turns on, in its words
-/// (empty: the paper's ideal drives and sensors).
-fn drive_effects(scenario: &Scenario) -> Vec<String> {
-    let f = &scenario.file;
-    let (mpc, plant, sim) = (&f.mpc, &f.plant, &f.simulation);
-    let mut e = Vec::new();
-    let mut on = |cond: bool, text: String| {
-        if cond {
-            e.push(text);
-        }
-    };
-    on(
-        mpc.torque_limits,
-        "[mpc] torque_limits (QP over the horizon)".into(),
-    );
-    on(
-        mpc.friction_compensation,
-        "[mpc] friction_compensation".into(),
-    );
-    on(mpc.delay_compensation, "[mpc] delay_compensation".into());
-    on(mpc.state_observer, "[mpc] state_observer".into());
-    on(mpc.observer_friction, "[mpc] observer_friction".into());
-    on(
-        plant.torque_limits,
-        "[plant] torque_limits (saturation)".into(),
-    );
-    on(
-        !plant.coulomb_friction.is_empty(),
-        format!(
-            "[plant] coulomb_friction = {:?} N·m",
-            plant.coulomb_friction
-        ),
-    );
-    on(
-        !plant.viscous_friction.is_empty(),
-        format!(
-            "[plant] viscous_friction = {:?} N·m·s/rad",
-            plant.viscous_friction
-        ),
-    );
-    on(
-        plant.encoder_counts > 0,
-        format!("[plant] encoder_counts = {}", plant.encoder_counts),
-    );
-    on(
-        plant.velocity_from_encoder,
-        "[plant] velocity_from_encoder".into(),
-    );
-    on(
-        plant.delay_samples > 0,
-        format!("[plant] delay_samples = {}", plant.delay_samples),
-    );
-    on(
-        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
-        "[plant] measurement noise".into(),
-    );
-    on(
-        !plant.faults.is_empty(),
-        format!("[plant] faults ({})", plant.faults.len()),
-    );
-    on(
-        !f.faults.nan_at_s.is_empty(),
-        format!("[faults] nan_at_s = {:?}", f.faults.nan_at_s),
-    );
-    on(
-        !f.faults.dropout_s.is_empty(),
-        format!("[faults] dropout_s = {:?}", f.faults.dropout_s),
-    );
-    on(
-        sim.plausibility_check,
-        "[simulation] plausibility_check".into(),
-    );
-    on(sim.safe_stop, "[simulation] safe_stop".into());
-    if let Some(v) = f.safety.max_joint_error_rad {
-        e.push(format!("[safety] max_joint_error_rad = {v}"));
-    }
-    e
 }
 
 /// `(controller, record)` of the runs with payload `mass`, in run order.
