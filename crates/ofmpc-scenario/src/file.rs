@@ -439,7 +439,7 @@ fn set_key(doc: &mut toml::Table, o: &Override) -> Result<(), ScenarioError> {
             toml::Value::Table(t) => t,
             other => {
                 return Err(error(format!(
-                    "{} is a {}, not a table",
+                    "{} is not a table (its value is of type {})",
                     parts[..=i].join("."),
                     other.type_str()
                 )))
