@@ -8,12 +8,16 @@ use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
 use crate::output::plot::{render_both, Figure};
 use crate::output::report::{Image, Report, Table};
+use crate::output::run_files::{
+    controllers_in_words, per_payload, per_run, the_controllers, RunFiles, CARTESIAN_REFERENCE,
+    METRICS, PATH, PAYLOAD_SWEEP, REPORT, SCENARIO, TIMESERIES,
+};
 use crate::tables::{summary_rows, summary_text, timeseries_csv, SUMMARY_HEADER};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunStatus};
+use ofmpc::sim::{kind_name, mass_label, RunMetrics, RunStatus};
 use ofmpc_scenario::{metrics_json, run_jobs, unique_runs, Run, Scenario};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -33,82 +37,6 @@ fn figure(
     dir.write(format!("{rel}.svg"), r.svg.as_bytes())?;
     report.figure(format!("{caption} ({rel}.png, .svg)"), Image::Png(r.png));
     Ok(())
-}
-
-/// Every file a run of these payloads and controllers writes, relative to the output folder.
-fn planned_files(payloads: &[Payload], controllers: &[ControllerKind]) -> Vec<PathBuf> {
-    let mut v: Vec<String> = Vec::new();
-    let both = |v: &mut Vec<String>, stem: String| {
-        v.push(format!("{stem}.png"));
-        v.push(format!("{stem}.svg"));
-    };
-    both(&mut v, "path".into());
-    both(&mut v, "cartesian_reference".into());
-    for p in payloads {
-        both(&mut v, format!("joint_errors_m{}", mass_label(p.mass)));
-        both(&mut v, format!("cartesian_errors_m{}", mass_label(p.mass)));
-    }
-    if payloads.len() >= 3 {
-        both(&mut v, "payload_sweep".into());
-    }
-    if controllers.iter().any(|k| k.is_adaptive()) {
-        for p in payloads {
-            both(&mut v, format!("identification_m{}", mass_label(p.mass)));
-        }
-    }
-    for p in payloads {
-        for k in controllers {
-            let name = run_name(*k, p);
-            v.push(format!("{name}/timeseries.csv"));
-            both(&mut v, format!("{name}/joints_torques"));
-            both(&mut v, format!("{name}/cartesian_error"));
-        }
-    }
-    v.extend(["metrics.json", "scenario.toml", "report.html"].map(String::from));
-    v.into_iter().map(PathBuf::from).collect()
-}
-
-/// Entries of `out` written by an earlier run that this run does not replace: run folders
-/// (`<controller>_m<mass>/` with a `timeseries.csv`) and per-payload or sweep figures.
-fn earlier_run_leftovers(out: &Path, planned: &[PathBuf]) -> Vec<String> {
-    let top: std::collections::HashSet<String> = planned
-        .iter()
-        .filter_map(|p| p.components().next())
-        .map(|c| c.as_os_str().to_string_lossy().into_owned())
-        .collect();
-    let Ok(entries) = std::fs::read_dir(out) else {
-        return Vec::new();
-    };
-    let mut found: Vec<String> = entries
-        .flatten()
-        .filter_map(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            if top.contains(&name) {
-                return None;
-            }
-            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
-            let run_dir = is_dir
-                && ControllerKind::ALL
-                    .iter()
-                    .any(|k| name.starts_with(&format!("{}_m", kind_name(*k))))
-                && e.path().join("timeseries.csv").is_file();
-            let figure = !is_dir
-                && (name.ends_with(".png") || name.ends_with(".svg"))
-                && (name.starts_with("joint_errors_m")
-                    || name.starts_with("cartesian_errors_m")
-                    || name.starts_with("identification_m")
-                    || name.starts_with("payload_sweep."));
-            if run_dir {
-                Some(format!("{name}/"))
-            } else if figure {
-                Some(name)
-            } else {
-                None
-            }
-        })
-        .collect();
-    found.sort();
-    found
 }
 
 /// The files a scenario reads (never overwritten by its outputs).
@@ -174,9 +102,9 @@ pub fn execute(
     for w in &repeats {
         console::warn(w);
     }
-    let planned = planned_files(&payloads, &controllers);
-    let mut dir = open_output(out, inputs(scenario, scenario_path), &planned)?;
-    let leftovers = earlier_run_leftovers(out, &planned);
+    let files = RunFiles::new(&scenario.file, &payloads, &controllers);
+    let mut dir = open_output(out, inputs(scenario, scenario_path), &files.files())?;
+    let leftovers = files.earlier_leftovers(out);
     if !leftovers.is_empty() {
         console::warn(&format!(
             "{} holds results of an earlier run that this run does not replace: {}. \
@@ -214,7 +142,7 @@ pub fn execute(
     let robot = &exp.robot;
     report.paragraph(format!(
         "Robot {} ({} joints), program {}, path duration {:.2} s sampled at Ts = {} s, hold {} s. \
-         Controllers: the usual MPC (Eq. 43), the first incremental algorithm (Eq. 32/37) and the second (Eq. 34/39), \
+         Controllers: {}, \
          horizon N = {}. The plant carries a point payload at the flange that the controllers' model does not know. \
          \"Steady\" is the last {} s of the hold.",
         robot.name(),
@@ -223,6 +151,7 @@ pub fn execute(
         exp.reference.duration(),
         exp.reference.ts(),
         exp.loop_settings.hold_s,
+        controllers_in_words(&controllers),
         exp.mpc.horizon,
         exp.loop_settings.steady_window_s,
     ));
@@ -260,14 +189,14 @@ pub fn execute(
     figure(
         &mut dir,
         &mut report,
-        "path",
+        PATH,
         "The path: top, isometric and side views, and the joint reference",
         &figures::path("Path and joint reference", &exp.reference),
     )?;
     figure(
         &mut dir,
         &mut report,
-        "cartesian_reference",
+        CARTESIAN_REFERENCE,
         "Fig. 4: the timed Cartesian reference (each segment rest to rest)",
         &figures::cartesian_reference(
             "Cartesian reference: position, velocity, acceleration",
@@ -275,7 +204,10 @@ pub fn execute(
             exp.reference.ts(),
         ),
     )?;
-    report.heading("Tracking errors of the three controllers (the paper's Fig. 6 and 7)");
+    report.heading(format!(
+        "Tracking errors of {} (the paper's Fig. 6 and 7)",
+        the_controllers(controllers.len())
+    ));
     for p in &payloads {
         let these = records_with_mass(&runs, p.mass);
         let label = if p.mass == 0.0 {
@@ -287,14 +219,14 @@ pub fn execute(
         figure(
             &mut dir,
             &mut report,
-            &format!("joint_errors_m{}", mass_label(p.mass)),
+            &format!("{}{}", per_payload::JOINT_ERRORS, mass_label(p.mass)),
             &format!("{fig_no}: joint errors, {label}"),
             &figures::joint_errors(&format!("Joint errors e = w − q, {label}"), &these),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("cartesian_errors_m{}", mass_label(p.mass)),
+            &format!("{}{}", per_payload::CARTESIAN_ERRORS, mass_label(p.mass)),
             &format!("Cartesian errors, {label}"),
             &figures::cartesian_errors(
                 &format!("Cartesian errors (reference − flange), {label}"),
@@ -302,7 +234,7 @@ pub fn execute(
             ),
         )?;
     }
-    if runs.iter().any(|r| r.kind.is_adaptive()) {
+    if files.identification {
         let pick_up = exp.loop_settings.pick_up_at_s;
         report.heading("Online payload identification (adaptive variants)");
         report.paragraph(format!(
@@ -326,7 +258,7 @@ pub fn execute(
             figure(
                 &mut dir,
                 &mut report,
-                &format!("identification_m{label}"),
+                &format!("{}{label}", per_payload::IDENTIFICATION),
                 &format!("Error and identified mass against time, payload {label} kg"),
                 &figures::identification(
                     &format!("Payload {label} kg: error and identified mass"),
@@ -337,7 +269,7 @@ pub fn execute(
         }
     }
     let effects = scenario.file.effects();
-    if !effects.is_empty() {
+    if files.drives {
         report.heading("Drives, sensors and faults");
         report.paragraph(format!(
             "This scenario turns on: {}. Counters over each run: `faults` = samples whose \
@@ -382,7 +314,7 @@ pub fn execute(
             figure(
                 &mut dir,
                 &mut report,
-                &format!("torque_ratios_m{label}"),
+                &format!("{}{label}", per_payload::TORQUE_RATIOS),
                 &format!("Commanded torque relative to the drives' limits, payload {label} kg"),
                 &figures::torque_ratios(
                     &format!("|τ| / τmax, payload {label} kg"),
@@ -391,12 +323,15 @@ pub fn execute(
                 ),
             )?;
         }
-        for r in runs.iter().filter(|r| r.result.record.has_measurement()) {
+        for r in runs
+            .iter()
+            .filter(|r| files.measurement && r.result.record.has_measurement())
+        {
             let name = &r.metrics.name;
             figure(
                 &mut dir,
                 &mut report,
-                &format!("{name}/measurement_error"),
+                &format!("{name}/{}", per_run::MEASUREMENT_ERROR),
                 &format!("{name}: what the controller was given minus the true position (gaps: lost measurements)"),
                 &figures::measurement_errors(
                     &format!("{name}: measured − true position"),
@@ -405,12 +340,12 @@ pub fn execute(
             )?;
         }
     }
-    if payloads.len() >= 3 {
+    if files.sweep {
         report.heading("Payload sweep");
         figure(
             &mut dir,
             &mut report,
-            "payload_sweep",
+            PAYLOAD_SWEEP,
             "Steady and RMS Cartesian error against payload (markers: diverged runs, at the error when stopped)",
             &figures::payload_sweep("Cartesian error against payload", &metrics),
         )?;
@@ -419,20 +354,20 @@ pub fn execute(
     for r in &runs {
         let name = &r.metrics.name;
         dir.write(
-            format!("{name}/timeseries.csv"),
+            format!("{name}/{TIMESERIES}"),
             timeseries_csv(&r.result.record).as_bytes(),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("{name}/joints_torques"),
+            &format!("{name}/{}", per_run::JOINTS_TORQUES),
             &format!("Fig. 5, {name}: joint coordinates and torques"),
             &figures::joints_and_torques(&format!("{name}: joints and torques"), &r.result.record),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("{name}/cartesian_error"),
+            &format!("{name}/{}", per_run::CARTESIAN_ERROR),
             &format!("{name}: Cartesian error"),
             &figures::cartesian_errors(
                 &format!("{name}: Cartesian error"),
@@ -440,7 +375,7 @@ pub fn execute(
             ),
         )?;
     }
-    dir.write("metrics.json", metrics_json(&metrics)?.as_bytes())?;
+    dir.write(METRICS, metrics_json(&metrics)?.as_bytes())?;
     // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
     // file re-runs from any working directory.
     let effective = scenario
@@ -452,8 +387,8 @@ pub fn execute(
     );
     report.heading("Scenario");
     report.code(effective.clone());
-    dir.write("scenario.toml", effective.as_bytes())?;
-    dir.write("report.html", report.to_html()?.as_bytes())?;
+    dir.write(SCENARIO, effective.as_bytes())?;
+    dir.write(REPORT, report.to_html()?.as_bytes())?;
     dir.commit()
         .with_context(|| format!("moving the results into {}", out.display()))?;
 
