@@ -6,7 +6,7 @@
 //! program parsed and timed, reference built, every setting checked).
 //! `examples/scenario.toml` documents every key.
 //!
-//! * [`file`]: the file's types and loader; its sections `[mpc]`,
+//! * [`file`](mod@file): the file's types and loader; its sections `[mpc]`,
 //!   `[simulation]` and `[plant]` are the library's own settings types.
 //! * [`resolve`]: [`Scenario::resolve`], robot and program loading.
 //! * [`runner`]: every payload × controller in parallel ([`run_jobs`]), their

@@ -10,7 +10,7 @@ pub mod tune;
 use crate::cli::{Analyze, Cli, Command, Inspect};
 use ofmpc_scenario::{Override, Scenario, ScenarioError, ScenarioFile};
 
-pub use robot::{load_model, load_robot, parse_fixed, parse_vector};
+pub(crate) use robot::{load_model, load_robot, parse_fixed, parse_vector};
 
 /// Runs one command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -77,7 +77,7 @@ fn override_error(e: ScenarioError, origin: Option<&str>) -> anyhow::Error {
 }
 
 /// Parses a comma-separated list of controller names for option `name`.
-pub fn parse_controllers(
+pub(crate) fn parse_controllers(
     name: &str,
     text: &str,
 ) -> anyhow::Result<Vec<ofmpc::control::ControllerKind>> {
