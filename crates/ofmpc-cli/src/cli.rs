@@ -1,8 +1,8 @@
 //! Command-line arguments (clap). The commands live in `commands/`.
 
-use crate::scenario::{mode_name, profile_name};
 use clap::{Args, Parser, Subcommand};
 use ofmpc::motion::{PlanOptions, TimingOptions};
+use ofmpc_scenario::{mode_name, profile_name};
 use std::path::PathBuf;
 
 /// Offset-free model predictive control of industrial robots.
@@ -109,6 +109,13 @@ joint); qd1..qdn joint velocities (rad/s; m/s); tau1..taun joint torques applied
 [t, t + Ts) (N·m; N); qref1..qrefn reference (rad); e1..en = qref − q (rad); x,y,z flange \
 position (m, base frame); xref,yref,zref its reference (m); ex,ey,ez = ref − flange (m).";
 
+/// The help of `--set` (`run`, `reproduce`).
+const SET_HELP: &str = "Sets a scenario key, as if written in the file: KEY=VALUE with a dotted \
+key (e.g. mpc.horizon=20, plant.substep=2e-4, timing.mode=G64, plant.coulomb_friction=[1.0]); the \
+value is read as TOML (a number, true, an array, a \"string\") and otherwise taken as a string. \
+Repeatable, applied in order; every check of the file applies, and an unknown key is an error. A \
+path set this way is relative to the working directory.";
+
 /// `ofmpc run`
 #[derive(Debug, Args)]
 #[command(after_help = RESULTS_HELP)]
@@ -119,6 +126,9 @@ pub struct RunArgs {
     /// `[payload] masses_kg`.
     #[arg(long, allow_hyphen_values = true)]
     pub payload: Option<String>,
+    /// Set a scenario key (KEY=VALUE; repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
+    pub set: Vec<String>,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]
     pub out: PathBuf,
@@ -142,6 +152,9 @@ pub struct ReproduceArgs {
     /// none before (the controllers are not told).
     #[arg(long)]
     pub pick_up_at: Option<f64>,
+    /// Set a scenario key (KEY=VALUE; repeatable), after the options above.
+    #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
+    pub set: Vec<String>,
     /// Output directory.
     #[arg(long, default_value = "ofmpc-out")]
     pub out: PathBuf,

@@ -465,3 +465,115 @@ fn inspect_robot_lists_joints_limits_and_drives() {
     assert_eq!(j3["armature_kgm2"].as_f64().unwrap(), 0.5);
     assert_eq!(v["joints"][5]["max_effort"].as_f64().unwrap(), 16.0);
 }
+
+/// `ofmpc run FILE --set key=value`: the value as if written in the file. One quick run
+/// (usual, one payload, a short hold set from the command line) that the written
+/// `scenario.toml` reflects, and the file's checks and messages for what does not fit.
+#[test]
+fn run_set_overrides_a_key_with_the_files_checks() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = dir.path().join("s.toml");
+    std::fs::write(
+        &s,
+        "controllers = [\"usual\"]\n[payload]\nmasses_kg = [0.0]\n",
+    )
+    .unwrap();
+    let out = dir.path().join("o");
+    let (s, o) = (s.to_str().unwrap(), out.to_str().unwrap());
+    ok(&[
+        "run",
+        s,
+        "--set",
+        "simulation.hold_s=0.2",
+        "--set",
+        "simulation.steady_window_s = 0.1",
+        "--set",
+        "title=set from the command line",
+        "--set",
+        "mpc.horizon=12",
+        "--out",
+        o,
+    ]);
+    let written: toml::Table =
+        toml::from_str(&std::fs::read_to_string(out.join("scenario.toml")).unwrap()).unwrap();
+    assert_eq!(written["title"].as_str(), Some("set from the command line"));
+    assert_eq!(written["mpc"]["horizon"].as_integer(), Some(12));
+    assert_eq!(written["simulation"]["hold_s"].as_float(), Some(0.2));
+
+    // (arguments, what the message names); nothing is written for any of them.
+    let bad: [(&[&str], &[&str]); 7] = [
+        // An unknown key: the file's message (unknown field, the keys it knows).
+        (
+            &["--set", "mpc.horizn=20"],
+            &["mpc.horizn=20", "unknown field `horizn`", "horizon"],
+        ),
+        (
+            &["--set", "nosuch.key=1"],
+            &["nosuch.key=1", "unknown field `nosuch`"],
+        ),
+        // A value of the wrong type.
+        (
+            &["--set", "simulation.hold_s=long"],
+            &["simulation.hold_s=long", "invalid type", "long"],
+        ),
+        // A key below a value.
+        (
+            &["--set", "controllers.x=1"],
+            &["controllers.x=1", "not a table"],
+        ),
+        (&["--set", "title.x=1"], &["title.x=1", "invalid type: map"]),
+        // A value the library rejects: named by its scenario key, as in a file.
+        (&["--set", "plant.substep=-1"], &["[plant] substep = -1"]),
+        // Not key=value.
+        (
+            &["--set", "mpc.horizon"],
+            &["--set", "mpc.horizon", "key=value"],
+        ),
+    ];
+    for (args, names) in bad {
+        let bad_out = dir.path().join("bad");
+        let mut all = vec!["run", s];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", bad_out.to_str().unwrap()]);
+        let o = ofmpc(&all);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        for n in names {
+            assert!(e.contains(n), "{args:?} should name {n}: {e}");
+        }
+        assert!(!bad_out.exists(), "{args:?}: no output for a failed run");
+    }
+}
+
+/// `ofmpc reproduce --set`: applied after the options, with the same checks.
+#[test]
+fn reproduce_set_applies_after_the_options() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let o = ofmpc(&[
+        "reproduce",
+        "--controllers",
+        "usual",
+        "--payload",
+        "0",
+        "--set",
+        "simulation.hold_s=-1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("[simulation] hold_s = -1"), "{e}");
+    let e = fails(&[
+        "reproduce",
+        "--set",
+        "controllers=[\"fourth\"]",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("--set controllers=") && e.contains("fourth"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}

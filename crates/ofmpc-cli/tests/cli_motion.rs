@@ -91,7 +91,7 @@ fn the_command_line_and_scenario_defaults_are_the_librarys() {
     use clap::Parser;
     use ofmpc::motion::{PlanOptions, TimingOptions};
     use ofmpc_cli::cli::{Cli, Command as Cmd};
-    use ofmpc_cli::scenario::{parse_mode, parse_profile, ScenarioFile};
+    use ofmpc_scenario::{parse_mode, parse_profile, ScenarioFile};
     let cli = Cli::parse_from(["ofmpc", "trajectory", "paper", "--out", "x.csv"]);
     let Cmd::Trajectory(a) = cli.command else {
         panic!("not the trajectory command")

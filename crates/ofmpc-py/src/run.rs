@@ -1,16 +1,17 @@
 //! `ofmpc.run`: a whole scenario (every payload × controller) run in Rust with
-//! the GIL released, through the CLI crate's scenario loader and runner; the
-//! result is the text of `metrics.json` (the Python side parses it).
+//! the GIL released, through the scenario crate's loader and runner (those of
+//! the `ofmpc` command); the result is the text of `metrics.json` (the Python
+//! side parses it).
 
 use crate::errors::chain_to_py;
-use ofmpc_cli::api::{metrics_json, run_metrics};
-use ofmpc_cli::scenario::{Scenario, ScenarioFile};
+use ofmpc_scenario::{metrics_json, run_metrics, Scenario, ScenarioFile};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
 fn run_file_inner(file: &ScenarioFile, origin: &str) -> anyhow::Result<String> {
-    let scenario = Scenario::resolve(file).map_err(|e| anyhow::anyhow!("{origin}: {e:#}"))?;
-    metrics_json(&run_metrics(&scenario)?)
+    let scenario =
+        Scenario::resolve(file).map_err(|e| anyhow::Error::new(e).context(origin.to_string()))?;
+    Ok(metrics_json(&run_metrics(&scenario)?)?)
 }
 
 /// Runs a scenario file (TOML, paths inside relative to it); returns metrics.json's text.

@@ -5,17 +5,12 @@
 
 use crate::output::atomic::write_atomic;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_REFERENCE};
-use crate::scenario::{Scenario, ScenarioFile};
 use anyhow::Context;
 use clap::Args;
-use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
-use ofmpc::control::{ControllerKind, MpcSettings, Weight};
-use ofmpc::robot::Robot;
+use ofmpc::control::{MpcSettings, Weight};
+use ofmpc_scenario::analysis::{margin, model_robot, radius_curves, RadiusCurve};
+use ofmpc_scenario::{Scenario, ScenarioFile};
 use std::path::PathBuf;
-
-/// The heaviest payload `max_payload_kg` reports (kg): a controller still
-/// inside its interval there reports this bound.
-pub const PAYLOAD_SEARCH_LIMIT_KG: f64 = 1000.0;
 
 /// Robot, program and tuning options shared by `analyze stability` and `tune`.
 #[derive(Debug, Args, Clone)]
@@ -118,75 +113,32 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
     Ok(f)
 }
 
-/// What `analyze stability` computes for one controller.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct Margin {
-    /// `[lo, hi]` of α = H_model/H_plant, stable near rest.
-    pub alpha_interval: [f64; 2],
-    /// Largest point payload at the flange keeping α inside along the program (kg).
-    pub max_payload_kg: f64,
-}
-
-/// The margin of `kind` for the robot, tuning and program of `scenario`:
-/// α interval at the program's first point, payload along the program.
-pub fn margin(scenario: &Scenario, kind: ControllerKind) -> anyhow::Result<Margin> {
-    let exp = &scenario.experiment;
-    let robot = exp
-        .model_robot()
-        .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e)))?;
-    let q0 = exp.reference.q(0);
-    let opts = StabilityOptions::default();
-    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts)
-        .with_context(|| format!("stability of {kind}"))?;
-    let poses = program_poses(scenario);
-    let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
-    Ok(Margin {
-        alpha_interval: [lo, hi],
-        max_payload_kg: m,
-    })
-}
-
-/// Every 10th point of the joint reference.
-fn program_poses(scenario: &Scenario) -> Vec<&[f64]> {
-    let r = &scenario.experiment.reference;
-    (0..r.len()).step_by(10).map(|k| r.q(k)).collect()
-}
-
-/// The spectral radius against α for each controller.
-pub fn radius_figure(
-    robot: &Robot,
-    mpc: &MpcSettings,
-    q0: &[f64],
-    kinds: &[ControllerKind],
-) -> anyhow::Result<Figure> {
-    let alphas: Vec<f64> = (0..=56).map(|i| 0.3 + 0.025 * i as f64).collect();
+/// The spectral radius against α for each controller, as a figure.
+fn radius_figure(curves: &[RadiusCurve]) -> Figure {
     let mut p = Panel::new(
         "closed loop near rest: spectral radius against the inertia ratio",
         "α = H_model / H_plant",
         "spectral radius ρ",
     );
-    let opts = StabilityOptions::default();
-    for &k in kinds {
-        let rho = alphas
-            .iter()
-            .map(|&a| spectral_radius(robot, k.base(), mpc, q0, a, &opts))
-            .collect::<Result<Vec<f64>, _>>()?;
+    for c in curves {
         p.series.push(Series::line(
-            k.name(),
-            alphas.clone(),
-            rho.iter().map(|r| r.min(3.0)).collect(),
-            crate::figures::controller_color(k.name()),
+            c.kind.name(),
+            c.alpha.clone(),
+            c.radius.iter().map(|r| r.min(3.0)).collect(),
+            crate::figures::controller_color(c.kind.name()),
         ));
     }
-    p.series.push(Series::dashed(
-        "ρ = 1 (stability limit)",
-        vec![alphas[0], alphas[alphas.len() - 1]],
-        vec![1.0, 1.0],
-        COLOR_REFERENCE,
-    ));
+    if let Some(alphas) = curves.first().map(|c| &c.alpha) {
+        p.series.push(Series::dashed(
+            "ρ = 1 (stability limit)",
+            vec![alphas[0], alphas[alphas.len() - 1]],
+            vec![1.0, 1.0],
+            COLOR_REFERENCE,
+        ));
+    }
     let mut f = Figure::new("Stability margin against model mismatch", 1);
     f.panels.push(p);
-    Ok(f)
+    f
 }
 
 /// Runs `ofmpc analyze stability`.
@@ -208,10 +160,13 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
         );
     }
     let exp = &scenario.experiment;
-    let robot = exp
-        .model_robot()
-        .map_err(|e| anyhow::anyhow!(crate::errors::experiment_error(&e)))?;
-    let fig = radius_figure(&robot, &exp.mpc, exp.reference.q(0), &kinds)?;
+    let robot = model_robot(&scenario)?;
+    let fig = radius_figure(&radius_curves(
+        &robot,
+        &exp.mpc,
+        exp.reference.q(0),
+        &kinds,
+    )?);
     let r = render_both(&fig).context("rendering the stability figure")?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     write_atomic(&a.out.join("stability.png"), &r.png)

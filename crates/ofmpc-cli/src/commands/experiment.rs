@@ -3,19 +3,22 @@
 //! figures and `report.html`, all through a staged directory so that a failed
 //! run leaves no half-written file.
 
-use crate::api::{run_jobs, unique_runs, Run};
 use crate::figures;
 use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
 use crate::output::plot::{render_both, Figure};
 use crate::output::report::{Image, Report, Table};
-use crate::scenario::Scenario;
+use crate::output::run_files::{
+    controllers_in_words, per_payload, per_run, the_controllers, RunFiles, CARTESIAN_REFERENCE,
+    METRICS, PATH, PAYLOAD_SWEEP, REPORT, SCENARIO, TIMESERIES,
+};
 use crate::tables::{summary_rows, summary_text, timeseries_csv, SUMMARY_HEADER};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunStatus};
+use ofmpc::sim::{kind_name, mass_label, RunMetrics, RunStatus};
+use ofmpc_scenario::{metrics_json, run_jobs, unique_runs, Run, Scenario};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -34,82 +37,6 @@ fn figure(
     dir.write(format!("{rel}.svg"), r.svg.as_bytes())?;
     report.figure(format!("{caption} ({rel}.png, .svg)"), Image::Png(r.png));
     Ok(())
-}
-
-/// Every file a run of these payloads and controllers writes, relative to the output folder.
-fn planned_files(payloads: &[Payload], controllers: &[ControllerKind]) -> Vec<PathBuf> {
-    let mut v: Vec<String> = Vec::new();
-    let both = |v: &mut Vec<String>, stem: String| {
-        v.push(format!("{stem}.png"));
-        v.push(format!("{stem}.svg"));
-    };
-    both(&mut v, "path".into());
-    both(&mut v, "cartesian_reference".into());
-    for p in payloads {
-        both(&mut v, format!("joint_errors_m{}", mass_label(p.mass)));
-        both(&mut v, format!("cartesian_errors_m{}", mass_label(p.mass)));
-    }
-    if payloads.len() >= 3 {
-        both(&mut v, "payload_sweep".into());
-    }
-    if controllers.iter().any(|k| k.is_adaptive()) {
-        for p in payloads {
-            both(&mut v, format!("identification_m{}", mass_label(p.mass)));
-        }
-    }
-    for p in payloads {
-        for k in controllers {
-            let name = run_name(*k, p);
-            v.push(format!("{name}/timeseries.csv"));
-            both(&mut v, format!("{name}/joints_torques"));
-            both(&mut v, format!("{name}/cartesian_error"));
-        }
-    }
-    v.extend(["metrics.json", "scenario.toml", "report.html"].map(String::from));
-    v.into_iter().map(PathBuf::from).collect()
-}
-
-/// Entries of `out` written by an earlier run that this run does not replace: run folders
-/// (`<controller>_m<mass>/` with a `timeseries.csv`) and per-payload or sweep figures.
-fn earlier_run_leftovers(out: &Path, planned: &[PathBuf]) -> Vec<String> {
-    let top: std::collections::HashSet<String> = planned
-        .iter()
-        .filter_map(|p| p.components().next())
-        .map(|c| c.as_os_str().to_string_lossy().into_owned())
-        .collect();
-    let Ok(entries) = std::fs::read_dir(out) else {
-        return Vec::new();
-    };
-    let mut found: Vec<String> = entries
-        .flatten()
-        .filter_map(|e| {
-            let name = e.file_name().to_string_lossy().into_owned();
-            if top.contains(&name) {
-                return None;
-            }
-            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
-            let run_dir = is_dir
-                && ControllerKind::ALL
-                    .iter()
-                    .any(|k| name.starts_with(&format!("{}_m", kind_name(*k))))
-                && e.path().join("timeseries.csv").is_file();
-            let figure = !is_dir
-                && (name.ends_with(".png") || name.ends_with(".svg"))
-                && (name.starts_with("joint_errors_m")
-                    || name.starts_with("cartesian_errors_m")
-                    || name.starts_with("identification_m")
-                    || name.starts_with("payload_sweep."));
-            if run_dir {
-                Some(format!("{name}/"))
-            } else if figure {
-                Some(name)
-            } else {
-                None
-            }
-        })
-        .collect();
-    found.sort();
-    found
 }
 
 /// The files a scenario reads (never overwritten by its outputs).
@@ -175,9 +102,9 @@ pub fn execute(
     for w in &repeats {
         console::warn(w);
     }
-    let planned = planned_files(&payloads, &controllers);
-    let mut dir = open_output(out, inputs(scenario, scenario_path), &planned)?;
-    let leftovers = earlier_run_leftovers(out, &planned);
+    let files = RunFiles::new(&scenario.file, &payloads, &controllers);
+    let mut dir = open_output(out, inputs(scenario, scenario_path), &files.files())?;
+    let leftovers = files.earlier_leftovers(out);
     if !leftovers.is_empty() {
         console::warn(&format!(
             "{} holds results of an earlier run that this run does not replace: {}. \
@@ -192,9 +119,7 @@ pub fn execute(
         .iter()
         .flat_map(|p| controllers.iter().map(move |k| (*k, *p)))
         .collect();
-    let steps_per_run = (exp.reference.len()
-        + (exp.loop_settings.hold_s / exp.reference.ts()).round() as usize)
-        as u64;
+    let steps_per_run = scenario.samples_per_run() as u64;
     let bar = ProgressBar::new(steps_per_run * jobs.len() as u64);
     if std::io::stderr().is_terminal() {
         bar.set_style(
@@ -217,7 +142,7 @@ pub fn execute(
     let robot = &exp.robot;
     report.paragraph(format!(
         "Robot {} ({} joints), program {}, path duration {:.2} s sampled at Ts = {} s, hold {} s. \
-         Controllers: the usual MPC (Eq. 43), the first incremental algorithm (Eq. 32/37) and the second (Eq. 34/39), \
+         Controllers: {}, \
          horizon N = {}. The plant carries a point payload at the flange that the controllers' model does not know. \
          \"Steady\" is the last {} s of the hold.",
         robot.name(),
@@ -226,6 +151,7 @@ pub fn execute(
         exp.reference.duration(),
         exp.reference.ts(),
         exp.loop_settings.hold_s,
+        controllers_in_words(&controllers),
         exp.mpc.horizon,
         exp.loop_settings.steady_window_s,
     ));
@@ -263,14 +189,14 @@ pub fn execute(
     figure(
         &mut dir,
         &mut report,
-        "path",
+        PATH,
         "The path: top, isometric and side views, and the joint reference",
         &figures::path("Path and joint reference", &exp.reference),
     )?;
     figure(
         &mut dir,
         &mut report,
-        "cartesian_reference",
+        CARTESIAN_REFERENCE,
         "Fig. 4: the timed Cartesian reference (each segment rest to rest)",
         &figures::cartesian_reference(
             "Cartesian reference: position, velocity, acceleration",
@@ -278,7 +204,10 @@ pub fn execute(
             exp.reference.ts(),
         ),
     )?;
-    report.heading("Tracking errors of the three controllers (the paper's Fig. 6 and 7)");
+    report.heading(format!(
+        "Tracking errors of {} (the paper's Fig. 6 and 7)",
+        the_controllers(controllers.len())
+    ));
     for p in &payloads {
         let these = records_with_mass(&runs, p.mass);
         let label = if p.mass == 0.0 {
@@ -290,14 +219,14 @@ pub fn execute(
         figure(
             &mut dir,
             &mut report,
-            &format!("joint_errors_m{}", mass_label(p.mass)),
+            &format!("{}{}", per_payload::JOINT_ERRORS, mass_label(p.mass)),
             &format!("{fig_no}: joint errors, {label}"),
             &figures::joint_errors(&format!("Joint errors e = w − q, {label}"), &these),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("cartesian_errors_m{}", mass_label(p.mass)),
+            &format!("{}{}", per_payload::CARTESIAN_ERRORS, mass_label(p.mass)),
             &format!("Cartesian errors, {label}"),
             &figures::cartesian_errors(
                 &format!("Cartesian errors (reference − flange), {label}"),
@@ -305,7 +234,7 @@ pub fn execute(
             ),
         )?;
     }
-    if runs.iter().any(|r| r.kind.is_adaptive()) {
+    if files.identification {
         let pick_up = exp.loop_settings.pick_up_at_s;
         report.heading("Online payload identification (adaptive variants)");
         report.paragraph(format!(
@@ -329,7 +258,7 @@ pub fn execute(
             figure(
                 &mut dir,
                 &mut report,
-                &format!("identification_m{label}"),
+                &format!("{}{label}", per_payload::IDENTIFICATION),
                 &format!("Error and identified mass against time, payload {label} kg"),
                 &figures::identification(
                     &format!("Payload {label} kg: error and identified mass"),
@@ -339,8 +268,8 @@ pub fn execute(
             )?;
         }
     }
-    let effects = drive_effects(scenario);
-    if !effects.is_empty() {
+    let effects = scenario.file.effects();
+    if files.drives {
         report.heading("Drives, sensors and faults");
         report.paragraph(format!(
             "This scenario turns on: {}. Counters over each run: `faults` = samples whose \
@@ -385,7 +314,7 @@ pub fn execute(
             figure(
                 &mut dir,
                 &mut report,
-                &format!("torque_ratios_m{label}"),
+                &format!("{}{label}", per_payload::TORQUE_RATIOS),
                 &format!("Commanded torque relative to the drives' limits, payload {label} kg"),
                 &figures::torque_ratios(
                     &format!("|τ| / τmax, payload {label} kg"),
@@ -394,12 +323,15 @@ pub fn execute(
                 ),
             )?;
         }
-        for r in runs.iter().filter(|r| r.result.record.has_measurement()) {
+        for r in runs
+            .iter()
+            .filter(|r| files.measurement && r.result.record.has_measurement())
+        {
             let name = &r.metrics.name;
             figure(
                 &mut dir,
                 &mut report,
-                &format!("{name}/measurement_error"),
+                &format!("{name}/{}", per_run::MEASUREMENT_ERROR),
                 &format!("{name}: what the controller was given minus the true position (gaps: lost measurements)"),
                 &figures::measurement_errors(
                     &format!("{name}: measured − true position"),
@@ -408,12 +340,12 @@ pub fn execute(
             )?;
         }
     }
-    if payloads.len() >= 3 {
+    if files.sweep {
         report.heading("Payload sweep");
         figure(
             &mut dir,
             &mut report,
-            "payload_sweep",
+            PAYLOAD_SWEEP,
             "Steady and RMS Cartesian error against payload (markers: diverged runs, at the error when stopped)",
             &figures::payload_sweep("Cartesian error against payload", &metrics),
         )?;
@@ -422,20 +354,20 @@ pub fn execute(
     for r in &runs {
         let name = &r.metrics.name;
         dir.write(
-            format!("{name}/timeseries.csv"),
+            format!("{name}/{TIMESERIES}"),
             timeseries_csv(&r.result.record).as_bytes(),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("{name}/joints_torques"),
+            &format!("{name}/{}", per_run::JOINTS_TORQUES),
             &format!("Fig. 5, {name}: joint coordinates and torques"),
             &figures::joints_and_torques(&format!("{name}: joints and torques"), &r.result.record),
         )?;
         figure(
             &mut dir,
             &mut report,
-            &format!("{name}/cartesian_error"),
+            &format!("{name}/{}", per_run::CARTESIAN_ERROR),
             &format!("{name}: Cartesian error"),
             &figures::cartesian_errors(
                 &format!("{name}: Cartesian error"),
@@ -443,25 +375,20 @@ pub fn execute(
             ),
         )?;
     }
-    #[derive(serde::Serialize)]
-    struct MetricsFile<'a> {
-        runs: &'a [RunMetrics],
-    }
-    let json = serde_json::to_string_pretty(&MetricsFile { runs: &metrics })?;
-    dir.write("metrics.json", json.as_bytes())?;
+    dir.write(METRICS, metrics_json(&metrics)?.as_bytes())?;
     // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
     // file re-runs from any working directory.
-    let mut file = scenario.file.clone();
-    file.payload.masses_kg = payloads.iter().map(|p| p.mass).collect();
-    file.controllers = controllers.clone();
-    let effective = toml::to_string(&file).context("writing the effective scenario")?;
+    let effective = scenario
+        .effective_file(&payloads, &controllers)
+        .to_toml()
+        .context("writing the effective scenario")?;
     let effective = format!(
         "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
     );
     report.heading("Scenario");
     report.code(effective.clone());
-    dir.write("scenario.toml", effective.as_bytes())?;
-    dir.write("report.html", report.to_html()?.as_bytes())?;
+    dir.write(SCENARIO, effective.as_bytes())?;
+    dir.write(REPORT, report.to_html()?.as_bytes())?;
     dir.commit()
         .with_context(|| format!("moving the results into {}", out.display()))?;
 
@@ -516,7 +443,7 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
         exp.robot.name(),
     );
     for k in kinds {
-        match super::analyze::margin(scenario, k) {
+        match ofmpc_scenario::analysis::margin(scenario, k).map_err(anyhow::Error::from) {
             Ok(m) => text.push_str(&format!(
                 " the {k} algorithm is stable for an inertia ratio α = H_model/H_plant in {:.3}–{:.3}, \
                  i.e. a point payload up to {:.2} kg that the model does not know;",
@@ -530,85 +457,6 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
          The adaptive variants identify the payload and keep α near 1; `ofmpc tune` finds weights for a payload range.",
     );
     text
-}
-
-/// The drive, sensor and fault effects a scenario turns on, in its words
-/// (empty: the paper's ideal drives and sensors).
-fn drive_effects(scenario: &Scenario) -> Vec<String> {
-    let f = &scenario.file;
-    let (mpc, plant, sim) = (&f.mpc, &f.plant, &f.simulation);
-    let mut e = Vec::new();
-    let mut on = |cond: bool, text: String| {
-        if cond {
-            e.push(text);
-        }
-    };
-    on(
-        mpc.torque_limits,
-        "[mpc] torque_limits (QP over the horizon)".into(),
-    );
-    on(
-        mpc.friction_compensation,
-        "[mpc] friction_compensation".into(),
-    );
-    on(mpc.delay_compensation, "[mpc] delay_compensation".into());
-    on(mpc.state_observer, "[mpc] state_observer".into());
-    on(mpc.observer_friction, "[mpc] observer_friction".into());
-    on(
-        plant.torque_limits,
-        "[plant] torque_limits (saturation)".into(),
-    );
-    on(
-        !plant.coulomb_friction.is_empty(),
-        format!(
-            "[plant] coulomb_friction = {:?} N·m",
-            plant.coulomb_friction
-        ),
-    );
-    on(
-        !plant.viscous_friction.is_empty(),
-        format!(
-            "[plant] viscous_friction = {:?} N·m·s/rad",
-            plant.viscous_friction
-        ),
-    );
-    on(
-        plant.encoder_counts > 0,
-        format!("[plant] encoder_counts = {}", plant.encoder_counts),
-    );
-    on(
-        plant.velocity_from_encoder,
-        "[plant] velocity_from_encoder".into(),
-    );
-    on(
-        plant.delay_samples > 0,
-        format!("[plant] delay_samples = {}", plant.delay_samples),
-    );
-    on(
-        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
-        "[plant] measurement noise".into(),
-    );
-    on(
-        !plant.faults.is_empty(),
-        format!("[plant] faults ({})", plant.faults.len()),
-    );
-    on(
-        !f.faults.nan_at_s.is_empty(),
-        format!("[faults] nan_at_s = {:?}", f.faults.nan_at_s),
-    );
-    on(
-        !f.faults.dropout_s.is_empty(),
-        format!("[faults] dropout_s = {:?}", f.faults.dropout_s),
-    );
-    on(
-        sim.plausibility_check,
-        "[simulation] plausibility_check".into(),
-    );
-    on(sim.safe_stop, "[simulation] safe_stop".into());
-    if let Some(v) = f.safety.max_joint_error_rad {
-        e.push(format!("[safety] max_joint_error_rad = {v}"));
-    }
-    e
 }
 
 /// `(controller, record)` of the runs with payload `mass`, in run order.

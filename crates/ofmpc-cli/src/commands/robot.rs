@@ -7,12 +7,22 @@ use ofmpc::robot::{Payload, Robot};
 /// Loads the robot named by `--robot` (built-in name or URDF path), applies
 /// `--drives` and a point-mass payload at the flange.
 pub fn load_robot(args: &RobotArgs, payload_kg: f64) -> anyhow::Result<Robot> {
-    let mut robot = crate::scenario::load_robot(&args.robot, args.drives.as_deref())?;
+    let mut robot = load_model(&args.robot, args.drives.as_deref())?;
     if !payload_kg.is_finite() || payload_kg < 0.0 {
         bail!("--payload {payload_kg}: the payload must be a finite mass ≥ 0 kg");
     }
     if payload_kg > 0.0 {
         robot.set_payload(Some(Payload::point_mass(payload_kg)))?;
+    }
+    Ok(robot)
+}
+
+/// Loads a robot by name or URDF path with an optional drives file
+/// ([`ofmpc_scenario::load_robot`]), printing its warnings.
+pub fn load_model(model: &str, drives: Option<&std::path::Path>) -> anyhow::Result<Robot> {
+    let (robot, warnings) = ofmpc_scenario::load_robot(model, drives)?;
+    for w in &warnings {
+        crate::output::console::warn(w);
     }
     Ok(robot)
 }

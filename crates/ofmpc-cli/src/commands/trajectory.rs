@@ -6,13 +6,11 @@ use crate::figures;
 use crate::output::atomic::{check_destinations, Input};
 use crate::output::console;
 use crate::output::plot::render_both;
-use crate::scenario::{
-    load_robot, parse_mode, parse_profile, plan_error_message, read_program, SettingNames,
-};
 use crate::tables::reference_csv;
 use anyhow::Context;
 use ofmpc::gcode::ParseOptions;
 use ofmpc::motion::{plan, Orientation, PlanOptions, TimingOptions};
+use ofmpc_scenario::{parse_mode, parse_profile, plan_error_message, read_program, SettingNames};
 use std::path::{Path, PathBuf};
 
 /// The command line's names of the planning settings.
@@ -71,7 +69,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         inputs.push(Input::new(d, "the drives file"));
     }
     check_destinations(&out_dir, &files, &inputs)?;
-    let robot = load_robot(&a.robot, a.drives.as_deref())?;
+    let robot = super::load_model(&a.robot, a.drives.as_deref())?;
     let file =
         (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
     let (name, text) = read_program(file)?;

@@ -1,9 +1,9 @@
-//! The scenario runner without the output layer: one place that turns a
-//! resolved scenario into runs (repeats removed, every payload × controller in
-//! parallel). `ofmpc run`/`reproduce` write its results; the Python bindings'
-//! `ofmpc.run` returns their metrics.
+//! The job runner: a resolved scenario turned into runs (repeats removed,
+//! every payload × controller in parallel) and their metrics. Front ends
+//! write the results (`ofmpc run`) or return them (`ofmpc.run` in Python).
 
-use crate::scenario::Scenario;
+use crate::error::ScenarioError;
+use crate::resolve::Scenario;
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
 use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult};
@@ -66,7 +66,7 @@ pub fn run_jobs(
     payloads: &[Payload],
     controllers: &[ControllerKind],
     progress: &(dyn Fn(u64) + Sync),
-) -> anyhow::Result<Vec<Run>> {
+) -> Result<Vec<Run>, ScenarioError> {
     let exp = &scenario.experiment;
     let jobs: Vec<(ControllerKind, Payload)> = payloads
         .iter()
@@ -80,12 +80,9 @@ pub fn run_jobs(
                     progress((k - last) as u64);
                     last = k;
                 })
-                .map_err(|e| {
-                    anyhow::anyhow!(
-                        "{}: {}",
-                        run_name(kind, &payload),
-                        crate::errors::experiment_error(&e)
-                    )
+                .map_err(|error| ScenarioError::Run {
+                    run: run_name(kind, &payload),
+                    error: Box::new(error),
                 })?;
             Ok(Run {
                 kind,
@@ -97,9 +94,9 @@ pub fn run_jobs(
         .collect()
 }
 
-/// Runs a scenario as `ofmpc run` does (repeats removed, warned about by the
-/// caller from [`unique_runs`]) and returns the metrics of its runs.
-pub fn run_metrics(scenario: &Scenario) -> anyhow::Result<Vec<RunMetrics>> {
+/// Runs a scenario as `ofmpc run` does (repeats removed; the caller warns about them
+/// from [`unique_runs`]) and returns the metrics of its runs.
+pub fn run_metrics(scenario: &Scenario) -> Result<Vec<RunMetrics>, ScenarioError> {
     let (payloads, controllers, _) = unique_runs(scenario);
     Ok(run_jobs(scenario, &payloads, &controllers, &|_| {})?
         .into_iter()
@@ -108,10 +105,13 @@ pub fn run_metrics(scenario: &Scenario) -> anyhow::Result<Vec<RunMetrics>> {
 }
 
 /// The text of `metrics.json` for these metrics: `{"runs": [...]}`, pretty-printed.
-pub fn metrics_json(runs: &[RunMetrics]) -> anyhow::Result<String> {
+pub fn metrics_json(runs: &[RunMetrics]) -> Result<String, ScenarioError> {
     #[derive(serde::Serialize)]
     struct MetricsFile<'a> {
         runs: &'a [RunMetrics],
     }
-    Ok(serde_json::to_string_pretty(&MetricsFile { runs })?)
+    serde_json::to_string_pretty(&MetricsFile { runs }).map_err(|e| ScenarioError::Write {
+        what: "metrics.json",
+        message: e.to_string(),
+    })
 }

@@ -1,0 +1,292 @@
+//! Analyses of a resolved scenario that need no full run: the stability
+//! margin of each controller ([`margin`], [`radius_curves`]) and robust
+//! tuning over a payload range ([`robust_tuning`]).
+
+use crate::error::ScenarioError;
+use crate::file::ScenarioFile;
+use crate::resolve::Scenario;
+use ofmpc::analysis::{
+    alpha_interval, inertia_ratio_range, max_payload, spectral_radius, StabilityOptions,
+};
+use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc::robot::{Payload, Robot};
+use rayon::prelude::*;
+
+/// The heaviest payload `max_payload_kg` reports (kg): a controller still
+/// inside its interval there reports this bound.
+pub const PAYLOAD_SEARCH_LIMIT_KG: f64 = 1000.0;
+
+/// What `analyze stability` computes for one controller.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct Margin {
+    /// `[lo, hi]` of α = H_model/H_plant, stable near rest.
+    pub alpha_interval: [f64; 2],
+    /// Largest point payload at the flange keeping α inside along the program (kg).
+    pub max_payload_kg: f64,
+}
+
+/// The controllers' model of the robot (with the payload `[mpc] model_payload_kg` assumes).
+pub fn model_robot(scenario: &Scenario) -> Result<Robot, ScenarioError> {
+    scenario
+        .experiment
+        .model_robot()
+        .map_err(|error| ScenarioError::experiment(None, error))
+}
+
+/// The margin of `kind` for the robot, tuning and program of `scenario`:
+/// α interval at the program's first point, payload along the program.
+pub fn margin(scenario: &Scenario, kind: ControllerKind) -> Result<Margin, ScenarioError> {
+    let exp = &scenario.experiment;
+    let robot = model_robot(scenario)?;
+    let q0 = exp.reference.q(0);
+    let opts = StabilityOptions::default();
+    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts).map_err(|source| {
+        ScenarioError::Stability {
+            kind,
+            source: Box::new(source),
+        }
+    })?;
+    let poses = program_poses(scenario);
+    let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
+    Ok(Margin {
+        alpha_interval: [lo, hi],
+        max_payload_kg: m,
+    })
+}
+
+/// Every 10th point of the joint reference.
+pub fn program_poses(scenario: &Scenario) -> Vec<&[f64]> {
+    let r = &scenario.experiment.reference;
+    (0..r.len()).step_by(10).map(|k| r.q(k)).collect()
+}
+
+/// One controller's spectral radius near rest against the inertia ratio.
+#[derive(Debug, Clone)]
+pub struct RadiusCurve {
+    /// The controller.
+    pub kind: ControllerKind,
+    /// α = H_model/H_plant.
+    pub alpha: Vec<f64>,
+    /// The spectral radius ρ at each α (stable below 1).
+    pub radius: Vec<f64>,
+}
+
+/// The spectral radius against α ∈ [0.3, 1.7] (step 0.025) of each controller near rest
+/// at `q0` with `mpc`, on the model `robot`.
+pub fn radius_curves(
+    robot: &Robot,
+    mpc: &MpcSettings,
+    q0: &[f64],
+    kinds: &[ControllerKind],
+) -> Result<Vec<RadiusCurve>, ScenarioError> {
+    let alpha: Vec<f64> = (0..=56).map(|i| 0.3 + 0.025 * i as f64).collect();
+    let opts = StabilityOptions::default();
+    kinds
+        .iter()
+        .map(|&kind| {
+            let radius = alpha
+                .iter()
+                .map(|&a| spectral_radius(robot, kind.base(), mpc, q0, a, &opts))
+                .collect::<Result<Vec<f64>, _>>()?;
+            Ok(RadiusCurve {
+                kind,
+                alpha: alpha.clone(),
+                radius,
+            })
+        })
+        .collect()
+}
+
+/// The weights `Q_Δy` of the robust tuning's grid.
+pub const TUNING_Q_DY: [f64; 3] = [0.1, 0.5, 2.0];
+/// The weights `Q_Δu` of the robust tuning's grid.
+pub const TUNING_Q_DU: [f64; 5] = [1e-5, 1e-4, 1e-3, 1e-2, 1e-1];
+/// Model payloads tried per weight pair (evenly over the range).
+const MODEL_GRID: usize = 13;
+
+/// One tuning of the robust tuning's grid.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Candidate {
+    /// Output-increment weight (times I).
+    pub q_dy: f64,
+    /// Input-increment weight (times I).
+    pub q_du: f64,
+    /// The payload the model assumes (kg).
+    pub model_payload_kg: f64,
+    /// `min(ln(α_min/lo), ln(hi/α_max))` over the range: positive = inside every
+    /// controller's interval.
+    pub margin: f64,
+    /// Worst RMS Cartesian error (mm) of the simulated runs; NaN when not simulated.
+    pub rms_mm: f64,
+    /// Whether every simulated run completed without steady error.
+    pub offset_free: bool,
+}
+
+/// What [`robust_tuning`] found.
+#[derive(Debug, Clone)]
+pub struct Tuning {
+    /// Every weight pair with its best model payload (simulated when its margin is positive).
+    pub candidates: Vec<Candidate>,
+    /// The offset-free candidate with the least worst RMS error.
+    pub chosen: Candidate,
+    /// The payloads simulated (the range's ends and middle, kg).
+    pub simulated_kg: [f64; 3],
+    /// The scenario with the chosen tuning: the base scenario's file, these controllers,
+    /// five payloads over the range.
+    pub file: ScenarioFile,
+}
+
+/// The paper's tuning with `Q_Δy`, `Q_Δu` (times I) and the model payload.
+pub fn tuning_settings(q_dy: f64, q_du: f64, model_payload_kg: f64) -> MpcSettings {
+    MpcSettings {
+        q_dy: Weight::Scalar(q_dy),
+        q_du: Weight::Scalar(q_du),
+        model_payload_kg,
+        ..MpcSettings::default()
+    }
+}
+
+/// Robust tuning of the non-adaptive controllers `kinds` over the point payloads
+/// `lo_kg..=hi_kg` on the robot and program of `base`:
+///
+/// 1. For each weight pair `(Q_Δy, Q_Δu)` of a grid (`Q_yw = I`, `Q_u` as
+///    given) and each controller, the α interval near rest at the program's
+///    first point ([`ofmpc::analysis::alpha_interval`]).
+/// 2. For each pair, the payload the model should assume: on a grid over the
+///    range, the one whose inertia ratios along the program, for the lightest
+///    and the heaviest payload, stay inside every controller's interval with
+///    the largest margin `min(ln(α_min/lo), ln(hi/α_max))`.
+/// 3. The candidates with a positive margin are simulated along the program
+///    at the range's ends and middle; the tuning with the least worst RMS
+///    Cartesian error among the runs that completed offset-free wins.
+pub fn robust_tuning(
+    base: &Scenario,
+    lo_kg: f64,
+    hi_kg: f64,
+    kinds: &[ControllerKind],
+) -> Result<Tuning, ScenarioError> {
+    if !(lo_kg >= 0.0 && hi_kg >= lo_kg) {
+        return Err(ScenarioError::PayloadRange {
+            lo: lo_kg,
+            hi: hi_kg,
+        });
+    }
+    if let Some(&kind) = kinds.iter().find(|k| k.is_adaptive()) {
+        return Err(ScenarioError::AdaptiveTuning { kind });
+    }
+    let exp = &base.experiment;
+    let q0 = exp.reference.q(0).to_vec();
+    let poses = program_poses(base);
+    let opts = StabilityOptions {
+        tolerance: 4e-3,
+        ..Default::default()
+    };
+    let pairs: Vec<(f64, f64)> = TUNING_Q_DY
+        .iter()
+        .flat_map(|&d| TUNING_Q_DU.iter().map(move |&u| (d, u)))
+        .collect();
+    // 1. Intervals per weight pair (the intersection over the controllers).
+    let intervals: Vec<Option<(f64, f64)>> = pairs
+        .par_iter()
+        .map(|&(d, u)| {
+            let s = tuning_settings(d, u, 0.0);
+            let mut iv = (0.0f64, f64::INFINITY);
+            for &k in kinds {
+                match alpha_interval(&exp.robot, k, &s, &q0, &opts) {
+                    Ok((lo, hi)) => iv = (iv.0.max(lo), iv.1.min(hi)),
+                    Err(_) => return None,
+                }
+            }
+            Some(iv)
+        })
+        .collect();
+    // 2. The model payload with the largest margin per pair.
+    let mut candidates = Vec::new();
+    for (&(d, u), iv) in pairs.iter().zip(&intervals) {
+        let Some((lo, hi)) = *iv else { continue };
+        let mut best: Option<(f64, f64)> = None;
+        for i in 0..MODEL_GRID {
+            let m = lo_kg + (hi_kg - lo_kg) * i as f64 / (MODEL_GRID - 1) as f64;
+            let mut model = exp.robot.clone();
+            if m > 0.0 {
+                model.set_payload(Some(Payload::point_mass(m)))?;
+            }
+            let mut amin = f64::INFINITY;
+            let mut amax = f64::NEG_INFINITY;
+            for p in [lo_kg, hi_kg] {
+                let (a0, a1) = inertia_ratio_range(&model, &Payload::point_mass(p), &poses)?;
+                amin = amin.min(a0);
+                amax = amax.max(a1);
+            }
+            let margin = (amin / lo).ln().min((hi / amax).ln());
+            if !matches!(best, Some((_, b)) if b >= margin) {
+                best = Some((m, margin));
+            }
+        }
+        if let Some((m, margin)) = best {
+            candidates.push(Candidate {
+                q_dy: d,
+                q_du: u,
+                model_payload_kg: m,
+                margin,
+                rms_mm: f64::NAN,
+                offset_free: false,
+            });
+        }
+    }
+    // 3. Simulate the stable candidates at the range's ends and middle.
+    let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
+    candidates
+        .par_iter_mut()
+        .filter(|c| c.margin > 0.0)
+        .for_each(|c| {
+            let mut e = exp.clone();
+            e.mpc = tuning_settings(c.q_dy, c.q_du, c.model_payload_kg);
+            let mut worst = 0.0f64;
+            let mut ok = true;
+            for &k in kinds {
+                for &m in &masses {
+                    match e.run(k, &Payload::point_mass(m), &mut |_, _| {}) {
+                        Ok((r, metrics)) => {
+                            let steady = metrics
+                                .steady_joint_error_max_rad
+                                .iter()
+                                .copied()
+                                .fold(0.0, f64::max);
+                            ok &= r.outcome.is_completed() && steady <= 1e-9;
+                            worst = worst.max(metrics.cartesian_error_rms_mm);
+                        }
+                        Err(_) => ok = false,
+                    }
+                }
+            }
+            c.rms_mm = worst;
+            c.offset_free = ok;
+        });
+    let chosen = candidates
+        .iter()
+        .filter(|c| c.offset_free)
+        .min_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))
+        .cloned()
+        .ok_or_else(|| ScenarioError::NoRobustTuning {
+            controllers: kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(","),
+            lo: lo_kg,
+            hi: hi_kg,
+        })?;
+    let mut file = base.file.clone();
+    file.title = format!(
+        "Robust tuning for {lo_kg}..{hi_kg} kg: Q_Δy = {}, Q_Δu = {}, model payload {} kg",
+        chosen.q_dy, chosen.q_du, chosen.model_payload_kg
+    );
+    file.controllers = kinds.to_vec();
+    file.mpc = tuning_settings(chosen.q_dy, chosen.q_du, chosen.model_payload_kg);
+    file.payload.masses_kg = (0..=4)
+        .map(|i| lo_kg + (hi_kg - lo_kg) * i as f64 / 4.0)
+        .collect();
+    Ok(Tuning {
+        candidates,
+        chosen,
+        simulated_kg: masses,
+        file,
+    })
+}

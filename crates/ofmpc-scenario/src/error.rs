@@ -1,0 +1,350 @@
+//! The scenario crate's errors. Each says where: the file, the scenario key
+//! (`[section] key = value`) or the override (`section.key = value`), and
+//! keeps the library's typed error. Front ends add their own advice (a
+//! command-line flag, a Python argument); this crate never names one.
+
+use ofmpc::analysis::StabilityError;
+use ofmpc::control::{ControllerKind, DriveQuantity, SettingsError};
+use ofmpc::motion::PlanError;
+use ofmpc::robot::{ModelError, PayloadError};
+use ofmpc::sim::{
+    ExperimentError, FrictionKind, LoopSettingsError, NoiseKind, PlantError, PlantSettingsError,
+};
+use std::path::PathBuf;
+
+/// What went wrong reading, resolving, running or analysing a scenario.
+///
+/// The `Display` of a variant says where and what; variants that wrap an
+/// I/O or library error carrying a chain of its own expose it as
+/// [`std::error::Error::source`] (print the chain, e.g. with `anyhow`'s `{:#}`).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ScenarioError {
+    /// The scenario file could not be read.
+    #[error("cannot read scenario {}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The scenario is not valid TOML, or a key or value does not fit
+    /// (unknown key, wrong type): the parser's message, with its position.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// The file (or another name of the document).
+        origin: String,
+        /// The parser's message.
+        message: String,
+    },
+    /// An override `key=value` is not of that form.
+    #[error("'{text}': give key=value, the key a dotted path such as mpc.horizon")]
+    OverrideSyntax {
+        /// The override as given.
+        text: String,
+    },
+    /// An override does not fit the scenario (unknown key, wrong type, or a
+    /// key below a value that is not a table): the same message as the key
+    /// written in the file.
+    #[error("{key} = {value}: {message}")]
+    Override {
+        /// The dotted key.
+        key: String,
+        /// The value as given.
+        value: String,
+        /// Why it does not fit.
+        message: String,
+    },
+    /// `controllers = []`.
+    #[error("controllers = []: name at least one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\"")]
+    NoControllers,
+    /// `[payload] masses_kg = []`.
+    #[error("payload.masses_kg = []: give at least one mass (0 for none)")]
+    NoPayloads,
+    /// The robot (built-in name or URDF) could not be loaded.
+    #[error(transparent)]
+    Robot(Box<ModelError>),
+    /// The drives file could not be read or applied.
+    #[error("applying {}", path.display())]
+    Drives {
+        /// The drives file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: Box<ModelError>,
+    },
+    /// `[mpc]` does not fit the robot.
+    #[error("[mpc] {error}")]
+    Mpc {
+        /// The library's error.
+        error: Box<SettingsError>,
+    },
+    /// A payload of `[payload]` is not a physical body.
+    #[error("[payload] mass {mass} kg: {error}")]
+    Payload {
+        /// The mass (kg).
+        mass: f64,
+        /// The library's error.
+        error: Box<PayloadError>,
+    },
+    /// The program file could not be read.
+    #[error("cannot read program {}", path.display())]
+    ReadProgram {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An unknown time law.
+    #[error("{key} '{value}': use 'septic' (the paper's) or 'quintic'")]
+    Profile {
+        /// The setting that holds it.
+        key: String,
+        /// The value.
+        value: String,
+    },
+    /// An unknown path mode.
+    #[error("{key} '{value}': use 'G61' (exact stop) or 'G64' (blend corners)")]
+    Mode {
+        /// The setting that holds it.
+        key: String,
+        /// The value.
+        value: String,
+    },
+    /// The program could not be planned with these settings.
+    #[error("{program}: {}", plan_error_message(.error, &SCENARIO_KEYS))]
+    Plan {
+        /// The program's name.
+        program: String,
+        /// The library's error.
+        error: Box<PlanError>,
+    },
+    /// The experiment's settings do not fit (named by their scenario key).
+    #[error("{}{}", .program.as_deref().map(|p| format!("{p}: ")).unwrap_or_default(), experiment_error(.error))]
+    Experiment {
+        /// The program's name, when the error is about the planned experiment.
+        program: Option<String>,
+        /// The library's error.
+        error: Box<ExperimentError>,
+    },
+    /// A run could not start.
+    #[error("{run}: {}", experiment_error(.error))]
+    Run {
+        /// The run's name (`<controller>_m<mass>`).
+        run: String,
+        /// The library's error.
+        error: Box<ExperimentError>,
+    },
+    /// A controller's stability interval could not be computed.
+    #[error("stability of {kind}")]
+    Stability {
+        /// The controller.
+        kind: ControllerKind,
+        /// Why.
+        #[source]
+        source: Box<StabilityError>,
+    },
+    /// A stability computation other than the interval failed.
+    #[error(transparent)]
+    Analysis(Box<StabilityError>),
+    /// Robust tuning was asked for an adaptive controller (it identifies the payload).
+    #[error("{kind}: tune the non-adaptive controllers (the adaptive ones identify the payload)")]
+    AdaptiveTuning {
+        /// The controller.
+        kind: ControllerKind,
+    },
+    /// The payload range of robust tuning is not `0 ≤ lo ≤ hi`.
+    #[error("payload range {lo},{hi}: give LO,HI with 0 ≤ LO ≤ HI (kg)")]
+    PayloadRange {
+        /// Lower end (kg).
+        lo: f64,
+        /// Upper end (kg).
+        hi: f64,
+    },
+    /// No tuning of the search grid is robust over the range.
+    #[error("no tuning of the grid keeps {controllers} stable and offset-free over {lo}..{hi} kg on this robot and program: narrow the payload range")]
+    NoRobustTuning {
+        /// The controllers, comma-separated.
+        controllers: String,
+        /// Lower end (kg).
+        lo: f64,
+        /// Upper end (kg).
+        hi: f64,
+    },
+    /// A scenario or metrics document could not be written.
+    #[error("writing {what}: {message}")]
+    Write {
+        /// What (e.g. "the scenario").
+        what: &'static str,
+        /// The serializer's message.
+        message: String,
+    },
+}
+
+impl From<ModelError> for ScenarioError {
+    fn from(e: ModelError) -> Self {
+        Self::Robot(Box::new(e))
+    }
+}
+
+impl From<StabilityError> for ScenarioError {
+    fn from(e: StabilityError) -> Self {
+        Self::Analysis(Box::new(e))
+    }
+}
+
+impl ScenarioError {
+    /// An [`ExperimentError`] about the settings, named by its scenario key (prefixed by
+    /// the program's name when it is about the planned experiment).
+    pub fn experiment(program: Option<String>, error: ExperimentError) -> Self {
+        Self::Experiment {
+            program,
+            error: Box::new(error),
+        }
+    }
+}
+
+/// How a front end names the planning settings in its messages.
+#[derive(Debug, Clone, Copy)]
+pub struct SettingNames {
+    /// Path speed limit.
+    pub speed: &'static str,
+    /// Path acceleration limit.
+    pub accel: &'static str,
+    /// Path jerk limit.
+    pub jerk: &'static str,
+    /// Default corner tolerance.
+    pub tolerance: &'static str,
+    /// Sample period.
+    pub ts: &'static str,
+    /// Work offset of programs that set none.
+    pub origin: &'static str,
+}
+
+/// The scenario file's names of the planning settings.
+pub const SCENARIO_KEYS: SettingNames = SettingNames {
+    speed: "[timing] max_speed_m_s",
+    accel: "[timing] max_accel_m_s2",
+    jerk: "[timing] max_jerk_m_s3",
+    tolerance: "[timing] tolerance_mm",
+    ts: "[mpc] ts",
+    origin: "[program] origin_mm",
+};
+
+/// A planning error in the front end's words: the library's message, followed by the
+/// setting (flag or key) to change where the library names one.
+pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
+    use ofmpc::motion::reference::ReferenceFailure;
+    use ofmpc::motion::trajectory::{TimingLimit, TrajectoryError};
+    use ofmpc::motion::SampleCause;
+    let setting = match e {
+        PlanError::SamplePeriod(_) => Some(names.ts),
+        PlanError::TooManySamples { cause, .. } => match cause {
+            SampleCause::PathSpeed { .. } => Some(names.speed),
+            SampleCause::PathAcceleration { .. } => Some(names.accel),
+            SampleCause::SamplePeriod => Some(names.ts),
+            _ => None,
+        },
+        PlanError::Timing(TrajectoryError::InvalidLimit { limit, .. }) => Some(match limit {
+            TimingLimit::PathSpeed => names.speed,
+            TimingLimit::PathAcceleration => names.accel,
+            TimingLimit::PathJerk => names.jerk,
+            _ => names.tolerance,
+        }),
+        PlanError::Reference(r) => match &r.failure {
+            ReferenceFailure::Ik(_) | ReferenceFailure::BranchLimit { .. } => Some(names.origin),
+            ReferenceFailure::JointSpeed { .. } => Some(names.speed),
+            ReferenceFailure::SamplePeriod(_) => Some(names.ts),
+            _ => None,
+        },
+        _ => None,
+    };
+    match setting {
+        Some(s) => format!("{e} (setting: {s})"),
+        None => e.to_string(),
+    }
+}
+
+/// The scenario key that holds the value an [`ExperimentError`] is about,
+/// with that value, e.g. `[plant] substep = 1e-300`.
+pub fn experiment_key(e: &ExperimentError) -> Option<String> {
+    Some(match e {
+        ExperimentError::Loop(l) => match l {
+            LoopSettingsError::HoldTime(v) => format!("[simulation] hold_s = {v}"),
+            LoopSettingsError::DivergenceThreshold(v) => {
+                format!("[simulation] divergence_threshold_rad = {v}")
+            }
+            LoopSettingsError::SteadyWindow { value, .. } => {
+                format!("[simulation] steady_window_s = {value}")
+            }
+            LoopSettingsError::IdentificationTime { value, .. } => {
+                format!("[simulation] identification_s = {value}")
+            }
+            LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
+            LoopSettingsError::FaultTime { index, value } => {
+                format!("[faults] nan_at_s[{index}] = {value}")
+            }
+            LoopSettingsError::DropoutInterval { index, from, to } => {
+                format!("[faults] dropout_s[{index}] = [{from}, {to}]")
+            }
+            LoopSettingsError::MaxJointError(v) => format!("[safety] max_joint_error_rad = {v}"),
+            _ => "[simulation]".into(),
+        },
+        ExperimentError::Plant(PlantError::Settings(p)) => match p {
+            PlantSettingsError::Substep(v) => format!("[plant] substep = {v}"),
+            PlantSettingsError::SubstepRatio { ts, substep, .. } => {
+                format!("[plant] substep = {substep} with [mpc] ts = {ts}")
+            }
+            PlantSettingsError::FrictionLength { kind, .. }
+            | PlantSettingsError::FrictionValue { kind, .. } => format!(
+                "[plant] {}",
+                match kind {
+                    FrictionKind::Viscous => "viscous_friction",
+                    _ => "coulomb_friction",
+                }
+            ),
+            PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
+            PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
+            PlantSettingsError::Fault {
+                index, what, value, ..
+            } => format!("[plant] faults[{index}].{what} = {value}"),
+            PlantSettingsError::Noise { kind, value } => format!(
+                "[plant] {} = {value}",
+                match kind {
+                    NoiseKind::Position => "position_noise",
+                    _ => "velocity_noise",
+                }
+            ),
+            _ => "[plant]".into(),
+        },
+        ExperimentError::Mpc(SettingsError::DriveModelLength { what, .. })
+        | ExperimentError::Mpc(SettingsError::DriveModelValue { what, .. }) => format!(
+            "the drives file's {}",
+            match what {
+                DriveQuantity::MaxTorque => "max_torque_nm",
+                DriveQuantity::Coulomb => "coulomb_nm",
+                DriveQuantity::Viscous => "viscous_nms",
+                _ => "values",
+            }
+        ),
+        ExperimentError::Mpc(SettingsError::DrivesUnsupported(_)) => {
+            "[mpc] torque_limits / friction_compensation".into()
+        }
+        ExperimentError::Mpc(_) => "[mpc]".into(),
+        ExperimentError::TooManySamples { .. } => {
+            "the program's duration with [simulation] hold_s at [mpc] ts".into()
+        }
+        ExperimentError::Model(_) => "[payload]".into(),
+        _ => return None,
+    })
+}
+
+/// `key: explanation` for an [`ExperimentError`].
+pub fn experiment_error(e: &ExperimentError) -> String {
+    match experiment_key(e) {
+        Some(k) => format!("{k}: {e}"),
+        None => e.to_string(),
+    }
+}

@@ -1,0 +1,527 @@
+//! The scenario file (TOML) as written, defaults filled in: [`ScenarioFile`]
+//! and its sections. The sections that configure the library are the
+//! library's own settings types, deserialized as they are (`[mpc]` =
+//! [`MpcSettings`], `[simulation]` = [`LoopSettings`], `[plant]` =
+//! [`PlantSettings`]). Overrides ([`Override`], `key=value` with a dotted key)
+//! are applied to the document before it is deserialized, so they meet the
+//! same checks and messages as the key written in the file.
+
+use crate::error::ScenarioError;
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::motion::timelaw::Profile;
+use ofmpc::motion::{PathMode, TimingOptions};
+use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// `[robot]`
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RobotSection {
+    /// `"irb140"` or a URDF path (relative to the scenario file).
+    pub model: String,
+    /// Drives file (TOML) for a URDF; the built-in IRB 140 has its own.
+    pub drives: Option<PathBuf>,
+}
+
+impl Default for RobotSection {
+    fn default() -> Self {
+        Self {
+            model: "irb140".into(),
+            drives: None,
+        }
+    }
+}
+
+/// `[payload]`: the rigid body at the flange that the controllers do not know.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PayloadSection {
+    /// One run per mass and controller (kg).
+    pub masses_kg: Vec<f64>,
+    /// Centre of mass in the flange frame (m); default the flange centre.
+    pub com_m: [f64; 3],
+    /// Inertia about the centre of mass, flange axes: `[ixx, iyy, izz, ixy, ixz, iyz]` (kg·m²);
+    /// default zero (a point mass).
+    pub inertia_kgm2: [f64; 6],
+    /// When the payload is picked up (s, path time): the plant carries none
+    /// before and the payload from then on; the controllers are not told.
+    /// Default: carried from the start.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pick_up_at_s: Option<f64>,
+}
+
+impl Default for PayloadSection {
+    fn default() -> Self {
+        Self {
+            masses_kg: vec![0.0, 0.25],
+            com_m: [0.0; 3],
+            inertia_kgm2: [0.0; 6],
+            pick_up_at_s: None,
+        }
+    }
+}
+
+/// `[program]`
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ProgramSection {
+    /// G-code file (relative to the scenario file); default the paper's Table I program.
+    pub file: Option<PathBuf>,
+    /// G54 work offset (mm) for programs that set none.
+    pub origin_mm: Option<[f64; 3]>,
+}
+
+/// `[timing]`
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TimingSection {
+    /// `"septic"` (the paper's: acceleration a 5th-order polynomial) or `"quintic"`.
+    pub profile: String,
+    /// Path speed (m/s) of moves without an F word (peak under G61, cruise under G64).
+    pub max_speed_m_s: f64,
+    /// Path acceleration limit (m/s²).
+    pub max_accel_m_s2: f64,
+    /// Path jerk limit (m/s³) of blended (G64) moves.
+    pub max_jerk_m_s3: f64,
+    /// Corner tolerance (mm) of G64 without P.
+    pub tolerance_mm: f64,
+    /// Path mode of programs that select neither: `"G61"` (exact stop) or `"G64"`.
+    pub mode: String,
+}
+
+impl Default for TimingSection {
+    fn default() -> Self {
+        let d = TimingOptions::default();
+        Self {
+            profile: profile_name(d.profile).into(),
+            max_speed_m_s: d.max_speed,
+            max_accel_m_s2: d.max_accel,
+            max_jerk_m_s3: d.max_jerk,
+            tolerance_mm: d.blend_tolerance * 1e3,
+            mode: mode_name(d.default_mode).into(),
+        }
+    }
+}
+
+/// `[orientation]`
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OrientationSection {
+    /// Fixed flange orientation as roll, pitch, yaw (degrees, base frame, R = Rz Ry Rx);
+    /// default: the flange orientation at q = 0 (tool axis along base +x).
+    pub rpy_deg: Option<[f64; 3]>,
+}
+
+/// A scenario file as written, defaults filled in.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// A title for the report.
+    pub title: String,
+    /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`,
+    /// `"first-adaptive"`, `"second-adaptive"`.
+    pub controllers: Vec<ControllerKind>,
+    /// `[robot]`
+    pub robot: RobotSection,
+    /// `[payload]`
+    pub payload: PayloadSection,
+    /// `[program]`
+    pub program: ProgramSection,
+    /// `[timing]`
+    pub timing: TimingSection,
+    /// `[orientation]`
+    pub orientation: OrientationSection,
+    /// `[mpc]`: the controllers' tuning (shared).
+    pub mpc: MpcSettings,
+    /// `[simulation]`: hold, divergence threshold, steady window.
+    pub simulation: LoopSettings,
+    /// `[plant]`: integration and the effects the model leaves out.
+    pub plant: PlantSettings,
+    /// `[faults]`: invalid and missing measurements.
+    pub faults: FaultsSection,
+    /// `[safety]`: the safe stop on a joint error limit.
+    pub safety: SafetySection,
+}
+
+/// `[faults]`: the measurement is NaN at the samples at `nan_at_s` (s, path
+/// time); no measurement arrives in the intervals `dropout_s = [[from, to], …]`.
+/// The controller runs on its own prediction over them; metrics.json counts
+/// them (`faults`).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FaultsSection {
+    /// Times of invalid (NaN) measurements (s).
+    pub nan_at_s: Vec<f64>,
+    /// Intervals without a measurement, `[from, to]` (s).
+    pub dropout_s: Vec<[f64; 2]>,
+}
+
+/// `[safety]`: when a joint's error passes `max_joint_error_rad`, the robot
+/// brakes to rest and holds within its torque limits; the run ends "stopped".
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SafetySection {
+    /// Joint error limit (rad); off when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_joint_error_rad: Option<f64>,
+}
+
+impl Default for ScenarioFile {
+    fn default() -> Self {
+        Self {
+            title: "Offset-free MPC of the ABB IRB 140 on the paper's path".into(),
+            controllers: ControllerKind::ALL.to_vec(),
+            robot: RobotSection::default(),
+            payload: PayloadSection::default(),
+            program: ProgramSection::default(),
+            timing: TimingSection::default(),
+            orientation: OrientationSection::default(),
+            mpc: MpcSettings::default(),
+            simulation: LoopSettings::default(),
+            plant: PlantSettings::default(),
+            faults: FaultsSection::default(),
+            safety: SafetySection::default(),
+        }
+    }
+}
+
+impl ScenarioFile {
+    /// Reads a scenario. Relative paths inside (`program.file`, `robot.drives`, and
+    /// `robot.model` when it ends in `.urdf` or names a file there) are resolved against the
+    /// scenario file's folder, not the working directory, and made absolute: the scenario
+    /// written with the results (`scenario.toml`) then re-runs from any working directory.
+    pub fn from_file(path: &Path) -> Result<Self, ScenarioError> {
+        Self::from_file_with(path, &[])
+    }
+
+    /// Reads a scenario as [`ScenarioFile::from_file`] does, with `overrides` applied to
+    /// the document before it is deserialized (in order; a later one wins). A path set by
+    /// an override is relative to the working directory, not to the scenario's folder.
+    pub fn from_file_with(path: &Path, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let parse_error = |e: toml::de::Error| ScenarioError::Parse {
+            origin: path.display().to_string(),
+            message: e.to_string(),
+        };
+        // The file alone first: its errors carry their line and column.
+        let mut s: ScenarioFile = toml::from_str(&text).map_err(parse_error)?;
+        if !overrides.is_empty() {
+            let doc: toml::Table = toml::from_str(&text).map_err(parse_error)?;
+            s = apply_overrides(doc, overrides)?;
+        }
+        let dir = absolute(path.parent().unwrap_or(Path::new(".")));
+        let set = |key: &str| overrides.iter().any(|o| o.key == key);
+        let base = |key: &str| {
+            if set(key) {
+                absolute(Path::new("."))
+            } else {
+                dir.clone()
+            }
+        };
+        let resolve = |key: &str, p: &Path| absolute(&base(key).join(p));
+        let model = resolve("robot.model", Path::new(&s.robot.model));
+        if s.robot.model.ends_with(".urdf") || model.is_file() {
+            s.robot.model = model.display().to_string();
+        }
+        s.robot.drives = s
+            .robot
+            .drives
+            .as_deref()
+            .map(|p| resolve("robot.drives", p));
+        s.program.file = s
+            .program
+            .file
+            .as_deref()
+            .map(|p| resolve("program.file", p));
+        Ok(s)
+    }
+
+    /// This scenario with `overrides` applied (as to a file's document; a path set by one
+    /// is made absolute against the working directory).
+    pub fn with_overrides(&self, overrides: &[Override]) -> Result<Self, ScenarioError> {
+        if overrides.is_empty() {
+            return Ok(self.clone());
+        }
+        let write_error = |message: String| ScenarioError::Write {
+            what: "the scenario",
+            message,
+        };
+        let doc = match toml::Value::try_from(self).map_err(|e| write_error(e.to_string()))? {
+            toml::Value::Table(t) => t,
+            other => return Err(write_error(format!("a {}, not a table", other.type_str()))),
+        };
+        let mut s = apply_overrides(doc, overrides)?;
+        let set = |key: &str| overrides.iter().any(|o| o.key == key);
+        if set("robot.model")
+            && (s.robot.model.ends_with(".urdf") || Path::new(&s.robot.model).is_file())
+        {
+            s.robot.model = absolute(Path::new(&s.robot.model)).display().to_string();
+        }
+        if set("robot.drives") {
+            s.robot.drives = s.robot.drives.as_deref().map(absolute);
+        }
+        if set("program.file") {
+            s.program.file = s.program.file.as_deref().map(absolute);
+        }
+        Ok(s)
+    }
+
+    /// The closed loop's settings: `[simulation]` with the three values it does not
+    /// deserialize filled in from `[payload] pick_up_at_s`, `[safety]
+    /// max_joint_error_rad` and `[faults]`.
+    pub fn loop_settings(&self) -> LoopSettings {
+        // TODO(#23 sim): `LoopSettings` has three `#[serde(skip)]` fields that the scenario
+        // fills by hand here (the only place); replace this once the library's settings
+        // types carry them (or take them apart from `[simulation]`).
+        let mut s = self.simulation.clone();
+        s.pick_up_at_s = self.payload.pick_up_at_s;
+        s.max_joint_error_rad = self.safety.max_joint_error_rad;
+        s.measurement_faults = MeasurementFaults {
+            nan_at_s: self.faults.nan_at_s.clone(),
+            dropout_s: self.faults.dropout_s.clone(),
+        };
+        s
+    }
+
+    /// The drive, sensor and fault effects this scenario turns on, in its keys' words
+    /// (empty: the paper's ideal drives and sensors).
+    pub fn effects(&self) -> Vec<String> {
+        let (mpc, plant, sim) = (&self.mpc, &self.plant, &self.simulation);
+        let mut e = Vec::new();
+        let mut on = |cond: bool, text: String| {
+            if cond {
+                e.push(text);
+            }
+        };
+        on(
+            mpc.torque_limits,
+            "[mpc] torque_limits (QP over the horizon)".into(),
+        );
+        on(
+            mpc.friction_compensation,
+            "[mpc] friction_compensation".into(),
+        );
+        on(mpc.delay_compensation, "[mpc] delay_compensation".into());
+        on(mpc.state_observer, "[mpc] state_observer".into());
+        on(mpc.observer_friction, "[mpc] observer_friction".into());
+        on(
+            plant.torque_limits,
+            "[plant] torque_limits (saturation)".into(),
+        );
+        on(
+            !plant.coulomb_friction.is_empty(),
+            format!(
+                "[plant] coulomb_friction = {:?} N·m",
+                plant.coulomb_friction
+            ),
+        );
+        on(
+            !plant.viscous_friction.is_empty(),
+            format!(
+                "[plant] viscous_friction = {:?} N·m·s/rad",
+                plant.viscous_friction
+            ),
+        );
+        on(
+            plant.encoder_counts > 0,
+            format!("[plant] encoder_counts = {}", plant.encoder_counts),
+        );
+        on(
+            plant.velocity_from_encoder,
+            "[plant] velocity_from_encoder".into(),
+        );
+        on(
+            plant.delay_samples > 0,
+            format!("[plant] delay_samples = {}", plant.delay_samples),
+        );
+        on(
+            plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
+            "[plant] measurement noise".into(),
+        );
+        on(
+            !plant.faults.is_empty(),
+            format!("[plant] faults ({})", plant.faults.len()),
+        );
+        on(
+            !self.faults.nan_at_s.is_empty(),
+            format!("[faults] nan_at_s = {:?}", self.faults.nan_at_s),
+        );
+        on(
+            !self.faults.dropout_s.is_empty(),
+            format!("[faults] dropout_s = {:?}", self.faults.dropout_s),
+        );
+        on(
+            sim.plausibility_check,
+            "[simulation] plausibility_check".into(),
+        );
+        on(sim.safe_stop, "[simulation] safe_stop".into());
+        if let Some(v) = self.safety.max_joint_error_rad {
+            e.push(format!("[safety] max_joint_error_rad = {v}"));
+        }
+        e
+    }
+
+    /// Whether the runs record the measurement the controller was given apart from the
+    /// true state (the plant's sensing is not ideal, or `[faults]` sets some): their
+    /// records then have [`ofmpc::sim::Record::has_measurement`].
+    pub fn records_measurement(&self) -> bool {
+        !(self.plant.measurement_is_ideal() && self.loop_settings().measurement_faults.is_empty())
+    }
+
+    /// The scenario as TOML text, every default filled in.
+    pub fn to_toml(&self) -> Result<String, ScenarioError> {
+        toml::to_string(self).map_err(|e| ScenarioError::Write {
+            what: "the scenario",
+            message: e.to_string(),
+        })
+    }
+}
+
+/// One override of a scenario key: `key=value`, the key a dotted path into the
+/// document (`mpc.horizon`, `plant.substep`, `title`), the value a TOML value
+/// (`20`, `1e-3`, `true`, `[1.0, 2.0]`, `"text"`) or, when it does not parse as
+/// one, a string (`G64`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Override {
+    /// The dotted key.
+    pub key: String,
+    /// The value as given.
+    pub raw: String,
+    /// The value.
+    pub value: toml::Value,
+}
+
+impl std::str::FromStr for Override {
+    type Err = ScenarioError;
+
+    fn from_str(text: &str) -> Result<Self, ScenarioError> {
+        let syntax = || ScenarioError::OverrideSyntax { text: text.into() };
+        let (key, raw) = text.split_once('=').ok_or_else(syntax)?;
+        let key = key.trim();
+        if key.split('.').any(|part| part.trim().is_empty()) {
+            return Err(syntax());
+        }
+        let key: String = key.split('.').map(str::trim).collect::<Vec<_>>().join(".");
+        let raw = raw.trim();
+        let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(raw.into()));
+        Ok(Self {
+            key,
+            raw: raw.into(),
+            value,
+        })
+    }
+}
+
+/// Sets `o` in `doc` (tables on the way are made when absent).
+fn set_key(doc: &mut toml::Table, o: &Override) -> Result<(), ScenarioError> {
+    let error = |message: String| ScenarioError::Override {
+        key: o.key.clone(),
+        value: o.raw.clone(),
+        message,
+    };
+    let parts: Vec<&str> = o.key.split('.').collect();
+    let (last, path) = parts
+        .split_last()
+        .ok_or_else(|| error("empty key".into()))?;
+    let mut table = doc;
+    for (i, part) in path.iter().enumerate() {
+        let entry = table
+            .entry(part.to_string())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        table = match entry {
+            toml::Value::Table(t) => t,
+            other => {
+                return Err(error(format!(
+                    "{} is not a table (its value is of type {})",
+                    parts[..=i].join("."),
+                    other.type_str()
+                )))
+            }
+        };
+    }
+    table.insert(last.to_string(), o.value.clone());
+    Ok(())
+}
+
+/// Applies `overrides` in order to `doc` and deserializes the result; an override that
+/// does not fit is reported with its key and value and the deserializer's message (the
+/// message the key written in the file gets, without the file position).
+fn apply_overrides(
+    mut doc: toml::Table,
+    overrides: &[Override],
+) -> Result<ScenarioFile, ScenarioError> {
+    let mut file = None;
+    for o in overrides {
+        set_key(&mut doc, o)?;
+        let parsed = ScenarioFile::deserialize(toml::Value::Table(doc.clone())).map_err(|e| {
+            ScenarioError::Override {
+                key: o.key.clone(),
+                value: o.raw.clone(),
+                message: e.message().trim_end().to_string(),
+            }
+        })?;
+        file = Some(parsed);
+    }
+    match file {
+        Some(f) => Ok(f),
+        None => {
+            ScenarioFile::deserialize(toml::Value::Table(doc)).map_err(|e| ScenarioError::Parse {
+                origin: "scenario".into(),
+                message: e.message().trim_end().to_string(),
+            })
+        }
+    }
+}
+
+/// `p` as an absolute path (joined to the working directory if relative; `.` components
+/// dropped, symbolic links not resolved). Falls back to `p` if the working directory is unknown.
+pub fn absolute(p: &Path) -> PathBuf {
+    std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+}
+
+/// The name of a profile, as [`parse_profile`] reads it.
+pub const fn profile_name(p: Profile) -> &'static str {
+    match p {
+        Profile::Septic => "septic",
+        Profile::Quintic => "quintic",
+    }
+}
+
+/// The name of a path mode, as [`parse_mode`] reads it (the tolerance is a separate setting).
+pub const fn mode_name(m: PathMode) -> &'static str {
+    match m {
+        PathMode::ExactStop => "G61",
+        PathMode::Blend { .. } => "G64",
+    }
+}
+
+/// Parses `septic` / `quintic`.
+pub fn parse_profile(s: &str) -> Result<Profile, ScenarioError> {
+    match s.to_ascii_lowercase().as_str() {
+        "septic" | "paper" => Ok(Profile::Septic),
+        "quintic" => Ok(Profile::Quintic),
+        _ => Err(ScenarioError::Profile {
+            key: "profile".into(),
+            value: s.into(),
+        }),
+    }
+}
+
+/// Parses a path mode: `G61` (exact stop) or `G64` (blend). `what` names the setting.
+pub fn parse_mode(s: &str, what: &str) -> Result<PathMode, ScenarioError> {
+    match s.to_ascii_uppercase().as_str() {
+        "G61" | "EXACT" => Ok(PathMode::ExactStop),
+        "G64" | "BLEND" => Ok(PathMode::Blend { tolerance: None }),
+        _ => Err(ScenarioError::Mode {
+            key: what.into(),
+            value: s.into(),
+        }),
+    }
+}

@@ -1,0 +1,37 @@
+//! Scenarios of ofmpc: what `ofmpc run` and `ofmpc.run` (Python) read and run.
+//!
+//! Two stages, as in ripgrep: [`ScenarioFile`] is what the user wrote (TOML,
+//! serde, defaults filled in, [`Override`]s applied to the document before it
+//! is deserialized), [`Scenario`] is the resolved experiment (robot loaded,
+//! program parsed and timed, reference built, every setting checked).
+//! `examples/scenario.toml` documents every key.
+//!
+//! * [`file`](mod@file): the file's types and loader; its sections `[mpc]`,
+//!   `[simulation]` and `[plant]` are the library's own settings types.
+//! * [`resolve`]: [`Scenario::resolve`], robot and program loading.
+//! * [`runner`]: every payload × controller in parallel ([`run_jobs`]), their
+//!   metrics ([`run_metrics`], [`metrics_json`]).
+//! * [`analysis`]: stability margins ([`analysis::margin`]) and robust tuning
+//!   ([`analysis::robust_tuning`]).
+//! * [`error`]: [`ScenarioError`], which names the file, key and value; the
+//!   front ends (the `ofmpc` command, the Python bindings) add their own advice.
+
+#![warn(missing_docs)]
+
+pub mod analysis;
+pub mod error;
+pub mod file;
+pub mod resolve;
+pub mod runner;
+
+pub use error::{
+    experiment_error, experiment_key, plan_error_message, ScenarioError, SettingNames,
+    SCENARIO_KEYS,
+};
+pub use file::{
+    absolute, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
+    OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
+    ScenarioFile, TimingSection,
+};
+pub use resolve::{load_robot, read_program, Scenario};
+pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};

@@ -1,0 +1,71 @@
+//! The scenario crate without the command: every example scenario resolves,
+//! overrides meet the file's checks, and the closed loop's settings carry the
+//! values of `[payload]`, `[safety]` and `[faults]`.
+
+use ofmpc_scenario::{Override, Scenario, ScenarioError, ScenarioFile};
+use std::path::Path;
+
+fn examples() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+#[test]
+fn every_example_scenario_resolves() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(examples()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let file = ScenarioFile::from_file(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            Scenario::resolve(&file).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 15, "{n} example scenarios");
+}
+
+#[test]
+fn overrides_are_applied_before_the_files_checks() {
+    let path = examples().join("probe-friction-comp.toml");
+    let sets: Vec<Override> = ["mpc.horizon=12", "plant.substep=2e-4", "timing.mode=G64"]
+        .iter()
+        .map(|s| s.parse().unwrap())
+        .collect();
+    let f = ScenarioFile::from_file_with(&path, &sets).unwrap();
+    assert_eq!(f.mpc.horizon, 12);
+    assert_eq!(f.plant.substep, 2e-4);
+    assert_eq!(f.timing.mode, "G64");
+    // Untouched keys keep the file's values, its paths resolved against its folder.
+    assert!(f.mpc.friction_compensation);
+    assert!(f.robot.drives.as_deref().unwrap().is_absolute());
+
+    let unknown: Override = "mpc.horizn=20".parse().unwrap();
+    match ScenarioFile::from_file_with(&path, &[unknown]) {
+        Err(ScenarioError::Override { key, message, .. }) => {
+            assert_eq!(key, "mpc.horizn");
+            assert!(message.contains("unknown field `horizn`"), "{message}");
+        }
+        other => panic!("{:?}", other.map(|_| ())),
+    }
+    assert!(matches!(
+        "no-equals".parse::<Override>(),
+        Err(ScenarioError::OverrideSyntax { .. })
+    ));
+    // The same overrides on a scenario built in code.
+    let f = ScenarioFile::default().with_overrides(&sets).unwrap();
+    assert_eq!((f.mpc.horizon, f.plant.substep), (12, 2e-4));
+}
+
+#[test]
+fn loop_settings_carry_pick_up_safety_and_faults() {
+    let text = "[payload]\npick_up_at_s = 1.5\n[safety]\nmax_joint_error_rad = 0.05\n\
+                [faults]\nnan_at_s = [1.0]\ndropout_s = [[2.0, 2.1]]\n";
+    let f: ScenarioFile = toml::from_str(text).unwrap();
+    let s = f.loop_settings();
+    assert_eq!(s.pick_up_at_s, Some(1.5));
+    assert_eq!(s.max_joint_error_rad, Some(0.05));
+    assert_eq!(s.measurement_faults.nan_at_s, [1.0]);
+    assert_eq!(s.measurement_faults.dropout_s, [[2.0, 2.1]]);
+    assert!(f.records_measurement());
+    assert!(!ScenarioFile::default().records_measurement());
+}
