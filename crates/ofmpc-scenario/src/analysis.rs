@@ -203,27 +203,8 @@ pub fn robust_tuning(
     // 2. The model payload with the largest margin per pair.
     let mut candidates = Vec::new();
     for (&(d, u), iv) in pairs.iter().zip(&intervals) {
-        let Some((lo, hi)) = *iv else { continue };
-        let mut best: Option<(f64, f64)> = None;
-        for i in 0..MODEL_GRID {
-            let m = lo_kg + (hi_kg - lo_kg) * i as f64 / (MODEL_GRID - 1) as f64;
-            let mut model = exp.robot.clone();
-            if m > 0.0 {
-                model.set_payload(Some(Payload::point_mass(m)))?;
-            }
-            let mut amin = f64::INFINITY;
-            let mut amax = f64::NEG_INFINITY;
-            for p in [lo_kg, hi_kg] {
-                let (a0, a1) = inertia_ratio_range(&model, &Payload::point_mass(p), &poses)?;
-                amin = amin.min(a0);
-                amax = amax.max(a1);
-            }
-            let margin = (amin / lo).ln().min((hi / amax).ln());
-            if !matches!(best, Some((_, b)) if b >= margin) {
-                best = Some((m, margin));
-            }
-        }
-        if let Some((m, margin)) = best {
+        let Some(interval) = *iv else { continue };
+        if let Some((m, margin)) = best_model_payload(exp, interval, (lo_kg, hi_kg), &poses)? {
             candidates.push(Candidate {
                 q_dy: d,
                 q_du: u,
@@ -239,30 +220,7 @@ pub fn robust_tuning(
     candidates
         .par_iter_mut()
         .filter(|c| c.margin > 0.0)
-        .for_each(|c| {
-            let mut e = exp.clone();
-            e.mpc = tuning_settings(c.q_dy, c.q_du, c.model_payload_kg);
-            let mut worst = 0.0f64;
-            let mut ok = true;
-            for &k in kinds {
-                for &m in &masses {
-                    match e.run(k, &Payload::point_mass(m), &mut |_, _| {}) {
-                        Ok((r, metrics)) => {
-                            let steady = metrics
-                                .steady_joint_error_max_rad
-                                .iter()
-                                .copied()
-                                .fold(0.0, f64::max);
-                            ok &= r.outcome.is_completed() && steady <= 1e-9;
-                            worst = worst.max(metrics.cartesian_error_rms_mm);
-                        }
-                        Err(_) => ok = false,
-                    }
-                }
-            }
-            c.rms_mm = worst;
-            c.offset_free = ok;
-        });
+        .for_each(|c| simulate_candidate(exp, c, kinds, &masses));
     let chosen = candidates
         .iter()
         .filter(|c| c.offset_free)
@@ -289,4 +247,68 @@ pub fn robust_tuning(
         simulated_kg: masses,
         file,
     })
+}
+
+/// The model payload on a grid over `[lo_kg, hi_kg]` whose inertia-ratio
+/// range over the poses keeps the largest logarithmic margin inside the
+/// stable `interval` of α, with that margin (`None` without a grid point).
+fn best_model_payload(
+    exp: &ofmpc::sim::Experiment,
+    (lo, hi): (f64, f64),
+    (lo_kg, hi_kg): (f64, f64),
+    poses: &[&[f64]],
+) -> Result<Option<(f64, f64)>, ScenarioError> {
+    let mut best: Option<(f64, f64)> = None;
+    for i in 0..MODEL_GRID {
+        let m = lo_kg + (hi_kg - lo_kg) * i as f64 / (MODEL_GRID - 1) as f64;
+        let mut model = exp.robot.clone();
+        if m > 0.0 {
+            model.set_payload(Some(Payload::point_mass(m)))?;
+        }
+        let mut amin = f64::INFINITY;
+        let mut amax = f64::NEG_INFINITY;
+        for p in [lo_kg, hi_kg] {
+            let (a0, a1) = inertia_ratio_range(&model, &Payload::point_mass(p), poses)?;
+            amin = amin.min(a0);
+            amax = amax.max(a1);
+        }
+        let margin = (amin / lo).ln().min((hi / amax).ln());
+        if !matches!(best, Some((_, b)) if b >= margin) {
+            best = Some((m, margin));
+        }
+    }
+    Ok(best)
+}
+
+/// Simulates candidate `c` for every controller of `kinds` at the payloads
+/// `masses`: its worst Cartesian RMS error and whether every run completed
+/// offset-free (steady joint error ≤ 1e-9 rad).
+fn simulate_candidate(
+    exp: &ofmpc::sim::Experiment,
+    c: &mut Candidate,
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) {
+    let mut e = exp.clone();
+    e.mpc = tuning_settings(c.q_dy, c.q_du, c.model_payload_kg);
+    let mut worst = 0.0f64;
+    let mut ok = true;
+    for &k in kinds {
+        for &m in masses {
+            match e.run(k, &Payload::point_mass(m), &mut |_, _| {}) {
+                Ok((r, metrics)) => {
+                    let steady = metrics
+                        .steady_joint_error_max_rad
+                        .iter()
+                        .copied()
+                        .fold(0.0, f64::max);
+                    ok &= r.outcome.is_completed() && steady <= 1e-9;
+                    worst = worst.max(metrics.cartesian_error_rms_mm);
+                }
+                Err(_) => ok = false,
+            }
+        }
+    }
+    c.rms_mm = worst;
+    c.offset_free = ok;
 }

@@ -114,13 +114,63 @@ pub fn execute(
             leftovers.join(", ")
         ));
     }
-    let exp = &scenario.experiment;
-    let jobs: Vec<(ControllerKind, Payload)> = payloads
+    let runs = run_with_progress(scenario, &payloads, &controllers)?;
+    let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
+    let mut w = Writer {
+        dir: &mut dir,
+        report: Report::new(&scenario.file.title),
+        scenario,
+        runs: &runs,
+        metrics: &metrics,
+        payloads: &payloads,
+        controllers: &controllers,
+        files: &files,
+    };
+    w.summary();
+    w.path()?;
+    w.tracking_errors()?;
+    if files.identification {
+        w.identification()?;
+    }
+    if files.drives {
+        w.drives()?;
+    }
+    if files.sweep {
+        w.sweep()?;
+    }
+    w.each_run()?;
+    w.finish()?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", out.display()))?;
+
+    console::print(&summary_text(&metrics))?;
+    console::println(&format!(
+        "{} runs in {:.2} s (wall); results in {}/ (metrics.json, report.html, one folder per run)",
+        runs.len(),
+        started.elapsed().as_secs_f64(),
+        out.display()
+    ))?;
+    let failed: Vec<String> = metrics
         .iter()
-        .flat_map(|p| controllers.iter().map(move |k| (*k, *p)))
+        .filter(|m| m.status == RunStatus::Failed)
+        .map(|m| format!("{}: {}", m.name, m.reason))
         .collect();
+    if !failed.is_empty() {
+        return Err(crate::errors::RunsFailed { runs: failed }.into());
+    }
+    Ok(())
+}
+
+/// Every run of `controllers` × `payloads`, with a progress bar on stderr
+/// when it is a terminal.
+fn run_with_progress(
+    scenario: &Scenario,
+    payloads: &[Payload],
+    controllers: &[ControllerKind],
+) -> anyhow::Result<Vec<Run>> {
+    let jobs = payloads.len() * controllers.len();
     let steps_per_run = scenario.samples_per_run() as u64;
-    let bar = ProgressBar::new(steps_per_run * jobs.len() as u64);
+    let bar = ProgressBar::new(steps_per_run * jobs as u64);
     if std::io::stderr().is_terminal() {
         bar.set_style(
             ProgressStyle::with_template(
@@ -131,113 +181,143 @@ pub fn execute(
     } else {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let runs = run_jobs(scenario, &payloads, &controllers, &|samples| {
-        bar.inc(samples)
-    })?;
+    let runs = run_jobs(scenario, payloads, controllers, &|samples| bar.inc(samples))?;
     bar.finish_and_clear();
-    let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
+    Ok(runs)
+}
 
-    let mut report = Report::new(&scenario.file.title);
-    report.heading("Summary");
-    let robot = &exp.robot;
-    report.paragraph(format!(
-        "Robot {} ({} joints), program {}, path duration {:.2} s sampled at Ts = {} s, hold {} s. \
-         Controllers: {}, \
-         horizon N = {}. The plant carries a point payload at the flange that the controllers' model does not know. \
-         \"Steady\" is the last {} s of the hold.",
-        robot.name(),
-        robot.dof(),
-        scenario.program_name,
-        exp.reference.duration(),
-        exp.reference.ts(),
-        exp.loop_settings.hold_s,
-        controllers_in_words(&controllers),
-        exp.mpc.horizon,
-        exp.loop_settings.steady_window_s,
-    ));
-    report.table(Table {
-        caption: "Summary (metrics.json has every number)".into(),
-        header: SUMMARY_HEADER.iter().map(|s| s.to_string()).collect(),
-        rows: summary_rows(&metrics),
-    });
-    let stopped: Vec<&Run> = runs
-        .iter()
-        .filter(|r| !r.result.outcome.is_completed())
-        .collect();
-    if stopped
-        .iter()
-        .any(|r| r.metrics.status == RunStatus::Diverged)
-    {
-        report.heading("Diverged runs");
-        report.paragraph(diverged_explanation(scenario, &stopped));
-    }
-    if stopped
-        .iter()
-        .any(|r| r.metrics.status == RunStatus::Failed)
-    {
-        report.heading("Failed runs");
-        report.paragraph(
-            "A failed run could not go on (a controller step or the plant's integration failed); its \
-             metrics cover what was recorded before, and metrics that do not exist are null.",
-        );
-    }
-    for r in &stopped {
-        report.paragraph(format!("{}: {}", r.metrics.name, r.result.outcome));
+/// Writes a run's results into the staged folder and its report, section
+/// by section (the files are those of [`RunFiles`]).
+struct Writer<'a> {
+    dir: &'a mut StagedDir,
+    report: Report,
+    scenario: &'a Scenario,
+    runs: &'a [Run],
+    metrics: &'a [RunMetrics],
+    payloads: &'a [Payload],
+    controllers: &'a [ControllerKind],
+    files: &'a RunFiles,
+}
+
+impl Writer<'_> {
+    /// Renders a figure into the folder and the report ([`figure`]).
+    fn figure(&mut self, rel: &str, caption: &str, fig: &Figure) -> anyhow::Result<()> {
+        figure(self.dir, &mut self.report, rel, caption, fig)
     }
 
-    report.heading("The path");
-    figure(
-        &mut dir,
-        &mut report,
-        PATH,
-        "The path: top, isometric and side views, and the joint reference",
-        &figures::path("Path and joint reference", &exp.reference),
-    )?;
-    figure(
-        &mut dir,
-        &mut report,
-        CARTESIAN_REFERENCE,
-        "Fig. 4: the timed Cartesian reference (each segment rest to rest)",
-        &figures::cartesian_reference(
-            "Cartesian reference: position, velocity, acceleration",
-            &scenario.trajectory,
-            exp.reference.ts(),
-        ),
-    )?;
-    report.heading(format!(
-        "Tracking errors of {} (the paper's Fig. 6 and 7)",
-        the_controllers(controllers.len())
-    ));
-    for p in &payloads {
-        let these = records_with_mass(&runs, p.mass);
-        let label = if p.mass == 0.0 {
-            "exact model (no payload)".to_string()
-        } else {
-            format!("payload {} kg unknown to the model", mass_label(p.mass))
-        };
-        let fig_no = if p.mass == 0.0 { "Fig. 6" } else { "Fig. 7" };
-        figure(
-            &mut dir,
-            &mut report,
-            &format!("{}{}", per_payload::JOINT_ERRORS, mass_label(p.mass)),
-            &format!("{fig_no}: joint errors, {label}"),
-            &figures::joint_errors(&format!("Joint errors e = w − q, {label}"), &these),
-        )?;
-        figure(
-            &mut dir,
-            &mut report,
-            &format!("{}{}", per_payload::CARTESIAN_ERRORS, mass_label(p.mass)),
-            &format!("Cartesian errors, {label}"),
-            &figures::cartesian_errors(
-                &format!("Cartesian errors (reference − flange), {label}"),
-                &these,
-            ),
-        )?;
-    }
-    if files.identification {
-        let pick_up = exp.loop_settings.pick_up_at_s;
-        report.heading("Online payload identification (adaptive variants)");
+    /// The summary: the setting in words, the table, why runs stopped.
+    fn summary(&mut self) {
+        let (scenario, metrics, runs) = (self.scenario, self.metrics, self.runs);
+        let exp = &scenario.experiment;
+        let report = &mut self.report;
+        report.heading("Summary");
+        let robot = &exp.robot;
         report.paragraph(format!(
+            "Robot {} ({} joints), program {}, path duration {:.2} s sampled at Ts = {} s, hold {} s. \
+             Controllers: {}, \
+             horizon N = {}. The plant carries a point payload at the flange that the controllers' model does not know. \
+             \"Steady\" is the last {} s of the hold.",
+            robot.name(),
+            robot.dof(),
+            scenario.program_name,
+            exp.reference.duration(),
+            exp.reference.ts(),
+            exp.loop_settings.hold_s,
+            controllers_in_words(self.controllers),
+            exp.mpc.horizon,
+            exp.loop_settings.steady_window_s,
+        ));
+        report.table(Table {
+            caption: "Summary (metrics.json has every number)".into(),
+            header: SUMMARY_HEADER.iter().map(|s| s.to_string()).collect(),
+            rows: summary_rows(metrics),
+        });
+        let stopped: Vec<&Run> = runs
+            .iter()
+            .filter(|r| !r.result.outcome.is_completed())
+            .collect();
+        if stopped
+            .iter()
+            .any(|r| r.metrics.status == RunStatus::Diverged)
+        {
+            report.heading("Diverged runs");
+            report.paragraph(diverged_explanation(scenario, &stopped));
+        }
+        if stopped
+            .iter()
+            .any(|r| r.metrics.status == RunStatus::Failed)
+        {
+            report.heading("Failed runs");
+            report.paragraph(
+                "A failed run could not go on (a controller step or the plant's integration failed); its \
+                 metrics cover what was recorded before, and metrics that do not exist are null.",
+            );
+        }
+        for r in &stopped {
+            report.paragraph(format!("{}: {}", r.metrics.name, r.result.outcome));
+        }
+    }
+
+    /// The path and the timed Cartesian reference (Fig. 4).
+    fn path(&mut self) -> anyhow::Result<()> {
+        let scenario = self.scenario;
+        let exp = &scenario.experiment;
+        self.report.heading("The path");
+        self.figure(
+            PATH,
+            "The path: top, isometric and side views, and the joint reference",
+            &figures::path("Path and joint reference", &exp.reference),
+        )?;
+        self.figure(
+            CARTESIAN_REFERENCE,
+            "Fig. 4: the timed Cartesian reference (each segment rest to rest)",
+            &figures::cartesian_reference(
+                "Cartesian reference: position, velocity, acceleration",
+                &scenario.trajectory,
+                exp.reference.ts(),
+            ),
+        )
+    }
+
+    /// Joint and Cartesian errors per payload (Fig. 6 and 7).
+    fn tracking_errors(&mut self) -> anyhow::Result<()> {
+        let runs = self.runs;
+        self.report.heading(format!(
+            "Tracking errors of {} (the paper's Fig. 6 and 7)",
+            the_controllers(self.controllers.len())
+        ));
+        for p in self.payloads {
+            let these = records_with_mass(runs, p.mass);
+            let label = if p.mass == 0.0 {
+                "exact model (no payload)".to_string()
+            } else {
+                format!("payload {} kg unknown to the model", mass_label(p.mass))
+            };
+            let fig_no = if p.mass == 0.0 { "Fig. 6" } else { "Fig. 7" };
+            self.figure(
+                &format!("{}{}", per_payload::JOINT_ERRORS, mass_label(p.mass)),
+                &format!("{fig_no}: joint errors, {label}"),
+                &figures::joint_errors(&format!("Joint errors e = w − q, {label}"), &these),
+            )?;
+            self.figure(
+                &format!("{}{}", per_payload::CARTESIAN_ERRORS, mass_label(p.mass)),
+                &format!("Cartesian errors, {label}"),
+                &figures::cartesian_errors(
+                    &format!("Cartesian errors (reference − flange), {label}"),
+                    &these,
+                ),
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The adaptive variants' identified mass against time.
+    fn identification(&mut self) -> anyhow::Result<()> {
+        let (exp, runs) = (&self.scenario.experiment, self.runs);
+        let pick_up = exp.loop_settings.pick_up_at_s;
+        self.report
+            .heading("Online payload identification (adaptive variants)");
+        self.report.paragraph(format!(
             "The adaptive variants identify the payload's inertial parameters by recursive least squares \
              from the measured motion and their own torque, and update their model at every sample; they \
              identify for {} s at rest before the path starts (not recorded).{}",
@@ -247,17 +327,15 @@ pub fn execute(
                 None => String::new(),
             }
         ));
-        for p in &payloads {
-            let these = records_with_mass(&runs, p.mass);
+        for p in self.payloads {
+            let these = records_with_mass(runs, p.mass);
             let m = p.mass;
             let label = mass_label(m);
             let truth = move |t: f64| match pick_up {
                 Some(tp) if t < tp => 0.0,
                 _ => m,
             };
-            figure(
-                &mut dir,
-                &mut report,
+            self.figure(
                 &format!("{}{label}", per_payload::IDENTIFICATION),
                 &format!("Error and identified mass against time, payload {label} kg"),
                 &figures::identification(
@@ -267,9 +345,16 @@ pub fn execute(
                 ),
             )?;
         }
+        Ok(())
     }
-    let effects = scenario.file.effects();
-    if files.drives {
+
+    /// Drives, sensors and faults: the counters per run, the torque ratios,
+    /// the measurement errors.
+    fn drives(&mut self) -> anyhow::Result<()> {
+        let (scenario, runs) = (self.scenario, self.runs);
+        let robot = &scenario.experiment.robot;
+        let effects = scenario.file.effects();
+        let report = &mut self.report;
         report.heading("Drives, sensors and faults");
         report.paragraph(format!(
             "This scenario turns on: {}. Counters over each run: `faults` = samples whose \
@@ -308,12 +393,10 @@ pub fn execute(
                 .collect(),
         });
         let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
-        for p in &payloads {
-            let these = records_with_mass(&runs, p.mass);
+        for p in self.payloads {
+            let these = records_with_mass(runs, p.mass);
             let label = mass_label(p.mass);
-            figure(
-                &mut dir,
-                &mut report,
+            self.figure(
                 &format!("{}{label}", per_payload::TORQUE_RATIOS),
                 &format!("Commanded torque relative to the drives' limits, payload {label} kg"),
                 &figures::torque_ratios(
@@ -323,14 +406,13 @@ pub fn execute(
                 ),
             )?;
         }
+        let measured = self.files.measurement;
         for r in runs
             .iter()
-            .filter(|r| files.measurement && r.result.record.has_measurement())
+            .filter(|r| measured && r.result.record.has_measurement())
         {
             let name = &r.metrics.name;
-            figure(
-                &mut dir,
-                &mut report,
+            self.figure(
                 &format!("{name}/{}", per_run::MEASUREMENT_ERROR),
                 &format!("{name}: what the controller was given minus the true position (gaps: lost measurements)"),
                 &figures::measurement_errors(
@@ -339,75 +421,70 @@ pub fn execute(
                 ),
             )?;
         }
+        Ok(())
     }
-    if files.sweep {
-        report.heading("Payload sweep");
-        figure(
-            &mut dir,
-            &mut report,
+
+    /// Steady and RMS errors against payload.
+    fn sweep(&mut self) -> anyhow::Result<()> {
+        let metrics = self.metrics;
+        self.report.heading("Payload sweep");
+        self.figure(
             PAYLOAD_SWEEP,
             "Steady and RMS Cartesian error against payload (markers: diverged runs, at the error when stopped)",
-            &figures::payload_sweep("Cartesian error against payload", &metrics),
-        )?;
+            &figures::payload_sweep("Cartesian error against payload", metrics),
+        )
     }
-    report.heading("Each run: joints and torques (the paper's Fig. 5), Cartesian error");
-    for r in &runs {
-        let name = &r.metrics.name;
-        dir.write(
-            format!("{name}/{TIMESERIES}"),
-            timeseries_csv(&r.result.record).as_bytes(),
-        )?;
-        figure(
-            &mut dir,
-            &mut report,
-            &format!("{name}/{}", per_run::JOINTS_TORQUES),
-            &format!("Fig. 5, {name}: joint coordinates and torques"),
-            &figures::joints_and_torques(&format!("{name}: joints and torques"), &r.result.record),
-        )?;
-        figure(
-            &mut dir,
-            &mut report,
-            &format!("{name}/{}", per_run::CARTESIAN_ERROR),
-            &format!("{name}: Cartesian error"),
-            &figures::cartesian_errors(
-                &format!("{name}: Cartesian error"),
-                &[(kind_name(r.kind), &r.result.record)],
-            ),
-        )?;
-    }
-    dir.write(METRICS, metrics_json(&metrics)?.as_bytes())?;
-    // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
-    // file re-runs from any working directory.
-    let effective = scenario
-        .effective_file(&payloads, &controllers)
-        .to_toml()
-        .context("writing the effective scenario")?;
-    let effective = format!(
-        "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
-    );
-    report.heading("Scenario");
-    report.code(effective.clone());
-    dir.write(SCENARIO, effective.as_bytes())?;
-    dir.write(REPORT, report.to_html()?.as_bytes())?;
-    dir.commit()
-        .with_context(|| format!("moving the results into {}", out.display()))?;
 
-    console::print(&summary_text(&metrics))?;
-    console::println(&format!(
-        "{} runs in {:.2} s (wall); results in {}/ (metrics.json, report.html, one folder per run)",
-        runs.len(),
-        started.elapsed().as_secs_f64(),
-        out.display()
-    ))?;
-    let failed: Vec<String> = metrics
-        .iter()
-        .filter(|m| m.status == RunStatus::Failed)
-        .map(|m| format!("{}: {}", m.name, m.reason))
-        .collect();
-    if !failed.is_empty() {
-        return Err(crate::errors::RunsFailed { runs: failed }.into());
+    /// Each run's time series, joints and torques (Fig. 5), Cartesian error.
+    fn each_run(&mut self) -> anyhow::Result<()> {
+        self.report
+            .heading("Each run: joints and torques (the paper's Fig. 5), Cartesian error");
+        for r in self.runs {
+            let name = &r.metrics.name;
+            self.dir.write(
+                format!("{name}/{TIMESERIES}"),
+                timeseries_csv(&r.result.record).as_bytes(),
+            )?;
+            self.figure(
+                &format!("{name}/{}", per_run::JOINTS_TORQUES),
+                &format!("Fig. 5, {name}: joint coordinates and torques"),
+                &figures::joints_and_torques(
+                    &format!("{name}: joints and torques"),
+                    &r.result.record,
+                ),
+            )?;
+            self.figure(
+                &format!("{name}/{}", per_run::CARTESIAN_ERROR),
+                &format!("{name}: Cartesian error"),
+                &figures::cartesian_errors(
+                    &format!("{name}: Cartesian error"),
+                    &[(kind_name(r.kind), &r.result.record)],
+                ),
+            )?;
+        }
+        Ok(())
     }
-    Ok(())
+
+    /// `metrics.json`, the effective `scenario.toml` and `report.html`.
+    fn finish(mut self) -> anyhow::Result<()> {
+        self.dir
+            .write(METRICS, metrics_json(self.metrics)?.as_bytes())?;
+        // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
+        // file re-runs from any working directory.
+        let effective = self
+            .scenario
+            .effective_file(self.payloads, self.controllers)
+            .to_toml()
+            .context("writing the effective scenario")?;
+        let effective = format!(
+            "# The scenario of this run, every default filled in: `ofmpc run scenario.toml` repeats it.\n{effective}"
+        );
+        self.report.heading("Scenario");
+        self.report.code(effective.clone());
+        self.dir.write(SCENARIO, effective.as_bytes())?;
+        self.dir.write(REPORT, self.report.to_html()?.as_bytes())?;
+        Ok(())
+    }
 }
 
 fn weight_text(w: &ofmpc::control::Weight) -> String {
