@@ -147,25 +147,13 @@ pub struct ScenarioFile {
 /// `[faults]`: the measurement is NaN at the samples at `nan_at_s` (s, path
 /// time); no measurement arrives in the intervals `dropout_s = [[from, to], …]`.
 /// The controller runs on its own prediction over them; metrics.json counts
-/// them (`faults`).
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct FaultsSection {
-    /// Times of invalid (NaN) measurements (s).
-    pub nan_at_s: Vec<f64>,
-    /// Intervals without a measurement, `[from, to]` (s).
-    pub dropout_s: Vec<[f64; 2]>,
-}
+/// them (`faults`). The library's type, deserialized as it is.
+pub type FaultsSection = MeasurementFaults;
 
 /// `[safety]`: when a joint's error passes `max_joint_error_rad`, the robot
 /// brakes to rest and holds within its torque limits; the run ends "stopped".
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SafetySection {
-    /// Joint error limit (rad); off when absent.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_joint_error_rad: Option<f64>,
-}
+/// The library's type, deserialized as it is.
+pub type SafetySection = ofmpc::sim::SafetySettings;
 
 impl Default for ScenarioFile {
     fn default() -> Self {
@@ -270,21 +258,12 @@ impl ScenarioFile {
         Ok(s)
     }
 
-    /// The closed loop's settings: `[simulation]` with the three values it does not
-    /// deserialize filled in from `[payload] pick_up_at_s`, `[safety]
-    /// max_joint_error_rad` and `[faults]`.
+    /// The closed loop's settings: `[simulation]` with the pick-up time of
+    /// `[payload]`, `[safety]` and `[faults]` ([`LoopSettings::with_sections`]).
     pub fn loop_settings(&self) -> LoopSettings {
-        // TODO(#23 sim): `LoopSettings` has three `#[serde(skip)]` fields that the scenario
-        // fills by hand here (the only place); replace this once the library's settings
-        // types carry them (or take them apart from `[simulation]`).
-        let mut s = self.simulation.clone();
-        s.pick_up_at_s = self.payload.pick_up_at_s;
-        s.max_joint_error_rad = self.safety.max_joint_error_rad;
-        s.measurement_faults = MeasurementFaults {
-            nan_at_s: self.faults.nan_at_s.clone(),
-            dropout_s: self.faults.dropout_s.clone(),
-        };
-        s
+        self.simulation
+            .clone()
+            .with_sections(self.payload.pick_up_at_s, &self.safety, &self.faults)
     }
 
     /// The drive, sensor and fault effects this scenario turns on, in its keys' words

@@ -55,6 +55,17 @@ pub struct LoopSettings {
     pub measurement_faults: MeasurementFaults,
 }
 
+/// The safety function of a run: a joint error (of the state the controller
+/// is given) beyond `max_joint_error_rad` brings the robot to a safe stop
+/// ([`super::Supervisor`]). A scenario's `[safety]` section.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SafetySettings {
+    /// Joint error limit (rad); off when absent.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_joint_error_rad: Option<f64>,
+}
+
 /// Faults of the measurement channel, at path times: at the sample at (or
 /// first after) each `nan_at_s` the measurement is NaN; in each
 /// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
@@ -169,6 +180,21 @@ impl LoopSettings {
             }
         }
         self.measurement_faults.validate()
+    }
+
+    /// These settings with the events and checks a scenario keeps in their
+    /// own sections: the payload's pick-up time, the safety function and the
+    /// measurement faults (the fields not read from `[simulation]`).
+    pub fn with_sections(
+        mut self,
+        pick_up_at_s: Option<f64>,
+        safety: &SafetySettings,
+        faults: &MeasurementFaults,
+    ) -> Self {
+        self.pick_up_at_s = pick_up_at_s;
+        self.max_joint_error_rad = safety.max_joint_error_rad;
+        self.measurement_faults = faults.clone();
+        self
     }
 
     /// The [`Supervisor`]'s part of these settings.

@@ -22,7 +22,8 @@ pub use sensor::Sensor;
 
 pub use closed_loop::{
     record_columns, run_closed_loop, run_closed_loop_with, ClosedLoop, LoopSettings,
-    MeasurementFaults, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
+    MeasurementFaults, RunEvents, RunResult, SafetySettings, MAX_IDENTIFICATION_S,
+    SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
