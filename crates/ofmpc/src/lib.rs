@@ -1,7 +1,7 @@
 //! # ofmpc — offset-free model predictive control of serial robots
 //!
 //! Pure computation, no printing. Data flow, one module per concept:
-//! G-code text → [`gcode`] → [`motion`] (path segments, corner blending, timing, joint
+//! G-code text → [`gcode`] (moves made of [`geometry`] segments) → [`motion`] (corner blending, timing, joint
 //! reference by IK; one entry point [`motion::plan`]) → controller (robot model) → torque → plant (robot model +
 //! payload) → measurement → record → metrics.
 //!
@@ -45,6 +45,7 @@ pub mod analysis;
 pub mod control;
 pub mod dynamics;
 pub mod gcode;
+pub mod geometry;
 pub mod ident;
 pub mod ik;
 pub mod motion;

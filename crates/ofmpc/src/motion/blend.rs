@@ -14,7 +14,7 @@
 //! without a stop. Corners that involve an arc (G02/G03) are not rounded: the path stops
 //! there (exact stop), as it does at a tolerance of 0 and at reversals.
 
-use crate::motion::segment::Segment;
+use crate::geometry::Segment;
 use nalgebra::Vector3;
 
 /// Angle (rad) below which two moves count as tangent-continuous: no blend, no stop.
@@ -23,19 +23,9 @@ pub const TANGENT_ANGLE: f64 = 1e-6;
 /// Turning angle (rad) above which a corner counts as a reversal: the path stops there.
 pub const REVERSAL_ANGLE: f64 = std::f64::consts::PI - 1e-3;
 
-/// How consecutive moves are joined.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub enum PathMode {
-    /// `G61`: every move runs rest to rest with the septic law (the paper's).
-    #[default]
-    ExactStop,
-    /// `G64 P<tol>`: corners are rounded within `tolerance` (m) and the path does not stop
-    /// where it does not have to; `None` (`G64` without `P`): the planner's default tolerance.
-    Blend {
-        /// Largest distance (m) between the path and a programmed corner.
-        tolerance: Option<f64>,
-    },
-}
+/// The path modes `G61` / `G64` are a program's modal state, read by [`crate::gcode`]; the
+/// blending here is what `G64` asks for.
+pub use crate::gcode::PathMode;
 
 /// A circular arc in any plane: `p(φ) = c + R (cos φ e₁ + sin φ e₂)`, `φ = s/R ∈ [0, sweep]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
