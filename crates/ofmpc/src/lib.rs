@@ -48,6 +48,7 @@ pub mod gcode;
 pub mod geometry;
 pub mod ident;
 pub mod ik;
+mod linalg;
 pub mod motion;
 pub mod robot;
 pub mod sim;
