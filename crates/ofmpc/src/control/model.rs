@@ -236,11 +236,7 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Term
 mod tests {
     use super::*;
 
-    fn spd(n: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        let m = DMatrix::<f64>::from_fn(n, n, |_, _| crate::linalg::random::centered(&mut s));
-        &m * m.transpose() + DMatrix::identity(n, n) * 0.1
-    }
+    use crate::linalg::random::spd_matrix as spd;
 
     #[test]
     fn f0_is_minus_h_inverse_c_and_torque_roundtrips() {

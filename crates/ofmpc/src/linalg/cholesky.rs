@@ -106,11 +106,7 @@ mod tests {
     use super::*;
     use nalgebra::{DMatrix, DVector};
 
-    fn spd(n: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        let m = DMatrix::<f64>::from_fn(n, n, |_, _| crate::linalg::random::centered(&mut s));
-        &m * m.transpose() + DMatrix::identity(n, n) * 0.1
-    }
+    use crate::linalg::random::spd_matrix as spd;
 
     /// The row-oriented loop the module doc compares with (the former copy in the forward
     /// dynamics and the numeric IK).

@@ -27,3 +27,12 @@ pub(crate) fn symmetric(s: &mut u64) -> f64 {
 pub(crate) fn centered(s: &mut u64) -> f64 {
     uniform(s) - 0.5
 }
+
+/// A random symmetric positive definite `n×n` test matrix `M Mᵀ + 0.1 I`, `M` of
+/// [`centered`] entries (filled column by column) from the seed `seed`.
+#[cfg(test)]
+pub(crate) fn spd_matrix(n: usize, seed: u64) -> nalgebra::DMatrix<f64> {
+    let mut s = seed;
+    let m = nalgebra::DMatrix::<f64>::from_fn(n, n, |_, _| centered(&mut s));
+    &m * m.transpose() + nalgebra::DMatrix::identity(n, n) * 0.1
+}
