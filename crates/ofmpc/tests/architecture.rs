@@ -127,10 +127,12 @@ fn code_only(src: &str) -> String {
                 out.push(blank(b[i]));
                 i += 1;
             }
-        } else if c == b'"' {
+        } else if c == b'"' || (c == b'\'' && is_char_literal(&b[i..])) {
+            // A string literal, or a character literal ('x', '\n', '\u{…}', not a lifetime):
+            // blank up to the closing quote, escapes included.
             out.push(b' ');
             i += 1;
-            while i < b.len() && b[i] != b'"' {
+            while i < b.len() && b[i] != c {
                 if b[i] == b'\\' {
                     out.push(b' ');
                     i += 1;
@@ -142,30 +144,30 @@ fn code_only(src: &str) -> String {
             }
             out.push(b' ');
             i += 1;
-        } else if c == b'\''
-            && (b.get(i + 2) == Some(&b'\'')
-                || (b.get(i + 1) == Some(&b'\\')
-                    && b[i + 2..].iter().take(10).any(|&x| x == b'\'')))
-        {
-            // A character literal ('x', '\n', '\u{…}'), not a lifetime.
-            out.push(b' ');
-            i += 1;
-            while i < b.len() && b[i] != b'\'' {
-                if b[i] == b'\\' {
-                    out.push(b' ');
-                    i += 1;
-                }
-                out.push(b' ');
-                i += 1;
-            }
-            out.push(b' ');
-            i += 1;
         } else {
             out.push(c);
             i += 1;
         }
     }
     String::from_utf8(out).unwrap()
+}
+
+/// Whether the `'` at the start of `b` opens a character literal (else it is a lifetime or a
+/// label): an escape, or one UTF-8 character followed by `'`.
+fn is_char_literal(b: &[u8]) -> bool {
+    match b.get(1) {
+        Some(b'\\') => true,
+        Some(&lead) => {
+            let len = match lead {
+                0x00..=0x7f => 1,
+                0xc0..=0xdf => 2,
+                0xe0..=0xef => 3,
+                _ => 4,
+            };
+            b.get(1 + len) == Some(&b'\'')
+        }
+        None => false,
+    }
 }
 
 /// The top-level modules `lib.rs` declares.
@@ -428,12 +430,13 @@ fn modules_reference_only_lower_layers() {
 fn the_reference_finder_reads_groups_chains_and_skips_comments() {
     let code = code_only(
         "// crate::a\n/* crate::b /* nested */ crate::c */ let s = \"crate::d\"; let c = '\"';\n\
-         use crate::{e, f::{g, h}, i as j};\nlet r = r#\"crate::k\"#; crate::l::m();\n",
+         use crate::{e, f::{g, h}, i as j};\nlet r = r#\"crate::k\"#; crate::l::m();\n\
+         fn f<'a>(x: &'a u8) -> char { 'μ' } crate::n::p();",
     );
     assert!(!code.contains("crate::a") && !code.contains("crate::b") && !code.contains("crate::c"));
     assert!(!code.contains("crate::d") && !code.contains("crate::k"));
-    assert!(code.contains("crate::l::m"));
-    assert_eq!(code.lines().count(), 4);
+    assert!(code.contains("crate::l::m") && code.contains("crate::n::p"));
+    assert_eq!(code.lines().count(), 5);
     let at = code.find("crate::{").unwrap();
     assert_eq!(group_names(&code[at + 8..]), ["e", "f", "i"]);
 }
