@@ -16,6 +16,9 @@ use ofmpc::robot::Robot;
 use std::hint::black_box;
 use std::time::Duration;
 
+#[path = "../tests/common/rng.rs"]
+mod rng;
+
 /// One whole step (model terms, f0, ZOH, the least-squares problem and its
 /// solve) for every controller, both solvers, N = 5 … 200. Benchmark ids:
 /// `step_irb140/<controller>-<solver>/<N>`. `OFMPC_BENCH_KINDS=second`
@@ -94,13 +97,8 @@ fn solve(c: &mut Criterion) {
             lsq_flops(p, &vec![m; p]) as f64 / 1e6,
             lsq_flops(p, &profile) as f64 / 1e6
         );
-        let mut seed = 1u64;
-        let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut lcg = rng::Lcg(1);
+        let mut rnd = move || lcg.uniform() - 0.5;
         let a: Vec<f64> = (0..m * p).map(|_| rnd()).collect();
         let b: Vec<f64> = (0..m).map(|_| rnd()).collect();
         // The incremental algorithms' layout after the tracking rows'

@@ -1,7 +1,7 @@
 //! # ofmpc — offset-free model predictive control of serial robots
 //!
 //! Pure computation, no printing. Data flow, one module per concept:
-//! G-code text → [`gcode`] → [`motion`] (path segments, corner blending, timing, joint
+//! G-code text → [`gcode`] (moves made of [`geometry`] segments) → [`motion`] (corner blending, timing, joint
 //! reference by IK; one entry point [`motion::plan`]) → [`control`] (the predictive
 //! controllers on their robot model) → [`sim`] (the closed loop as public stages:
 //! [`sim::Sensor`] → [`sim::Supervisor`] → [`sim::Estimator`] → controller →
@@ -63,8 +63,10 @@ pub mod analysis;
 pub mod control;
 pub mod dynamics;
 pub mod gcode;
+pub mod geometry;
 pub mod ident;
 pub mod ik;
+mod linalg;
 pub mod motion;
 pub mod robot;
 pub mod sim;

@@ -295,12 +295,7 @@ impl std::ops::Add for Inertia {
 mod tests {
     use super::*;
 
-    fn rnd(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    use crate::linalg::random::symmetric as rnd;
     fn v3(s: &mut u64) -> Vector3<f64> {
         Vector3::new(rnd(s), rnd(s), rnd(s))
     }

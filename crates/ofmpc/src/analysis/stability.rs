@@ -34,6 +34,7 @@
 
 use crate::control::{new_controller, ControllerKind, MpcSettings, SettingsError, StepError};
 use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
+use crate::linalg::{random, rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Payload, Robot};
 use nalgebra::{DMatrix, DVector};
 
@@ -156,27 +157,18 @@ impl ScaledPlant {
         Some(chol.solve(&rhs) * self.alpha)
     }
 
-    /// Advances `x = [q; q̇]` by `ts` under constant `tau`.
+    /// Advances `x = [q; q̇]` by `ts` under constant `tau` (RK4 substeps, [`crate::linalg`]).
     fn step(&mut self, x: &mut [f64], tau: &[f64], ts: f64, substeps: usize) -> Option<()> {
         let n = tau.len();
         let h = ts / substeps as f64;
+        let mut work = vec![0.0; RK4_WORK_PER_DOF * n];
+        let (q, v) = x[..2 * n].split_at_mut(n);
         for _ in 0..substeps {
-            let q = x[..n].to_vec();
-            let v = x[n..].to_vec();
-            let k1 = self.accel(&q, &v, tau)?;
-            let q2: Vec<f64> = (0..n).map(|i| q[i] + 0.5 * h * v[i]).collect();
-            let v2: Vec<f64> = (0..n).map(|i| v[i] + 0.5 * h * k1[i]).collect();
-            let k2 = self.accel(&q2, &v2, tau)?;
-            let q3: Vec<f64> = (0..n).map(|i| q[i] + 0.5 * h * v2[i]).collect();
-            let v3: Vec<f64> = (0..n).map(|i| v[i] + 0.5 * h * k2[i]).collect();
-            let k3 = self.accel(&q3, &v3, tau)?;
-            let q4: Vec<f64> = (0..n).map(|i| q[i] + h * v3[i]).collect();
-            let v4: Vec<f64> = (0..n).map(|i| v[i] + h * k3[i]).collect();
-            let k4 = self.accel(&q4, &v4, tau)?;
-            for i in 0..n {
-                x[i] = q[i] + h / 6.0 * (v[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
-                x[n + i] = v[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
+            rk4_second_order_step(q, v, h, &mut work, |q, v, a| {
+                a.copy_from_slice(self.accel(q, v, tau).ok_or(())?.as_slice());
+                Ok::<(), ()>(())
+            })
+            .ok()?;
         }
         x.iter().all(|v| v.is_finite()).then_some(())
     }
@@ -191,15 +183,12 @@ fn memory(kind: ControllerKind) -> (bool, bool) {
     }
 }
 
-/// A small deterministic generator for the perturbations.
+/// A small deterministic generator for the perturbations ([`crate::linalg::random`]).
 struct Lcg(u64);
 impl Lcg {
+    /// Uniform in `[−1, 1)`.
     fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        random::symmetric(&mut self.0)
     }
 }
 

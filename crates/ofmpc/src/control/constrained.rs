@@ -42,6 +42,7 @@
 use super::dense::dot;
 use super::lsq::LsqWorkspace;
 use super::model::LinearLikeModel;
+use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
 
 /// Relative margin kept inside the limits so that rounding in `τ = H u + g`
 /// never crosses them.
@@ -389,7 +390,7 @@ pub fn solve_box_qp(
         for (a, &fa) in w.free[..nf].iter().enumerate() {
             w.rhs[a] = lin[fa] - dot(&hess[fa * p..fa * p + p], &w.za[..p]);
         }
-        solve_factored(nf, p, &w.l, &mut w.rhs[..nf]);
+        cholesky_solve_in_place_dot(nf, p, &w.l, &mut w.rhs[..nf]);
         // Largest step towards the subproblem's optimum that stays in the box.
         let mut alpha = 1.0f64;
         let mut block: Option<(usize, usize, i8)> = None;
@@ -469,41 +470,7 @@ fn factor_free(p: usize, hess: &[f64], free: &[usize], l: &mut [f64]) -> bool {
             l[b * p + a] = hess[fb * p + fa];
         }
     }
-    for j in 0..nf {
-        for k in 0..j {
-            let ljk = l[k * p + j];
-            let (left, right) = l.split_at_mut(j * p);
-            let colk = &left[k * p + j..k * p + nf];
-            for (x, y) in right[j..nf].iter_mut().zip(colk) {
-                *x -= ljk * y;
-            }
-        }
-        let d = l[j * p + j];
-        if !(d > 0.0 && d.is_finite()) {
-            return false;
-        }
-        let d = d.sqrt();
-        l[j * p + j] = d;
-        for v in &mut l[j * p + j + 1..j * p + nf] {
-            *v /= d;
-        }
-    }
-    true
-}
-
-/// Solves `L Lᵀ x = b` in place (`L` n×n lower, leading dimension `ld`).
-fn solve_factored(n: usize, ld: usize, l: &[f64], b: &mut [f64]) {
-    for j in 0..n {
-        let zj = b[j] / l[j * ld + j];
-        b[j] = zj;
-        for (bi, li) in b[j + 1..n].iter_mut().zip(&l[j * ld + j + 1..j * ld + n]) {
-            *bi -= li * zj;
-        }
-    }
-    for i in (0..n).rev() {
-        let s = super::dense::dot(&l[i * ld + i + 1..i * ld + n], &b[i + 1..n]);
-        b[i] = (b[i] - s) / l[i * ld + i];
-    }
+    cholesky_in_place(nf, p, l).is_ok()
 }
 
 /// Deletes row and column `k` of the n×n factor (`L Lᵀ = P_FF` without
@@ -564,12 +531,7 @@ fn append_to_factor(n: usize, ld: usize, l: &mut [f64], k: &mut [f64], pii: f64)
 mod tests {
     use super::*;
 
-    fn lcg(s: &mut u64) -> f64 {
-        *s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    use crate::linalg::random::symmetric as lcg;
 
     /// `MᵀM + eps·I` (p×p column-major) for a random `M` with entries in
     /// [−1, 1].

@@ -83,26 +83,9 @@ pub(crate) fn axpy(s: f64, x: &[f64], y: &mut [f64]) {
     }
 }
 
-/// Dot product with eight independent accumulators so that it vectorizes.
-#[inline(always)]
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let len = a.len().min(b.len());
-    let (a, b) = (&a[..len], &b[..len]);
-    let ca = a.chunks_exact(8);
-    let cb = b.chunks_exact(8);
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    let mut acc = [0.0f64; 8];
-    for (x, y) in ca.zip(cb) {
-        for q in 0..8 {
-            acc[q] += x[q] * y[q];
-        }
-    }
-    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    for (x, y) in ra.iter().zip(rb) {
-        s += x * y;
-    }
-    s
-}
+/// Dot product with eight independent accumulators so that it vectorizes (shared with the
+/// Cholesky back substitution of [`crate::linalg`]).
+pub(crate) use crate::linalg::dot;
 
 /// `true` iff every entry is finite. Branch-free over 8 lanes (`0·x` is ±0
 /// for finite `x` and NaN for ±∞ and NaN), so it vectorizes.

@@ -1,6 +1,8 @@
 //! What a controller knows about the drives: torque limits and friction
 //! estimates per joint (from the drives file, [`crate::robot::Drives`]).
 
+/// Which quantity of a [`DriveModel`] (defined next to the [`SettingsError`] that names it).
+pub use super::settings::DriveQuantity;
 use super::settings::SettingsError;
 use crate::robot::Robot;
 
@@ -76,30 +78,5 @@ impl DriveModel {
             self.coulomb_velocity_rad_s,
             v,
         )
-    }
-}
-
-/// Which quantity of a [`DriveModel`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum DriveQuantity {
-    /// Peak torque.
-    MaxTorque,
-    /// Coulomb friction.
-    Coulomb,
-    /// Viscous friction.
-    Viscous,
-    /// Velocity scale of the smoothed Coulomb friction.
-    CoulombVelocity,
-}
-
-impl std::fmt::Display for DriveQuantity {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            DriveQuantity::MaxTorque => "peak torque",
-            DriveQuantity::Coulomb => "Coulomb friction estimate",
-            DriveQuantity::Viscous => "viscous friction estimate",
-            DriveQuantity::CoulombVelocity => "Coulomb friction velocity scale",
-        })
     }
 }

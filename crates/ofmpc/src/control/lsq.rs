@@ -645,12 +645,7 @@ mod tests {
     use super::*;
     use nalgebra::{DMatrix, DVector};
 
-    fn rng(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    use crate::linalg::random::symmetric as rng;
 
     fn solve_dense(a: &DMatrix<f64>, b: &DVector<f64>) -> (Vec<f64>, LsqInfo) {
         let mut ws = LsqWorkspace::new(a.nrows(), a.ncols()).unwrap();

@@ -5,6 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use crate::dynamics::JointSpaceDynamics;
+use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
 
 /// Why the model terms of one sample cannot be used.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
@@ -135,14 +136,20 @@ impl LinearLikeModel {
                 return Err(TermsError::NonFiniteTerm { term, index });
             }
         }
-        cholesky_in_place(self.n, self.h.as_slice(), self.chol.as_mut_slice())?;
+        let n = self.n;
+        self.chol.as_mut_slice()[..n * n].copy_from_slice(&self.h.as_slice()[..n * n]);
+        cholesky_in_place(n, n, self.chol.as_mut_slice()).map_err(|e| {
+            TermsError::InertiaNotPositiveDefinite {
+                pivot: e.pivot,
+                value: e.value,
+            }
+        })?;
         // f0 = −H⁻¹ C: solve L Lᵀ f0 = −C column by column.
         self.f0.copy_from(&self.c);
-        let n = self.n;
         let l = self.chol.as_slice();
         for col in self.f0.as_mut_slice().chunks_exact_mut(n) {
             col.iter_mut().for_each(|v| *v = -*v);
-            cholesky_solve_in_place(n, l, col);
+            cholesky_solve_in_place_dot(n, n, l, col);
         }
         Ok(())
     }
@@ -188,7 +195,7 @@ impl LinearLikeModel {
         for ((ui, ti), gi) in u.iter_mut().zip(tau).zip(self.g.iter()) {
             *ui = ti - gi;
         }
-        cholesky_solve_in_place(self.n, self.chol.as_slice(), u);
+        cholesky_solve_in_place_dot(self.n, self.n, self.chol.as_slice(), u);
         Ok(())
     }
 }
@@ -208,7 +215,7 @@ impl LinearLikeModel {
 
     pub(crate) fn solve_h_in_place(&self, b: &mut [f64]) {
         if b.len() == self.n {
-            cholesky_solve_in_place(self.n, self.chol.as_slice(), b);
+            cholesky_solve_in_place_dot(self.n, self.n, self.chol.as_slice(), b);
         }
     }
 }
@@ -225,66 +232,11 @@ fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), Term
     }
 }
 
-/// Cholesky factorization `H = L Lᵀ` of an n×n SPD matrix (column-major,
-/// lower triangle read), written into the lower triangle of `l`.
-pub(crate) fn cholesky_in_place(n: usize, h: &[f64], l: &mut [f64]) -> Result<(), TermsError> {
-    l[..n * n].copy_from_slice(&h[..n * n]);
-    for j in 0..n {
-        // Column j: l_jj = sqrt(h_jj − Σ_k<j l_jk²), l_ij = (h_ij − Σ_k<j l_ik l_jk)/l_jj.
-        for k in 0..j {
-            let ljk = l[k * n + j];
-            let (left, right) = l.split_at_mut(j * n);
-            let colk = &left[k * n..k * n + n];
-            let colj = &mut right[..n];
-            for i in j..n {
-                colj[i] -= ljk * colk[i];
-            }
-        }
-        let d = l[j * n + j];
-        // Also catches NaN.
-        if d.is_nan() || d <= 0.0 || d.is_infinite() {
-            return Err(TermsError::InertiaNotPositiveDefinite { pivot: j, value: d });
-        }
-        let d = d.sqrt();
-        l[j * n + j] = d;
-        for v in &mut l[j * n + j + 1..j * n + n] {
-            *v /= d;
-        }
-    }
-    Ok(())
-}
-
-/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`].
-pub(crate) fn cholesky_solve_in_place(n: usize, l: &[f64], b: &mut [f64]) {
-    // Forward: L z = b (column-oriented).
-    for j in 0..n {
-        let zj = b[j] / l[j * n + j];
-        b[j] = zj;
-        for i in j + 1..n {
-            b[i] -= l[j * n + i] * zj;
-        }
-    }
-    // Backward: Lᵀ x = z (row i of Lᵀ is column i of L).
-    for i in (0..n).rev() {
-        let s = super::dense::dot(&l[i * n + i + 1..i * n + n], &b[i + 1..n]);
-        b[i] = (b[i] - s) / l[i * n + i];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn spd(n: usize, seed: u64) -> DMatrix<f64> {
-        let mut s = seed;
-        let m = DMatrix::<f64>::from_fn(n, n, |_, _| {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        });
-        &m * m.transpose() + DMatrix::identity(n, n) * 0.1
-    }
+    use crate::linalg::random::spd_matrix as spd;
 
     #[test]
     fn f0_is_minus_h_inverse_c_and_torque_roundtrips() {

@@ -421,7 +421,7 @@ pub enum SettingsError {
     #[error("the drive data give {got} values of the {what} but the robot has {expected} joints")]
     DriveModelLength {
         /// Which quantity.
-        what: super::drive_model::DriveQuantity,
+        what: DriveQuantity,
         /// Joints.
         expected: usize,
         /// Values given.
@@ -431,7 +431,7 @@ pub enum SettingsError {
     #[error("the {what} of joint {} is {value}: limits must be > 0 (or infinite), friction finite and >= 0", index + 1)]
     DriveModelValue {
         /// Which quantity.
-        what: super::drive_model::DriveQuantity,
+        what: DriveQuantity,
         /// 0-based joint.
         index: usize,
         /// The value.
@@ -465,4 +465,29 @@ pub enum SettingsError {
     /// The payload estimator's tuning cannot be used.
     #[error(transparent)]
     Estimator(#[from] crate::ident::RlsSettingsError),
+}
+
+/// Which quantity of a [`DriveModel`](super::DriveModel) (in a [`SettingsError`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum DriveQuantity {
+    /// Peak torque.
+    MaxTorque,
+    /// Coulomb friction.
+    Coulomb,
+    /// Viscous friction.
+    Viscous,
+    /// Velocity scale of the smoothed Coulomb friction.
+    CoulombVelocity,
+}
+
+impl std::fmt::Display for DriveQuantity {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            DriveQuantity::MaxTorque => "peak torque",
+            DriveQuantity::Coulomb => "Coulomb friction estimate",
+            DriveQuantity::Viscous => "viscous friction estimate",
+            DriveQuantity::CoulombVelocity => "Coulomb friction velocity scale",
+        })
+    }
 }

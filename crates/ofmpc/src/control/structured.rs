@@ -928,12 +928,7 @@ mod tests {
     use super::*;
     use nalgebra::{DMatrix, DVector};
 
-    fn rng(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
+    use crate::linalg::random::symmetric as rng;
 
     fn random_problem(nu: usize, nz: usize, nq: usize, nh: usize, seed: &mut u64) -> StageLq {
         let mut st = StageLq::new(nu, nz, nq, nh);

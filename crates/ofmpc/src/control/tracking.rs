@@ -327,12 +327,7 @@ mod tests {
     #[test]
     fn written_rows_are_l_times_g1_in_the_permuted_layout() {
         let mut seed = 3u64;
-        let mut rnd = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
-        };
+        let mut rnd = move || crate::linalg::random::centered(&mut seed);
         for (n, nh, ramp) in [
             (2, 4, true),
             (6, 10, true),

@@ -299,12 +299,7 @@ mod tests {
     }
 
     fn random(n: usize, seed: &mut u64) -> DMatrix<f64> {
-        DMatrix::from_fn(n, n, |_, _| {
-            *seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        })
+        DMatrix::from_fn(n, n, |_, _| crate::linalg::random::symmetric(seed))
     }
 
     fn rel(a: &DMatrix<f64>, b: &DMatrix<f64>) -> f64 {

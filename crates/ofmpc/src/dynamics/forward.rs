@@ -3,6 +3,7 @@
 use super::rnea::rnea_unchecked;
 use super::terms::crba;
 use super::{check, check_ws, finite_result, Workspace};
+use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use crate::robot::{ModelError, Robot};
 use nalgebra::DVector;
 
@@ -28,44 +29,21 @@ pub fn forward_dynamics<'w>(
         ws.qdd[i] = tau[i] - ws.tau[i];
     }
     crba(robot, ws, q)?;
-    // In-place Cholesky H = L Lᵀ (lower triangle of ws.chol).
+    // Cholesky H = L Lᵀ (lower triangle of ws.chol), then L Lᵀ q̈ = τ − h in ws.qdd.
+    // Only the lower triangle is copied: the upper one of ws.chol stays as it was (zero).
     for j in 0..n {
-        let mut d = ws.h[(j, j)];
-        for k in 0..j {
-            d -= ws.chol[(j, k)] * ws.chol[(j, k)];
-        }
-        if d <= 0.0 || !d.is_finite() {
-            return Err(ModelError::NotPositiveDefinite {
-                joint: j,
-                pivot: d,
-                with_payload: robot.payload().is_some_and(|p| p.mass > 0.0),
-            });
-        }
-        let l = d.sqrt();
-        ws.chol[(j, j)] = l;
-        for i in j + 1..n {
-            let mut s = ws.h[(i, j)];
-            for k in 0..j {
-                s -= ws.chol[(i, k)] * ws.chol[(j, k)];
-            }
-            ws.chol[(i, j)] = s / l;
+        for i in j..n {
+            ws.chol[(i, j)] = ws.h[(i, j)];
         }
     }
-    // Solve L y = b, then Lᵀ x = y, in ws.qdd.
-    for i in 0..n {
-        let mut s = ws.qdd[i];
-        for k in 0..i {
-            s -= ws.chol[(i, k)] * ws.qdd[k];
-        }
-        ws.qdd[i] = s / ws.chol[(i, i)];
+    if let Err(e) = cholesky_in_place(n, n, ws.chol.as_mut_slice()) {
+        return Err(ModelError::NotPositiveDefinite {
+            joint: e.pivot,
+            pivot: e.value,
+            with_payload: robot.payload().is_some_and(|p| p.mass > 0.0),
+        });
     }
-    for i in (0..n).rev() {
-        let mut s = ws.qdd[i];
-        for k in i + 1..n {
-            s -= ws.chol[(k, i)] * ws.qdd[k];
-        }
-        ws.qdd[i] = s / ws.chol[(i, i)];
-    }
+    cholesky_solve_in_place(n, n, ws.chol.as_slice(), ws.qdd.as_mut_slice());
     finite_result("qdd", ws.qdd.as_slice())?;
     Ok(&ws.qdd)
 }

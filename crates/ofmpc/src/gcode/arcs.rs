@@ -1,11 +1,12 @@
-//! Arc blocks (G02/G03): centre from I/J/K offsets or from R, the radius check, and the hint
-//! naming the plane the offsets would fit.
+//! Arc blocks (G02/G03): centre from I/J/K offsets or from R (the circle itself:
+//! [`crate::geometry::arc`]), the radius check, and the hint naming the plane the offsets
+//! would fit.
 
 use super::codes::{Args, Motion};
 use super::interpreter::Interpreter;
 use super::lexer::Word;
 use super::{arc_tolerance, err, GcodeError, GcodeErrorKind};
-use crate::motion::segment::{ArcDirection, ArcError, Plane, Segment, CLOSED_ARC_TOLERANCE};
+use crate::geometry::{center_from_radius, ArcDirection, ArcError, Plane, RadiusArcError, Segment};
 use nalgebra::Vector3;
 
 impl Interpreter {
@@ -23,66 +24,44 @@ impl Interpreter {
     ) -> Result<Segment, GcodeError> {
         use GcodeErrorKind::*;
         let plane = self.plane;
-        let (u, v, _) = plane.axes();
         let radius = r.value * self.scale();
-        let (du, dv) = (end[u] - start[u], end[v] - start[v]);
-        let chord = du.hypot(dv);
-        if radius == 0.0 {
-            return Err(err(
-                line,
-                r.col,
-                Arc,
-                r.text,
-                "arc radius R is zero",
-                "give the radius (negative for the long way round, more than 180°)",
-            ));
-        }
-        if chord <= CLOSED_ARC_TOLERANCE {
-            return Err(err(
-                line,
-                col,
-                Arc,
-                line_text,
-                format!(
+        let tol = arc_tolerance(self.inch);
+        let center =
+            center_from_radius(start, end, plane, radius, dir, tol).map_err(|e| match e {
+                RadiusArcError::ZeroRadius => err(
+                    line,
+                    r.col,
+                    Arc,
+                    r.text,
+                    "arc radius R is zero",
+                    "give the radius (negative for the long way round, more than 180°)",
+                ),
+                RadiusArcError::ZeroChord => err(
+                    line,
+                    col,
+                    Arc,
+                    line_text,
+                    format!(
                     "{} with R and a zero-length arc: start and end coincide in the {} plane ({})",
                     mode.code(),
                     plane.name(),
                     plane.gcode()
                 ),
-                "R cannot describe a full circle: give the centre with I/J/K offsets",
-            ));
-        }
-        let half = chord / 2.0;
-        let tol = arc_tolerance(self.inch);
-        let h2 = radius * radius - half * half;
-        let h = if h2 >= 0.0 {
-            h2.sqrt()
-        } else if radius.abs() >= half - tol {
-            0.0
-        } else {
-            return Err(err(
-                line,
-                r.col,
-                Arc,
-                line_text,
-                format!(
-                    "|R| = {:.4} mm is less than half the chord ({:.4} mm)",
-                    radius.abs() * 1e3,
-                    half * 1e3
+                    "R cannot describe a full circle: give the centre with I/J/K offsets",
                 ),
-                "increase R or move the end point: no circle of that radius joins the points",
-            ));
-        };
-        // Centre to the left of the chord (seen from +normal) for a short CCW or a long CW arc.
-        let left = matches!(
-            (dir, radius > 0.0),
-            (ArcDirection::CounterClockwise, true) | (ArcDirection::Clockwise, false)
-        );
-        let sgn = if left { 1.0 } else { -1.0 };
-        let (tu, tv) = (du / chord, dv / chord);
-        let mut center = start;
-        center[u] = start[u] + du / 2.0 - sgn * h * tv;
-        center[v] = start[v] + dv / 2.0 + sgn * h * tu;
+                RadiusArcError::RadiusBelowHalfChord { radius, half_chord } => err(
+                    line,
+                    r.col,
+                    Arc,
+                    line_text,
+                    format!(
+                        "|R| = {:.4} mm is less than half the chord ({:.4} mm)",
+                        radius * 1e3,
+                        half_chord * 1e3
+                    ),
+                    "increase R or move the end point: no circle of that radius joins the points",
+                ),
+            })?;
         Segment::arc(start, center, end, plane, dir).map_err(|e| arc_error(e, line, col, line_text))
     }
 

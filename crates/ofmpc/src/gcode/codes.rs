@@ -2,7 +2,7 @@
 
 use super::lexer::Word;
 use super::{err, GcodeError, GcodeErrorKind};
-use crate::motion::segment::Plane;
+use crate::geometry::Plane;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Motion {

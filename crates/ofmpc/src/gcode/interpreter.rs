@@ -4,11 +4,10 @@
 use super::codes::{classify_g, classify_m, letter_index, Args, GCode, MCode, Motion, ARG_LETTERS};
 use super::lexer::Word;
 use super::{
-    err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, Program,
+    err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
     MIN_MOVE_LENGTH,
 };
-use crate::motion::segment::{ArcDirection, Plane, Segment};
-use crate::motion::PathMode;
+use crate::geometry::{ArcDirection, Plane, Segment};
 use nalgebra::Vector3;
 
 /// Modal state of the reader while it walks the program, and the moves produced so far.

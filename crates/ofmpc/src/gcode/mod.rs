@@ -57,16 +57,17 @@ mod codes;
 mod interpreter;
 mod lexer;
 
-use crate::motion::segment::Segment;
-use crate::motion::PathMode;
+use crate::geometry::Segment;
 use interpreter::Interpreter;
 use lexer::{lex_line, Lexed};
 use nalgebra::Vector3;
 use std::fmt;
 
 /// The paper's Table I test program (section IV), corrected to `G17` and placed with a work
-/// offset; see the comments in the file `examples/paper-table1.gcode`.
-pub const PAPER_TABLE1: &str = include_str!("../../../../examples/paper-table1.gcode");
+/// offset; see the comments in the file `examples/paper-table1.gcode` (the crate embeds its
+/// byte-identical copy `crates/ofmpc/data/paper-table1.gcode`, so that the packaged crate is
+/// self-contained).
+pub const PAPER_TABLE1: &str = include_str!("../../data/paper-table1.gcode");
 
 /// Largest magnitude accepted for any number in a program.
 pub const MAX_WORD_VALUE: f64 = 1e9;
@@ -107,6 +108,22 @@ impl Program {
             })
             .unwrap_or(self.start)
     }
+}
+
+/// How consecutive moves are joined: the path mode of `G61` (exact stop) and `G64 P…`
+/// (blending), a modal state of the program that each [`MoveKind::Path`] carries and the
+/// planner ([`crate::motion`]) honours.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum PathMode {
+    /// `G61`: every move runs rest to rest with the septic law (the paper's).
+    #[default]
+    ExactStop,
+    /// `G64 P<tol>`: corners are rounded within `tolerance` (m) and the path does not stop
+    /// where it does not have to; `None` (`G64` without `P`): the planner's default tolerance.
+    Blend {
+        /// Largest distance (m) between the path and a programmed corner.
+        tolerance: Option<f64>,
+    },
 }
 
 /// One move of a program.

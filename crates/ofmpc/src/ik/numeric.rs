@@ -13,6 +13,7 @@
 use nalgebra::{DMatrix, DVector, Isometry3};
 
 use super::{pose_error, pose_is_finite, ForwardKinematics, IkError};
+use crate::linalg;
 
 /// Settings of [`NumericIk`]; each field's default is given in its doc.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,42 +109,15 @@ pub struct NumericIk {
 }
 
 /// Solves `a x = b` for symmetric positive definite `a` by an in-place Cholesky
-/// factorisation (lower triangle of `a` is overwritten with L, `b` with x).
-/// Returns false (and leaves garbage) if `a` is not numerically positive definite.
+/// factorisation ([`crate::linalg`]; the lower triangle of `a` is overwritten with L,
+/// `b` with x). Returns false (and leaves garbage) if `a` is not numerically positive
+/// definite.
 fn cholesky_solve_in_place(a: &mut DMatrix<f64>, b: &mut DVector<f64>) -> bool {
     let n = a.nrows();
-    for j in 0..n {
-        let mut d = a[(j, j)];
-        for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
-        }
-        if !(d > 0.0 && d.is_finite()) {
-            return false;
-        }
-        let d = d.sqrt();
-        a[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / d;
-        }
+    if linalg::cholesky_in_place(n, n, a.as_mut_slice()).is_err() {
+        return false;
     }
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[(i, k)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= a[(k, i)] * b[k];
-        }
-        b[i] = s / a[(i, i)];
-    }
+    linalg::cholesky_solve_in_place(n, n, a.as_slice(), b.as_mut_slice());
     true
 }
 

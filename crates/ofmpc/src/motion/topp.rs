@@ -702,13 +702,8 @@ impl MinTree {
 mod tests {
     use super::*;
 
-    /// Pseudo-random numbers in [0, 1).
-    fn lcg(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (*seed >> 11) as f64 / (1u64 << 53) as f64
-    }
+    // Pseudo-random numbers in [0, 1).
+    use crate::linalg::random::uniform as lcg;
 
     #[test]
     fn range_minimum_and_sliding_extremes_match_brute_force() {

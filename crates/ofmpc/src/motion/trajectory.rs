@@ -12,10 +12,10 @@
 //! [`CartesianTrajectory::sample`] allocates nothing and is meant to be called every control
 //! step.
 
-use crate::gcode::{MoveKind, Program};
-use crate::motion::blend::{blend, PathMode, RunMove};
+use crate::gcode::{MoveKind, PathMode, Program};
+use crate::geometry::Segment;
+use crate::motion::blend::{blend, RunMove};
 use crate::motion::reference::{ReferenceError, MAX_PLAN_VALUES};
-use crate::motion::segment::Segment;
 use crate::motion::timelaw::{Profile, TimeLaw};
 use crate::motion::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
 use nalgebra::Vector3;

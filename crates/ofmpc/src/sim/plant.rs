@@ -2,6 +2,7 @@
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
+use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Robot};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -436,11 +437,10 @@ pub struct Plant {
     q: Vec<f64>,
     qd: Vec<f64>,
     t: f64,
-    // RK4 stages and the applied torque.
+    // The applied torque, the net torque (applied minus friction) and the RK4 scratch.
     tau: Vec<f64>,
-    k: [Vec<f64>; 8],
-    tmp_q: Vec<f64>,
-    tmp_v: Vec<f64>,
+    net: Vec<f64>,
+    rk4: Vec<f64>,
     backup: Vec<f64>,
     rng: Gauss,
     /// Delay line of measurements, `(D + 1) × 2n`, and its next slot.
@@ -481,8 +481,8 @@ impl Plant {
             qd: z.clone(),
             t: 0.0,
             tau: z.clone(),
-            k: std::array::from_fn(|_| z.clone()),
-            tmp_q: z.clone(),
+            net: z.clone(),
+            rk4: vec![0.0; RK4_WORK_PER_DOF * n],
             backup: vec![0.0; 2 * n],
             ring: vec![0.0; ring_len],
             ring_next: 0,
@@ -491,7 +491,6 @@ impl Plant {
             last_ts: 0.0,
             fired: vec![false; n_faults],
             last_meas: vec![0.0; 2 * n],
-            tmp_v: z,
         })
     }
 
@@ -641,34 +640,6 @@ impl Plant {
         Ok(())
     }
 
-    /// Friction torque at velocity `v` of joint `i` (opposes motion;
-    /// [`crate::dynamics::friction::torque`]).
-    #[inline]
-    fn friction(&self, i: usize, v: f64) -> f64 {
-        crate::dynamics::friction::torque(
-            self.viscous[i],
-            self.coulomb[i],
-            self.settings.coulomb_velocity,
-            v,
-        )
-    }
-
-    fn accel(&mut self, q_from_tmp: bool, out: usize) -> Result<(), ModelError> {
-        let n = self.q.len();
-        // k[7] holds the net torque (applied minus friction).
-        let (q, v) = if q_from_tmp {
-            (&self.tmp_q, &self.tmp_v)
-        } else {
-            (&self.q, &self.qd)
-        };
-        for i in 0..n {
-            self.k[7][i] = self.tau[i] - self.friction(i, v[i]);
-        }
-        let a = forward_dynamics(&self.robot, &mut self.ws, q, v, &self.k[7])?;
-        self.k[out].copy_from_slice(a.as_slice());
-        Ok(())
-    }
-
     /// Advances the plant by `ts` seconds under the constant torque `tau`
     /// (zero-order hold), by RK4 substeps. Returns an error (and leaves the
     /// state as it was) when the state or torque stops being finite.
@@ -712,35 +683,29 @@ impl Plant {
 
     fn integrate(&mut self, steps: usize, h: f64) -> Result<(), PlantError> {
         let n = self.q.len();
+        let vs = self.settings.coulomb_velocity;
         for _ in 0..steps {
-            // k[0..4]: accelerations of the 4 stages; velocities are the stage states.
-            self.accel(false, 0)?;
-            for i in 0..n {
-                self.tmp_q[i] = self.q[i] + 0.5 * h * self.qd[i];
-                self.tmp_v[i] = self.qd[i] + 0.5 * h * self.k[0][i];
-                self.k[4][i] = self.tmp_v[i];
-            }
-            self.accel(true, 1)?;
-            for i in 0..n {
-                self.tmp_q[i] = self.q[i] + 0.5 * h * self.k[4][i];
-                self.tmp_v[i] = self.qd[i] + 0.5 * h * self.k[1][i];
-                self.k[5][i] = self.tmp_v[i];
-            }
-            self.accel(true, 2)?;
-            for i in 0..n {
-                self.tmp_q[i] = self.q[i] + h * self.k[5][i];
-                self.tmp_v[i] = self.qd[i] + h * self.k[2][i];
-                self.k[6][i] = self.tmp_v[i];
-            }
-            self.accel(true, 3)?;
-            for i in 0..n {
-                let dq =
-                    h / 6.0 * (self.qd[i] + 2.0 * self.k[4][i] + 2.0 * self.k[5][i] + self.k[6][i]);
-                let dv = h / 6.0
-                    * (self.k[0][i] + 2.0 * self.k[1][i] + 2.0 * self.k[2][i] + self.k[3][i]);
-                self.q[i] += dq;
-                self.qd[i] += dv;
-            }
+            let Self {
+                robot,
+                ws,
+                viscous,
+                coulomb,
+                tau,
+                net,
+                rk4,
+                q,
+                qd,
+                ..
+            } = self;
+            rk4_second_order_step(q, qd, h, rk4, |q, v, a| {
+                // Net torque: applied minus friction (opposes motion).
+                for i in 0..n {
+                    net[i] = tau[i]
+                        - crate::dynamics::friction::torque(viscous[i], coulomb[i], vs, v[i]);
+                }
+                a.copy_from_slice(forward_dynamics(robot, ws, q, v, net)?.as_slice());
+                Ok::<(), ModelError>(())
+            })?;
             if let Some(joint) =
                 (0..n).find(|&i| !(self.q[i].is_finite() && self.qd[i].is_finite()))
             {

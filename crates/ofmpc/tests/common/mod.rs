@@ -4,24 +4,10 @@
 use nalgebra::{DMatrix, DVector};
 use ofmpc::dynamics::JointSpaceDynamics;
 
-/// Deterministic pseudo-random numbers in [-1, 1).
-pub struct Rng(pub u64);
+pub mod rng;
 
-impl Rng {
-    pub fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    }
-    pub fn matrix(&mut self, r: usize, c: usize) -> DMatrix<f64> {
-        DMatrix::from_fn(r, c, |_, _| self.next())
-    }
-    pub fn vector(&mut self, r: usize) -> DVector<f64> {
-        DVector::from_fn(r, |_, _| self.next())
-    }
-}
+/// Deterministic pseudo-random numbers (`next()` in [-1, 1)): the tests' one LCG.
+pub use rng::Lcg as Rng;
 
 /// A linear plant: constant `H`, `C`, `g`.
 #[derive(Clone, Debug)]

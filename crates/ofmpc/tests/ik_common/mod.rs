@@ -126,27 +126,17 @@ pub fn poe(q: &[f64; 6]) -> Matrix4<f64> {
     t * m
 }
 
-/// SplitMix64: a small deterministic generator for reproducible random tests.
-pub struct Rng(u64);
+// A test crate that uses both `robot_common` and `ik_common` (ik_opw) compiles the file
+// twice, as two modules: harmless, they hold no state.
+#[allow(clippy::duplicate_mod)]
+#[path = "../common/rng.rs"]
+pub mod rng;
+
+/// SplitMix64 (the tests' one copy): a small deterministic generator for reproducible
+/// random tests.
+pub use rng::SplitMix64 as Rng;
 
 impl Rng {
-    /// Generator with a fixed seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-    /// Next 64 random bits.
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [a, b).
-    pub fn uniform(&mut self, a: f64, b: f64) -> f64 {
-        let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
-        a + (b - a) * u
-    }
     /// Uniform joint vector inside the URDF limits shrunk by `margin` rad.
     pub fn joints_in_limits(&mut self, margin: f64) -> [f64; 6] {
         std::array::from_fn(|i| self.uniform(LOWER[i] + margin, UPPER[i] - margin))

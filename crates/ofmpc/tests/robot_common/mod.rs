@@ -3,25 +3,14 @@
 
 use ofmpc::robot::Robot;
 
-/// A small deterministic generator (PCG-like LCG), so tests are reproducible.
-pub struct Rng(pub u64);
+// A test crate that uses both `robot_common` and `ik_common` (ik_opw) compiles the file
+// twice, as two modules: harmless, they hold no state.
+#[allow(clippy::duplicate_mod)]
+#[path = "../common/rng.rs"]
+pub mod rng;
 
-impl Rng {
-    pub fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-    pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
-        (0..n).map(|_| self.range(lo, hi)).collect()
-    }
-}
+/// A small deterministic generator (the tests' one LCG), so tests are reproducible.
+pub use rng::Lcg as Rng;
 
 /// A random serial chain as URDF text: revolute and prismatic joints with
 /// random origins, axes and inertials, and fixed joints in between.

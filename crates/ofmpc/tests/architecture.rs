@@ -1,0 +1,483 @@
+//! The library's module layering (issue #23), checked on the source text.
+//!
+//! Every `.rs` file under `src/` belongs to one top-level module (`src/<m>.rs` or
+//! `src/<m>/…`). A reference from module `a` to module `b ≠ a` is a path `crate::b…`, a name
+//! `b` inside a `use crate::{…}` group, or a `super::` chain that climbs out of `a` to the
+//! crate root and down into `b`. Comments (so doc links) and string literals do not count.
+//!
+//! Checked: (a) the references between top-level modules have no cycle; (b) every module
+//! sits on a layer of [`LAYERS`] (bottom first) and references only modules on lower layers
+//! (modules on one layer are independent of each other). A failure names the file, the line
+//! and the reference.
+//!
+//! Also checked here: what the crate embeds with `include_str!` / `include_bytes!` lies inside
+//! the crate (so that `cargo package` works), and the embedded copy of the paper's program is
+//! byte-identical to the one in `examples/` that users and the README use.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// The layers, bottom first: a module may reference only modules on lower layers.
+///
+/// - `linalg`: dense kernels (Cholesky, RK4, dot), the pseudo-random generator;
+/// - `spatial` (6-D vectors, transforms), `geometry` (path segments, planes, arcs),
+///   `ik` (inverse kinematics against a `ForwardKinematics` trait);
+/// - `robot` (model, URDF, drives), `gcode` (program text → moves of geometry);
+/// - `dynamics` (RNEA, CRBA, forward dynamics of a robot);
+/// - `ident` (payload identification), `motion` (blending, timing, joint reference);
+/// - `control` (the MPC controllers);
+/// - `sim` (plant, closed loop, metrics), `analysis` (closed-loop stability).
+const LAYERS: &[&[&str]] = &[
+    &["linalg"],
+    &["spatial", "geometry", "ik"],
+    &["robot", "gcode"],
+    &["dynamics"],
+    &["ident", "motion"],
+    &["control"],
+    &["sim", "analysis"],
+];
+
+fn src_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
+}
+
+/// Every `.rs` file below `dir`, sorted.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// The source with comments and the contents of string and character literals blanked out
+/// (replaced by spaces; newlines kept, so line numbers stay).
+fn code_only(src: &str) -> String {
+    let b = src.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let blank = |c: u8| if c == b'\n' { b'\n' } else { b' ' };
+    let mut i = 0;
+    while i < b.len() {
+        let c = b[i];
+        if c == b'/' && b.get(i + 1) == Some(&b'/') {
+            while i < b.len() && b[i] != b'\n' {
+                out.push(b' ');
+                i += 1;
+            }
+        } else if c == b'/' && b.get(i + 1) == Some(&b'*') {
+            let mut depth = 0;
+            while i < b.len() {
+                if b[i] == b'/' && b.get(i + 1) == Some(&b'*') {
+                    depth += 1;
+                    out.extend_from_slice(b"  ");
+                    i += 2;
+                } else if b[i] == b'*' && b.get(i + 1) == Some(&b'/') {
+                    depth -= 1;
+                    out.extend_from_slice(b"  ");
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    out.push(blank(b[i]));
+                    i += 1;
+                }
+            }
+        } else if c == b'r'
+            && (b.get(i + 1) == Some(&b'"') || b.get(i + 1) == Some(&b'#'))
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'))
+        {
+            // Raw string r"…", r#"…"#.
+            let mut j = i + 1;
+            let mut hashes = 0;
+            while b.get(j) == Some(&b'#') {
+                hashes += 1;
+                j += 1;
+            }
+            if b.get(j) != Some(&b'"') {
+                out.push(c);
+                i += 1;
+                continue;
+            }
+            out.extend(std::iter::repeat_n(b' ', j + 1 - i));
+            i = j + 1;
+            while i < b.len() {
+                if b[i] == b'"'
+                    && b[i + 1..]
+                        .iter()
+                        .take(hashes)
+                        .filter(|&&h| h == b'#')
+                        .count()
+                        == hashes
+                {
+                    out.extend(std::iter::repeat_n(b' ', hashes + 1));
+                    i += hashes + 1;
+                    break;
+                }
+                out.push(blank(b[i]));
+                i += 1;
+            }
+        } else if c == b'"' || (c == b'\'' && is_char_literal(&b[i..])) {
+            // A string literal, or a character literal ('x', '\n', '\u{…}', not a lifetime):
+            // blank up to the closing quote, escapes included.
+            out.push(b' ');
+            i += 1;
+            while i < b.len() && b[i] != c {
+                if b[i] == b'\\' {
+                    out.push(b' ');
+                    i += 1;
+                }
+                if i < b.len() {
+                    out.push(blank(b[i]));
+                    i += 1;
+                }
+            }
+            out.push(b' ');
+            i += 1;
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).unwrap()
+}
+
+/// Whether the `'` at the start of `b` opens a character literal (else it is a lifetime or a
+/// label): an escape, or one UTF-8 character followed by `'`.
+fn is_char_literal(b: &[u8]) -> bool {
+    match b.get(1) {
+        Some(b'\\') => true,
+        Some(&lead) => {
+            let len = match lead {
+                0x00..=0x7f => 1,
+                0xc0..=0xdf => 2,
+                0xe0..=0xef => 3,
+                _ => 4,
+            };
+            b.get(1 + len) == Some(&b'\'')
+        }
+        None => false,
+    }
+}
+
+/// The top-level modules `lib.rs` declares.
+fn top_level_modules() -> BTreeSet<String> {
+    let lib = code_only(&fs::read_to_string(src_dir().join("lib.rs")).unwrap());
+    lib.lines()
+        .filter_map(|l| {
+            let l = l.trim();
+            let l = l
+                .strip_prefix("pub(crate) ")
+                .or_else(|| l.strip_prefix("pub "))
+                .unwrap_or(l);
+            let name = l.strip_prefix("mod ")?.strip_suffix(';')?;
+            Some(name.trim().to_string())
+        })
+        .collect()
+}
+
+/// A reference from one top-level module to another.
+#[derive(Debug, Clone)]
+struct Reference {
+    from: String,
+    to: String,
+    file: String,
+    line: usize,
+    text: String,
+}
+
+fn ident_at(s: &str) -> &str {
+    let end = s
+        .find(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .unwrap_or(s.len());
+    &s[..end]
+}
+
+/// The top-level names of a `{…}` group starting at `s` (just after the `{`).
+fn group_names(s: &str) -> Vec<String> {
+    let mut names = Vec::new();
+    let mut depth = 0;
+    let mut expect = true;
+    let mut i = 0;
+    let b = s.as_bytes();
+    while i < b.len() {
+        let c = b[i] as char;
+        match c {
+            '{' => depth += 1,
+            '}' if depth == 0 => break,
+            '}' => depth -= 1,
+            ',' if depth == 0 => expect = true,
+            c if c.is_whitespace() => {}
+            _ if depth == 0 && expect => {
+                let id = ident_at(&s[i..]);
+                if !id.is_empty() {
+                    names.push(id.to_string());
+                    i += id.len();
+                    expect = false;
+                    continue;
+                }
+                expect = false;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    names
+}
+
+/// Every reference from the module of `file` to another top-level module.
+fn references(file: &Path, modules: &BTreeSet<String>) -> Vec<Reference> {
+    let rel = file.strip_prefix(src_dir()).unwrap();
+    let parts: Vec<String> = rel
+        .iter()
+        .map(|p| p.to_string_lossy().into_owned())
+        .collect();
+    if parts == ["lib.rs"] {
+        return Vec::new();
+    }
+    let from = parts[0].trim_end_matches(".rs").to_string();
+    // Depth of the file's module below the crate root (src/m.rs, src/m/mod.rs: 1).
+    let depth = if parts.last().unwrap() == "mod.rs" {
+        parts.len() - 1
+    } else {
+        parts.len()
+    };
+    let original = fs::read_to_string(file).unwrap();
+    let code = code_only(&original);
+    let text = |at: usize| {
+        let line = code[..at].matches('\n').count();
+        (
+            line + 1,
+            original.lines().nth(line).unwrap_or("").trim().to_string(),
+        )
+    };
+    let mut out = Vec::new();
+    let mut add = |to: &str, at: usize| {
+        if to != from && modules.contains(to) {
+            let (line, text) = text(at);
+            out.push(Reference {
+                from: from.clone(),
+                to: to.to_string(),
+                file: format!("src/{}", rel.display()),
+                line,
+                text,
+            });
+        }
+    };
+    let word_start = |at: usize| {
+        at == 0 || {
+            let p = code.as_bytes()[at - 1];
+            !(p.is_ascii_alphanumeric() || p == b'_' || p == b'$')
+        }
+    };
+    for (at, _) in code.match_indices("crate::") {
+        if !word_start(at) {
+            continue;
+        }
+        let rest = &code[at + "crate::".len()..];
+        if let Some(group) = rest.strip_prefix('{') {
+            for name in group_names(group) {
+                add(&name, at);
+            }
+        } else {
+            add(ident_at(rest), at);
+        }
+    }
+    // super:: chains that climb to the crate root (inline modules ignored: they only make
+    // a chain stay lower).
+    for (at, _) in code.match_indices("super::") {
+        if !word_start(at) {
+            continue;
+        }
+        let mut rest = &code[at..];
+        let mut ups = 0;
+        while let Some(r) = rest.strip_prefix("super::") {
+            ups += 1;
+            rest = r.trim_start();
+        }
+        if ups >= depth {
+            if let Some(group) = rest.strip_prefix('{') {
+                for name in group_names(group) {
+                    add(&name, at);
+                }
+            } else {
+                add(ident_at(rest), at);
+            }
+        }
+    }
+    // Skip the tail of a chain already counted (super::super:: found twice).
+    out.sort_by(|a, b| (a.line, &a.to).cmp(&(b.line, &b.to)));
+    out.dedup_by(|a, b| a.line == b.line && a.to == b.to);
+    out
+}
+
+fn all_references() -> (BTreeSet<String>, Vec<Reference>) {
+    let modules = top_level_modules();
+    let refs = rust_files(&src_dir())
+        .iter()
+        .flat_map(|f| references(f, &modules))
+        .collect();
+    (modules, refs)
+}
+
+fn describe(r: &Reference) -> String {
+    format!(
+        "{}:{}: `{}` references `{}`: {}",
+        r.file, r.line, r.from, r.to, r.text
+    )
+}
+
+#[test]
+fn top_level_modules_have_no_cycle() {
+    let (modules, refs) = all_references();
+    let mut edges: BTreeMap<&str, BTreeMap<&str, &Reference>> = BTreeMap::new();
+    for r in &refs {
+        edges
+            .entry(r.from.as_str())
+            .or_default()
+            .entry(r.to.as_str())
+            .or_insert(r);
+    }
+    // Depth-first search; a back edge closes a cycle.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Mark {
+        New,
+        Open,
+        Done,
+    }
+    let mut mark: BTreeMap<&str, Mark> = modules.iter().map(|m| (m.as_str(), Mark::New)).collect();
+    let mut cycles = Vec::new();
+    fn visit<'a>(
+        m: &'a str,
+        edges: &BTreeMap<&'a str, BTreeMap<&'a str, &'a Reference>>,
+        mark: &mut BTreeMap<&'a str, Mark>,
+        path: &mut Vec<&'a Reference>,
+        cycles: &mut Vec<String>,
+    ) {
+        mark.insert(m, Mark::Open);
+        for (&to, &r) in edges.get(m).into_iter().flatten() {
+            path.push(r);
+            match mark.get(to).copied().unwrap_or(Mark::Done) {
+                Mark::New => visit(to, edges, mark, path, cycles),
+                Mark::Open => {
+                    let start = path.iter().position(|r| r.from == to).unwrap();
+                    let chain: Vec<String> = path[start..].iter().map(|r| describe(r)).collect();
+                    cycles.push(chain.join("\n    then "));
+                }
+                Mark::Done => {}
+            }
+            path.pop();
+        }
+        mark.insert(m, Mark::Done);
+    }
+    for m in &modules {
+        if mark[m.as_str()] == Mark::New {
+            visit(m, &edges, &mut mark, &mut Vec::new(), &mut cycles);
+        }
+    }
+    assert!(
+        cycles.is_empty(),
+        "import cycles among the top-level modules:\n  {}",
+        cycles.join("\n  ")
+    );
+}
+
+#[test]
+fn modules_reference_only_lower_layers() {
+    let (modules, refs) = all_references();
+    let layer: BTreeMap<&str, usize> = LAYERS
+        .iter()
+        .enumerate()
+        .flat_map(|(i, l)| l.iter().map(move |m| (*m, i)))
+        .collect();
+    let declared: BTreeSet<String> = layer.keys().map(|m| m.to_string()).collect();
+    assert_eq!(
+        modules, declared,
+        "lib.rs declares other top-level modules than the layer list: put each on its layer"
+    );
+    let bad: Vec<String> = refs
+        .iter()
+        .filter(|r| layer[r.to.as_str()] >= layer[r.from.as_str()])
+        .map(|r| {
+            format!(
+                "{} (layer {} → layer {})",
+                describe(r),
+                layer[r.from.as_str()],
+                layer[r.to.as_str()]
+            )
+        })
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "modules reference a module on their own or a higher layer (layers, bottom first: {LAYERS:?}):\n  {}",
+        bad.join("\n  ")
+    );
+}
+
+/// The checker itself: references in code count, in comments and strings they do not;
+/// `use crate::{…}` groups and `super::` chains out of the module are seen.
+#[test]
+fn the_reference_finder_reads_groups_chains_and_skips_comments() {
+    let code = code_only(
+        "// crate::a\n/* crate::b /* nested */ crate::c */ let s = \"crate::d\"; let c = '\"';\n\
+         use crate::{e, f::{g, h}, i as j};\nlet r = r#\"crate::k\"#; crate::l::m();\n\
+         fn f<'a>(x: &'a u8) -> char { 'μ' } crate::n::p();",
+    );
+    assert!(!code.contains("crate::a") && !code.contains("crate::b") && !code.contains("crate::c"));
+    assert!(!code.contains("crate::d") && !code.contains("crate::k"));
+    assert!(code.contains("crate::l::m") && code.contains("crate::n::p"));
+    assert_eq!(code.lines().count(), 5);
+    let at = code.find("crate::{").unwrap();
+    assert_eq!(group_names(&code[at + 8..]), ["e", "f", "i"]);
+}
+
+/// `include_str!` / `include_bytes!` in the library reach only files inside the crate.
+#[test]
+fn embedded_files_lie_inside_the_crate() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .canonicalize()
+        .unwrap();
+    let mut outside = Vec::new();
+    for file in rust_files(&src_dir()) {
+        let text = fs::read_to_string(&file).unwrap();
+        for (n, line) in text.lines().enumerate() {
+            for mac in ["include_str!(\"", "include_bytes!(\""] {
+                let Some(at) = line.find(mac) else { continue };
+                let arg = &line[at + mac.len()..];
+                let arg = &arg[..arg.find('"').unwrap()];
+                let target = file.parent().unwrap().join(arg).canonicalize().unwrap();
+                if !target.starts_with(&root) {
+                    outside.push(format!("{}:{}: {}", file.display(), n + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(
+        outside.is_empty(),
+        "files embedded from outside the crate (cargo package leaves them out):\n  {}",
+        outside.join("\n  ")
+    );
+}
+
+/// The crate's copy of the paper's Table I program is the one users run from `examples/`.
+#[test]
+fn embedded_paper_program_equals_the_examples_copy() {
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let embedded = fs::read(crate_dir.join("data/paper-table1.gcode")).unwrap();
+    let examples = fs::read(crate_dir.join("../../examples/paper-table1.gcode")).unwrap();
+    assert!(
+        embedded == examples,
+        "crates/ofmpc/data/paper-table1.gcode and examples/paper-table1.gcode differ: copy one onto the other"
+    );
+    assert_eq!(ofmpc::gcode::PAPER_TABLE1.as_bytes(), &embedded[..]);
+}
