@@ -11,6 +11,10 @@ use std::path::PathBuf;
 fn run_file_inner(file: &ScenarioFile, origin: &str) -> anyhow::Result<String> {
     let scenario =
         Scenario::resolve(file).map_err(|e| anyhow::Error::new(e).context(origin.to_string()))?;
+    // The robot's and the drives' warnings, on stderr as the command prints them.
+    for w in &scenario.warnings {
+        eprintln!("warning: {w}");
+    }
     Ok(metrics_json(&run_metrics(&scenario)?)?)
 }
 
