@@ -1692,34 +1692,7 @@ fn draw_axes_3d<DB: DrawingBackend>(
             }
         })
         .collect();
-    let pane = ShapeStyle::from(RGBColor(247, 247, 247)).filled();
-    let grid = ShapeStyle::from(RGBColor(215, 215, 215)).stroke_width(1);
-    let frame = ShapeStyle::from(RGBColor(150, 150, 150)).stroke_width(1);
-    for (i, &back_i) in back.iter().enumerate() {
-        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
-        let base = with(lo, i, back_i);
-        let corners = [
-            base,
-            with(base, j, hi[j]),
-            with(with(base, j, hi[j]), k, hi[k]),
-            with(base, k, hi[k]),
-        ];
-        area.draw(&Polygon::new(corners.map(pt3).to_vec(), pane))
-            .map_err(err)?;
-        for (a, b) in [(j, k), (k, j)] {
-            for &t in &ticks[a] {
-                let p = with(base, a, t);
-                area.draw(&PathElement::new(
-                    vec![pt3(p), pt3(with(p, b, hi[b]))],
-                    grid,
-                ))
-                .map_err(err)?;
-            }
-        }
-        let mut outline = corners.map(pt3).to_vec();
-        outline.push(pt3(base));
-        area.draw(&PathElement::new(outline, frame)).map_err(err)?;
-    }
+    draw_back_faces(area, &back, lo, hi, &ticks).map_err(err)?;
 
     let (x0, y0) = px([
         0.5 * lo[0] + 0.5 * hi[0],
@@ -1774,20 +1747,7 @@ fn draw_axes_3d<DB: DrawingBackend>(
         if nx * (mx - f64::from(x0)) + ny * (my - f64::from(y0)) < 0.0 {
             (nx, ny) = (-nx, -ny);
         }
-        let h = if nx > 0.5 {
-            HPos::Left
-        } else if nx < -0.5 {
-            HPos::Right
-        } else {
-            HPos::Center
-        };
-        let v = if ny > 0.5 {
-            VPos::Top
-        } else if ny < -0.5 {
-            VPos::Bottom
-        } else {
-            VPos::Center
-        };
+        let (h, v) = label_alignment(nx, ny);
         let off = |d: f64| ((nx * d).round() as i32, (ny * d).round() as i32);
         let a = &axes[idx];
         let (mut lw, mut lh) = (0u32, 0u32);
@@ -1809,19 +1769,7 @@ fn draw_axes_3d<DB: DrawingBackend>(
         }
         let extent = nx.abs() * f64::from(lw) + ny.abs() * f64::from(lh);
         let gap = f64::from(TICK_3D + 3) + extent + 8.0;
-        let font = (FONT_FAMILY, 13).into_font();
-        let (style, gap) = if nx.abs() > 0.7 {
-            let style = TextStyle::from(font.transform(FontTransform::Rotate270))
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, VPos::Center));
-            (style, gap + 8.0)
-        } else {
-            let vpos = if ny >= 0.0 { VPos::Top } else { VPos::Bottom };
-            let style = TextStyle::from(font)
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, vpos));
-            (style, gap)
-        };
+        let (style, gap) = axis_title_style(nx, ny, gap);
         // Anchor at the start point of the edge and offset to the description position.
         let (ox, oy) = off(gap);
         let to = (
@@ -1832,6 +1780,88 @@ fn draw_axes_3d<DB: DrawingBackend>(
             .map_err(err)?;
     }
     Ok(())
+}
+
+/// The three back faces of a 3-D chart's box (`back[i]`: the far end of
+/// axis `i`), filled, gridded at the `ticks` and outlined.
+fn draw_back_faces<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Cartesian3d<RangedCoordf64, RangedCoordf64, RangedCoordf64>>,
+    back: &[f64],
+    lo: [f64; 3],
+    hi: [f64; 3],
+    ticks: &[Vec<f64>],
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let with = |mut p: [f64; 3], i: usize, v: f64| {
+        p[i] = v;
+        p
+    };
+    let pane = ShapeStyle::from(RGBColor(247, 247, 247)).filled();
+    let grid = ShapeStyle::from(RGBColor(215, 215, 215)).stroke_width(1);
+    let frame = ShapeStyle::from(RGBColor(150, 150, 150)).stroke_width(1);
+    for (i, &back_i) in back.iter().enumerate() {
+        let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+        let base = with(lo, i, back_i);
+        let corners = [
+            base,
+            with(base, j, hi[j]),
+            with(with(base, j, hi[j]), k, hi[k]),
+            with(base, k, hi[k]),
+        ];
+        area.draw(&Polygon::new(corners.map(pt3).to_vec(), pane))?;
+        for (a, b) in [(j, k), (k, j)] {
+            for &t in &ticks[a] {
+                let p = with(base, a, t);
+                area.draw(&PathElement::new(
+                    vec![pt3(p), pt3(with(p, b, hi[b]))],
+                    grid,
+                ))?;
+            }
+        }
+        let mut outline = corners.map(pt3).to_vec();
+        outline.push(pt3(base));
+        area.draw(&PathElement::new(outline, frame))?;
+    }
+
+    Ok(())
+}
+
+/// Where a tick label sits relative to its tick, for an edge whose outward
+/// screen normal is `(nx, ny)`: the label points away from the box.
+fn label_alignment(nx: f64, ny: f64) -> (HPos, VPos) {
+    let h = if nx > 0.5 {
+        HPos::Left
+    } else if nx < -0.5 {
+        HPos::Right
+    } else {
+        HPos::Center
+    };
+    let v = if ny > 0.5 {
+        VPos::Top
+    } else if ny < -0.5 {
+        VPos::Bottom
+    } else {
+        VPos::Center
+    };
+    (h, v)
+}
+
+/// The style of an axis description beyond its tick labels and its
+/// distance `gap` from the edge: rotated along a vertical-ish edge (8 px
+/// farther), else level and above or below.
+fn axis_title_style(nx: f64, ny: f64, gap: f64) -> (TextStyle<'static>, f64) {
+    let font = (FONT_FAMILY, 13).into_font();
+    if nx.abs() > 0.7 {
+        let style = TextStyle::from(font.transform(FontTransform::Rotate270))
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Center, VPos::Center));
+        (style, gap + 8.0)
+    } else {
+        let vpos = if ny >= 0.0 { VPos::Top } else { VPos::Bottom };
+        let style = TextStyle::from(font)
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Center, vpos));
+        (style, gap)
+    }
 }
 
 /// Draws a 3-D panel into `area` (inside the panel's margins and caption).
