@@ -1702,14 +1702,7 @@ fn draw_axes_3d<DB: DrawingBackend>(
     let tick_font = TextStyle::from((FONT_FAMILY, 12).into_font()).color(&BLACK);
     let axis_line = ShapeStyle::from(RGBColor(60, 60, 60)).stroke_width(1);
     for (idx, name) in names.iter().enumerate() {
-        // The four edges parallel to this axis, by their start point.
-        let others: Vec<usize> = (0..3).filter(|&i| i != idx).collect();
-        let mut starts = Vec::with_capacity(4);
-        for &a in &[lo[others[0]], hi[others[0]]] {
-            for &b in &[lo[others[1]], hi[others[1]]] {
-                starts.push(with(with(lo, others[0], a), others[1], b));
-            }
-        }
+        let starts = edge_starts(idx, lo, hi);
         let mid_of = |s: [f64; 3]| {
             let (a, b) = (px(s), px(with(s, idx, hi[idx])));
             (f64::from(a.0 + b.0) / 2.0, f64::from(a.1 + b.1) / 2.0)
@@ -1823,6 +1816,22 @@ fn draw_back_faces<DB: DrawingBackend>(
     }
 
     Ok(())
+}
+
+/// The start points of the four edges of the box `[lo, hi]` parallel to
+/// axis `idx`.
+fn edge_starts(idx: usize, lo: [f64; 3], hi: [f64; 3]) -> Vec<[f64; 3]> {
+    let others: Vec<usize> = (0..3).filter(|&i| i != idx).collect();
+    let mut starts = Vec::with_capacity(4);
+    for &a in &[lo[others[0]], hi[others[0]]] {
+        for &b in &[lo[others[1]], hi[others[1]]] {
+            let mut p = lo;
+            p[others[0]] = a;
+            p[others[1]] = b;
+            starts.push(p);
+        }
+    }
+    starts
 }
 
 /// Where a tick label sits relative to its tick, for an edge whose outward
