@@ -940,15 +940,20 @@ mod tests {
 
     #[test]
     fn staged_dir_rejects_escaping_paths() {
-        let tmp = tempfile::tempdir().unwrap();
-        let mut s = StagedDir::new(tmp.path()).unwrap();
+        // The output folder inside a folder of the test's own, so that "../x" is a path
+        // nobody else creates (the system's temporary folder may hold an `x`).
+        let outer = tempfile::tempdir().unwrap();
+        let out = outer.path().join("out");
+        fs::create_dir(&out).unwrap();
+        let mut s = StagedDir::new(&out).unwrap();
         for bad in ["../x", "/etc/x", "", "a/../../b"] {
             let e = s.write(bad, b"x").unwrap_err();
             assert_eq!(e.kind(), io::ErrorKind::InvalidInput, "{bad}");
         }
         drop(s);
-        assert!(names(tmp.path()).is_empty());
-        assert!(!tmp.path().parent().unwrap().join("x").exists());
+        assert!(names(&out).is_empty());
+        assert!(!outer.path().join("x").exists());
+        assert!(!outer.path().join("b").exists());
     }
 
     #[test]
