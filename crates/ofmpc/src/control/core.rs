@@ -41,7 +41,7 @@ use super::model::LinearLikeModel;
 use super::prediction::Predictions;
 use super::settings::{MpcSettings, SettingsError, Solver};
 use super::structured::{StageError, StageLq};
-use super::tracking::TrackingRows;
+use super::tracking::{dense_entries, TrackingRows};
 use super::zoh::Zoh;
 use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -772,21 +772,6 @@ fn structured_backend(
         head,
         head_ready: false,
     })
-}
-
-/// The `f64` entries the dense solver holds for `n` joints and horizon `nh`:
-/// the system `[𝒜 | b]` (2·N·n rows) and, for the incremental algorithms,
-/// the tracking rows' constant factors ([`TrackingRows::entries`]); `None`
-/// on overflow. [`MpcSettings::validate_for_dof`] checks the same number.
-pub(crate) fn dense_entries(n: usize, nh: usize, incremental: bool) -> Option<usize> {
-    let p = nh.checked_mul(n)?;
-    let system = p.checked_mul(2)?.checked_mul(p + 1)?;
-    let extra = if incremental {
-        TrackingRows::entries(n, nh)?
-    } else {
-        0
-    };
-    system.checked_add(extra)
 }
 
 pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Result<(), StepError> {

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::ControllerKind;
+use super::kind::ControllerKind;
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
@@ -285,7 +285,7 @@ impl MpcSettings {
         if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
             let p = self.horizon.saturating_mul(dof);
             let rows = p.saturating_mul(2);
-            let entries = super::core::dense_entries(dof, self.horizon, true);
+            let entries = super::tracking::dense_entries(dof, self.horizon, true);
             if !matches!(entries, Some(e) if e <= MAX_SYSTEM_ENTRIES) {
                 return Err(SettingsError::TooLarge {
                     rows,

@@ -298,6 +298,21 @@ fn block_sum<const NN: usize, const FMA: bool>(lr: &[f64], g: &[f64]) -> [f64; N
     acc
 }
 
+/// The `f64` entries the dense solver holds for `n` joints and horizon `nh`:
+/// the system `[𝒜 | b]` (2·N·n rows) and, for the incremental algorithms,
+/// the tracking rows' constant factors ([`TrackingRows::entries`]); `None`
+/// on overflow. [`super::MpcSettings::validate_for_dof`] checks the same number.
+pub(crate) fn dense_entries(n: usize, nh: usize, incremental: bool) -> Option<usize> {
+    let p = nh.checked_mul(n)?;
+    let system = p.checked_mul(2)?.checked_mul(p + 1)?;
+    let extra = if incremental {
+        TrackingRows::entries(n, nh)?
+    } else {
+        0
+    };
+    system.checked_add(extra)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

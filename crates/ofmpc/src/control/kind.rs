@@ -1,0 +1,93 @@
+//! Which controller: the paper's three and the adaptive variants, by name.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// Which controller: the paper's three, and the adaptive variants of the
+/// incremental ones ([`super::adaptive`]). Serde names: `"usual"`, `"first"`,
+/// `"second"`, `"first-adaptive"`, `"second-adaptive"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ControllerKind {
+    /// Usual positional MPC, Eq. (43): no integrator, steady offset under mismatch.
+    Usual,
+    /// First incremental algorithm, Eq. (32)/(37): one integrator.
+    First,
+    /// Second incremental algorithm, Eq. (34)/(39): two integrators.
+    Second,
+    /// The first algorithm with online payload identification ([`super::AdaptiveMpc`]).
+    #[serde(rename = "first-adaptive")]
+    FirstAdaptive,
+    /// The second algorithm with online payload identification ([`super::AdaptiveMpc`]).
+    #[serde(rename = "second-adaptive")]
+    SecondAdaptive,
+}
+
+impl ControllerKind {
+    /// The paper's three, in its order of comparison.
+    pub const ALL: [ControllerKind; 3] = [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+    ];
+
+    /// Every kind: the paper's three, then the adaptive variants.
+    pub const WITH_ADAPTIVE: [ControllerKind; 5] = [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+        ControllerKind::FirstAdaptive,
+        ControllerKind::SecondAdaptive,
+    ];
+
+    /// The lowercase name (`"usual"`, `"first"`, `"second"`,
+    /// `"first-adaptive"`, `"second-adaptive"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::Usual => "usual",
+            ControllerKind::First => "first",
+            ControllerKind::Second => "second",
+            ControllerKind::FirstAdaptive => "first-adaptive",
+            ControllerKind::SecondAdaptive => "second-adaptive",
+        }
+    }
+
+    /// Whether it identifies the payload online.
+    pub fn is_adaptive(self) -> bool {
+        matches!(
+            self,
+            ControllerKind::FirstAdaptive | ControllerKind::SecondAdaptive
+        )
+    }
+
+    /// The algorithm it runs: the adaptive variants' plain kind.
+    pub fn base(self) -> ControllerKind {
+        match self {
+            ControllerKind::FirstAdaptive => ControllerKind::First,
+            ControllerKind::SecondAdaptive => ControllerKind::Second,
+            k => k,
+        }
+    }
+}
+
+impl fmt::Display for ControllerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// An unknown controller name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\"")]
+pub struct UnknownControllerKind(pub String);
+
+impl FromStr for ControllerKind {
+    type Err = UnknownControllerKind;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        ControllerKind::WITH_ADAPTIVE
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| UnknownControllerKind(s.to_string()))
+    }
+}
