@@ -481,3 +481,86 @@ fn embedded_paper_program_equals_the_examples_copy() {
     );
     assert_eq!(ofmpc::gcode::PAPER_TABLE1.as_bytes(), &embedded[..]);
 }
+
+/// The sibling files a file of `control/` references (`super::x`, `super::{x, …}`,
+/// `crate::control::x`), without its unit tests.
+fn control_sibling_references(file: &Path, siblings: &BTreeSet<String>) -> BTreeSet<String> {
+    let src = code_only(&fs::read_to_string(file).unwrap());
+    let src = match src.find("#[cfg(test)]\nmod tests") {
+        Some(i) => &src[..i],
+        None => &src[..],
+    };
+    let mut found = BTreeSet::new();
+    for prefix in ["super::", "crate::control::"] {
+        let mut rest = src;
+        while let Some(i) = rest.find(prefix) {
+            let after = &rest[i + prefix.len()..];
+            let names = match after.strip_prefix('{') {
+                Some(group) => group_names(group),
+                None => vec![ident_at(after).to_string()],
+            };
+            found.extend(names.into_iter().filter(|n| siblings.contains(n)));
+            rest = after;
+        }
+    }
+    found
+}
+
+/// Inside `control`, no two files import each other (`mod.rs` declares its
+/// children and is left out): the settings, the drive model, the solvers and
+/// the controllers form a partial order.
+#[test]
+fn control_files_do_not_import_each_other() {
+    let dir = src_dir().join("control");
+    let files: Vec<PathBuf> = fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "rs") && !p.ends_with("mod.rs"))
+        .collect();
+    let name = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
+    let siblings: BTreeSet<String> = files.iter().map(|p| name(p)).collect();
+    assert!(siblings.contains("settings") && siblings.contains("core"));
+    let refs: Vec<(String, BTreeSet<String>)> = files
+        .iter()
+        .map(|p| (name(p), control_sibling_references(p, &siblings)))
+        .collect();
+    let mut both_ways = Vec::new();
+    for (a, to) in &refs {
+        for b in to {
+            let back = refs.iter().any(|(n, t)| n == b && t.contains(a));
+            if a < b && back {
+                both_ways.push(format!("control/{a}.rs <-> control/{b}.rs"));
+            }
+        }
+    }
+    assert!(
+        both_ways.is_empty(),
+        "files that import each other: {both_ways:?}"
+    );
+}
+
+#[test]
+fn the_control_reference_finder_reads_paths_groups_and_skips_tests() {
+    let path = std::env::temp_dir().join(format!("ofmpc-arch-{}.rs", std::process::id()));
+    fs::write(
+        &path,
+        "use super::core::dense_entries;\nuse super::{settings::Solver, zoh};\n\
+         // super::lsq in a comment\nfn f() { crate::control::model::g(); let s = \"super::dense\"; }\n\
+         #[cfg(test)]\nmod tests {\n    use super::tracking::T;\n}\n",
+    )
+    .unwrap();
+    let siblings: BTreeSet<String> = [
+        "core", "settings", "zoh", "lsq", "model", "dense", "tracking",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let found = control_sibling_references(&path, &siblings);
+    let _ = fs::remove_file(&path);
+    let want: BTreeSet<String> = ["core", "settings", "zoh", "model"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    assert_eq!(found, want);
+}
