@@ -348,7 +348,7 @@ impl ScenarioFile {
     /// true state (the plant's sensing is not ideal, or `[faults]` sets some): their
     /// records then have [`ofmpc::sim::Record::has_measurement`].
     pub fn records_measurement(&self) -> bool {
-        !(self.plant.measurement_is_ideal() && self.loop_settings().measurement_faults.is_empty())
+        ofmpc::sim::records_measurement(&self.plant, &self.faults)
     }
 
     /// The scenario as TOML text, every default filled in.

@@ -4,9 +4,9 @@ use super::actuator::Actuator;
 use super::estimator::Estimator;
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::Plant;
+use super::plant::{Plant, PlantSettings};
 use super::recorder::{Recorder, Sample};
-use super::schedule::{sample_at, LossSchedule};
+use super::schedule::{at_or_after, sample_at, LossSchedule};
 use super::sensor::Sensor;
 use super::supervisor::{StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
@@ -88,14 +88,9 @@ impl MeasurementFaults {
 
     /// Whether the measurement of the sample at `t` (period `ts`) is lost.
     pub fn lost_at(&self, t: f64, ts: f64) -> bool {
-        let eps = 1e-9 * ts;
-        self.nan_at_s
-            .iter()
-            .any(|&f| t >= f - eps && t < f + ts - eps)
-            || self
-                .dropout_s
-                .iter()
-                .any(|&[from, to]| t >= from - eps && t < to - eps)
+        let within = |from: f64, to: f64| at_or_after(t, from, ts) && !at_or_after(t, to, ts);
+        self.nan_at_s.iter().any(|&f| within(f, f + ts))
+            || self.dropout_s.iter().any(|&[from, to]| within(from, to))
     }
 
     fn validate(&self) -> Result<(), LoopSettingsError> {
@@ -216,6 +211,14 @@ impl LoopSettings {
     pub fn hold_samples(&self, ts: f64) -> usize {
         (self.hold_s / ts).round() as usize
     }
+}
+
+/// Whether a run records the measurement the controller was given apart
+/// from the true state: the plant's sensing is not ideal, or measurements
+/// are lost ([`MeasurementFaults`]). The one rule for sizing, validating and
+/// recording ([`record_columns`]'s `measured`).
+pub fn records_measurement(plant: &PlantSettings, faults: &MeasurementFaults) -> bool {
+    !(plant.measurement_is_ideal() && faults.is_empty())
 }
 
 /// Values recorded per sample for `n` joints: t, q, q̇, τ, w (4n), the
@@ -374,7 +377,7 @@ impl<'a> ClosedLoop<'a> {
     /// Whether the readings differ from the true state (a noisy, delayed or
     /// faulty sensor, lost samples): they are recorded too.
     fn measured(&self) -> bool {
-        !self.plant.settings().measurement_is_ideal() || self.sensor.loses_samples()
+        records_measurement(self.plant.settings(), &self.settings.measurement_faults)
     }
 
     /// Runs the pre-roll, the path and the hold. `progress(k, total)` is

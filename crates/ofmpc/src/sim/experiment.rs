@@ -3,7 +3,7 @@
 //! reference; run, then judged.
 
 use super::closed_loop::{
-    record_columns, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
+    record_columns, records_measurement, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
 };
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
@@ -102,8 +102,7 @@ impl Experiment {
             .saturating_add(self.loop_settings.hold_samples(ts));
         let columns = record_columns(
             n,
-            !(self.plant.measurement_is_ideal()
-                && self.loop_settings.measurement_faults.is_empty()),
+            records_measurement(&self.plant, &self.loop_settings.measurement_faults),
         );
         let values = samples.saturating_mul(columns);
         if values > MAX_RECORD_VALUES {

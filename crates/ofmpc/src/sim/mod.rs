@@ -17,12 +17,12 @@ mod supervisor;
 pub use actuator::{Actuator, Loading};
 pub use estimator::Estimator;
 pub use recorder::{Recorder, Sample};
-pub use schedule::{sample_at, LossSchedule, TIME_MATCH_TOLERANCE};
+pub use schedule::{at_or_after, sample_at, LossSchedule, TIME_MATCH_TOLERANCE};
 pub use sensor::Sensor;
 
 pub use closed_loop::{
-    record_columns, run_closed_loop, run_closed_loop_with, ClosedLoop, LoopSettings,
-    MeasurementFaults, RunEvents, RunResult, SafetySettings, MAX_IDENTIFICATION_S,
+    record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,
+    LoopSettings, MeasurementFaults, RunEvents, RunResult, SafetySettings, MAX_IDENTIFICATION_S,
     SAFE_STOP_RECORD_S,
 };
 pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};

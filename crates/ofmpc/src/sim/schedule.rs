@@ -12,6 +12,14 @@ use super::closed_loop::MeasurementFaults;
 /// Relative tolerance (of `Ts`) when a time is matched to a sample.
 pub const TIME_MATCH_TOLERANCE: f64 = 1e-9;
 
+/// Whether time `t` is at or after the event time `at`, within
+/// [`TIME_MATCH_TOLERANCE`]` · ts`: the one comparison every timed event of
+/// the loop is matched by (`t ≥ at − 10⁻⁹·ts`).
+#[inline]
+pub fn at_or_after(t: f64, at: f64, ts: f64) -> bool {
+    t >= at - TIME_MATCH_TOLERANCE * ts
+}
+
 /// The first sample `k` whose time `k·ts` is at or after `t − 10⁻⁹·ts`
 /// ([`TIME_MATCH_TOLERANCE`]). `t` must be finite and `ts > 0`; negative
 /// times give sample 0.
@@ -29,10 +37,10 @@ pub fn sample_at(t: f64, ts: f64) -> usize {
         return usize::MAX;
     }
     let mut k = estimate as usize;
-    while k > 0 && (k - 1) as f64 * ts >= threshold {
+    while k > 0 && at_or_after((k - 1) as f64 * ts, t, ts) {
         k -= 1;
     }
-    while (k as f64 * ts) < threshold {
+    while !at_or_after(k as f64 * ts, t, ts) {
         k += 1;
     }
     k
