@@ -285,6 +285,22 @@ pub enum ModelError {
         /// The value.
         value: f64,
     },
+    /// A joint value outside the joint's position limits.
+    #[error("{what}[{index}] (joint {}, '{joint}') is {value}, outside its limits [{lower}, {upper}]: give a value within the limits", index + 1)]
+    OutsideLimits {
+        /// Which vector.
+        what: String,
+        /// 0-based index.
+        index: usize,
+        /// The joint's name.
+        joint: String,
+        /// The value.
+        value: f64,
+        /// Lower limit.
+        lower: f64,
+        /// Upper limit.
+        upper: f64,
+    },
     /// A dynamics workspace built for another robot.
     #[error("the workspace was built for {workspace} joints but the robot has {robot}: build it with Workspace::new(&robot)")]
     WorkspaceMismatch {

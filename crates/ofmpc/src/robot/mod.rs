@@ -146,6 +146,33 @@ pub(crate) fn check_inertia_tensor(i: &Matrix3<f64>) -> Result<(), InertiaError>
     Ok(())
 }
 
+/// The default start pose: q = 0 where it lies inside every joint's limits, else the centre
+/// of the limits (an infinite bound taken as 0 on its side, the result clamped into the limits).
+fn default_start_q(joints: &[Joint]) -> Vec<f64> {
+    let inside = joints
+        .iter()
+        .all(|j| j.limits.lower <= 0.0 && 0.0 <= j.limits.upper);
+    if inside {
+        return vec![0.0; joints.len()];
+    }
+    joints
+        .iter()
+        .map(|j| {
+            let lo = if j.limits.lower.is_finite() {
+                j.limits.lower
+            } else {
+                0.0
+            };
+            let hi = if j.limits.upper.is_finite() {
+                j.limits.upper
+            } else {
+                0.0
+            };
+            (0.5 * (lo + hi)).max(j.limits.lower).min(j.limits.upper)
+        })
+        .collect()
+}
+
 /// A fixed-base serial robot: the constants every algorithm reads.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Robot {
@@ -162,6 +189,9 @@ pub struct Robot {
     warnings: Vec<UrdfWarning>,
     /// Closed-form (OPW) kinematic parameters, when the arm has them.
     opw: Option<OpwParameters>,
+    /// The start pose (rad or m): the initial state of a run and the inverse kinematics'
+    /// first seed ([`Robot::start_q`]).
+    start_q: Vec<f64>,
 }
 
 impl Robot {
@@ -219,6 +249,7 @@ impl Robot {
         flange_name: String,
     ) -> Self {
         let bodies = joints.iter().map(|j| j.body).collect();
+        let start_q = default_start_q(&joints);
         Self {
             name,
             joints,
@@ -229,7 +260,35 @@ impl Robot {
             bodies,
             warnings: Vec::new(),
             opw: None,
+            start_q,
         }
+    }
+
+    /// The start pose (rad for revolute joints, m for prismatic ones): the robot's initial
+    /// state in a run and the first seed of the inverse kinematics. By default q = 0 where
+    /// that is inside every joint's limits, else the limits' centre (a bound that is
+    /// infinite counts as 0 on that side).
+    pub fn start_q(&self) -> &[f64] {
+        &self.start_q
+    }
+
+    /// Sets the start pose: one finite value per joint, each within its position limits.
+    pub fn set_start_q(&mut self, q: &[f64]) -> Result<(), ModelError> {
+        self.check_vector("start_q", q)?;
+        for (i, (j, &v)) in self.joints.iter().zip(q).enumerate() {
+            if v < j.limits.lower || v > j.limits.upper {
+                return Err(ModelError::OutsideLimits {
+                    what: "start_q".to_string(),
+                    index: i,
+                    joint: j.name.clone(),
+                    value: v,
+                    lower: j.limits.lower,
+                    upper: j.limits.upper,
+                });
+            }
+        }
+        self.start_q = q.to_vec();
+        Ok(())
     }
 
     /// Applies a drives file: armature and, where given, speed and torque limits
