@@ -33,6 +33,18 @@ pub enum Command {
     /// Search the tuning that keeps the non-adaptive controllers stable over a
     /// payload range with the least RMS error; write it as a scenario file.
     Tune(crate::commands::tune::TuneArgs),
+    /// Starting files for your own robot: `init robot my.urdf` writes drives.toml and
+    /// scenario.toml.
+    #[command(subcommand)]
+    Init(Init),
+}
+
+/// `ofmpc init ...`
+#[derive(Debug, Subcommand)]
+pub enum Init {
+    /// A drives file (one table per moving joint, the URDF's limits filled in) and a scenario
+    /// that runs the robot, in --out.
+    Robot(crate::commands::init::InitRobotArgs),
 }
 
 /// `ofmpc analyze ...`
@@ -126,7 +138,19 @@ pub struct RunArgs {
     /// `[payload] masses_kg`.
     #[arg(long, allow_hyphen_values = true)]
     pub payload: Option<String>,
-    /// Set a scenario key (KEY=VALUE; repeatable).
+    /// Controllers, comma-separated: replaces the scenario's `controllers`
+    /// (as `--set 'controllers=[...]'`).
+    #[arg(long)]
+    pub controllers: Option<String>,
+    /// `irb140` or the path of a .urdf file (relative to the working directory): replaces
+    /// `[robot] model` (as `--set robot.model=...`).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Path mode of programs that select neither, `G61` or `G64`: replaces `[timing] mode`
+    /// (as `--set timing.mode=...`).
+    #[arg(long)]
+    pub mode: Option<String>,
+    /// Set a scenario key (KEY=VALUE; repeatable), after the options above.
     #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
     pub set: Vec<String>,
     /// Output directory.
@@ -152,6 +176,17 @@ pub struct ReproduceArgs {
     /// none before (the controllers are not told).
     #[arg(long)]
     pub pick_up_at: Option<f64>,
+    /// `irb140` (built in) or the path of a .urdf file: sets `[robot] model` (a URDF's drives
+    /// file: `--set robot.drives=FILE`).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// G54 work offset X,Y,Z in mm, for programs that set none: sets `[program] origin_mm`.
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Path mode of programs that select neither, `G61` (exact stop, the default) or `G64`
+    /// (blend): sets `[timing] mode`.
+    #[arg(long)]
+    pub mode: Option<String>,
     /// Set a scenario key (KEY=VALUE; repeatable), after the options above.
     #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
     pub set: Vec<String>,

@@ -7,10 +7,38 @@ use crate::output::atomic::write_atomic;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_REFERENCE};
 use anyhow::Context;
 use clap::Args;
-use ofmpc::control::{MpcSettings, Weight};
-use ofmpc_scenario::analysis::{margin, model_robot, radius_curves, RadiusCurve};
+use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc_scenario::analysis::{margin, model_robot, radius_curves, Margin, RadiusCurve};
 use ofmpc_scenario::{Scenario, ScenarioFile};
+use std::io::IsTerminal;
 use std::path::PathBuf;
+
+/// How `analyze stability` and `tune` print their result: JSON for scripts (the default when
+/// stdout is not a terminal: a pipe or a file), a summary in words for a person (the default
+/// on a terminal).
+#[derive(Debug, Args, Clone)]
+pub struct FormatArgs {
+    /// Print the result as JSON (the default when stdout is not a terminal).
+    #[arg(long, conflicts_with = "words")]
+    pub json: bool,
+    /// Print a summary in words (the default when stdout is a terminal).
+    #[arg(long)]
+    pub words: bool,
+}
+
+impl FormatArgs {
+    /// Whether to print JSON.
+    pub fn json(&self) -> bool {
+        self.json || (!self.words && !std::io::stdout().is_terminal())
+    }
+}
+
+/// A progress line on stderr, when stderr is a terminal (scripts read stdout; a log stays clean).
+pub(crate) fn progress(text: &str) {
+    if std::io::stderr().is_terminal() {
+        crate::output::console::note(text);
+    }
+}
 
 /// Robot, program and tuning options shared by `analyze stability` and `tune`.
 #[derive(Debug, Args, Clone)]
@@ -97,6 +125,42 @@ pub struct StabilityArgs {
     /// Directory for the figure (`stability.png`, `stability.svg`).
     #[arg(long, default_value = "ofmpc-out")]
     pub out: PathBuf,
+    /// JSON or words.
+    #[command(flatten)]
+    pub format: FormatArgs,
+}
+
+/// The margins of `analyze stability` in words: per controller its α interval and payload,
+/// and what the payload means for a controller without an integrator (`usual`: stable far
+/// beyond, but with a steady offset that grows with the payload).
+pub fn stability_words(margins: &[(ControllerKind, Margin)], figure: &std::path::Path) -> String {
+    let mut s = String::from(
+        "Stability near rest against a model that is wrong (α = H_model / H_plant: the inertia \
+         the controller assumes over the real robot's):\n",
+    );
+    for (k, m) in margins {
+        let [lo, hi] = m.alpha_interval;
+        s.push_str(&format!(
+            "  {:<8} stable for α in {lo:.3}–{hi:.3}; an unknown point payload at the flange \
+             up to {:.2} kg keeps it stable along the program",
+            k.name(),
+            m.max_payload_kg
+        ));
+        if *k == ControllerKind::Usual {
+            s.push_str(
+                ", but it has no integrator: under any unknown payload it keeps a steady \
+                 offset that grows with the payload (stable is not offset-free)",
+            );
+        } else {
+            s.push_str("; offset-free inside it, diverges beyond");
+        }
+        s.push_str(".\n");
+    }
+    s.push_str(&format!(
+        "Figure: {} (spectral radius against α; ρ < 1 is stable). `--json` prints the numbers.",
+        figure.display()
+    ));
+    s
 }
 
 /// The scenario file of a setup and tuning (resolved like `ofmpc run`'s).
@@ -153,12 +217,14 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     let file = scenario_file(&a.setup, a.tuning.settings())?;
     let scenario = Scenario::resolve(&file)?;
     let mut out = serde_json::Map::new();
-    for &k in &kinds {
-        out.insert(
-            k.name().to_string(),
-            serde_json::to_value(margin(&scenario, k)?)?,
-        );
+    let mut margins = Vec::new();
+    for (i, &k) in kinds.iter().enumerate() {
+        progress(&format!("the margin of {k} ({} of {})", i + 1, kinds.len()));
+        let m = margin(&scenario, k)?;
+        out.insert(k.name().to_string(), serde_json::to_value(&m)?);
+        margins.push((k, m));
     }
+    progress("the spectral radius against α (the figure)");
     let exp = &scenario.experiment;
     let robot = model_robot(&scenario)?;
     let fig = radius_figure(&radius_curves(
@@ -173,9 +239,11 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", a.out.join("stability.png").display()))?;
     write_atomic(&a.out.join("stability.svg"), r.svg.as_bytes())
         .with_context(|| format!("writing {}", a.out.join("stability.svg").display()))?;
-    println!(
-        "{}",
+    let text = if a.format.json() {
         serde_json::to_string_pretty(&serde_json::Value::Object(out))?
-    );
+    } else {
+        stability_words(&margins, &a.out.join("stability.png"))
+    };
+    println!("{text}");
     Ok(())
 }

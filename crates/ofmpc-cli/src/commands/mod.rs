@@ -2,12 +2,13 @@
 
 pub mod analyze;
 pub(crate) mod experiment;
+pub mod init;
 mod inspect;
 mod robot;
 mod trajectory;
 pub mod tune;
 
-use crate::cli::{Analyze, Cli, Command, Inspect};
+use crate::cli::{Analyze, Cli, Command, Init, Inspect};
 use ofmpc_scenario::{Override, Scenario, ScenarioError, ScenarioFile};
 
 pub(crate) use robot::{load_model, load_robot, parse_fixed, parse_vector};
@@ -19,7 +20,13 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(Inspect::Robot(a)) => inspect::robot(&a),
         Command::Trajectory(a) => trajectory::trajectory(&a),
         Command::Run(a) => {
-            let sets = parse_overrides(&a.set)?;
+            let mut sets = shorthand_overrides(&Shorthands {
+                controllers: a.controllers.as_deref(),
+                robot: a.robot.as_deref(),
+                origin: None,
+                mode: a.mode.as_deref(),
+            })?;
+            sets.extend(parse_overrides(&a.set)?);
             let mut file = ScenarioFile::from_file_with(&a.scenario, &sets)
                 .map_err(|e| override_error(e, Some(&a.scenario.display().to_string())))?;
             if let Some(p) = &a.payload {
@@ -37,15 +44,66 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             file.payload.masses_kg = parse_vector("--payload", &a.payload, None)?;
             file.controllers = parse_controllers("--controllers", &a.controllers)?;
             file.payload.pick_up_at_s = a.pick_up_at;
+            let mut sets = shorthand_overrides(&Shorthands {
+                controllers: None,
+                robot: a.robot.as_deref(),
+                origin: a.origin.as_deref(),
+                mode: a.mode.as_deref(),
+            })?;
+            sets.extend(parse_overrides(&a.set)?);
             let file = file
-                .with_overrides(&parse_overrides(&a.set)?)
+                .with_overrides(&sets)
                 .map_err(|e| override_error(e, None))?;
             let scenario = Scenario::resolve(&file)?;
             experiment::execute(&scenario, None, &a.out)
         }
         Command::Analyze(Analyze::Stability(a)) => analyze::stability(&a),
         Command::Tune(a) => tune::tune(&a),
+        Command::Init(Init::Robot(a)) => init::robot(&a),
     }
+}
+
+/// The options of `run` and `reproduce` that are shorthands for a `--set` of one key.
+struct Shorthands<'a> {
+    /// `--controllers A,B` → `controllers = ["A", "B"]`.
+    controllers: Option<&'a str>,
+    /// `--robot R` → `robot.model = "R"`.
+    robot: Option<&'a str>,
+    /// `--origin X,Y,Z` → `program.origin_mm = [X, Y, Z]`.
+    origin: Option<&'a str>,
+    /// `--mode M` → `timing.mode = "M"`.
+    mode: Option<&'a str>,
+}
+
+/// The overrides the shorthand options stand for, in the order above (before any `--set`, so
+/// that `--set` has the last word). Lists are checked here, naming the option; the values
+/// then meet every check of the scenario file, as the key written there would.
+fn shorthand_overrides(s: &Shorthands) -> anyhow::Result<Vec<Override>> {
+    let set = |key: &str, raw: &str, value: toml::Value| Override {
+        key: key.into(),
+        raw: raw.into(),
+        value,
+    };
+    let mut v = Vec::new();
+    if let Some(c) = s.controllers {
+        let names = parse_controllers("--controllers", c)?
+            .iter()
+            .map(|k| toml::Value::String(k.name().to_string()))
+            .collect();
+        v.push(set("controllers", c, toml::Value::Array(names)));
+    }
+    if let Some(r) = s.robot {
+        v.push(set("robot.model", r, toml::Value::String(r.into())));
+    }
+    if let Some(o) = s.origin {
+        let xyz = parse_vector("--origin", o, Some(3))?;
+        let xyz = xyz.into_iter().map(toml::Value::Float).collect();
+        v.push(set("program.origin_mm", o, toml::Value::Array(xyz)));
+    }
+    if let Some(m) = s.mode {
+        v.push(set("timing.mode", m, toml::Value::String(m.into())));
+    }
+    Ok(v)
 }
 
 /// Parses the `--set KEY=VALUE` options.

@@ -5,7 +5,7 @@
 //! parses the options, writes the scenario and the trade-off figure, and
 //! prints the choice as JSON.
 
-use super::analyze::{scenario_file, SetupArgs};
+use super::analyze::{progress, scenario_file, FormatArgs, SetupArgs};
 use crate::output::atomic::write_atomic;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND};
 use anyhow::{bail, Context};
@@ -30,6 +30,40 @@ pub struct TuneArgs {
     /// The scenario file to write (TOML).
     #[arg(long)]
     pub out: PathBuf,
+    /// JSON or words.
+    #[command(flatten)]
+    pub format: FormatArgs,
+}
+
+/// The result of `tune` in words (the JSON's fields, explained).
+fn tune_words(summary: &serde_json::Value, lo_kg: f64, hi_kg: f64) -> String {
+    let f = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
+    let n = |k: &str| summary[k].as_u64().unwrap_or(0);
+    let s = |k: &str| summary[k].as_str().unwrap_or("").to_string();
+    let verdict = if f("stability_margin") > 0.0 {
+        "every payload of the range stays inside the controllers' stability interval"
+    } else {
+        "no candidate keeps the whole range stable: this is the best compromise found; narrow \
+         the range or use an adaptive controller"
+    };
+    format!(
+        "Tuning for an unknown payload of {lo_kg}–{hi_kg} kg: q_dy = {}, q_du = {}, the model \
+         assuming {} kg.\n\
+         Stability margin {:.3} (ln of the distance to the interval's ends; > 0 is stable): {verdict}.\n\
+         Worst RMS Cartesian error at the range's ends and middle: {:.4} mm.\n\
+         Candidates searched: {} stable, {} offset-free over the range.\n\
+         Written: {} (run it with `ofmpc run {}`) and the trade-off figure {}. `--json` prints the numbers.",
+        f("q_dy"),
+        f("q_du"),
+        f("model_payload_kg"),
+        f("stability_margin"),
+        f("worst_rms_mm"),
+        n("candidates_stable"),
+        n("candidates_offset_free"),
+        s("scenario"),
+        s("scenario"),
+        s("figure"),
+    )
 }
 
 /// An absolute path where it exists, so that the scenario written elsewhere
@@ -56,7 +90,16 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     setup.drives = setup.drives.as_deref().map(absolute);
     setup.program = setup.program.as_deref().map(absolute);
     let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    progress(&format!(
+        "searching the weights and the model payload for {lo_kg}–{hi_kg} kg, then simulating \
+         the best candidates at the range's ends and middle (a minute or so)"
+    ));
+    let started = std::time::Instant::now();
     let tuning = robust_tuning(&base, lo_kg, hi_kg, &kinds)?;
+    progress(&format!(
+        "searched in {:.0} s",
+        started.elapsed().as_secs_f64()
+    ));
     let (candidates, chosen, masses) = (&tuning.candidates, &tuning.chosen, tuning.simulated_kg);
     let text = format!(
         "# Written by `ofmpc tune --payload-range {lo_kg},{hi_kg}`: `ofmpc run` this file.\n\
@@ -77,9 +120,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     let svg = PathBuf::from(format!("{}_tradeoff.svg", stem.display()));
     write_atomic(&png, &r.png).with_context(|| format!("writing {}", png.display()))?;
     write_atomic(&svg, r.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&serde_json::json!({
+    let summary = serde_json::json!({
             "q_dy": chosen.q_dy,
             "q_du": chosen.q_du,
             "model_payload_kg": chosen.model_payload_kg,
@@ -89,8 +130,13 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
             "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
             "scenario": a.out.display().to_string(),
             "figure": png.display().to_string(),
-        }))?
-    );
+    });
+    let text = if a.format.json() {
+        serde_json::to_string_pretty(&summary)?
+    } else {
+        tune_words(&summary, lo_kg, hi_kg)
+    };
+    println!("{text}");
     Ok(())
 }
 

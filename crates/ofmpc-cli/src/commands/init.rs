@@ -1,0 +1,134 @@
+//! `ofmpc init robot URDF`: the starting files for one's own robot — a drives file with one
+//! table per moving joint (the URDF's limits filled in, what a URDF lacks marked to fill) and a
+//! scenario that runs the robot — so that the next command is `ofmpc run`.
+
+use crate::output::atomic::write_atomic;
+use anyhow::{bail, Context};
+use clap::Args;
+use ofmpc::robot::Robot;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// `ofmpc init robot`
+#[derive(Debug, Args)]
+pub struct InitRobotArgs {
+    /// The robot's URDF file.
+    pub urdf: PathBuf,
+    /// Folder for `drives.toml` and `scenario.toml` (made if absent; existing files are never
+    /// replaced).
+    #[arg(long, default_value = ".")]
+    pub out: PathBuf,
+}
+
+/// A TOML number for a known limit, or the line commented out with a note when unknown.
+fn limit_line(key: &str, value: f64, unit: &str) -> String {
+    if value.is_finite() {
+        format!("{key} = {value:?}    # {unit}, from the URDF\n")
+    } else {
+        format!("# {key} =    # {unit}: the URDF gives none\n")
+    }
+}
+
+/// The drives file skeleton of `robot`.
+pub fn drives_skeleton(robot: &Robot, urdf: &Path) -> String {
+    let mut s = format!(
+        "# Drives of {} (written by `ofmpc init robot`): joint side, SI units (N·m, rad/s; N, m/s\n\
+         # for a prismatic joint). Fill in what the URDF lacks; a key left out keeps the URDF's value\n\
+         # or none. docs/guide/tutorials/own-robot.md explains each key.\n",
+        urdf.display()
+    );
+    for j in robot.joints() {
+        let _ = write!(
+            s,
+            "\n[joints.{}]\n\
+             armature_kgm2 = 0.0    # rotor inertia J_motor·gear_ratio² (kg·m²): fill in, it matters for stability\n",
+            toml_key(&j.name)
+        );
+        s.push_str(&limit_line("max_torque_nm", j.limits.effort, "peak torque"));
+        s.push_str(&limit_line(
+            "max_speed_rad_s",
+            j.limits.velocity,
+            "speed limit",
+        ));
+        s.push_str(
+            "# max_accel_rad_s2 =    # acceleration limit (G64 timing)\n\
+             # coulomb_nm =          # Coulomb friction estimate ([mpc] friction_compensation)\n\
+             # viscous_nms =         # viscous friction estimate (N·m·s/rad)\n",
+        );
+    }
+    s
+}
+
+/// A TOML key: bare when it can be, quoted otherwise.
+fn toml_key(name: &str) -> String {
+    if !name.is_empty()
+        && name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        name.to_string()
+    } else {
+        format!("{name:?}")
+    }
+}
+
+/// The scenario skeleton for the URDF at `model` (as written in the scenario).
+pub fn scenario_skeleton(model: &str) -> String {
+    format!(
+        "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
+         # default (examples/scenario.toml, docs/guide/reference/scenario.md). Paths are relative to\n\
+         # this file.\n\
+         title = \"My robot\"\n\
+         controllers = [\"usual\", \"first\", \"second\"]\n\n\
+         [robot]\n\
+         model = {model:?}\n\
+         drives = \"drives.toml\"\n\n\
+         [program]\n\
+         # file = \"my-program.gcode\"      # default: the paper's Table I program\n\
+         # origin_mm = [400.0, 0.0, 300.0]  # G54 work offset (mm, base frame): put the part within reach\n\n\
+         [payload]\n\
+         masses_kg = [0.0, 0.5]           # the load the controllers do not know (kg)\n"
+    )
+}
+
+/// Runs `ofmpc init robot`.
+pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
+    let robot = Robot::from_urdf_file(&a.urdf)
+        .with_context(|| format!("reading the URDF {}", a.urdf.display()))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let drives = a.out.join("drives.toml");
+    let scenario = a.out.join("scenario.toml");
+    for p in [&drives, &scenario] {
+        if p.exists() {
+            bail!(
+                "{} exists: init never replaces a file; choose another --out",
+                p.display()
+            );
+        }
+    }
+    // The URDF as the scenario will find it: relative to --out when it can be, else absolute.
+    let urdf = ofmpc_scenario::absolute(&a.urdf);
+    let out = ofmpc_scenario::absolute(&a.out);
+    let model = urdf
+        .strip_prefix(&out)
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|_| urdf.clone());
+    write_atomic(&drives, drives_skeleton(&robot, &a.urdf).as_bytes())
+        .with_context(|| format!("writing {}", drives.display()))?;
+    write_atomic(
+        &scenario,
+        scenario_skeleton(&model.display().to_string()).as_bytes(),
+    )
+    .with_context(|| format!("writing {}", scenario.display()))?;
+    crate::output::console::println(&format!(
+        "wrote {} ({} joints: fill in armature_kgm2 and what the URDF lacks) and {}; next:\n  \
+         ofmpc inspect robot --robot {} --drives {}\n  ofmpc run {}",
+        drives.display(),
+        robot.dof(),
+        scenario.display(),
+        a.urdf.display(),
+        drives.display(),
+        scenario.display()
+    ))?;
+    Ok(())
+}
