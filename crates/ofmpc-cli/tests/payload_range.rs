@@ -260,3 +260,118 @@ fn tune_writes_a_scenario_that_runs_as_is() {
         );
     }
 }
+
+/// `analyze stability` in words (`--words`; the default on a terminal) says what the numbers
+/// mean, in particular that the usual MPC's large payload is stability, not precision; `--json`
+/// gives the JSON that a pipe gets by default.
+#[test]
+fn analyze_stability_in_words_and_as_json() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (urdf, drives, program) = (
+        test_data("arm6.urdf"),
+        test_data("arm6_drives.toml"),
+        test_data("arc_yz.gcode"),
+    );
+    let args = |format: &'static str| {
+        vec![
+            "analyze".to_string(),
+            "stability".into(),
+            "--robot".into(),
+            urdf.display().to_string(),
+            "--drives".into(),
+            drives.display().to_string(),
+            "--program".into(),
+            program.display().to_string(),
+            "--origin".into(),
+            "500,110,500".into(),
+            "--controllers".into(),
+            "usual,second".into(),
+            "--out".into(),
+            tmp.path().display().to_string(),
+            format.into(),
+        ]
+    };
+    let words_args = args("--words");
+    let words = ok(&words_args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(words.contains("no integrator"), "{words}");
+    assert!(words.contains("second") && words.contains(" kg"), "{words}");
+    assert!(serde_json::from_str::<Value>(&words).is_err());
+    let json_args = args("--json");
+    let json = ok(&json_args.iter().map(String::as_str).collect::<Vec<_>>());
+    let v: Value = serde_json::from_str(&json).unwrap();
+    let m = v["second"]["max_payload_kg"].as_f64().unwrap();
+    assert!(words.contains(&format!("{m:.2} kg")), "{m} in {words}");
+}
+
+/// `--robot`, `--origin`, `--mode` and `--controllers` are `--set` of one key each: the run
+/// and its scenario.toml show them; a bad value is refused naming the option or the key.
+#[test]
+fn shorthand_options_set_their_keys() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (urdf, drives, program) = (
+        test_data("arm6.urdf"),
+        test_data("arm6_drives.toml"),
+        test_data("arc_yz.gcode"),
+    );
+    let out = tmp.path().join("a");
+    let drives_set = format!("robot.drives={}", drives.display());
+    ok(&[
+        "reproduce",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--set",
+        &drives_set,
+        "--program",
+        program.to_str().unwrap(),
+        "--origin",
+        "500,110,500",
+        "--mode",
+        "G64",
+        "--payload",
+        "0",
+        "--controllers",
+        "first",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let scenario_path = out.join("scenario.toml");
+    let scenario = std::fs::read_to_string(&scenario_path).unwrap();
+    assert!(
+        scenario.contains("arm6.urdf") && scenario.contains("mode = \"G64\""),
+        "{scenario}"
+    );
+    assert!(
+        scenario.contains("origin_mm = [500.0, 110.0, 500.0]"),
+        "{scenario}"
+    );
+    let again = tmp.path().join("b");
+    ok(&[
+        "run",
+        scenario_path.to_str().unwrap(),
+        "--controllers",
+        "second",
+        "--mode",
+        "G61",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    let m = metrics(&again);
+    let names: Vec<&str> = m["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["second_m0"]);
+    let rerun = std::fs::read_to_string(again.join("scenario.toml")).unwrap();
+    assert!(rerun.contains("mode = \"G61\""), "{rerun}");
+    let err = fails(&[
+        "run",
+        scenario_path.to_str().unwrap(),
+        "--controllers",
+        "third",
+    ]);
+    assert!(err.contains("--controllers"), "{err}");
+    let err = fails(&["run", scenario_path.to_str().unwrap(), "--mode", "G65"]);
+    assert!(err.contains("mode") && err.contains("G65"), "{err}");
+}

@@ -221,7 +221,7 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     for (i, &k) in kinds.iter().enumerate() {
         progress(&format!("the margin of {k} ({} of {})", i + 1, kinds.len()));
         let m = margin(&scenario, k)?;
-        out.insert(k.name().to_string(), serde_json::to_value(&m)?);
+        out.insert(k.name().to_string(), serde_json::to_value(m)?);
         margins.push((k, m));
     }
     progress("the spectral radius against α (the figure)");
