@@ -2,7 +2,7 @@
 //! the offending values, so that callers (the CLI, bindings) word them.
 
 use super::plant::{PlantError, PlantSettingsError};
-use super::supervisor::StopReason;
+use super::supervisor::{DivergenceRule, StopReason, GROWTH_FACTOR, GROWTH_WINDOW_S};
 use crate::control::{SettingsError, StepError};
 use crate::robot::ModelError;
 use serde::Serialize;
@@ -90,6 +90,9 @@ pub enum RunOutcome {
         error_rad: f64,
         /// The divergence threshold (rad).
         threshold_rad: f64,
+        /// The rule that judged it (with [`DivergenceRule::Growth`] the
+        /// threshold is the floor beyond which the error grew).
+        rule: DivergenceRule,
     },
     /// Stopped at `t` by a failure.
     Failed {
@@ -146,12 +149,24 @@ impl fmt::Display for RunOutcome {
                 joint,
                 error_rad,
                 threshold_rad,
-            } => write!(
-                f,
-                "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
-                 divergence threshold {threshold_rad} rad",
-                joint + 1
-            ),
+                rule,
+            } => {
+                write!(
+                    f,
+                    "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
+                     divergence threshold {threshold_rad} rad",
+                    joint + 1
+                )?;
+                match rule {
+                    DivergenceRule::Threshold => Ok(()),
+                    DivergenceRule::Growth => write!(
+                        f,
+                        " and growing (at least {GROWTH_FACTOR}× the error {GROWTH_WINDOW_S}–{} s before, \
+                         a joint beyond its limits or half a turn)",
+                        2.0 * GROWTH_WINDOW_S
+                    ),
+                }
+            }
             RunOutcome::Failed { t, cause } => write!(f, "failed at t = {t:.3} s: {cause}"),
             RunOutcome::Stopped {
                 t,
