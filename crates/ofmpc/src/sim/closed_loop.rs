@@ -498,10 +498,14 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
+        self.supervisor.reset(&self.x);
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
-            self.pre_roll_sample(j, t)?;
+            if self.pre_roll_sample(j, t)? {
+                // A safe stop began: the path's samples brake and hold.
+                break;
+            }
         }
         if pre_roll > 0 {
             self.plant
@@ -509,12 +513,17 @@ impl<'a> ClosedLoop<'a> {
                 .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         }
         self.sensor.reset(&self.x);
-        self.supervisor.reset(&self.x);
+        if self.supervisor.stopping().is_none() {
+            self.supervisor.reset(&self.x);
+        }
         Ok(())
     }
 
     /// Sample `j` of the pre-roll (at time `t < 0`): hold the first point.
-    fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<(), Ended> {
+    /// `Ok(true)`: a failed step or a divergence began a safe stop (with
+    /// the stop law: as on the path, the run then brakes and holds and ends
+    /// "stopped"); without it they end the run.
+    fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<bool, Ended> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         let ts = self.reference.ts();
         let n = self.reference.dof();
@@ -531,10 +540,17 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        self.estimator
+        let status = self
+            .estimator
             .estimate(model, &self.x)
-            .and_then(|xs| controller.step(model, xs, w0, preview, tau))
-            .map_err(|e| failed(RunFailure::Controller(e)))?;
+            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
+        if let Err(e) = status {
+            let reason = StopReason::ControllerFailed(e);
+            return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
+                true => Ok(true),
+                false => Err(failed(RunFailure::Controller(e))),
+            };
+        }
         self.estimator.record_torque(&self.tau);
         self.plant
             .step(&self.tau, ts)
@@ -545,6 +561,16 @@ impl<'a> ClosedLoop<'a> {
             let e = w0[i] - q[i];
             e.is_nan() || e.abs() > threshold
         }) {
+            let error_rad = w0[joint] - q[joint];
+            if !error_rad.is_nan() {
+                let reason = StopReason::Diverged { joint, error_rad };
+                if self
+                    .supervisor
+                    .begin_stop(t, reason, &self.x, self.model, ts)
+                {
+                    return Ok(true);
+                }
+            }
             return Err(RunOutcome::Diverged {
                 t,
                 joint,
@@ -555,7 +581,7 @@ impl<'a> ClosedLoop<'a> {
                 rule: DivergenceRule::Threshold,
             });
         }
-        Ok(())
+        Ok(false)
     }
 
     /// The path and the hold, from the reading [`Self::start`] left.
@@ -567,7 +593,12 @@ impl<'a> ClosedLoop<'a> {
     ) -> RunOutcome {
         let ts = self.reference.ts();
         let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
-        let mut end = total;
+        // A stop that began in the pre-roll: the record holds its braking
+        // and hold.
+        let mut end = match self.supervisor.stopping() {
+            Some(_) => stop_samples,
+            None => total,
+        };
         let mut k = 0;
         while k < end {
             match self.sample(k, rec) {
