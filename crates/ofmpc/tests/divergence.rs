@@ -70,12 +70,18 @@ fn the_paper_s_unstable_runs_still_diverge_at_about_the_same_time() {
 }
 
 /// The usual MPC on the test arm is stable to about 157 kg (`ofmpc analyze
-/// stability`); at 70 kg its steady offset is above the 0.2 rad threshold.
+/// stability`); at 70 and 120 kg its steady offset is above the 0.2 rad
+/// threshold (120 kg: the first sag reaches 0.55 rad within 0.35 s).
 /// The threshold rule calls that "diverged"; the growth rule lets it
 /// complete and report the offset.
 #[test]
 fn a_stable_run_with_a_large_offset_completes_and_reports_it() {
-    let mass = 70.0;
+    for mass in [70.0, 120.0] {
+        stable_with_offset(mass);
+    }
+}
+
+fn stable_with_offset(mass: f64) {
     let t = outcome(
         &experiment(arm6(), DivergenceRule::Threshold),
         ControllerKind::Usual,
@@ -99,7 +105,7 @@ fn a_stable_run_with_a_large_offset_completes_and_reports_it() {
     assert!(steady > 0.2 && steady < 0.5, "steady offset {steady}");
     // Bounded: the largest error is the first sag, not a growth.
     let peak = m.joint_error_max_rad.iter().copied().fold(0.0, f64::max);
-    assert!(peak < 0.5, "peak {peak}");
+    assert!(peak < 0.6, "peak {peak}");
 }
 
 /// A scenario that writes `divergence_threshold_rad` keeps the threshold

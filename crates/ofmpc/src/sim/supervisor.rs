@@ -65,7 +65,8 @@ pub const GROWTH_CEILING_RAD: f64 = std::f64::consts::PI;
 /// * [`DivergenceRule::Growth`] (the default): diverged when `ε_k > f` and
 ///   either `ε_k ≥` [`GROWTH_FACTOR`] `· max{ε_j : k − 2M ≤ j < k − M}`
 ///   (`M` = [`GROWTH_WINDOW_S`]`/Ts` samples, or half the samples so far at
-///   the start of a run: the error quadrupled within a second), or a joint
+///   the start of a run, not before `M/2` samples: the error quadrupled
+///   within a second), or a joint
 ///   is beyond its position limits, or `ε_k >` [`GROWTH_CEILING_RAD`]. A
 ///   step disturbance at the start (a payload that sags the arm within
 ///   0.1–0.3 s) rises by less than the factor against the look-back, an
@@ -885,7 +886,10 @@ impl Supervisor {
         }
         let len = self.errors.len();
         let m = (len / 2).min(self.judged / 2);
-        if m == 0 {
+        // The first half window of a run (0.25 s) is the settling of the
+        // start (a payload sagging the arm): only the limits and the
+        // ceiling judge it.
+        if m == 0 || self.judged < len / 4 {
             return false;
         }
         let from = self.judged - 2 * m;
