@@ -144,7 +144,7 @@ impl RunOutcome {
 
     /// A safe stop that is not one: the robot was not at rest by the end of
     /// the record (every true joint speed below
-    /// [`super::supervisor::REST_SPEED`]), or a joint left its position
+    /// [`crate::sim::REST_SPEED`]), or a joint left its position
     /// limits after the stop began.
     pub fn is_failed_stop(&self) -> bool {
         matches!(
