@@ -16,7 +16,7 @@ impl fmt::Display for RunsFailed {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} run(s) failed (their results so far are in metrics.json with \"status\": \"failed\"):",
+            "{} run(s) failed (their results so far are in metrics.json with \"status\": \"failed\", or \"failed_stop\" for a safe stop that did not stop):",
             self.runs.len()
         )?;
         for r in &self.runs {

@@ -162,6 +162,7 @@ pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
                     (RunStatus::Diverged, Some(t)) => format!("DIVERGED at {t:.2} s"),
                     (RunStatus::Failed, Some(t)) => format!("FAILED at {t:.2} s"),
                     (RunStatus::Stopped, Some(t)) => format!("STOPPED at {t:.2} s"),
+                    (RunStatus::FailedStop, Some(t)) => format!("STOP FAILED at {t:.2} s"),
                     (status, _) => status.to_string().to_uppercase(),
                 },
             ]

@@ -374,4 +374,35 @@ fn shorthand_options_set_their_keys() {
     assert!(err.contains("--controllers"), "{err}");
     let err = fails(&["run", scenario_path.to_str().unwrap(), "--mode", "G65"]);
     assert!(err.contains("mode") && err.contains("G65"), "{err}");
+/// #19 item 7: on the light test arm no plain tuning of the second
+/// algorithm (scalar or per-joint weights) holds 0..7 kg; `tune` says so
+/// and writes the adaptive variant's scenario with its margin, which holds
+/// (the report names the choice).
+#[test]
+fn tune_falls_back_to_the_adaptive_variant_when_no_plain_tuning_holds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("tuned.toml");
+    let (urdf, drives) = (test_data("arm6.urdf"), test_data("arm6_drives.toml"));
+    let text = ok(&[
+        "tune",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--drives",
+        drives.to_str().unwrap(),
+        "--payload-range",
+        "0,7",
+        "--controllers",
+        "second",
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    let v: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["adaptive"], true, "{text}");
+    assert_eq!(v["controllers"], "second-adaptive", "{text}");
+    assert!(v["stability_margin"].as_f64().unwrap() > 0.0, "{text}");
+    let written = std::fs::read_to_string(&file).unwrap();
+    assert!(
+        written.contains("controllers = [\"second-adaptive\"]"),
+        "{written}"
+    );
 }

@@ -111,6 +111,10 @@ pub struct Candidate {
     pub q_dy: f64,
     /// Input-increment weight (times I).
     pub q_du: f64,
+    /// Per-joint weights: `Q_Δy` and `Q_Δu` of the wrist (the last three
+    /// joints of an arm with at least four) are these times the scalar ones
+    /// (1: the scalar tuning).
+    pub wrist_scale: f64,
     /// The payload the model assumes (kg).
     pub model_payload_kg: f64,
     /// `min(ln(α_min/lo), ln(hi/α_max))` over the range: positive = inside every
@@ -134,7 +138,20 @@ pub struct Tuning {
     /// The scenario with the chosen tuning: the base scenario's file, these controllers,
     /// five payloads over the range.
     pub file: ScenarioFile,
+    /// The controllers the scenario runs: the requested ones, or their
+    /// adaptive variants when no plain tuning holds the range
+    /// ([`Tuning::adaptive`]).
+    pub controllers: Vec<ControllerKind>,
+    /// No plain tuning (scalar or per-joint) held the range: the scenario
+    /// runs the adaptive variants with the paper's tuning, which held it in
+    /// simulation; `chosen` then describes that tuning (its margin: the α
+    /// interval's distance from α = 1, the exact model they identify).
+    pub adaptive: bool,
 }
+
+/// Per-joint weight scales of the wrist tried when no scalar tuning holds
+/// the range (a light wrist needs heavier increment weights than the arm).
+pub const TUNING_WRIST_SCALES: [f64; 3] = [10.0, 100.0, 0.1];
 
 /// The paper's tuning with `Q_Δy`, `Q_Δu` (times I) and the model payload.
 pub fn tuning_settings(q_dy: f64, q_du: f64, model_payload_kg: f64) -> MpcSettings {
@@ -144,6 +161,25 @@ pub fn tuning_settings(q_dy: f64, q_du: f64, model_payload_kg: f64) -> MpcSettin
         model_payload_kg,
         ..MpcSettings::default()
     }
+}
+
+/// [`tuning_settings`] for `n` joints with the wrist's weights (the last
+/// three joints when `n ≥ 4`) scaled by `wrist_scale` (per-joint weights;
+/// scalar when the scale is 1).
+pub fn candidate_settings(c: &Candidate, n: usize) -> MpcSettings {
+    let mut s = tuning_settings(c.q_dy, c.q_du, c.model_payload_kg);
+    if c.wrist_scale != 1.0 && n >= 4 {
+        let diag = |w: f64| {
+            Weight::Diagonal(
+                (0..n)
+                    .map(|i| if i + 3 >= n { w * c.wrist_scale } else { w })
+                    .collect(),
+            )
+        };
+        s.q_dy = diag(c.q_dy);
+        s.q_du = diag(c.q_du);
+    }
+    s
 }
 
 /// Robust tuning of the non-adaptive controllers `kinds` over the point payloads
@@ -174,27 +210,124 @@ pub fn robust_tuning(
     if let Some(&kind) = kinds.iter().find(|k| k.is_adaptive()) {
         return Err(ScenarioError::AdaptiveTuning { kind });
     }
+    // The search per family of controllers: the incremental MPC (and the
+    // usual one) here; other families add their own search beside it.
+    let mut candidates = mpc_candidates(base, (lo_kg, hi_kg), kinds, &[1.0])?;
+    let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
+    let best = |cs: &[Candidate]| {
+        cs.iter()
+            .filter(|c| c.offset_free)
+            .min_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))
+            .cloned()
+    };
+    let mut chosen = best(&candidates);
+    if chosen.is_none() && base.experiment.robot.dof() >= 4 {
+        // Per-joint weights: the wrist weighted apart from the arm.
+        let more = mpc_candidates(base, (lo_kg, hi_kg), kinds, &TUNING_WRIST_SCALES)?;
+        chosen = best(&more);
+        candidates.extend(more);
+    }
+    let controllers_text = || kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(",");
+    let (chosen, controllers, adaptive) = match chosen {
+        Some(c) => (c, kinds.to_vec(), false),
+        None => {
+            let (c, adaptive_kinds) =
+                adaptive_fallback(base, kinds, &masses)?.ok_or_else(|| {
+                    ScenarioError::NoRobustTuning {
+                        controllers: controllers_text(),
+                        lo: lo_kg,
+                        hi: hi_kg,
+                    }
+                })?;
+            (c, adaptive_kinds, true)
+        }
+    };
+    let mut file = base.file.clone();
+    file.title = if adaptive {
+        format!(
+            "Payload range {lo_kg}..{hi_kg} kg: no plain tuning of {} holds it; the adaptive variants \
+             (online identification) with the paper's tuning do",
+            controllers_text()
+        )
+    } else {
+        format!(
+            "Robust tuning for {lo_kg}..{hi_kg} kg: Q_Δy = {}, Q_Δu = {}, model payload {} kg{}",
+            chosen.q_dy,
+            chosen.q_du,
+            chosen.model_payload_kg,
+            if chosen.wrist_scale != 1.0 {
+                format!(", wrist weights × {}", chosen.wrist_scale)
+            } else {
+                String::new()
+            }
+        )
+    };
+    file.controllers = controllers.clone();
+    file.mpc = candidate_settings(&chosen, base.experiment.robot.dof());
+    file.payload.masses_kg = (0..=4)
+        .map(|i| lo_kg + (hi_kg - lo_kg) * i as f64 / 4.0)
+        .collect();
+    Ok(Tuning {
+        candidates,
+        chosen,
+        simulated_kg: masses,
+        file,
+        controllers,
+        adaptive,
+    })
+}
+
+/// Steps 1–3 of [`robust_tuning`] for the MPC controllers `kinds` with the
+/// wrist scales `scales` ([`Candidate::wrist_scale`]): every weight pair of
+/// the grid with its best model payload, the stable ones simulated.
+fn mpc_candidates(
+    base: &Scenario,
+    (lo_kg, hi_kg): (f64, f64),
+    kinds: &[ControllerKind],
+    scales: &[f64],
+) -> Result<Vec<Candidate>, ScenarioError> {
     let exp = &base.experiment;
+    let n = exp.robot.dof();
     let q0 = exp.reference.q(0).to_vec();
     let poses = program_poses(base);
     let opts = StabilityOptions {
         tolerance: 4e-3,
         ..Default::default()
     };
-    let pairs: Vec<(f64, f64)> = TUNING_Q_DY
+    // The smallest span hi/lo of α any model payload needs over the range:
+    // a pair whose interval is narrower is rejected before its other
+    // controllers are analysed (and never simulated).
+    let span = required_span(exp, (lo_kg, hi_kg), &poses)?;
+    let grid: Vec<Candidate> = scales
         .iter()
-        .flat_map(|&d| TUNING_Q_DU.iter().map(move |&u| (d, u)))
+        .flat_map(|&w| {
+            TUNING_Q_DY.iter().flat_map(move |&d| {
+                TUNING_Q_DU.iter().map(move |&u| Candidate {
+                    q_dy: d,
+                    q_du: u,
+                    wrist_scale: w,
+                    model_payload_kg: 0.0,
+                    margin: f64::NAN,
+                    rms_mm: f64::NAN,
+                    offset_free: false,
+                })
+            })
+        })
         .collect();
     // 1. Intervals per weight pair (the intersection over the controllers).
-    let intervals: Vec<Option<(f64, f64)>> = pairs
+    let intervals: Vec<Option<(f64, f64)>> = grid
         .par_iter()
-        .map(|&(d, u)| {
-            let s = tuning_settings(d, u, 0.0);
+        .map(|c| {
+            let s = candidate_settings(c, n);
             let mut iv = (0.0f64, f64::INFINITY);
             for &k in kinds {
                 match alpha_interval(&exp.robot, k, &s, &q0, &opts) {
                     Ok((lo, hi)) => iv = (iv.0.max(lo), iv.1.min(hi)),
                     Err(_) => return None,
+                }
+                if iv.1 / iv.0 <= span {
+                    // Early rejection: no model payload fits the range.
+                    return None;
                 }
             }
             Some(iv)
@@ -202,16 +335,13 @@ pub fn robust_tuning(
         .collect();
     // 2. The model payload with the largest margin per pair.
     let mut candidates = Vec::new();
-    for (&(d, u), iv) in pairs.iter().zip(&intervals) {
+    for (c, iv) in grid.into_iter().zip(&intervals) {
         let Some(interval) = *iv else { continue };
         if let Some((m, margin)) = best_model_payload(exp, interval, (lo_kg, hi_kg), &poses)? {
             candidates.push(Candidate {
-                q_dy: d,
-                q_du: u,
                 model_payload_kg: m,
                 margin,
-                rms_mm: f64::NAN,
-                offset_free: false,
+                ..c
             });
         }
     }
@@ -221,32 +351,104 @@ pub fn robust_tuning(
         .par_iter_mut()
         .filter(|c| c.margin > 0.0)
         .for_each(|c| simulate_candidate(exp, c, kinds, &masses));
-    let chosen = candidates
+    Ok(candidates)
+}
+
+/// The smallest `max α / min α` over the model-payload grid of
+/// [`best_model_payload`]: what a stable interval must span at least.
+fn required_span(
+    exp: &ofmpc::sim::Experiment,
+    (lo_kg, hi_kg): (f64, f64),
+    poses: &[&[f64]],
+) -> Result<f64, ScenarioError> {
+    let mut span = f64::INFINITY;
+    for i in 0..MODEL_GRID {
+        let (amin, amax) = model_ratio_range(exp, i, (lo_kg, hi_kg), poses)?;
+        span = span.min(amax / amin);
+    }
+    Ok(span)
+}
+
+/// The inertia-ratio range over the poses, for the lightest and the
+/// heaviest payload, of grid point `i` of the model payload.
+fn model_ratio_range(
+    exp: &ofmpc::sim::Experiment,
+    i: usize,
+    (lo_kg, hi_kg): (f64, f64),
+    poses: &[&[f64]],
+) -> Result<(f64, f64), ScenarioError> {
+    let m = model_grid_kg(i, (lo_kg, hi_kg));
+    let mut model = exp.robot.clone();
+    if m > 0.0 {
+        model.set_payload(Some(Payload::point_mass(m)))?;
+    }
+    let mut amin = f64::INFINITY;
+    let mut amax = f64::NEG_INFINITY;
+    for p in [lo_kg, hi_kg] {
+        let (a0, a1) = inertia_ratio_range(&model, &Payload::point_mass(p), poses)?;
+        amin = amin.min(a0);
+        amax = amax.max(a1);
+    }
+    Ok((amin, amax))
+}
+
+/// Grid point `i` of the model payload over the range (kg).
+fn model_grid_kg(i: usize, (lo_kg, hi_kg): (f64, f64)) -> f64 {
+    lo_kg + (hi_kg - lo_kg) * i as f64 / (MODEL_GRID - 1) as f64
+}
+
+/// When no plain tuning holds the range: the adaptive variants of `kinds`
+/// with the paper's tuning, simulated at `masses`; the candidate (its
+/// margin: `min(ln(1/lo), ln(hi))` of the plain controllers' α interval,
+/// the distance of the exact model that identification restores from the
+/// interval's ends) and the variants, when every run completed
+/// offset-free.
+fn adaptive_fallback(
+    base: &Scenario,
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) -> Result<Option<(Candidate, Vec<ControllerKind>)>, ScenarioError> {
+    let exp = &base.experiment;
+    let mut adaptive: Vec<ControllerKind> = kinds
         .iter()
-        .filter(|c| c.offset_free)
-        .min_by(|a, b| a.rms_mm.total_cmp(&b.rms_mm))
-        .cloned()
-        .ok_or_else(|| ScenarioError::NoRobustTuning {
-            controllers: kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(","),
-            lo: lo_kg,
-            hi: hi_kg,
-        })?;
-    let mut file = base.file.clone();
-    file.title = format!(
-        "Robust tuning for {lo_kg}..{hi_kg} kg: Q_Δy = {}, Q_Δu = {}, model payload {} kg",
-        chosen.q_dy, chosen.q_du, chosen.model_payload_kg
-    );
-    file.controllers = kinds.to_vec();
-    file.mpc = tuning_settings(chosen.q_dy, chosen.q_du, chosen.model_payload_kg);
-    file.payload.masses_kg = (0..=4)
-        .map(|i| lo_kg + (hi_kg - lo_kg) * i as f64 / 4.0)
+        .filter_map(|k| match k {
+            ControllerKind::First => Some(ControllerKind::FirstAdaptive),
+            ControllerKind::Second => Some(ControllerKind::SecondAdaptive),
+            _ => None,
+        })
         .collect();
-    Ok(Tuning {
-        candidates,
-        chosen,
-        simulated_kg: masses,
-        file,
-    })
+    adaptive.dedup();
+    if adaptive.is_empty() {
+        return Ok(None);
+    }
+    let d = MpcSettings::default();
+    let (Weight::Scalar(q_dy), Weight::Scalar(q_du)) = (&d.q_dy, &d.q_du) else {
+        return Ok(None);
+    };
+    let mut c = Candidate {
+        q_dy: *q_dy,
+        q_du: *q_du,
+        wrist_scale: 1.0,
+        model_payload_kg: 0.0,
+        margin: f64::NAN,
+        rms_mm: f64::NAN,
+        offset_free: false,
+    };
+    let q0 = exp.reference.q(0);
+    let opts = StabilityOptions::default();
+    let mut margin = f64::INFINITY;
+    for k in &adaptive {
+        let (lo, hi) = alpha_interval(&exp.robot, k.base(), &d, q0, &opts).map_err(|source| {
+            ScenarioError::Stability {
+                kind: *k,
+                source: Box::new(source),
+            }
+        })?;
+        margin = margin.min((1.0 / lo).ln().min(hi.ln()));
+    }
+    c.margin = margin;
+    simulate_candidate(exp, &mut c, &adaptive, masses);
+    Ok(c.offset_free.then_some((c, adaptive)))
 }
 
 /// The model payload on a grid over `[lo_kg, hi_kg]` whose inertia-ratio
@@ -260,18 +462,8 @@ fn best_model_payload(
 ) -> Result<Option<(f64, f64)>, ScenarioError> {
     let mut best: Option<(f64, f64)> = None;
     for i in 0..MODEL_GRID {
-        let m = lo_kg + (hi_kg - lo_kg) * i as f64 / (MODEL_GRID - 1) as f64;
-        let mut model = exp.robot.clone();
-        if m > 0.0 {
-            model.set_payload(Some(Payload::point_mass(m)))?;
-        }
-        let mut amin = f64::INFINITY;
-        let mut amax = f64::NEG_INFINITY;
-        for p in [lo_kg, hi_kg] {
-            let (a0, a1) = inertia_ratio_range(&model, &Payload::point_mass(p), poses)?;
-            amin = amin.min(a0);
-            amax = amax.max(a1);
-        }
+        let m = model_grid_kg(i, (lo_kg, hi_kg));
+        let (amin, amax) = model_ratio_range(exp, i, (lo_kg, hi_kg), poses)?;
         let margin = (amin / lo).ln().min((hi / amax).ln());
         if !matches!(best, Some((_, b)) if b >= margin) {
             best = Some((m, margin));
@@ -290,11 +482,17 @@ fn simulate_candidate(
     masses: &[f64],
 ) {
     let mut e = exp.clone();
-    e.mpc = tuning_settings(c.q_dy, c.q_du, c.model_payload_kg);
+    e.mpc = candidate_settings(c, exp.robot.dof());
     let mut worst = 0.0f64;
     let mut ok = true;
+    // The heaviest payload first: the likeliest to fail; after a failed run
+    // the candidate cannot be chosen and its other runs are skipped (its
+    // RMS is the worst of the runs made).
     for &k in kinds {
-        for &m in masses {
+        for &m in masses.iter().rev() {
+            if !ok {
+                break;
+            }
             match e.run(k, &Payload::point_mass(m), &mut |_, _| {}) {
                 Ok((r, metrics)) => {
                     let steady = metrics

@@ -152,7 +152,7 @@ pub fn execute(
     ))?;
     let failed: Vec<String> = metrics
         .iter()
-        .filter(|m| m.status == RunStatus::Failed)
+        .filter(|m| m.status.is_failure())
         .map(|m| format!("{}: {}", m.name, m.reason))
         .collect();
     if !failed.is_empty() {
@@ -251,6 +251,16 @@ impl Writer<'_> {
             report.paragraph(
                 "A failed run could not go on (a controller step or the plant's integration failed); its \
                  metrics cover what was recorded before, and metrics that do not exist are null.",
+            );
+        }
+        if stopped
+            .iter()
+            .any(|r| r.metrics.status == RunStatus::FailedStop)
+        {
+            report.heading("Failed stops");
+            report.paragraph(
+                "A failed stop is a safe stop whose robot was not at rest by the end of the record or left \
+                 its joint limits: the stop law alone could not hold it (a real cell needs its brakes).",
             );
         }
         for r in &stopped {

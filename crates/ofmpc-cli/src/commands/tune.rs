@@ -101,9 +101,27 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     ));
     let (candidates, chosen, masses) = (&tuning.candidates, &tuning.chosen, tuning.simulated_kg);
+    let chose = tuning
+        .controllers
+        .iter()
+        .map(|k| k.name())
+        .collect::<Vec<_>>()
+        .join(",");
+    if tuning.adaptive {
+        crate::output::console::warn(&format!(
+            "no plain {} tuning (scalar or per-joint weights) holds {lo_kg}..{hi_kg} kg; the scenario runs \
+             {chose} (online payload identification), which held every payload simulated",
+            a.controllers
+        ));
+    }
+    let margin_text = if tuning.adaptive {
+        "Stability margin of the identified (exact) model, min ln(1/α_lo), ln(α_hi)"
+    } else {
+        "Stability margin (min over the range of ln(α/α_lo), ln(α_hi/α))"
+    };
     let text = format!(
         "# Written by `ofmpc tune --payload-range {lo_kg},{hi_kg}`: `ofmpc run` this file.\n\
-         # Stability margin (min over the range of ln(α/α_lo), ln(α_hi/α)): {:.3}; worst RMS Cartesian error \
+         # Controllers: {chose}. {margin_text}: {:.3}; worst RMS Cartesian error \
          over {lo_kg}, {}, {hi_kg} kg: {:.4} mm.\n{}",
         chosen.margin,
         masses[1],
@@ -123,6 +141,9 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     let summary = serde_json::json!({
             "q_dy": chosen.q_dy,
             "q_du": chosen.q_du,
+            "wrist_scale": chosen.wrist_scale,
+            "controllers": chose,
+            "adaptive": tuning.adaptive,
             "model_payload_kg": chosen.model_payload_kg,
             "stability_margin": chosen.margin,
             "worst_rms_mm": chosen.rms_mm,

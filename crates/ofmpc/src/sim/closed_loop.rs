@@ -8,7 +8,7 @@ use super::plant::{Plant, PlantSettings};
 use super::recorder::{Recorder, Sample};
 use super::schedule::{at_or_after, sample_at, LossSchedule};
 use super::sensor::Sensor;
-use super::supervisor::{StopReason, Supervisor, SupervisorSettings};
+use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
@@ -16,13 +16,23 @@ use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
 /// Settings of a closed-loop run.
+///
+/// Read from a scenario's `[simulation]`: `divergence` absent means
+/// [`DivergenceRule::Threshold`] when `divergence_threshold_rad` is written,
+/// else [`DivergenceRule::Growth`] (users who set the threshold keep its
+/// meaning; everyone else gets the growth rule).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
+#[serde(default, deny_unknown_fields, from = "LoopSettingsFile")]
 pub struct LoopSettings {
     /// How long the last reference point is held after the path ends (s).
     pub hold_s: f64,
-    /// A run whose joint error passes this (rad) on any joint is stopped as diverged.
+    /// The divergence threshold (rad): with [`DivergenceRule::Threshold`] a
+    /// run whose joint error passes this on any joint is stopped as
+    /// diverged; with [`DivergenceRule::Growth`] (the default) the error
+    /// must also grow ([`DivergenceRule`]): the floor of the growth rule.
     pub divergence_threshold_rad: f64,
+    /// How a divergence is recognised ([`DivergenceRule`]).
+    pub divergence: DivergenceRule,
     /// The "steady" window at the end of the hold, for the metrics (s).
     pub steady_window_s: f64,
     /// Identification phase of the adaptive controllers (s, at most
@@ -53,6 +63,58 @@ pub struct LoopSettings {
     /// prediction over them).
     #[serde(skip)]
     pub measurement_faults: MeasurementFaults,
+}
+
+/// [`LoopSettings`] as written in a file: the same keys, with
+/// `divergence_threshold_rad` and `divergence` optional so that the rule
+/// follows what the user wrote ([`LoopSettings`]).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+struct LoopSettingsFile {
+    hold_s: f64,
+    divergence_threshold_rad: Option<f64>,
+    divergence: Option<DivergenceRule>,
+    steady_window_s: f64,
+    identification_s: f64,
+    plausibility_check: bool,
+    safe_stop: bool,
+}
+
+impl Default for LoopSettingsFile {
+    fn default() -> Self {
+        let d = LoopSettings::default();
+        Self {
+            hold_s: d.hold_s,
+            divergence_threshold_rad: None,
+            divergence: None,
+            steady_window_s: d.steady_window_s,
+            identification_s: d.identification_s,
+            plausibility_check: d.plausibility_check,
+            safe_stop: d.safe_stop,
+        }
+    }
+}
+
+impl From<LoopSettingsFile> for LoopSettings {
+    fn from(f: LoopSettingsFile) -> Self {
+        let d = LoopSettings::default();
+        let divergence = f.divergence.unwrap_or(match f.divergence_threshold_rad {
+            Some(_) => DivergenceRule::Threshold,
+            None => DivergenceRule::Growth,
+        });
+        Self {
+            hold_s: f.hold_s,
+            divergence_threshold_rad: f
+                .divergence_threshold_rad
+                .unwrap_or(d.divergence_threshold_rad),
+            divergence,
+            steady_window_s: f.steady_window_s,
+            identification_s: f.identification_s,
+            plausibility_check: f.plausibility_check,
+            safe_stop: f.safe_stop,
+            ..d
+        }
+    }
 }
 
 /// The safety function of a run: a joint error (of the state the controller
@@ -125,6 +187,7 @@ impl Default for LoopSettings {
         Self {
             hold_s: 2.0,
             divergence_threshold_rad: 0.2,
+            divergence: DivergenceRule::Growth,
             steady_window_s: 0.5,
             identification_s: 0.5,
             pick_up_at_s: None,
@@ -196,6 +259,7 @@ impl LoopSettings {
     pub fn supervisor(&self) -> SupervisorSettings {
         SupervisorSettings {
             divergence_threshold_rad: self.divergence_threshold_rad,
+            divergence: self.divergence,
             plausibility_check: self.plausibility_check,
             safe_stop: self.safe_stop,
             max_joint_error_rad: self.max_joint_error_rad,
@@ -345,7 +409,7 @@ impl<'a> ClosedLoop<'a> {
         let horizon = controller.horizon();
         let lost = LossSchedule::new(&settings.measurement_faults, ts);
         let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
-        let supervisor = Supervisor::new(plant.robot(), settings.supervisor());
+        let supervisor = Supervisor::new(plant.robot(), settings.supervisor()).sized_for(ts);
         let actuator = Actuator::for_robot(plant.robot());
         Self {
             controller,
@@ -434,10 +498,14 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
+        self.supervisor.reset(&self.x);
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
-            self.pre_roll_sample(j, t)?;
+            if self.pre_roll_sample(j, t)? {
+                // A safe stop began: the path's samples brake and hold.
+                break;
+            }
         }
         if pre_roll > 0 {
             self.plant
@@ -445,12 +513,17 @@ impl<'a> ClosedLoop<'a> {
                 .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         }
         self.sensor.reset(&self.x);
-        self.supervisor.reset(&self.x);
+        if self.supervisor.stopping().is_none() {
+            self.supervisor.reset(&self.x);
+        }
         Ok(())
     }
 
     /// Sample `j` of the pre-roll (at time `t < 0`): hold the first point.
-    fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<(), Ended> {
+    /// `Ok(true)`: a failed step or a divergence began a safe stop (with
+    /// the stop law: as on the path, the run then brakes and holds and ends
+    /// "stopped"); without it they end the run.
+    fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<bool, Ended> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         let ts = self.reference.ts();
         let n = self.reference.dof();
@@ -467,10 +540,17 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        self.estimator
+        let status = self
+            .estimator
             .estimate(model, &self.x)
-            .and_then(|xs| controller.step(model, xs, w0, preview, tau))
-            .map_err(|e| failed(RunFailure::Controller(e)))?;
+            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
+        if let Err(e) = status {
+            let reason = StopReason::ControllerFailed(e);
+            return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
+                true => Ok(true),
+                false => Err(failed(RunFailure::Controller(e))),
+            };
+        }
         self.estimator.record_torque(&self.tau);
         self.plant
             .step(&self.tau, ts)
@@ -481,14 +561,27 @@ impl<'a> ClosedLoop<'a> {
             let e = w0[i] - q[i];
             e.is_nan() || e.abs() > threshold
         }) {
+            let error_rad = w0[joint] - q[joint];
+            if !error_rad.is_nan() {
+                let reason = StopReason::Diverged { joint, error_rad };
+                if self
+                    .supervisor
+                    .begin_stop(t, reason, &self.x, self.model, ts)
+                {
+                    return Ok(true);
+                }
+            }
             return Err(RunOutcome::Diverged {
                 t,
                 joint,
                 error_rad: w0[joint] - q[joint],
                 threshold_rad: threshold,
+                // At rest on the first point: the threshold alone, under
+                // either rule (no offset is expected there).
+                rule: DivergenceRule::Threshold,
             });
         }
-        Ok(())
+        Ok(false)
     }
 
     /// The path and the hold, from the reading [`Self::start`] left.
@@ -500,7 +593,12 @@ impl<'a> ClosedLoop<'a> {
     ) -> RunOutcome {
         let ts = self.reference.ts();
         let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
-        let mut end = total;
+        // A stop that began in the pre-roll: the record holds its braking
+        // and hold.
+        let mut end = match self.supervisor.stopping() {
+            Some(_) => stop_samples,
+            None => total,
+        };
         let mut k = 0;
         while k < end {
             match self.sample(k, rec) {
@@ -589,7 +687,7 @@ impl<'a> ClosedLoop<'a> {
         if let Some(joint) = (0..n).find(|&i| (w[i] - q[i]).is_nan()) {
             return Err(failed(RunFailure::NonFiniteError { joint }));
         }
-        if let Some((joint, error_rad)) = self.supervisor.divergence(w, q) {
+        if let Some((joint, error_rad)) = self.supervisor.judge(w, q) {
             let reason = StopReason::Diverged { joint, error_rad };
             if !self
                 .supervisor
@@ -600,6 +698,7 @@ impl<'a> ClosedLoop<'a> {
                     joint,
                     error_rad,
                     threshold_rad: self.settings.divergence_threshold_rad,
+                    rule: self.settings.divergence,
                 });
             }
             stop_began = Some(k + 1);

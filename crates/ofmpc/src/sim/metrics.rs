@@ -321,6 +321,7 @@ mod tests {
             joint: 0,
             error_rad: 0.3,
             threshold_rad: 0.2,
+            rule: crate::sim::DivergenceRule::Threshold,
         };
         let d = compute("x", "first", 0.25, &r, 0.5, 1.0, &outcome);
         assert!(d.diverged && d.steady_cartesian_error_mm.is_nan());

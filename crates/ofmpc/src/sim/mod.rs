@@ -36,6 +36,7 @@ pub use plant::{
     MAX_DELAY_SAMPLES,
 };
 pub use supervisor::{
-    Inspection, MeasurementGuard, Plausibility, SafeStop, StopReason, Stopping, Supervisor,
-    SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
+    DivergenceRule, Inspection, MeasurementGuard, Plausibility, SafeStop, StopReason, Stopping,
+    Supervisor, SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, GROWTH_CEILING_RAD, GROWTH_FACTOR,
+    GROWTH_WINDOW_S, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
 };

@@ -2,7 +2,7 @@
 //! the offending values, so that callers (the CLI, bindings) word them.
 
 use super::plant::{PlantError, PlantSettingsError};
-use super::supervisor::StopReason;
+use super::supervisor::{DivergenceRule, StopReason, GROWTH_FACTOR, GROWTH_WINDOW_S};
 use crate::control::{SettingsError, StepError};
 use crate::robot::ModelError;
 use serde::Serialize;
@@ -16,8 +16,8 @@ pub const MAX_RECORD_VALUES: usize = 100_000_000;
 /// The largest number of integration substeps per control period.
 pub const MAX_SUBSTEPS: usize = 100_000;
 
-/// The four ways a run ends, as written in `metrics.json` (`"ok"`,
-/// `"diverged"`, `"failed"`, `"stopped"`).
+/// The five ways a run ends, as written in `metrics.json` (`"ok"`,
+/// `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RunStatus {
@@ -30,19 +30,32 @@ pub enum RunStatus {
     /// failed. Its metrics cover what was recorded before.
     Failed,
     /// The loop brought the robot to a safe stop (divergence, a failed step
-    /// or an implausible measurement, with the safe stop enabled).
+    /// or an implausible measurement, with the safe stop enabled): at rest
+    /// by the end of the record, every joint within its limits.
     Stopped,
+    /// The loop tried a safe stop, but the robot was not at rest by the end
+    /// of the record or a joint left its position limits: not a stop (a
+    /// real cell needs its brakes). A failure, like [`RunStatus::Failed`].
+    #[serde(rename = "failed_stop")]
+    FailedStop,
 }
 
 impl RunStatus {
-    /// `"ok"`, `"diverged"`, `"failed"` or `"stopped"`.
+    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"` or `"failed_stop"`.
     pub fn name(self) -> &'static str {
         match self {
             RunStatus::Ok => "ok",
             RunStatus::Diverged => "diverged",
             RunStatus::Failed => "failed",
             RunStatus::Stopped => "stopped",
+            RunStatus::FailedStop => "failed_stop",
         }
+    }
+
+    /// The run failed (a failed step or integration, or a failed stop):
+    /// the command reports it with a non-zero exit status.
+    pub fn is_failure(self) -> bool {
+        matches!(self, RunStatus::Failed | RunStatus::FailedStop)
     }
 }
 
@@ -90,6 +103,9 @@ pub enum RunOutcome {
         error_rad: f64,
         /// The divergence threshold (rad).
         threshold_rad: f64,
+        /// The rule that judged it (with [`DivergenceRule::Growth`] the
+        /// threshold is the floor beyond which the error grew).
+        rule: DivergenceRule,
     },
     /// Stopped at `t` by a failure.
     Failed {
@@ -113,14 +129,29 @@ pub enum RunOutcome {
 }
 
 impl RunOutcome {
-    /// `Ok`, `Diverged` or `Failed`.
+    /// `Ok`, `Diverged`, `Failed`, `Stopped`, or `FailedStop` for a stop
+    /// whose robot was not at rest within its limits
+    /// ([`Self::is_failed_stop`]).
     pub fn status(&self) -> RunStatus {
         match self {
             RunOutcome::Completed => RunStatus::Ok,
             RunOutcome::Diverged { .. } => RunStatus::Diverged,
             RunOutcome::Failed { .. } => RunStatus::Failed,
+            RunOutcome::Stopped { .. } if self.is_failed_stop() => RunStatus::FailedStop,
             RunOutcome::Stopped { .. } => RunStatus::Stopped,
         }
+    }
+
+    /// A safe stop that is not one: the robot was not at rest by the end of
+    /// the record (every true joint speed below
+    /// [`crate::sim::REST_SPEED`]), or a joint left its position
+    /// limits after the stop began.
+    pub fn is_failed_stop(&self) -> bool {
+        matches!(
+            self,
+            RunOutcome::Stopped { at_rest_after_s, within_limits, .. }
+                if at_rest_after_s.is_none() || !within_limits
+        )
     }
     /// When the run was stopped early (s), `None` when it completed.
     pub fn stopped_at(&self) -> Option<f64> {
@@ -146,12 +177,24 @@ impl fmt::Display for RunOutcome {
                 joint,
                 error_rad,
                 threshold_rad,
-            } => write!(
-                f,
-                "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
-                 divergence threshold {threshold_rad} rad",
-                joint + 1
-            ),
+                rule,
+            } => {
+                write!(
+                    f,
+                    "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
+                     divergence threshold {threshold_rad} rad",
+                    joint + 1
+                )?;
+                match rule {
+                    DivergenceRule::Threshold => Ok(()),
+                    DivergenceRule::Growth => write!(
+                        f,
+                        " and growing (at least {GROWTH_FACTOR}× the error {GROWTH_WINDOW_S}–{} s before, \
+                         a joint beyond its limits or half a turn)",
+                        2.0 * GROWTH_WINDOW_S
+                    ),
+                }
+            }
             RunOutcome::Failed { t, cause } => write!(f, "failed at t = {t:.3} s: {cause}"),
             RunOutcome::Stopped {
                 t,
@@ -159,7 +202,11 @@ impl fmt::Display for RunOutcome {
                 at_rest_after_s,
                 within_limits,
             } => {
-                write!(f, "stopped safely from t = {t:.3} s: {reason}; ")?;
+                if self.is_failed_stop() {
+                    write!(f, "the safe stop from t = {t:.3} s failed: {reason}; ")?;
+                } else {
+                    write!(f, "stopped safely from t = {t:.3} s: {reason}; ")?;
+                }
                 match at_rest_after_s {
                     Some(d) => write!(f, "at rest {d:.3} s later")?,
                     None => f.write_str("not at rest by the end of the record")?,

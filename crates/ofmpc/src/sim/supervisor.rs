@@ -43,6 +43,58 @@ pub const MOVING_STEP_RAD: f64 = 1e-5;
 pub const REST_SPEED: f64 = 1e-3;
 /// Braking time constant `T_b` (s).
 pub const BRAKE_TIME: f64 = 0.03;
+/// The look-back of the growth rule ([`DivergenceRule::Growth`], s): the
+/// error now is compared with the largest error between `2·W` and `W` ago.
+pub const GROWTH_WINDOW_S: f64 = 0.5;
+/// The growth factor of the growth rule: an error (beyond the floor) at
+/// least this many times the largest error of the look-back window grows.
+pub const GROWTH_FACTOR: f64 = 4.0;
+/// A joint error beyond this (rad, half a turn) is a divergence under the
+/// growth rule whatever its history: no stable tracking controller holds an
+/// offset of half a turn.
+pub const GROWTH_CEILING_RAD: f64 = std::f64::consts::PI;
+
+/// How the loop judges a run unstable ("diverged").
+///
+/// An offset is a result, divergence is growth: a stable controller whose
+/// model misses a heavy payload (the usual MPC) settles at a large steady
+/// offset, which must complete and be reported, while an unstable loop's
+/// error grows geometrically (the spectral radius of its linearisation is
+/// above 1; `analysis::stability`). With `ε_k = max_i |w_i − q_i|` (the true
+/// joint error at sample `k`) and the floor `f` = the divergence threshold:
+/// * [`DivergenceRule::Growth`] (the default): diverged when `ε_k > f` and
+///   either `ε_k ≥` [`GROWTH_FACTOR`] `· max{ε_j : k − 2M ≤ j < k − M}`
+///   (`M` = [`GROWTH_WINDOW_S`]`/Ts` samples, or half the samples so far at
+///   the start of a run, not before `M/2` samples: the error quadrupled
+///   within a second), or a joint
+///   is beyond its position limits, or `ε_k >` [`GROWTH_CEILING_RAD`]. A
+///   step disturbance at the start (a payload that sags the arm within
+///   0.1–0.3 s) rises by less than the factor against the look-back, an
+///   instability keeps growing (the paper's unstable runs grow 2–4× per
+///   0.1 s). A payload picked up mid-path that moves a small error beyond
+///   the floor within a second reads as growth (a limit of the rule).
+/// * [`DivergenceRule::Threshold`]: diverged when `ε_k > f` (the rule of
+///   earlier versions; a scenario that sets `divergence_threshold_rad`
+///   without `divergence` gets it).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DivergenceRule {
+    /// Growth beyond the threshold as a floor (above).
+    #[default]
+    Growth,
+    /// The threshold alone.
+    Threshold,
+}
+
+impl DivergenceRule {
+    /// `"growth"` or `"threshold"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            DivergenceRule::Growth => "growth",
+            DivergenceRule::Threshold => "threshold",
+        }
+    }
+}
 
 /// Why the loop stopped the robot.
 #[derive(Debug, Clone, PartialEq)]
@@ -563,8 +615,11 @@ impl SafeStop {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SupervisorSettings {
     /// A joint error (reference − true position) beyond this (rad) is a
-    /// divergence: a safe stop with [`Self::safe_stop`], else the run ends.
+    /// divergence (with [`DivergenceRule::Growth`]: when it also grows): a
+    /// safe stop with [`Self::safe_stop`], else the run ends.
     pub divergence_threshold_rad: f64,
+    /// How a divergence is recognised ([`DivergenceRule`]).
+    pub divergence: DivergenceRule,
     /// Check each measurement ([`Plausibility`]) and replace rejected values
     /// by predictions.
     pub plausibility_check: bool,
@@ -620,6 +675,10 @@ pub struct Supervisor {
     /// frozen joint from its last good reading.
     x_hist: Vec<f64>,
     tau_hist: Vec<f64>,
+    /// The growth rule's history of `ε` (a ring of `2M` samples,
+    /// [`Self::sized_for`]) and how many samples were judged.
+    errors: Vec<f64>,
+    judged: usize,
 }
 
 impl Supervisor {
@@ -642,7 +701,22 @@ impl Supervisor {
             upper: robot.upper_limits(),
             x_hist: vec![0.0; (FROZEN_SAMPLES + 1) * 2 * n],
             tau_hist: vec![0.0; FROZEN_SAMPLES * n],
+            errors: Vec::new(),
+            judged: 0,
         }
+    }
+
+    /// Sizes the growth rule's history for the control period `ts` (s):
+    /// needed by [`Self::judge`] with [`DivergenceRule::Growth`] (without
+    /// it only the limits and the ceiling judge growth).
+    pub fn sized_for(mut self, ts: f64) -> Self {
+        let m = if ts.is_finite() && ts > 0.0 {
+            ((GROWTH_WINDOW_S / ts).round() as usize).clamp(1, 1_000_000)
+        } else {
+            1
+        };
+        self.errors = vec![0.0; 2 * m];
+        self
     }
 
     /// What it was built with.
@@ -661,6 +735,7 @@ impl Supervisor {
         }
         self.tau_hist.fill(0.0);
         self.stop = None;
+        self.judged = 0;
     }
 
     /// Judges the reading `x` (2n, after the sensor) against the reference
@@ -772,9 +847,62 @@ impl Supervisor {
         }
     }
 
+    /// Judges the true position `q` against the reference `w` after a
+    /// sample by the settings' [`DivergenceRule`] and records the error for
+    /// the growth rule: the joint with the largest error and its error
+    /// `w − q` when the run diverges; `None` during a stop. Allocates
+    /// nothing.
+    pub fn judge(&mut self, w: &[f64], q: &[f64]) -> Option<(usize, f64)> {
+        if self.stop.is_some() {
+            return None;
+        }
+        if self.settings.divergence == DivergenceRule::Threshold {
+            return self.divergence(w, q);
+        }
+        let n = self.n;
+        let (mut joint, mut eps) = (0, 0.0_f64);
+        for i in 0..n {
+            let e = (w[i] - q[i]).abs();
+            if e > eps || e.is_nan() {
+                (joint, eps) = (i, e);
+            }
+        }
+        let grew = eps > self.settings.divergence_threshold_rad && self.grew(eps, q);
+        let len = self.errors.len();
+        if len > 0 {
+            self.errors[self.judged % len] = eps;
+        }
+        self.judged += 1;
+        grew.then(|| (joint, w[joint] - q[joint]))
+    }
+
+    /// The growth rule's test of an error `eps` beyond the floor
+    /// ([`DivergenceRule`]).
+    fn grew(&self, eps: f64, q: &[f64]) -> bool {
+        if eps > GROWTH_CEILING_RAD
+            || (0..self.n).any(|i| q[i] < self.lower[i] || q[i] > self.upper[i])
+        {
+            return true;
+        }
+        let len = self.errors.len();
+        let m = (len / 2).min(self.judged / 2);
+        // The first half window of a run (0.25 s) is the settling of the
+        // start (a payload sagging the arm): only the limits and the
+        // ceiling judge it.
+        if m == 0 || self.judged < len / 4 {
+            return false;
+        }
+        let from = self.judged - 2 * m;
+        let past = (from..from + m)
+            .map(|j| self.errors[j % len])
+            .fold(0.0, f64::max);
+        eps >= GROWTH_FACTOR * past
+    }
+
     /// The first joint whose error `w − q` (reference, true position) is
     /// beyond the divergence threshold, with the error; `None` during a
-    /// stop.
+    /// stop. The threshold rule alone ([`Self::judge`] applies the
+    /// settings' rule).
     pub fn divergence(&self, w: &[f64], q: &[f64]) -> Option<(usize, f64)> {
         if self.stop.is_some() {
             return None;
