@@ -101,6 +101,8 @@ impl Scenario {
             return Err(ScenarioError::NoPayloads);
         }
         let (robot, mut warnings) = load_robot(&f.robot.model, f.robot.drives.as_deref())?;
+        // Runs and the stability analysis need the dynamics: every moving link's inertial.
+        robot.require_inertials()?;
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)

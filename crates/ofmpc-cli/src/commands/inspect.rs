@@ -18,6 +18,7 @@ fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
 /// Prints `{"robot", "dof", "q", "qd", "qdd", "H", "C", "g", "tau", "flange": {"position", "rotation"}}`.
 pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
     let robot = load_robot(&a.robot, a.payload)?;
+    robot.require_inertials()?;
     let n = robot.dof();
     let q = parse_vector("--q", &a.q, Some(n))?;
     let zeros = vec![0.0; n];

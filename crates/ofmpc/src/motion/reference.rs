@@ -5,11 +5,13 @@
 //!
 //! [`build_reference`] maps a timed Cartesian path to joint space by inverse
 //! kinematics: analytic (OPW) when the robot declares its OPW parameters
-//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric (damped
-//! least squares seeded by the previous sample).
+//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric: damped
+//! least squares from the previous sample (continuation: one branch along the path), and
+//! for the first sample, or when that fails, from the start pose
+//! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
 use crate::dynamics::RobotDynamics;
-use crate::ik::{ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings};
+use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings};
 use crate::motion::trajectory::CartesianTrajectory;
 use crate::robot::Robot;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -102,8 +104,9 @@ pub struct ReferenceError {
 /// How the flange orientation along the path is chosen: constant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Orientation {
-    /// The flange orientation of the robot at q = 0 (the IRB 140: tool axis
-    /// along base +x, as in the paper).
+    /// The flange (TCP) orientation of the robot at its start pose ([`Robot::start_q`]:
+    /// q = 0 by default, where that is inside the limits; the IRB 140: tool axis along
+    /// base +x, as in the paper).
     #[default]
     AtZero,
     /// A fixed rotation of the flange in the base frame.
@@ -112,11 +115,11 @@ pub enum Orientation {
 
 enum Ik {
     Analytic(Box<IkSolver>),
-    Numeric(Box<NumericIk>),
+    Numeric(Box<RobustIk>),
 }
 
 /// Flange positions → joint positions along a path, each solution the one nearest to the
-/// previous (the first nearest to q = 0), with a constant orientation. Shared by the
+/// previous (the first nearest to the start pose), with a constant orientation. Shared by the
 /// reference sampler and the planner's joint-limit grid.
 pub(crate) struct JointMap {
     fk: RobotDynamics,
@@ -131,7 +134,7 @@ impl JointMap {
         let n = robot.dof();
         let mut fk = RobotDynamics::new(robot.clone());
         let rotation = match orientation {
-            Orientation::AtZero => fk.flange_pose(&vec![0.0; n]).rotation,
+            Orientation::AtZero => fk.flange_pose(robot.start_q()).rotation,
             Orientation::Fixed(r) => r,
         };
         let lower = robot.lower_limits();
@@ -145,11 +148,12 @@ impl JointMap {
             _ => {
                 let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
                 let up: Vec<f64> = upper.iter().map(|v| v.min(1e6)).collect();
-                Ik::Numeric(Box::new(NumericIk::new(
+                Ik::Numeric(Box::new(RobustIk::new(
                     n,
                     &lo,
                     &up,
-                    NumericIkSettings::default(),
+                    robot.start_q(),
+                    RobustIkSettings::default(),
                 )?))
             }
         };
@@ -157,14 +161,14 @@ impl JointMap {
             fk,
             ik,
             rotation,
-            prev: vec![0.0; n],
+            prev: robot.start_q().to_vec(),
             robot: robot.clone(),
         })
     }
 
-    /// Restarts from q = 0 (the next solution is the one nearest to it).
+    /// Restarts from the start pose (the next solution is the one nearest to it).
     pub(crate) fn reset(&mut self) {
-        self.prev.fill(0.0);
+        self.prev.copy_from_slice(self.robot.start_q());
     }
 
     /// The joint positions at flange position `p`, nearest to the previous solution; they
@@ -238,8 +242,8 @@ pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
 ///
 /// Checks every sample: reachable, within the joint limits, and each joint's
 /// step within its speed limit times `ts`. The first sample takes the
-/// solution closest to q = 0 (within limits); each later one the solution
-/// closest to the previous sample. Refuses, before allocating, a path that
+/// solution closest to the start pose ([`Robot::start_q`], within limits); each later
+/// one the solution closest to the previous sample. Refuses, before allocating, a path that
 /// needs more than [`MAX_PLAN_VALUES`] values.
 pub fn build_reference(
     robot: &Robot,
