@@ -127,6 +127,8 @@ pub(crate) struct JointMap {
     rotation: UnitQuaternion<f64>,
     prev: Vec<f64>,
     robot: Robot,
+    /// The flange in the TCP frame (`tcp⁻¹`): the analytic IK solves for the flange.
+    tcp_inverse: Isometry3<f64>,
 }
 
 impl JointMap {
@@ -163,6 +165,7 @@ impl JointMap {
             rotation,
             prev: robot.start_q().to_vec(),
             robot: robot.clone(),
+            tcp_inverse: robot.tcp().to_isometry().inverse(),
         })
     }
 
@@ -175,10 +178,11 @@ impl JointMap {
     /// become the previous solution.
     pub(crate) fn solve(&mut self, p: &Vector3<f64>) -> Result<&[f64], ReferenceFailure> {
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
+        let flange = self.flange_pose(&pose);
         match &mut self.ik {
             Ik::Analytic(s) => {
                 let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
-                let q = s.solve_near(&pose, &hint).map_err(ReferenceFailure::Ik)?;
+                let q = s.solve_near(&flange, &hint).map_err(ReferenceFailure::Ik)?;
                 self.prev.copy_from_slice(&q);
             }
             Ik::Numeric(num) => {
@@ -191,6 +195,16 @@ impl JointMap {
         Ok(&self.prev)
     }
 
+    /// The flange pose of a TCP pose (the pose itself when the TCP is the flange: bit for
+    /// bit the pose the analytic IK solved before TCPs).
+    fn flange_pose(&self, tcp_pose: &Isometry3<f64>) -> Isometry3<f64> {
+        if self.robot.tcp_is_identity() {
+            *tcp_pose
+        } else {
+            tcp_pose * self.tcp_inverse
+        }
+    }
+
     /// When the analytic solution jumps to another configuration, whether the continuous
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
@@ -201,7 +215,7 @@ impl JointMap {
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
         let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
         let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
-        let q = wide.solve_near(&pose, &hint).ok()?;
+        let q = wide.solve_near(&self.flange_pose(&pose), &hint).ok()?;
         self.robot.joints().iter().enumerate().find_map(|(i, j)| {
             (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
                 ReferenceFailure::BranchLimit {

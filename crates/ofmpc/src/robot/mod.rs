@@ -199,6 +199,26 @@ pub struct Robot {
     missing_inertials: Vec<(String, String)>,
 }
 
+/// Which inverse kinematics the planner uses for a robot ([`Robot::ik_method`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum IkMethod {
+    /// The closed form of ortho-parallel arms with a spherical wrist ([`OpwParameters`]).
+    Opw,
+    /// Multi-start damped least squares within the joint limits ([`crate::ik::RobustIk`]).
+    Numeric,
+}
+
+impl IkMethod {
+    /// A one-line description (e.g. for `inspect robot`).
+    pub fn description(&self) -> &'static str {
+        match self {
+            IkMethod::Opw => "analytic: OPW closed form (ortho-parallel arm, spherical wrist; up to 8 branches)",
+            IkMethod::Numeric => "numeric: damped least squares within the joint limits, multi-start (start pose, limits' centre, Halton points), null-space posture for redundant arms",
+        }
+    }
+}
+
 /// How to cut a kinematic chain out of a URDF and where its tool is: the options of
 /// [`Robot::from_urdf_str_with`] and [`Robot::from_urdf_file_with`].
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -232,6 +252,14 @@ impl Robot {
     /// has them ([`OpwParameters::irb140`]); a robot loaded from a URDF has none.
     pub fn opw_parameters(&self) -> Option<&OpwParameters> {
         self.opw.as_ref()
+    }
+
+    /// The inverse kinematics the planner uses for this robot.
+    pub fn ik_method(&self) -> IkMethod {
+        match self.opw {
+            Some(_) if self.dof() == 6 => IkMethod::Opw,
+            _ => IkMethod::Numeric,
+        }
     }
 
     /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
