@@ -155,3 +155,72 @@ fn the_chain_ends_at_the_tip_and_a_named_end_effector_beats_a_finger() {
     let (dp, dr) = distance(&expected, &with_tcp);
     assert!(dp < 1e-15 && dr < 1e-14, "{dp} {dr}");
 }
+
+/// A 100 mm wide path with a semicircle around the tool point of a mid-range pose: planned
+/// (G61, 10 ms) on every arm, each sample's joint step small (no branch flip: the planner
+/// also refuses a step beyond a joint's speed limit).
+#[test]
+fn a_square_with_an_arc_stays_on_one_branch_on_eight_arms() {
+    use ofmpc::gcode::ParseOptions;
+    use ofmpc::motion::{plan, PlanOptions};
+    let program = "G21 G90 G17\nG0 X0 Y0 Z0\nG1 X50 F1200\nG1 X50 Y100\nG3 X-50 Y100 I-50 J0\nG1 X-50 Y0\nG1 X0 Y0\n";
+    let pose = [0.3, -0.8, 1.2, -0.6, 0.9, 0.4, 0.2];
+    for (name, file, tip) in ARMS {
+        let mut robot = load(file, tip);
+        // A mid-range pose: the values above where they are inside the limits, else the
+        // point 30 % into the range.
+        let q = robot
+            .joints()
+            .iter()
+            .zip(pose)
+            .map(|(j, v)| {
+                let (lo, hi) = (j.limits.lower.max(-3.0), j.limits.upper.min(3.0));
+                if v > lo && v < hi {
+                    v
+                } else {
+                    lo + 0.3 * (hi - lo)
+                }
+            })
+            .collect::<Vec<f64>>();
+        let mut q = q;
+        if name == "UR3" {
+            // The UR3 reaches 0.5 m: fold the arm so that the path lies inside.
+            (q[1], q[2]) = (-1.3, 2.0);
+        }
+        if name == "Panda" {
+            // Franka's ready pose (from the generic pose above the path brings joint 3
+            // towards its limit, where the continuation jumps: see the report of #19).
+            q = vec![0.0, -0.785, 0.0, -2.356, 0.0, 1.571, 0.785];
+        }
+        if name == "iiwa" || name == "LWR" {
+            // Elbow bent (the generic pose stretches the KUKAs towards their reach).
+            q = vec![0.0, 0.6, 0.0, -1.4, 0.0, 0.9, 0.0];
+        }
+        robot.set_start_q(&q).unwrap();
+        let mut fk = RobotDynamics::new(robot.clone());
+        let p = fk.flange_pose(&q).translation.vector;
+        let options = PlanOptions {
+            parse: ParseOptions {
+                origin: Some([p.x, p.y - 0.05, p.z]),
+            },
+            ..PlanOptions::default()
+        };
+        let planned = plan(program, &robot, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let r = &planned.reference;
+        let n = robot.dof();
+        let mut max_step: f64 = 0.0;
+        for k in 1..r.len() {
+            for i in 0..n {
+                max_step = max_step.max((r.q(k)[i] - r.q(k - 1)[i]).abs());
+            }
+        }
+        println!(
+            "{name:7} path: {} samples, largest joint step {max_step:.4} rad",
+            r.len()
+        );
+        assert!(
+            max_step < 0.05,
+            "{name}: a joint steps {max_step} rad in one sample"
+        );
+    }
+}

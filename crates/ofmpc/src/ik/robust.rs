@@ -20,8 +20,10 @@
 //! used to bring the arm towards the start pose: steps `δ = −(I − J⁺J)·k·(q − q_start)`
 //! in the null space of the Jacobian (Liégeois 1977; Siciliano et al., *Robotics*,
 //! eq. 3.54), each followed by a damped-least-squares polish back onto the pose, accepted
-//! only when the distance to the start pose decreases. The solution then depends on the
-//! pose, not on the iteration's path, and a path does not drift along the self-motion.
+//! only when the distance to the start pose decreases. A fresh solve takes up to
+//! [`RobustIkSettings::posture_steps`] such steps; a continuation (the seed, the previous
+//! sample, converged) one step of [`RobustIkSettings::continuation_gain`], so that a path
+//! moves smoothly and does not drift along the self-motion.
 
 use nalgebra::{DMatrix, Isometry3};
 
@@ -39,6 +41,9 @@ pub struct RobustIkSettings {
     pub posture_steps: usize,
     /// Gain `k` of the null-space step (fraction of the distance per step). Default 0.5.
     pub posture_gain: f64,
+    /// Gain of the one null-space step of a continuation (the seed converged: along a
+    /// path). Default 0.01.
+    pub continuation_gain: f64,
 }
 
 impl Default for RobustIkSettings {
@@ -48,6 +53,7 @@ impl Default for RobustIkSettings {
             halton_starts: 96,
             posture_steps: 20,
             posture_gain: 0.5,
+            continuation_gain: 0.01,
         }
     }
 }
@@ -150,15 +156,17 @@ impl RobustIk {
         if !start_q.iter().all(|x| x.is_finite()) {
             return Err(IkError::NonFinite { what: "start pose" });
         }
-        if !(settings.posture_gain.is_finite()
-            && settings.posture_gain > 0.0
-            && settings.posture_gain <= 1.0)
-        {
-            return Err(IkError::InvalidParameter {
-                name: "posture_gain",
-                value: settings.posture_gain,
-                requirement: "must be in (0, 1]",
-            });
+        for (name, value) in [
+            ("posture_gain", settings.posture_gain),
+            ("continuation_gain", settings.continuation_gain),
+        ] {
+            if !(value.is_finite() && value > 0.0 && value <= 1.0) {
+                return Err(IkError::InvalidParameter {
+                    name,
+                    value,
+                    requirement: "must be in (0, 1]",
+                });
+            }
         }
         let m = 2 + settings.halton_starts;
         let mut starts = Vec::with_capacity(m * n);
@@ -242,7 +250,18 @@ impl RobustIk {
                         orientation_error: r.orientation_error,
                     };
                     if n > 6 {
-                        self.posture(fk, target, &mut report)?;
+                        // A fresh solve goes to the posture optimum; a continuation (the
+                        // seed converged) takes one small step towards it, so that a path
+                        // moves smoothly along the self-motion.
+                        let (steps, gain) = if s == 0 {
+                            (
+                                self.settings.posture_steps.min(1),
+                                self.settings.continuation_gain,
+                            )
+                        } else {
+                            (self.settings.posture_steps, self.settings.posture_gain)
+                        };
+                        self.posture(fk, target, &mut report, steps, gain)?;
                     }
                     q.copy_from_slice(&self.q);
                     return Ok(report);
@@ -296,18 +315,19 @@ impl RobustIk {
         fk: &mut F,
         target: &Isometry3<f64>,
         report: &mut RobustIkReport,
+        steps: usize,
+        k: f64,
     ) -> Result<(), IkError> {
         let n = self.n;
         let dist =
             |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum() };
         let mut d = dist(&self.q, &self.start_q);
-        for _ in 0..self.settings.posture_steps {
+        for _ in 0..steps {
             if d <= 1e-24 {
                 break;
             }
             fk.flange_jacobian(&self.q, &mut self.jac);
             // z = −k (q − q_start); δ = z − Jᵀ (J Jᵀ + μI)⁻¹ J z: the null-space projection.
-            let k = self.settings.posture_gain;
             for i in 0..n {
                 self.trial[i] = -k * (self.q[i] - self.start_q[i]);
             }

@@ -100,7 +100,7 @@ pub enum UrdfError {
         joint: String,
     },
     /// Two moving joints leave one link.
-    #[error("not a serial chain: link '{link}' branches into moving joints {joints:?}; only one path of moving joints is supported (fixed side branches are fine)")]
+    #[error("not a serial chain: link '{link}' branches into moving joints {joints:?}; only one path of moving joints is supported (fixed side branches are fine): choose the chain's tip link (the flange, e.g. tool0 or a hand) to hold the other branches rigid")]
     NotSerial {
         /// The link.
         link: String,
