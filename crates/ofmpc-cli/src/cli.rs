@@ -68,6 +68,9 @@ pub struct TrajectoryArgs {
     /// Drives file for a URDF robot.
     #[arg(long)]
     pub drives: Option<PathBuf>,
+    /// Tip, tool centre point and start pose.
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// G54 work offset X,Y,Z in mm, for programs that set none.
     #[arg(long, allow_hyphen_values = true)]
     pub origin: Option<String>,
@@ -222,6 +225,33 @@ pub struct RobotArgs {
     /// built-in IRB 140 has its own; a URDF has none by default.
     #[arg(long)]
     pub drives: Option<PathBuf>,
+    /// Tip, tool centre point and start pose.
+    #[command(flatten)]
+    pub chain: ChainArgs,
+}
+
+/// The robot's chain and tool (as the scenario's `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
+/// `start_q`).
+#[derive(Debug, Args, Clone, Default)]
+pub struct ChainArgs {
+    /// The URDF link that ends the chain (the flange); joints beyond it or on other
+    /// branches are held rigid (e.g. --tip panda_hand for a Panda with fingers). Default:
+    /// the one path of moving joints, ending at tool0, flange or an end-effector link.
+    #[arg(long)]
+    pub tip: Option<String>,
+    /// Tool centre point X,Y,Z in mm, in the tip's frame: planning, IK, metrics and
+    /// figures use it. Default: the tip itself.
+    #[arg(long, allow_hyphen_values = true)]
+    pub tcp: Option<String>,
+    /// Orientation of the tool centre point relative to the tip: roll,pitch,yaw in degrees
+    /// (R = Rz·Ry·Rx).
+    #[arg(long = "tcp-rpy", allow_hyphen_values = true)]
+    pub tcp_rpy: Option<String>,
+    /// Start pose, one value per joint, comma-separated (rad; m for a prismatic joint):
+    /// the robot's initial state and the IK's first seed. Default: q = 0 where that is
+    /// inside the limits, else the limits' centre.
+    #[arg(long = "start-q", allow_hyphen_values = true)]
+    pub start_q: Option<String>,
 }
 
 /// `ofmpc inspect dynamics`

@@ -6,7 +6,7 @@ use crate::errors::to_py;
 use nalgebra::{Matrix3, Vector3};
 use numpy::{PyArray1, PyArray2};
 use ofmpc::dynamics::{self, RobotDynamics};
-use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
@@ -33,18 +33,59 @@ impl PyRobot {
         }
     }
 
-    /// A robot from a URDF file, with an optional drives file (TOML: armature and limits).
+    /// A robot from a URDF file, with an optional drives file (TOML: armature and limits),
+    /// the link that ends the chain (`tip`: joints beyond it or on other branches are held
+    /// rigid), the tool centre point relative to the tip (`tcp`: a 4×4 homogeneous matrix,
+    /// m) and the start pose (`start_q`, one value per joint within the limits).
     #[staticmethod]
-    #[pyo3(signature = (path, drives=None))]
-    fn from_urdf(path: PathBuf, drives: Option<PathBuf>) -> PyResult<Self> {
-        let mut robot = Robot::from_urdf_file(&path).map_err(to_py)?;
+    #[pyo3(signature = (path, drives=None, tip=None, tcp=None, start_q=None))]
+    fn from_urdf(
+        path: PathBuf,
+        drives: Option<PathBuf>,
+        tip: Option<String>,
+        tcp: Option<Matrix<'_>>,
+        start_q: Option<Vector<'_>>,
+    ) -> PyResult<Self> {
+        let tcp = match tcp {
+            None => None,
+            Some(m) => {
+                let a = m.as_array();
+                if a.shape() != [4, 4] {
+                    return Err(to_py(format!(
+                        "tcp has shape {:?}: give a 4×4 homogeneous matrix (rotation, position in m)",
+                        a.shape()
+                    )));
+                }
+                Some(ofmpc::spatial::Transform {
+                    rot: Matrix3::from_fn(|r, c| a[[r, c]]),
+                    pos: Vector3::new(a[[0, 3]], a[[1, 3]], a[[2, 3]]),
+                })
+            }
+        };
+        let options = ChainOptions { tip, tcp };
+        let mut robot = Robot::from_urdf_file_with(&path, &options).map_err(to_py)?;
         if let Some(d) = drives {
             let drives = Drives::from_file(&d).map_err(to_py)?;
             robot.apply_drives(&drives).map_err(to_py)?;
         }
+        if let Some(q) = start_q {
+            robot.set_start_q(&vec_of(&q)).map_err(to_py)?;
+        }
         Ok(Self {
             dynamics: RobotDynamics::new(robot),
         })
+    }
+
+    /// The link that ends the chain (the flange frame's link).
+    #[getter]
+    fn tip(&self) -> String {
+        self.robot().flange_name().to_string()
+    }
+
+    /// The start pose (the IK's first seed and the initial state of a run).
+    #[getter]
+    fn start_q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        array1(py, self.robot().start_q())
     }
 
     /// Number of joints n.
@@ -181,7 +222,8 @@ impl PyRobot {
         Ok(array1(py, g.as_slice()))
     }
 
-    /// Flange pose in the base frame as a 4×4 homogeneous matrix.
+    /// Flange pose in the base frame as a 4×4 homogeneous matrix (the tool centre point's
+    /// when `from_urdf` was given a `tcp`).
     fn flange_pose<'py>(
         &mut self,
         py: Python<'py>,

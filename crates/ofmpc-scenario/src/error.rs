@@ -65,6 +65,14 @@ pub enum ScenarioError {
     /// The robot (built-in name or URDF) could not be loaded.
     #[error(transparent)]
     Robot(Box<ModelError>),
+    /// A `[robot]` key does not fit the robot (start pose, tip).
+    #[error("{key}: {error}")]
+    RobotKey {
+        /// The key, e.g. `"[robot] start_q"`.
+        key: &'static str,
+        /// Why.
+        error: Box<ModelError>,
+    },
     /// The drives file could not be read or applied.
     #[error("applying {}", path.display())]
     Drives {

@@ -22,6 +22,24 @@ pub struct RobotSection {
     pub model: String,
     /// Drives file (TOML) for a URDF; the built-in IRB 140 has its own.
     pub drives: Option<PathBuf>,
+    /// The start pose (rad; m for a prismatic joint), one value per joint, within the
+    /// limits: the robot's initial state and the inverse kinematics' first seed. Default
+    /// q = 0 where that is inside the limits, else the limits' centre.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_q: Option<Vec<f64>>,
+    /// The URDF link that ends the chain (the flange): joints beyond it, or on other
+    /// branches, are held rigid, so a hand with fingers loads. Default: the one path of
+    /// moving joints, ending at `tool0`, `flange` or an end-effector link if there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tip: Option<String>,
+    /// Tool centre point relative to the tip (mm, tip frame): planning, IK, metrics and
+    /// figures use it. Default: the tip itself.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tcp_mm: Option<[f64; 3]>,
+    /// Orientation of the tool centre point relative to the tip, roll, pitch, yaw (degrees,
+    /// R = Rz Ry Rx). Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tcp_rpy_deg: Option<[f64; 3]>,
 }
 
 impl Default for RobotSection {
@@ -29,6 +47,28 @@ impl Default for RobotSection {
         Self {
             model: "irb140".into(),
             drives: None,
+            start_q: None,
+            tip: None,
+            tcp_mm: None,
+            tcp_rpy_deg: None,
+        }
+    }
+}
+
+impl RobotSection {
+    /// The chain options of `tip`, `tcp_mm` and `tcp_rpy_deg`.
+    pub fn chain_options(&self) -> ofmpc::robot::ChainOptions {
+        let tcp = (self.tcp_mm.is_some() || self.tcp_rpy_deg.is_some()).then(|| {
+            let p = self.tcp_mm.unwrap_or([0.0; 3]);
+            let r = self.tcp_rpy_deg.unwrap_or([0.0; 3]);
+            ofmpc::spatial::Transform::from_xyz_rpy(
+                [p[0] * 1e-3, p[1] * 1e-3, p[2] * 1e-3],
+                [r[0].to_radians(), r[1].to_radians(), r[2].to_radians()],
+            )
+        });
+        ofmpc::robot::ChainOptions {
+            tip: self.tip.clone(),
+            tcp,
         }
     }
 }

@@ -7,7 +7,7 @@ use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use ofmpc::control::ControllerKind;
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::{plan, CartesianTrajectory, Orientation, PlanOptions, TimingOptions};
-use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, PlantSettings};
 use std::path::Path;
 
@@ -35,11 +35,40 @@ pub fn load_robot(
     model: &str,
     drives: Option<&Path>,
 ) -> Result<(Robot, Vec<String>), ScenarioError> {
+    load_robot_with(model, drives, &ChainOptions::default())
+}
+
+/// Loads the robot of a `[robot]` section: model, drives, tip, tool centre point and start
+/// pose. Returns the robot and the warnings to show.
+pub fn load_robot_section(
+    section: &crate::file::RobotSection,
+) -> Result<(Robot, Vec<String>), ScenarioError> {
+    let (mut robot, warnings) = load_robot_with(
+        &section.model,
+        section.drives.as_deref(),
+        &section.chain_options(),
+    )?;
+    if let Some(q) = &section.start_q {
+        robot.set_start_q(q).map_err(|e| ScenarioError::RobotKey {
+            key: "[robot] start_q",
+            error: Box::new(e),
+        })?;
+    }
+    Ok((robot, warnings))
+}
+
+/// [`load_robot`] with a chosen tip and tool centre point ([`ChainOptions`]); the built-in
+/// robot takes the tool centre point and refuses a tip other than its flange.
+pub fn load_robot_with(
+    model: &str,
+    drives: Option<&Path>,
+    chain: &ChainOptions,
+) -> Result<(Robot, Vec<String>), ScenarioError> {
     let path = Path::new(model);
     let from_urdf = model.ends_with(".urdf") || path.is_file();
     let mut warnings = Vec::new();
     let mut robot = if from_urdf {
-        let robot = Robot::from_urdf_file(path)?;
+        let robot = Robot::from_urdf_file_with(path, chain)?;
         warnings.extend(
             robot
                 .warnings()
@@ -48,7 +77,23 @@ pub fn load_robot(
         );
         robot
     } else {
-        Robot::builtin(model)?
+        let mut robot = Robot::builtin(model)?;
+        if let Some(tip) = chain.tip.as_deref().filter(|t| *t != robot.flange_name()) {
+            return Err(ScenarioError::RobotKey {
+                key: "[robot] tip",
+                error: Box::new(
+                    ofmpc::robot::UrdfError::UnknownTip {
+                        tip: tip.to_string(),
+                        links: vec![robot.flange_name().to_string()],
+                    }
+                    .into(),
+                ),
+            });
+        }
+        if let Some(t) = chain.tcp {
+            robot.set_tcp(t)?;
+        }
+        robot
     };
     if let Some(d) = drives {
         let drives_error = |source| ScenarioError::Drives {
@@ -100,7 +145,9 @@ impl Scenario {
         if f.payload.masses_kg.is_empty() {
             return Err(ScenarioError::NoPayloads);
         }
-        let (robot, mut warnings) = load_robot(&f.robot.model, f.robot.drives.as_deref())?;
+        let (robot, mut warnings) = load_robot_section(&f.robot)?;
+        // Runs and the stability analysis need the dynamics: every moving link's inertial.
+        robot.require_inertials()?;
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)

@@ -144,6 +144,13 @@ impl Transform {
             pos: -(rt * self.pos),
         }
     }
+    /// From a nalgebra isometry (rotation matrix of its unit quaternion).
+    pub fn from_isometry(x: &nalgebra::Isometry3<f64>) -> Self {
+        Self {
+            rot: x.rotation.to_rotation_matrix().into_inner(),
+            pos: x.translation.vector,
+        }
+    }
     /// As a nalgebra isometry (rotation re-orthonormalized through a quaternion).
     pub fn to_isometry(&self) -> nalgebra::Isometry3<f64> {
         let r = nalgebra::UnitQuaternion::from_rotation_matrix(

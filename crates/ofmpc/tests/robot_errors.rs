@@ -49,11 +49,22 @@ fn fixed_side_branches_are_allowed_and_add_their_mass() {
 
 #[test]
 fn missing_inertial_is_named() {
+    // Issue #19: the file loads for kinematics (with a warning); what needs the dynamics
+    // asks `require_inertials`, which names the link, its joint and what to add.
     let t = format!(
         "<robot name=\"m\"><link name=\"b\"/><link name=\"l\"/>{}</robot>",
         joint("j", "revolute", "b", "l")
     );
-    let e = err(&t);
+    let r = Robot::from_urdf_str(&t).unwrap();
+    assert!(
+        r.warnings()
+            .iter()
+            .any(|w| w.to_string().contains("'l'") || w.to_string().contains(" l ")),
+        "{:?}",
+        r.warnings()
+    );
+    let e = r.require_inertials().unwrap_err().to_string();
+    assert!(e.contains("<inertial>") && e.contains("<mass"), "{e}");
     assert!(
         e.contains("link 'l'") && e.contains("no inertial") && e.contains("joint 'j'"),
         "{e}"
@@ -264,10 +275,31 @@ fn urdf_limits_follow_the_specification() {
         );
         assert!(e.to_string().contains("URDF specification"), "{e}");
     }
-    // velocity or effort ≤ 0.
+    // velocity or effort = 0: "not given" as ROS tools read it (issue #19), a warning and
+    // no limit; < 0: an error.
+    for attr in ["velocity", "effort"] {
+        let lim = if attr == "velocity" {
+            "<limit lower=\"-1\" upper=\"1\" velocity=\"0\" effort=\"30\"/>"
+        } else {
+            "<limit lower=\"-1\" upper=\"1\" velocity=\"2\" effort=\"0\"/>"
+        };
+        let r = Robot::from_urdf_str(&one_joint(lim, "", "revolute")).unwrap();
+        let l = r.joints()[0].limits;
+        let unlimited = if attr == "velocity" {
+            l.velocity
+        } else {
+            l.effort
+        };
+        assert_eq!(unlimited, f64::INFINITY);
+        assert!(
+            matches!(&r.warnings()[0], UrdfWarning::UnspecifiedLimit { attribute, .. } if *attribute == attr),
+            "{:?}",
+            r.warnings()
+        );
+    }
     for (lim, attr) in [
         (
-            "<limit lower=\"-1\" upper=\"1\" velocity=\"0\" effort=\"30\"/>",
+            "<limit lower=\"-1\" upper=\"1\" velocity=\"-1\" effort=\"30\"/>",
             "velocity",
         ),
         (

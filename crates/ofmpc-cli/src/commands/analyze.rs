@@ -55,6 +55,15 @@ pub struct SetupArgs {
     /// G54 work offset X,Y,Z in mm, for programs that set none.
     #[arg(long, allow_hyphen_values = true)]
     pub origin: Option<String>,
+    /// Constant tool orientation as roll,pitch,yaw in degrees (base frame, R = Rz·Ry·Rx),
+    /// as `trajectory --rpy` and `[orientation] rpy_deg`; default: the orientation at the
+    /// start pose.
+    #[arg(long, allow_hyphen_values = true)]
+    pub rpy: Option<String>,
+    /// Tip, tool centre point and start pose (as `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
+    /// `start_q`).
+    #[command(flatten)]
+    pub chain: crate::cli::ChainArgs,
 }
 
 /// Tuning options, as in `[mpc]` (default: the paper's).
@@ -173,6 +182,11 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
         let v = super::parse_vector("--origin", o, Some(3))?;
         f.program.origin_mm = Some([v[0], v[1], v[2]]);
     }
+    if let Some(r) = &setup.rpy {
+        let v = super::parse_fixed("--rpy", r, 3, "roll,pitch,yaw in degrees", "180,0,0")?;
+        f.orientation.rpy_deg = Some([v[0], v[1], v[2]]);
+    }
+    setup.chain.apply(&mut f.robot)?;
     f.mpc = mpc;
     Ok(f)
 }

@@ -18,6 +18,7 @@ fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
 /// Prints `{"robot", "dof", "q", "qd", "qdd", "H", "C", "g", "tau", "flange": {"position", "rotation"}}`.
 pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
     let robot = load_robot(&a.robot, a.payload)?;
+    robot.require_inertials()?;
     let n = robot.dof();
     let q = parse_vector("--q", &a.q, Some(n))?;
     let zeros = vec![0.0; n];
@@ -90,12 +91,22 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
         })
         .collect();
     let f = robot.flange_offset();
+    let t = robot.tcp();
+    let tcp_rpy = nalgebra::Rotation3::from_matrix_unchecked(t.rot).euler_angles();
     let out = json!({
         "robot": robot.name(),
         "dof": robot.dof(),
         "moving_mass_kg": robot.moving_mass(),
         "gravity": [robot.gravity().x, robot.gravity().y, robot.gravity().z],
         "flange": { "frame": robot.flange_name(), "offset_from_last_body_m": [f.pos.x, f.pos.y, f.pos.z] },
+        "tip": robot.flange_name(),
+        "tcp": {
+            "position_mm": [t.pos.x * 1e3, t.pos.y * 1e3, t.pos.z * 1e3],
+            "rpy_deg": [tcp_rpy.0.to_degrees(), tcp_rpy.1.to_degrees(), tcp_rpy.2.to_degrees()],
+        },
+        "start_q": robot.start_q(),
+        "ik_solver": robot.ik_method().description(),
+        "links_without_inertial": robot.require_inertials().err().map(|e| e.to_string()),
         "joints": joints,
     });
     console::println(&serde_json::to_string_pretty(&out)?)?;

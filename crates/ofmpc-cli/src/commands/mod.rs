@@ -11,7 +11,7 @@ pub mod tune;
 use crate::cli::{Analyze, Cli, Command, Init, Inspect};
 use ofmpc_scenario::{Override, Scenario, ScenarioError, ScenarioFile};
 
-pub(crate) use robot::{load_model, load_robot, parse_fixed, parse_vector};
+pub(crate) use robot::{load_model_with, load_robot, parse_fixed, parse_vector};
 
 /// Runs one command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {

@@ -69,7 +69,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         inputs.push(Input::new(d, "the drives file"));
     }
     check_destinations(&out_dir, &files, &inputs)?;
-    let robot = super::load_model(&a.robot, a.drives.as_deref())?;
+    let robot = super::load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
     let file =
         (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
     let (name, text) = read_program(file)?;

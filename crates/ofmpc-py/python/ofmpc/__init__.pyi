@@ -23,8 +23,15 @@ class Robot:
     def irb140() -> Robot:
         """The built-in ABB IRB 140 with its drives (armature, torque and speed limits)."""
     @staticmethod
-    def from_urdf(path: Union[str, os.PathLike[str]], drives: Optional[Union[str, os.PathLike[str]]] = None) -> Robot:
-        """A robot from a URDF file, with an optional drives file (TOML)."""
+    def from_urdf(path: Union[str, os.PathLike[str]], drives: Optional[Union[str, os.PathLike[str]]] = None, tip: Optional[str] = None, tcp: Optional[ArrayLike] = None, start_q: Optional[ArrayLike] = None) -> Robot:
+        """A robot from a URDF file, with an optional drives file (TOML), the link ending the
+        chain (tip), the tool centre point relative to it (tcp, 4×4, m) and the start pose."""
+    @property
+    def tip(self) -> str:
+        """The link that ends the chain."""
+    @property
+    def start_q(self) -> F64Array:
+        """The start pose (rad; m for a prismatic joint)."""
     @property
     def dof(self) -> int:
         """Number of joints n."""

@@ -57,11 +57,18 @@ pub(crate) fn fk_unchecked(robot: &Robot, ws: &mut Workspace, q: &[f64]) {
         };
         parent = pose;
     }
-    ws.flange = parent.compose(robot.flange_offset());
+    // The tool centre point (the flange unless a TCP is set; composed only then, so the
+    // flange pose is bit for bit what it was before TCPs).
+    ws.flange = if robot.tcp_is_identity() {
+        parent.compose(robot.flange_offset())
+    } else {
+        parent.compose(&robot.tool_offset())
+    };
 }
 
 /// Forward kinematics: the pose of every body (`ws.poses`, base frame) and of
-/// the flange (`ws.flange`, returned).
+/// the flange (`ws.flange`, returned) — the tool centre point when the robot has one
+/// ([`Robot::tcp`]).
 pub fn forward_kinematics<'w>(
     robot: &Robot,
     ws: &'w mut Workspace,
@@ -73,7 +80,7 @@ pub fn forward_kinematics<'w>(
     Ok(&ws.flange)
 }
 
-/// The geometric Jacobian of the flange, 6×n (`ws.jacobian`): `[ṗ; ω] = J q̇`,
+/// The geometric Jacobian of the flange (the tool centre point when set), 6×n (`ws.jacobian`): `[ṗ; ω] = J q̇`,
 /// with ṗ the velocity of the flange origin and ω the angular velocity, both in
 /// the base frame. Also runs forward kinematics.
 pub fn flange_jacobian<'w>(

@@ -35,10 +35,12 @@ use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 
 pub mod numeric;
 pub mod opw;
+pub mod robust;
 pub mod solver;
 
 pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
 pub use opw::{OpwParameters, OpwSolutions};
+pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
 pub use solver::IkSolver;
 
 /// What the numeric IK needs of a robot model: flange pose and geometric Jacobian.
@@ -148,6 +150,35 @@ pub enum IkError {
         position_error: f64,
         /// Remaining orientation error (rad) of the best iterate.
         orientation_error: f64,
+    },
+    /// No start of the multi-start IK ([`RobustIk`]) converged: the pose is out of
+    /// reach, or every configuration reaching it leaves a joint's limits.
+    #[error(
+        "no joint configuration within the limits reaches this pose (best of {starts} starts: \
+         remaining error {:.3e} m, {:.3e} rad{}); move the target into the workspace \
+         (work offset) or change the orientation",
+        position_error,
+        orientation_error,
+        match at_limit {
+            Some(h) => format!(
+                "; there joint {} is at {:.2}°, on its limit of [{:.2}°, {:.2}°]",
+                h.joint,
+                h.value.to_degrees(),
+                h.lower.to_degrees(),
+                h.upper.to_degrees()
+            ),
+            None => String::new(),
+        }
+    )]
+    NoSolution {
+        /// Starts tried.
+        starts: usize,
+        /// Remaining position error (m) of the best iterate.
+        position_error: f64,
+        /// Remaining orientation error (rad) of the best iterate.
+        orientation_error: f64,
+        /// A joint of the best iterate on its limit, if any.
+        at_limit: Option<IkLimitHit>,
     },
 }
 

@@ -5,11 +5,13 @@
 //!
 //! [`build_reference`] maps a timed Cartesian path to joint space by inverse
 //! kinematics: analytic (OPW) when the robot declares its OPW parameters
-//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric (damped
-//! least squares seeded by the previous sample).
+//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric: damped
+//! least squares from the previous sample (continuation: one branch along the path), and
+//! for the first sample, or when that fails, from the start pose
+//! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
 use crate::dynamics::RobotDynamics;
-use crate::ik::{ForwardKinematics, IkError, IkSolver, NumericIk, NumericIkSettings};
+use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings};
 use crate::motion::trajectory::CartesianTrajectory;
 use crate::robot::Robot;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -102,8 +104,9 @@ pub struct ReferenceError {
 /// How the flange orientation along the path is chosen: constant.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Orientation {
-    /// The flange orientation of the robot at q = 0 (the IRB 140: tool axis
-    /// along base +x, as in the paper).
+    /// The flange (TCP) orientation of the robot at its start pose ([`Robot::start_q`]:
+    /// q = 0 by default, where that is inside the limits; the IRB 140: tool axis along
+    /// base +x, as in the paper).
     #[default]
     AtZero,
     /// A fixed rotation of the flange in the base frame.
@@ -112,11 +115,11 @@ pub enum Orientation {
 
 enum Ik {
     Analytic(Box<IkSolver>),
-    Numeric(Box<NumericIk>),
+    Numeric(Box<RobustIk>),
 }
 
 /// Flange positions → joint positions along a path, each solution the one nearest to the
-/// previous (the first nearest to q = 0), with a constant orientation. Shared by the
+/// previous (the first nearest to the start pose), with a constant orientation. Shared by the
 /// reference sampler and the planner's joint-limit grid.
 pub(crate) struct JointMap {
     fk: RobotDynamics,
@@ -124,6 +127,8 @@ pub(crate) struct JointMap {
     rotation: UnitQuaternion<f64>,
     prev: Vec<f64>,
     robot: Robot,
+    /// The flange in the TCP frame (`tcp⁻¹`): the analytic IK solves for the flange.
+    tcp_inverse: Isometry3<f64>,
 }
 
 impl JointMap {
@@ -131,7 +136,7 @@ impl JointMap {
         let n = robot.dof();
         let mut fk = RobotDynamics::new(robot.clone());
         let rotation = match orientation {
-            Orientation::AtZero => fk.flange_pose(&vec![0.0; n]).rotation,
+            Orientation::AtZero => fk.flange_pose(robot.start_q()).rotation,
             Orientation::Fixed(r) => r,
         };
         let lower = robot.lower_limits();
@@ -145,11 +150,12 @@ impl JointMap {
             _ => {
                 let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
                 let up: Vec<f64> = upper.iter().map(|v| v.min(1e6)).collect();
-                Ik::Numeric(Box::new(NumericIk::new(
+                Ik::Numeric(Box::new(RobustIk::new(
                     n,
                     &lo,
                     &up,
-                    NumericIkSettings::default(),
+                    robot.start_q(),
+                    RobustIkSettings::default(),
                 )?))
             }
         };
@@ -157,24 +163,26 @@ impl JointMap {
             fk,
             ik,
             rotation,
-            prev: vec![0.0; n],
+            prev: robot.start_q().to_vec(),
             robot: robot.clone(),
+            tcp_inverse: robot.tcp().to_isometry().inverse(),
         })
     }
 
-    /// Restarts from q = 0 (the next solution is the one nearest to it).
+    /// Restarts from the start pose (the next solution is the one nearest to it).
     pub(crate) fn reset(&mut self) {
-        self.prev.fill(0.0);
+        self.prev.copy_from_slice(self.robot.start_q());
     }
 
     /// The joint positions at flange position `p`, nearest to the previous solution; they
     /// become the previous solution.
     pub(crate) fn solve(&mut self, p: &Vector3<f64>) -> Result<&[f64], ReferenceFailure> {
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
+        let flange = self.flange_pose(&pose);
         match &mut self.ik {
             Ik::Analytic(s) => {
                 let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
-                let q = s.solve_near(&pose, &hint).map_err(ReferenceFailure::Ik)?;
+                let q = s.solve_near(&flange, &hint).map_err(ReferenceFailure::Ik)?;
                 self.prev.copy_from_slice(&q);
             }
             Ik::Numeric(num) => {
@@ -187,6 +195,16 @@ impl JointMap {
         Ok(&self.prev)
     }
 
+    /// The flange pose of a TCP pose (the pose itself when the TCP is the flange: bit for
+    /// bit the pose the analytic IK solved before TCPs).
+    fn flange_pose(&self, tcp_pose: &Isometry3<f64>) -> Isometry3<f64> {
+        if self.robot.tcp_is_identity() {
+            *tcp_pose
+        } else {
+            tcp_pose * self.tcp_inverse
+        }
+    }
+
     /// When the analytic solution jumps to another configuration, whether the continuous
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
@@ -197,7 +215,7 @@ impl JointMap {
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
         let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
         let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
-        let q = wide.solve_near(&pose, &hint).ok()?;
+        let q = wide.solve_near(&self.flange_pose(&pose), &hint).ok()?;
         self.robot.joints().iter().enumerate().find_map(|(i, j)| {
             (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
                 ReferenceFailure::BranchLimit {
@@ -238,8 +256,8 @@ pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
 ///
 /// Checks every sample: reachable, within the joint limits, and each joint's
 /// step within its speed limit times `ts`. The first sample takes the
-/// solution closest to q = 0 (within limits); each later one the solution
-/// closest to the previous sample. Refuses, before allocating, a path that
+/// solution closest to the start pose ([`Robot::start_q`], within limits); each later
+/// one the solution closest to the previous sample. Refuses, before allocating, a path that
 /// needs more than [`MAX_PLAN_VALUES`] values.
 pub fn build_reference(
     robot: &Robot,

@@ -17,6 +17,16 @@ pub enum InertiaError {
     /// The principal moments violate `a + b ≥ c`.
     #[error("the principal moments {0:?} violate the triangle inequality")]
     Triangle([f64; 3]),
+    /// The principal moments violate `a + b ≥ c` by more than the accepted tolerance.
+    #[error("the principal moments {moments:?} violate the triangle inequality a + b ≥ c by {:.2} % of c, beyond the accepted {:.0} %: correct the <inertia> (e.g. recompute it from the link's mesh)", excess * 100.0, tolerance * 100.0)]
+    TriangleBeyond {
+        /// Principal moments (kg·m²).
+        moments: [f64; 3],
+        /// Relative excess `(c − a − b)/c`.
+        excess: f64,
+        /// The accepted excess.
+        tolerance: f64,
+    },
 }
 
 /// Why a payload is not a physical rigid body for this robot.
@@ -90,7 +100,7 @@ pub enum UrdfError {
         joint: String,
     },
     /// Two moving joints leave one link.
-    #[error("not a serial chain: link '{link}' branches into moving joints {joints:?}; only one path of moving joints is supported (fixed side branches are fine)")]
+    #[error("not a serial chain: link '{link}' branches into moving joints {joints:?}; only one path of moving joints is supported (fixed side branches are fine): choose the chain's tip link (the flange, e.g. tool0 or a hand) to hold the other branches rigid")]
     NotSerial {
         /// The link.
         link: String,
@@ -200,6 +210,22 @@ pub enum UrdfError {
     /// Nothing moves.
     #[error("the URDF has no revolute or prismatic joint: nothing to control")]
     NoMovingJoint,
+    /// The chosen tip is not a link of the URDF.
+    #[error("tip link '{tip}' is not a link of the URDF; its links: {}", links.join(", "))]
+    UnknownTip {
+        /// The tip asked for.
+        tip: String,
+        /// The URDF's links, sorted.
+        links: Vec<String>,
+    },
+    /// Moving links without `<inertial>`: the kinematics work, the dynamics do not.
+    #[error("{}: the dynamics need the mass and inertia of every moving link; add to each <link> an <inertial> with <origin xyz rpy> (centre of mass), <mass value> (kg) and <inertia ixx ixy ixz iyy iyz izz> (kg·m², about the centre of mass) — planning a path works without", links.iter().zip(joints).map(|(l, j)| format!("link '{l}' (moved by joint '{j}') has no inertial")).collect::<Vec<_>>().join("; "))]
+    NoInertials {
+        /// The links without inertial.
+        links: Vec<String>,
+        /// The joints moving them.
+        joints: Vec<String>,
+    },
 }
 
 /// Something the URDF says that ofmpc does not model: it is ignored, and the
@@ -221,6 +247,33 @@ pub enum UrdfWarning {
     /// `<safety_controller>` soft limits: the hard `<limit>` is used.
     #[error("joint '{0}': <safety_controller> soft limits are ignored; the <limit> range is used")]
     IgnoredSafetyController(String),
+    /// `effort="0"` or `velocity="0"`: ROS tools read it as "not given"; the limit is
+    /// unknown (infinite) unless a drives file gives it.
+    #[error("joint '{joint}': <limit {attribute}=\"0\"> read as not given (no {attribute} limit); give it in a drives file ({}) if a controller or the planner needs it", if *attribute == "effort" { "max_torque_nm" } else { "max_speed_rad_s" })]
+    UnspecifiedLimit {
+        /// The joint.
+        joint: String,
+        /// `"effort"` or `"velocity"`.
+        attribute: &'static str,
+    },
+    /// A link's principal moments break the triangle inequality by at most
+    /// [`super::TRIANGLE_TOLERANCE`]: accepted as given.
+    #[error("link '{link}': the principal moments {moments:?} violate the triangle inequality a + b ≥ c by {:.3} % of c (accepted up to 1 %, as given)", excess * 100.0)]
+    InertiaTriangle {
+        /// The link.
+        link: String,
+        /// Principal moments (kg·m²).
+        moments: [f64; 3],
+        /// Relative excess `(c − a − b)/c`.
+        excess: f64,
+    },
+    /// Moving links without `<inertial>`: the robot serves for kinematics only (planning);
+    /// simulation and control need the inertials ([`super::Robot::require_inertials`]).
+    #[error("link(s) {} have no <inertial>: the robot loads for kinematics (planning a path), not for dynamics (runs, stability analysis) until each gets one", links.join(", "))]
+    NoInertial {
+        /// The moving links without inertial.
+        links: Vec<String>,
+    },
 }
 
 /// What can be wrong with a robot description or with the vectors given to it.
@@ -300,6 +353,12 @@ pub enum ModelError {
         lower: f64,
         /// Upper limit.
         upper: f64,
+    },
+    /// A tool centre point that is not a rigid transform.
+    #[error("the tool centre point at {position:?} m is not a rigid transform (finite position, proper rotation)")]
+    InvalidTcp {
+        /// Its position (m).
+        position: [f64; 3],
     },
     /// A dynamics workspace built for another robot.
     #[error("the workspace was built for {workspace} joints but the robot has {robot}: build it with Workspace::new(&robot)")]

@@ -11,6 +11,7 @@ mod urdf;
 
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
+pub use urdf::TRIANGLE_TOLERANCE;
 
 use crate::ik::OpwParameters;
 use crate::spatial::{Inertia, Transform};
@@ -192,6 +193,46 @@ pub struct Robot {
     /// The start pose (rad or m): the initial state of a run and the inverse kinematics'
     /// first seed ([`Robot::start_q`]).
     start_q: Vec<f64>,
+    /// The tool centre point in the flange (tip) frame ([`Robot::tcp`]).
+    tcp: Transform,
+    /// Moving links without `<inertial>` and their joints ([`Robot::require_inertials`]).
+    missing_inertials: Vec<(String, String)>,
+}
+
+/// Which inverse kinematics the planner uses for a robot ([`Robot::ik_method`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum IkMethod {
+    /// The closed form of ortho-parallel arms with a spherical wrist ([`OpwParameters`]).
+    Opw,
+    /// Multi-start damped least squares within the joint limits ([`crate::ik::RobustIk`]).
+    Numeric,
+}
+
+impl IkMethod {
+    /// A one-line description (e.g. for `inspect robot`).
+    pub fn description(&self) -> &'static str {
+        match self {
+            IkMethod::Opw => "analytic: OPW closed form (ortho-parallel arm, spherical wrist; up to 8 branches)",
+            IkMethod::Numeric => "numeric: damped least squares within the joint limits, multi-start (start pose, limits' centre, Halton points), null-space posture for redundant arms",
+        }
+    }
+}
+
+/// How to cut a kinematic chain out of a URDF and where its tool is: the options of
+/// [`Robot::from_urdf_str_with`] and [`Robot::from_urdf_file_with`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ChainOptions {
+    /// The link that ends the chain (the flange): the chain runs from the root to it;
+    /// moving joints not on that path are held rigid (at 0, or the limit nearest to it)
+    /// and their links count as carried mass, so a branched tree (a hand with fingers)
+    /// loads. `None`: the one path of moving joints, ending at a link named `tool0`,
+    /// `flange` or like an end effector on the last body if there is one, else at the
+    /// last link there.
+    pub tip: Option<String>,
+    /// The tool centre point in the tip's frame (`None`: the tip itself). See
+    /// [`Robot::set_tcp`].
+    pub tcp: Option<Transform>,
 }
 
 impl Robot {
@@ -213,6 +254,14 @@ impl Robot {
         self.opw.as_ref()
     }
 
+    /// The inverse kinematics the planner uses for this robot.
+    pub fn ik_method(&self) -> IkMethod {
+        match self.opw {
+            Some(_) if self.dof() == 6 => IkMethod::Opw,
+            _ => IkMethod::Numeric,
+        }
+    }
+
     /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
     /// robot's forward kinematics (flange frame) exactly; the caller is responsible.
     pub fn set_opw_parameters(&mut self, opw: Option<OpwParameters>) {
@@ -230,16 +279,90 @@ impl Robot {
     /// Loads a URDF text (see [`ModelError`] for what is rejected). No drives:
     /// armature zero, limits from the URDF.
     pub fn from_urdf_str(text: &str) -> Result<Self, ModelError> {
-        urdf::parse(text)
+        Self::from_urdf_str_with(text, &ChainOptions::default())
+    }
+
+    /// Loads a URDF text with a chosen tip and tool centre point ([`ChainOptions`]).
+    pub fn from_urdf_str_with(text: &str, options: &ChainOptions) -> Result<Self, ModelError> {
+        let mut robot = urdf::parse(text, options.tip.as_deref())?;
+        if let Some(t) = &options.tcp {
+            robot.set_tcp(*t)?;
+        }
+        Ok(robot)
     }
 
     /// Loads a URDF file.
     pub fn from_urdf_file(path: &std::path::Path) -> Result<Self, ModelError> {
+        Self::from_urdf_file_with(path, &ChainOptions::default())
+    }
+
+    /// Loads a URDF file with a chosen tip and tool centre point ([`ChainOptions`]).
+    pub fn from_urdf_file_with(
+        path: &std::path::Path,
+        options: &ChainOptions,
+    ) -> Result<Self, ModelError> {
         let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
             path: path.display().to_string(),
             message: e.to_string(),
         })?;
-        urdf::parse(&text).map_err(|e| e.in_file(path))
+        Self::from_urdf_str_with(&text, options).map_err(|e| e.in_file(path))
+    }
+
+    /// The tool centre point (TCP) in the flange (tip) frame; the identity unless set.
+    /// Forward kinematics, the Jacobian, the inverse kinematics, planning and the recorded
+    /// Cartesian positions are those of the TCP; a payload stays given in the flange frame.
+    pub fn tcp(&self) -> &Transform {
+        &self.tcp
+    }
+
+    /// Sets the tool centre point in the flange frame (rotation proper, values finite).
+    pub fn set_tcp(&mut self, tcp: Transform) -> Result<(), ModelError> {
+        let finite = tcp.pos.iter().chain(tcp.rot.iter()).all(|v| v.is_finite());
+        let proper = finite
+            && (tcp.rot.transpose() * tcp.rot - nalgebra::Matrix3::identity())
+                .abs()
+                .max()
+                < 1e-9
+            && (tcp.rot.determinant() - 1.0).abs() < 1e-9;
+        if !proper {
+            return Err(ModelError::InvalidTcp {
+                position: [tcp.pos.x, tcp.pos.y, tcp.pos.z],
+            });
+        }
+        self.tcp = tcp;
+        Ok(())
+    }
+
+    /// The flange with the TCP: pose of the TCP in the last body's frame.
+    pub(crate) fn tool_offset(&self) -> Transform {
+        self.flange.compose(&self.tcp)
+    }
+
+    /// Whether the TCP is the flange itself.
+    pub(crate) fn tcp_is_identity(&self) -> bool {
+        self.tcp == Transform::identity()
+    }
+
+    /// Ok when every moving link has mass or inertia; else the links without `<inertial>`
+    /// and what to add ([`UrdfError::NoInertials`]). Simulation, control and stability
+    /// analysis need them; kinematics and planning do not.
+    pub fn require_inertials(&self) -> Result<(), ModelError> {
+        if self.missing_inertials.is_empty() {
+            return Ok(());
+        }
+        Err(UrdfError::NoInertials {
+            links: self
+                .missing_inertials
+                .iter()
+                .map(|(l, _)| l.clone())
+                .collect(),
+            joints: self
+                .missing_inertials
+                .iter()
+                .map(|(_, j)| j.clone())
+                .collect(),
+        }
+        .into())
     }
 
     pub(crate) fn assemble(
@@ -261,6 +384,8 @@ impl Robot {
             warnings: Vec::new(),
             opw: None,
             start_q,
+            tcp: Transform::identity(),
+            missing_inertials: Vec::new(),
         }
     }
 

@@ -16,7 +16,7 @@
 //! (a chain of thousands of fixed frames neither recurses nor rescans).
 
 use super::error::{UrdfError, UrdfWarning};
-use super::{check_inertia_tensor, Joint, JointKind, JointLimits, ModelError, Robot};
+use super::{check_inertia_tensor, InertiaError, Joint, JointKind, JointLimits, ModelError, Robot};
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
@@ -29,7 +29,25 @@ fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
-fn link_inertia(link: &urdf_rs::Link) -> Result<Inertia, UrdfError> {
+/// Largest relative excess `(c − a − b)/c` of the principal moments over the triangle
+/// inequality that a URDF link may have: accepted with a [`UrdfWarning::InertiaTriangle`]
+/// (CAD exports round; MuJoCo and Pinocchio load such files).
+pub const TRIANGLE_TOLERANCE: f64 = 0.01;
+
+/// The relative excess of principal moments over the triangle inequality: the largest
+/// `(c − a − b)/c` over the three orderings (≤ 0 when it holds).
+fn triangle_excess(m: &[f64; 3]) -> f64 {
+    let [a, b, c] = *m;
+    [(c, a + b), (b, a + c), (a, b + c)]
+        .iter()
+        .map(|&(big, sum)| if big > 0.0 { (big - sum) / big } else { 0.0 })
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+fn link_inertia(
+    link: &urdf_rs::Link,
+    warnings: &mut Vec<UrdfWarning>,
+) -> Result<Inertia, UrdfError> {
     let i = &link.inertial;
     let m = i.mass.value;
     let t = &i.inertia;
@@ -47,10 +65,32 @@ fn link_inertia(link: &urdf_rs::Link) -> Result<Inertia, UrdfError> {
             mass: m,
         });
     }
-    check_inertia_tensor(&tensor).map_err(|error| UrdfError::LinkInertia {
-        link: link.name.clone(),
-        error,
-    })?;
+    match check_inertia_tensor(&tensor) {
+        Ok(()) => {}
+        Err(InertiaError::Triangle(moments)) if triangle_excess(&moments) <= TRIANGLE_TOLERANCE => {
+            warnings.push(UrdfWarning::InertiaTriangle {
+                link: link.name.clone(),
+                moments,
+                excess: triangle_excess(&moments),
+            });
+        }
+        Err(InertiaError::Triangle(moments)) => {
+            return Err(UrdfError::LinkInertia {
+                link: link.name.clone(),
+                error: InertiaError::TriangleBeyond {
+                    moments,
+                    excess: triangle_excess(&moments),
+                    tolerance: TRIANGLE_TOLERANCE,
+                },
+            })
+        }
+        Err(error) => {
+            return Err(UrdfError::LinkInertia {
+                link: link.name.clone(),
+                error,
+            })
+        }
+    }
     let frame = origin(&i.origin);
     let i_com = frame.rot * tensor * frame.rot.transpose();
     Ok(Inertia::from_com(m, frame.pos, i_com))
@@ -104,17 +144,29 @@ fn moving_joint(
                 value: l.lower,
             });
         }
-        for (attribute, value) in [("velocity", l.velocity), ("effort", l.effort)] {
-            if !(value.is_finite() && value > 0.0) {
-                return Err(UrdfError::MissingLimit {
+        // ROS tools read 0 as "not given" (ROS-Industrial's descriptions write effort="0"):
+        // unlimited, with a warning; a negative or non-finite value is an error.
+        let mut given = |attribute: &'static str, value: f64| {
+            if value == 0.0 {
+                warnings.push(UrdfWarning::UnspecifiedLimit {
+                    joint: j.name.clone(),
+                    attribute,
+                });
+                Ok(f64::INFINITY)
+            } else if value.is_finite() && value > 0.0 {
+                Ok(value)
+            } else {
+                Err(UrdfError::MissingLimit {
                     joint: j.name.clone(),
                     kind: kind_name,
                     attribute,
                     value,
-                });
+                })
             }
-        }
-        (l.lower, l.upper, l.velocity, l.effort)
+        };
+        let velocity = given("velocity", l.velocity)?;
+        let effort = given("effort", l.effort)?;
+        (l.lower, l.upper, velocity, effort)
     } else {
         // Continuous: no range; velocity and effort optional (0 = not given).
         let optional = |attribute: &'static str, v: f64| {
@@ -166,18 +218,28 @@ fn moving_joint(
     })
 }
 
-/// Parses a URDF text into a [`Robot`].
-pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
+/// Link names that mark the end of an arm, in order of preference, for the default flange:
+/// exact names first, then parts of names. A finger or other leaf is taken only when no
+/// link on the last body is named like this.
+const FLANGE_NAMES: [&str; 2] = ["tool0", "flange"];
+const FLANGE_NAME_PARTS: [&str; 5] = ["end_effector", "tool0", "flange", "ee_link", "tcp"];
+
+/// Parses a URDF text into a [`Robot`]: the chain from the root to `tip` (a link name),
+/// or when `None` the one path of moving joints.
+pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> {
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
         message: e.to_string(),
     })?;
-    let tree = Tree::new(&urdf)?;
+    let mut tree = Tree::new(&urdf)?;
     let root = tree.root()?;
+    if let Some(t) = tip {
+        tree.choose_tip(t)?;
+    }
     let has_moving = tree.moving_below(root)?;
     let Walk {
         joints,
-        warnings,
+        mut warnings,
         frames,
         last_link,
     } = tree.walk(root, &has_moving)?;
@@ -185,24 +247,50 @@ pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
         return Err(UrdfError::NoMovingJoint.into());
     }
     let n = joints.len();
-    for j in &joints {
-        if j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0 {
-            return Err(UrdfError::NoInertial {
-                link: j.link.clone(),
-                joint: j.name.clone(),
-            }
-            .into());
-        }
-    }
-    let named = ["tool0", "flange"]
+    let missing: Vec<(String, String)> = joints
         .iter()
-        .find_map(|name| match frames.get(*name) {
-            Some((Some(b), pose)) if *b == n - 1 => Some((name.to_string(), *pose)),
-            _ => None,
+        .filter(|j| j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0)
+        .map(|j| (j.link.clone(), j.name.clone()))
+        .collect();
+    if !missing.is_empty() {
+        warnings.push(UrdfWarning::NoInertial {
+            links: missing.iter().map(|(l, _)| l.clone()).collect(),
         });
-    let (flange_name, flange) = match named.or(last_link) {
-        Some(f) => f,
-        None => (joints[n - 1].link.clone(), Transform::identity()),
+    }
+    let on_last = |name: &str| matches!(frames.get(name), Some((Some(b), _)) if *b == n - 1);
+    let (flange_name, flange) = match tip {
+        Some(t) => match frames.get(t) {
+            Some((Some(b), pose)) if *b == n - 1 => (t.to_string(), *pose),
+            _ => (joints[n - 1].link.clone(), Transform::identity()),
+        },
+        None => {
+            let exact = FLANGE_NAMES
+                .iter()
+                .find(|name| on_last(name))
+                .map(|s| s.to_string());
+            let mut named: Vec<&str> = frames
+                .keys()
+                .copied()
+                .filter(|name| {
+                    let lower = name.to_ascii_lowercase();
+                    on_last(name) && FLANGE_NAME_PARTS.iter().any(|p| lower.contains(p))
+                })
+                .collect();
+            named.sort_by_key(|name| {
+                let lower = name.to_ascii_lowercase();
+                (
+                    FLANGE_NAME_PARTS.iter().position(|p| lower.contains(p)),
+                    name.to_string(),
+                )
+            });
+            match exact.or(named.first().map(|s| s.to_string())) {
+                Some(name) => (name.clone(), frames[name.as_str()].1),
+                None => match last_link {
+                    Some(f) => f,
+                    None => (joints[n - 1].link.clone(), Transform::identity()),
+                },
+            }
+        }
     };
     let name = if urdf.name.is_empty() {
         "robot".to_string()
@@ -211,6 +299,7 @@ pub(super) fn parse(text: &str) -> Result<Robot, ModelError> {
     };
     let mut robot = Robot::assemble(name, joints, flange, flange_name);
     robot.warnings = warnings;
+    robot.missing_inertials = missing;
     Ok(robot)
 }
 
@@ -221,6 +310,10 @@ struct Tree<'u> {
     links: HashMap<&'u str, usize>,
     children: Vec<Vec<usize>>,
     parent_of: Vec<Option<usize>>,
+    /// Per URDF joint: it is a moving joint of the chain (not fixed, and on the path to
+    /// the tip when one is chosen). Other joints are rigid: a moving joint off the chain
+    /// is held at 0 (or the limit nearest to it).
+    moves: Vec<bool>,
 }
 
 /// What the walk down the tree ([`Tree::walk`]) collects.
@@ -268,12 +361,80 @@ impl<'u> Tree<'u> {
             parent_of[c] = Some(ji);
             children[p].push(ji);
         }
+        let moves = urdf.joints.iter().map(|j| !is_fixed(j)).collect();
         Ok(Self {
             urdf,
             links,
             children,
             parent_of,
+            moves,
         })
+    }
+
+    /// Makes the chain end at link `tip`: only the moving joints on the path from the root
+    /// to it stay moving; the others become rigid (held at 0 or the nearest limit).
+    fn choose_tip(&mut self, tip: &str) -> Result<(), UrdfError> {
+        let Some(&t) = self.links.get(tip) else {
+            let mut names: Vec<String> = self.urdf.links.iter().map(|l| l.name.clone()).collect();
+            names.sort();
+            return Err(UrdfError::UnknownTip {
+                tip: tip.to_string(),
+                links: names,
+            });
+        };
+        let mut on_path = vec![false; self.urdf.joints.len()];
+        let mut l = t;
+        let mut steps = 0;
+        while let Some(ji) = self.parent_of[l] {
+            on_path[ji] = true;
+            l = self.links[self.urdf.joints[ji].parent.link.as_str()];
+            steps += 1;
+            if steps > self.urdf.joints.len() {
+                break; // a loop: reported by moving_below
+            }
+        }
+        for (m, on) in self.moves.iter_mut().zip(on_path) {
+            *m = *m && on;
+        }
+        Ok(())
+    }
+
+    /// The joint `ji` moves in the chain.
+    fn is_moving(&self, ji: usize) -> bool {
+        self.moves[ji]
+    }
+
+    /// The origin of joint `ji` and, for a moving URDF joint held rigid off the chain, its
+    /// motion at the held value (0, or the limit nearest to it).
+    fn rigid_origin(&self, ji: usize) -> Transform {
+        let j = &self.urdf.joints[ji];
+        let o = origin(&j.origin);
+        let axis = Vector3::from(*j.axis.xyz);
+        let norm = axis.norm();
+        if is_fixed(j) || !(norm.is_finite() && norm > 0.0) {
+            return o;
+        }
+        let (lo, hi) = (j.limit.lower, j.limit.upper);
+        let v = if lo <= hi && lo.is_finite() && hi.is_finite() {
+            0.0f64.clamp(lo, hi)
+        } else {
+            0.0
+        };
+        if v == 0.0 {
+            return o;
+        }
+        let axis = axis / norm;
+        let motion = match j.joint_type {
+            urdf_rs::JointType::Prismatic => Transform {
+                rot: Matrix3::identity(),
+                pos: axis * v,
+            },
+            _ => Transform {
+                rot: crate::spatial::axis_angle(&axis, v),
+                pos: Vector3::zeros(),
+            },
+        };
+        o.compose(&motion)
     }
 
     /// The one link without a parent joint.
@@ -315,7 +476,7 @@ impl<'u> Tree<'u> {
         for &l in order.iter().rev() {
             has_moving[l] = self.children[l]
                 .iter()
-                .any(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[self.child_link(ji)]);
+                .any(|&ji| self.is_moving(ji) || has_moving[self.child_link(ji)]);
         }
         Ok(has_moving)
     }
@@ -327,7 +488,7 @@ impl<'u> Tree<'u> {
         let moving: Vec<usize> = self.children[l]
             .iter()
             .copied()
-            .filter(|&ji| !is_fixed(&urdf.joints[ji]) || has_moving[self.child_link(ji)])
+            .filter(|&ji| self.is_moving(ji) || has_moving[self.child_link(ji)])
             .collect();
         if moving.len() > 1 {
             return Err(UrdfError::NotSerial {
@@ -355,7 +516,7 @@ impl<'u> Tree<'u> {
             vec![(root, Transform::identity(), None)];
         while let Some((l, pose, body)) = stack.pop() {
             let link = &urdf.links[l];
-            let inertia = link_inertia(link)?;
+            let inertia = link_inertia(link, &mut walk.warnings)?;
             if let Some(b) = body {
                 let j = &mut walk.joints[b];
                 j.body = j.body + inertia.to_parent(&pose);
@@ -381,10 +542,11 @@ impl<'u> Tree<'u> {
                 if !finite3(&j.origin.xyz) || !finite3(&j.origin.rpy) {
                     return Err(UrdfError::BadOrigin(j.name.clone()));
                 }
-                let placement = pose.compose(&origin(&j.origin));
-                if is_fixed(j) {
+                if !self.is_moving(ji) {
+                    let placement = pose.compose(&self.rigid_origin(ji));
                     stack.push((self.child_link(ji), placement, body));
                 } else {
+                    let placement = pose.compose(&origin(&j.origin));
                     // One moving child per link: joints are numbered base to tip.
                     walk.joints
                         .push(moving_joint(j, placement, &mut walk.warnings)?);
