@@ -20,6 +20,10 @@ pub fn controller_color(name: &str) -> usize {
         "second" => COLOR_SECOND,
         "first-adaptive" => 4,
         "second-adaptive" => 5,
+        "pid" => 6,
+        "ctc" => 7,
+        "ctc-adaptive" => 8,
+        "dob-mpc" => 9,
         _ => COLOR_REFERENCE,
     }
 }

@@ -107,6 +107,11 @@ impl Scenario {
             .map_err(|error| ScenarioError::Mpc {
                 error: Box::new(error),
             })?;
+        f.baselines
+            .validate_for_dof(n)
+            .map_err(|error| ScenarioError::Baselines {
+                error: Box::new(error),
+            })?;
         let loop_settings = f.loop_settings();
         let settings_error = |error| ScenarioError::experiment(None, error);
         loop_settings
@@ -197,7 +202,10 @@ impl Scenario {
         let experiment = Experiment {
             robot,
             reference,
-            mpc: f.mpc.clone(),
+            mpc: ofmpc::control::MpcSettings {
+                baselines: f.baselines.clone(),
+                ..f.mpc.clone()
+            },
             plant: f.plant.clone(),
             loop_settings,
         };
