@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod baseline_tuning;
 pub mod error;
 pub mod file;
 pub mod resolve;
