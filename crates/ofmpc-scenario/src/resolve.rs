@@ -107,11 +107,6 @@ impl Scenario {
             .map_err(|error| ScenarioError::Mpc {
                 error: Box::new(error),
             })?;
-        f.baselines
-            .validate_for_dof(n)
-            .map_err(|error| ScenarioError::Baselines {
-                error: Box::new(error),
-            })?;
         let loop_settings = f.loop_settings();
         let settings_error = |error| ScenarioError::experiment(None, error);
         loop_settings
@@ -202,10 +197,7 @@ impl Scenario {
         let experiment = Experiment {
             robot,
             reference,
-            mpc: ofmpc::control::MpcSettings {
-                baselines: f.baselines.clone(),
-                ..f.mpc.clone()
-            },
+            mpc: mpc_with_baselines(f, n)?,
             plant: f.plant.clone(),
             loop_settings,
         };
@@ -270,4 +262,20 @@ fn friction_substep_warning(
          resolved and steady errors are not to be trusted; use substep = {suggest:.3e} s or smaller",
         plant.substep
     ))
+}
+
+/// `[mpc]` with the bandwidths of `[baselines]`, checked for `n` joints.
+fn mpc_with_baselines(
+    f: &ScenarioFile,
+    n: usize,
+) -> Result<ofmpc::control::MpcSettings, ScenarioError> {
+    f.baselines
+        .validate_for_dof(n)
+        .map_err(|error| ScenarioError::Baselines {
+            error: Box::new(error),
+        })?;
+    Ok(ofmpc::control::MpcSettings {
+        baselines: f.baselines.clone(),
+        ..f.mpc.clone()
+    })
 }
