@@ -114,20 +114,27 @@ pub(crate) fn section(
     Ok(())
 }
 
-/// RMS against payload, one line per controller, stopped runs as markers.
+/// RMS against payload, one line per controller (the baselines dashed),
+/// stopped runs as markers.
 pub(crate) fn rms_figure(metrics: &[RunMetrics], controllers: &[ControllerKind]) -> Figure {
     let mut f = Figure::new("Controllers compared", 1);
     let mut p = Panel::new("Cartesian RMS error", "payload (kg)", "RMS error (mm)");
     p.log_y = true;
-    for (i, k) in controllers.iter().enumerate() {
+    for k in controllers {
         let mine: Vec<&RunMetrics> = metrics
             .iter()
             .filter(|m| m.controller == k.name())
             .collect();
         let (ok, bad): (Vec<&RunMetrics>, Vec<&RunMetrics>) =
             mine.iter().partition(|m| m.status == RunStatus::Ok);
-        let color = crate::figures::controller_color(k.name()).max(i % 8 + 1);
-        p.series.push(Series::line(
+        let color = crate::figures::controller_color(k.name());
+        // The baselines dashed: the palette has 8 colours for 9 controllers.
+        let line = if k.is_baseline() {
+            Series::dashed
+        } else {
+            Series::line
+        };
+        p.series.push(line(
             k.name(),
             ok.iter().map(|m| m.payload_kg).collect(),
             ok.iter().map(|m| m.cartesian_error_rms_mm).collect(),
@@ -146,26 +153,31 @@ pub(crate) fn rms_figure(metrics: &[RunMetrics], controllers: &[ControllerKind])
     f
 }
 
-/// Which controller to choose for which payload range, from the metrics: per
-/// payload the completed run with the least RMS error, grouped into ranges
-/// of the same winner, and which controllers did not complete somewhere.
-pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKind]) -> String {
+/// Completed and offset-free: steady joint error ≤ 1e-6 rad.
+fn offset_free(m: &RunMetrics) -> bool {
+    m.status == RunStatus::Ok
+        && m.steady_joint_error_max_rad
+            .iter()
+            .all(|e| e.is_finite() && *e <= 1e-6)
+}
+
+/// Per payload the offset-free run of the least RMS error among `metrics`
+/// whose controller passes `keep`, grouped into ranges of one winner.
+fn winners(metrics: &[RunMetrics], keep: &dyn Fn(&str) -> bool) -> String {
     let mut payloads: Vec<f64> = metrics.iter().map(|m| m.payload_kg).collect();
     payloads.sort_by(f64::total_cmp);
     payloads.dedup();
-    let best = |p: f64| {
-        metrics
+    let mut ranges: Vec<(String, f64, f64, f64)> = Vec::new();
+    for &p in &payloads {
+        let best = metrics
             .iter()
-            .filter(|m| m.payload_kg == p && m.status == RunStatus::Ok)
+            .filter(|m| m.payload_kg == p && offset_free(m) && keep(&m.controller))
             .filter(|m| m.cartesian_error_rms_mm.is_finite())
             .min_by(|a, b| {
                 a.cartesian_error_rms_mm
                     .total_cmp(&b.cartesian_error_rms_mm)
-            })
-    };
-    let mut ranges: Vec<(String, f64, f64, f64)> = Vec::new();
-    for &p in &payloads {
-        let Some(b) = best(p) else { continue };
+            });
+        let Some(b) = best else { continue };
         match ranges.last_mut() {
             Some((name, _, hi, worst)) if *name == b.controller => {
                 *hi = p;
@@ -174,8 +186,7 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
             _ => ranges.push((b.controller.clone(), p, p, b.cartesian_error_rms_mm)),
         }
     }
-    let mut text = String::from("Least RMS error: ");
-    let parts: Vec<String> = ranges
+    ranges
         .iter()
         .map(|(name, lo, hi, worst)| {
             let range = if lo == hi {
@@ -185,16 +196,38 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
             };
             format!("{name} at {range} (RMS ≤ {} mm)", num(*worst))
         })
-        .collect();
-    text.push_str(&parts.join("; "));
-    text.push_str(". ");
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Which controller to choose for which payload range, from the metrics: per
+/// payload the completed run with the least RMS error, grouped into ranges
+/// of the same winner, and which controllers did not complete somewhere.
+pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKind]) -> String {
+    let mut payloads: Vec<f64> = metrics.iter().map(|m| m.payload_kg).collect();
+    payloads.sort_by(f64::total_cmp);
+    payloads.dedup();
+    let adaptive = |name: &str| {
+        name.parse::<ControllerKind>()
+            .is_ok_and(|k| k.is_adaptive())
+    };
+    let mut text = format!(
+        "Least RMS error among the offset-free runs (steady joint error ≤ 1e-6 rad): {}. ",
+        winners(metrics, &|_| true)
+    );
+    let fixed = winners(metrics, &|n| !adaptive(n));
+    if controllers.iter().any(|k| k.is_adaptive()) && !fixed.is_empty() {
+        text.push_str(&format!(
+            "Without online identification (a fixed model, the payload unknown): {fixed}. "
+        ));
+    }
     let complete: Vec<&str> = controllers
         .iter()
         .filter(|k| {
             metrics
                 .iter()
                 .filter(|m| m.controller == k.name())
-                .all(|m| m.status == RunStatus::Ok)
+                .all(offset_free)
         })
         .map(|k| k.name())
         .collect();
@@ -204,7 +237,7 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
         .map(|k| {
             let from = metrics
                 .iter()
-                .filter(|m| m.controller == k.name() && m.status != RunStatus::Ok)
+                .filter(|m| m.controller == k.name() && !offset_free(m))
                 .map(|m| m.payload_kg)
                 .fold(f64::INFINITY, f64::min);
             format!("{} (from {} kg)", k.name(), num(from))
@@ -221,8 +254,8 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
         };
         if let Some(robust) = complete.iter().min_by(|a, b| worst(a).total_cmp(&worst(b))) {
             text.push_str(&format!(
-                "Over the whole range {} kg the controller with the least worst-case RMS among those that \
-                 complete every payload is {robust} ({} mm): choose it when the payload is not known. ",
+                "Over the whole range {} kg the controller with the least worst-case RMS among those \
+                 offset-free at every payload is {robust} ({} mm): choose it when the payload is not known. ",
                 match (payloads.first(), payloads.last()) {
                     (Some(a), Some(b)) => format!("{}–{}", num(*a), num(*b)),
                     _ => String::new(),
@@ -237,8 +270,8 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
     }
     if !incomplete.is_empty() {
         text.push_str(&format!(
-            "Did not complete every payload (the payload the model does not know moves them out of \
-             their stability margin, or a limit stopped them): {}.",
+            "Not offset-free at every payload (a steady offset by construction, as the usual MPC's, \
+             or the payload the model does not know moves them out of their stability margin): {}.",
             incomplete.join(", ")
         ));
     }
