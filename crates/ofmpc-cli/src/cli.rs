@@ -172,9 +172,16 @@ pub struct ReproduceArgs {
     #[arg(long, default_value = "0,0.25", allow_hyphen_values = true)]
     pub payload: String,
     /// Controllers, comma-separated: usual, first, second, first-adaptive,
-    /// second-adaptive.
+    /// second-adaptive, and the baselines pid, ctc, ctc-adaptive, dob-mpc;
+    /// "all" for every one, "baselines" for the four baselines, "paper" for
+    /// the paper's three.
     #[arg(long, default_value = "usual,first,second")]
     pub controllers: String,
+    /// Compare every controller (the paper's, their adaptive variants and the
+    /// baselines) over 0, 0.25, 1, 2, 6 kg; --payload and --controllers,
+    /// when given other values than their defaults, still choose.
+    #[arg(long)]
+    pub compare: bool,
     /// The payload is picked up at this time (s) of the path: the plant carries
     /// none before (the controllers are not told).
     #[arg(long)]

@@ -20,6 +20,11 @@ pub fn controller_color(name: &str) -> usize {
         "second" => COLOR_SECOND,
         "first-adaptive" => 4,
         "second-adaptive" => 5,
+        // The baselines: drawn dashed where they share a colour.
+        "pid" => 6,
+        "ctc" => 1,
+        "ctc-adaptive" => 5,
+        "dob-mpc" => 3,
         _ => COLOR_REFERENCE,
     }
 }

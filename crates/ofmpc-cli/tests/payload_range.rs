@@ -374,6 +374,8 @@ fn shorthand_options_set_their_keys() {
     assert!(err.contains("--controllers"), "{err}");
     let err = fails(&["run", scenario_path.to_str().unwrap(), "--mode", "G65"]);
     assert!(err.contains("mode") && err.contains("G65"), "{err}");
+}
+
 /// #19 item 7: on the light test arm no plain tuning of the second
 /// algorithm (scalar or per-joint weights) holds 0..7 kg; `tune` says so
 /// and writes the adaptive variant's scenario with its margin, which holds

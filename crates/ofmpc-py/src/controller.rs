@@ -87,9 +87,15 @@ impl PyController {
                     "q_dy" => settings.q_dy = wt,
                     "q_du" => settings.q_du = wt,
                     "q_u" => settings.q_u = wt,
+                    // The baselines' bandwidths (rad/s): pid, ctc/ctc-adaptive, dob-mpc.
+                    "pid_bandwidth" => settings.baselines.pid_bandwidth = wt,
+                    "ctc_bandwidth" => settings.baselines.ctc_bandwidth = wt,
+                    "dob_observer_bandwidth" => settings.baselines.dob_observer_bandwidth = wt,
                     _ => {
                         return Err(to_py(format!(
-                            "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u"
+                            "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u, \
+                             the baselines' bandwidths pid_bandwidth, ctc_bandwidth and \
+                             dob_observer_bandwidth"
                         )))
                     }
                 }
@@ -112,7 +118,8 @@ impl PyController {
         })
     }
 
-    /// "usual", "first" or "second".
+    /// "usual", "first", "second", "first-adaptive", "second-adaptive",
+    /// "pid", "ctc", "ctc-adaptive" or "dob-mpc".
     #[getter]
     fn kind(&self) -> &'static str {
         self.kind.name()

@@ -130,6 +130,21 @@ def test_controller_holds_a_rest_state_and_validates_its_inputs(robot, ref):
         c.step(np.full(12, np.nan), w, ref.preview(0, 10))
 
 
+def test_baselines_step_from_python(robot, ref):
+    """The baselines (issue #21) behind the same class: at rest on the reference the
+    first torque holds the robot (τ = g(q)); their bandwidths are keyword arguments."""
+    w = ref.q[0]
+    x = np.concatenate([w, np.zeros(6)])
+    for kind in ("pid", "ctc", "ctc-adaptive", "dob-mpc"):
+        c = ofmpc.Controller(kind, robot, pid_bandwidth=50.0, ctc_bandwidth=[120.0] * 6)
+        assert c.kind == kind
+        c.reset(x)
+        tau = c.step(x, w, np.tile(w, (10, 1)))
+        assert rel_err(tau, robot.gravity(w)) < 1e-9, kind
+    with pytest.raises(ofmpc.OfmpcError, match=r"ctc_bandwidth\[0\] = -1"):
+        ofmpc.Controller("ctc", robot, ctc_bandwidth=-1.0)
+
+
 def test_errors_carry_the_library_s_messages(robot):
     with pytest.raises(ofmpc.OfmpcError, match='unknown controller "third"'):
         ofmpc.Controller("third", robot)

@@ -88,6 +88,13 @@ pub enum ScenarioError {
         /// The library's error.
         error: Box<SettingsError>,
     },
+    /// `[baselines]` does not fit the robot (a bandwidth ≤ 0, not finite,
+    /// or a list of another length than the robot's joints).
+    #[error("[baselines] {error}")]
+    Baselines {
+        /// The library's error.
+        error: Box<SettingsError>,
+    },
     /// A payload of `[payload]` is not a physical body.
     #[error("[payload] mass {mass} kg: {error}")]
     Payload {

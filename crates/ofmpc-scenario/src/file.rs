@@ -7,7 +7,7 @@
 //! same checks and messages as the key written in the file.
 
 use crate::error::ScenarioError;
-use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
 use ofmpc::motion::timelaw::Profile;
 use ofmpc::motion::{PathMode, TimingOptions};
 use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings};
@@ -160,7 +160,10 @@ pub struct ScenarioFile {
     /// A title for the report.
     pub title: String,
     /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`,
-    /// `"first-adaptive"`, `"second-adaptive"`.
+    /// `"first-adaptive"`, `"second-adaptive"`, and the baselines `"pid"`,
+    /// `"ctc"`, `"ctc-adaptive"`, `"dob-mpc"`; `"all"` stands for every one
+    /// ([`ControllerKind::EVERY`]), `"baselines"` for the four baselines.
+    #[serde(deserialize_with = "controllers_with_shorthands")]
     pub controllers: Vec<ControllerKind>,
     /// `[robot]`
     pub robot: RobotSection,
@@ -182,6 +185,63 @@ pub struct ScenarioFile {
     pub faults: FaultsSection,
     /// `[safety]`: the safe stop on a joint error limit.
     pub safety: SafetySection,
+    /// `[baselines]`: the baseline controllers' bandwidths (rad/s; a number
+    /// or one per joint): `pid_bandwidth`, `ctc_bandwidth`,
+    /// `dob_observer_bandwidth`. Written with the results only when set.
+    #[serde(skip_serializing_if = "is_default_baselines")]
+    pub baselines: BaselineSettings,
+}
+
+fn is_default_baselines(b: &BaselineSettings) -> bool {
+    *b == BaselineSettings::default()
+}
+
+/// A controller name, or a shorthand for several (`"all"`, `"baselines"`).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum ControllerName {
+    Kind(ControllerKind),
+    Shorthand(String),
+}
+
+/// `controllers = [...]` with the shorthands `"all"` (every controller) and
+/// `"baselines"` expanded in place; repeats are kept (the runner removes them).
+fn controllers_with_shorthands<'de, D>(d: D) -> Result<Vec<ControllerKind>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    let names = Vec::<ControllerName>::deserialize(d)?;
+    let mut out = Vec::new();
+    for name in names {
+        match name {
+            ControllerName::Kind(k) => out.push(k),
+            ControllerName::Shorthand(s) => match expand_shorthand(&s) {
+                Some(kinds) => out.extend_from_slice(kinds),
+                None => {
+                    return Err(serde::de::Error::custom(format!(
+                        "unknown controller {s:?}: expected one of {}, or \"all\", \"baselines\"",
+                        ControllerKind::EVERY
+                            .iter()
+                            .map(|k| format!("\"{k}\""))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )))
+                }
+            },
+        }
+    }
+    Ok(out)
+}
+
+/// The kinds a shorthand stands for: `"all"` every controller,
+/// `"baselines"` the four baselines, `"paper"` the paper's three.
+pub fn expand_shorthand(s: &str) -> Option<&'static [ControllerKind]> {
+    match s.trim().to_ascii_lowercase().as_str() {
+        "all" => Some(&ControllerKind::EVERY),
+        "baselines" => Some(&ControllerKind::BASELINES),
+        "paper" => Some(&ControllerKind::ALL),
+        _ => None,
+    }
 }
 
 /// `[faults]`: the measurement is NaN at the samples at `nan_at_s` (s, path
@@ -210,6 +270,7 @@ impl Default for ScenarioFile {
             plant: PlantSettings::default(),
             faults: FaultsSection::default(),
             safety: SafetySection::default(),
+            baselines: BaselineSettings::default(),
         }
     }
 }

@@ -19,6 +19,7 @@
 #![warn(missing_docs)]
 
 pub mod analysis;
+pub mod baseline_tuning;
 pub mod error;
 pub mod file;
 pub mod resolve;
@@ -29,7 +30,7 @@ pub use error::{
     SCENARIO_KEYS,
 };
 pub use file::{
-    absolute, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
+    absolute, expand_shorthand, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };

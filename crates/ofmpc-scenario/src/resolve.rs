@@ -244,7 +244,7 @@ impl Scenario {
         let experiment = Experiment {
             robot,
             reference,
-            mpc: f.mpc.clone(),
+            mpc: mpc_with_baselines(f, n)?,
             plant: f.plant.clone(),
             loop_settings,
         };
@@ -309,4 +309,20 @@ fn friction_substep_warning(
          resolved and steady errors are not to be trusted; use substep = {suggest:.3e} s or smaller",
         plant.substep
     ))
+}
+
+/// `[mpc]` with the bandwidths of `[baselines]`, checked for `n` joints.
+fn mpc_with_baselines(
+    f: &ScenarioFile,
+    n: usize,
+) -> Result<ofmpc::control::MpcSettings, ScenarioError> {
+    f.baselines
+        .validate_for_dof(n)
+        .map_err(|error| ScenarioError::Baselines {
+            error: Box::new(error),
+        })?;
+    Ok(ofmpc::control::MpcSettings {
+        baselines: f.baselines.clone(),
+        ..f.mpc.clone()
+    })
 }

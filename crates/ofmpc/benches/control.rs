@@ -1,6 +1,7 @@
 //! Per-step cost of the three controllers on the IRB 140 model with both
 //! least-squares solvers (dense Householder QR of 𝒜, structured square-root
-//! Riccati), N = 5 … 200, and the dense least-squares solve alone.
+//! Riccati), N = 5 … 200, and the dense least-squares solve alone; the
+//! baselines (pid, ctc, ctc-adaptive, dob-mpc) beside them at N = 10.
 //!
 //! Run: `cargo bench -p ofmpc --bench control`.
 
@@ -234,5 +235,44 @@ fn limits(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, steps, solve, parts, limits);
+/// One step of each baseline beside the paper's controllers and the
+/// adaptive second algorithm, N = 10 (the paper's tuning), same state and
+/// reference as `step_irb140`. Ids: `step_baselines/<controller>`. Run:
+/// `cargo bench -p ofmpc --bench control -- step_baselines`.
+fn baselines(c: &mut Criterion) {
+    let n = 6;
+    let nh = 10;
+    let mut group = c.benchmark_group("step_baselines");
+    group.warm_up_time(Duration::from_millis(300));
+    group.measurement_time(Duration::from_secs(1));
+    group.sample_size(20);
+    let s = MpcSettings::default();
+    let kinds = ControllerKind::ALL
+        .into_iter()
+        .chain([ControllerKind::SecondAdaptive])
+        .chain(ControllerKind::BASELINES);
+    for kind in kinds {
+        let mut ctrl = new_controller(kind, n, &s).unwrap();
+        let mut model = RobotDynamics::new(Robot::irb140());
+        let x = vec![
+            -0.27, 1.45, -0.85, -0.3, -0.7, 0.3, 0.2, -0.1, 0.15, 0.3, -0.2, 0.25,
+        ];
+        ctrl.reset(&x).unwrap();
+        let wk: Vec<f64> = x[..n].iter().map(|q| q + 1e-3).collect();
+        let preview: Vec<f64> = (0..nh)
+            .flat_map(|j| x[..n].iter().map(move |q| q + 1e-3 * (j + 2) as f64))
+            .collect();
+        let mut tau = vec![0.0; n];
+        group.bench_function(kind.name(), |b| {
+            b.iter(|| {
+                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
+                    .unwrap();
+                black_box(&tau);
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, steps, solve, parts, limits, baselines);
 criterion_main!(benches);

@@ -174,7 +174,8 @@ fn built_controller_steps_allocate_nothing() {
         ..Default::default()
     };
     let drives = binding_drives(n);
-    for kind in ControllerKind::WITH_ADAPTIVE {
+    // Every kind: the paper's, the adaptive variants and the baselines.
+    for kind in ControllerKind::EVERY {
         for settings in [MpcSettings::default(), limited.clone()] {
             let limits = settings.torque_limits;
             let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());

@@ -138,6 +138,9 @@ pub fn execute(
     if files.sweep {
         w.sweep()?;
     }
+    if files.compare {
+        w.compare()?;
+    }
     w.each_run()?;
     w.finish()?;
     dir.commit()
@@ -442,6 +445,21 @@ impl Writer<'_> {
             PAYLOAD_SWEEP,
             "Steady and RMS Cartesian error against payload (markers: diverged runs, at the error when stopped)",
             &figures::payload_sweep("Cartesian error against payload", metrics),
+        )
+    }
+
+    /// The "Controllers compared" section ([`crate::output::compare`]).
+    fn compare(&mut self) -> anyhow::Result<()> {
+        let limits: Vec<f64> = (self.scenario.experiment.robot.joints().iter())
+            .map(|j| j.limits.effort)
+            .collect();
+        let dir = &mut *self.dir;
+        crate::output::compare::section(
+            &mut self.report,
+            self.metrics,
+            self.controllers,
+            &limits,
+            &mut |report, rel, caption, fig| figure(dir, report, rel, caption, fig),
         )
     }
 

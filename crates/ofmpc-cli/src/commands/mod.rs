@@ -41,8 +41,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             // Absolute, so that the scenario.toml written with the results re-runs from any
             // working directory.
             file.program.file = a.program.as_deref().map(ofmpc_scenario::absolute);
-            file.payload.masses_kg = parse_vector("--payload", &a.payload, None)?;
-            file.controllers = parse_controllers("--controllers", &a.controllers)?;
+            let (payload, controllers) = compare_defaults(&a);
+            file.payload.masses_kg = parse_vector("--payload", payload, None)?;
+            file.controllers = parse_controllers("--controllers", controllers)?;
             file.payload.pick_up_at_s = a.pick_up_at;
             let mut sets = shorthand_overrides(&Shorthands {
                 controllers: None,
@@ -106,6 +107,25 @@ fn shorthand_overrides(s: &Shorthands) -> anyhow::Result<Vec<Override>> {
     Ok(v)
 }
 
+/// The payloads and controllers of `reproduce`: with `--compare`, every
+/// controller over 0, 0.25, 1, 2, 6 kg where the options keep their defaults.
+fn compare_defaults(a: &crate::cli::ReproduceArgs) -> (&str, &str) {
+    if !a.compare {
+        return (&a.payload, &a.controllers);
+    }
+    let payload = if a.payload == "0,0.25" {
+        "0,0.25,1,2,6"
+    } else {
+        &a.payload
+    };
+    let controllers = if a.controllers == "usual,first,second" {
+        "all"
+    } else {
+        &a.controllers
+    };
+    (payload, controllers)
+}
+
 /// Parses the `--set KEY=VALUE` options.
 fn parse_overrides(sets: &[String]) -> anyhow::Result<Vec<Override>> {
     sets.iter()
@@ -141,6 +161,14 @@ pub(crate) fn parse_controllers(
 ) -> anyhow::Result<Vec<ofmpc::control::ControllerKind>> {
     let mut v = Vec::new();
     for (i, part) in text.split(',').enumerate() {
+        if let Some(kinds) = ofmpc_scenario::expand_shorthand(part) {
+            for k in kinds {
+                if !v.contains(k) {
+                    v.push(*k);
+                }
+            }
+            continue;
+        }
         let k: ofmpc::control::ControllerKind = part
             .trim()
             .parse()

@@ -24,7 +24,8 @@ pub struct TuneArgs {
     /// Payload range LO,HI in kg (point mass at the flange).
     #[arg(long)]
     pub payload_range: String,
-    /// Controllers to tune for, comma-separated (usual, first, second).
+    /// Controllers to tune for, comma-separated (usual, first, second); or
+    /// one baseline (pid, ctc, ctc-adaptive, dob-mpc): its bandwidth.
     #[arg(long, default_value = "first,second")]
     pub controllers: String,
     /// The scenario file to write (TOML).
@@ -80,6 +81,9 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         bail!("--payload-range {lo_kg},{hi_kg}: give LO,HI with 0 ≤ LO ≤ HI (kg)");
     }
     let kinds = super::parse_controllers("--controllers", &a.controllers)?;
+    if kinds.iter().any(|k| k.is_baseline()) {
+        return tune_baselines(a, lo_kg, hi_kg, &kinds);
+    }
     if let Some(k) = kinds.iter().find(|k| k.is_adaptive()) {
         bail!("--controllers {k}: tune the non-adaptive controllers (the adaptive ones identify the payload)");
     }
@@ -158,6 +162,58 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         tune_words(&summary, lo_kg, hi_kg)
     };
     println!("{text}");
+    Ok(())
+}
+
+/// `ofmpc tune --controllers pid|ctc|ctc-adaptive|dob-mpc`: the largest
+/// bandwidth that keeps the payload range stable and offset-free, with its
+/// margin ([`ofmpc_scenario::baseline_tuning`]); one baseline at a time.
+fn tune_baselines(
+    a: &TuneArgs,
+    lo_kg: f64,
+    hi_kg: f64,
+    kinds: &[ofmpc::control::ControllerKind],
+) -> anyhow::Result<()> {
+    let [kind] = kinds else {
+        bail!(
+            "--controllers {}: tune one baseline at a time (its bandwidth), not together with other controllers",
+            kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(",")
+        );
+    };
+    let mut setup = a.setup.clone();
+    if setup.robot.ends_with(".urdf") || Path::new(&setup.robot).is_file() {
+        setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
+    }
+    setup.drives = setup.drives.as_deref().map(absolute);
+    setup.program = setup.program.as_deref().map(absolute);
+    let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    let t = ofmpc_scenario::baseline_tuning::baseline_bandwidth(&base, lo_kg, hi_kg, *kind)?;
+    let margin = match t.margin {
+        Some(m) => format!("{m:.3} (ln of the first failing bandwidth over it)"),
+        None => "not bounded by the grid (no bandwidth up to 316 rad/s failed)".into(),
+    };
+    let text = format!(
+        "# Written by `ofmpc tune --payload-range {lo_kg},{hi_kg} --controllers {kind}`: `ofmpc run` this file.\n\
+         # Largest bandwidth keeping {lo_kg}, {}, {hi_kg} kg offset-free: {} rad/s; margin {margin}; \
+         worst RMS Cartesian error {:.4} mm.\n{}",
+        t.simulated_kg[1],
+        t.chosen.bandwidth,
+        t.chosen.rms_mm,
+        t.file.to_toml()?
+    );
+    write_atomic(&a.out, text.as_bytes())
+        .with_context(|| format!("writing {}", a.out.display()))?;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&serde_json::json!({
+            "controller": kind.name(),
+            "bandwidth_rad_s": t.chosen.bandwidth,
+            "margin": t.margin,
+            "worst_rms_mm": t.chosen.rms_mm,
+            "candidates": t.candidates,
+            "scenario": a.out.display().to_string(),
+        }))?
+    );
     Ok(())
 }
 

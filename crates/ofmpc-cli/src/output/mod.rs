@@ -7,6 +7,7 @@
 
 pub mod atomic;
 pub mod cleanup;
+pub(crate) mod compare;
 pub mod console;
 pub mod plot;
 pub mod report;

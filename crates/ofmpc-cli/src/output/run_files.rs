@@ -16,13 +16,7 @@ use ofmpc_scenario::ScenarioFile;
 use std::path::{Path, PathBuf};
 
 /// Every controller a scenario can name (run folders are `<controller>_m<mass>/`).
-const KINDS: [ControllerKind; 5] = [
-    ControllerKind::Usual,
-    ControllerKind::First,
-    ControllerKind::Second,
-    ControllerKind::FirstAdaptive,
-    ControllerKind::SecondAdaptive,
-];
+const KINDS: [ControllerKind; 9] = ControllerKind::EVERY;
 
 /// The per-payload figures, by the prefix of their stem (`<prefix><mass label>`).
 pub(crate) mod per_payload {
@@ -78,6 +72,9 @@ pub(crate) struct RunFiles {
     pub identification: bool,
     /// The payload sweep figure (three payloads or more).
     pub sweep: bool,
+    /// The "Controllers compared" section and its figure (a baseline ran
+    /// beside another controller, [`super::compare::wanted`]).
+    pub compare: bool,
     /// The drives section: torque ratio figures (some drive, sensor or fault effect is on).
     pub drives: bool,
     /// Measurement error figures per run (the runs record the measurement apart).
@@ -96,6 +93,7 @@ impl RunFiles {
                 .collect(),
             identification: controllers.iter().any(|k| k.is_adaptive()),
             sweep: payloads.len() >= 3,
+            compare: super::compare::wanted(controllers),
             drives,
             measurement: drives && file.records_measurement(),
         }
@@ -117,6 +115,9 @@ impl RunFiles {
         }
         if self.sweep {
             v.push(PAYLOAD_SWEEP.into());
+        }
+        if self.compare {
+            v.push(super::compare::COMPARE_FIGURE.into());
         }
         for r in &self.runs {
             v.push(format!("{r}/{}", per_run::JOINTS_TORQUES));

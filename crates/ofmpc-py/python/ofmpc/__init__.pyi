@@ -111,7 +111,10 @@ class Controller:
     Its model of the robot is a copy of ``robot`` at construction (payload included).
     Weights (square roots: the cost uses QᵀQ), each a number (times I) or one per joint:
     ``q_yw`` (output error), ``q_dy`` (output increment), ``q_du`` (input increment),
-    ``q_u`` (input, usual MPC). Defaults: the paper's tuning.
+    ``q_u`` (input, usual MPC). Defaults: the paper's tuning. The baselines ``"pid"``,
+    ``"ctc"``, ``"ctc-adaptive"``, ``"dob-mpc"`` take their bandwidths (rad/s, a number or
+    one per joint) the same way: ``pid_bandwidth`` (default 60), ``ctc_bandwidth`` (150),
+    ``dob_observer_bandwidth`` (100).
     """
 
     def __init__(

@@ -1,5 +1,7 @@
 //! Adaptive variants of the incremental algorithms: the first or second
-//! algorithm whose robot model carries a payload identified online.
+//! algorithm whose robot model carries a payload identified online; and the
+//! same for the computed-torque baseline (`ctc-adaptive`, the classic
+//! adaptive robot controller: [`super::ctc`] on the identified model).
 //!
 //! At every sample `k`, before the algorithm's own step, the payload
 //! estimator ([`crate::ident::PayloadEstimator`]) takes the period
@@ -18,8 +20,8 @@
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 
 use super::{
-    Controller, ControllerKind, FirstMpc, MpcSettings, SecondMpc, SettingsError, StepError,
-    StepInfo,
+    Controller, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc, SettingsError,
+    StepError, StepInfo,
 };
 use crate::dynamics::JointSpaceDynamics;
 use crate::ident::{payload_of, PayloadEstimator, PayloadParams, RlsSettings};
@@ -54,9 +56,10 @@ impl std::fmt::Debug for AdaptiveMpc {
 }
 
 impl AdaptiveMpc {
-    /// `kind` must be [`ControllerKind::FirstAdaptive`] or
-    /// [`ControllerKind::SecondAdaptive`] (the plain kinds are taken as their
-    /// adaptive variant; the usual MPC has none and is refused).
+    /// `kind` must be [`ControllerKind::FirstAdaptive`],
+    /// [`ControllerKind::SecondAdaptive`] or [`ControllerKind::CtcAdaptive`]
+    /// (the plain kinds are taken as their adaptive variant; the usual MPC,
+    /// the PID and the disturbance-observer MPC have none and are refused).
     pub fn new(
         kind: ControllerKind,
         n: usize,
@@ -81,7 +84,13 @@ impl AdaptiveMpc {
                 ControllerKind::SecondAdaptive,
                 Box::new(SecondMpc::new(n, settings)?),
             ),
-            ControllerKind::Usual => return Err(SettingsError::NoAdaptiveVariant),
+            ControllerKind::Ctc | ControllerKind::CtcAdaptive => (
+                ControllerKind::CtcAdaptive,
+                Box::new(CtcController::new(n, settings)?),
+            ),
+            ControllerKind::Usual | ControllerKind::Pid | ControllerKind::DobMpc => {
+                return Err(SettingsError::NoAdaptiveVariant)
+            }
         };
         let estimator = PayloadEstimator::new(n, rls, PayloadParams::zeros())
             .map_err(SettingsError::Estimator)?;

@@ -1,4 +1,5 @@
-//! Which controller: the paper's three and the adaptive variants, by name.
+//! Which controller: the paper's three, the adaptive variants and the
+//! baselines, by name.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -22,6 +23,20 @@ pub enum ControllerKind {
     /// The second algorithm with online payload identification ([`super::AdaptiveMpc`]).
     #[serde(rename = "second-adaptive")]
     SecondAdaptive,
+    /// Baseline: independent joint PID with gravity compensation and velocity
+    /// feed-forward ([`super::pid`]).
+    Pid,
+    /// Baseline: computed torque on the nominal model with PID on the error
+    /// ([`super::ctc`]).
+    Ctc,
+    /// Baseline: computed torque with the payload identified online by the
+    /// adaptive controllers' estimator ([`super::AdaptiveMpc`]).
+    #[serde(rename = "ctc-adaptive")]
+    CtcAdaptive,
+    /// Baseline: offset-free MPC with an input-disturbance model and observer
+    /// ([`super::dob_mpc`]).
+    #[serde(rename = "dob-mpc")]
+    DobMpc,
 }
 
 impl ControllerKind {
@@ -41,8 +56,32 @@ impl ControllerKind {
         ControllerKind::SecondAdaptive,
     ];
 
+    /// The baselines an engineer compares against: PID with gravity
+    /// compensation, computed torque, adaptive computed torque and the
+    /// disturbance-observer MPC ([`super::baseline`]).
+    pub const BASELINES: [ControllerKind; 4] = [
+        ControllerKind::Pid,
+        ControllerKind::Ctc,
+        ControllerKind::CtcAdaptive,
+        ControllerKind::DobMpc,
+    ];
+
+    /// Every kind: the paper's three, the adaptive variants, the baselines.
+    pub const EVERY: [ControllerKind; 9] = [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+        ControllerKind::FirstAdaptive,
+        ControllerKind::SecondAdaptive,
+        ControllerKind::Pid,
+        ControllerKind::Ctc,
+        ControllerKind::CtcAdaptive,
+        ControllerKind::DobMpc,
+    ];
+
     /// The lowercase name (`"usual"`, `"first"`, `"second"`,
-    /// `"first-adaptive"`, `"second-adaptive"`).
+    /// `"first-adaptive"`, `"second-adaptive"`, `"pid"`, `"ctc"`,
+    /// `"ctc-adaptive"`, `"dob-mpc"`).
     pub fn name(self) -> &'static str {
         match self {
             ControllerKind::Usual => "usual",
@@ -50,6 +89,10 @@ impl ControllerKind {
             ControllerKind::Second => "second",
             ControllerKind::FirstAdaptive => "first-adaptive",
             ControllerKind::SecondAdaptive => "second-adaptive",
+            ControllerKind::Pid => "pid",
+            ControllerKind::Ctc => "ctc",
+            ControllerKind::CtcAdaptive => "ctc-adaptive",
+            ControllerKind::DobMpc => "dob-mpc",
         }
     }
 
@@ -57,8 +100,16 @@ impl ControllerKind {
     pub fn is_adaptive(self) -> bool {
         matches!(
             self,
-            ControllerKind::FirstAdaptive | ControllerKind::SecondAdaptive
+            ControllerKind::FirstAdaptive
+                | ControllerKind::SecondAdaptive
+                | ControllerKind::CtcAdaptive
         )
+    }
+
+    /// Whether it is one of the baselines ([`Self::BASELINES`]), not a
+    /// predictive controller of the paper.
+    pub fn is_baseline(self) -> bool {
+        Self::BASELINES.contains(&self)
     }
 
     /// The algorithm it runs: the adaptive variants' plain kind.
@@ -66,6 +117,7 @@ impl ControllerKind {
         match self {
             ControllerKind::FirstAdaptive => ControllerKind::First,
             ControllerKind::SecondAdaptive => ControllerKind::Second,
+            ControllerKind::CtcAdaptive => ControllerKind::Ctc,
             k => k,
         }
     }
@@ -79,13 +131,13 @@ impl fmt::Display for ControllerKind {
 
 /// An unknown controller name.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\"")]
+#[error("unknown controller {0:?}: expected one of \"usual\", \"first\", \"second\", \"first-adaptive\", \"second-adaptive\", \"pid\", \"ctc\", \"ctc-adaptive\", \"dob-mpc\"")]
 pub struct UnknownControllerKind(pub String);
 
 impl FromStr for ControllerKind {
     type Err = UnknownControllerKind;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        ControllerKind::WITH_ADAPTIVE
+        ControllerKind::EVERY
             .into_iter()
             .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
             .ok_or_else(|| UnknownControllerKind(s.to_string()))

@@ -1,5 +1,10 @@
 //! Predictive controllers of Section III: the usual MPC (Eq. (43)) and the
-//! two offset-free incremental algorithms (Eq. (32)/(37) and (34)/(39)).
+//! two offset-free incremental algorithms (Eq. (32)/(37) and (34)/(39));
+//! beside them the baselines a control engineer compares against
+//! ([`baseline`]): joint PID with gravity compensation ([`pid`]), computed
+//! torque ([`ctc`]), its adaptive variant ([`adaptive`]) and the
+//! disturbance-observer MPC ([`dob_mpc`]), behind the same [`Controller`]
+//! trait and [`ControllerBuilder`].
 //!
 //! Per sample every controller
 //! 1. evaluates the robot model `H, C, g` at the measured state and forms
@@ -27,16 +32,20 @@
 //! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
 
 pub mod adaptive;
+pub mod baseline;
 pub mod builder;
 pub mod constrained;
 pub(crate) mod core;
+pub mod ctc;
 pub(crate) mod dense;
+pub mod dob_mpc;
 pub mod drive_model;
 pub mod first;
 mod kind;
 pub mod lsq;
 pub mod model;
 pub mod observer;
+pub mod pid;
 pub mod prediction;
 pub mod second;
 pub mod settings;
@@ -49,21 +58,26 @@ pub mod zoh;
 use crate::dynamics::JointSpaceDynamics;
 
 pub use adaptive::AdaptiveMpc;
+pub use baseline::triple_pole_gains;
 pub use builder::{
     BuildError, ControllerBuilder, FrictionUse, Mpc, MpcParts, ObserverSettings, StepInput,
     StepOutput, DEFAULT_OBSERVER_POLE,
 };
 pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
+pub use ctc::CtcController;
+pub use dob_mpc::DobMpc;
 pub use drive_model::{DriveModel, DriveQuantity};
 pub use first::FirstMpc;
 pub use kind::{ControllerKind, UnknownControllerKind};
 pub use lsq::{LsqError, LsqInfo, LsqWorkspace};
 pub use model::{LinearLikeModel, TermsError};
 pub use observer::StateObserver;
+pub use pid::PidController;
 pub use prediction::Predictions;
 pub use second::SecondMpc;
 pub use settings::{
-    structured_from_horizon, MpcSettings, SettingsError, Solver, Weight, STRUCTURED_FROM_HORIZON,
+    bandwidths, structured_from_horizon, BaselineSettings, MpcSettings, SettingsError, Solver,
+    Weight, STRUCTURED_FROM_HORIZON,
 };
 pub use usual::UsualMpc;
 pub use zoh::{Zoh, ZohError};
@@ -209,8 +223,11 @@ pub fn new_controller(
         ControllerKind::Usual => Box::new(UsualMpc::new(n, settings)?),
         ControllerKind::First => Box::new(FirstMpc::new(n, settings)?),
         ControllerKind::Second => Box::new(SecondMpc::new(n, settings)?),
-        ControllerKind::FirstAdaptive | ControllerKind::SecondAdaptive => {
-            Box::new(AdaptiveMpc::new(kind, n, settings)?)
-        }
+        ControllerKind::FirstAdaptive
+        | ControllerKind::SecondAdaptive
+        | ControllerKind::CtcAdaptive => Box::new(AdaptiveMpc::new(kind, n, settings)?),
+        ControllerKind::Pid => Box::new(PidController::new(n, settings)?),
+        ControllerKind::Ctc => Box::new(CtcController::new(n, settings)?),
+        ControllerKind::DobMpc => Box::new(DobMpc::new(n, settings)?),
     })
 }

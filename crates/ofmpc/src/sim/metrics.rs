@@ -172,6 +172,9 @@ pub struct RunMetrics {
     /// Largest `|τ_i| / τmax_i` of the commanded torque over joints and
     /// samples (0 without finite limits).
     pub max_torque_ratio: f64,
+    /// Largest change of the applied torque between two samples,
+    /// `max_{k,i} |τ_{k,i} − τ_{k−1,i}|` (N·m; NaN with fewer than two samples).
+    pub torque_step_max_nm: f64,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -240,6 +243,10 @@ pub fn compute(
             c_steady = c_steady.max(norm);
         }
     }
+    let torque_step = (1..len)
+        .flat_map(|k| (0..n).map(move |i| (k, i)))
+        .map(|(k, i)| (rec.tau[k * n + i] - rec.tau[(k - 1) * n + i]).abs())
+        .fold(if len < 2 { f64::NAN } else { 0.0 }, f64::max);
     let status = outcome.status();
     let stopped = status != RunStatus::Ok;
     // Nothing recorded: no metric exists.
@@ -282,6 +289,7 @@ pub fn compute(
         faults: rec.faults,
         saturated_samples: rec.saturated_samples,
         max_torque_ratio: rec.max_torque_ratio,
+        torque_step_max_nm: torque_step,
     }
 }
 
@@ -312,6 +320,7 @@ mod tests {
         assert!((m.cartesian_error_rms_mm - 5.0).abs() < 1e-9);
         assert!((m.steady_cartesian_error_mm - 5.0).abs() < 1e-9);
         assert_eq!(m.torque_max_nm[0], 199.0);
+        assert_eq!(m.torque_step_max_nm, 1.0);
         assert!((m.step_time_us.median - 99.5).abs() < 1e-12);
         assert_eq!(m.step_time_us.max, 199.0);
         // Ts = 10 ms = 10_000 µs: no step time of 0..199 µs misses it.

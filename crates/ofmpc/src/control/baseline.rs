@@ -1,0 +1,480 @@
+//! What the baseline controllers share: their tuning (one bandwidth each),
+//! the PID gains of a discrete triple pole, the reference's velocity and
+//! acceleration from the sampled preview, and the PID law with anti-windup.
+//!
+//! # Gains: a discrete triple pole at `p = e^(−ωn·Ts)`
+//!
+//! With the acceleration `v_k` held over each period (zero-order hold) the
+//! error `e = q_ref − q` of a joint whose acceleration the controller sets
+//! evolves as the discretized double integrator with an integral state
+//! `z_k = Ts Σ_{j<k} e_j`:
+//!
+//! ```text
+//! e_{k+1} = e_k + Ts ė_k − Ts²/2 v_k,   ė_{k+1} = ė_k − Ts v_k,   z_{k+1} = z_k + Ts e_k,
+//! v_k = kp e_k + kd ė_k + ki z_k.
+//! ```
+//!
+//! Its characteristic polynomial is
+//! `(z−1)³ + (kp Ts²/2)(z²−1) + kd Ts (z−1)² + (ki Ts³/2)(z+1)`; matching it
+//! to `(z − p)³` gives, with `a = kp Ts²/2`, `b = kd Ts`, `c = ki Ts³/2`,
+//!
+//! ```text
+//! b = (7 − 3p − 3p² − p³)/4,   a = 3 − 3p − b,   c = 3p² − 3 + 2b
+//! ```
+//!
+//! (pole placement of a sampled PID, Franklin, Powell & Workman, *Digital
+//! Control of Dynamic Systems*, 3rd ed., ch. 8; [`triple_pole_gains`]). The
+//! continuous limit (`Ts → 0`) is `kp = 3ωn²`, `kd = 3ωn`, `ki = ωn³`.
+//!
+//! # Reference velocity and acceleration from the samples
+//!
+//! The controllers see the reference at the samples only. A double
+//! integrator driven by a held acceleration `a_k` passes through every
+//! sample `w_k` when `a_k + a_{k−1} = 2 Δ²w_k / Ts²`; its smooth solution, to
+//! `O(Ts²)`, and the velocity that then reaches `w_{k+1}` exactly are
+//!
+//! ```text
+//! a_k = (w_{k+2} − w_{k+1} − w_k + w_{k−1}) / (2 Ts²),   v_k = (w_{k+1} − w_k)/Ts − Ts a_k / 2
+//! ```
+//!
+//! ([`RefDerivatives`]): the feed-forward of the computed-torque law and the
+//! reference velocity of every baseline's derivative term.
+//!
+//! # Anti-windup
+//!
+//! Conditional integration: the integral of a joint whose torque the drives'
+//! limit clipped at this sample is not accumulated (as the incremental
+//! algorithms' aggregated error, [`super::MpcSettings::torque_limits`]).
+
+use super::core::{check_finite, check_len};
+use super::drive_model::DriveModel;
+use super::model::LinearLikeModel;
+use super::settings::{MpcSettings, SettingsError};
+use super::{StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+pub use super::settings::{
+    BaselineSettings, DEFAULT_CTC_BANDWIDTH, DEFAULT_DOB_OBSERVER_BANDWIDTH, DEFAULT_PID_BANDWIDTH,
+};
+
+/// `(kp, kd, ki)` that place the three poles of the sampled PID loop of a
+/// double integrator at `e^(−ωn·Ts)` (module docs).
+pub fn triple_pole_gains(omega_n: f64, ts: f64) -> (f64, f64, f64) {
+    let p = (-omega_n * ts).exp();
+    let b = (7.0 - 3.0 * p - 3.0 * p * p - p * p * p) / 4.0;
+    let a = 3.0 - 3.0 * p - b;
+    let c = 3.0 * p * p - 3.0 + 2.0 * b;
+    (2.0 * a / (ts * ts), b / ts, 2.0 * c / (ts * ts * ts))
+}
+
+/// The reference's velocity and held acceleration at sample `k` from
+/// `w_{k−1}, w_k, w_{k+1}, w_{k+2}` (module docs). Keeps `w_{k−1}`.
+#[derive(Debug, Clone)]
+pub(crate) struct RefDerivatives {
+    w_prev: Vec<f64>,
+    has_prev: bool,
+    /// `v_k` (n values).
+    pub v: Vec<f64>,
+    /// `a_k` (n values).
+    pub a: Vec<f64>,
+}
+
+impl RefDerivatives {
+    pub fn new(n: usize) -> Self {
+        Self {
+            w_prev: vec![0.0; n],
+            has_prev: false,
+            v: vec![0.0; n],
+            a: vec![0.0; n],
+        }
+    }
+
+    /// Forgets `w_{k−1}` (the next sample takes the reference at rest before).
+    pub fn reset(&mut self) {
+        self.has_prev = false;
+    }
+
+    /// Computes `v_k`, `a_k` from `w_k` and the preview (`w_{k+1}, …`, at
+    /// least one block; `w_{k+2} = w_{k+1}` with a horizon of one).
+    pub fn update(&mut self, w_k: &[f64], preview: &[f64], ts: f64) {
+        let n = w_k.len();
+        let w1 = &preview[..n];
+        let w2 = preview.get(n..2 * n).unwrap_or(w1);
+        for i in 0..n {
+            let wm = if self.has_prev {
+                self.w_prev[i]
+            } else {
+                w_k[i]
+            };
+            let a = (w2[i] - w1[i] - w_k[i] + wm) / (2.0 * ts * ts);
+            self.a[i] = a;
+            self.v[i] = (w1[i] - w_k[i]) / ts - 0.5 * ts * a;
+        }
+    }
+
+    /// Commits `w_{k−1} ← w_k` after a successful step.
+    pub fn commit(&mut self, w_k: &[f64]) {
+        self.w_prev.copy_from_slice(w_k);
+        self.has_prev = true;
+    }
+}
+
+/// The PID law of the baselines, per joint: `v = kp e + kd ė + ki z` with
+/// conditional integration ([`JointPid::commit`]).
+#[derive(Debug, Clone)]
+pub(crate) struct JointPid {
+    kp: Vec<f64>,
+    kd: Vec<f64>,
+    ki: Vec<f64>,
+    ts: f64,
+    z: Vec<f64>,
+    e: Vec<f64>,
+}
+
+impl JointPid {
+    /// Gains of the triple pole at `e^(−ωn_i·Ts)` for each joint.
+    pub fn new(omega_n: &[f64], ts: f64) -> Self {
+        let n = omega_n.len();
+        let mut s = Self {
+            kp: vec![0.0; n],
+            kd: vec![0.0; n],
+            ki: vec![0.0; n],
+            ts,
+            z: vec![0.0; n],
+            e: vec![0.0; n],
+        };
+        for (i, w) in omega_n.iter().enumerate() {
+            (s.kp[i], s.kd[i], s.ki[i]) = triple_pole_gains(*w, ts);
+        }
+        s
+    }
+
+    /// Clears the integral.
+    pub fn reset(&mut self) {
+        self.z.fill(0.0);
+    }
+
+    /// `v_i = kp e_i + kd ė_i + ki z_i` with `e = w_k − q`, `ė = v_ref − q̇`
+    /// (writes `out`; the integral is not changed until [`Self::commit`]).
+    pub fn law(&mut self, x: &[f64], w_k: &[f64], v_ref: &[f64], out: &mut [f64]) {
+        let n = w_k.len();
+        for i in 0..n {
+            let e = w_k[i] - x[i];
+            let ed = v_ref[i] - x[n + i];
+            self.e[i] = e;
+            out[i] = self.kp[i] * e + self.kd[i] * ed + self.ki[i] * self.z[i];
+        }
+    }
+
+    /// `z_{k+1} = z_k + Ts e_k` on every joint whose torque was not clipped.
+    pub fn commit(&mut self, clipped: &[bool]) {
+        for i in 0..self.z.len() {
+            if !clipped[i] {
+                self.z[i] += self.ts * self.e[i];
+            }
+        }
+    }
+}
+
+/// Clips `tau` to `±limits` (when given), marking the clipped joints.
+pub(crate) fn clip(tau: &mut [f64], limits: Option<&[f64]>, clipped: &mut [bool]) {
+    clipped.fill(false);
+    if let Some(lim) = limits {
+        for ((t, l), c) in tau.iter_mut().zip(lim).zip(clipped.iter_mut()) {
+            if t.abs() > *l {
+                *t = t.clamp(-l, *l);
+                *c = true;
+            }
+        }
+    }
+}
+
+/// Which joint-space law a [`JointLawCore`] runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Law {
+    /// `τ = g(q) + D (kp e + kd ė + ki z)`, `D = diag H(q_0)` ([`super::pid`]).
+    Pid,
+    /// `τ = H(q)(a_ref + kp e + kd ė + ki z) + C(q, q̇) q̇ + g(q)` ([`super::ctc`]).
+    Ctc,
+}
+
+/// Everything of the PID and computed-torque baselines but the kind:
+/// buffers sized once, the model terms, the law, limits and friction.
+#[derive(Debug, Clone)]
+pub(crate) struct JointLawCore {
+    law: Law,
+    n: usize,
+    settings: MpcSettings,
+    model: LinearLikeModel,
+    pid: JointPid,
+    refd: RefDerivatives,
+    /// `H_ii(q_0)` of the PID law (at the state of the last reset).
+    scale: Vec<f64>,
+    scale_ready: bool,
+    x0: Vec<f64>,
+    fb: Vec<f64>,
+    u: Vec<f64>,
+    increments: Vec<f64>,
+    tau_new: Vec<f64>,
+    clipped: Vec<bool>,
+    drives: Option<DriveModel>,
+}
+
+impl JointLawCore {
+    /// Buffers for `n` joints; the gains from `omega_n` (rad/s, per joint).
+    pub fn new(
+        law: Law,
+        n: usize,
+        settings: &MpcSettings,
+        omega_n: &[f64],
+    ) -> Result<Self, SettingsError> {
+        settings.validate_for_dof(n)?;
+        Ok(Self {
+            law,
+            n,
+            settings: settings.clone(),
+            model: LinearLikeModel::new(n),
+            pid: JointPid::new(omega_n, settings.ts),
+            refd: RefDerivatives::new(n),
+            scale: vec![1.0; n],
+            scale_ready: false,
+            x0: vec![0.0; 2 * n],
+            fb: vec![0.0; n],
+            u: vec![0.0; n],
+            increments: vec![0.0; settings.horizon * n],
+            tau_new: vec![0.0; n],
+            clipped: vec![false; n],
+            drives: None,
+        })
+    }
+
+    pub fn dof(&self) -> usize {
+        self.n
+    }
+    pub fn horizon(&self) -> usize {
+        self.settings.horizon
+    }
+    pub fn settings(&self) -> &MpcSettings {
+        &self.settings
+    }
+    pub fn input(&self) -> &[f64] {
+        &self.u
+    }
+    pub fn increments(&self) -> &[f64] {
+        &self.increments
+    }
+
+    /// Keeps the drives' limits and friction estimates.
+    pub fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        drives.validate(self.n)?;
+        self.drives = Some(drives.clone());
+        Ok(())
+    }
+
+    /// Integral, input and `w_{k−1}` cleared; the PID's scale is taken at
+    /// `x0` at the next step.
+    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        check_len("x0", x0.len(), 2 * self.n)?;
+        check_finite("x0", x0)?;
+        self.x0.copy_from_slice(x0);
+        self.scale_ready = false;
+        self.pid.reset();
+        self.refd.reset();
+        self.u.fill(0.0);
+        self.increments.fill(0.0);
+        Ok(())
+    }
+
+    /// One step of the law (module docs); state committed only on success.
+    pub fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let n = self.n;
+        check_len("x", x.len(), 2 * n)?;
+        check_len("w_k", w_k.len(), n)?;
+        check_len("preview", preview.len(), self.settings.horizon * n)?;
+        check_len("tau", tau.len(), n)?;
+        check_finite("x", x)?;
+        check_finite("w_k", w_k)?;
+        check_finite("preview", preview)?;
+        let limited = self.settings.torque_limits;
+        if (limited || self.settings.friction_compensation) && self.drives.is_none() {
+            return Err(StepError::NoDriveModel);
+        }
+        if self.law == Law::Pid && !self.scale_ready {
+            self.model.update(model, &self.x0[..n], &self.x0[n..])?;
+            for (i, s) in self.scale.iter_mut().enumerate() {
+                *s = self.model.h()[(i, i)];
+            }
+            self.scale_ready = true;
+        }
+        self.model.update(model, &x[..n], &x[n..])?;
+        self.refd.update(w_k, preview, self.settings.ts);
+        self.pid.law(x, w_k, &self.refd.v, &mut self.fb);
+        match self.law {
+            Law::Pid => {
+                self.u.copy_from_slice(&self.fb);
+                let g = self.model.g();
+                for i in 0..n {
+                    self.tau_new[i] = g[i] + self.scale[i] * self.fb[i];
+                }
+            }
+            Law::Ctc => {
+                for i in 0..n {
+                    self.u[i] = self.refd.a[i] + self.fb[i];
+                }
+                self.model.torque(&self.u, &mut self.tau_new)?;
+                let c = self.model.c().as_slice();
+                for (j, col) in c.chunks_exact(n).enumerate() {
+                    super::dense::axpy(x[n + j], col, &mut self.tau_new);
+                }
+            }
+        }
+        if let Some(d) = self
+            .drives
+            .as_ref()
+            .filter(|_| self.settings.friction_compensation)
+        {
+            // The friction estimate at the reference's velocity, as the
+            // predictive controllers' feed-forward (MpcSettings::friction_compensation).
+            for (i, t) in self.tau_new.iter_mut().enumerate() {
+                let v = (preview[i] - w_k[i]) / self.settings.ts;
+                *t += d.damping(i, v) * v;
+            }
+        }
+        let limits = self
+            .drives
+            .as_ref()
+            .filter(|_| limited)
+            .map(|d| d.max_torque_nm.as_slice());
+        clip(&mut self.tau_new, limits, &mut self.clipped);
+        if let Some(index) = self
+            .u
+            .iter()
+            .chain(&self.tau_new)
+            .position(|v| !v.is_finite())
+        {
+            return Err(StepError::NonFiniteResult {
+                what: if index < n { "u" } else { "tau" },
+                index: index % n,
+            });
+        }
+        tau.copy_from_slice(&self.tau_new);
+        self.pid.commit(&self.clipped);
+        self.refd.commit(w_k);
+        self.increments[..n].copy_from_slice(&self.u);
+        Ok(StepInfo {
+            cost: 0.0,
+            r_diag_ratio: 1.0,
+            zoh_squarings: 0,
+        })
+    }
+}
+
+/// Implements [`Controller`](super::Controller) for a struct with a field
+/// `core: JointLawCore`.
+macro_rules! impl_joint_law {
+    ($ty:ty, $kind:expr) => {
+        impl $crate::control::Controller for $ty {
+            fn kind(&self) -> $crate::control::ControllerKind {
+                $kind
+            }
+            fn dof(&self) -> usize {
+                self.core.dof()
+            }
+            fn horizon(&self) -> usize {
+                self.core.horizon()
+            }
+            fn settings(&self) -> &$crate::control::MpcSettings {
+                self.core.settings()
+            }
+            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
+                self.core.reset(x0)
+            }
+            fn input(&self) -> &[f64] {
+                self.core.input()
+            }
+            fn increments(&self) -> &[f64] {
+                self.core.increments()
+            }
+            fn set_drive_model(
+                &mut self,
+                drives: &$crate::control::DriveModel,
+            ) -> Result<(), $crate::control::SettingsError> {
+                self.core.set_drive_model(drives)
+            }
+            fn step(
+                &mut self,
+                model: &mut dyn $crate::dynamics::JointSpaceDynamics,
+                x: &[f64],
+                w_k: &[f64],
+                preview: &[f64],
+                tau: &mut [f64],
+            ) -> Result<$crate::control::StepInfo, $crate::control::StepError> {
+                self.core.step(model, x, w_k, preview, tau)
+            }
+        }
+    };
+}
+pub(crate) use impl_joint_law;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gains_place_a_triple_pole() {
+        for (wn, ts) in [(60.0, 0.01), (150.0, 0.01), (5.0, 0.001)] {
+            let (kp, kd, ki) = triple_pole_gains(wn, ts);
+            let p: f64 = (-wn * ts).exp();
+            // Closed-loop matrix of the module docs; its characteristic
+            // polynomial evaluated at a few points equals (z − p)³.
+            let a = [
+                [
+                    1.0 - ts * ts / 2.0 * kp,
+                    ts - ts * ts / 2.0 * kd,
+                    -ts * ts / 2.0 * ki,
+                ],
+                [-ts * kp, 1.0 - ts * kd, -ts * ki],
+                [ts, 0.0, 1.0],
+            ];
+            for z in [-1.3, 0.2, 0.9, 2.0] {
+                let m = |i: usize, j: usize| if i == j { z - a[i][j] } else { -a[i][j] };
+                let det = m(0, 0) * (m(1, 1) * m(2, 2) - m(1, 2) * m(2, 1))
+                    - m(0, 1) * (m(1, 0) * m(2, 2) - m(1, 2) * m(2, 0))
+                    + m(0, 2) * (m(1, 0) * m(2, 1) - m(1, 1) * m(2, 0));
+                let want = (z - p).powi(3);
+                assert!(
+                    (det - want).abs() < 1e-9 * (1.0 + want.abs()),
+                    "{det} vs {want}"
+                );
+            }
+        }
+        // Continuous limit.
+        let (kp, kd, ki) = triple_pole_gains(10.0, 1e-5);
+        assert!((kp / 300.0 - 1.0).abs() < 1e-3 && (kd / 30.0 - 1.0).abs() < 1e-3);
+        assert!((ki / 1000.0 - 1.0).abs() < 1e-2);
+    }
+
+    #[test]
+    fn reference_derivatives_are_exact_for_a_cubic() {
+        // w(t) = t³: the held acceleration reaches w_{k+1} exactly from
+        // (w_k, v_k), and v_k, a_k are within O(Ts²) of w', mean w''.
+        let ts = 0.01;
+        let w = |k: f64| (k * ts).powi(3);
+        let mut r = RefDerivatives::new(1);
+        let k = 50.0;
+        r.commit(&[w(k - 1.0)]);
+        r.update(&[w(k)], &[w(k + 1.0), w(k + 2.0)], ts);
+        let reached = w(k) + ts * r.v[0] + 0.5 * ts * ts * r.a[0];
+        assert!((reached - w(k + 1.0)).abs() < 1e-15);
+        let t = k * ts;
+        assert!((r.v[0] - 3.0 * t * t).abs() <= 0.5 * ts * ts + 1e-15);
+        assert!((r.a[0] - 6.0 * (t + ts / 2.0)).abs() < 1e-9);
+    }
+}

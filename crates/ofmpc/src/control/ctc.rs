@@ -1,0 +1,39 @@
+//! Baseline: computed-torque control on the nominal model with PID on the
+//! error and the reference's velocity and acceleration as feed-forward.
+//!
+//! ```text
+//! τ_k = H(q_k) (a_ref,k + kp e_k + kd ė_k + ki z_k) + C(q_k, q̇_k) q̇_k + g(q_k),
+//! e_k = w_k − q_k,   ė_k = v_ref,k − q̇_k,   z_{k+1} = z_k + Ts e_k
+//! ```
+//!
+//! (Spong, Hutchinson & Vidyasagar, *Robot Modeling and Control*, §8.4,
+//! with an integral term): with an exact model every joint's error is the
+//! sampled double integrator of [`super::baseline`], whose gains place a
+//! triple pole at `e^(−ωn·Ts)`, `ωn` =
+//! [`super::BaselineSettings::ctc_bandwidth`] (default 150 rad/s);
+//! `v_ref`, `a_ref` from the samples ([`super::baseline`]). A payload the
+//! model leaves out acts as an input disturbance that the integrator
+//! removes at rest. With torque limits the torque is clipped and the clipped
+//! joint's integral frozen (anti-windup).
+
+use super::baseline::{impl_joint_law, JointLawCore, Law};
+use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::ControllerKind;
+
+/// The computed-torque baseline. Allocation-free [`Controller::step`](super::Controller::step).
+#[derive(Debug, Clone)]
+pub struct CtcController {
+    core: JointLawCore,
+}
+
+impl_joint_law!(CtcController, ControllerKind::Ctc);
+
+impl CtcController {
+    /// A controller for `n` joints with `settings.baselines.ctc_bandwidth`.
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        let wn = bandwidths("ctc_bandwidth", &settings.baselines.ctc_bandwidth, n)?;
+        Ok(Self {
+            core: JointLawCore::new(Law::Ctc, n, settings, &wn)?,
+        })
+    }
+}

@@ -1,0 +1,238 @@
+//! Baseline: offset-free MPC with an input-disturbance model and observer
+//! (Maeder, Borrelli & Morari, "Linear offset-free model predictive
+//! control", *Automatica* 45, 2009; Pannocchia & Rawlings 2003), the
+//! textbook alternative to the paper's incremental algorithms.
+//!
+//! The usual MPC's model (Eq. (9)–(13)) gets a constant input disturbance
+//! `d` per joint, `q̈ = f0 q̇ + u + d`. A steady-state (Luenberger) observer
+//! corrects `d̂` with the error of the predicted velocity over the last
+//! period,
+//!
+//! ```text
+//! ε_k = q̇_k − q̇_{k−1} − Ts (½(f0_{k−1} q̇_{k−1} + f0_k q̇_k) + u_{k−1} + d̂_{k−1}),
+//! d̂_k = d̂_{k−1} + (1 − p)/Ts · ε_k,   p = e^(−ω_o·Ts),
+//! ```
+//!
+//! so that the estimation error of a constant disturbance decays as `p^k`
+//! (the velocity block of the ZOH input matrix is `Ts·I` to first order),
+//! `ω_o` = [`super::BaselineSettings::dob_observer_bandwidth`] (default
+//! 100 rad/s). The target calculation gives the steady input `U_s = −d̂`;
+//! the usual cost with `Q_U (U − U_s)` and the predictions `F x + G (U + d̂)`
+//! is the usual MPC's own problem in `Ũ = U + d̂`: the controller solves it
+//! ([`super::UsualMpc`], same `N`, `Ts`, weights and solver) and applies
+//!
+//! ```text
+//! u_k = ũ_k − d̂_k,   τ_k = H u_k + g = τ̃_k − H d̂_k   (Eq. (15)).
+//! ```
+//!
+//! At rest `ε = 0` forces `u = −d̂` exactly, i.e. `ũ = 0`: the usual
+//! problem's optimum at `q = w` — no steady offset.
+//!
+//! Torque limits: the torque is clipped to the drives' limits (the usual
+//! QP would bound `τ̃`, not the applied torque) and the observer is given the
+//! input actually applied, so the disturbance estimate does not wind up.
+
+use super::core::{check_finite, check_len};
+use super::drive_model::DriveModel;
+use super::model::LinearLikeModel;
+use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::usual::UsualMpc;
+use super::{Controller, ControllerKind, StepError, StepInfo};
+use crate::dynamics::JointSpaceDynamics;
+
+/// The disturbance-observer MPC baseline. Allocation-free [`Controller::step`].
+#[derive(Debug, Clone)]
+pub struct DobMpc {
+    inner: UsualMpc,
+    settings: MpcSettings,
+    n: usize,
+    model: LinearLikeModel,
+    /// `(1 − p_i)/Ts` per joint.
+    gain: Vec<f64>,
+    d_hat: Vec<f64>,
+    d_new: Vec<f64>,
+    x_prev: Vec<f64>,
+    u_prev: Vec<f64>,
+    f0qd_prev: Vec<f64>,
+    f0qd: Vec<f64>,
+    has_prev: bool,
+    u: Vec<f64>,
+    tau_tilde: Vec<f64>,
+    tau_new: Vec<f64>,
+    tmp: Vec<f64>,
+    du_clip: Vec<f64>,
+    drives: Option<DriveModel>,
+}
+
+impl DobMpc {
+    /// A controller for `n` joints: the usual MPC of `settings` and the
+    /// observer of `settings.baselines.dob_observer_bandwidth`.
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        let wo = bandwidths(
+            "dob_observer_bandwidth",
+            &settings.baselines.dob_observer_bandwidth,
+            n,
+        )?;
+        let inner_settings = MpcSettings {
+            torque_limits: false,
+            constraint_horizon: None,
+            ..settings.clone()
+        };
+        let ts = settings.ts;
+        Ok(Self {
+            inner: UsualMpc::new(n, &inner_settings)?,
+            settings: settings.clone(),
+            n,
+            model: LinearLikeModel::new(n),
+            gain: wo.iter().map(|w| (1.0 - (-w * ts).exp()) / ts).collect(),
+            d_hat: vec![0.0; n],
+            d_new: vec![0.0; n],
+            x_prev: vec![0.0; 2 * n],
+            u_prev: vec![0.0; n],
+            f0qd_prev: vec![0.0; n],
+            f0qd: vec![0.0; n],
+            has_prev: false,
+            u: vec![0.0; n],
+            tau_tilde: vec![0.0; n],
+            tau_new: vec![0.0; n],
+            tmp: vec![0.0; n],
+            du_clip: vec![0.0; n],
+            drives: None,
+        })
+    }
+
+    /// The disturbance estimate `d̂` (rad/s², n values).
+    pub fn disturbance(&self) -> &[f64] {
+        &self.d_hat
+    }
+
+    /// `d̂_k` into `d_new` from the velocity prediction error (module docs).
+    fn observe(&mut self, x: &[f64]) {
+        let n = self.n;
+        let ts = self.settings.ts;
+        let f0 = self.model.f0().as_slice();
+        self.f0qd.fill(0.0);
+        for (j, col) in f0.chunks_exact(n).enumerate() {
+            super::dense::axpy(x[n + j], col, &mut self.f0qd);
+        }
+        for i in 0..n {
+            self.d_new[i] = self.d_hat[i];
+            if self.has_prev {
+                let acc = 0.5 * (self.f0qd_prev[i] + self.f0qd[i]) + self.u_prev[i] + self.d_hat[i];
+                let eps = x[n + i] - self.x_prev[n + i] - ts * acc;
+                self.d_new[i] += self.gain[i] * eps;
+            }
+        }
+    }
+
+    /// `τ = τ̃ − H d̂`, clipped to the limits; `u` the input applied.
+    fn torque(&mut self) -> Result<(), StepError> {
+        let n = self.n;
+        let h = self.model.h().as_slice();
+        self.tau_new.copy_from_slice(&self.tau_tilde);
+        for (j, col) in h.chunks_exact(n).enumerate() {
+            super::dense::axpy(-self.d_new[j], col, &mut self.tau_new);
+        }
+        for ((u, ut), d) in self.u.iter_mut().zip(self.inner.input()).zip(&self.d_new) {
+            *u = ut - d;
+        }
+        let limits = self.drives.as_ref().filter(|_| self.settings.torque_limits);
+        if let Some(lim) = limits.map(|d| d.max_torque_nm.as_slice()) {
+            let mut clipped = false;
+            for ((t, l), dt) in self.tau_new.iter_mut().zip(lim).zip(self.tmp.iter_mut()) {
+                let c = t.clamp(-l, *l);
+                *dt = c - *t;
+                clipped |= c != *t;
+                *t = c;
+            }
+            if clipped {
+                // The input applied: u + H⁻¹ δτ (input_from_torque gives H⁻¹(τ − g)).
+                for (dt, g) in self.tmp.iter_mut().zip(self.model.g().iter()) {
+                    *dt += g;
+                }
+                self.model.input_from_torque(&self.tmp, &mut self.du_clip)?;
+                for (u, d) in self.u.iter_mut().zip(&self.du_clip) {
+                    *u += d;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Controller for DobMpc {
+    fn kind(&self) -> ControllerKind {
+        ControllerKind::DobMpc
+    }
+    fn dof(&self) -> usize {
+        self.n
+    }
+    fn horizon(&self) -> usize {
+        self.inner.horizon()
+    }
+    fn settings(&self) -> &MpcSettings {
+        &self.settings
+    }
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        self.inner.reset(x0)?;
+        self.d_hat.fill(0.0);
+        self.u_prev.fill(0.0);
+        self.u.fill(0.0);
+        self.has_prev = false;
+        Ok(())
+    }
+    fn input(&self) -> &[f64] {
+        &self.u
+    }
+    fn increments(&self) -> &[f64] {
+        self.inner.increments()
+    }
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        drives.validate(self.n)?;
+        if self.settings.friction_compensation {
+            self.inner.set_drive_model(drives)?;
+        }
+        self.drives = Some(drives.clone());
+        Ok(())
+    }
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        x: &[f64],
+        w_k: &[f64],
+        preview: &[f64],
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepError> {
+        let n = self.n;
+        check_len("x", x.len(), 2 * n)?;
+        check_len("tau", tau.len(), n)?;
+        check_finite("x", x)?;
+        if self.settings.torque_limits && self.drives.is_none() {
+            return Err(StepError::NoDriveModel);
+        }
+        self.model.update(model, &x[..n], &x[n..])?;
+        let info = self
+            .inner
+            .step(model, x, w_k, preview, &mut self.tau_tilde)?;
+        self.observe(x);
+        self.torque()?;
+        if let Some(index) = self
+            .u
+            .iter()
+            .chain(&self.tau_new)
+            .position(|v| !v.is_finite())
+        {
+            return Err(StepError::NonFiniteResult {
+                what: if index < n { "u" } else { "tau" },
+                index: index % n,
+            });
+        }
+        tau.copy_from_slice(&self.tau_new);
+        self.d_hat.copy_from_slice(&self.d_new);
+        self.x_prev.copy_from_slice(x);
+        self.u_prev.copy_from_slice(&self.u);
+        self.f0qd_prev.copy_from_slice(&self.f0qd);
+        self.has_prev = true;
+        Ok(info)
+    }
+}

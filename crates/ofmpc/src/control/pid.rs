@@ -1,0 +1,41 @@
+//! Baseline: independent joint PID with gravity compensation and velocity
+//! feed-forward, the controller the paper's introduction names.
+//!
+//! ```text
+//! τ_k = g(q_k) + D (kp e_k + kd ė_k + ki z_k),   D = diag(H_11(q_0), …, H_nn(q_0)),
+//! e_k = w_k − q_k,   ė_k = v_ref,k − q̇_k,   z_{k+1} = z_k + Ts e_k,
+//! ```
+//!
+//! with the nominal model's gravity at the measured `q_k`, its inertia's
+//! diagonal at the start pose `q_0` (the state of the last
+//! [`Controller::reset`](super::Controller::reset)), the reference velocity
+//! of [`super::baseline::RefDerivatives`] and the gains of a discrete triple
+//! pole at `e^(−ωn·Ts)` ([`super::baseline`]), `ωn` =
+//! [`super::BaselineSettings::pid_bandwidth`] (default 60 rad/s). No
+//! acceleration feed-forward and no coupling: the inertia the law leaves out
+//! (off-diagonal, pose-dependent, the payload's) is a disturbance its
+//! integrator removes at rest. With torque limits the torque is clipped
+//! and the clipped joint's integral frozen (anti-windup).
+
+use super::baseline::{impl_joint_law, JointLawCore, Law};
+use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::ControllerKind;
+
+/// The PID baseline. Allocation-free [`Controller::step`](super::Controller::step).
+#[derive(Debug, Clone)]
+pub struct PidController {
+    core: JointLawCore,
+}
+
+impl_joint_law!(PidController, ControllerKind::Pid);
+
+impl PidController {
+    /// A controller for `n` joints with `settings.baselines.pid_bandwidth`
+    /// (and `ts`, `horizon` for the preview it reads).
+    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+        let wn = bandwidths("pid_bandwidth", &settings.baselines.pid_bandwidth, n)?;
+        Ok(Self {
+            core: JointLawCore::new(Law::Pid, n, settings, &wn)?,
+        })
+    }
+}

@@ -1,0 +1,135 @@
+//! The baseline controllers (issue #21) against the issue's targets: the
+//! paper's path on the IRB 140 (0.5 m/s, 2.5 m/s², septic law, N = 10,
+//! Ts = 10 ms, noise-free) with RMS no worse than 1.5× the independent
+//! implementation's table, offset-free (steady joint error ≤ 1e-9 rad), and
+//! the same on the 6-axis test arm (up to 1 kg for the fixed-gain ones,
+//! 6 kg for ctc-adaptive); torque limits respected with the
+//! integrators' anti-windup.
+
+use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
+use ofmpc::motion::reference::{build_reference, Orientation};
+use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::robot::{Drives, Payload, Robot};
+use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunStatus};
+
+fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Experiment {
+    let program = parse(program, &ParseOptions { origin }).unwrap();
+    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
+    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
+    Experiment {
+        robot,
+        reference,
+        mpc: MpcSettings::default(),
+        plant: Default::default(),
+        loop_settings: LoopSettings::default(),
+    }
+}
+
+fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
+    exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})
+        .unwrap()
+        .1
+}
+
+fn steady(m: &RunMetrics) -> f64 {
+    m.steady_joint_error_max_rad
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+}
+
+fn assert_offset_free(m: &RunMetrics) {
+    assert_eq!(m.status, RunStatus::Ok, "{}: {}", m.name, m.reason);
+    assert!(steady(m) <= 1e-9, "{}: steady {:e} rad", m.name, steady(m));
+}
+
+/// The issue's table (Cartesian RMS, mm, independent implementation) at
+/// 1 kg and 6 kg.
+const TABLE: [(ControllerKind, [f64; 2]); 3] = [
+    (ControllerKind::Pid, [0.065, 0.22]),
+    (ControllerKind::Ctc, [0.0057, 0.053]),
+    (ControllerKind::DobMpc, [0.0082, 0.077]),
+];
+
+#[test]
+fn baselines_meet_the_issue_table_on_the_paper_path() {
+    let exp = experiment(Robot::irb140(), PAPER_TABLE1, None);
+    for (kind, want) in TABLE {
+        for (mass, table) in [1.0, 6.0].into_iter().zip(want) {
+            let m = run(&exp, kind, mass);
+            assert_offset_free(&m);
+            assert!(
+                m.cartesian_error_rms_mm <= 1.5 * table,
+                "{}: RMS {} mm, table {table} mm",
+                m.name,
+                m.cartesian_error_rms_mm
+            );
+        }
+    }
+    // Adaptive against adaptive: the identified payload leaves the computed
+    // torque nearly exact.
+    let m = run(&exp, ControllerKind::CtcAdaptive, 6.0);
+    assert_offset_free(&m);
+    assert!(
+        m.cartesian_error_rms_mm <= 0.001,
+        "{}",
+        m.cartesian_error_rms_mm
+    );
+    let est = m.payload_estimate_kg.unwrap();
+    assert!((est - 6.0).abs() < 0.05, "{est}");
+}
+
+#[test]
+fn baselines_carry_the_payload_range_on_the_test_arm() {
+    let mut robot = Robot::from_urdf_str(include_str!("data/arm6.urdf")).unwrap();
+    let d = Drives::from_toml_str(include_str!("data/arm6_drives.toml")).unwrap();
+    robot.apply_drives(&d).unwrap();
+    let exp = experiment(
+        robot,
+        include_str!("data/arc_yz.gcode"),
+        Some([0.5, 0.11, 0.5]),
+    );
+    // Offset-free up to 1 kg. Heavier, the wrist roll's inertia (2e-4 kg·m²
+    // armature) grows by more than the PID loops tolerate with fixed gains
+    // (measured: steady 2e-8 to 1e-6 rad at 2 kg, ctc and dob-mpc diverge at
+    // 4 kg, joint 4); the identified model of ctc-adaptive carries 6 kg.
+    for kind in ControllerKind::BASELINES {
+        for mass in [0.0, 1.0] {
+            assert_offset_free(&run(&exp, kind, mass));
+        }
+    }
+    let m = run(&exp, ControllerKind::CtcAdaptive, 6.0);
+    assert_offset_free(&m);
+    assert!(
+        m.cartesian_error_rms_mm <= 0.001,
+        "{}",
+        m.cartesian_error_rms_mm
+    );
+}
+
+#[test]
+fn baselines_respect_torque_limits_and_do_not_wind_up() {
+    // Joint 1 limited at 26 N·m (the path asks 26.4 at 0.25 kg), limits in
+    // the plant and the controllers: clipped, and offset-free afterwards.
+    let mut robot = Robot::irb140();
+    robot
+        .apply_drives(&Drives::from_toml_str("[joints.joint_1]\nmax_torque_nm = 26.0\n").unwrap())
+        .unwrap();
+    let mut exp = experiment(robot, PAPER_TABLE1, None);
+    exp.mpc.torque_limits = true;
+    exp.plant = PlantSettings {
+        torque_limits: true,
+        ..Default::default()
+    };
+    for kind in ControllerKind::BASELINES {
+        let m = run(&exp, kind, 0.25);
+        assert_offset_free(&m);
+        assert!(
+            m.torque_max_nm[0] <= 26.0 + 1e-9,
+            "{}: {:?}",
+            m.name,
+            m.torque_max_nm
+        );
+    }
+}
