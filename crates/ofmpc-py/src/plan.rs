@@ -151,6 +151,7 @@ pub fn plan(
         let options = PlanOptions {
             parse: ParseOptions {
                 origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
+                ..ParseOptions::default()
             },
             timing: TimingOptions {
                 profile,

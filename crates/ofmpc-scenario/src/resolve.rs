@@ -148,7 +148,10 @@ impl Scenario {
             value: f.timing.profile.clone(),
         })?;
         let options = PlanOptions {
-            parse: ParseOptions { origin },
+            parse: ParseOptions {
+                origin,
+                ..ParseOptions::default()
+            },
             timing: TimingOptions {
                 profile,
                 max_speed: f.timing.max_speed_m_s,

@@ -154,10 +154,23 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
     })
 }
 
-/// Action of an M code.
+/// Action of an M code (each is also recorded as a program event).
 pub(super) enum MCode {
     End,
     Warn(String),
+}
+
+/// The argument letters M code `m` uses (LinuxCNC: M62–M65 P; M66 P E L Q; M67/M68 E Q;
+/// M61 Q; M100–M199 P Q; M3/M4 S; M6 T).
+pub(super) fn m_letters(m: f64) -> &'static str {
+    match m as i64 {
+        62..=65 => "P",
+        66 => "PELQ",
+        67 | 68 => "EQ",
+        61 => "Q",
+        100..=199 => "PQ",
+        _ => "",
+    }
 }
 
 pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError> {
@@ -189,14 +202,17 @@ pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError>
 }
 
 /// Letters that carry arguments (not G, M, N).
-pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZ";
+pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZDEHQ@^";
+
+/// Number of [`ARG_LETTERS`].
+pub(super) const N_ARGS: usize = 19;
 
 pub(super) fn letter_index(c: char) -> Option<usize> {
     ARG_LETTERS.find(c)
 }
 
 /// The argument words of one line, by letter.
-pub(super) struct Args<'l, 'w>(pub(super) [Option<&'l Word<'w>>; 13]);
+pub(super) struct Args<'l, 'w>(pub(super) [Option<&'l Word<'w>>; N_ARGS]);
 
 impl<'l, 'w> Args<'l, 'w> {
     pub(super) fn get(&self, c: char) -> Option<&'l Word<'w>> {

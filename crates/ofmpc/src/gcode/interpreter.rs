@@ -1,11 +1,14 @@
 //! Interpreter: modal state (units, plane, distance mode, work offsets, motion mode, feed,
 //! position) and the execution of one line's words.
 
-use super::codes::{classify_g, classify_m, letter_index, Args, GCode, MCode, Motion, ARG_LETTERS};
+use super::codes::{
+    classify_g, classify_m, letter_index, m_letters, Args, GCode, MCode, Motion, ARG_LETTERS,
+    N_ARGS,
+};
 use super::lexer::Word;
 use super::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
-    MIN_MOVE_LENGTH,
+    ProgramEvent, ProgramMessage, MIN_MOVE_LENGTH,
 };
 use crate::geometry::{ArcDirection, Plane, Segment};
 use nalgebra::Vector3;
@@ -34,6 +37,14 @@ pub(super) struct Interpreter {
     pub(super) warned_ignored: bool,
     /// Path mode selected by G61 / G64; `None` until the program selects one.
     pub(super) mode: Option<PathMode>,
+    /// M codes, S and T words so far.
+    pub(super) events: Vec<ProgramEvent>,
+    /// Message comments so far.
+    pub(super) messages: Vec<ProgramMessage>,
+    /// Tool position before the program (m), from the options.
+    pub(super) initial: Option<Vector3<f64>>,
+    /// Tool length offset (m) along the tool axis.
+    pub(super) tool_length: f64,
 }
 
 impl Interpreter {
@@ -71,6 +82,10 @@ impl Interpreter {
             seen_content: false,
             warned_ignored: false,
             mode: None,
+            events: Vec::new(),
+            messages: Vec::new(),
+            initial: options.start,
+            tool_length: 0.0,
         })
     }
 
@@ -120,6 +135,9 @@ impl Interpreter {
             start_line: self.start_line,
             moves: self.moves,
             warnings: self.warnings,
+            events: self.events,
+            messages: self.messages,
+            tool_length: self.tool_length,
         })
     }
 
@@ -142,7 +160,13 @@ impl Interpreter {
         cmd.check_non_modal_conflict(line, line_text)?;
 
         let motion_mode = cmd.explicit_motion.map(|(m, _)| m).or(self.motion);
-        Self::check_unused_args(line, &cmd, motion_mode, args)?;
+        let mletters: String = sorted
+            .mcodes
+            .iter()
+            .map(|(_, w)| m_letters(w.value))
+            .collect();
+        Self::check_unused_args(line, &cmd, motion_mode, args, &mletters)?;
+        self.record_events(line, &sorted);
 
         if let Some(g10) = cmd.set_offset {
             self.set_offset(line, g10, args)?;
@@ -207,7 +231,7 @@ impl Interpreter {
         use GcodeErrorKind::*;
         let mut gcodes: Vec<(GCode, &Word<'_>)> = Vec::new();
         let mut mcodes: Vec<(MCode, &Word<'_>)> = Vec::new();
-        let mut args: [Option<&Word<'_>>; 13] = [None; 13];
+        let mut args: [Option<&Word<'_>>; N_ARGS] = [None; N_ARGS];
         for w in words {
             match w.letter {
                 'N' => {}
@@ -275,8 +299,8 @@ impl Interpreter {
                 "program the tool centre point; remove the word",
             ),
             _ => (
-                format!("the word {c} is not supported"),
-                "supported letters: G M N X Y Z I J K R F P L S T O",
+                format!("the word {c} is not supported here"),
+                "supported letters: G M N X Y Z I J K R F P L S T O (Q with G64 and M61/M66–M68)",
             ),
         };
         err(
@@ -287,6 +311,38 @@ impl Interpreter {
             message,
             hint,
         )
+    }
+
+    /// Records the line's S and T words and M codes (with the words they use) as events.
+    fn record_events(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
+        let after_moves = self.moves.len();
+        for c in ['S', 'T'] {
+            if let Some(w) = sorted.args.get(c) {
+                self.events.push(ProgramEvent {
+                    line,
+                    code: c.to_string(),
+                    words: vec![(c, w.value)],
+                    after_moves,
+                });
+            }
+        }
+        for (_, w) in &sorted.mcodes {
+            let words = m_letters(w.value)
+                .chars()
+                .filter_map(|c| sorted.args.get(c).map(|a| (c, a.value)))
+                .collect();
+            let code = if w.value.fract() == 0.0 {
+                format!("M{}", w.value as i64)
+            } else {
+                format!("M{}", w.value)
+            };
+            self.events.push(ProgramEvent {
+                line,
+                code,
+                words,
+                after_moves,
+            });
+        }
     }
 
     /// Warns about harmless words without effect on the path: S, T, O and the ignored M codes.
@@ -394,8 +450,9 @@ impl Interpreter {
         cmd: &LineCommands<'_, '_>,
         motion_mode: Option<Motion>,
         args: &Args<'_, '_>,
+        mletters: &str,
     ) -> Result<(), GcodeError> {
-        let used = Self::used_letters(cmd, motion_mode);
+        let used = Self::used_letters(cmd, motion_mode, mletters);
         for (k, c) in ARG_LETTERS.chars().enumerate() {
             if let (Some(w), false) = (args.0[k], used[k]) {
                 let (message, hint) = match c {
@@ -416,6 +473,11 @@ impl Interpreter {
                         "remove P (G64 P<tolerance> sets the corner tolerance; arcs with several turns are not supported: program each turn)",
                     ),
                     'L' => ("L is only used by G10 L2".to_string(), "remove the L word"),
+                    'D' | 'E' | 'H' | 'Q' => return Err(Self::unsupported_letter(line, w)),
+                    '@' | '^' => (
+                        format!("{c} (polar coordinate) is only used by G00–G03"),
+                        "write the move with G01 @distance ^angle, or remove the word",
+                    ),
                     _ => (format!("{c} is not used here"), "remove the word"),
                 };
                 return Err(err(
@@ -434,8 +496,12 @@ impl Interpreter {
     /// Which argument letters (indexed as [`ARG_LETTERS`]) this line's command uses:
     /// F S T O always, P for G64, P X for G04, L P X Y Z for G10, else X Y Z for a motion
     /// (and I J K R for an arc).
-    fn used_letters(cmd: &LineCommands<'_, '_>, motion_mode: Option<Motion>) -> [bool; 13] {
-        let mut used = [false; 13];
+    fn used_letters(
+        cmd: &LineCommands<'_, '_>,
+        motion_mode: Option<Motion>,
+        mletters: &str,
+    ) -> [bool; N_ARGS] {
+        let mut used = [false; N_ARGS];
         for c in ['F', 'S', 'T', 'O'] {
             if let Some(k) = letter_index(c) {
                 used[k] = true;
@@ -448,6 +514,7 @@ impl Interpreter {
                 }
             }
         };
+        use_letters(mletters);
         if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
             use_letters("P");
         }
@@ -509,6 +576,9 @@ impl Interpreter {
             ));
         }
         if w.value > 0.0 {
+            if let (None, Some(p0)) = (self.pos, self.initial) {
+                self.begin_at(p0, line);
+            }
             if self.pos.is_none() {
                 return Err(err(
                     line,
@@ -646,6 +716,14 @@ impl Interpreter {
             args,
         };
         let Some(pos) = self.pos else {
+            let full = matches!(mode, Motion::Rapid | Motion::Linear)
+                && self.absolute
+                && ['X', 'Y', 'Z'].iter().all(|&c| args.get(c).is_some());
+            if let (Some(p0), false) = (self.initial, full) {
+                // The tool is where the options say (the robot's start pose): move from there.
+                self.begin_at(p0, line);
+                return self.motion(line, col, line_text, mode, args);
+            }
             // The first motion defines the start point.
             return self.first_motion(&block);
         };
@@ -675,6 +753,13 @@ impl Interpreter {
             },
         });
         Ok(())
+    }
+
+    /// Starts the program at `p` (the tool position before the program), at `line`.
+    pub(super) fn begin_at(&mut self, p: Vector3<f64>, line: usize) {
+        self.pos = Some(p);
+        self.start = p;
+        self.start_line = line;
     }
 
     /// The first motion: sets the start point, which must be given in absolute
