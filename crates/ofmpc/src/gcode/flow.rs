@@ -68,125 +68,8 @@ fn link(lines: &[SourceLine<'_>]) -> Result<Links, GcodeError> {
     };
     let mut stack: Vec<Open> = Vec::new();
     for (i, l) in lines.iter().enumerate() {
-        let Some(o) = o_stmt(l) else { continue };
-        let open = |kind| Open {
-            kind,
-            label: o.label.clone(),
-            at: i,
-            branches: vec![i],
-        };
-        let top_is = |s: &[Open], kinds: &[OKind]| {
-            s.last()
-                .is_some_and(|t| kinds.contains(&t.kind) && t.label == o.label)
-        };
-        match o.kind {
-            OKind::Sub => {
-                if let Some(t) = stack.last() {
-                    let m = format!(
-                        "o{} sub inside o{} {} (line {})",
-                        o.label,
-                        t.label,
-                        t.kind.name(),
-                        lines[t.at].no
-                    );
-                    return Err(structure_error(
-                        l,
-                        o,
-                        m,
-                        "define subroutines at the top level of the file",
-                    ));
-                }
-                if let Some(&prev) = k.subs.get(&o.label) {
-                    let m = format!(
-                        "subroutine o{} defined twice (first at line {})",
-                        o.label, lines[prev].no
-                    );
-                    return Err(structure_error(
-                        l,
-                        o,
-                        m,
-                        "give each subroutine its own name",
-                    ));
-                }
-                k.subs.insert(o.label.clone(), i);
-                stack.push(open(OKind::Sub));
-            }
-            OKind::If | OKind::Do | OKind::Repeat => stack.push(open(o.kind)),
-            OKind::While if top_is(&stack, &[OKind::Do]) => {
-                let t = stack.pop().map_or(NONE, |t| t.at);
-                k.end[t] = i;
-                k.next[i] = t;
-                k.do_while[i] = true;
-            }
-            OKind::While => stack.push(open(OKind::While)),
-            OKind::Elseif | OKind::Else if top_is(&stack, &[OKind::If]) => {
-                if let Some(t) = stack.last_mut() {
-                    t.branches.push(i);
-                }
-            }
-            OKind::Endif if top_is(&stack, &[OKind::If]) => {
-                let t = stack.pop().map_or(Vec::new(), |t| t.branches);
-                for w in t.windows(2) {
-                    k.next[w[0]] = w[1];
-                }
-                for &b in &t {
-                    k.end[b] = i;
-                }
-                if let Some(&last) = t.last() {
-                    k.next[last] = i;
-                }
-            }
-            OKind::Endwhile if top_is(&stack, &[OKind::While]) => close_loop(&mut stack, &mut k, i),
-            OKind::Endrepeat if top_is(&stack, &[OKind::Repeat]) => {
-                close_loop(&mut stack, &mut k, i)
-            }
-            OKind::Endsub if top_is(&stack, &[OKind::Sub]) => close_loop(&mut stack, &mut k, i),
-            OKind::Break | OKind::Continue => {
-                let lp = stack.iter().rev().find(|t| {
-                    t.label == o.label && matches!(t.kind, OKind::While | OKind::Do | OKind::Repeat)
-                });
-                match lp {
-                    Some(t) => k.next[i] = t.at,
-                    None => {
-                        let m =
-                            format!("o{} {} outside a loop o{}", o.label, o.kind.name(), o.label);
-                        return Err(structure_error(l, o, m, "break and continue carry the label of the loop (while, do, repeat) they are in"));
-                    }
-                }
-            }
-            OKind::Return => {
-                if !stack
-                    .iter()
-                    .any(|t| t.kind == OKind::Sub && t.label == o.label)
-                {
-                    let m = format!("o{} return outside the subroutine o{}", o.label, o.label);
-                    return Err(structure_error(
-                        l,
-                        o,
-                        m,
-                        "return carries the label of its subroutine",
-                    ));
-                }
-            }
-            OKind::Call => {}
-            _ => {
-                let m = match stack.last() {
-                    Some(t) => format!(
-                        "o{} {} does not close o{} {} (line {})",
-                        o.label,
-                        o.kind.name(),
-                        t.label,
-                        t.kind.name(),
-                        lines[t.at].no
-                    ),
-                    None => format!(
-                        "o{} {} without its opening statement",
-                        o.label,
-                        o.kind.name()
-                    ),
-                };
-                return Err(structure_error(l, o, m, "each if/while/do/repeat/sub is closed by its own endif/endwhile/while/endrepeat/endsub with the same label"));
-            }
+        if let Some(o) = o_stmt(l) {
+            link_one(lines, &mut stack, &mut k, i, o)?;
         }
     }
     if let Some(t) = stack.pop() {
@@ -209,6 +92,148 @@ fn link(lines: &[SourceLine<'_>]) -> Result<Links, GcodeError> {
         }
     }
     Ok(k)
+}
+
+/// Links the O-word statement `o` at line index `i` (see [`link`]).
+fn link_one(
+    lines: &[SourceLine<'_>],
+    stack: &mut Vec<Open>,
+    k: &mut Links,
+    i: usize,
+    o: &OStmt<'_>,
+) -> Result<(), GcodeError> {
+    let l = &lines[i];
+    let open = |kind| Open {
+        kind,
+        label: o.label.clone(),
+        at: i,
+        branches: vec![i],
+    };
+    let top_is = |s: &[Open], kinds: &[OKind]| {
+        s.last()
+            .is_some_and(|t| kinds.contains(&t.kind) && t.label == o.label)
+    };
+    match o.kind {
+        OKind::Sub => {
+            if let Some(t) = stack.last() {
+                let m = format!(
+                    "o{} sub inside o{} {} (line {})",
+                    o.label,
+                    t.label,
+                    t.kind.name(),
+                    lines[t.at].no
+                );
+                return Err(structure_error(
+                    l,
+                    o,
+                    m,
+                    "define subroutines at the top level of the file",
+                ));
+            }
+            if let Some(&prev) = k.subs.get(&o.label) {
+                let m = format!(
+                    "subroutine o{} defined twice (first at line {})",
+                    o.label, lines[prev].no
+                );
+                return Err(structure_error(
+                    l,
+                    o,
+                    m,
+                    "give each subroutine its own name",
+                ));
+            }
+            k.subs.insert(o.label.clone(), i);
+            stack.push(open(OKind::Sub));
+        }
+        OKind::If | OKind::Do | OKind::Repeat => stack.push(open(o.kind)),
+        OKind::While if top_is(stack, &[OKind::Do]) => {
+            let t = stack.pop().map_or(NONE, |t| t.at);
+            k.end[t] = i;
+            k.next[i] = t;
+            k.do_while[i] = true;
+        }
+        OKind::While => stack.push(open(OKind::While)),
+        OKind::Elseif | OKind::Else if top_is(stack, &[OKind::If]) => {
+            if let Some(t) = stack.last_mut() {
+                t.branches.push(i);
+            }
+        }
+        OKind::Endif if top_is(stack, &[OKind::If]) => {
+            let t = stack.pop().map_or(Vec::new(), |t| t.branches);
+            for w in t.windows(2) {
+                k.next[w[0]] = w[1];
+            }
+            for &b in &t {
+                k.end[b] = i;
+            }
+            if let Some(&last) = t.last() {
+                k.next[last] = i;
+            }
+        }
+        OKind::Endwhile if top_is(stack, &[OKind::While]) => close_loop(stack, k, i),
+        OKind::Endrepeat if top_is(stack, &[OKind::Repeat]) => close_loop(stack, k, i),
+        OKind::Endsub if top_is(stack, &[OKind::Sub]) => close_loop(stack, k, i),
+        OKind::Break | OKind::Continue | OKind::Return => link_jump(l, stack, k, i, o)?,
+        OKind::Call => {}
+        _ => {
+            let m = match stack.last() {
+                Some(t) => format!(
+                    "o{} {} does not close o{} {} (line {})",
+                    o.label,
+                    o.kind.name(),
+                    t.label,
+                    t.kind.name(),
+                    lines[t.at].no
+                ),
+                None => format!(
+                    "o{} {} without its opening statement",
+                    o.label,
+                    o.kind.name()
+                ),
+            };
+            return Err(structure_error(l, o, m, "each if/while/do/repeat/sub is closed by its own endif/endwhile/while/endrepeat/endsub with the same label"));
+        }
+    }
+    Ok(())
+}
+
+/// Links `break`/`continue` to their loop and checks that `return` is in its subroutine.
+fn link_jump(
+    l: &SourceLine<'_>,
+    stack: &[Open],
+    k: &mut Links,
+    i: usize,
+    o: &OStmt<'_>,
+) -> Result<(), GcodeError> {
+    match o.kind {
+        OKind::Break | OKind::Continue => {
+            let lp = stack.iter().rev().find(|t| {
+                t.label == o.label && matches!(t.kind, OKind::While | OKind::Do | OKind::Repeat)
+            });
+            match lp {
+                Some(t) => k.next[i] = t.at,
+                None => {
+                    let m = format!("o{} {} outside a loop o{}", o.label, o.kind.name(), o.label);
+                    return Err(structure_error(l, o, m, "break and continue carry the label of the loop (while, do, repeat) they are in"));
+                }
+            }
+        }
+        OKind::Return
+            if !stack
+                .iter()
+                .any(|t| t.kind == OKind::Sub && t.label == o.label) =>
+        {
+            let m = format!("o{} return outside the subroutine o{}", o.label, o.label);
+            return Err(structure_error(
+                l,
+                o,
+                m,
+                "return carries the label of its subroutine",
+            ));
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 fn close_loop(stack: &mut Vec<Open>, k: &mut Links, i: usize) {

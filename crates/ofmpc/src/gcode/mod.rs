@@ -96,6 +96,16 @@ pub struct ParseOptions {
     pub max_steps: Option<usize>,
 }
 
+impl ParseOptions {
+    /// The default options with the initial `G54` work offset `origin` (m, base frame).
+    pub fn with_origin(origin: Option<[f64; 3]>) -> Self {
+        Self {
+            origin,
+            ..Self::default()
+        }
+    }
+}
+
 /// A parsed program: where the robot starts and what it does from there.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Program {
