@@ -526,11 +526,11 @@ fn syntax_errors() {
 fn word_errors() {
     use GcodeErrorKind::*;
     check(
-        &fail_after_start("G7 X1\n"),
+        &fail_after_start("G6 X1\n"),
         2,
         1,
         UnknownCode,
-        &["unknown G code G7", "supported: G00"],
+        &["unknown G code G6", "supported: G00"],
     );
     check(
         &fail_after_start("G1.5 X1\n"),
@@ -540,25 +540,25 @@ fn word_errors() {
         &["unknown G code"],
     );
     check(
-        &fail_after_start("G28\n"),
+        &fail_after_start("G41 D1\n"),
         2,
         1,
         Unsupported,
-        &["homing", "G00 X Y Z"],
+        &["G41/G42 cutter radius compensation", "tool centre path"],
     );
     check(
-        &fail_after_start("G92 X0\n"),
+        &fail_after_start("G96 S100\n"),
         2,
         1,
         Unsupported,
-        &["G92", "G10 L2 P1"],
+        &["G96", "G97"],
     );
     check(
-        &fail_after_start("G90.1 G2 X1 I1\n"),
+        &fail_after_start("G5.2 X1 Y1 P1\n"),
         2,
         1,
         Unsupported,
-        &["G90.1", "G91.1"],
+        &["G5.2 (spline or NURBS)", "lines and arcs"],
     );
     check(
         &fail_after_start("G1 X1 A90\n"),
@@ -720,11 +720,11 @@ fn command_errors() {
         &["G10 without L", "G10 L2 P1"],
     );
     check(
-        &fail_after_start("G10 L20 P1 X0\n"),
+        &fail_after_start("G10 L1 P1 Z0\n"),
         2,
         5,
         Unsupported,
-        &["G10 L20", "only G10 L2"],
+        &["G10 L1", "only G10 L2 / L20"],
     );
     check(
         &fail_after_start("G10 L2 X0\n"),

@@ -6,6 +6,7 @@ use super::codes::{
     N_ARGS,
 };
 use super::lexer::Word;
+use super::modal::Extra;
 use super::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
     ProgramEvent, ProgramMessage, MIN_MOVE_LENGTH,
@@ -45,6 +46,10 @@ pub(super) struct Interpreter {
     pub(super) initial: Option<Vector3<f64>>,
     /// Tool length offset (m) along the tool axis.
     pub(super) tool_length: f64,
+    /// State of the codes of [`super::modal`].
+    pub(super) ext: Extra,
+    /// The warning that the origin option applies to G54 only was given.
+    warned_wcs: bool,
 }
 
 impl Interpreter {
@@ -86,6 +91,11 @@ impl Interpreter {
             messages: Vec::new(),
             initial: options.start,
             tool_length: 0.0,
+            ext: Extra {
+                feed_mode: 94,
+                ..Extra::default()
+            },
+            warned_wcs: false,
         })
     }
 
@@ -172,15 +182,31 @@ impl Interpreter {
             self.set_offset(line, g10, args)?;
         }
         if let Some(k) = cmd.wcs {
-            self.wcs = k;
+            self.select_wcs(line, k, &cmd);
+        }
+        if let Some(sw) = args.get('S') {
+            self.ext.spindle = Some(sw.value);
+        }
+        if let Some((c, w)) = cmd.tool {
+            self.tool_length_code(line, w, c, args);
+        }
+        if let Some((g, c, w)) = cmd.axis_cmd {
+            match g {
+                GCode::Home(_) => self.home(line, w, c, args)?,
+                _ => self.shift(c, args),
+            }
         }
         if let Some(g4) = cmd.dwell {
             self.dwell(line, line_text, g4, args)?;
         }
         if let Some(m) = cmd.explicit_motion {
+            if !matches!(m.0, Motion::Cycle(_)) {
+                self.ext.cycle_z0 = None;
+            }
             self.motion = Some(m.0);
         }
-        if cmd.dwell.is_none() && cmd.set_offset.is_none() {
+        let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
+        if cmd.dwell.is_none() && cmd.set_offset.is_none() && !consumes_axes {
             if let Some(m) = motion_mode {
                 self.line_motion(line, line_text, words, &cmd, m, args)?;
             }
@@ -379,7 +405,11 @@ impl Interpreter {
             set_offset: None,
             wcs: None,
             blend: None,
+            axis_cmd: None,
+            tool: None,
+            wcs_col: 0,
         };
+        self.ext.machine = false;
         for &(g, w) in gcodes {
             match g {
                 GCode::Inch(b) => self.inch = b,
@@ -388,10 +418,23 @@ impl Interpreter {
                 GCode::Motion(m) => cmd.explicit_motion = Some((m, w)),
                 GCode::Dwell => cmd.dwell = Some(w),
                 GCode::SetOffset => cmd.set_offset = Some(w),
-                GCode::Wcs(k) => cmd.wcs = Some(k),
+                GCode::Wcs(k) => {
+                    cmd.wcs = Some(k);
+                    cmd.wcs_col = w.col;
+                }
                 GCode::ExactStop => self.mode = Some(PathMode::ExactStop),
                 GCode::Blend => cmd.blend = Some(w),
                 GCode::NoOp => {}
+                GCode::Shift(c) | GCode::Home(c) => cmd.axis_cmd = Some((g, c, w)),
+                GCode::Machine => self.ext.machine = true,
+                GCode::ToolLength(c) => cmd.tool = Some((c, w)),
+                GCode::ArcAbsolute(b) => self.ext.arc_absolute = b,
+                GCode::Retract(b) => self.ext.retract_initial = b,
+                GCode::CancelCycle => {
+                    self.motion = None;
+                    self.ext.cycle_z0 = None;
+                }
+                GCode::FeedMode(m) => self.ext.feed_mode = m,
             }
         }
         cmd
@@ -440,6 +483,10 @@ impl Interpreter {
                 _ => None,
             };
             self.mode = Some(PathMode::Blend { tolerance });
+            self.ext.merge_q = match args.get('Q') {
+                Some(q) if q.value > 0.0 => Some(q.value * self.scale()),
+                _ => None,
+            };
         }
         Ok(())
     }
@@ -516,16 +563,28 @@ impl Interpreter {
         };
         use_letters(mletters);
         if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
-            use_letters("P");
+            use_letters("PQ");
+        }
+        match cmd.tool {
+            Some((430, _)) => use_letters("H"),
+            Some((431, _)) => use_letters("Z"),
+            _ => {}
+        }
+        if cmd.axis_cmd.is_some() {
+            use_letters("XYZ");
+            return used;
         }
         if cmd.dwell.is_some() {
             use_letters("PX");
         } else if cmd.set_offset.is_some() {
             use_letters("LPXYZ");
         } else if let Some(m) = motion_mode {
-            use_letters("XYZ");
+            use_letters("XYZ@^");
             if matches!(m, Motion::Cw | Motion::Ccw) {
                 use_letters("IJKR");
+            }
+            if matches!(m, Motion::Cycle(_)) {
+                use_letters("RQPL");
             }
         }
         used
@@ -609,7 +668,7 @@ impl Interpreter {
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
         let has = |c| args.get(c).is_some();
-        let axes = has('X') || has('Y') || has('Z');
+        let axes = has('X') || has('Y') || has('Z') || has('@') || has('^');
         let centre = has('I') || has('J') || has('K') || has('R');
         let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
         if axes || (is_arc && centre) {
@@ -647,14 +706,14 @@ impl Interpreter {
                     "set a work offset with G10 L2 P1 X.. Y.. Z..",
                 ))
             }
-            Some(l) if l.value != 2.0 => {
+            Some(l) if l.value != 2.0 && l.value != 20.0 => {
                 return Err(err(
                     line,
                     l.col,
                     Unsupported,
                     l.text,
                     format!("G10 {} is not supported", l.text),
-                    "only G10 L2 Pn X Y Z (work offset of G54..G59) is supported",
+                    "only G10 L2 / L20 Pn X Y Z (work offsets of G54..G59) are supported: there is no tool table",
                 ))
             }
             Some(_) => {}
@@ -669,17 +728,22 @@ impl Interpreter {
                 "P1..P6 selects the work offset of G54..G59",
             )
         })?;
-        if !(1.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
+        if !(0.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
             return Err(err(
                 line,
                 p.col,
                 InvalidValue,
                 p.text,
-                "G10 L2 needs P1..P6",
-                "P1..P6 selects the work offset of G54..G59",
+                "G10 L2 needs P1..P6 (or P0)",
+                "P1..P6 selects the work offset of G54..G59, P0 the active one",
             ));
         }
-        let k = p.value as usize - 1;
+        let k = if p.value == 0.0 {
+            self.wcs
+        } else {
+            p.value as usize - 1
+        };
+        let l20 = arg('L').is_some_and(|l| l.value == 20.0);
         if k == 0 && self.p1_from_options {
             self.p1_from_options = false;
             if self.origin_given {
@@ -692,12 +756,44 @@ impl Interpreter {
             self.offsets[0] = [0.0; 3];
         }
         let scale = self.scale();
+        let here = self.pos.or(self.initial).unwrap_or_else(Vector3::zeros);
+        let g92 = self.ext.g92;
         for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
             if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
-                o[axis] = w.value * scale;
+                // L20: the offset that makes the current point read as the given value.
+                o[axis] = if l20 {
+                    here[axis] - w.value * scale - g92[axis]
+                } else {
+                    w.value * scale
+                };
             }
         }
         Ok(())
+    }
+
+    /// Selects work offset `k` (G54 + k); warns once when the origin option, which sets
+    /// G54 only, was given and the program selects another.
+    fn select_wcs(&mut self, line: usize, k: usize, cmd: &LineCommands<'_, '_>) {
+        self.wcs = k;
+        if k != 0 && self.origin_given && self.p1_from_options && !self.warned_wcs {
+            self.warned_wcs = true;
+            let o = self.offsets.get(k).copied().unwrap_or([0.0; 3]);
+            let col = cmd.wcs_col;
+            self.warn(
+                line,
+                col,
+                format!(
+                    "G{} selected: the part origin given with the reading options is the G54 offset and does not apply; G{}'s offset is ({:.3}, {:.3}, {:.3}) mm (set it with G10 L2 P{} or remove the G{})",
+                    54 + k,
+                    54 + k,
+                    o[0] * 1e3,
+                    o[1] * 1e3,
+                    o[2] * 1e3,
+                    k + 1,
+                    54 + k
+                ),
+            );
+        }
     }
 
     pub(super) fn motion(
@@ -727,22 +823,26 @@ impl Interpreter {
             // The first motion defines the start point.
             return self.first_motion(&block);
         };
-        let target = self.motion_target(pos, args);
-        let scale = self.scale();
-        let feed = match (mode, self.feed) {
-            (Motion::Rapid, _) | (_, None) => None,
-            (_, Some(f)) => Some(f * scale / 60.0),
+        if let Motion::Cycle(n) = mode {
+            return self.cycle(line, col, line_text, n, args);
+        }
+        let target = match self.polar_target(line, pos, args)? {
+            Some(p) => p,
+            None => self.motion_target(pos, args),
         };
         let segment = match mode {
-            Motion::Rapid | Motion::Linear => {
+            Motion::Rapid | Motion::Linear | Motion::Cycle(_) => {
                 if (target - pos).norm() <= MIN_MOVE_LENGTH {
                     self.warn(line, col, "zero-length move skipped");
                     return Ok(());
                 }
-                Segment::line(pos, target)
+                self.push_line(line, pos, target, mode == Motion::Rapid);
+                return Ok(());
             }
             Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
+        let feed = self.move_feed(false, segment.length());
+        self.ext.merged.clear();
         self.pos = Some(segment.end());
         self.moves.push(Move {
             line,
@@ -769,7 +869,7 @@ impl Interpreter {
         let (line, col, line_text) = (b.line, b.col, b.line_text);
         let arg = |c| b.args.get(c);
         let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let offset = self.work();
         let xyz = [arg('X'), arg('Y'), arg('Z')];
         if matches!(b.mode, Motion::Cw | Motion::Ccw) {
             return Err(err(
@@ -822,9 +922,9 @@ impl Interpreter {
 
     /// The programmed end point of a move from `pos`: each given coordinate in the active
     /// work offset (G90) or relative to `pos` (G91), the others unchanged.
-    fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
+    pub(super) fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
         let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let offset = self.work();
         let xyz = [args.get('X'), args.get('Y'), args.get('Z')];
         let mut target = pos;
         for (a, w) in xyz.iter().enumerate() {
@@ -898,6 +998,11 @@ struct LineCommands<'l, 'w> {
     set_offset: Option<&'l Word<'w>>,
     wcs: Option<usize>,
     blend: Option<&'l Word<'w>>,
+    /// G92 family, G52, G28/G30 (+.1): the code, its tenths and its word.
+    axis_cmd: Option<(GCode, u16, &'l Word<'w>)>,
+    /// G43 / G43.1 / G49.
+    tool: Option<(u16, &'l Word<'w>)>,
+    wcs_col: usize,
 }
 
 impl LineCommands<'_, '_> {

@@ -58,6 +58,7 @@ mod expr;
 mod flow;
 mod interpreter;
 mod lexer;
+mod modal;
 
 use crate::geometry::Segment;
 pub use flow::DEFAULT_MAX_STEPS;
