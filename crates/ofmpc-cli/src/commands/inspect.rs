@@ -2,7 +2,7 @@
 //! that any peer implementation can be checked against this one.
 
 use super::{load_robot, parse_vector};
-use crate::cli::{InspectDynamics, InspectRobot};
+use crate::cli::{InspectDynamics, InspectProgram, InspectRobot};
 use crate::output::console;
 use nalgebra::DMatrix;
 use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
@@ -98,6 +98,54 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
         "flange": { "frame": robot.flange_name(), "offset_from_last_body_m": [f.pos.x, f.pos.y, f.pos.z] },
         "joints": joints,
     });
+    console::println(&serde_json::to_string_pretty(&out)?)?;
+    Ok(())
+}
+
+/// Prints the program as read: `{"units": "mm", "start", "tool_length_mm", "moves": [{"line",
+/// "kind", "end", "center", "normal", "turns", "feed_mm_s", "seconds"}], "events", "messages",
+/// "warnings"}` in machine coordinates (mm); the first move goes from the start (the robot's
+/// start pose, or machine zero) to the program's first point.
+pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
+    let (name, text) = ofmpc_scenario::read_program(Some(&a.file))?;
+    let origin = match &a.origin {
+        Some(o) => {
+            let v = super::parse_fixed(
+                "--origin",
+                o,
+                3,
+                "the work offset's x,y,z in mm",
+                "150,0,-250",
+            )?;
+            Some([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3])
+        }
+        None => None,
+    };
+    let start = match &a.robot {
+        None => {
+            if a.start_q.is_some() {
+                anyhow::bail!("--start-q needs --robot (the pose is a robot's)");
+            }
+            nalgebra::Vector3::zeros()
+        }
+        Some(r) => {
+            let mut robot = super::load_model(r, a.drives.as_deref())?;
+            if let Some(t) = &a.start_q {
+                let q = parse_vector("--start-q", t, Some(robot.dof()))?;
+                robot.set_start_q(&q)?;
+            }
+            ofmpc::motion::start_position(&robot)
+                .ok_or_else(|| anyhow::anyhow!("the robot's start pose has no tool position"))?
+        }
+    };
+    let options = ofmpc::gcode::ParseOptions {
+        origin,
+        start: Some(start),
+        ..Default::default()
+    };
+    let program = ofmpc::gcode::parse(&text, &options)
+        .map_err(|e| anyhow::Error::new(e).context(name.clone()))?;
+    let out = super::program_json::program_json(&program, start);
     console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }
