@@ -21,6 +21,7 @@
 pub mod analysis;
 pub mod error;
 pub mod file;
+pub mod program_json;
 pub mod resolve;
 pub mod runner;
 
@@ -33,5 +34,6 @@ pub use file::{
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
+pub use program_json::program_json;
 pub use resolve::{load_robot, read_program, Scenario};
 pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};

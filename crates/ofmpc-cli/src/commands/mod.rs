@@ -3,7 +3,6 @@
 pub mod analyze;
 pub(crate) mod experiment;
 mod inspect;
-mod program_json;
 mod robot;
 mod trajectory;
 pub mod tune;
