@@ -212,6 +212,29 @@ pub enum Inspect {
     Dynamics(InspectDynamics),
     /// The robot as loaded: joints, limits, drives, masses, flange, as JSON.
     Robot(InspectRobot),
+    /// A G-code program as read (moves in machine coordinates, mm; events; messages;
+    /// warnings), as JSON, without planning its timing.
+    Program(InspectProgram),
+}
+
+/// `ofmpc inspect program`
+#[derive(Debug, Args)]
+pub struct InspectProgram {
+    /// The G-code file.
+    pub file: PathBuf,
+    /// Work offset (G54) x,y,z in mm; default none (as a CNC from machine zero).
+    #[arg(long, allow_hyphen_values = true)]
+    pub origin: Option<String>,
+    /// Robot (`irb140` or a .urdf): the program starts from the tool position of its start
+    /// pose; without it the start is (0, 0, 0).
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Drives file of the robot.
+    #[arg(long)]
+    pub drives: Option<PathBuf>,
+    /// The robot's start pose, comma-separated joint positions (rad or m).
+    #[arg(long, allow_hyphen_values = true)]
+    pub start_q: Option<String>,
 }
 
 /// `ofmpc inspect robot`

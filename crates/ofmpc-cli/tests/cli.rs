@@ -577,3 +577,49 @@ fn reproduce_set_applies_after_the_options() {
     );
     assert!(!out.exists());
 }
+
+#[test]
+fn inspect_program_prints_the_moves_in_machine_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("p.ngc");
+    std::fs::write(
+        &f,
+        "G21 G90\nG0 Z5 M3 S1000\n(MSG, cut)\nG10 L2 P2 X100\nG55 G1 X10 Y0 F600\nG81 X20 R2 Z-1\nG80\nM30\n",
+    )
+    .unwrap();
+    let out = ok(&["inspect", "program", f.to_str().unwrap()]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["units"], "mm");
+    let ends: Vec<Vec<f64>> = v["moves"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| serde_json::from_value(m["end"].clone()).unwrap())
+        .collect();
+    // From machine zero; G55's offset is added; the cycle expands to its moves.
+    let want = [
+        [0.0, 0.0, 5.0],
+        [110.0, 0.0, 5.0],
+        [120.0, 0.0, 5.0],
+        [120.0, 0.0, 2.0],
+        [120.0, 0.0, -1.0],
+        [120.0, 0.0, 2.0],
+    ];
+    assert_eq!(ends.len(), want.len(), "{out}");
+    for (a, b) in ends.iter().zip(want) {
+        assert!((0..3).all(|k| (a[k] - b[k]).abs() < 1e-9), "{a:?} vs {b:?}");
+    }
+    assert_eq!(v["moves"][1]["feed_mm_s"], 10.0);
+    assert_eq!(v["events"][0]["code"], "S");
+    assert_eq!(v["messages"][0]["text"], "cut");
+    // With a robot the program starts from its start pose's tool position.
+    let out = ok(&[
+        "inspect",
+        "program",
+        f.to_str().unwrap(),
+        "--robot",
+        "irb140",
+    ]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert!(v["start"][0].as_f64().unwrap() > 100.0, "{out}");
+}

@@ -24,6 +24,7 @@ fn _ofmpc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<plan::PyReference>()?;
     m.add_class::<controller::PyController>()?;
     m.add_function(wrap_pyfunction!(plan::plan, m)?)?;
+    m.add_function(wrap_pyfunction!(plan::read_program, m)?)?;
     m.add_function(wrap_pyfunction!(run::run_file, m)?)?;
     m.add_function(wrap_pyfunction!(run::run_json, m)?)?;
     m.add("STANDARD_GRAVITY", ofmpc::robot::STANDARD_GRAVITY)?;

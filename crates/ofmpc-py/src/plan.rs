@@ -151,6 +151,7 @@ pub fn plan(
         let options = PlanOptions {
             parse: ParseOptions {
                 origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
+                ..ParseOptions::default()
             },
             timing: TimingOptions {
                 profile,
@@ -173,5 +174,37 @@ pub fn plan(
                 .map(|w| format!("{name}: {w}"))
                 .collect(),
         })
+    })
+}
+
+/// Reads a program (`text`) as `ofmpc inspect program` does; returns its JSON text.
+/// `start_mm`: the tool position before the program (default machine zero), or the start
+/// pose of `robot`.
+#[pyfunction]
+#[pyo3(name = "_read_program", signature = (text, name, origin_mm, robot))]
+pub fn read_program(
+    py: Python<'_>,
+    text: Option<String>,
+    name: String,
+    origin_mm: Option<(f64, f64, f64)>,
+    robot: Option<&PyRobot>,
+) -> PyResult<String> {
+    let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
+    let robot = robot.map(|r| r.robot().clone());
+    py.detach(move || {
+        let start = match &robot {
+            Some(r) => ofmpc::motion::start_position(r)
+                .ok_or_else(|| to_py("the robot's start pose has no tool position".to_string()))?,
+            None => nalgebra::Vector3::zeros(),
+        };
+        let options = ParseOptions {
+            origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
+            start: Some(start),
+            ..ParseOptions::default()
+        };
+        let program =
+            ofmpc::gcode::parse(&text, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
+        serde_json::to_string(&ofmpc_scenario::program_json(&program, start))
+            .map_err(|e| to_py(e.to_string()))
     })
 }

@@ -190,3 +190,14 @@ def test_run_from_a_dict_and_from_a_file_agree(tmp_path):
             ra.pop(key), rb.pop(key)
         assert ra == rb
         assert ra["steady_cartesian_error_mm"] < 1e-6 and not ra["diverged"]
+
+
+def test_read_program_returns_the_moves_events_and_messages():
+    p = ofmpc.read_program("G0 Z5 S100 M3\n(MSG, hi)\nG1 X10 F600\nG2 X20 Y0 I5 J0\n")
+    assert p["units"] == "mm" and p["start"] == [0.0, 0.0, 0.0]
+    assert [m["kind"] for m in p["moves"]] == ["rapid", "feed", "arc"]
+    assert p["moves"][1]["end"] == [10.0, 0.0, 5.0]
+    assert abs(p["moves"][1]["feed_mm_s"] - 10.0) < 1e-12
+    assert abs(p["moves"][2]["turns"] + 0.5) < 1e-12
+    assert [e["code"] for e in p["events"]] == ["S", "M3"]
+    assert p["messages"] == [{"line": 2, "kind": "MSG", "text": "hi"}]

@@ -22,6 +22,7 @@ pub mod analysis;
 pub mod baseline_tuning;
 pub mod error;
 pub mod file;
+pub mod program_json;
 pub mod resolve;
 pub mod runner;
 
@@ -34,5 +35,6 @@ pub use file::{
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
+pub use program_json::program_json;
 pub use resolve::{load_robot, load_robot_section, load_robot_with, read_program, Scenario};
 pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};

@@ -195,7 +195,7 @@ impl Scenario {
             value: f.timing.profile.clone(),
         })?;
         let options = PlanOptions {
-            parse: ParseOptions { origin },
+            parse: ParseOptions::with_origin(origin),
             timing: TimingOptions {
                 profile,
                 max_speed: f.timing.max_speed_m_s,

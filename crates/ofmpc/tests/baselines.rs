@@ -14,7 +14,14 @@ use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunStatus};
 
 fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Experiment {
-    let program = parse(program, &ParseOptions { origin }).unwrap();
+    let program = parse(
+        program,
+        &ParseOptions {
+            origin,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
     Experiment {

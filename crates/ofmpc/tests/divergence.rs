@@ -12,7 +12,7 @@ use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{DivergenceRule, Experiment, LoopSettings, RunOutcome, RunStatus};
 
 fn experiment(robot: Robot, rule: DivergenceRule) -> Experiment {
-    let program = parse(PAPER_TABLE1, &ParseOptions { origin: None }).unwrap();
+    let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
     Experiment {

@@ -202,6 +202,7 @@ fn a_square_with_an_arc_stays_on_one_branch_on_eight_arms() {
         let options = PlanOptions {
             parse: ParseOptions {
                 origin: Some([p.x, p.y - 0.05, p.z]),
+                ..ParseOptions::default()
             },
             ..PlanOptions::default()
         };

@@ -58,6 +58,7 @@ fn ros_industrial_abb_urdfs_plan_and_name_their_missing_inertials() {
         let options = PlanOptions {
             parse: ParseOptions {
                 origin: Some([p.x, p.y, p.z]),
+                ..ParseOptions::default()
             },
             ..PlanOptions::default()
         };

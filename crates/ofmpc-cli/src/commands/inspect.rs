@@ -2,7 +2,7 @@
 //! that any peer implementation can be checked against this one.
 
 use super::{load_robot, parse_vector};
-use crate::cli::{InspectDynamics, InspectRobot};
+use crate::cli::{InspectDynamics, InspectProgram, InspectRobot};
 use crate::output::console;
 use nalgebra::DMatrix;
 use ofmpc::dynamics::{forward_kinematics, joint_space_terms, rnea, Workspace};
@@ -109,6 +109,54 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
         "links_without_inertial": robot.require_inertials().err().map(|e| e.to_string()),
         "joints": joints,
     });
+    console::println(&serde_json::to_string_pretty(&out)?)?;
+    Ok(())
+}
+
+/// Prints the program as read: `{"units": "mm", "start", "tool_length_mm", "moves": [{"line",
+/// "kind", "end", "center", "normal", "turns", "feed_mm_s", "seconds"}], "events", "messages",
+/// "warnings"}` in machine coordinates (mm); the first move goes from the start (the robot's
+/// start pose, or machine zero) to the program's first point.
+pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
+    let (name, text) = ofmpc_scenario::read_program(Some(&a.file))?;
+    let origin = match &a.origin {
+        Some(o) => {
+            let v = super::parse_fixed(
+                "--origin",
+                o,
+                3,
+                "the work offset's x,y,z in mm",
+                "150,0,-250",
+            )?;
+            Some([v[0] * 1e-3, v[1] * 1e-3, v[2] * 1e-3])
+        }
+        None => None,
+    };
+    let start = match &a.robot {
+        None => {
+            if a.start_q.is_some() {
+                anyhow::bail!("--start-q needs --robot (the pose is a robot's)");
+            }
+            nalgebra::Vector3::zeros()
+        }
+        Some(r) => {
+            let chain = crate::cli::ChainArgs {
+                start_q: a.start_q.clone(),
+                ..Default::default()
+            };
+            let robot = super::robot::load_model_with(r, a.drives.as_deref(), &chain)?;
+            ofmpc::motion::start_position(&robot)
+                .ok_or_else(|| anyhow::anyhow!("the robot's start pose has no tool position"))?
+        }
+    };
+    let options = ofmpc::gcode::ParseOptions {
+        origin,
+        start: Some(start),
+        ..Default::default()
+    };
+    let program = ofmpc::gcode::parse(&text, &options)
+        .map_err(|e| anyhow::Error::new(e).context(name.clone()))?;
+    let out = ofmpc_scenario::program_json(&program, start);
     console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }

@@ -18,6 +18,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(Inspect::Dynamics(a)) => inspect::dynamics(&a),
         Command::Inspect(Inspect::Robot(a)) => inspect::robot(&a),
+        Command::Inspect(Inspect::Program(a)) => inspect::program(&a),
         Command::Trajectory(a) => trajectory::trajectory(&a),
         Command::Run(a) => {
             let mut sets = shorthand_overrides(&Shorthands {

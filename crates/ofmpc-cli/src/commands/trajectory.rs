@@ -98,7 +98,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         None => Orientation::AtZero,
     };
     let options = PlanOptions {
-        parse: ParseOptions { origin },
+        parse: ParseOptions::with_origin(origin),
         timing: TimingOptions {
             profile: parse_profile(&a.profile)?,
             max_speed: a.speed,

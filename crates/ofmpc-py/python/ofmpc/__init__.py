@@ -28,6 +28,7 @@ from ._ofmpc import (
     Robot,
     __version__,
     _plan,
+    _read_program,
     _run_file,
     _run_json,
 )
@@ -40,6 +41,7 @@ __all__ = [
     "STANDARD_GRAVITY",
     "__version__",
     "plan",
+    "read_program",
     "run",
 ]
 
@@ -107,6 +109,34 @@ def plan(
     if r is not None and len(r) != 3:
         raise OfmpcError(f"rpy_deg has {len(r)} values: give (roll, pitch, yaw) in degrees")
     return _plan(text, name, robot, float(ts), o, profile, float(max_speed), float(max_accel), r)
+
+
+def read_program(
+    program: Union[str, "os.PathLike[str]"],
+    origin: Optional[Sequence[float]] = None,
+    robot: Optional[Robot] = None,
+) -> dict:
+    """Reads a G-code program without planning it, as ``ofmpc inspect program`` does.
+
+    Args:
+        program: a G-code file path, G-code text, or ``"paper"``.
+        origin: G54 work offset ``(x, y, z)`` in mm; default none.
+        robot: the program starts from the tool position of the robot's start pose;
+            default: machine zero (0, 0, 0).
+
+    Returns:
+        ``{"units": "mm", "start", "tool_length_mm", "moves": [{"line", "kind", "end",
+        "center", "normal", "turns", "feed_mm_s"}], "events", "messages", "warnings"}``,
+        points in machine coordinates (mm).
+
+    Raises:
+        OfmpcError: the program does not read (line and column in the message).
+    """
+    text, name = _program_text(program)
+    o = None if origin is None else tuple(float(v) for v in origin)
+    if o is not None and len(o) != 3:
+        raise OfmpcError(f"origin has {len(o)} values: give (x, y, z) in mm")
+    return json.loads(_read_program(text, name, o, robot))
 
 
 def run(scenario: Union[Mapping[str, Any], str, "os.PathLike[str]"]) -> dict:

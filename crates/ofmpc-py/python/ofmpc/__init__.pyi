@@ -144,6 +144,13 @@ class Controller:
     def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
         """Measured x (2n,), reference w_k (n,), preview (N, n) → torque τ_k (n,)."""
 
+def read_program(
+    program: Union[str, os.PathLike[str]],
+    origin: Optional[Sequence[float]] = None,
+    robot: Optional[Robot] = None,
+) -> dict:
+    """Reads a program as ``ofmpc inspect program`` does (mm, machine coordinates)."""
+
 def plan(
     program: Union[str, os.PathLike[str]],
     robot: Robot,

@@ -79,10 +79,23 @@ impl Interpreter {
     ) -> Result<Segment, GcodeError> {
         let scale = self.scale();
         let ijk = [args.get('I'), args.get('J'), args.get('K')];
-        let given = ijk.map(|w| w.is_some());
+        let mut given = ijk.map(|w| w.is_some());
         let mut off = Vector3::zeros();
         for (a, w) in ijk.iter().enumerate() {
             off[a] = w.map_or(0.0, |w| w.value) * scale;
+        }
+        if self.ext.arc_absolute {
+            // G90.1: I J K are the centre in program coordinates (LinuxCNC).
+            let work = self.work();
+            let (u, v) = match self.plane {
+                Plane::XY => (0, 1),
+                Plane::ZX => (2, 0),
+                Plane::YZ => (1, 2),
+            };
+            for a in [u, v] {
+                off[a] += work[a] - start[a];
+                given[a] = true;
+            }
         }
         let tol = arc_tolerance(self.inch);
         let center = start + off;

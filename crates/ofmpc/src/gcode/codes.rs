@@ -10,6 +10,8 @@ pub(super) enum Motion {
     Linear,
     Cw,
     Ccw,
+    /// A canned cycle: G73, G81, G82, G83, G85, G86, G89 (the number).
+    Cycle(u8),
 }
 
 impl Motion {
@@ -19,6 +21,13 @@ impl Motion {
             Motion::Linear => "G01",
             Motion::Cw => "G02",
             Motion::Ccw => "G03",
+            Motion::Cycle(73) => "G73",
+            Motion::Cycle(81) => "G81",
+            Motion::Cycle(82) => "G82",
+            Motion::Cycle(83) => "G83",
+            Motion::Cycle(85) => "G85",
+            Motion::Cycle(86) => "G86",
+            Motion::Cycle(_) => "G89",
         }
     }
 }
@@ -39,6 +48,22 @@ pub(super) enum GCode {
     Blend,
     /// Accepted, no effect.
     NoOp,
+    /// G92, G92.1, G92.2, G92.3 (tenths: 920..923) and G52 (520).
+    Shift(u16),
+    /// G53: this line's motion in machine coordinates.
+    Machine,
+    /// G28, G28.1, G30, G30.1 (tenths).
+    Home(u16),
+    /// G43 (430), G43.1 (431), G49 (490).
+    ToolLength(u16),
+    /// G90.1 (true) / G91.1 (false).
+    ArcAbsolute(bool),
+    /// G98 (true: retract to the initial Z) / G99 (false: to R).
+    Retract(bool),
+    /// G80: cancel the motion mode.
+    CancelCycle,
+    /// G93 (inverse time), G94 (per minute), G95 (per revolution).
+    FeedMode(u8),
 }
 
 impl GCode {
@@ -53,6 +78,13 @@ impl GCode {
             GCode::Wcs(_) => 12,
             GCode::Absolute(_) => 3,
             GCode::ExactStop | GCode::Blend => 13,
+            GCode::Shift(_) | GCode::Home(_) => 0,
+            GCode::Machine => 0,
+            GCode::ToolLength(_) => 8,
+            GCode::ArcAbsolute(_) => 4,
+            GCode::Retract(_) => 10,
+            GCode::CancelCycle => 1,
+            GCode::FeedMode(_) => 5,
             GCode::NoOp => 255,
         }
     }
@@ -67,7 +99,7 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
             GcodeErrorKind::UnknownCode,
             w.text,
             format!("unknown G code {}", w.text),
-            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G54-G59 G61 G64 G90 G91",
+            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G28 G30 G40 G43 G49 G52 G53 G54-G59 G61 G64 G73 G80-G83 G85 G86 G89 G90 G91 G92 G93-G95 G98 G99",
         )
     };
     if (w.value * 10.0 - tenths).abs() > 1e-9 {
@@ -99,65 +131,91 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
         540 | 550 | 560 | 570 | 580 | 590 => GCode::Wcs(((code - 540) / 10) as usize),
         900 => GCode::Absolute(true),
         910 => GCode::Absolute(false),
-        911 | 400 | 490 | 800 | 940 => GCode::NoOp,
+        400 | 80 | 970 => GCode::NoOp,
+        911 => GCode::ArcAbsolute(false),
+        901 => GCode::ArcAbsolute(true),
+        800 => GCode::CancelCycle,
+        930 => GCode::FeedMode(93),
+        940 => GCode::FeedMode(94),
+        950 => GCode::FeedMode(95),
         610 | 611 => GCode::ExactStop,
         640 => GCode::Blend,
-        901 => {
-            return Err(unsupported(
-                "G90.1 (absolute arc centres) is not supported",
-                "give I/J/K relative to the arc's start point (G91.1, the default)",
-            ))
-        }
-        280 | 281 | 300 | 301 => {
-            return Err(unsupported(
-                "homing (G28/G30) is not supported",
-                "program the position with G00 X Y Z",
-            ))
-        }
-        920..=923 => {
-            return Err(unsupported(
-                "G92 offsets are not supported",
-                "set a work offset with G10 L2 P1 X Y Z and select it with G54",
-            ))
-        }
+        920..=923 | 520 => GCode::Shift(code as u16),
+        530 => GCode::Machine,
+        280 | 281 | 300 | 301 => GCode::Home(code as u16),
+        430 | 431 | 490 => GCode::ToolLength(code as u16),
+        980 => GCode::Retract(true),
+        990 => GCode::Retract(false),
+        730 | 810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Motion::Cycle((code / 10) as u8)),
         410 | 420 | 411 | 421 => {
             return Err(unsupported(
-                "cutter radius compensation is not supported",
-                "program the tool centre path",
+                "G41/G42 cutter radius compensation is not supported",
+                "program the tool centre path (most CAM systems can output it)",
             ))
         }
-        430..=432 => {
+        432 => {
             return Err(unsupported(
-                "tool length compensation is not supported",
-                "program the tool centre point; remove G43",
+                "G43.2 (additional tool length offset) is not supported",
+                "give the tool length with G43.1 Z<length>",
             ))
         }
-        530 => {
+        330 | 331 => {
             return Err(unsupported(
-                "G53 (machine coordinates) is not supported",
-                "use a work offset G54-G59",
+                "G33 (spindle-synchronized motion, threading) is not supported",
+                "a robot path has no spindle synchronization; remove the threading",
             ))
         }
-        930 | 950 => {
+        740 | 760 | 840 | 870 | 880 => {
             return Err(unsupported(
-                "only feed per minute (G94) is supported",
-                "remove G93/G95 and give F in mm/min",
+                &format!("canned cycle {} is not supported", w.text),
+                "supported cycles: G73 G81 G82 G83 G85 G86 G89; expand this one into G00/G01 moves",
             ))
         }
-        730 | 760 | 810..=890 => {
+        50 | 51 | 52 | 53 | 62 => {
             return Err(unsupported(
-                "canned cycles are not supported",
-                "expand the cycle into G00/G01 moves",
+                &format!("{} (spline or NURBS) is not supported", w.text),
+                "let the CAM system output lines and arcs (G01/G02/G03)",
+            ))
+        }
+        70 | 700 | 710 | 711 | 720 | 721 => {
+            return Err(unsupported(
+                &format!("{} (lathe mode or lathe cycle) is not supported", w.text),
+                "a robot path is read in milling mode; remove it",
+            ))
+        }
+        960 => {
+            return Err(unsupported(
+                &format!("{} (spindle speed mode) is not supported", w.text),
+                "G96 constant surface speed needs a lathe; remove it (or write G97)",
+            ))
+        }
+        591..=593 => {
+            return Err(unsupported(
+                "G59.1–G59.3 work offsets are not supported",
+                "use G54–G59",
             ))
         }
         _ => return Err(unknown()),
     })
 }
 
-/// Action of an M code.
+/// Action of an M code (each is also recorded as a program event).
 pub(super) enum MCode {
     End,
     Warn(String),
+}
+
+/// The argument letters M code `m` uses (LinuxCNC: M62–M65 P; M66 P E L Q; M67/M68 E Q;
+/// M61 Q; M100–M199 P Q; M3/M4 S; M6 T).
+pub(super) fn m_letters(m: f64) -> &'static str {
+    match m as i64 {
+        62..=65 => "P",
+        66 => "PELQ",
+        67 | 68 => "EQ",
+        61 => "Q",
+        100..=199 => "PQ",
+        _ => "",
+    }
 }
 
 pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError> {
@@ -189,14 +247,17 @@ pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError>
 }
 
 /// Letters that carry arguments (not G, M, N).
-pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZ";
+pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZDEHQ@^";
+
+/// Number of [`ARG_LETTERS`].
+pub(super) const N_ARGS: usize = 19;
 
 pub(super) fn letter_index(c: char) -> Option<usize> {
     ARG_LETTERS.find(c)
 }
 
 /// The argument words of one line, by letter.
-pub(super) struct Args<'l, 'w>(pub(super) [Option<&'l Word<'w>>; 13]);
+pub(super) struct Args<'l, 'w>(pub(super) [Option<&'l Word<'w>>; N_ARGS]);
 
 impl<'l, 'w> Args<'l, 'w> {
     pub(super) fn get(&self, c: char) -> Option<&'l Word<'w>> {

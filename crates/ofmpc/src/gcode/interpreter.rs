@@ -1,11 +1,15 @@
 //! Interpreter: modal state (units, plane, distance mode, work offsets, motion mode, feed,
 //! position) and the execution of one line's words.
 
-use super::codes::{classify_g, classify_m, letter_index, Args, GCode, MCode, Motion, ARG_LETTERS};
+use super::codes::{
+    classify_g, classify_m, letter_index, m_letters, Args, GCode, MCode, Motion, ARG_LETTERS,
+    N_ARGS,
+};
 use super::lexer::Word;
+use super::modal::Extra;
 use super::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
-    MIN_MOVE_LENGTH,
+    ProgramEvent, ProgramMessage, MIN_MOVE_LENGTH,
 };
 use crate::geometry::{ArcDirection, Plane, Segment};
 use nalgebra::Vector3;
@@ -34,6 +38,18 @@ pub(super) struct Interpreter {
     pub(super) warned_ignored: bool,
     /// Path mode selected by G61 / G64; `None` until the program selects one.
     pub(super) mode: Option<PathMode>,
+    /// M codes, S and T words so far.
+    pub(super) events: Vec<ProgramEvent>,
+    /// Message comments so far.
+    pub(super) messages: Vec<ProgramMessage>,
+    /// Tool position before the program (m), from the options.
+    pub(super) initial: Option<Vector3<f64>>,
+    /// Tool length offset (m) along the tool axis.
+    pub(super) tool_length: f64,
+    /// State of the codes of [`super::modal`].
+    pub(super) ext: Extra,
+    /// The warning that the origin option applies to G54 only was given.
+    warned_wcs: bool,
 }
 
 impl Interpreter {
@@ -71,6 +87,15 @@ impl Interpreter {
             seen_content: false,
             warned_ignored: false,
             mode: None,
+            events: Vec::new(),
+            messages: Vec::new(),
+            initial: options.start,
+            tool_length: 0.0,
+            ext: Extra {
+                feed_mode: 94,
+                ..Extra::default()
+            },
+            warned_wcs: false,
         })
     }
 
@@ -120,6 +145,9 @@ impl Interpreter {
             start_line: self.start_line,
             moves: self.moves,
             warnings: self.warnings,
+            events: self.events,
+            messages: self.messages,
+            tool_length: self.tool_length,
         })
     }
 
@@ -142,21 +170,43 @@ impl Interpreter {
         cmd.check_non_modal_conflict(line, line_text)?;
 
         let motion_mode = cmd.explicit_motion.map(|(m, _)| m).or(self.motion);
-        Self::check_unused_args(line, &cmd, motion_mode, args)?;
+        let mletters: String = sorted
+            .mcodes
+            .iter()
+            .map(|(_, w)| m_letters(w.value))
+            .collect();
+        Self::check_unused_args(line, &cmd, motion_mode, args, &mletters)?;
+        self.record_events(line, &sorted);
 
         if let Some(g10) = cmd.set_offset {
             self.set_offset(line, g10, args)?;
         }
         if let Some(k) = cmd.wcs {
-            self.wcs = k;
+            self.select_wcs(line, k, &cmd);
+        }
+        if let Some(sw) = args.get('S') {
+            self.ext.spindle = Some(sw.value);
+        }
+        if let Some((c, w)) = cmd.tool {
+            self.tool_length_code(line, w, c, args);
+        }
+        if let Some((g, c, w)) = cmd.axis_cmd {
+            match g {
+                GCode::Home(_) => self.home(line, w, c, args)?,
+                _ => self.shift(c, args),
+            }
         }
         if let Some(g4) = cmd.dwell {
             self.dwell(line, line_text, g4, args)?;
         }
         if let Some(m) = cmd.explicit_motion {
+            if !matches!(m.0, Motion::Cycle(_)) {
+                self.ext.cycle_z0 = None;
+            }
             self.motion = Some(m.0);
         }
-        if cmd.dwell.is_none() && cmd.set_offset.is_none() {
+        let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
+        if cmd.dwell.is_none() && cmd.set_offset.is_none() && !consumes_axes {
             if let Some(m) = motion_mode {
                 self.line_motion(line, line_text, words, &cmd, m, args)?;
             }
@@ -207,7 +257,7 @@ impl Interpreter {
         use GcodeErrorKind::*;
         let mut gcodes: Vec<(GCode, &Word<'_>)> = Vec::new();
         let mut mcodes: Vec<(MCode, &Word<'_>)> = Vec::new();
-        let mut args: [Option<&Word<'_>>; 13] = [None; 13];
+        let mut args: [Option<&Word<'_>>; N_ARGS] = [None; N_ARGS];
         for w in words {
             match w.letter {
                 'N' => {}
@@ -275,8 +325,8 @@ impl Interpreter {
                 "program the tool centre point; remove the word",
             ),
             _ => (
-                format!("the word {c} is not supported"),
-                "supported letters: G M N X Y Z I J K R F P L S T O",
+                format!("the word {c} is not supported here"),
+                "supported letters: G M N X Y Z I J K R F P L S T O (Q with G64 and M61/M66–M68)",
             ),
         };
         err(
@@ -287,6 +337,38 @@ impl Interpreter {
             message,
             hint,
         )
+    }
+
+    /// Records the line's S and T words and M codes (with the words they use) as events.
+    fn record_events(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
+        let after_moves = self.moves.len();
+        for c in ['S', 'T'] {
+            if let Some(w) = sorted.args.get(c) {
+                self.events.push(ProgramEvent {
+                    line,
+                    code: c.to_string(),
+                    words: vec![(c, w.value)],
+                    after_moves,
+                });
+            }
+        }
+        for (_, w) in &sorted.mcodes {
+            let words = m_letters(w.value)
+                .chars()
+                .filter_map(|c| sorted.args.get(c).map(|a| (c, a.value)))
+                .collect();
+            let code = if w.value.fract() == 0.0 {
+                format!("M{}", w.value as i64)
+            } else {
+                format!("M{}", w.value)
+            };
+            self.events.push(ProgramEvent {
+                line,
+                code,
+                words,
+                after_moves,
+            });
+        }
     }
 
     /// Warns about harmless words without effect on the path: S, T, O and the ignored M codes.
@@ -323,7 +405,11 @@ impl Interpreter {
             set_offset: None,
             wcs: None,
             blend: None,
+            axis_cmd: None,
+            tool: None,
+            wcs_col: 0,
         };
+        self.ext.machine = false;
         for &(g, w) in gcodes {
             match g {
                 GCode::Inch(b) => self.inch = b,
@@ -332,10 +418,23 @@ impl Interpreter {
                 GCode::Motion(m) => cmd.explicit_motion = Some((m, w)),
                 GCode::Dwell => cmd.dwell = Some(w),
                 GCode::SetOffset => cmd.set_offset = Some(w),
-                GCode::Wcs(k) => cmd.wcs = Some(k),
+                GCode::Wcs(k) => {
+                    cmd.wcs = Some(k);
+                    cmd.wcs_col = w.col;
+                }
                 GCode::ExactStop => self.mode = Some(PathMode::ExactStop),
                 GCode::Blend => cmd.blend = Some(w),
                 GCode::NoOp => {}
+                GCode::Shift(c) | GCode::Home(c) => cmd.axis_cmd = Some((g, c, w)),
+                GCode::Machine => self.ext.machine = true,
+                GCode::ToolLength(c) => cmd.tool = Some((c, w)),
+                GCode::ArcAbsolute(b) => self.ext.arc_absolute = b,
+                GCode::Retract(b) => self.ext.retract_initial = b,
+                GCode::CancelCycle => {
+                    self.motion = None;
+                    self.ext.cycle_z0 = None;
+                }
+                GCode::FeedMode(m) => self.ext.feed_mode = m,
             }
         }
         cmd
@@ -384,6 +483,10 @@ impl Interpreter {
                 _ => None,
             };
             self.mode = Some(PathMode::Blend { tolerance });
+            self.ext.merge_q = match args.get('Q') {
+                Some(q) if q.value > 0.0 => Some(q.value * self.scale()),
+                _ => None,
+            };
         }
         Ok(())
     }
@@ -394,8 +497,9 @@ impl Interpreter {
         cmd: &LineCommands<'_, '_>,
         motion_mode: Option<Motion>,
         args: &Args<'_, '_>,
+        mletters: &str,
     ) -> Result<(), GcodeError> {
-        let used = Self::used_letters(cmd, motion_mode);
+        let used = Self::used_letters(cmd, motion_mode, mletters);
         for (k, c) in ARG_LETTERS.chars().enumerate() {
             if let (Some(w), false) = (args.0[k], used[k]) {
                 let (message, hint) = match c {
@@ -416,6 +520,11 @@ impl Interpreter {
                         "remove P (G64 P<tolerance> sets the corner tolerance; arcs with several turns are not supported: program each turn)",
                     ),
                     'L' => ("L is only used by G10 L2".to_string(), "remove the L word"),
+                    'D' | 'E' | 'H' | 'Q' => return Err(Self::unsupported_letter(line, w)),
+                    '@' | '^' => (
+                        format!("{c} (polar coordinate) is only used by G00–G03"),
+                        "write the move with G01 @distance ^angle, or remove the word",
+                    ),
                     _ => (format!("{c} is not used here"), "remove the word"),
                 };
                 return Err(err(
@@ -434,8 +543,12 @@ impl Interpreter {
     /// Which argument letters (indexed as [`ARG_LETTERS`]) this line's command uses:
     /// F S T O always, P for G64, P X for G04, L P X Y Z for G10, else X Y Z for a motion
     /// (and I J K R for an arc).
-    fn used_letters(cmd: &LineCommands<'_, '_>, motion_mode: Option<Motion>) -> [bool; 13] {
-        let mut used = [false; 13];
+    fn used_letters(
+        cmd: &LineCommands<'_, '_>,
+        motion_mode: Option<Motion>,
+        mletters: &str,
+    ) -> [bool; N_ARGS] {
+        let mut used = [false; N_ARGS];
         for c in ['F', 'S', 'T', 'O'] {
             if let Some(k) = letter_index(c) {
                 used[k] = true;
@@ -448,17 +561,30 @@ impl Interpreter {
                 }
             }
         };
+        use_letters(mletters);
         if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
-            use_letters("P");
+            use_letters("PQ");
+        }
+        match cmd.tool {
+            Some((430, _)) => use_letters("H"),
+            Some((431, _)) => use_letters("Z"),
+            _ => {}
+        }
+        if cmd.axis_cmd.is_some() {
+            use_letters("XYZ");
+            return used;
         }
         if cmd.dwell.is_some() {
             use_letters("PX");
         } else if cmd.set_offset.is_some() {
             use_letters("LPXYZ");
         } else if let Some(m) = motion_mode {
-            use_letters("XYZ");
+            use_letters("XYZ@^");
             if matches!(m, Motion::Cw | Motion::Ccw) {
                 use_letters("IJKR");
+            }
+            if matches!(m, Motion::Cycle(_)) {
+                use_letters("RQPL");
             }
         }
         used
@@ -509,6 +635,9 @@ impl Interpreter {
             ));
         }
         if w.value > 0.0 {
+            if let (None, Some(p0)) = (self.pos, self.initial) {
+                self.begin_at(p0, line);
+            }
             if self.pos.is_none() {
                 return Err(err(
                     line,
@@ -539,7 +668,7 @@ impl Interpreter {
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
         let has = |c| args.get(c).is_some();
-        let axes = has('X') || has('Y') || has('Z');
+        let axes = has('X') || has('Y') || has('Z') || has('@') || has('^');
         let centre = has('I') || has('J') || has('K') || has('R');
         let is_arc = matches!(m, Motion::Cw | Motion::Ccw);
         if axes || (is_arc && centre) {
@@ -577,14 +706,14 @@ impl Interpreter {
                     "set a work offset with G10 L2 P1 X.. Y.. Z..",
                 ))
             }
-            Some(l) if l.value != 2.0 => {
+            Some(l) if l.value != 2.0 && l.value != 20.0 => {
                 return Err(err(
                     line,
                     l.col,
                     Unsupported,
                     l.text,
                     format!("G10 {} is not supported", l.text),
-                    "only G10 L2 Pn X Y Z (work offset of G54..G59) is supported",
+                    "only G10 L2 / L20 Pn X Y Z (work offsets of G54..G59) are supported: there is no tool table",
                 ))
             }
             Some(_) => {}
@@ -599,17 +728,22 @@ impl Interpreter {
                 "P1..P6 selects the work offset of G54..G59",
             )
         })?;
-        if !(1.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
+        if !(0.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
             return Err(err(
                 line,
                 p.col,
                 InvalidValue,
                 p.text,
-                "G10 L2 needs P1..P6",
-                "P1..P6 selects the work offset of G54..G59",
+                "G10 L2 needs P1..P6 (or P0)",
+                "P1..P6 selects the work offset of G54..G59, P0 the active one",
             ));
         }
-        let k = p.value as usize - 1;
+        let k = if p.value == 0.0 {
+            self.wcs
+        } else {
+            p.value as usize - 1
+        };
+        let l20 = arg('L').is_some_and(|l| l.value == 20.0);
         if k == 0 && self.p1_from_options {
             self.p1_from_options = false;
             if self.origin_given {
@@ -622,12 +756,44 @@ impl Interpreter {
             self.offsets[0] = [0.0; 3];
         }
         let scale = self.scale();
+        let here = self.pos.or(self.initial).unwrap_or_else(Vector3::zeros);
+        let g92 = self.ext.g92;
         for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
             if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
-                o[axis] = w.value * scale;
+                // L20: the offset that makes the current point read as the given value.
+                o[axis] = if l20 {
+                    here[axis] - w.value * scale - g92[axis]
+                } else {
+                    w.value * scale
+                };
             }
         }
         Ok(())
+    }
+
+    /// Selects work offset `k` (G54 + k); warns once when the origin option, which sets
+    /// G54 only, was given and the program selects another.
+    fn select_wcs(&mut self, line: usize, k: usize, cmd: &LineCommands<'_, '_>) {
+        self.wcs = k;
+        if k != 0 && self.origin_given && self.p1_from_options && !self.warned_wcs {
+            self.warned_wcs = true;
+            let o = self.offsets.get(k).copied().unwrap_or([0.0; 3]);
+            let col = cmd.wcs_col;
+            self.warn(
+                line,
+                col,
+                format!(
+                    "G{} selected: the part origin given with the reading options is the G54 offset and does not apply; G{}'s offset is ({:.3}, {:.3}, {:.3}) mm (set it with G10 L2 P{} or remove the G{})",
+                    54 + k,
+                    54 + k,
+                    o[0] * 1e3,
+                    o[1] * 1e3,
+                    o[2] * 1e3,
+                    k + 1,
+                    54 + k
+                ),
+            );
+        }
     }
 
     pub(super) fn motion(
@@ -646,25 +812,37 @@ impl Interpreter {
             args,
         };
         let Some(pos) = self.pos else {
+            let full = matches!(mode, Motion::Rapid | Motion::Linear)
+                && self.absolute
+                && ['X', 'Y', 'Z'].iter().all(|&c| args.get(c).is_some());
+            if let (Some(p0), false) = (self.initial, full) {
+                // The tool is where the options say (the robot's start pose): move from there.
+                self.begin_at(p0, line);
+                return self.motion(line, col, line_text, mode, args);
+            }
             // The first motion defines the start point.
             return self.first_motion(&block);
         };
-        let target = self.motion_target(pos, args);
-        let scale = self.scale();
-        let feed = match (mode, self.feed) {
-            (Motion::Rapid, _) | (_, None) => None,
-            (_, Some(f)) => Some(f * scale / 60.0),
+        if let Motion::Cycle(n) = mode {
+            return self.cycle(line, col, line_text, n, args);
+        }
+        let target = match self.polar_target(line, pos, args)? {
+            Some(p) => p,
+            None => self.motion_target(pos, args),
         };
         let segment = match mode {
-            Motion::Rapid | Motion::Linear => {
+            Motion::Rapid | Motion::Linear | Motion::Cycle(_) => {
                 if (target - pos).norm() <= MIN_MOVE_LENGTH {
                     self.warn(line, col, "zero-length move skipped");
                     return Ok(());
                 }
-                Segment::line(pos, target)
+                self.push_line(line, pos, target, mode == Motion::Rapid);
+                return Ok(());
             }
             Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
+        let feed = self.move_feed(false, segment.length());
+        self.ext.merged.clear();
         self.pos = Some(segment.end());
         self.moves.push(Move {
             line,
@@ -677,6 +855,13 @@ impl Interpreter {
         Ok(())
     }
 
+    /// Starts the program at `p` (the tool position before the program), at `line`.
+    pub(super) fn begin_at(&mut self, p: Vector3<f64>, line: usize) {
+        self.pos = Some(p);
+        self.start = p;
+        self.start_line = line;
+    }
+
     /// The first motion: sets the start point, which must be given in absolute
     /// coordinates with all of X, Y and Z, by a straight move (G00/G01).
     fn first_motion(&mut self, b: &MotionBlock<'_, '_, '_>) -> Result<(), GcodeError> {
@@ -684,7 +869,7 @@ impl Interpreter {
         let (line, col, line_text) = (b.line, b.col, b.line_text);
         let arg = |c| b.args.get(c);
         let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let offset = self.work();
         let xyz = [arg('X'), arg('Y'), arg('Z')];
         if matches!(b.mode, Motion::Cw | Motion::Ccw) {
             return Err(err(
@@ -737,9 +922,9 @@ impl Interpreter {
 
     /// The programmed end point of a move from `pos`: each given coordinate in the active
     /// work offset (G90) or relative to `pos` (G91), the others unchanged.
-    fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
+    pub(super) fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
         let scale = self.scale();
-        let offset = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        let offset = self.work();
         let xyz = [args.get('X'), args.get('Y'), args.get('Z')];
         let mut target = pos;
         for (a, w) in xyz.iter().enumerate() {
@@ -813,6 +998,11 @@ struct LineCommands<'l, 'w> {
     set_offset: Option<&'l Word<'w>>,
     wcs: Option<usize>,
     blend: Option<&'l Word<'w>>,
+    /// G92 family, G52, G28/G30 (+.1): the code, its tenths and its word.
+    axis_cmd: Option<(GCode, u16, &'l Word<'w>)>,
+    /// G43 / G43.1 / G49.
+    tool: Option<(u16, &'l Word<'w>)>,
+    wcs_col: usize,
 }
 
 impl LineCommands<'_, '_> {

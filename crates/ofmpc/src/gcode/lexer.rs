@@ -1,6 +1,8 @@
 //! Lexer: one line of text → words (letter, value, column, source text).
 
+use super::expr::{Expr, Func, Op};
 use super::{err, GcodeError, GcodeErrorKind, MAX_WORD_VALUE};
+use std::cell::Cell;
 
 /// One word of a line: an upper-case letter and its value.
 #[derive(Debug, Clone)]
@@ -13,10 +15,158 @@ pub(super) struct Word<'a> {
     pub(super) text: &'a str,
 }
 
+/// The value of a word as read: a plain number, or an expression evaluated when the line runs.
+#[derive(Debug, Clone)]
+pub(super) enum Value {
+    Num(f64),
+    Expr(Expr),
+}
+
+/// A word as read (its value possibly an expression).
+#[derive(Debug, Clone)]
+pub(super) struct RawWord<'a> {
+    pub(super) letter: char,
+    pub(super) value: Value,
+    pub(super) col: usize,
+    pub(super) text: &'a str,
+}
+
+/// The parameter a `#… = …` setting writes.
+#[derive(Debug, Clone)]
+pub(super) enum Target {
+    Numbered(Expr),
+    Named(String),
+}
+
+/// A parameter setting `#… = value`.
+#[derive(Debug, Clone)]
+pub(super) struct Assign<'a> {
+    pub(super) target: Target,
+    pub(super) value: Expr,
+    pub(super) col: usize,
+    pub(super) text: &'a str,
+}
+
+/// The keyword of an O-word statement.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum OKind {
+    Sub,
+    Endsub,
+    Call,
+    Return,
+    If,
+    Elseif,
+    Else,
+    Endif,
+    While,
+    Endwhile,
+    Do,
+    Repeat,
+    Endrepeat,
+    Break,
+    Continue,
+}
+
+impl OKind {
+    fn from_word(w: &str) -> Option<OKind> {
+        Some(match w {
+            "SUB" => OKind::Sub,
+            "ENDSUB" => OKind::Endsub,
+            "CALL" => OKind::Call,
+            "RETURN" => OKind::Return,
+            "IF" => OKind::If,
+            "ELSEIF" => OKind::Elseif,
+            "ELSE" => OKind::Else,
+            "ENDIF" => OKind::Endif,
+            "WHILE" => OKind::While,
+            "ENDWHILE" => OKind::Endwhile,
+            "DO" => OKind::Do,
+            "REPEAT" => OKind::Repeat,
+            "ENDREPEAT" => OKind::Endrepeat,
+            "BREAK" => OKind::Break,
+            "CONTINUE" => OKind::Continue,
+            _ => return None,
+        })
+    }
+
+    /// The keyword as written in programs (lower case).
+    pub(super) fn name(self) -> &'static str {
+        match self {
+            OKind::Sub => "sub",
+            OKind::Endsub => "endsub",
+            OKind::Call => "call",
+            OKind::Return => "return",
+            OKind::If => "if",
+            OKind::Elseif => "elseif",
+            OKind::Else => "else",
+            OKind::Endif => "endif",
+            OKind::While => "while",
+            OKind::Endwhile => "endwhile",
+            OKind::Do => "do",
+            OKind::Repeat => "repeat",
+            OKind::Endrepeat => "endrepeat",
+            OKind::Break => "break",
+            OKind::Continue => "continue",
+        }
+    }
+}
+
+/// An O-word statement (`o100 while [#1 LT 3]`, `o<name> call [1] [2]`).
+#[derive(Debug, Clone)]
+pub(super) struct OStmt<'a> {
+    /// The label: the number (without leading zeros) or `<name>` in lower case.
+    pub(super) label: String,
+    pub(super) kind: OKind,
+    pub(super) args: Vec<Expr>,
+    pub(super) col: usize,
+    pub(super) text: &'a str,
+}
+
+/// The kind of a comment that is a program message.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum MessageKind {
+    Msg,
+    Print,
+    Debug,
+}
+
+/// A comment `(MSG,…)`, `(PRINT,…)` or `(DEBUG,…)`.
+#[derive(Debug, Clone)]
+pub(super) struct Comment {
+    pub(super) kind: MessageKind,
+    pub(super) text: String,
+}
+
+/// One line as read.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Block<'a> {
+    pub(super) words: Vec<RawWord<'a>>,
+    pub(super) assigns: Vec<Assign<'a>>,
+    pub(super) o: Option<OStmt<'a>>,
+    pub(super) comments: Vec<Comment>,
+    /// The line starts with `/` (block delete).
+    pub(super) delete: bool,
+}
+
+impl Block<'_> {
+    /// Nothing to execute.
+    pub(super) fn is_empty(&self) -> bool {
+        self.words.is_empty()
+            && self.assigns.is_empty()
+            && self.o.is_none()
+            && self.comments.is_empty()
+    }
+}
+
 pub(super) enum Lexed<'a> {
     Percent,
-    Words(Vec<Word<'a>>),
+    Block(Block<'a>),
 }
+
+/// Most nodes in the expressions of one line (bounds the reader's recursion).
+const MAX_EXPR_NODES: usize = 2000;
+/// Deepest nesting of `[ ]` and `#`.
+const MAX_EXPR_DEPTH: usize = 32;
 
 pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> {
     use GcodeErrorKind::Syntax;
@@ -24,8 +174,9 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
         raw,
         chars: raw.char_indices().collect(),
         line,
+        nodes: Cell::new(0),
     };
-    let mut words = Vec::new();
+    let mut block = Block::default();
     let mut i = 0;
     let mut first_content = true;
     while let Some(&(_, c)) = text.chars.get(i) {
@@ -47,23 +198,57 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
                 "`%` delimits the program and must stand alone on its line",
             ));
         }
+        if c == '/' && first_content {
+            block.delete = true;
+            first_content = false;
+            i += 1;
+            continue;
+        }
         first_content = false;
         if c == ';' {
             break;
         }
         if c == '(' {
-            i = text.skip_comment(i)?;
+            let (j, comment) = text.comment(i)?;
+            block.comments.extend(comment);
+            i = j;
             continue;
         }
-        if c.is_ascii_alphabetic() {
+        if block.o.is_some() {
+            return Err(text.after_o_word(i));
+        }
+        if c == '#' {
+            let (a, j) = text.assignment(i)?;
+            block.assigns.push(a);
+            i = j;
+            continue;
+        }
+        if c == 'O' || c == 'o' {
+            if let Some((o, j)) = text.o_word(i)? {
+                if let Some(w) = block.words.first() {
+                    return Err(err(
+                        line,
+                        w.col,
+                        Syntax,
+                        raw.trim(),
+                        format!("{} before an O-word statement", w.text),
+                        "an O-word statement (sub, call, if, while, …) stands alone on its line",
+                    ));
+                }
+                block.o = Some(o);
+                i = j;
+                continue;
+            }
+        }
+        if c.is_ascii_alphabetic() || c == '@' || c == '^' {
             let (word, j) = text.word(i, c)?;
-            words.push(word);
+            block.words.push(word);
             i = j;
             continue;
         }
         return Err(text.unexpected_char(i, c));
     }
-    Ok(Lexed::Words(words))
+    Ok(Lexed::Block(block))
 }
 
 /// The characters of one line with their byte offsets, for the pieces of [`lex_line`].
@@ -71,6 +256,8 @@ struct LineChars<'a> {
     raw: &'a str,
     chars: Vec<(usize, char)>,
     line: usize,
+    /// Expression nodes read so far on this line.
+    nodes: Cell<usize>,
 }
 
 impl<'a> LineChars<'a> {
@@ -79,9 +266,10 @@ impl<'a> LineChars<'a> {
         self.chars.get(i).map_or(self.raw.len(), |&(b, _)| b)
     }
 
-    /// Skips the comment in ( ) that opens at character `i`; returns the index after `)`.
+    /// Reads the comment in ( ) that opens at character `i`; returns the index after `)` and
+    /// the comment if it is a message (`MSG,` `PRINT,` `DEBUG,`, any case).
     /// Errors: a nested `(`, or no `)` on the line.
-    fn skip_comment(&self, i: usize) -> Result<usize, GcodeError> {
+    fn comment(&self, i: usize) -> Result<(usize, Option<Comment>), GcodeError> {
         let (raw, chars, line) = (self.raw, &self.chars, self.line);
         match chars
             .iter()
@@ -99,7 +287,10 @@ impl<'a> LineChars<'a> {
                     "comments do not nest: remove the inner parentheses, or use ; for a comment to the end of the line",
                 ))
             }
-            Some(k) => Ok(i + k + 2),
+            Some(k) => {
+                let body = &raw[self.byte_at(i + 1)..self.byte_at(i + 1 + k)];
+                Ok((i + k + 2, message_comment(body)))
+            }
             None => Err(err(
                 line,
                 i + 1,
@@ -111,9 +302,373 @@ impl<'a> LineChars<'a> {
         }
     }
 
+    /// The next non-blank character at or after `j` and its index.
+    fn peek(&self, mut j: usize) -> (usize, Option<char>) {
+        while matches!(self.chars.get(j), Some(&(_, ' ' | '\t'))) {
+            j += 1;
+        }
+        (j, self.chars.get(j).map(|&(_, c)| c))
+    }
+
+    /// The ASCII letters starting at `j` (upper case) and the index after them.
+    fn letters(&self, j: usize) -> (String, usize) {
+        let mut k = j;
+        let mut s = String::new();
+        while let Some(&(_, c)) = self.chars.get(k) {
+            if !c.is_ascii_alphabetic() {
+                break;
+            }
+            s.push(c.to_ascii_uppercase());
+            k += 1;
+        }
+        (s, k)
+    }
+
+    /// An error of kind Syntax at character `i`.
+    fn syntax(&self, i: usize, message: impl Into<String>, hint: impl Into<String>) -> GcodeError {
+        let i = i.min(self.chars.len().saturating_sub(1));
+        let end = self.byte_at((i + 1).min(self.chars.len()));
+        err(
+            self.line,
+            i + 1,
+            GcodeErrorKind::Syntax,
+            &escape(&self.raw[self.byte_at(i.min(self.chars.len()))..end]),
+            message,
+            hint,
+        )
+    }
+
+    /// Does a value that is an expression start at `j` (`#`, `[`, a function name followed
+    /// by `[`, or a sign before one of them)?
+    fn expression_starts(&self, j: usize) -> bool {
+        let (j, c) = self.peek(j);
+        match c {
+            Some('#' | '[') => true,
+            Some('+' | '-') => self.expression_starts(j + 1),
+            Some(c) if c.is_ascii_alphabetic() => {
+                let (name, k) = self.letters(j);
+                let known = Func::from_word(&name).is_some() || name == "ATAN" || name == "EXISTS";
+                known && self.peek(k).1 == Some('[')
+            }
+            _ => false,
+        }
+    }
+
+    /// Counts one expression node; errors past [`MAX_EXPR_NODES`] or [`MAX_EXPR_DEPTH`].
+    fn node(&self, i: usize, depth: usize) -> Result<(), GcodeError> {
+        self.nodes.set(self.nodes.get() + 1);
+        if self.nodes.get() > MAX_EXPR_NODES || depth > MAX_EXPR_DEPTH {
+            return Err(self.syntax(
+                i,
+                format!(
+                    "expression too large (more than {MAX_EXPR_NODES} terms or {MAX_EXPR_DEPTH} levels of [ ] on one line)"
+                ),
+                "split the computation over several parameter settings",
+            ));
+        }
+        Ok(())
+    }
+
+    /// A real value at `j` (rs274ngc's `real_value`): a number, `#…`, `[ … ]`, a function,
+    /// or a signed one of these. Returns the expression and the index after it.
+    fn real_value(&self, j: usize, depth: usize) -> Result<(Expr, usize), GcodeError> {
+        let (j, c) = self.peek(j);
+        self.node(j, depth)?;
+        match c {
+            Some('-') => {
+                let (e, k) = self.real_value(j + 1, depth + 1)?;
+                Ok((Expr::Neg(Box::new(e)), k))
+            }
+            Some('+') => self.real_value(j + 1, depth + 1),
+            Some('[') => self.bracket(j, depth + 1),
+            Some('#') => self.parameter(j, depth + 1),
+            Some(c) if c.is_ascii_digit() || c == '.' => {
+                let mut k = j;
+                while matches!(self.chars.get(k), Some(&(_, ch)) if ch.is_ascii_digit() || ch == '.')
+                {
+                    k += 1;
+                }
+                let s = &self.raw[self.byte_at(j)..self.byte_at(k)];
+                let v: f64 = s.parse().map_err(|_| {
+                    self.syntax(
+                        j,
+                        format!("the number `{s}` does not parse"),
+                        "write a decimal number with at most one point, e.g. 12.5",
+                    )
+                })?;
+                if v.abs() > MAX_WORD_VALUE {
+                    return Err(self.syntax(
+                        j,
+                        "number out of range",
+                        format!("numbers must not exceed {MAX_WORD_VALUE:e} in magnitude"),
+                    ));
+                }
+                Ok((Expr::Num(v), k))
+            }
+            Some(c) if c.is_ascii_alphabetic() => self.function(j, depth + 1),
+            Some(c) => Err(self.syntax(
+                j,
+                format!("a value was expected, found `{}`", escape(&c.to_string())),
+                "write a number, #parameter, [expression] or function such as SIN[30]",
+            )),
+            None => Err(self.syntax(
+                j,
+                "a value was expected at the end of the line",
+                "complete the expression",
+            )),
+        }
+    }
+
+    /// A function call at `j`: `NAME[expr]`, `ATAN[a]/[b]` or `EXISTS[#<name>]`.
+    fn function(&self, j: usize, depth: usize) -> Result<(Expr, usize), GcodeError> {
+        let (name, k) = self.letters(j);
+        let (k, c) = self.peek(k);
+        if c != Some('[') {
+            return Err(self.syntax(j, format!("`{name}` where a value was expected"), "functions take their argument in [ ], e.g. SIN[30]; operators such as MOD and EQ stand between two values"));
+        }
+        if name == "EXISTS" {
+            let (k2, c2) = self.peek(k + 1);
+            let (k3, c3) = self.peek(k2 + 1);
+            if c2 == Some('#') && c3 == Some('<') {
+                let (n, k4) = self.name(k3)?;
+                let (k5, c5) = self.peek(k4);
+                if c5 == Some(']') {
+                    return Ok((Expr::Exists(n), k5 + 1));
+                }
+            }
+            return Err(self.syntax(
+                j,
+                "EXISTS takes one named parameter",
+                "write EXISTS[#<name>]",
+            ));
+        }
+        let (a, k) = self.bracket(k, depth)?;
+        if name == "ATAN" {
+            let (k2, c2) = self.peek(k);
+            if c2 != Some('/') {
+                return Err(self.syntax(k2, "ATAN takes two arguments", "write ATAN[y]/[x]"));
+            }
+            let (k3, c3) = self.peek(k2 + 1);
+            if c3 != Some('[') {
+                return Err(self.syntax(k3, "ATAN takes two arguments", "write ATAN[y]/[x]"));
+            }
+            let (b, k4) = self.bracket(k3, depth)?;
+            return Ok((Expr::Atan(Box::new(a), Box::new(b)), k4));
+        }
+        match Func::from_word(&name) {
+            Some(f) => Ok((Expr::Func(f, Box::new(a)), k)),
+            None => Err(self.syntax(
+                j,
+                format!("unknown function `{name}`"),
+                "functions: ABS ACOS ASIN ATAN COS EXISTS EXP FIX FUP LN ROUND SIN SQRT TAN",
+            )),
+        }
+    }
+
+    /// A name `<…>` whose `<` is at `j`: lower case, blanks removed; the index after `>`.
+    fn name(&self, j: usize) -> Result<(String, usize), GcodeError> {
+        let mut k = j + 1;
+        let mut s = String::new();
+        while let Some(&(_, c)) = self.chars.get(k) {
+            if c == '>' {
+                if s.is_empty() {
+                    return Err(self.syntax(j, "empty name `<>`", "write a name, e.g. #<depth>"));
+                }
+                return Ok((s, k + 1));
+            }
+            if !c.is_whitespace() {
+                s.extend(c.to_lowercase());
+            }
+            k += 1;
+        }
+        Err(self.syntax(
+            j,
+            "name without closing `>`",
+            "close the name, e.g. #<depth>",
+        ))
+    }
+
+    /// A parameter `#n`, `#[expr]`, `##n` or `#<name>` at `j`.
+    fn parameter(&self, j: usize, depth: usize) -> Result<(Expr, usize), GcodeError> {
+        let (k, c) = self.peek(j + 1);
+        if c == Some('<') {
+            let (n, k2) = self.name(k)?;
+            return Ok((Expr::Named(n), k2));
+        }
+        let (e, k2) = self.real_value(j + 1, depth)?;
+        Ok((Expr::Param(Box::new(e)), k2))
+    }
+
+    /// A binary operator at `j` (after blanks), its precedence and the index after it.
+    fn operator(&self, j: usize) -> Option<(Op, usize)> {
+        let (j, c) = self.peek(j);
+        match c? {
+            '*' if self.chars.get(j + 1).is_some_and(|&(_, c)| c == '*') => Some((Op::Pow, j + 2)),
+            '*' => Some((Op::Mul, j + 1)),
+            '/' => Some((Op::Div, j + 1)),
+            '+' => Some((Op::Add, j + 1)),
+            '-' => Some((Op::Sub, j + 1)),
+            c if c.is_ascii_alphabetic() => {
+                let (w, k) = self.letters(j);
+                Op::from_word(&w).map(|op| (op, k))
+            }
+            _ => None,
+        }
+    }
+
+    /// `[ expr ]` with its `[` at `j`; binary operators by precedence climbing.
+    fn bracket(&self, j: usize, depth: usize) -> Result<(Expr, usize), GcodeError> {
+        let (lhs, k) = self.real_value(j + 1, depth)?;
+        let (e, k) = self.climb(lhs, k, 0, depth)?;
+        let (k, c) = self.peek(k);
+        if c != Some(']') {
+            return Err(match c {
+                None => self.syntax(j, "`[` without `]`", "close the expression with `]`"),
+                Some(_) => self.syntax(
+                    k,
+                    "an operator or `]` was expected",
+                    "operators: ** * / MOD + - EQ NE GT GE LT LE AND OR XOR",
+                ),
+            });
+        }
+        Ok((e, k + 1))
+    }
+
+    /// Precedence climbing: extends `lhs` with operators of precedence at least `min`.
+    fn climb(
+        &self,
+        mut lhs: Expr,
+        mut k: usize,
+        min: u8,
+        depth: usize,
+    ) -> Result<(Expr, usize), GcodeError> {
+        while let Some((op, k1)) = self.operator(k).filter(|(op, _)| op.precedence() >= min) {
+            self.node(k, depth)?;
+            let (mut rhs, mut k2) = self.real_value(k1, depth)?;
+            while let Some((next, _)) = self
+                .operator(k2)
+                .filter(|(n, _)| n.precedence() > op.precedence())
+            {
+                (rhs, k2) = self.climb(rhs, k2, next.precedence(), depth + 1)?;
+            }
+            lhs = Expr::Bin(op, Box::new(lhs), Box::new(rhs));
+            k = k2;
+        }
+        Ok((lhs, k))
+    }
+
+    /// A parameter setting `#… = value` with its `#` at `i`.
+    fn assignment(&self, i: usize) -> Result<(Assign<'a>, usize), GcodeError> {
+        let (k, c) = self.peek(i + 1);
+        let (target, k) = if c == Some('<') {
+            let (n, k2) = self.name(k)?;
+            (Target::Named(n), k2)
+        } else {
+            let (e, k2) = self.real_value(i + 1, 1)?;
+            (Target::Numbered(e), k2)
+        };
+        let (k, c) = self.peek(k);
+        if c != Some('=') {
+            return Err(self.syntax(k.min(self.chars.len().saturating_sub(1)), "a parameter at the start of a word must be set with `=`", "write #1 = 2.5 or #<name> = [#1 + 1]; to use a parameter as a value write it after a letter, e.g. X#1"));
+        }
+        let (value, k2) = self.real_value(k + 1, 1)?;
+        let text = &self.raw[self.byte_at(i)..self.byte_at(k2)];
+        Ok((
+            Assign {
+                target,
+                value,
+                col: i + 1,
+                text,
+            },
+            k2,
+        ))
+    }
+
+    /// An O-word statement at `i` (`o100 while …`, `o<name> call …`); `None` when the O is
+    /// followed by a number and no keyword (a program number, read as a word).
+    fn o_word(&self, i: usize) -> Result<Option<(OStmt<'a>, usize)>, GcodeError> {
+        let (j, c) = self.peek(i + 1);
+        let (label, k) = match c {
+            Some('<') => {
+                let (n, k) = self.name(j)?;
+                (format!("<{n}>"), k)
+            }
+            Some(c) if c.is_ascii_digit() => {
+                let mut k = j;
+                while matches!(self.chars.get(k), Some(&(_, ch)) if ch.is_ascii_digit()) {
+                    k += 1;
+                }
+                let digits = &self.raw[self.byte_at(j)..self.byte_at(k)];
+                let t = digits.trim_start_matches('0');
+                (
+                    if t.is_empty() {
+                        "0".to_string()
+                    } else {
+                        t.to_string()
+                    },
+                    k,
+                )
+            }
+            _ => return Ok(None),
+        };
+        let (k, _) = self.peek(k);
+        let (kw, k2) = self.letters(k);
+        let Some(kind) = OKind::from_word(&kw) else {
+            if label.starts_with('<') {
+                return Err(self.syntax(
+                    k,
+                    format!("O-word {label} without a keyword"),
+                    "write o<name> sub, call, if, while, … (LinuxCNC's O-words)",
+                ));
+            }
+            return Ok(None);
+        };
+        let mut args = Vec::new();
+        let mut k = k2;
+        loop {
+            let (k1, c) = self.peek(k);
+            match c {
+                Some('[') => {
+                    let (e, k3) = self.bracket(k1, 1)?;
+                    args.push(e);
+                    k = k3;
+                }
+                _ => break,
+            }
+        }
+        let text = &self.raw[self.byte_at(i)..self.byte_at(k)];
+        Ok(Some((
+            OStmt {
+                label,
+                kind,
+                args,
+                col: i + 1,
+                text,
+            },
+            k,
+        )))
+    }
+
+    /// The error for anything but a comment after an O-word statement, at `i`.
+    fn after_o_word(&self, i: usize) -> GcodeError {
+        self.syntax(i, "text after an O-word statement", "an O-word statement (sub, call, if, while, …) stands alone on its line; conditions and arguments go in [ ]")
+    }
+
     /// Reads the word whose letter `c` is character `i`: the letter, blanks, an optional
     /// sign and a decimal number. Returns the word and the index after it.
-    fn word(&self, i: usize, c: char) -> Result<(Word<'a>, usize), GcodeError> {
+    fn word(&self, i: usize, c: char) -> Result<(RawWord<'a>, usize), GcodeError> {
+        if self.expression_starts(i + 1) {
+            let letter = c.to_ascii_uppercase();
+            let (e, k) = self.real_value(i + 1, 0)?;
+            let text = &self.raw[self.byte_at(i)..self.byte_at(k)];
+            let word = RawWord {
+                letter,
+                value: Value::Expr(e),
+                col: i + 1,
+                text,
+            };
+            return Ok((word, k));
+        }
         let (raw, chars, line) = (self.raw, &self.chars, self.line);
         let col = i + 1;
         let letter = c.to_ascii_uppercase();
@@ -155,9 +710,9 @@ impl<'a> LineChars<'a> {
                 format!("numbers must not exceed {MAX_WORD_VALUE:e} in magnitude"),
             ));
         }
-        let word = Word {
+        let word = RawWord {
             letter,
-            value,
+            value: Value::Num(value),
             col,
             text,
         };
@@ -170,19 +725,15 @@ impl<'a> LineChars<'a> {
         let next = self.chars.get(j).map(|&(_, ch)| ch);
         let hint = if matches!(next, Some('O' | 'o')) {
             format!("the letter O where the digit 0 was meant? write {letter}0")
-        } else if next == Some('#') {
-            "parameters (`#`) are not supported: write plain numbers".to_string()
-        } else if next == Some('[') {
-            "expressions (`[ ]`) are not supported: write plain numbers".to_string()
         } else {
             format!("write a number after {letter}, e.g. {letter}10.5")
         };
-        let shown = &self.raw[self.byte_at(i)..self.byte_at((j + 1).min(self.chars.len()))];
+        let shown = escape(&self.raw[self.byte_at(i)..self.byte_at((j + 1).min(self.chars.len()))]);
         err(
             self.line,
             i + 1,
             GcodeErrorKind::Syntax,
-            shown,
+            &shown,
             format!("{letter} has no number"),
             hint,
         )
@@ -235,20 +786,27 @@ impl<'a> LineChars<'a> {
     /// The error for character `c` at `i`, which starts no word, comment or `%`.
     fn unexpected_char(&self, i: usize, c: char) -> GcodeError {
         let (message, hint) = match c {
-            '#' => ("parameters (`#`) are not supported", "write plain numbers"),
             '[' | ']' => (
-                "expressions (`[ ]`) are not supported",
-                "write plain numbers",
+                "an expression `[ ]` where a word was expected".to_string(),
+                "expressions are values: write them after a letter (X[1+2]) or a parameter setting (#1 = [1+2])".to_string(),
             ),
             '/' => (
-                "block delete (`/`) is not supported",
-                "remove the `/` (or the whole line)",
+                "block delete `/` inside a line".to_string(),
+                "`/` (block delete) may only start a line".to_string(),
             ),
-            '*' => ("checksums (`*`) are not supported", "remove the checksum"),
-            ')' => ("`)` without `(`", "comments are written `(like this)`"),
+            '*' => ("checksums (`*`) are not supported".to_string(), "remove the checksum".to_string()),
+            ')' => ("`)` without `(`".to_string(), "comments are written `(like this)`".to_string()),
+            '@' | '^' => (
+                format!("polar word `{c}` without a value or in a motion it does not apply to"),
+                "polar coordinates: G1 @<distance> ^<angle in degrees> in the active plane".to_string(),
+            ),
+            c if is_invisible(c) => (
+                format!("invisible character {} (shown escaped)", escape(&c.to_string())),
+                "delete it: editors and copy-paste insert such characters".to_string(),
+            ),
             _ => (
-                "unexpected character",
-                "a line holds words such as G01 X10.5, comments in ( ) or after ;",
+                "unexpected character".to_string(),
+                "a line holds words such as G01 X10.5, comments in ( ) or after ;".to_string(),
             ),
         };
         let end = self.byte_at(i + 1);
@@ -256,9 +814,45 @@ impl<'a> LineChars<'a> {
             self.line,
             i + 1,
             GcodeErrorKind::Syntax,
-            &self.raw[self.byte_at(i)..end],
+            &escape(&self.raw[self.byte_at(i)..end]),
             message,
             hint,
         )
     }
+}
+
+/// Is `c` a character that shows as nothing or as a blank (control characters, no-break and
+/// zero-width spaces, byte-order marks, directional marks)?
+pub(super) fn is_invisible(c: char) -> bool {
+    c.is_control()
+        || matches!(c, '\u{a0}' | '\u{ad}' | '\u{2000}'..='\u{200f}' | '\u{2028}'..='\u{202f}' | '\u{205f}'..='\u{206f}' | '\u{feff}')
+}
+
+/// `s` with invisible characters written as `\u{…}` escapes.
+pub(super) fn escape(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        if is_invisible(c) && c != ' ' {
+            out.push_str(&format!("\\u{{{:x}}}", c as u32));
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The message in a comment's `body` (`MSG,…`, `PRINT,…`, `DEBUG,…`, any case).
+fn message_comment(body: &str) -> Option<Comment> {
+    let t = body.trim_start();
+    let (kw, rest) = t.split_once(',')?;
+    let kind = match kw.trim().to_ascii_uppercase().as_str() {
+        "MSG" => MessageKind::Msg,
+        "PRINT" => MessageKind::Print,
+        "DEBUG" => MessageKind::Debug,
+        _ => return None,
+    };
+    Some(Comment {
+        kind,
+        text: rest.to_string(),
+    })
 }

@@ -54,12 +54,17 @@
 
 mod arcs;
 mod codes;
+mod expr;
+mod flow;
 mod interpreter;
 mod lexer;
+mod modal;
 
 use crate::geometry::Segment;
+pub use flow::DEFAULT_MAX_STEPS;
+use flow::{Runner, SourceLine};
 use interpreter::Interpreter;
-use lexer::{lex_line, Lexed};
+use lexer::lex_line;
 use nalgebra::Vector3;
 use std::fmt;
 
@@ -81,6 +86,25 @@ pub struct ParseOptions {
     /// Initial `G54` work offset (m, base frame), used when the program does not set the G54
     /// offset itself with `G10 L2 P1`. `None`: zero.
     pub origin: Option<[f64; 3]>,
+    /// Where the tool is when the program starts (m, base frame: the frame of the program's
+    /// points after the work offset is applied), e.g. the tool position of the robot's start
+    /// pose. `Some`: a first motion that does not give all of X, Y and Z absolutely (or an
+    /// arc) moves from here, as a CNC moves from where the machine is. `None`: the first
+    /// motion must give X, Y and Z (it sets the start point).
+    pub start: Option<Vector3<f64>>,
+    /// Lines the program may execute beyond its own length (loops, calls) before it is
+    /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`].
+    pub max_steps: Option<usize>,
+}
+
+impl ParseOptions {
+    /// The default options with the initial `G54` work offset `origin` (m, base frame).
+    pub fn with_origin(origin: Option<[f64; 3]>) -> Self {
+        Self {
+            origin,
+            ..Self::default()
+        }
+    }
 }
 
 /// A parsed program: where the robot starts and what it does from there.
@@ -94,6 +118,37 @@ pub struct Program {
     pub moves: Vec<Move>,
     /// Harmless things the reader ignored.
     pub warnings: Vec<GcodeWarning>,
+    /// M codes, S and T words in program order (passed through; no effect on the path).
+    pub events: Vec<ProgramEvent>,
+    /// `(MSG,…)`, `(PRINT,…)`, `(DEBUG,…)` comments in program order.
+    pub messages: Vec<ProgramMessage>,
+    /// Tool length offset in force at the end of the program (m, along the tool axis, from
+    /// `G43 H…` / `G43.1 Z…`; 0 after `G49`): for the TCP.
+    pub tool_length: f64,
+}
+
+/// An M code or an S/T word of a program: recorded in order, never a reason to reject.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProgramEvent {
+    /// Source line (1-based).
+    pub line: usize,
+    /// `M3`, `M62`, `S`, `T`, … (M codes without leading zeros).
+    pub code: String,
+    /// The words that go with it (`P`, `Q`, `E`, `L`, `S`, `T`), letter and value.
+    pub words: Vec<(char, f64)>,
+    /// Number of [`Program::moves`] before the event: it happens after those moves.
+    pub after_moves: usize,
+}
+
+/// A message comment of a program.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ProgramMessage {
+    /// Source line (1-based).
+    pub line: usize,
+    /// `MSG`, `PRINT` or `DEBUG`.
+    pub kind: &'static str,
+    /// The text (parameters substituted for PRINT and DEBUG; invisible characters escaped).
+    pub text: String,
 }
 
 impl Program {
@@ -256,26 +311,28 @@ pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> 
     let mut it = Interpreter::new(options)?;
     // A UTF-8 byte-order mark (Windows editors write one) is not part of the program.
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
-    for (i, raw) in lines(text).enumerate() {
-        let line_no = i + 1;
-        if it.ended {
-            it.note_ignored(line_no, raw);
-            continue;
+    let raw: Vec<&str> = lines(text).collect();
+    // Read up to the closing `%` (a `%` after content); what follows is ignored text.
+    let mut source = Vec::with_capacity(raw.len());
+    let mut content = false;
+    for (i, r) in raw.iter().enumerate() {
+        let lexed = lex_line(r, i + 1);
+        let percent = matches!(lexed, Ok(lexer::Lexed::Percent));
+        let empty = matches!(&lexed, Ok(lexer::Lexed::Block(b)) if b.is_empty() && !b.delete);
+        source.push(SourceLine {
+            no: i + 1,
+            raw: r,
+            lexed,
+        });
+        if percent && content {
+            break;
         }
-        match lex_line(raw, line_no)? {
-            Lexed::Percent => {
-                if it.seen_content {
-                    it.ended = true;
-                } else {
-                    it.seen_content = true;
-                }
-            }
-            Lexed::Words(words) if words.is_empty() => {}
-            Lexed::Words(words) => {
-                it.seen_content = true;
-                it.line(line_no, raw, &words)?;
-            }
-        }
+        content |= !percent && !empty;
+    }
+    let mut runner = Runner::new(&source)?;
+    let next = runner.run(&mut it, options.max_steps.unwrap_or(DEFAULT_MAX_STEPS))?;
+    for (i, r) in raw.iter().enumerate().skip(next) {
+        it.note_ignored(i + 1, r);
     }
     it.finish()
 }

@@ -222,9 +222,24 @@ pub enum PlanError {
 pub const MAX_TIMING_ATTEMPTS: usize = 6;
 
 /// Parses `text` and plans it: see [`plan_program`].
+///
+/// A program whose first motion omits axes starts from the tool position of the robot's
+/// start pose ([`Robot::start_q`]) unless `options.parse.start` gives another.
 pub fn plan(text: &str, robot: &Robot, options: &PlanOptions) -> Result<Plan, PlanError> {
-    let program = parse(text, &options.parse).map_err(PlanError::Program)?;
+    let mut read = options.parse.clone();
+    if read.start.is_none() {
+        read.start = start_position(robot);
+    }
+    let program = parse(text, &read).map_err(PlanError::Program)?;
     plan_program(program, robot, options)
+}
+
+/// The flange position (m, base frame) at the robot's start pose; `None` if it has none.
+pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
+    let mut ws = crate::dynamics::Workspace::new(robot);
+    crate::dynamics::forward_kinematics(robot, &mut ws, robot.start_q())
+        .ok()
+        .map(|t| t.pos)
 }
 
 /// Plans a parsed program for `robot`: blends and times it ([`CartesianTrajectory`]), maps

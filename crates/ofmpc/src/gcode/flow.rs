@@ -1,0 +1,657 @@
+//! Control flow of rs274ngc's O-words in one file (LinuxCNC's "O codes"): `sub/endsub/call/
+//! return`, `if/elseif/else/endif`, `while/endwhile`, `do/while`, `repeat/endrepeat`,
+//! `break/continue`; parameter settings and messages; and the walk over the lines with a step
+//! limit, so that an endless loop ends with an error naming the loop.
+
+use super::expr::{EvalError, Expr, Params};
+use super::interpreter::Interpreter;
+use super::lexer::{escape, Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
+use super::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
+use std::collections::HashMap;
+
+/// Lines a program may execute beyond its own length before the reader stops it as an
+/// endless loop (10 million: well under a second of reading).
+pub const DEFAULT_MAX_STEPS: usize = 10_000_000;
+
+/// Deepest nesting of subroutine calls.
+const MAX_CALL_DEPTH: usize = 100;
+
+const NONE: usize = usize::MAX;
+
+/// One line of the source as read.
+pub(super) struct SourceLine<'a> {
+    pub(super) no: usize,
+    pub(super) raw: &'a str,
+    pub(super) lexed: Result<Lexed<'a>, GcodeError>,
+}
+
+/// The links between the O-word statements of a file (indices into the lines).
+struct Links {
+    /// `if`/`elseif`: the next branch; `endwhile`/`endrepeat`/closing `while` of a `do`: the
+    /// loop's start; `break`/`continue`: the loop's start.
+    next: Vec<usize>,
+    /// `if`/`elseif`/`else`: the `endif`; loop starts: their end statement; `sub`: `endsub`.
+    end: Vec<usize>,
+    /// The `while` that closes a `do`.
+    do_while: Vec<bool>,
+    /// Subroutines by label.
+    subs: HashMap<String, usize>,
+}
+
+fn o_stmt<'s, 'a>(l: &'s SourceLine<'a>) -> Option<&'s OStmt<'a>> {
+    match &l.lexed {
+        Ok(Lexed::Block(b)) if !b.delete => b.o.as_ref(),
+        _ => None,
+    }
+}
+
+fn structure_error(l: &SourceLine<'_>, o: &OStmt<'_>, message: String, hint: &str) -> GcodeError {
+    err(l.no, o.col, GcodeErrorKind::Syntax, o.text, message, hint)
+}
+
+/// An open structure while [`link`] walks the file: kind, label, line index, branches.
+struct Open {
+    kind: OKind,
+    label: String,
+    at: usize,
+    branches: Vec<usize>,
+}
+
+/// Matches the O-word statements of `lines` (see [`Links`]).
+fn link(lines: &[SourceLine<'_>]) -> Result<Links, GcodeError> {
+    let n = lines.len();
+    let mut k = Links {
+        next: vec![NONE; n],
+        end: vec![NONE; n],
+        do_while: vec![false; n],
+        subs: HashMap::new(),
+    };
+    let mut stack: Vec<Open> = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        if let Some(o) = o_stmt(l) {
+            link_one(lines, &mut stack, &mut k, i, o)?;
+        }
+    }
+    if let Some(t) = stack.pop() {
+        let l = &lines[t.at];
+        let closer = match t.kind {
+            OKind::If => "endif",
+            OKind::While => "endwhile",
+            OKind::Do => "while",
+            OKind::Repeat => "endrepeat",
+            _ => "endsub",
+        };
+        if let Some(o) = o_stmt(l) {
+            let m = format!("o{} {} is never closed", t.label, t.kind.name());
+            return Err(structure_error(
+                l,
+                o,
+                m,
+                &format!("close it with o{} {closer}", t.label),
+            ));
+        }
+    }
+    Ok(k)
+}
+
+/// Links the O-word statement `o` at line index `i` (see [`link`]).
+fn link_one(
+    lines: &[SourceLine<'_>],
+    stack: &mut Vec<Open>,
+    k: &mut Links,
+    i: usize,
+    o: &OStmt<'_>,
+) -> Result<(), GcodeError> {
+    let l = &lines[i];
+    let open = |kind| Open {
+        kind,
+        label: o.label.clone(),
+        at: i,
+        branches: vec![i],
+    };
+    let top_is = |s: &[Open], kinds: &[OKind]| {
+        s.last()
+            .is_some_and(|t| kinds.contains(&t.kind) && t.label == o.label)
+    };
+    match o.kind {
+        OKind::Sub => {
+            if let Some(t) = stack.last() {
+                let m = format!(
+                    "o{} sub inside o{} {} (line {})",
+                    o.label,
+                    t.label,
+                    t.kind.name(),
+                    lines[t.at].no
+                );
+                return Err(structure_error(
+                    l,
+                    o,
+                    m,
+                    "define subroutines at the top level of the file",
+                ));
+            }
+            if let Some(&prev) = k.subs.get(&o.label) {
+                let m = format!(
+                    "subroutine o{} defined twice (first at line {})",
+                    o.label, lines[prev].no
+                );
+                return Err(structure_error(
+                    l,
+                    o,
+                    m,
+                    "give each subroutine its own name",
+                ));
+            }
+            k.subs.insert(o.label.clone(), i);
+            stack.push(open(OKind::Sub));
+        }
+        OKind::If | OKind::Do | OKind::Repeat => stack.push(open(o.kind)),
+        OKind::While if top_is(stack, &[OKind::Do]) => {
+            let t = stack.pop().map_or(NONE, |t| t.at);
+            k.end[t] = i;
+            k.next[i] = t;
+            k.do_while[i] = true;
+        }
+        OKind::While => stack.push(open(OKind::While)),
+        OKind::Elseif | OKind::Else if top_is(stack, &[OKind::If]) => {
+            if let Some(t) = stack.last_mut() {
+                t.branches.push(i);
+            }
+        }
+        OKind::Endif if top_is(stack, &[OKind::If]) => {
+            let t = stack.pop().map_or(Vec::new(), |t| t.branches);
+            for w in t.windows(2) {
+                k.next[w[0]] = w[1];
+            }
+            for &b in &t {
+                k.end[b] = i;
+            }
+            if let Some(&last) = t.last() {
+                k.next[last] = i;
+            }
+        }
+        OKind::Endwhile if top_is(stack, &[OKind::While]) => close_loop(stack, k, i),
+        OKind::Endrepeat if top_is(stack, &[OKind::Repeat]) => close_loop(stack, k, i),
+        OKind::Endsub if top_is(stack, &[OKind::Sub]) => close_loop(stack, k, i),
+        OKind::Break | OKind::Continue | OKind::Return => link_jump(l, stack, k, i, o)?,
+        OKind::Call => {}
+        _ => {
+            let m = match stack.last() {
+                Some(t) => format!(
+                    "o{} {} does not close o{} {} (line {})",
+                    o.label,
+                    o.kind.name(),
+                    t.label,
+                    t.kind.name(),
+                    lines[t.at].no
+                ),
+                None => format!(
+                    "o{} {} without its opening statement",
+                    o.label,
+                    o.kind.name()
+                ),
+            };
+            return Err(structure_error(l, o, m, "each if/while/do/repeat/sub is closed by its own endif/endwhile/while/endrepeat/endsub with the same label"));
+        }
+    }
+    Ok(())
+}
+
+/// Links `break`/`continue` to their loop and checks that `return` is in its subroutine.
+fn link_jump(
+    l: &SourceLine<'_>,
+    stack: &[Open],
+    k: &mut Links,
+    i: usize,
+    o: &OStmt<'_>,
+) -> Result<(), GcodeError> {
+    match o.kind {
+        OKind::Break | OKind::Continue => {
+            let lp = stack.iter().rev().find(|t| {
+                t.label == o.label && matches!(t.kind, OKind::While | OKind::Do | OKind::Repeat)
+            });
+            match lp {
+                Some(t) => k.next[i] = t.at,
+                None => {
+                    let m = format!("o{} {} outside a loop o{}", o.label, o.kind.name(), o.label);
+                    return Err(structure_error(l, o, m, "break and continue carry the label of the loop (while, do, repeat) they are in"));
+                }
+            }
+        }
+        OKind::Return
+            if !stack
+                .iter()
+                .any(|t| t.kind == OKind::Sub && t.label == o.label) =>
+        {
+            let m = format!("o{} return outside the subroutine o{}", o.label, o.label);
+            return Err(structure_error(
+                l,
+                o,
+                m,
+                "return carries the label of its subroutine",
+            ));
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
+fn close_loop(stack: &mut Vec<Open>, k: &mut Links, i: usize) {
+    if let Some(t) = stack.pop() {
+        k.end[t.at] = i;
+        k.next[i] = t.at;
+    }
+}
+
+/// A subroutine call in progress.
+struct Frame {
+    return_to: usize,
+    saved: [f64; 30],
+    repeats: usize,
+}
+
+/// Walks the lines: executes blocks, follows O-words, stops at the end of the program.
+pub(super) struct Runner<'s, 'a> {
+    lines: &'s [SourceLine<'a>],
+    links: Links,
+    pub(super) params: Params,
+    frames: Vec<Frame>,
+    /// Active `repeat` loops: the statement and the iterations left.
+    repeats: Vec<(usize, f64)>,
+    /// The last loop that jumped back (named by the step-limit error).
+    last_loop: usize,
+    warned_delete: bool,
+}
+
+impl<'s, 'a> Runner<'s, 'a> {
+    pub(super) fn new(lines: &'s [SourceLine<'a>]) -> Result<Self, GcodeError> {
+        Ok(Runner {
+            lines,
+            links: link(lines)?,
+            params: Params::default(),
+            frames: Vec::new(),
+            repeats: Vec::new(),
+            last_loop: NONE,
+            warned_delete: false,
+        })
+    }
+
+    /// Runs the program through `it`; returns the index of the line after the last one
+    /// executed (where ignored text starts).
+    pub(super) fn run(
+        &mut self,
+        it: &mut Interpreter,
+        max_steps: usize,
+    ) -> Result<usize, GcodeError> {
+        let limit = self.lines.len().saturating_add(max_steps);
+        let mut steps = 0usize;
+        let mut pc = 0;
+        while pc < self.lines.len() && !it.ended {
+            steps += 1;
+            if steps > limit {
+                return Err(self.step_limit(pc, max_steps));
+            }
+            let l = &self.lines[pc];
+            let b = match &l.lexed {
+                Err(e) => return Err(e.clone()),
+                Ok(Lexed::Percent) => {
+                    if it.seen_content {
+                        it.ended = true;
+                    } else {
+                        it.seen_content = true;
+                    }
+                    pc += 1;
+                    continue;
+                }
+                Ok(Lexed::Block(b)) => b,
+            };
+            if b.delete {
+                if !self.warned_delete {
+                    self.warned_delete = true;
+                    it.warn(
+                        l.no,
+                        1,
+                        "block delete: lines starting with `/` are skipped (LinuxCNC's default)",
+                    );
+                }
+                it.seen_content = true;
+                pc += 1;
+                continue;
+            }
+            if let Some(o) = &b.o {
+                it.seen_content = true;
+                pc = self.o_word(it, pc, o)?;
+                continue;
+            }
+            if !b.is_empty() {
+                it.seen_content = true;
+                self.block(it, l, b)?;
+            }
+            pc += 1;
+        }
+        Ok(pc)
+    }
+
+    fn step_limit(&self, pc: usize, max_steps: usize) -> GcodeError {
+        let at = if self.last_loop == NONE {
+            pc
+        } else {
+            self.last_loop
+        };
+        let l = &self.lines[at];
+        let (col, text, name) = match o_stmt(l) {
+            Some(o) => (
+                o.col,
+                o.text.to_string(),
+                format!("the loop o{} {} (line {})", o.label, o.kind.name(), l.no),
+            ),
+            None => (1, l.raw.trim().to_string(), format!("line {}", l.no)),
+        };
+        err(
+            l.no,
+            col,
+            GcodeErrorKind::InvalidValue,
+            &text,
+            format!("the program ran {max_steps} lines more than it has without ending: {name} does not end"),
+            "check the loop's condition (an endless loop), or split the program",
+        )
+    }
+
+    fn eval(
+        &self,
+        l: &SourceLine<'_>,
+        col: usize,
+        text: &str,
+        e: &Expr,
+    ) -> Result<f64, GcodeError> {
+        self.params
+            .eval(e)
+            .map_err(|e| eval_error(l.no, col, text, &e))
+    }
+
+    /// The condition or count of an O-word (its first `[ ]`), or an error naming it.
+    fn arg0(&self, l: &SourceLine<'_>, o: &OStmt<'_>) -> Result<f64, GcodeError> {
+        match o.args.first() {
+            Some(e) => self.eval(l, o.col, o.text, e),
+            None => Err(err(
+                l.no,
+                o.col,
+                GcodeErrorKind::Missing,
+                o.text,
+                format!("o{} {} without its [condition]", o.label, o.kind.name()),
+                "write the condition or count in [ ], e.g. o100 while [#1 LT 10]",
+            )),
+        }
+    }
+
+    /// Executes the O-word at line `pc`; returns the next line.
+    fn o_word(
+        &mut self,
+        it: &mut Interpreter,
+        pc: usize,
+        o: &OStmt<'_>,
+    ) -> Result<usize, GcodeError> {
+        let l = &self.lines[pc];
+        let k = &self.links;
+        Ok(match o.kind {
+            OKind::Sub => k.end[pc] + 1,
+            OKind::If => self.branch(pc)?,
+            OKind::Elseif | OKind::Else => k.end[pc] + 1,
+            OKind::Endif | OKind::Do => pc + 1,
+            OKind::While if k.do_while[pc] => {
+                if self.arg0(l, o)? != 0.0 {
+                    self.last_loop = pc;
+                    k.next[pc] + 1
+                } else {
+                    pc + 1
+                }
+            }
+            OKind::While => {
+                if self.arg0(l, o)? != 0.0 {
+                    pc + 1
+                } else {
+                    k.end[pc] + 1
+                }
+            }
+            OKind::Endwhile => {
+                self.last_loop = k.next[pc];
+                k.next[pc]
+            }
+            OKind::Repeat => {
+                let n = self.arg0(l, o)?.round();
+                if n >= 1.0 {
+                    self.repeats.push((pc, n));
+                    pc + 1
+                } else {
+                    k.end[pc] + 1
+                }
+            }
+            OKind::Endrepeat => {
+                self.last_loop = k.next[pc];
+                match self.repeats.last_mut() {
+                    Some((_, n)) if *n > 1.0 => {
+                        *n -= 1.0;
+                        k.next[pc] + 1
+                    }
+                    _ => {
+                        self.repeats.pop();
+                        pc + 1
+                    }
+                }
+            }
+            OKind::Break => {
+                let start = k.next[pc];
+                self.repeats.retain(|&(r, _)| r < start);
+                k.end[start] + 1
+            }
+            OKind::Continue => {
+                let start = k.next[pc];
+                self.last_loop = start;
+                match self.lines.get(start).and_then(o_stmt).map(|s| s.kind) {
+                    Some(OKind::While) => start,
+                    _ => k.end[start],
+                }
+            }
+            OKind::Call => self.call(pc, o)?,
+            OKind::Return | OKind::Endsub => self.ret(it, pc, o)?,
+        })
+    }
+
+    /// Finds the branch of the `if` at `pc` to run; returns its first line.
+    fn branch(&self, pc: usize) -> Result<usize, GcodeError> {
+        let mut at = pc;
+        loop {
+            let l = &self.lines[at];
+            let Some(o) = o_stmt(l) else {
+                return Ok(at + 1);
+            };
+            match o.kind {
+                OKind::If | OKind::Elseif => {
+                    if self.arg0(l, o)? != 0.0 {
+                        return Ok(at + 1);
+                    }
+                    at = self.links.next[at];
+                }
+                _ => return Ok(at + 1),
+            }
+        }
+    }
+
+    fn call(&mut self, pc: usize, o: &OStmt<'_>) -> Result<usize, GcodeError> {
+        let l = &self.lines[pc];
+        let Some(&sub) = self.links.subs.get(&o.label) else {
+            return Err(err(
+                l.no,
+                o.col,
+                GcodeErrorKind::Unsupported,
+                o.text,
+                format!("o{} call: no subroutine o{} sub in this file", o.label, o.label),
+                "subroutines in other files are not read: define it in this file with o… sub … o… endsub",
+            ));
+        };
+        if self.frames.len() >= MAX_CALL_DEPTH {
+            return Err(err(
+                l.no,
+                o.col,
+                GcodeErrorKind::InvalidValue,
+                o.text,
+                format!("subroutine calls nested deeper than {MAX_CALL_DEPTH}"),
+                "check for a subroutine that calls itself without end",
+            ));
+        }
+        let mut args = [0.0; 30];
+        for (a, e) in args.iter_mut().zip(&o.args) {
+            *a = self.eval(l, o.col, o.text, e)?;
+        }
+        let mut saved = [0.0; 30];
+        saved.copy_from_slice(&self.params.numbered[1..31]);
+        self.params.numbered[1..31].copy_from_slice(&args);
+        self.params.locals.push(HashMap::new());
+        self.frames.push(Frame {
+            return_to: pc + 1,
+            saved,
+            repeats: self.repeats.len(),
+        });
+        self.last_loop = sub;
+        Ok(sub + 1)
+    }
+
+    fn ret(&mut self, it: &mut Interpreter, pc: usize, o: &OStmt<'_>) -> Result<usize, GcodeError> {
+        let l = &self.lines[pc];
+        let value = match o.args.first() {
+            Some(e) => Some(self.eval(l, o.col, o.text, e)?),
+            None => None,
+        };
+        let Some(f) = self.frames.pop() else {
+            // endsub reached without a call: LinuxCNC ends the program there.
+            it.ended = true;
+            return Ok(pc + 1);
+        };
+        self.params.numbered[1..31].copy_from_slice(&f.saved);
+        self.params.locals.pop();
+        self.repeats.truncate(f.repeats);
+        if let Some(v) = value {
+            self.params.globals.insert("_value".into(), v);
+            self.params.globals.insert("_value_returned".into(), 1.0);
+        } else {
+            self.params.globals.insert("_value_returned".into(), 0.0);
+        }
+        Ok(f.return_to)
+    }
+
+    /// Executes a block: evaluates its words and settings with the parameters as they were
+    /// before the line (rs274ngc), sets the parameters, records its messages and runs its
+    /// words through the interpreter.
+    fn block(
+        &mut self,
+        it: &mut Interpreter,
+        l: &SourceLine<'a>,
+        b: &Block<'a>,
+    ) -> Result<(), GcodeError> {
+        let mut words: Vec<Word<'a>> = Vec::with_capacity(b.words.len());
+        for w in &b.words {
+            let value = match &w.value {
+                Value::Num(v) => *v,
+                Value::Expr(e) => {
+                    let v = self.eval(l, w.col, w.text, e)?;
+                    if v.abs() > MAX_WORD_VALUE {
+                        return Err(err(
+                            l.no,
+                            w.col,
+                            GcodeErrorKind::InvalidValue,
+                            w.text,
+                            format!("the value {v} is out of range"),
+                            format!("numbers must not exceed {MAX_WORD_VALUE:e} in magnitude"),
+                        ));
+                    }
+                    v
+                }
+            };
+            words.push(Word {
+                letter: w.letter,
+                value,
+                col: w.col,
+                text: w.text,
+            });
+        }
+        let mut sets = Vec::with_capacity(b.assigns.len());
+        for a in &b.assigns {
+            let v = self.eval(l, a.col, a.text, &a.value)?;
+            let target = match &a.target {
+                Target::Named(n) => Err(n.as_str()),
+                Target::Numbered(e) => {
+                    let i = self.eval(l, a.col, a.text, e)?;
+                    Ok(Params::index(i).map_err(|e| eval_error(l.no, a.col, a.text, &e))?)
+                }
+            };
+            sets.push((target, v));
+        }
+        for (t, v) in sets {
+            match t {
+                Ok(i) => self.params.numbered[i] = v,
+                Err(n) => self.params.set_named(n, v),
+            }
+        }
+        for c in &b.comments {
+            let text = match c.kind {
+                MessageKind::Msg => c.text.trim().to_string(),
+                _ => self.substitute(&c.text),
+            };
+            it.messages.push(ProgramMessage {
+                line: l.no,
+                kind: match c.kind {
+                    MessageKind::Msg => "MSG",
+                    MessageKind::Print => "PRINT",
+                    MessageKind::Debug => "DEBUG",
+                },
+                text: escape(&text),
+            });
+        }
+        if !words.is_empty() {
+            it.line(l.no, l.raw, &words)?;
+        }
+        Ok(())
+    }
+
+    /// `text` with `#n` and `#<name>` replaced by their values (`%lf`, as LinuxCNC's
+    /// `(PRINT,…)` and `(DEBUG,…)`).
+    fn substitute(&self, text: &str) -> String {
+        let mut out = String::new();
+        let mut rest = text;
+        while let Some(i) = rest.find('#') {
+            out.push_str(&rest[..i]);
+            let after = &rest[i + 1..];
+            if let Some(name) = after.strip_prefix('<').and_then(|a| a.split_once('>')) {
+                let key: String = name
+                    .0
+                    .chars()
+                    .filter(|c| !c.is_whitespace())
+                    .flat_map(char::to_lowercase)
+                    .collect();
+                match self.params.named(&key) {
+                    Some(v) => out.push_str(&format!("{v:.6}")),
+                    None => out.push_str("######"),
+                }
+                rest = name.1;
+                continue;
+            }
+            let digits = after.len() - after.trim_start_matches(|c: char| c.is_ascii_digit()).len();
+            match after[..digits]
+                .parse::<f64>()
+                .ok()
+                .and_then(|v| Params::index(v).ok())
+            {
+                Some(k) => out.push_str(&format!("{:.6}", self.params.numbered[k])),
+                None => out.push('#'),
+            }
+            rest = &after[digits..];
+        }
+        out.push_str(rest);
+        out.trim().to_string()
+    }
+}
+
+fn eval_error(line: usize, col: usize, text: &str, e: &EvalError) -> GcodeError {
+    let (m, h) = e.describe();
+    err(line, col, GcodeErrorKind::InvalidValue, text, m, h)
+}

@@ -1,0 +1,483 @@
+//! The modal codes CAM output uses beyond the basic ones (LinuxCNC's G-code reference):
+//! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43/G43.1/G49
+//! tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
+//! feed modes, polar `@ ^`, the canned cycles G73 G81 G82 G83 G85 G86 G89 with G98/G99 and L,
+//! and G64 Q (collinear moves within Q merged, LinuxCNC's naive-CAM detector).
+
+use super::codes::{Args, Motion};
+use super::interpreter::Interpreter;
+use super::lexer::Word;
+use super::{err, GcodeError, GcodeErrorKind, Move, MoveKind, PathMode, MIN_MOVE_LENGTH};
+use crate::geometry::{Plane, Segment};
+use nalgebra::Vector3;
+
+/// Retract after each peck of G73 and re-approach of G83 (LinuxCNC: 0.010 in).
+const PECK_DELTA_INCH: f64 = 0.010;
+
+/// Longest run of moves G64 Q merges into one (bounds the work per move).
+const MAX_MERGE_RUN: usize = 1000;
+
+/// State of the codes of this module.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Extra {
+    /// G92/G52 offset (m) and the one G92.2 suspended.
+    pub(super) g92: [f64; 3],
+    pub(super) g92_saved: [f64; 3],
+    /// This line is G53 (machine coordinates).
+    pub(super) machine: bool,
+    /// Positions stored by G28.1 / G30.1 (m, machine).
+    pub(super) home: [Option<Vector3<f64>>; 2],
+    /// G90.1 in force.
+    pub(super) arc_absolute: bool,
+    /// G98 (retract to the initial Z) in force; default G99 (LinuxCNC's R_PLANE).
+    pub(super) retract_initial: bool,
+    /// 93, 94 or 95.
+    pub(super) feed_mode: u8,
+    /// Last spindle speed S (for G95).
+    pub(super) spindle: Option<f64>,
+    /// Sticky canned-cycle words R, Z, Q, P (program units / s) and the Z (m) where the
+    /// cycles began.
+    pub(super) cycle: [Option<f64>; 4],
+    pub(super) cycle_z0: Option<f64>,
+    /// G64 Q tolerance (m) and the points removed from the last move by merging.
+    pub(super) merge_q: Option<f64>,
+    pub(super) merged: Vec<Vector3<f64>>,
+}
+
+impl Interpreter {
+    /// The offset from program to machine coordinates (m): work offset plus G92/G52, or
+    /// zero on a G53 line.
+    pub(super) fn work(&self) -> [f64; 3] {
+        if self.ext.machine {
+            return [0.0; 3];
+        }
+        let o = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        [0, 1, 2].map(|a| o[a] + self.ext.g92[a])
+    }
+
+    /// Where the tool is, for commands that need it before any motion: the position, else
+    /// the tool position before the program, else machine zero.
+    fn here(&self) -> Vector3<f64> {
+        self.pos.or(self.initial).unwrap_or_else(Vector3::zeros)
+    }
+
+    /// G92 (920), G92.1, G92.2, G92.3, G52 (520).
+    pub(super) fn shift(&mut self, code: u16, args: &Args<'_, '_>) {
+        let scale = self.scale();
+        let here = self.here();
+        let o = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
+        match code {
+            920 => {
+                for (a, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                    if let Some(w) = args.get(c) {
+                        self.ext.g92[a] = here[a] - w.value * scale - o[a];
+                    }
+                }
+            }
+            520 => {
+                for (a, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+                    if let Some(w) = args.get(c) {
+                        self.ext.g92[a] = w.value * scale;
+                    }
+                }
+            }
+            921 => {
+                self.ext = Extra {
+                    g92: [0.0; 3],
+                    g92_saved: [0.0; 3],
+                    ..std::mem::take(&mut self.ext)
+                }
+            }
+            922 => {
+                self.ext.g92_saved = self.ext.g92;
+                self.ext.g92 = [0.0; 3];
+            }
+            _ => self.ext.g92 = self.ext.g92_saved,
+        }
+    }
+
+    /// G28/G30 (go to the stored position, through the given point) and G28.1/G30.1 (store).
+    pub(super) fn home(
+        &mut self,
+        line: usize,
+        w: &Word<'_>,
+        code: u16,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        let k = usize::from(code >= 300);
+        if code % 10 == 1 {
+            self.ext.home[k] = Some(self.here());
+            return Ok(());
+        }
+        if self.pos.is_none() {
+            match self.initial {
+                Some(p0) => self.begin_at(p0, line),
+                None => {
+                    return Err(err(
+                        line,
+                        w.col,
+                        GcodeErrorKind::StartPoint,
+                        w.text,
+                        format!("{} before the start point is known", w.text),
+                        "start the program with G00 X.. Y.. Z..",
+                    ))
+                }
+            }
+        }
+        let pos = self.here();
+        let stored = self.ext.home[k]
+            .or(self.initial)
+            .unwrap_or_else(Vector3::zeros);
+        let given: Vec<usize> = ['X', 'Y', 'Z']
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| args.get(c).is_some())
+            .map(|(a, _)| a)
+            .collect();
+        let mut end = stored;
+        if !given.is_empty() {
+            let via = self.motion_target(pos, args);
+            self.push_line(line, pos, via, true);
+            end = via;
+            for a in given {
+                end[a] = stored[a];
+            }
+        }
+        let from = self.here();
+        self.push_line(line, from, end, true);
+        Ok(())
+    }
+
+    /// G43 H (no tool table: length 0, with a warning), G43.1 Z<length>, G49.
+    pub(super) fn tool_length_code(
+        &mut self,
+        line: usize,
+        w: &Word<'_>,
+        code: u16,
+        args: &Args<'_, '_>,
+    ) {
+        self.tool_length = match (code, args.get('Z')) {
+            (431, Some(z)) => z.value * self.scale(),
+            (430, _) => {
+                self.warn(
+                    line,
+                    w.col,
+                    format!(
+                        "{}: the tool table is not known, tool length 0 used (give the length with G43.1 Z…)",
+                        w.text
+                    ),
+                );
+                0.0
+            }
+            _ => 0.0,
+        };
+    }
+
+    /// The feed (m/s) of a move of `length` m in the active feed mode.
+    pub(super) fn move_feed(&self, rapid: bool, length: f64) -> Option<f64> {
+        let f = self.feed.filter(|_| !rapid)?;
+        let scale = self.scale();
+        match self.ext.feed_mode {
+            93 => Some(length * f / 60.0),
+            95 => self.ext.spindle.map(|s| f * s * scale / 60.0),
+            _ => Some(f * scale / 60.0),
+        }
+    }
+
+    /// Appends a straight move from `a` to `b` (skipped if zero-length); G64 Q merges it
+    /// with the last one where the points stay within Q of one line.
+    pub(super) fn push_line(&mut self, line: usize, a: Vector3<f64>, b: Vector3<f64>, rapid: bool) {
+        self.pos = Some(b);
+        if (b - a).norm() <= MIN_MOVE_LENGTH {
+            return;
+        }
+        let feed = self.move_feed(rapid, (b - a).norm());
+        if !rapid && self.try_merge(a, b, feed) {
+            return;
+        }
+        self.ext.merged.clear();
+        self.moves.push(Move {
+            line,
+            kind: MoveKind::Path {
+                segment: Segment::line(a, b),
+                feed,
+                mode: self.mode,
+            },
+        });
+    }
+
+    /// G64 Q: replaces the last move by one to `b` if it is a straight feed move at the same
+    /// feed, ends at `a`, no event came between, and every point it replaces stays within Q.
+    fn try_merge(&mut self, a: Vector3<f64>, b: Vector3<f64>, feed: Option<f64>) -> bool {
+        let Some(q) = self.ext.merge_q else {
+            return false;
+        };
+        if !matches!(self.mode, Some(PathMode::Blend { .. }))
+            || self.ext.merged.len() >= MAX_MERGE_RUN
+            || self
+                .events
+                .last()
+                .is_some_and(|e| e.after_moves == self.moves.len())
+        {
+            return false;
+        }
+        let mode = self.mode;
+        let Some(Move {
+            kind:
+                MoveKind::Path {
+                    segment: Segment::Line { .. },
+                    feed: f0,
+                    mode: m0,
+                },
+            ..
+        }) = self.moves.last()
+        else {
+            return false;
+        };
+        if *f0 != feed || *m0 != mode {
+            return false;
+        }
+        let s = match self.moves.last() {
+            Some(Move {
+                kind: MoveKind::Path { segment, .. },
+                ..
+            }) => segment.start(),
+            _ => return false,
+        };
+        let near = |p: &Vector3<f64>| distance_to_segment(p, &s, &b) <= q;
+        if (self.moves.last().map(|m| m.line).is_none())
+            || !near(&a)
+            || !self.ext.merged.iter().all(near)
+        {
+            return false;
+        }
+        self.ext.merged.push(a);
+        if let Some(Move {
+            kind: MoveKind::Path { segment, .. },
+            ..
+        }) = self.moves.last_mut()
+        {
+            *segment = Segment::line(s, b);
+        }
+        true
+    }
+
+    /// The polar end point (`@` distance, `^` angle in degrees, plane XY): from the origin
+    /// of the coordinate system (G90) or from the current point (G91).
+    pub(super) fn polar_target(
+        &self,
+        line: usize,
+        pos: Vector3<f64>,
+        args: &Args<'_, '_>,
+    ) -> Result<Option<Vector3<f64>>, GcodeError> {
+        let (r, t) = (args.get('@'), args.get('^'));
+        let Some(w) = r.or(t) else { return Ok(None) };
+        let bad = |m: &str| {
+            Err(err(
+                line,
+                w.col,
+                GcodeErrorKind::Conflict,
+                w.text,
+                m.to_string(),
+                "write G01 @<distance> ^<angle> in G17, without X and Y",
+            ))
+        };
+        if self.plane != Plane::XY || args.get('X').is_some() || args.get('Y').is_some() {
+            return bad("polar coordinates are read in the XY plane (G17) and replace X and Y");
+        }
+        let (Some(r), Some(t)) = (r, t) else {
+            return bad("a polar point needs both @ (distance) and ^ (angle)");
+        };
+        let scale = self.scale();
+        let (s, c) = t.value.to_radians().sin_cos();
+        let (dx, dy) = (r.value * scale * c, r.value * scale * s);
+        let work = self.work();
+        let mut p = pos;
+        if self.absolute {
+            p.x = work[0] + dx;
+            p.y = work[1] + dy;
+        } else {
+            p.x += dx;
+            p.y += dy;
+        }
+        if let Some(z) = args.get('Z') {
+            p.z = if self.absolute {
+                z.value * scale + work[2]
+            } else {
+                pos.z + z.value * scale
+            };
+        }
+        Ok(Some(p))
+    }
+
+    /// A canned cycle (G73 G81 G82 G83 G85 G86 G89) at the line's X Y, in G17.
+    pub(super) fn cycle(
+        &mut self,
+        line: usize,
+        w_col: usize,
+        line_text: &str,
+        n: u8,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
+        use GcodeErrorKind::*;
+        let code = Motion::Cycle(n).code();
+        if self.plane != Plane::XY {
+            return Err(err(
+                line,
+                w_col,
+                Unsupported,
+                line_text,
+                format!(
+                    "{code} in the {} plane is not supported",
+                    self.plane.gcode()
+                ),
+                "canned cycles are read in G17 (drilling along Z)",
+            ));
+        }
+        for (k, c) in ['R', 'Z', 'Q', 'P'].into_iter().enumerate() {
+            if let Some(w) = args.get(c) {
+                self.ext.cycle[k] = Some(w.value);
+            }
+        }
+        let [Some(r), Some(z)] = [self.ext.cycle[0], self.ext.cycle[1]] else {
+            return Err(err(
+                line,
+                w_col,
+                Missing,
+                line_text,
+                format!("{code} without R or Z"),
+                "give the retract plane R and the bottom Z (they stay in force for the next holes)",
+            ));
+        };
+        let q = self.ext.cycle[2].unwrap_or(0.0);
+        if matches!(n, 73 | 83) && q <= 0.0 {
+            return Err(err(
+                line,
+                w_col,
+                Missing,
+                line_text,
+                format!("{code} needs a peck depth Q > 0"),
+                "give Q, e.g. Q1",
+            ));
+        }
+        let repeats = match args.get('L') {
+            Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 && l.value <= 1e6 => {
+                l.value as usize
+            }
+            Some(l) => {
+                return Err(err(
+                    line,
+                    l.col,
+                    InvalidValue,
+                    l.text,
+                    "L (repeats) must be a whole number >= 0",
+                    "write e.g. L3",
+                ))
+            }
+            None => 1,
+        };
+        let Some(mut p) = self.pos.or(self.initial) else {
+            return Err(err(
+                line,
+                w_col,
+                StartPoint,
+                line_text,
+                format!("{code} before the start point is known"),
+                "start the program with G00 X.. Y.. Z..",
+            ));
+        };
+        if self.pos.is_none() {
+            self.begin_at(p, line);
+        }
+        let scale = self.scale();
+        let work = self.work();
+        let z0 = *self.ext.cycle_z0.get_or_insert(p.z);
+        let (r_m, bottom) = if self.absolute {
+            (r * scale + work[2], z * scale + work[2])
+        } else {
+            (p.z + r * scale, p.z + r * scale + z * scale)
+        };
+        let clear = if self.ext.retract_initial {
+            z0.max(r_m)
+        } else {
+            r_m
+        };
+        if p.z < r_m {
+            let to = Vector3::new(p.x, p.y, r_m);
+            self.push_line(line, p, to, true);
+            p = to;
+        }
+        let dwell = self.ext.cycle[3].unwrap_or(0.0);
+        for _ in 0..repeats {
+            let mut xy = p;
+            for (a, c) in ['X', 'Y'].into_iter().enumerate() {
+                if let Some(w) = args.get(c) {
+                    xy[a] = if self.absolute {
+                        w.value * scale + work[a]
+                    } else {
+                        xy[a] + w.value * scale
+                    };
+                }
+            }
+            self.push_line(line, p, xy, true);
+            let top = Vector3::new(xy.x, xy.y, r_m);
+            self.push_line(line, xy, top, true);
+            self.drill(line, n, top, bottom, q * scale, dwell);
+            let end = Vector3::new(xy.x, xy.y, clear);
+            let here = self.here();
+            self.push_line(line, here, end, true);
+            p = end;
+        }
+        Ok(())
+    }
+
+    /// The drilling of one hole from `top` (on R) to `bottom`, ending at the bottom or,
+    /// for G85/G89, back on R.
+    fn drill(&mut self, line: usize, n: u8, top: Vector3<f64>, bottom: f64, q: f64, dwell: f64) {
+        let at = |z: f64| Vector3::new(top.x, top.y, z);
+        let delta = PECK_DELTA_INCH * 0.0254;
+        match n {
+            73 | 83 => {
+                let mut depth = top.z;
+                while depth > bottom + MIN_MOVE_LENGTH {
+                    let next = (depth - q).max(bottom);
+                    let here = self.here();
+                    if n == 83 && depth < top.z {
+                        self.push_line(line, here, at(depth + delta), true);
+                    }
+                    let here = self.here();
+                    self.push_line(line, here, at(next), false);
+                    depth = next;
+                    if depth > bottom + MIN_MOVE_LENGTH {
+                        let up = if n == 83 { top.z } else { depth + delta };
+                        self.push_line(line, at(depth), at(up), true);
+                    }
+                }
+            }
+            _ => {
+                self.push_line(line, top, at(bottom), false);
+                if matches!(n, 82 | 89) && dwell > 0.0 {
+                    self.moves.push(Move {
+                        line,
+                        kind: MoveKind::Dwell { seconds: dwell },
+                    });
+                }
+                if matches!(n, 85 | 89) {
+                    self.push_line(line, at(bottom), top, false);
+                }
+            }
+        }
+    }
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn distance_to_segment(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
+}
