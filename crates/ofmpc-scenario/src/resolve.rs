@@ -171,6 +171,13 @@ impl Scenario {
                 .iter()
                 .map(|w| format!("{program_name}: {w}")),
         );
+        warnings.extend(
+            planned
+                .diagnostics
+                .joint_limited
+                .iter()
+                .map(|w| format!("{program_name}: {w}")),
+        );
         if f.mpc.observer_friction && !(f.mpc.state_observer || f.mpc.delay_compensation) {
             warnings.push(
                 "[mpc] observer_friction = true without an observer (state_observer or \
