@@ -14,7 +14,7 @@
 
 use crate::gcode::{MoveKind, PathMode, Program};
 use crate::geometry::Segment;
-use crate::motion::blend::{blend, RunMove};
+use crate::motion::blend::{blend_timed, RunMove};
 use crate::motion::exact::{joint_limited_duration, JointLimitedMove};
 use crate::motion::reference::{ReferenceError, MAX_PLAN_VALUES};
 use crate::motion::timelaw::{Profile, TimeLaw};
@@ -211,7 +211,7 @@ impl Timeline {
             return Ok(());
         }
         let line = self.run[0].line;
-        let pieces = blend(&self.run);
+        let pieces = blend_timed(&self.run, options.max_accel, options.max_jerk);
         self.run.clear();
         let t = self.t;
         let timed = time_run(
