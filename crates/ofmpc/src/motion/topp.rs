@@ -28,15 +28,20 @@
 //! # Jerk limit
 //!
 //! Between stops the profile `ṡ(t)` is then averaged over a sliding window of
-//! `T_j = 2 a_max / j_max` (a box filter, as in FIR-based interpolators of CNCs): the filtered
-//! acceleration `(ṡ(t) − ṡ(t − T_j)) / T_j` stays within `a_max`, its jerk
-//! `(s̈(t) − s̈(t − T_j)) / T_j` within `j_max`, the distance is unchanged, each section still
-//! starts and ends at rest, and the run lasts `T_j` longer per section. Because the filtered
-//! position at `t` lies within `F_max T_j` of every position the window averages, the
-//! velocity limits are eroded by that distance before the passes, so the filtered speed stays
-//! within them. The filter may mix accelerations of neighbouring positions: the caller checks
-//! the joint accelerations of the sampled reference and, if needed, replans with scaled
-//! limits ([`crate::motion::plan`]).
+//! `T_j = 2 a / j_max` (a box filter, as in FIR-based interpolators of CNCs), `a` the
+//! section's tangential acceleration limit: `a_max`, or less for a section too short to use
+//! it (`(d j²/4)^{1/3}` for a rest-to-rest section of length `d`, which minimises its duration `2√(d/a) + 2a/j`). The filtered acceleration `(ṡ(t) − ṡ(t − T_j)) / T_j`
+//! stays within `a`, its jerk `(s̈(t) − s̈(t − T_j)) / T_j` within `j_max`, the distance is
+//! unchanged, each section still starts and ends at rest, and lasts `T_j` longer. Stops are
+//! boundary conditions of their sections: nothing crosses them. The filtered speed stays
+//! within every velocity limit because each limit is extended, before the passes, over the
+//! distance the window spans at that limit's own speed (the erosion: see `eroded_limits`). The filter may
+//! mix accelerations of neighbouring positions: the caller checks the joint accelerations of
+//! the sampled reference and, if needed, replans with scaled limits ([`crate::motion::plan`]).
+//!
+//! The joint derivatives `q'`, `q''` of a node come from the nodes of its own piece (the
+//! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
+//! and both constrain it.
 
 use crate::motion::blend::Piece;
 use crate::motion::reference::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
@@ -553,7 +558,7 @@ fn erode_section(nodes: &[Node], t_j: f64, i0: usize, i1: usize, out: &mut [f64]
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
     let reach = |i: usize| {
-        let spacing = if i + 1 <= i1 {
+        let spacing = if i < i1 {
             nodes[i + 1].s - nodes[i].s
         } else {
             0.0
@@ -819,7 +824,7 @@ mod tests {
         for i in 0..n {
             let mut brute = nodes[i].xbar;
             for k in 0..n {
-                let same = section(k) == section(i) || (k == 150 && i <= 151 && i >= 149);
+                let same = section(k) == section(i) || (k == 150 && (149..=151).contains(&i));
                 let sp = |a: usize, b: usize| (nodes[b].s - nodes[a].s).abs();
                 let spacing = if k + 1 < n { sp(k, k + 1) } else { 0.0 }.max(if k > 0 {
                     sp(k - 1, k)
