@@ -211,13 +211,7 @@ impl Scenario {
             program: program_name.clone(),
             error: Box::new(error),
         })?;
-        warnings.extend(
-            planned
-                .program
-                .warnings
-                .iter()
-                .map(|w| format!("{program_name}: {w}")),
-        );
+        warnings.extend(plan_warnings(&program_name, &planned));
         if f.mpc.observer_friction && !(f.mpc.state_observer || f.mpc.delay_compensation) {
             warnings.push(
                 "[mpc] observer_friction = true without an observer (state_observer or \
@@ -325,4 +319,19 @@ fn mpc_with_baselines(
         baselines: f.baselines.clone(),
         ..f.mpc.clone()
     })
+}
+
+/// The plan's warnings to show, each prefixed with the program's name: the program's own and
+/// the exact-stop moves a joint limit slowed down.
+fn plan_warnings(program_name: &str, planned: &ofmpc::motion::Plan) -> Vec<String> {
+    let program = planned.program.warnings.iter().map(|w| w.to_string());
+    let slowed = planned
+        .diagnostics
+        .joint_limited
+        .iter()
+        .map(|w| w.to_string());
+    program
+        .chain(slowed)
+        .map(|w| format!("{program_name}: {w}"))
+        .collect()
 }

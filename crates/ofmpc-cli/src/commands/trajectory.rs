@@ -115,6 +115,9 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     for w in &planned.program.warnings {
         console::warn(&format!("{name}: {w}"));
     }
+    for w in &planned.diagnostics.joint_limited {
+        console::warn(&format!("{name}: {w}"));
+    }
     let (traj, reference) = (&planned.trajectory, &planned.reference);
     let fig = render_both(&figures::path(
         &format!("{name}: path and joint reference"),

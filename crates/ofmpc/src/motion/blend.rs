@@ -11,7 +11,9 @@
 //! (G1); its curvature `1/R` starts at the tangent points.
 //!
 //! Joins that are already tangent-continuous (angle below [`TANGENT_ANGLE`]) are passed
-//! without a stop. Corners that involve an arc (G02/G03) are not rounded: the path stops
+//! without a stop, and so are near-tangent joins (below [`NEAR_TANGENT_ANGLE`], such as the
+//! kinks that three-decimal CAM output leaves between arcs) when the move allows a
+//! deviation (`P` > 0): the path keeps its programmed points there. Corners that involve an arc (G02/G03) are not rounded: the path stops
 //! there (exact stop), as it does at a tolerance of 0 and at reversals.
 
 use crate::geometry::Segment;
@@ -24,6 +26,11 @@ pub use crate::geometry::corner::{CornerArc, REVERSAL_ANGLE, TANGENT_ANGLE};
 /// The path modes `G61` / `G64` are a program's modal state, read by [`crate::gcode`]; the
 /// blending here is what `G64` asks for.
 pub use crate::gcode::PathMode;
+
+/// Angle (rad) below which a join is passed without a stop when its tolerance is positive:
+/// 0.05°, a direction change of under 0.1 % of the speed (rounding of CAM output, LinuxCNC's
+/// naive-CAM joins); larger kinks between lines are blended, others stop.
+pub const NEAR_TANGENT_ANGLE: f64 = 0.05 * std::f64::consts::PI / 180.0;
 
 /// The geometry of one piece of a blended path.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,6 +104,31 @@ pub struct RunMove {
 /// The run starts and ends at rest; pieces come out in path order with their start arc
 /// lengths.
 pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
+    blend_within(moves, None)
+}
+
+/// [`blend`], but a corner whose blend would be slower than a stop under the path
+/// acceleration `max_accel` and jerk `max_jerk` stops instead.
+///
+/// The timing ([`crate::motion::topp`]) holds a blend's speed `v_c = min(F, √(a R))`
+/// (feed, centripetal limit on the radius `R`) over about `±1.1 T_j v_c` around it,
+/// `T_j = 2a/j` (its jerk filter), which costs about `2.2 T_j (1 − v_c/F)` against cruising;
+/// a stop costs one more filter window, `T_j`, and the deceleration from `v_c` to rest,
+/// `v_c / a`. The cheaper one is taken.
+pub fn blend_timed(moves: &[RunMove], max_accel: f64, max_jerk: f64) -> Vec<Piece> {
+    blend_within(moves, Some((max_accel, max_jerk)))
+}
+
+/// Whether a corner blend of radius `radius` between moves of feeds `f1`, `f2` is slower
+/// than stopping (see [`blend_timed`]).
+fn stop_is_faster(radius: f64, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) -> bool {
+    let feed = f1.min(f2);
+    let v_c = feed.min((max_accel * radius).sqrt());
+    let t_j = 2.0 * max_accel / max_jerk;
+    2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
+}
+
+fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
     let m = moves.len();
     // Tangent distance at the corner after move k (0: no blend).
     let mut d = vec![0.0; m];
@@ -106,7 +138,7 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
         let u1 = a.segment.tangent(a.segment.length());
         let u2 = b.segment.tangent(0.0);
         let theta = u1.dot(&u2).clamp(-1.0, 1.0).acos();
-        if theta < TANGENT_ANGLE {
+        if theta < TANGENT_ANGLE || (theta < NEAR_TANGENT_ANGLE && a.tolerance > 0.0) {
             continue;
         }
         let both_lines =
@@ -121,7 +153,10 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
         let dk = d_tol
             .min(a.segment.length() / 2.0)
             .min(b.segment.length() / 2.0);
-        if dk > 1e-12 {
+        let slow = timed.is_some_and(|(a_max, j_max)| {
+            stop_is_faster(dk / half.tan(), a.feed, b.feed, a_max, j_max)
+        });
+        if dk > 1e-12 && !slow {
             d[k] = dk;
         } else {
             stop[k] = true;

@@ -7,7 +7,8 @@
 //! 2. [`blend`]: under `G64` the corners between consecutive lines are rounded within the
 //!    tolerance;
 //! 3. timing ([`trajectory`]): `G61` moves rest to rest with the paper's septic law
-//!    ([`timelaw`]); `G64` runs time-optimally under the feed, path acceleration and jerk
+//!    ([`timelaw`]), slowed down where a joint's speed or acceleration limit needs it
+//!    ([`exact`]); `G64` runs time-optimally under the feed, path acceleration and jerk
 //!    and every joint's speed and acceleration limit ([`topp`]);
 //! 4. [`reference`](mod@reference): inverse kinematics (analytic when the robot declares OPW parameters,
 //!    else numeric) sampled every `Ts`, checked against the joint limits.
@@ -32,6 +33,7 @@
 //! ```
 
 pub mod blend;
+pub mod exact;
 pub mod reference;
 pub mod segment;
 pub mod timelaw;
@@ -39,6 +41,7 @@ pub mod topp;
 pub mod trajectory;
 
 pub use blend::PathMode;
+pub use exact::JointLimitedMove;
 pub use reference::{JointReference, Orientation, ReferenceError, MAX_PLAN_VALUES};
 pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
@@ -89,6 +92,8 @@ pub struct PlanDiagnostics {
     pub peak_speed_ratio: f64,
     /// Largest joint acceleration over the runs' samples, as a fraction of its limit.
     pub peak_accel_ratio: f64,
+    /// The exact-stop (`G61`) moves a joint limit slowed down, with the cause.
+    pub joint_limited: Vec<JointLimitedMove>,
 }
 
 /// A planned program: the parsed program, the timed Cartesian path, the joint reference.
@@ -248,8 +253,10 @@ pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
 /// Blended runs respect every joint's speed and acceleration limit on every sample of the
 /// reference: the timing uses them, and if the sampled reference still exceeds one (the
 /// jerk filter mixes neighbouring accelerations) the runs are timed again with the limits
-/// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. `G61` moves are checked for joint
-/// speed only (as in the paper). Before it allocates the reference the planner checks its
+/// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. A `G61` move whose fastest law would
+/// exceed a joint's speed or acceleration limit is slowed down uniformly until it keeps them
+/// ([`crate::motion::exact`]); the moves so slowed are listed in
+/// [`PlanDiagnostics::joint_limited`]. Before it allocates the reference the planner checks its
 /// size against [`MAX_PLAN_VALUES`].
 pub fn plan_program(
     program: Program,
@@ -263,11 +270,7 @@ pub fn plan_program(
     let n = robot.dof();
     let has_runs = has_blended_runs(&program, options);
     let limits = RobotLimits::of(robot);
-    let mut map = if has_runs {
-        Some(joint_map(&program, robot, options)?)
-    } else {
-        None
-    };
+    let mut map = Some(joint_map(&program, robot, options)?);
     let mut scale = [1.0f64; 2];
     let mut attempts = 0;
     loop {
@@ -298,6 +301,7 @@ pub fn plan_program(
                 attempts,
                 peak_speed_ratio: worst[0].0,
                 peak_accel_ratio: worst[1].0,
+                joint_limited: trajectory.joint_limited().to_vec(),
             };
             return Ok(Plan {
                 program,

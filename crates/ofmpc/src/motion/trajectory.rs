@@ -14,7 +14,8 @@
 
 use crate::gcode::{MoveKind, PathMode, Program};
 use crate::geometry::Segment;
-use crate::motion::blend::{blend, RunMove};
+use crate::motion::blend::{blend_timed, RunMove};
+use crate::motion::exact::{joint_limited_duration, JointLimitedMove};
 use crate::motion::reference::{ReferenceError, MAX_PLAN_VALUES};
 use crate::motion::timelaw::{Profile, TimeLaw};
 use crate::motion::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
@@ -171,6 +172,7 @@ pub struct CartesianTrajectory {
     start_line: usize,
     segments: Vec<TimedSegment>,
     duration: f64,
+    joint_limited: Vec<JointLimitedMove>,
 }
 
 /// What a pending group of moves is.
@@ -209,7 +211,7 @@ impl Timeline {
             return Ok(());
         }
         let line = self.run[0].line;
-        let pieces = blend(&self.run);
+        let pieces = blend_timed(&self.run, options.max_accel, options.max_jerk);
         self.run.clear();
         let t = self.t;
         let timed = time_run(
@@ -266,6 +268,10 @@ impl CartesianTrajectory {
             run: Vec::new(),
         };
         let mut pos = program.start;
+        let mut joint_limited = Vec::new();
+        if let Some(jc) = joints.as_deref_mut() {
+            jc.map.reset();
+        }
         for m in &program.moves {
             if let MoveKind::Path { segment, .. } = &m.kind {
                 pos = segment.end();
@@ -274,7 +280,20 @@ impl CartesianTrajectory {
                 continue;
             };
             timeline.flush(options, joints.as_deref_mut())?;
-            let (kind, dt) = Self::time_step(step, options, pos);
+            let (mut kind, mut dt) = Self::time_step(step, options, pos);
+            if let (Some(jc), TimedKind::Path { segment, law }) = (joints.as_deref_mut(), &mut kind)
+            {
+                if let Some((t, joint, quantity)) = joint_limited_duration(segment, law, jc) {
+                    joint_limited.push(JointLimitedMove {
+                        line: m.line,
+                        joint,
+                        quantity,
+                        factor: t / law.duration,
+                    });
+                    law.duration = t;
+                    dt = t;
+                }
+            }
             timeline.push(kind, dt, m.line);
         }
         timeline.flush(options, joints)?;
@@ -283,7 +302,14 @@ impl CartesianTrajectory {
             start_line: program.start_line,
             segments: timeline.segments,
             duration: timeline.t,
+            joint_limited,
         })
+    }
+
+    /// The exact-stop (`G61`) moves that a joint's speed or acceleration limit slowed down
+    /// (empty when timed without joint limits, [`CartesianTrajectory::new`]).
+    pub fn joint_limited(&self) -> &[JointLimitedMove] {
+        &self.joint_limited
     }
 
     /// Checks the path limits (positive and finite) and the blend tolerance (non-negative

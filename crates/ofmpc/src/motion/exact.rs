@@ -1,0 +1,131 @@
+//! Joint limits of exact-stop (`G61`) moves: the move's rest-to-rest law is slowed down
+//! uniformly until no joint exceeds its speed or acceleration limit.
+//!
+//! Along a law `s(t) = L σ(t/T)` (see [`crate::motion::timelaw`]) and a joint path `q(s)`
+//! (inverse kinematics), the chain rule gives
+//!
+//! `q̇_j = q'_j(s) L σ'(τ) / T`, `q̈_j = (q'_j(s) L σ''(τ) + q''_j(s) L² σ'(τ)²) / T²`,
+//!
+//! so the joint speeds scale with `1/T` and the joint accelerations with `1/T²`. The shortest
+//! duration that keeps joint `j` within its speed limit `v_j` and acceleration limit `A_j` is
+//! therefore `T_v = max_τ |q'_j L σ'| / v_j` and `T_a = √(max_τ |q'_j L σ'' + q''_j L² σ'²| / A_j)`
+//! (time scaling, e.g. Hollerbach 1984, "Dynamic scaling of manipulator trajectories").
+//! A move whose fastest law already keeps the limits is left exactly as it is.
+
+use crate::geometry::Segment;
+use crate::motion::timelaw::TimeLaw;
+use crate::motion::topp::JointConstraints;
+use crate::motion::JointQuantity;
+
+/// Samples of `τ` per move at which the joint speed and acceleration are evaluated.
+const TAU_SAMPLES: usize = 512;
+
+/// Largest joint step (rad) between neighbouring grid points that is still one branch of the
+/// inverse kinematics; a larger one is a configuration jump, left to the reference's check.
+const BRANCH_JUMP: f64 = 0.5;
+
+/// A `G61` move slowed down by a joint limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointLimitedMove {
+    /// Program line of the move.
+    pub line: usize,
+    /// The limiting joint, 1-based.
+    pub joint: usize,
+    /// Which of its limits.
+    pub quantity: JointQuantity,
+    /// The move's duration over its fastest duration under the path limits (> 1).
+    pub factor: f64,
+}
+
+impl std::fmt::Display for JointLimitedMove {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the exact-stop move on program line {} is slowed down {:.3}× to keep joint {}'s {} limit",
+            self.line, self.factor, self.joint, self.quantity
+        )
+    }
+}
+
+/// Joint positions at `m + 1` equally spaced points of `segment`, row-major; `None` if the
+/// inverse kinematics fails or jumps branch (the reference builder reports it).
+fn joint_grid(segment: &Segment, m: usize, jc: &mut JointConstraints<'_>) -> Option<Vec<f64>> {
+    let nj = jc.velocity.len();
+    let len = segment.length();
+    let mut q: Vec<f64> = Vec::with_capacity((m + 1) * nj);
+    for i in 0..=m {
+        let sol = jc
+            .map
+            .solve(&segment.point(len * i as f64 / m as f64))
+            .ok()?;
+        if i > 0 && (0..nj).any(|j| (sol[j] - q[(i - 1) * nj + j]).abs() > BRANCH_JUMP) {
+            return None;
+        }
+        q.extend_from_slice(sol);
+    }
+    Some(q)
+}
+
+/// `q'` and `q''` at the grid points (spacing `h`): central differences inside, second-order
+/// one-sided ones at the ends.
+fn derivatives(q: &[f64], m: usize, nj: usize, h: f64) -> (Vec<f64>, Vec<f64>) {
+    let at = |i: usize, j: usize| q[i * nj + j];
+    let mut d1 = vec![0.0; (m + 1) * nj];
+    let mut d2 = vec![0.0; (m + 1) * nj];
+    for i in 0..=m {
+        let c = i.clamp(1, m - 1);
+        for j in 0..nj {
+            let (y0, y1, y2) = (at(c - 1, j), at(c, j), at(c + 1, j));
+            let second = (y0 - 2.0 * y1 + y2) / (h * h);
+            let first = (y2 - y0) / (2.0 * h) + second * (i as f64 - c as f64) * h;
+            d1[i * nj + j] = first;
+            d2[i * nj + j] = second;
+        }
+    }
+    (d1, d2)
+}
+
+/// The duration of `law` on `segment` stretched so that every joint keeps its speed and
+/// acceleration limit (see the module documentation), and the limit that binds; `None` when
+/// the law already keeps them (or the joint path cannot be evaluated).
+pub(crate) fn joint_limited_duration(
+    segment: &Segment,
+    law: &TimeLaw,
+    jc: &mut JointConstraints<'_>,
+) -> Option<(f64, usize, JointQuantity)> {
+    let len = segment.length();
+    if !(len > 0.0 && law.duration > 0.0) {
+        return None;
+    }
+    let nj = jc.velocity.len();
+    let m = ((len / 5e-4).ceil() as usize).clamp(32, 512);
+    let q = joint_grid(segment, m, jc)?;
+    let (d1, d2) = derivatives(&q, m, nj, len / m as f64);
+    let (mut t_v, mut t_a) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    for k in 0..=TAU_SAMPLES {
+        let p = law.profile.eval(k as f64 / TAU_SAMPLES as f64);
+        let x = (p.s * m as f64).clamp(0.0, m as f64);
+        let i = (x.floor() as usize).min(m - 1);
+        let w = x - i as f64;
+        for j in 0..nj {
+            let lerp = |d: &[f64]| d[i * nj + j] * (1.0 - w) + d[(i + 1) * nj + j] * w;
+            let (dq, ddq) = (lerp(&d1), lerp(&d2));
+            let tv = (dq * len * p.ds).abs() / jc.velocity[j];
+            let ta = ((dq * len * p.dds + ddq * len * len * p.ds * p.ds).abs()
+                / jc.acceleration[j])
+                .sqrt();
+            if tv > t_v.0 {
+                t_v = (tv, j);
+            }
+            if ta > t_a.0 {
+                t_a = (ta, j);
+            }
+        }
+    }
+    let (t, j, quantity) = if t_v.0 >= t_a.0 {
+        (t_v.0, t_v.1, JointQuantity::Speed)
+    } else {
+        (t_a.0, t_a.1, JointQuantity::Acceleration)
+    };
+    (t.is_finite() && t > law.duration).then_some((t, j + 1, quantity))
+}
