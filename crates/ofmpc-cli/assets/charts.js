@@ -21,6 +21,14 @@
     var a = Math.abs(v);
     return (a !== 0 && (a < 1e-3 || a >= 1e5)) ? v.toExponential(3) : String(+v.toPrecision(4));
   }
+  // Log axes: powers of ten as 1e-6; the decades are many, so only every other is labelled
+  // when there are more than eight.
+  function fmtLog(v, i, all) {
+    if (v == null || v <= 0) { return ''; }
+    var e = Math.round(Math.log10(v));
+    if (Math.abs(Math.log10(v) - e) > 1e-6) { return ''; }
+    return '1e' + e;
+  }
   function panPlugin() {
     return { hooks: { ready: function (u) {
       var over = u.over, start = null;
@@ -73,7 +81,7 @@
       title: p.t, width: width, height: 260, series: series,
       scales: { x: { time: false }, y: p.log ? { distr: 3 } : {} },
       axes: [{ label: p.xl, values: function (u, vs) { return vs.map(fmt); } },
-             { label: p.yl, size: 64, values: function (u, vs) { return vs.map(fmt); } }],
+             { label: p.yl, size: 64, space: p.log ? 18 : 30, values: function (u, vs) { return vs.map(p.log ? fmtLog : fmt); } }],
       cursor: { drag: { x: true, y: true, uni: 20 } },
       legend: { live: true },
       plugins: [panPlugin()]

@@ -76,7 +76,7 @@
   var ref = D.reference ? D.reference.map(decode) : null;
   // ---- WebGL ----
   var canvas = document.getElementById('replay-canvas');
-  var gl = canvas.getContext('webgl', { antialias: true, preserveDrawingBuffer: true });
+  var gl = canvas.getContext('webgl', { antialias: false, preserveDrawingBuffer: false });
   var stateEl = document.getElementById('replay-state');
   if (!gl) { stateEl.textContent = 'WebGL is not available in this browser: no 3-D replay.'; root.setAttribute('data-ready', 'no-webgl'); return; }
   function shader(type, src) { var s = gl.createShader(type); gl.shaderSource(s, src); gl.compileShader(s); return s; }
@@ -175,7 +175,7 @@
   // ---- state and drawing ----
   var slider = document.getElementById('replay-slider'), timeEl = document.getElementById('replay-time');
   var sel = document.getElementById('replay-run'), playBtn = document.getElementById('replay-play');
-  var cur = 0, frame = 0, playing = false;
+  var cur = 0, frame = 0, playing = false, lastText = 0;
   runs.forEach(function (r, i) { var o = document.createElement('option'); o.value = String(i); o.textContent = r.name + ' (' + r.status + ')'; sel.appendChild(o); });
   var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: D.horizon, horizonNote: D.horizon_note };
   function draw() {
@@ -207,12 +207,16 @@
     gl.disableVertexAttribArray(locLit.n);
     var k = Math.min(frame * r.stride, r.len - 1);
     S.frames = r.n; S.k = k; S.t = r.t[frame]; S.q = q; S.flange = pts[pts.length - 1]; S.run = r.name; S.draws++;
+    stateEl.setAttribute('data-k', String(k));
+    stateEl.setAttribute('data-t', String(r.t[frame]));
+    // The words under the canvas at most 10 times a second while playing (layout is dear).
+    var now = performance.now();
+    if (playing && now - lastText < 100) { return; }
+    lastText = now;
     var e = Math.pow(10, r.e[frame]);
     timeEl.textContent = 't = ' + r.t[frame].toFixed(3) + ' s';
     stateEl.textContent = r.name + ' (' + r.status + '), sample ' + k + ': |e| = ' + (e < 1e-3 ? e.toExponential(2) : e.toPrecision(3)) + ' mm; q = [' +
       q.map(function (v) { return v.toFixed(4); }).join(', ') + '] rad. Trace colour: |e| from 1 nm (blue) to 1 m (red), log scale. ' + D.horizon_note;
-    stateEl.setAttribute('data-k', String(k));
-    stateEl.setAttribute('data-t', String(r.t[frame]));
     stateEl.setAttribute('data-q', q.join(','));
     stateEl.setAttribute('data-flange', S.flange.join(','));
     stateEl.setAttribute('data-run', r.name);

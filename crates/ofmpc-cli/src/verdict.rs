@@ -19,7 +19,7 @@ pub fn mm(v: f64) -> String {
     if a == 0.0 {
         "0 mm".into()
     } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.1e} mm")
+        format!("{v:.2e} mm")
     } else {
         let digits = (2 - a.log10().floor() as i32).max(0) as usize;
         format!("{v:.digits$} mm")
@@ -253,12 +253,16 @@ fn payload_sentence(runs: &[RunMetrics], names: &[&str]) -> Option<String> {
         growth.push((
             ratio,
             format!(
-                "{c}'s RMS error goes from {} at {} to {} at {} (× {:.3})",
+                "{c}'s RMS error goes from {} at {} to {} at {} (× {})",
                 mm(lo.cartesian_error_rms_mm),
                 kg(lo.payload_kg),
                 mm(hi.cartesian_error_rms_mm),
                 kg(hi.payload_kg),
-                ratio
+                if ratio >= 10.0 {
+                    format!("{ratio:.0}")
+                } else {
+                    format!("{ratio:.2}")
+                }
             ),
         ));
     }
@@ -340,7 +344,7 @@ mod tests {
             "{v}"
         );
         assert!(
-            v.contains("The smallest RMS Cartesian error: second at 0 kg (0.000140 mm), second at 0.25 kg (0.000990 mm) and first at 2 kg (0.0240 mm)"),
+            v.contains("The smallest RMS Cartesian error: second at 0 kg (1.40e-4 mm), second at 0.25 kg (9.90e-4 mm) and first at 2 kg (0.0240 mm)"),
             "{v}"
         );
         assert!(
@@ -383,7 +387,7 @@ mod tests {
     fn lengths_in_words() {
         assert_eq!(mm(0.08671), "0.0867 mm");
         assert_eq!(mm(309.2), "309 mm");
-        assert_eq!(mm(5e-13), "5.0e-13 mm");
+        assert_eq!(mm(5e-13), "5.00e-13 mm");
         assert_eq!(mm(f64::NAN), "n/a");
         assert!(verdict(&[]).is_empty());
     }

@@ -85,11 +85,16 @@ pub fn m4(x: &[f64], ys: &[&[f64]], buckets: usize) -> Vec<usize> {
                 lo_i = i;
                 hi_i = i;
             }
-            // A gap is kept as a gap (its neighbours are kept too).
+            // A gap stays a gap: its first and last missing sample and the finite samples
+            // beside them are kept.
             if !y[i].is_finite() {
-                keep[i] = true;
-                keep[i.saturating_sub(1)] = true;
-                keep[(i + 1).min(n - 1)] = true;
+                let prev_ok = i > 0 && y[i - 1].is_finite();
+                let next_ok = i + 1 < n && y[i + 1].is_finite();
+                if prev_ok || next_ok {
+                    keep[i] = true;
+                    keep[i.saturating_sub(1)] = true;
+                    keep[(i + 1).min(n - 1)] = true;
+                }
                 continue;
             }
             if !y[lo_i].is_finite() || y[i] < y[lo_i] {
