@@ -12,20 +12,43 @@ use ofmpc::sim::{Record, RunMetrics};
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
 
-/// Palette index of a controller by name.
+/// Palette index of a controller by name: a distinct colour for every kind, the baselines
+/// (`pid`, `ctc`, `ctc-adaptive`, `dob-mpc`) included; an adaptive variant is far from its base
+/// (reddish purple and indigo against blue and green).
 pub fn controller_color(name: &str) -> usize {
     match name {
         "usual" => COLOR_USUAL,
         "first" => COLOR_FIRST,
         "second" => COLOR_SECOND,
-        "first-adaptive" => 4,
-        "second-adaptive" => 5,
-        // The baselines: drawn dashed where they share a colour.
-        "pid" => 6,
-        "ctc" => 1,
-        "ctc-adaptive" => 5,
-        "dob-mpc" => 3,
+        "first-adaptive" => 6,
+        "second-adaptive" => 9,
+        "pid" => 4,
+        "ctc" => 5,
+        "ctc-adaptive" => 8,
+        "dob-mpc" => 10,
         _ => COLOR_REFERENCE,
+    }
+}
+
+/// Floor of the error plots' log axes: |e| below it (exact zeros) is drawn at it.
+pub const ERROR_FLOOR_RAD: f64 = 1e-15;
+/// Floor of the Cartesian error plots' log axes (mm).
+pub const ERROR_FLOOR_MM: f64 = 1e-12;
+
+/// A marker at the last sample of each run that ended before the longest one (it stopped),
+/// labelled with the time of the stop.
+fn stop_markers(p: &mut Panel, runs: &[(&str, &Record)], y: &dyn Fn(&Record, usize) -> f64) {
+    let longest = runs.iter().map(|(_, r)| r.len()).max().unwrap_or(0);
+    for (name, rec) in runs {
+        if rec.len() < longest && !rec.is_empty() {
+            let k = rec.len() - 1;
+            p.series.push(Series::markers(
+                format!("{name} stopped at {:.2} s", rec.t[k]),
+                vec![rec.t[k]],
+                vec![y(rec, k)],
+                controller_color(name),
+            ));
+        }
     }
 }
 
@@ -42,17 +65,18 @@ pub fn joints_and_torques(title: &str, rec: &Record) -> Figure {
             "t (s)",
             format!("q{} (rad)", i + 1),
         );
-        p.series.push(Series::dashed(
-            "reference",
-            rec.t.clone(),
-            column(rec, &rec.q_ref, i),
-            COLOR_REFERENCE,
-        ));
+        // q first, the reference dashed on top of it: visible where they coincide.
         p.series.push(Series::line(
             "q",
             rec.t.clone(),
             column(rec, &rec.q, i),
             COLOR_SECOND,
+        ));
+        p.series.push(Series::dashed(
+            "reference",
+            rec.t.clone(),
+            column(rec, &rec.q_ref, i),
+            COLOR_REFERENCE,
         ));
         f.panels.push(p);
         let mut p = Panel::new(
@@ -101,6 +125,26 @@ pub fn torque_ratios(title: &str, runs: &[(&str, &Record)], limits: &[f64]) -> F
                 controller_color(name),
             ));
         }
+        // The applied torque stops at the limit; what the controller commanded can be far
+        // above it (max |τ|/τmax of the table, over all joints): drawn as a level so that the
+        // axis reaches the true maximum.
+        for (name, rec) in runs {
+            if rec.max_torque_ratio > 1.0 + 1e-9 && rec.max_torque_ratio.is_finite() {
+                let (t0, t1) = (
+                    rec.t.first().copied().unwrap_or(0.0),
+                    rec.t.last().copied().unwrap_or(0.0),
+                );
+                p.series.push(Series::dashed(
+                    format!(
+                        "{name}: largest commanded, any joint = {:.3}",
+                        rec.max_torque_ratio
+                    ),
+                    vec![t0, t1],
+                    vec![rec.max_torque_ratio; 2],
+                    controller_color(name),
+                ));
+            }
+        }
         f.panels.push(p);
     }
     f
@@ -130,7 +174,10 @@ pub fn measurement_errors(title: &str, rec: &Record) -> Figure {
     f
 }
 
-/// Fig. 6/7: joint errors e_i = w_i − q_i of several runs, one panel per joint.
+/// Fig. 6/7: joint errors |e_i| = |w_i − q_i| of several runs, one panel per joint, on a log
+/// axis (the errors span decades: ≈ 1e-4 rad for the usual MPC under a payload, round-off for
+/// the incremental algorithms); exact zeros are drawn at [`ERROR_FLOOR_RAD`]. A run that
+/// stopped ends with a marker.
 pub fn joint_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
     let n = runs.first().map_or(0, |(_, r)| r.n);
     let mut f = Figure::new(title, 2);
@@ -138,10 +185,12 @@ pub fn joint_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
         let mut p = Panel::new(
             format!("joint {}", i + 1),
             "t (s)",
-            format!("e{} (rad)", i + 1),
+            format!("|e{}| (rad, log)", i + 1),
         );
+        p.log_y = true;
+        let y = |rec: &Record, k: usize| rec.joint_error(k, i).abs().max(ERROR_FLOOR_RAD);
         for (name, rec) in runs {
-            let e = (0..rec.len()).map(|k| rec.joint_error(k, i)).collect();
+            let e = (0..rec.len()).map(|k| y(rec, k)).collect();
             p.series.push(Series::line(
                 *name,
                 rec.t.clone(),
@@ -149,20 +198,27 @@ pub fn joint_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
                 controller_color(name),
             ));
         }
+        stop_markers(&mut p, runs, &y);
         f.panels.push(p);
     }
     f
 }
 
-/// Cartesian errors x, y, z (mm) of several runs.
+/// Cartesian errors |x|, |y|, |z| (mm, log axis, floor [`ERROR_FLOOR_MM`]) of several runs; a
+/// run that stopped ends with a marker.
 pub fn cartesian_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
-    let mut f = Figure::new(title, 1);
+    let mut f = Figure::new(title, 3);
     for (c, axis) in ["x", "y", "z"].iter().enumerate() {
-        let mut p = Panel::new(format!("{axis} error"), "t (s)", format!("e_{axis} (mm)"));
+        let mut p = Panel::new(
+            format!("{axis} error"),
+            "t (s)",
+            format!("|e_{axis}| (mm, log)"),
+        );
+        p.log_y = true;
+        let y =
+            |rec: &Record, k: usize| (rec.cartesian_error(k)[c] * 1e3).abs().max(ERROR_FLOOR_MM);
         for (name, rec) in runs {
-            let e = (0..rec.len())
-                .map(|k| rec.cartesian_error(k)[c] * 1e3)
-                .collect();
+            let e = (0..rec.len()).map(|k| y(rec, k)).collect();
             p.series.push(Series::line(
                 *name,
                 rec.t.clone(),
@@ -170,6 +226,7 @@ pub fn cartesian_errors(title: &str, runs: &[(&str, &Record)]) -> Figure {
                 controller_color(name),
             ));
         }
+        stop_markers(&mut p, runs, &y);
         f.panels.push(p);
     }
     f
@@ -414,7 +471,7 @@ pub fn motion_profile(title: &str, reference: &JointReference, limits: &[f64]) -
         "limit",
         vec![0.0, t_end],
         vec![1.0, 1.0],
-        COLOR_USUAL,
+        COLOR_REFERENCE,
     ));
     f.panels.push(jv);
     f

@@ -12,3 +12,4 @@ pub mod errors;
 pub(crate) mod figures;
 pub mod output;
 pub(crate) mod tables;
+pub mod verdict;

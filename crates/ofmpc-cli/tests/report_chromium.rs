@@ -252,3 +252,133 @@ fn check_script_detects_a_broken_figure() {
         Some("no".into())
     );
 }
+
+/// The text of `s` with the HTML attribute escapes of `report::escape` undone.
+fn unescape(s: &str) -> String {
+    s.replace("&quot;", "\"")
+        .replace("&#39;", "'")
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&amp;", "&")
+}
+
+/// Rows of a run's `timeseries.csv`: header and numbers.
+fn timeseries(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// The report of a real run in headless Chromium with WebGL (SwiftShader): every figure
+/// renders (the interactive charts included), the 3-D replay's canvas draws, moving its slider
+/// moves the robot, and the frame shown at sample k has the joint angles of row k of the run's
+/// `timeseries.csv` and — by the page's own forward kinematics — its flange position.
+#[test]
+fn replay_follows_the_timeseries_in_chromium() {
+    let Some(bin) = find_chromium() else {
+        eprintln!("note: Chromium not found; skipping replay_follows_the_timeseries_in_chromium");
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::fs::write(
+        d.join("s.toml"),
+        "title = \"Replay check\"\ncontrollers = [\"usual\", \"second\"]\n\
+         [payload]\nmasses_kg = [0.25]\n[simulation]\nhold_s = 0.3\nsteady_window_s = 0.1\n",
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_ofmpc"))
+        .args(["run", "s.toml", "--out", "o"])
+        .current_dir(d)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = d.join("o/report.html");
+    let html = std::fs::read_to_string(&page).unwrap();
+    keep_artifact("run_report.html", html.as_bytes());
+    let mut url = page.clone().into_os_string();
+    url.push("#replay-check");
+    let dom = chromium(
+        &bin,
+        &d.join("profile"),
+        &[
+            "--use-gl=swiftshader".into(),
+            "--enable-unsafe-swiftshader".into(),
+            "--enable-webgl".into(),
+            "--ignore-gpu-blocklist".into(),
+            "--virtual-time-budget=10000".into(),
+            "--window-size=1200,2000".into(),
+            "--dump-dom".into(),
+        ],
+        Path::new(&url),
+    );
+    let n: usize = attribute(&dom, "figure-check", "data-total")
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(n >= 5, "{n} figures");
+    assert_eq!(
+        attribute(&dom, "figure-check", "data-ok"),
+        Some(n.to_string()),
+        "not every figure rendered"
+    );
+    assert!(html.contains("data-kind=\"chart\""), "no interactive chart");
+    assert_eq!(attribute(&dom, "replay", "data-ready"), Some("yes".into()));
+    let check = unescape(&attribute(&dom, "replay", "data-check").expect("the replay's check"));
+    let frames: serde_json::Value = serde_json::from_str(&check).unwrap();
+    let frames = frames.as_array().unwrap();
+    assert_eq!(frames.len(), 2 * 4, "two runs, four slider positions each");
+    for run in ["usual_m0.25", "second_m0.25"] {
+        let (header, rows) = timeseries(&d.join("o").join(run).join("timeseries.csv"));
+        let col = |name: &str| header.iter().position(|h| h == name).unwrap();
+        let mine: Vec<&serde_json::Value> = frames.iter().filter(|f| f["run"] == run).collect();
+        assert_eq!(mine.len(), 4, "{run}");
+        let mut hashes = Vec::new();
+        for f in &mine {
+            let k = f["k"].as_u64().unwrap() as usize;
+            let row = &rows[k];
+            assert!(
+                (f["t"].as_f64().unwrap() - row[col("t")]).abs() < 1e-3,
+                "{run} t at {k}"
+            );
+            for i in 0..6 {
+                let q = f["q"][i].as_f64().unwrap();
+                let want = row[col(&format!("q{}", i + 1))];
+                // 16-bit quantization of the joint's range: ≤ 1e-4 rad.
+                assert!(
+                    (q - want).abs() < 1e-4,
+                    "{run} sample {k}: q{} {q} vs {want}",
+                    i + 1
+                );
+            }
+            for (c, name) in ["x", "y", "z"].iter().enumerate() {
+                let p = f["flange"][c].as_f64().unwrap();
+                let want = row[col(name)];
+                assert!(
+                    (p - want).abs() < 1e-3,
+                    "{run} sample {k}: {name} {p} vs {want}"
+                );
+            }
+            assert!(
+                f["ink"].as_u64().unwrap() > 2000,
+                "{run}: the canvas is nearly empty"
+            );
+            hashes.push(f["hash"].as_u64().unwrap());
+        }
+        assert_eq!(
+            mine[3]["k"].as_u64().unwrap() as usize,
+            rows.len() - 1,
+            "last frame is the last sample"
+        );
+        hashes.dedup();
+        assert!(
+            hashes.len() >= 3,
+            "{run}: the slider did not move the robot: {hashes:?}"
+        );
+    }
+}

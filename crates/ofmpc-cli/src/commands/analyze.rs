@@ -199,8 +199,13 @@ fn radius_figure(curves: &[RadiusCurve]) -> Figure {
         "spectral radius ρ",
     );
     for c in curves {
+        let clipped = c.radius.iter().any(|&r| r > 3.0);
         p.series.push(Series::line(
-            c.kind.name(),
+            if clipped {
+                format!("{} (ρ > 3 drawn at 3)", c.kind.name())
+            } else {
+                c.kind.name().to_string()
+            },
             c.alpha.clone(),
             c.radius.iter().map(|r| r.min(3.0)).collect(),
             crate::figures::controller_color(c.kind.name()),

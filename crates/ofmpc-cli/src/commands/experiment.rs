@@ -7,6 +7,7 @@ use crate::figures;
 use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
 use crate::output::plot::{render_both, Figure};
+use crate::output::replay::{replay_json, ReplayRun};
 use crate::output::report::{Image, Report, Table};
 use crate::output::run_files::{
     controllers_in_words, per_payload, per_run, the_controllers, RunFiles, CARTESIAN_REFERENCE,
@@ -35,7 +36,11 @@ fn figure(
     let r = render_both(fig).with_context(|| format!("rendering {rel}"))?;
     dir.write(format!("{rel}.png"), &r.png)?;
     dir.write(format!("{rel}.svg"), r.svg.as_bytes())?;
-    report.figure(format!("{caption} ({rel}.png, .svg)"), Image::Png(r.png));
+    let image = match crate::output::chart::chart_json(fig) {
+        Some(json) => Image::Chart(json),
+        None => Image::Png(r.png),
+    };
+    report.figure(format!("{caption} ({rel}.png, .svg)"), image);
     Ok(())
 }
 
@@ -126,8 +131,12 @@ pub fn execute(
         controllers: &controllers,
         files: &files,
     };
+    w.verdict();
     w.summary();
-    w.path()?;
+    w.replay();
+    if files.sweep {
+        w.sweep()?;
+    }
     w.tracking_errors()?;
     if files.identification {
         w.identification()?;
@@ -135,12 +144,10 @@ pub fn execute(
     if files.drives {
         w.drives()?;
     }
-    if files.sweep {
-        w.sweep()?;
-    }
     if files.compare {
         w.compare()?;
     }
+    w.path()?;
     w.each_run()?;
     w.finish()?;
     dir.commit()
@@ -206,6 +213,50 @@ impl Writer<'_> {
     /// Renders a figure into the folder and the report ([`figure`]).
     fn figure(&mut self, rel: &str, caption: &str, fig: &Figure) -> anyhow::Result<()> {
         figure(self.dir, &mut self.report, rel, caption, fig)
+    }
+
+    /// The verdict in words from the metrics ([`crate::verdict`]) and the table of contents.
+    fn verdict(&mut self) {
+        let sentences = crate::verdict::verdict(self.metrics);
+        if !sentences.is_empty() {
+            self.report.list("verdict", sentences);
+        }
+        self.report.toc();
+    }
+
+    /// The 3-D replay of every run (robot, reference path, flange trace coloured by the error).
+    fn replay(&mut self) {
+        let runs: Vec<ReplayRun<'_>> = self
+            .runs
+            .iter()
+            .map(|r| ReplayRun {
+                name: &r.metrics.name,
+                status: match r.metrics.stopped_at_s {
+                    Some(t) if r.metrics.status != RunStatus::Ok => {
+                        format!("{} at {t:.2} s", r.metrics.status)
+                    }
+                    _ => r.metrics.status.to_string(),
+                },
+                record: &r.result.record,
+            })
+            .collect();
+        self.report.heading("3-D replay");
+        self.report.paragraph(
+            "The robot drawn from its kinematics (capsules between the joint frames), the reference \
+             path (grey) and the flange trace coloured by the Cartesian tracking error. Play/pause, \
+             the time slider and the run menu; drag to orbit, wheel to zoom. Stopped runs end at the stop.",
+        );
+        self.report
+            .replay(replay_json(&self.scenario.experiment.robot, &runs));
+    }
+
+    /// Folds the figures of one payload (`<details>`) when there are more than two payloads.
+    fn fold(&mut self, summary: &str) -> bool {
+        let fold = self.payloads.len() > 2;
+        if fold {
+            self.report.details(summary);
+        }
+        fold
     }
 
     /// The summary: the setting in words, the table, why runs stopped.
@@ -295,11 +346,21 @@ impl Writer<'_> {
     /// Joint and Cartesian errors per payload (Fig. 6 and 7).
     fn tracking_errors(&mut self) -> anyhow::Result<()> {
         let runs = self.runs;
+        let names: Vec<String> = self
+            .controllers
+            .iter()
+            .map(|k| kind_name(*k).to_string())
+            .collect();
         self.report.heading(format!(
             "Tracking errors of {} (the paper's Fig. 6 and 7)",
+            crate::verdict::and_list(&names)
+        ));
+        self.report.paragraph(format!(
+            "Joint and Cartesian errors of {} per payload.",
             the_controllers(self.controllers.len())
         ));
         for p in self.payloads {
+            let folded = self.fold(&format!("payload {} kg", mass_label(p.mass)));
             let these = records_with_mass(runs, p.mass);
             let label = if p.mass == 0.0 {
                 "exact model (no payload)".to_string()
@@ -320,6 +381,9 @@ impl Writer<'_> {
                     &these,
                 ),
             )?;
+            if folded {
+                self.report.end_details();
+            }
         }
         Ok(())
     }
@@ -348,6 +412,7 @@ impl Writer<'_> {
                 Some(tp) if t < tp => 0.0,
                 _ => m,
             };
+            let folded = self.fold(&format!("payload {label} kg"));
             self.figure(
                 &format!("{}{label}", per_payload::IDENTIFICATION),
                 &format!("Error and identified mass against time, payload {label} kg"),
@@ -357,6 +422,9 @@ impl Writer<'_> {
                     &truth,
                 ),
             )?;
+            if folded {
+                self.report.end_details();
+            }
         }
         Ok(())
     }
@@ -409,6 +477,7 @@ impl Writer<'_> {
         for p in self.payloads {
             let these = records_with_mass(runs, p.mass);
             let label = mass_label(p.mass);
+            let folded = self.fold(&format!("payload {label} kg"));
             self.figure(
                 &format!("{}{label}", per_payload::TORQUE_RATIOS),
                 &format!("Commanded torque relative to the drives' limits, payload {label} kg"),
@@ -418,8 +487,15 @@ impl Writer<'_> {
                     &limits,
                 ),
             )?;
+            if folded {
+                self.report.end_details();
+            }
         }
         let measured = self.files.measurement;
+        if measured {
+            self.report
+                .details("Measured − true position, per run (what the controller was given)");
+        }
         for r in runs
             .iter()
             .filter(|r| measured && r.result.record.has_measurement())
@@ -433,6 +509,9 @@ impl Writer<'_> {
                     &r.result.record,
                 ),
             )?;
+        }
+        if measured {
+            self.report.end_details();
         }
         Ok(())
     }
@@ -463,16 +542,33 @@ impl Writer<'_> {
         )
     }
 
-    /// Each run's time series, joints and torques (Fig. 5), Cartesian error.
+    /// Each run's time series, joints and torques (Fig. 5), Cartesian error. In the page each
+    /// run is folded (`<details>`), and the per-run Cartesian error (the same curve as in the
+    /// per-payload figure) is only written as files, not shown twice.
     fn each_run(&mut self) -> anyhow::Result<()> {
         self.report
-            .heading("Each run: joints and torques (the paper's Fig. 5), Cartesian error");
+            .heading("Each run: joints and torques (the paper's Fig. 5)");
+        self.report.paragraph(
+            "One folded part per run (click to open). Each run's folder also holds its time series \
+             (timeseries.csv) and its Cartesian error (cartesian_error.png, .svg; the same curve as in \
+             the per-payload figure above).",
+        );
         for r in self.runs {
             let name = &r.metrics.name;
             self.dir.write(
                 format!("{name}/{TIMESERIES}"),
                 timeseries_csv(&r.result.record).as_bytes(),
             )?;
+            let m = &r.metrics;
+            self.report.details(format!(
+                "{name}: {}, RMS Cartesian error {}",
+                m.status,
+                crate::verdict::mm(m.cartesian_error_rms_mm)
+            ));
+            if m.status != RunStatus::Ok {
+                self.report
+                    .paragraph(format!("{name}: {}", r.result.outcome));
+            }
             self.figure(
                 &format!("{name}/{}", per_run::JOINTS_TORQUES),
                 &format!("Fig. 5, {name}: joint coordinates and torques"),
@@ -481,14 +577,16 @@ impl Writer<'_> {
                     &r.result.record,
                 ),
             )?;
-            self.figure(
-                &format!("{name}/{}", per_run::CARTESIAN_ERROR),
+            self.report.end_details();
+            let rel = format!("{name}/{}", per_run::CARTESIAN_ERROR);
+            let fig = figures::cartesian_errors(
                 &format!("{name}: Cartesian error"),
-                &figures::cartesian_errors(
-                    &format!("{name}: Cartesian error"),
-                    &[(kind_name(r.kind), &r.result.record)],
-                ),
-            )?;
+                &[(kind_name(r.kind), &r.result.record)],
+            );
+            let rendered = render_both(&fig).with_context(|| format!("rendering {rel}"))?;
+            self.dir.write(format!("{rel}.png"), &rendered.png)?;
+            self.dir
+                .write(format!("{rel}.svg"), rendered.svg.as_bytes())?;
         }
         Ok(())
     }

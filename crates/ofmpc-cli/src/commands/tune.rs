@@ -242,7 +242,10 @@ fn tradeoff_figure(candidates: &[Candidate], chosen: &Candidate) -> Figure {
         ));
     }
     p.series.push(Series::markers(
-        "chosen",
+        format!(
+            "chosen: margin {:.3}, worst RMS {:.3e} mm",
+            chosen.margin, chosen.rms_mm
+        ),
         vec![chosen.margin],
         vec![chosen.rms_mm.max(1e-9)],
         0,

@@ -6,9 +6,11 @@
 //! * `run_files`: the one list of what `run`/`reproduce` write (plan, leftovers, writer).
 
 pub mod atomic;
+pub mod chart;
 pub mod cleanup;
 pub(crate) mod compare;
 pub mod console;
 pub mod plot;
+pub mod replay;
 pub mod report;
 pub(crate) mod run_files;

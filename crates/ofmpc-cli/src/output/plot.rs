@@ -64,7 +64,7 @@ const TITLE_HEIGHT: u32 = 44;
 
 /// The palette: Okabe & Ito, "Color Universal Design" (2008), distinguishable with the common
 /// colour-vision deficiencies. Index with [`color`].
-pub const PALETTE: [RGBColor; 8] = [
+pub const PALETTE: [RGBColor; 11] = [
     RGBColor(0, 0, 0),       // black
     RGBColor(213, 94, 0),    // vermillion
     RGBColor(0, 114, 178),   // blue
@@ -73,6 +73,10 @@ pub const PALETTE: [RGBColor; 8] = [
     RGBColor(86, 180, 233),  // sky blue
     RGBColor(204, 121, 167), // reddish purple
     RGBColor(240, 228, 66),  // yellow
+    // Beyond Okabe & Ito, from Paul Tol's "muted" scheme (for more controller kinds):
+    RGBColor(136, 34, 85),  // wine
+    RGBColor(51, 34, 136),  // indigo
+    RGBColor(153, 153, 51), // olive
 ];
 
 /// Palette index of reference signals (black).

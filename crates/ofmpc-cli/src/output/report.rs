@@ -34,6 +34,9 @@ pub enum Image {
     Svg(String),
     /// PNG file bytes (e.g. from [`super::plot::render_png`]), embedded as a base64 data URI.
     Png(Vec<u8>),
+    /// An interactive figure: the chart data of [`super::chart::chart_json`], drawn in the page
+    /// by the vendored uPlot (zoom, pan, hover values).
+    Chart(String),
 }
 
 /// A figure: picture and caption.
@@ -58,6 +61,22 @@ pub enum Block {
     Table(Table),
     /// A figure.
     Figure(ReportFigure),
+    /// A bulleted list of sentences (e.g. the verdict), with a CSS class.
+    List {
+        /// CSS class of the `<ul>` (`"verdict"`).
+        class: String,
+        /// The items, plain text.
+        items: Vec<String>,
+    },
+    /// The table of contents: a link to every heading of the page, drawn here.
+    Toc,
+    /// Opens a folded part (`<details>`) with this summary line; closed by [`Block::DetailsEnd`].
+    DetailsStart(String),
+    /// Closes the folded part opened last.
+    DetailsEnd,
+    /// The 3-D replay of the runs: the data of [`super::replay::replay_json`], drawn by the
+    /// page's WebGL script (`assets/replay.js`).
+    Replay(String),
 }
 
 /// A report page: title and blocks in reading order.
@@ -142,6 +161,40 @@ impl Report {
         self
     }
 
+    /// Appends a bulleted list of sentences with a CSS class.
+    pub fn list(&mut self, class: &str, items: Vec<String>) -> &mut Self {
+        self.blocks.push(Block::List {
+            class: class.into(),
+            items,
+        });
+        self
+    }
+
+    /// Appends the table of contents (links to every heading of the page).
+    pub fn toc(&mut self) -> &mut Self {
+        self.blocks.push(Block::Toc);
+        self
+    }
+
+    /// Opens a folded part: `summary` shows, the blocks up to [`Report::end_details`] open
+    /// on a click.
+    pub fn details(&mut self, summary: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::DetailsStart(summary.into()));
+        self
+    }
+
+    /// Closes the folded part opened last.
+    pub fn end_details(&mut self) -> &mut Self {
+        self.blocks.push(Block::DetailsEnd);
+        self
+    }
+
+    /// Appends the 3-D replay (data of [`super::replay::replay_json`]).
+    pub fn replay(&mut self, json: String) -> &mut Self {
+        self.blocks.push(Block::Replay(json));
+        self
+    }
+
     /// Appends a figure.
     pub fn figure(&mut self, caption: impl Into<String>, image: Image) -> &mut Self {
         self.blocks.push(Block::Figure(ReportFigure {
@@ -175,10 +228,44 @@ impl Report {
              Figure check has not run (JavaScript is disabled?).</p>"
         );
         let mut fig_no = 0;
+        let anchors = self.anchors();
+        let mut heading_no = 0;
+        let mut open_details = 0usize;
         for block in &self.blocks {
             match block {
                 Block::Heading(t) => {
-                    let _ = writeln!(body, "<h2>{}</h2>", escape(t));
+                    let _ = writeln!(
+                        body,
+                        "<h2 id=\"{}\">{}</h2>",
+                        anchors[heading_no].0,
+                        escape(t)
+                    );
+                    heading_no += 1;
+                }
+                Block::List { class, items } => {
+                    let _ = writeln!(body, "<ul class=\"{}\">", escape(class));
+                    for i in items {
+                        let _ = writeln!(body, "<li>{}</li>", escape(i));
+                    }
+                    body.push_str("</ul>\n");
+                }
+                Block::Toc => {
+                    body.push_str("<nav id=\"toc\"><strong>Contents</strong><ol>\n");
+                    for (id, t) in &anchors {
+                        let _ = writeln!(body, "<li><a href=\"#{id}\">{}</a></li>", escape(t));
+                    }
+                    body.push_str("</ol></nav>\n");
+                }
+                Block::DetailsStart(summary) => {
+                    open_details += 1;
+                    let _ = writeln!(body, "<details><summary>{}</summary>", escape(summary));
+                }
+                Block::Replay(json) => replay_html(&mut body, json),
+                Block::DetailsEnd => {
+                    if open_details > 0 {
+                        open_details -= 1;
+                        body.push_str("</details>\n");
+                    }
                 }
                 Block::Paragraph(t) => {
                     let _ = writeln!(body, "<p>{}</p>", escape(t));
@@ -192,6 +279,9 @@ impl Report {
                     figure_html(&mut body, f, fig_no)?;
                 }
             }
+        }
+        for _ in 0..open_details {
+            body.push_str("</details>\n");
         }
         let nonce = {
             let mut hasher = std::collections::hash_map::DefaultHasher::new();
@@ -208,13 +298,67 @@ impl Report {
         h.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
         h.push_str("<meta name=\"generator\" content=\"ofmpc\">\n");
         let _ = writeln!(h, "<title>{title}</title>");
-        let _ = writeln!(h, "<style>{CSS}</style>\n</head>\n<body>\n<main>");
-        h.push_str(&body);
+        let charts = self.blocks.iter().any(|b| {
+            matches!(
+                b,
+                Block::Figure(ReportFigure {
+                    image: Image::Chart(_),
+                    ..
+                })
+            )
+        });
+        let replay = self.blocks.iter().any(|b| matches!(b, Block::Replay(_)));
+        let chart_css = if charts { UPLOT_CSS } else { "" };
         let _ = writeln!(
             h,
-            "</main>\n<script nonce=\"{nonce}\">{SCRIPT}</script>\n</body>\n</html>"
+            "<style>{CSS}{chart_css}</style>\n</head>\n<body>\n<main>"
+        );
+        h.push_str(&body);
+        h.push_str("</main>\n");
+        if charts {
+            let _ = writeln!(h, "<script nonce=\"{nonce}\">{UPLOT_JS}</script>");
+            let _ = writeln!(h, "<script nonce=\"{nonce}\">{CHARTS_JS}</script>");
+        }
+        if replay {
+            let _ = writeln!(h, "<script nonce=\"{nonce}\">{REPLAY_JS}</script>");
+        }
+        let _ = writeln!(
+            h,
+            "<script nonce=\"{nonce}\">{SCRIPT}</script>\n</body>\n</html>"
         );
         Ok(h)
+    }
+
+    /// The anchor id and text of every heading, in order: `sec-<slug>`, unique on the page.
+    fn anchors(&self) -> Vec<(String, String)> {
+        let mut seen = std::collections::HashSet::new();
+        let mut v = Vec::new();
+        for b in &self.blocks {
+            if let Block::Heading(t) = b {
+                let mut slug: String = t
+                    .chars()
+                    .map(|c| {
+                        if c.is_ascii_alphanumeric() {
+                            c.to_ascii_lowercase()
+                        } else {
+                            '-'
+                        }
+                    })
+                    .collect();
+                while slug.contains("--") {
+                    slug = slug.replace("--", "-");
+                }
+                let base = format!("sec-{}", slug.trim_matches('-'));
+                let mut id = base.clone();
+                let mut k = 2;
+                while !seen.insert(id.clone()) {
+                    id = format!("{base}-{k}");
+                    k += 1;
+                }
+                v.push((id, t.clone()));
+            }
+        }
+        v
     }
 
     /// Renders the page and writes it to `path` atomically.
@@ -336,6 +480,14 @@ fn figure_html(h: &mut String, f: &ReportFigure, no: usize) -> Result<(), Report
                 "<figure class=\"report-figure\" id=\"figure-{no}\" data-kind=\"svg\">\n{el}"
             );
         }
+        Image::Chart(json) => {
+            let _ = writeln!(
+                h,
+                "<figure class=\"report-figure\" id=\"figure-{no}\" data-kind=\"chart\">\n\
+                 <div class=\"chart\"></div>\n<script type=\"application/json\" class=\"chart-data\">{}</script>",
+                json.replace('<', "\\u003c")
+            );
+        }
         Image::Png(png) => {
             if !png.starts_with(b"\x89PNG\r\n\x1a\n") {
                 return Err(ReportError::BadPng {
@@ -354,6 +506,31 @@ fn figure_html(h: &mut String, f: &ReportFigure, no: usize) -> Result<(), Report
     Ok(())
 }
 
+/// The replay's section: canvas, controls and data (see `assets/replay.js`).
+fn replay_html(h: &mut String, json: &str) {
+    let _ = writeln!(
+        h,
+        "<section id=\"replay\" class=\"replay\" data-ready=\"no\">\n\
+         <div class=\"replay-controls\"><button type=\"button\" id=\"replay-play\">Play</button>\n\
+         <input type=\"range\" id=\"replay-slider\" min=\"0\" max=\"0\" value=\"0\" step=\"1\">\n\
+         <span id=\"replay-time\">t = 0 s</span>\n<select id=\"replay-run\"></select>\n\
+         <label><input type=\"checkbox\" id=\"replay-follow\"> slow motion</label></div>\n\
+         <canvas id=\"replay-canvas\" width=\"960\" height=\"540\"></canvas>\n\
+         <p id=\"replay-state\" class=\"replay-state\"></p>\n\
+         <script type=\"application/json\" id=\"replay-data\">{}</script>\n</section>",
+        json.replace('<', "\\u003c")
+    );
+}
+
+/// uPlot 1.6.32 (MIT, `assets/uplot/LICENSE`), from the npm registry.
+const UPLOT_JS: &str = include_str!("../../assets/uplot/uPlot.iife.min.js");
+/// uPlot's style sheet.
+const UPLOT_CSS: &str = include_str!("../../assets/uplot/uPlot.min.css");
+/// Draws the [`Image::Chart`] figures with uPlot.
+const CHARTS_JS: &str = include_str!("../../assets/charts.js");
+/// The 3-D replay (raw WebGL).
+const REPLAY_JS: &str = include_str!("../../assets/replay.js");
+
 const CSS: &str = "
 body{margin:0;background:#fff;color:#1a1a1a;font:16px/1.5 'DejaVu Sans',Verdana,sans-serif}
 main{max-width:1180px;margin:0 auto;padding:1.5em}
@@ -362,8 +539,14 @@ pre{background:#f6f6f6;padding:.8em;overflow-x:auto;font-size:.85em}
 table{border-collapse:collapse;margin:1em 0;font-size:.9em}
 caption{text-align:left;font-weight:bold;padding:.3em 0}
 th,td{border:1px solid #ccc;padding:.25em .6em}th{background:#f0f0f0}td.num{text-align:right;font-variant-numeric:tabular-nums}
-figure{margin:1.2em 0}figure svg,figure img{display:block;max-width:100%;height:auto}
+figure{margin:1.2em 0}div.chart{display:flex;flex-wrap:wrap;gap:12px}div.chart-panel{flex:0 0 auto}
+section.replay{margin:1em 0}#replay-canvas{width:100%;max-width:960px;border:1px solid #ddd;background:#fbfbfb;display:block}
+.replay-controls{display:flex;gap:.8em;align-items:center;margin:.4em 0}#replay-slider{flex:1;max-width:600px}.replay-state{font-size:.85em;color:#444;font-variant-numeric:tabular-nums}
+figure svg,figure img{display:block;max-width:100%;height:auto}
 figcaption{font-size:.9em;color:#444;margin-top:.4em}
+nav#toc{background:#f6f8fa;border:1px solid #ddd;padding:.5em 1em;margin:1em 0;font-size:.92em}nav#toc ol{margin:.3em 0;columns:2}
+ul.verdict{background:#f3f7ff;border-left:4px solid #3b6fd8;padding:.6em 1em .6em 2em;margin:1em 0}
+details{margin:.5em 0;border:1px solid #e3e3e3;border-radius:4px;padding:.2em .8em}summary{cursor:pointer;font-weight:bold;padding:.3em 0}
 #figure-check{font-size:.85em;padding:.3em .6em;border-radius:3px}
 #figure-check.ok{background:#e6f4ea;color:#1e5631}#figure-check.bad,#figure-check.pending{background:#fdecea;color:#8a1c1c}
 ";
@@ -371,6 +554,10 @@ figcaption{font-size:.9em;color:#444;margin-top:.4em}
 const SCRIPT: &str = "
 (function () {
   function drawn(fig) {
+    if (fig.getAttribute('data-kind') === 'chart') {
+      var cs = fig.querySelectorAll('canvas');
+      return fig.getAttribute('data-drawn') === 'yes' && cs.length > 0 && cs[0].width > 0;
+    }
     var img = fig.querySelector('img');
     if (img) { return img.complete && img.naturalWidth > 0 && img.naturalHeight > 0; }
     var svg = fig.querySelector('svg');

@@ -1,0 +1,107 @@
+// ofmpc report: draws the interactive figures with uPlot (vendored, MIT, assets/uplot/).
+// Each <figure data-kind="chart"> holds its data in a <script type="application/json"> element
+// (see crates/ofmpc-cli/src/output/chart.rs for the encoding: 16-bit values over [lo, hi]).
+// Drag a box: zoom; double-click: reset; shift + drag: pan; wheel: zoom x about the cursor.
+(function () {
+  'use strict';
+  var GAP = 65535;
+  function decode(q, log) {
+    var bin = atob(q.d), n = bin.length >> 1, out = new Array(n);
+    var lo = q.lo, span = q.hi - q.lo;
+    for (var i = 0; i < n; i++) {
+      var k = bin.charCodeAt(2 * i) | (bin.charCodeAt(2 * i + 1) << 8);
+      if (k === GAP) { out[i] = null; continue; }
+      var v = lo + span * k / (GAP - 1);
+      out[i] = log ? Math.pow(10, v) : v;
+    }
+    return out;
+  }
+  function fmt(v) {
+    if (v == null || !isFinite(v)) { return '–'; }
+    var a = Math.abs(v);
+    return (a !== 0 && (a < 1e-3 || a >= 1e5)) ? v.toExponential(3) : String(+v.toPrecision(4));
+  }
+  // Log axes: powers of ten as 1e-6; the decades are many, so only every other is labelled
+  // when there are more than eight.
+  function fmtLog(v, i, all) {
+    if (v == null || v <= 0) { return ''; }
+    var e = Math.round(Math.log10(v));
+    if (Math.abs(Math.log10(v) - e) > 1e-6) { return ''; }
+    return '1e' + e;
+  }
+  function panPlugin() {
+    return { hooks: { ready: function (u) {
+      var over = u.over, start = null;
+      over.addEventListener('mousedown', function (e) {
+        if (!e.shiftKey) { return; }
+        e.stopPropagation(); e.preventDefault();
+        var sx = u.scales.x, sy = u.scales.y;
+        start = { x: e.clientX, y: e.clientY, x0: sx.min, x1: sx.max, y0: sy.min, y1: sy.max };
+        function move(ev) {
+          var w = over.clientWidth, h = over.clientHeight;
+          var dx = (ev.clientX - start.x) / w * (start.x1 - start.x0);
+          u.setScale('x', { min: start.x0 - dx, max: start.x1 - dx });
+          if (u.scales.y.distr !== 3) {
+            var dy = (ev.clientY - start.y) / h * (start.y1 - start.y0);
+            u.setScale('y', { min: start.y0 + dy, max: start.y1 + dy });
+          }
+        }
+        function up() { document.removeEventListener('mousemove', move); document.removeEventListener('mouseup', up); }
+        document.addEventListener('mousemove', move);
+        document.addEventListener('mouseup', up);
+      }, true);
+      over.addEventListener('wheel', function (e) {
+        e.preventDefault();
+        var r = over.getBoundingClientRect(), f = e.deltaY < 0 ? 0.8 : 1.25;
+        var x = u.posToVal(e.clientX - r.left, 'x'), s = u.scales.x;
+        u.setScale('x', { min: x - (x - s.min) * f, max: x + (s.max - x) * f });
+      }, { passive: false });
+    } } };
+  }
+  function panel(fig, host, p, width) {
+    var groups = p.x.map(function (q) { return [decode(q, false)]; });
+    p.s.forEach(function (s) { groups[s.g].push(decode(s.y, p.log)); });
+    var data = groups.length === 1 ? groups[0] : uPlot.join(groups);
+    // Series in the order of the joined table: group by group.
+    var order = [];
+    groups.forEach(function (_, g) { p.s.forEach(function (s) { if (s.g === g) { order.push(s); } }); });
+    var series = [{ label: p.xl, value: function (u, v) { return fmt(v); } }];
+    order.forEach(function (s) {
+      var o = { label: s.l, stroke: s.c, width: 1.5, value: function (u, v) { return fmt(v); } };
+      if (s.k === 'd') { o.dash = [7, 5]; o.width = 2; }
+      if (s.k === 'm') { o.paths = function () { return null; }; o.points = { show: true, size: 8, fill: s.c, stroke: s.c }; }
+      else { o.points = { show: false }; }
+      if (groups.length > 1) { o.spanGaps = false; }
+      series.push(o);
+    });
+    var div = document.createElement('div');
+    div.className = 'chart-panel';
+    host.appendChild(div);
+    var opts = {
+      title: p.t, width: width, height: 260, series: series,
+      scales: { x: { time: false }, y: p.log ? { distr: 3 } : {} },
+      axes: [{ label: p.xl, values: function (u, vs) { return vs.map(fmt); } },
+             { label: p.yl, size: 64, space: p.log ? 18 : 30, values: function (u, vs) { return vs.map(p.log ? fmtLog : fmt); } }],
+      cursor: { drag: { x: true, y: true, uni: 20 } },
+      legend: { live: true },
+      plugins: [panPlugin()]
+    };
+    return new uPlot(opts, data, div);
+  }
+  function draw(fig) {
+    var el = fig.querySelector('script.chart-data');
+    if (!el || fig.getAttribute('data-drawn')) { return; }
+    var spec = JSON.parse(el.textContent);
+    var host = fig.querySelector('div.chart');
+    var cols = Math.max(1, Math.min(spec.c, 2));
+    var avail = Math.max(640, host.clientWidth || document.querySelector('main').clientWidth || 1100);
+    var width = Math.floor(avail / cols) - 12;
+    var ok = 0;
+    spec.p.forEach(function (p) { if (panel(fig, host, p, width)) { ok++; } });
+    fig.setAttribute('data-drawn', ok === spec.p.length ? 'yes' : 'no');
+  }
+  var figs = document.querySelectorAll('figure[data-kind="chart"]');
+  for (var i = 0; i < figs.length; i++) {
+    try { draw(figs[i]); } catch (e) { figs[i].setAttribute('data-drawn', 'no'); figs[i].setAttribute('data-error', String(e)); }
+  }
+})();
