@@ -40,7 +40,7 @@ fn figure(
 }
 
 /// The files a scenario reads (never overwritten by its outputs).
-fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
+pub(crate) fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
     let f = &scenario.file;
     let mut v = Vec::new();
     if let Some(p) = scenario_path {

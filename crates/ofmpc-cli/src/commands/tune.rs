@@ -6,7 +6,7 @@
 //! prints the choice as JSON.
 
 use super::analyze::{scenario_file, SetupArgs};
-use crate::output::atomic::write_atomic;
+use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND};
 use anyhow::{bail, Context};
 use clap::Args;
@@ -38,6 +38,28 @@ fn absolute(p: &Path) -> PathBuf {
     std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
+/// The folder of `--out` and the files `tune` writes there: the scenario, `<stem>_tradeoff.png`
+/// and `<stem>_tradeoff.svg`.
+fn out_files(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 3])> {
+    let Some(name) = out.file_name() else {
+        bail!("--out {}: give the path of a file to write", out.display());
+    };
+    let folder = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let stem = Path::new(name).with_extension("");
+    let stem = stem.display();
+    Ok((
+        folder,
+        [
+            PathBuf::from(name),
+            PathBuf::from(format!("{stem}_tradeoff.png")),
+            PathBuf::from(format!("{stem}_tradeoff.svg")),
+        ],
+    ))
+}
+
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     let range = super::parse_vector("--payload-range", &a.payload_range, Some(2))?;
@@ -56,6 +78,11 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     setup.drives = setup.drives.as_deref().map(absolute);
     setup.program = setup.program.as_deref().map(absolute);
     let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    // The scenario and its figure go through the same staged, input-checked output as `run`:
+    // checked before the search, moved into place only when all three are written.
+    let (folder, names) = out_files(&a.out)?;
+    let mut dir =
+        super::experiment::open_output(&folder, super::experiment::inputs(&base, None), &names)?;
     let tuning = robust_tuning(&base, lo_kg, hi_kg, &kinds)?;
     let (candidates, chosen, masses) = (&tuning.candidates, &tuning.chosen, tuning.simulated_kg);
     let text = format!(
@@ -67,30 +94,26 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         chosen.rms_mm,
         tuning.file.to_toml()?
     );
-    write_atomic(&a.out, text.as_bytes())
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    // The trade-off figure beside it.
+    // The trade-off figure beside it; all three files staged and moved into place together.
     let fig = tradeoff_figure(candidates, chosen);
     let r = render_both(&fig).context("rendering the trade-off figure")?;
-    let stem = a.out.with_extension("");
-    let png = PathBuf::from(format!("{}_tradeoff.png", stem.display()));
-    let svg = PathBuf::from(format!("{}_tradeoff.svg", stem.display()));
-    write_atomic(&png, &r.png).with_context(|| format!("writing {}", png.display()))?;
-    write_atomic(&svg, r.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&serde_json::json!({
-            "q_dy": chosen.q_dy,
-            "q_du": chosen.q_du,
-            "model_payload_kg": chosen.model_payload_kg,
-            "stability_margin": chosen.margin,
-            "worst_rms_mm": chosen.rms_mm,
-            "candidates_stable": candidates.iter().filter(|c| c.margin > 0.0).count(),
-            "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
-            "scenario": a.out.display().to_string(),
-            "figure": png.display().to_string(),
-        }))?
-    );
+    dir.write(&names[0], text.as_bytes())?;
+    dir.write(&names[1], &r.png)?;
+    dir.write(&names[2], r.svg.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", folder.display()))?;
+    let png = a.out.with_file_name(&names[1]);
+    console::println(&serde_json::to_string_pretty(&serde_json::json!({
+        "q_dy": chosen.q_dy,
+        "q_du": chosen.q_du,
+        "model_payload_kg": chosen.model_payload_kg,
+        "stability_margin": chosen.margin,
+        "worst_rms_mm": chosen.rms_mm,
+        "candidates_stable": candidates.iter().filter(|c| c.margin > 0.0).count(),
+        "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
+        "scenario": a.out.display().to_string(),
+        "figure": png.display().to_string(),
+    }))?)?;
     Ok(())
 }
 
