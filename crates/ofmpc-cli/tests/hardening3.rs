@@ -172,3 +172,150 @@ fn analyze_and_tune_into_a_closed_pipe_stop_quietly() {
         .collect();
     assert!(hidden.is_empty(), "{hidden:?}");
 }
+
+/// A quick scenario: one controller, no payload, a short hold.
+fn quick_scenario(dir: &Path) -> std::path::PathBuf {
+    let p = dir.join("s.toml");
+    fs::write(
+        &p,
+        "controllers = [\"usual\"]\n[payload]\nmasses_kg = [0.0]\n\
+         [simulation]\nhold_s = 0.2\nsteady_window_s = 0.1\n",
+    )
+    .unwrap();
+    p
+}
+
+/// A pid that runs nowhere visible: a child that has exited.
+fn dead_pid() -> u32 {
+    let mut c = Command::new("true").spawn().unwrap();
+    let pid = c.id();
+    c.wait().unwrap();
+    pid
+}
+
+/// Item 3: the lock is the kernel's (`flock` on the open lock file), not the pid: a holder whose
+/// pid this process cannot see (another PID namespace, here simulated by a pid that has exited
+/// while its file stays locked) keeps the folder, and nothing of it is touched.
+#[test]
+fn a_held_lock_is_respected_whatever_its_pid() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let s = quick_scenario(d);
+    let out = d.join("o");
+    fs::create_dir(&out).unwrap();
+    let pid = dead_pid();
+    let lock = out.join(".ofmpc-lock");
+    fs::write(&lock, format!("{pid}\n")).unwrap();
+    let stage = out.join(format!(".ofmpc-stage-{pid}-0"));
+    fs::create_dir(&stage).unwrap();
+    fs::write(stage.join("metrics.json"), "{}").unwrap();
+    let held = fs::File::open(&lock).unwrap();
+    held.try_lock().unwrap();
+    let before = snapshot(d);
+    let args = ["run", s.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let e = fails_in(d, &args);
+    assert!(e.contains(&format!("in use by process {pid}")), "{e}");
+    assert_eq!(snapshot(d), before);
+    // Released (its holder ended): stale, taken over, the stage removed.
+    drop(held);
+    let o = ofmpc_in(d, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!lock.exists() && !stage.exists());
+}
+
+/// Item 3 with a real second PID namespace (`unshare --pid`, when this machine allows it): the
+/// run inside it fails at once, naming the host run, and the host run ends well.
+#[test]
+fn a_run_in_another_pid_namespace_does_not_take_the_lock() {
+    let probe = Command::new("unshare")
+        .args(["--pid", "--fork", "--mount-proc", "true"])
+        .stderr(Stdio::null())
+        .status();
+    if !probe.is_ok_and(|s| s.success()) {
+        eprintln!("unshare --pid is not allowed here: skipped");
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let s = quick_scenario(d);
+    let out = d.join("o");
+    let host = Command::new(BIN)
+        .args([
+            "reproduce",
+            "--payload",
+            "0,0.25,0.5,1,2,4,0.1,0.2",
+            "--out",
+        ])
+        .arg(&out)
+        .current_dir(d)
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+    while !fs::read_dir(&out).is_ok_and(|r| {
+        r.flatten()
+            .any(|e| e.file_name().to_string_lossy().starts_with(".ofmpc-stage-"))
+    }) {
+        assert!(std::time::Instant::now() < deadline, "no stage appeared");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let o = Command::new("unshare")
+        .args(["--pid", "--fork", "--mount-proc", BIN, "run"])
+        .arg(&s)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(d)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains(&format!("in use by process {}", host.id())),
+        "{e}"
+    );
+    let h = host.wait_with_output().unwrap();
+    assert!(h.status.success(), "{}", stderr(&h));
+    assert_eq!(fs::read_dir(out.join("../o")).unwrap().count() > 3, true);
+    assert!(!out.join(".ofmpc-lock").exists());
+}
+
+/// Item 5: a SIGHUP inherited as ignored (`nohup`, here `trap '' HUP`) stays ignored: the run
+/// goes on and writes its results; without it, SIGHUP still ends the run cleanly (129).
+#[test]
+fn an_ignored_sighup_stays_ignored() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    for (trap, code) in [("trap '' HUP; ", 0), ("", 129)] {
+        let out = d.join(format!("o{code}"));
+        let run = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "{trap}exec \"$0\" reproduce --payload 0,0.5,1,2 --out \"$1\""
+            ))
+            .arg(BIN)
+            .arg(&out)
+            .current_dir(d)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(120);
+        while !out.join(".ofmpc-lock").exists() {
+            assert!(std::time::Instant::now() < deadline, "no lock appeared");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        let killed = Command::new("kill")
+            .args(["-HUP", &run.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(killed.success());
+        let o = run.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(code), "{}", stderr(&o));
+        assert_eq!(out.join("metrics.json").is_file(), code == 0);
+        assert!(!out.join(".ofmpc-lock").exists());
+    }
+}
