@@ -319,3 +319,162 @@ fn an_ignored_sighup_stays_ignored() {
         assert!(!out.join(".ofmpc-lock").exists());
     }
 }
+
+/// Item 8: `[mpc] torque_limits = true` on a robot with no finite peak torque (a URDF without
+/// effort limits on continuous joints) is refused before anything runs, naming the key; it never runs unconstrained.
+#[test]
+fn torque_limits_without_limits_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let urdf = fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140/irb140.urdf"),
+    )
+    .unwrap();
+    let mut stripped = String::new();
+    let mut rest = urdf.as_str();
+    while let Some(i) = rest.find(" effort=\"") {
+        stripped.push_str(&rest[..i]);
+        let after = &rest[i + 9..];
+        rest = &after[after.find('"').unwrap() + 1..];
+    }
+    stripped.push_str(rest);
+    // Continuous joints may omit the effort limit (then none is known).
+    let stripped = stripped.replace("type=\"revolute\"", "type=\"continuous\"");
+    fs::write(d.join("free.urdf"), stripped).unwrap();
+    fs::write(
+        d.join("s.toml"),
+        "controllers = [\"second\"]\n[robot]\nmodel = \"free.urdf\"\n[payload]\nmasses_kg = [0.0]\n\
+         [simulation]\nhold_s = 0.2\nsteady_window_s = 0.1\n[mpc]\ntorque_limits = true\n",
+    )
+    .unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["run", "s.toml", "--out", "o"]);
+    assert!(
+        e.contains("torque_limits") && e.contains("no joint has a finite peak torque"),
+        "{e}"
+    );
+    assert_eq!(snapshot(d), before);
+}
+
+/// Items 11 and 12: a section written as an array is an error naming it (never read by
+/// position); a file named like the built-in robot, in the scenario's folder and the working
+/// directory, does not shadow it (a path still names a file).
+#[test]
+fn sections_as_arrays_and_files_named_like_built_in_robots() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    fs::write(
+        d.join("a.toml"),
+        "mpc = [0.02, 3]\ncontrollers = [\"usual\"]\n",
+    )
+    .unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["run", "a.toml", "--out", "o"]);
+    assert!(
+        e.contains("mpc is written as an array") && e.contains("[mpc]"),
+        "{e}"
+    );
+    let e = fails_in(d, &["run", "a.toml", "--set", "plant=[1]", "--out", "o"]);
+    assert!(e.contains("mpc is written as an array"), "{e}");
+    assert_eq!(snapshot(d), before);
+    fs::write(d.join("irb140"), "not a URDF").unwrap();
+    let s = quick_scenario(d);
+    let o = ofmpc_in(d, &["run", s.to_str().unwrap(), "--out", "o"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // As a path it is the file.
+    fs::write(
+        d.join("b.toml"),
+        "controllers = [\"usual\"]\n[robot]\nmodel = \"./irb140\"\n",
+    )
+    .unwrap();
+    let e = fails_in(d, &["run", "b.toml", "--out", "o2"]);
+    assert!(e.contains("irb140"), "{e}");
+}
+
+/// Item 13: masses that differ (1 and 1.0000000000001) are not "listed more than once": they
+/// would share a run folder, so the scenario is refused naming both; a true repeat still warns.
+#[test]
+fn different_masses_with_one_label_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    fs::write(
+        d.join("m.toml"),
+        "controllers = [\"usual\"]\n[payload]\nmasses_kg = [1.0, 1.0000000000001]\n",
+    )
+    .unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["run", "m.toml", "--out", "o"]);
+    assert!(
+        e.contains("masses_kg") && e.contains("1.0000000000001") && e.contains("differ"),
+        "{e}"
+    );
+    assert!(!e.contains("more than once"), "{e}");
+    assert_eq!(snapshot(d), before);
+}
+
+/// Item 17: fixed-length options say what they need, not the robot's joint count.
+#[test]
+fn fixed_length_options_name_what_they_need() {
+    let tmp = tempfile::tempdir().unwrap();
+    let e = fails_in(
+        tmp.path(),
+        &["tune", "--payload-range", "0", "--out", "t.toml"],
+    );
+    assert!(
+        e.contains("--payload-range has 1 value but needs 2: LO,HI in kg"),
+        "{e}"
+    );
+    assert!(!e.contains("joints"), "{e}");
+    let e = fails_in(tmp.path(), &["analyze", "stability", "--origin", "1,2"]);
+    assert!(e.contains("--origin has 2 values but needs 3"), "{e}");
+    assert!(std::fs::read_dir(tmp.path()).unwrap().next().is_none());
+}
+
+/// Item 17: a dangling symbolic link as the output folder is one clear error, no "results go
+/// there" note first, and nothing is created.
+#[test]
+fn a_dangling_link_as_out_is_one_clear_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    std::os::unix::fs::symlink(d.join("nowhere"), d.join("o")).unwrap();
+    let s = quick_scenario(d);
+    let before = snapshot(d);
+    let e = fails_in(d, &["run", s.to_str().unwrap(), "--out", "o"]);
+    assert!(
+        e.contains("which does not exist") && !e.contains("results go there"),
+        "{e}"
+    );
+    assert_eq!(snapshot(d), before);
+}
+
+/// Items 15 and 17: a program is read with a limit (`/dev/zero` is refused at 64 MiB, not
+/// read forever), and a Latin-1 file is named with the byte, line and column and the encoding
+/// to use; nothing is written.
+#[test]
+fn inputs_are_read_with_a_limit_and_their_encoding_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let before = snapshot(d);
+    if Path::new("/dev/zero").exists() {
+        let e = fails_in(d, &["trajectory", "/dev/zero"]);
+        assert!(
+            e.contains("/dev/zero") && e.contains("larger than the limit of 67108864 bytes"),
+            "{e}"
+        );
+    }
+    assert_eq!(snapshot(d), before);
+    let mut latin = b"G0 X500 Y0 Z600\n; caf".to_vec();
+    latin.push(0xe9);
+    latin.extend_from_slice(b"\n");
+    fs::write(d.join("p.gcode"), &latin).unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["trajectory", "p.gcode"]);
+    assert!(
+        e.contains("p.gcode") && e.contains("byte 21 (line 2, column 6) is 0xe9"),
+        "{e}"
+    );
+    assert!(e.contains("UTF-8"), "{e}");
+    let e = fails_in(d, &["run", "p.gcode", "--out", "o"]);
+    assert!(e.contains("not UTF-8 text"), "{e}");
+    assert_eq!(snapshot(d), before);
+}

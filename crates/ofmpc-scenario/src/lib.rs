@@ -33,5 +33,5 @@ pub use file::{
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
-pub use resolve::{load_robot, read_program, Scenario};
+pub use resolve::{is_model_path, load_robot, read_program, Scenario};
 pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};

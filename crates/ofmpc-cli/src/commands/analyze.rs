@@ -106,7 +106,13 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
     f.robot.drives = setup.drives.clone();
     f.program.file = setup.program.clone();
     if let Some(o) = &setup.origin {
-        let v = super::parse_vector("--origin", o, Some(3))?;
+        let v = super::parse_fixed(
+            "--origin",
+            o,
+            3,
+            "x,y,z of the work offset in mm",
+            "450,0,400",
+        )?;
         f.program.origin_mm = Some([v[0], v[1], v[2]]);
     }
     f.mpc = mpc;

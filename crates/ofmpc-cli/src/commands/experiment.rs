@@ -49,7 +49,7 @@ pub(crate) fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<I
     if let Some(p) = &f.program.file {
         v.push(Input::new(p, "the program"));
     }
-    if Path::new(&f.robot.model).is_file() {
+    if ofmpc_scenario::is_model_path(&f.robot.model) && Path::new(&f.robot.model).is_file() {
         v.push(Input::new(&f.robot.model, "the robot model"));
     }
     if let Some(p) = &f.robot.drives {
@@ -67,6 +67,14 @@ pub(crate) fn open_output(
     planned: &[PathBuf],
 ) -> anyhow::Result<StagedDir> {
     if let Ok(to) = std::fs::read_link(out) {
+        if std::fs::metadata(out).is_err() {
+            anyhow::bail!(
+                "the output path {} is a symbolic link to {}, which does not exist: create that \
+                 folder, remove the link, or choose another output path (nothing was written)",
+                out.display(),
+                to.display()
+            );
+        }
         console::note(&format!(
             "{} is a symbolic link to {}: the results go there",
             out.display(),

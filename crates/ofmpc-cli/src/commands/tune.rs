@@ -62,7 +62,7 @@ fn out_files(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 3])> {
 
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
-    let range = super::parse_vector("--payload-range", &a.payload_range, Some(2))?;
+    let range = super::parse_fixed("--payload-range", &a.payload_range, 2, "LO,HI in kg", "0,3")?;
     let (lo_kg, hi_kg) = (range[0], range[1]);
     if !(lo_kg >= 0.0 && hi_kg >= lo_kg) {
         bail!("--payload-range {lo_kg},{hi_kg}: give LO,HI with 0 ≤ LO ≤ HI (kg)");
@@ -72,7 +72,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         bail!("--controllers {k}: tune the non-adaptive controllers (the adaptive ones identify the payload)");
     }
     let mut setup = a.setup.clone();
-    if setup.robot.ends_with(".urdf") || Path::new(&setup.robot).is_file() {
+    if ofmpc_scenario::is_model_path(&setup.robot) {
         setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
     }
     setup.drives = setup.drives.as_deref().map(absolute);
