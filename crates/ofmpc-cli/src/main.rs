@@ -3,7 +3,8 @@
 //!
 //! Exit status: 0 on success and when stdout is closed early (`ofmpc inspect robot | head -1`
 //! stops quietly, like ripgrep); 2 on an error (the message on stderr); 130 / 143 / 129 on
-//! SIGINT / SIGTERM / SIGHUP, after removing the run's staging folder and lock.
+//! SIGINT / SIGTERM / SIGHUP, after removing the run's staging folder and lock (a signal
+//! inherited as ignored, as SIGHUP under `nohup`, stays ignored).
 
 use clap::Parser;
 use ofmpc_cli::output::{cleanup, console};

@@ -1,10 +1,10 @@
 //! `ofmpc.Controller`: one predictive controller of the paper, stepped from
 //! Python, over `ofmpc::control`.
 
-use crate::arrays::array1;
+use crate::arrays::{array1, fill_shaped};
 use crate::errors::to_py;
 use crate::robot::PyRobot;
-use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn};
+use numpy::PyArray1;
 use ofmpc::control::{new_controller, Controller, ControllerKind, MpcSettings, StepInfo, Weight};
 use ofmpc::dynamics::RobotDynamics;
 use pyo3::prelude::*;
@@ -27,6 +27,8 @@ pub struct PyController {
     preview: Vec<f64>,
     tau: Vec<f64>,
     info: Option<StepInfo>,
+    /// Whether `reset` started a run (a `step` before it is refused).
+    started: bool,
 }
 
 /// Reads a weight: a number (times I) or one value per joint.
@@ -42,23 +44,6 @@ fn weight(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Weight> {
                 "weight {name} = {value}: give a number (times I) or one number per joint"
             ))
         })
-}
-
-/// Copies an array-like of numbers into `out`, checking its size.
-fn fill(what: &str, v: &PyArrayLikeDyn<'_, f64, AllowTypeChange>, out: &mut [f64]) -> PyResult<()> {
-    let a = v.as_array();
-    if a.len() != out.len() {
-        return Err(to_py(format!(
-            "{what} has {} values (shape {:?}) but {} are needed",
-            a.len(),
-            a.shape(),
-            out.len()
-        )));
-    }
-    for (o, x) in out.iter_mut().zip(a.iter()) {
-        *o = *x;
-    }
-    Ok(())
 }
 
 #[pymethods]
@@ -115,6 +100,7 @@ impl PyController {
             preview: vec![0.0; horizon * n],
             tau: vec![0.0; n],
             info: None,
+            started: false,
         })
     }
 
@@ -160,29 +146,48 @@ impl PyController {
             .transpose()
     }
 
-    /// Starts a run at the measured state x0 = [q; q̇] (2n,).
-    fn reset(&mut self, x0: PyArrayLikeDyn<'_, f64, AllowTypeChange>) -> PyResult<()> {
-        fill("x0", &x0, &mut self.x)?;
+    /// Starts a run at the measured state x0 = [q; q̇] (2n,). Required before the first
+    /// `step` (a step before it raises `OfmpcError`: the controller's memory of the last input
+    /// and output would otherwise be zeros, not the robot's state).
+    fn reset(&mut self, x0: &Bound<'_, PyAny>) -> PyResult<()> {
+        let n2 = 2 * self.dof;
+        fill_shaped("x0", x0, &[("(2·dof,)", &[n2])], &mut self.x)?;
         self.info = None;
+        self.started = false;
         self.controller
             .get_mut()
             .unwrap_or_else(|e| e.into_inner())
             .reset(&self.x)
-            .map_err(to_py)
+            .map_err(to_py)?;
+        self.started = true;
+        Ok(())
     }
 
     /// One control step: measured state x (2n,), current reference w_k (n,),
-    /// preview w_{k+1..k+N} ((N, n) or N·n values) → torque τ_k (n,).
+    /// preview w_{k+1..k+N} ((N, n) or (N·n,)) → torque τ_k (n,). Raises `OfmpcError` before
+    /// the first `reset`, and for an argument of another shape (a transposed preview, a column
+    /// `x`) or of a complex, datetime or string dtype, naming the argument.
     fn step<'py>(
         &mut self,
         py: Python<'py>,
-        x: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
-        w_k: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
-        preview: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+        x: &Bound<'py, PyAny>,
+        w_k: &Bound<'py, PyAny>,
+        preview: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        fill("x", &x, &mut self.x)?;
-        fill("w_k", &w_k, &mut self.w)?;
-        fill("preview", &preview, &mut self.preview)?;
+        if !self.started {
+            return Err(to_py(
+                "step before reset: call reset(x0) with the measured state [q, q̇] first",
+            ));
+        }
+        let (n, h) = (self.dof, self.horizon);
+        fill_shaped("x", x, &[("(2·dof,)", &[2 * n])], &mut self.x)?;
+        fill_shaped("w_k", w_k, &[("(dof,)", &[n])], &mut self.w)?;
+        fill_shaped(
+            "preview",
+            preview,
+            &[("(horizon, dof)", &[h, n]), ("(horizon·dof,)", &[h * n])],
+            &mut self.preview,
+        )?;
         let info = self
             .controller
             .get_mut()

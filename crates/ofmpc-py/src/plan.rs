@@ -6,6 +6,7 @@ use crate::errors::to_py;
 use crate::robot::PyRobot;
 use nalgebra::UnitQuaternion;
 use numpy::{PyArray1, PyArray2};
+use ofmpc::control::settings::MAX_HORIZON;
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::timelaw::Profile;
 use ofmpc::motion::{plan as motion_plan, JointReference, Orientation, PlanOptions, TimingOptions};
@@ -91,11 +92,25 @@ impl PyReference {
         array1(py, self.reference.q(k))
     }
     /// The preview w_{k+1}, …, w_{k+N} as an (N, n) array, the last sample held past the end.
-    fn preview<'py>(&self, py: Python<'py>, k: usize, horizon: usize) -> Bound<'py, PyArray2<f64>> {
+    /// `horizon` is bounded like a controller's (at most `MAX_HORIZON` = 1000 samples).
+    fn preview<'py>(
+        &self,
+        py: Python<'py>,
+        k: usize,
+        horizon: usize,
+    ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        if horizon > MAX_HORIZON {
+            return Err(to_py(format!(
+                "preview horizon = {horizon}: at most {MAX_HORIZON} samples (the controllers' \
+                 limit, ofmpc's MAX_HORIZON)"
+            )));
+        }
         let n = self.reference.dof();
         let mut out = vec![0.0; horizon * n];
-        self.reference.preview(k, horizon, &mut out);
-        array2(py, horizon, n, out)
+        // Past the end every sample is the last: k beyond it reads the same and cannot overflow.
+        self.reference
+            .preview(k.min(self.reference.len()), horizon, &mut out);
+        Ok(array2(py, horizon, n, out))
     }
     fn __len__(&self) -> usize {
         self.reference.len()

@@ -4,6 +4,9 @@ messages."""
 
 from __future__ import annotations
 
+import os
+import pathlib
+
 import numpy as np
 import pytest
 
@@ -201,3 +204,70 @@ def test_read_program_returns_the_moves_events_and_messages():
     assert abs(p["moves"][2]["turns"] + 0.5) < 1e-12
     assert [e["code"] for e in p["events"]] == ["S", "M3"]
     assert p["messages"] == [{"line": 2, "kind": "MSG", "text": "hi"}]
+
+
+def test_hostile_arguments_raise_ofmpc_error_naming_them(robot, ref):
+    """Issue #22 items 1, 6, 7: no abort or panic from a size, no step before reset, no array
+    of the right count but the wrong shape or dtype read by position."""
+    # Item 1: a huge preview is refused by the controllers' limit, never allocated.
+    for h in (2**40, 2**62, 1001):
+        with pytest.raises(ofmpc.OfmpcError, match="at most 1000"):
+            ref.preview(0, h)
+    assert ref.preview(2**63, 3).shape == (3, 6)
+    np.testing.assert_array_equal(ref.preview(2**63, 2), ref.preview(len(ref), 2))
+    w = ref.q[0]
+    x = np.concatenate([w, np.zeros(6)])
+    c = ofmpc.Controller("second", robot)
+    # Item 6: step before reset.
+    with pytest.raises(ofmpc.OfmpcError, match="step before reset"):
+        c.step(x, w, ref.preview(0, 10))
+    c.reset(x)
+    good = c.step(x, w, ref.preview(0, 10))
+    assert np.all(np.abs(good) < 1e3)
+    # Item 7: shapes, with the argument's name.
+    bad = [
+        ((x, w, ref.preview(0, 10).T), r"preview must be \(horizon, dof\) = \(10, 6\).*got \(6, 10\)"),
+        ((x.reshape(6, 2), w, ref.preview(0, 10)), r"x must be \(2·dof,\) = \(12,\), got \(6, 2\)"),
+        ((x, w.reshape(6, 1), ref.preview(0, 10)), r"w_k must be \(dof,\) = \(6,\), got \(6, 1\)"),
+        ((x, w, ref.preview(0, 10).reshape(10, 6, 1)), r"preview must be .*got \(10, 6, 1\)"),
+        ((x.astype(complex), w, ref.preview(0, 10)), r"x has dtype .*complex"),
+        ((x, np.zeros(6, dtype="datetime64[s]"), ref.preview(0, 10)), r"w_k has dtype .*datetime64"),
+        ((x, w, np.zeros((10, 6), dtype="timedelta64[s]")), r"preview has dtype .*timedelta64"),
+        ((x.astype(str), w, ref.preview(0, 10)), r"x has dtype .*string"),
+    ]
+    for args, msg in bad:
+        with pytest.raises(ofmpc.OfmpcError, match=msg):
+            c.step(*args)
+    with pytest.raises(ofmpc.OfmpcError, match=r"x0 must be"):
+        c.reset(x.reshape(2, 6))
+
+
+def test_sections_as_lists_and_robot_files_named_like_built_ins(tmp_path, monkeypatch):
+    """Issue #22 items 11, 12: a section given as a list is an error naming it; a file named
+    like the built-in robot in the working directory does not shadow it."""
+    with pytest.raises(ofmpc.OfmpcError, match=r"mpc is written as an array"):
+        ofmpc.run({"mpc": [0.01, 10], "controllers": ["usual"]})
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "irb140").write_text("not a URDF")
+    m = ofmpc.run(
+        {
+            "controllers": ["usual"],
+            "payload": {"masses_kg": [0.0]},
+            "simulation": {"hold_s": 0.2, "steady_window_s": 0.1},
+        }
+    )
+    assert m["runs"][0]["status"] == "completed"
+
+
+def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
+    """Issue #22 items 15, 17: /dev/zero is not read whole; a Latin-1 file names the byte and
+    the encoding; a missing file is said to be missing, not parsed as G-code."""
+    if os.path.exists("/dev/zero"):
+        with pytest.raises(ofmpc.OfmpcError, match="larger than the limit"):
+            ofmpc.plan(pathlib.Path("/dev/zero"), robot)
+    latin = tmp_path / "p.gcode"
+    latin.write_bytes("G0 X500 Y0 Z600 ; caf\xe9\n".encode("latin-1"))
+    with pytest.raises(ofmpc.OfmpcError, match=r"not UTF-8 text: byte 22 \(line 1, column 23\)"):
+        ofmpc.plan(str(latin), robot)
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        ofmpc.plan("prog.gcode2", robot)

@@ -348,6 +348,11 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
             "[mpc] torque_limits / friction_compensation".into()
         }
         ExperimentError::Mpc(_) => "[mpc]".into(),
+        ExperimentError::Build(_) => {
+            "[mpc] torque_limits = true with no finite max_torque_nm (robot effort limits or \
+             [robot] drives)"
+                .into()
+        }
         ExperimentError::TooManySamples { .. } => {
             "the program's duration with [simulation] hold_s at [mpc] ts".into()
         }

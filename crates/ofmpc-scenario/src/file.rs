@@ -288,15 +288,24 @@ impl ScenarioFile {
     /// the document before it is deserialized (in order; a later one wins). A path set by
     /// an override is relative to the working directory, not to the scenario's folder.
     pub fn from_file_with(path: &Path, overrides: &[Override]) -> Result<Self, ScenarioError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            read_text_limited(path, MAX_SCENARIO_BYTES).map_err(|source| ScenarioError::Read {
+                path: path.to_path_buf(),
+                source,
+            })?;
         let parse_error = |e: toml::de::Error| ScenarioError::Parse {
             origin: path.display().to_string(),
             message: e.to_string(),
         };
-        // The file alone first: its errors carry their line and column.
+        // The sections' shapes first (an array is never read by position), then the file
+        // alone: its errors carry their line and column.
+        let doc: toml::Table = toml::from_str(&text).map_err(parse_error)?;
+        check_sections(doc.iter().map(|(k, v)| (k.as_str(), toml_kind(v)))).map_err(|message| {
+            ScenarioError::Parse {
+                origin: path.display().to_string(),
+                message,
+            }
+        })?;
         let mut s: ScenarioFile = toml::from_str(&text).map_err(parse_error)?;
         if !overrides.is_empty() {
             let doc: toml::Table = toml::from_str(&text).map_err(parse_error)?;
@@ -313,7 +322,11 @@ impl ScenarioFile {
         };
         let resolve = |key: &str, p: &Path| absolute(&base(key).join(p));
         let model = resolve("robot.model", Path::new(&s.robot.model));
-        if s.robot.model.ends_with(".urdf") || model.is_file() {
+        let builtin = ofmpc::robot::Robot::builtin(&s.robot.model).is_ok();
+        if s.robot.model.ends_with(".urdf")
+            || s.robot.model.contains(['/', std::path::MAIN_SEPARATOR])
+            || (!builtin && model.is_file())
+        {
             s.robot.model = model.display().to_string();
         }
         s.robot.drives = s
@@ -499,6 +512,133 @@ impl std::str::FromStr for Override {
     }
 }
 
+/// The largest scenario file read (bytes): 4 MiB, far above any real scenario.
+pub const MAX_SCENARIO_BYTES: u64 = 4 << 20;
+
+/// The largest G-code program read (bytes): 64 MiB (several million lines; a reference of
+/// that length would already pass the recorder's limit at the paper's sample time).
+pub const MAX_PROGRAM_BYTES: u64 = 64 << 20;
+
+/// Reads a text file of at most `limit` bytes: stops reading past the limit (a `/dev/zero` or
+/// a runaway file is never read whole) and says the limit; text that is not UTF-8 is an error
+/// naming the byte offset, line and column of the first bad byte and the encoding to use.
+/// Errors are of kind `InvalidData` (the caller adds the file's name).
+pub fn read_text_limited(path: &Path, limit: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "it is larger than the limit of {limit} bytes ({} MiB; reading stopped there): \
+                 split it, or check that it is the file you meant",
+                limit >> 20
+            ),
+        ));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let b = e.as_bytes();
+        let line = b[..at].iter().filter(|&&c| c == b'\n').count() + 1;
+        let col = at
+            - b[..at]
+                .iter()
+                .rposition(|&c| c == b'\n')
+                .map_or(0, |i| i + 1)
+            + 1;
+        let hint = if b.starts_with(&[0xff, 0xfe]) || b.starts_with(&[0xfe, 0xff]) {
+            "it looks like UTF-16"
+        } else {
+            "it may be Latin-1 or another 8-bit encoding"
+        };
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text: byte {at} (line {line}, column {col}) is 0x{:02x} ({hint}): save \
+                 it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)",
+                b[at]
+            ),
+        )
+    })
+}
+
+/// The scenario's sections: each a table of keys. A derived deserializer would also read a
+/// section from an array, by position (`mpc = [0.02, 3]` as ts and horizon): refused instead.
+const SECTIONS: [&str; 10] = [
+    "robot",
+    "payload",
+    "program",
+    "timing",
+    "orientation",
+    "mpc",
+    "simulation",
+    "plant",
+    "faults",
+    "safety",
+];
+
+/// What a TOML value is, in words (`table` for a table).
+fn toml_kind(v: &toml::Value) -> &'static str {
+    match v {
+        toml::Value::Table(_) => "table",
+        toml::Value::Array(_) => "an array",
+        toml::Value::String(_) => "a string",
+        toml::Value::Boolean(_) => "a boolean",
+        toml::Value::Datetime(_) => "a date",
+        _ => "a number",
+    }
+}
+
+/// Checks that every section among the top-level `(key, type)` pairs of a document is a table
+/// (`"table"` in TOML, `"object"` in JSON); the message names the key.
+fn check_sections<'a>(top: impl Iterator<Item = (&'a str, &'a str)>) -> Result<(), String> {
+    for (key, kind) in top {
+        if SECTIONS.contains(&key) && kind != "table" && kind != "object" {
+            return Err(format!(
+                "{key} is written as {kind} (`{key} = …`), but [{key}] is a section: a table of \
+                 named keys (`[{key}]` followed by `key = value` lines, or a dict in JSON); \
+                 examples/scenario.toml lists every key"
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl ScenarioFile {
+    /// Reads a scenario from JSON text with the keys of the TOML file (as `ofmpc.run` gives a
+    /// dict); a section written as anything but an object is refused, naming it.
+    pub fn from_json(text: &str) -> Result<Self, ScenarioError> {
+        let error = |message: String| ScenarioError::Parse {
+            origin: "scenario".into(),
+            message,
+        };
+        // The JSON position means nothing to the caller (it wrote a dict).
+        let plain = |e: serde_json::Error| {
+            let m = e.to_string();
+            m.split(" at line ").next().unwrap_or(&m).to_string()
+        };
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| error(plain(e)))?;
+        if let serde_json::Value::Object(top) = &value {
+            check_sections(top.iter().map(|(k, v)| {
+                let kind = match v {
+                    serde_json::Value::Object(_) => "object",
+                    serde_json::Value::Array(_) => "an array",
+                    serde_json::Value::Null => "null",
+                    serde_json::Value::Bool(_) => "a boolean",
+                    serde_json::Value::Number(_) => "a number",
+                    serde_json::Value::String(_) => "a string",
+                };
+                (k.as_str(), kind)
+            }))
+            .map_err(error)?;
+        }
+        serde_json::from_value(value).map_err(|e| error(plain(e)))
+    }
+}
+
 /// Sets `o` in `doc` (tables on the way are made when absent).
 fn set_key(doc: &mut toml::Table, o: &Override) -> Result<(), ScenarioError> {
     let error = |message: String| ScenarioError::Override {
@@ -540,6 +680,13 @@ fn apply_overrides(
     let mut file = None;
     for o in overrides {
         set_key(&mut doc, o)?;
+        check_sections(doc.iter().map(|(k, v)| (k.as_str(), toml_kind(v)))).map_err(|message| {
+            ScenarioError::Override {
+                key: o.key.clone(),
+                value: o.raw.clone(),
+                message,
+            }
+        })?;
         let parsed = ScenarioFile::deserialize(toml::Value::Table(doc.clone())).map_err(|e| {
             ScenarioError::Override {
                 key: o.key.clone(),

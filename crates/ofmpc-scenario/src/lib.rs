@@ -36,5 +36,7 @@ pub use file::{
     ScenarioFile, TimingSection,
 };
 pub use program_json::program_json;
-pub use resolve::{load_robot, load_robot_section, load_robot_with, read_program, Scenario};
+pub use resolve::{
+    is_model_path, load_robot, load_robot_section, load_robot_with, read_program, Scenario,
+};
 pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};

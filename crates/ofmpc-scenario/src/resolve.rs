@@ -29,6 +29,17 @@ pub struct Scenario {
     pub warnings: Vec<String>,
 }
 
+/// Whether a `[robot] model` value names a file rather than a built-in robot: a path (it
+/// holds a folder separator or ends in `.urdf`), or a name no built-in robot has that names an
+/// existing file. A built-in name (`irb140`) always means the built-in robot, even when a file
+/// of that name lies in the working directory or the scenario's folder.
+pub fn is_model_path(model: &str) -> bool {
+    model.ends_with(".urdf")
+        || model.contains('/')
+        || model.contains(std::path::MAIN_SEPARATOR)
+        || (Robot::builtin(model).is_err() && Path::new(model).is_file())
+}
+
 /// Loads a robot by name or URDF path, with an optional drives file. Returns the robot
 /// and the warnings to show (the URDF's, joints the drives file leaves unset).
 pub fn load_robot(
@@ -65,7 +76,7 @@ pub fn load_robot_with(
     chain: &ChainOptions,
 ) -> Result<(Robot, Vec<String>), ScenarioError> {
     let path = Path::new(model);
-    let from_urdf = model.ends_with(".urdf") || path.is_file();
+    let from_urdf = is_model_path(model);
     let mut warnings = Vec::new();
     let mut robot = if from_urdf {
         let robot = Robot::from_urdf_file_with(path, chain)?;
@@ -127,10 +138,12 @@ pub fn read_program(file: Option<&Path>) -> Result<(String, String), ScenarioErr
             PAPER_TABLE1.to_string(),
         )),
         Some(p) => {
-            let text = std::fs::read_to_string(p).map_err(|source| ScenarioError::ReadProgram {
-                path: p.to_path_buf(),
-                source,
-            })?;
+            let text = crate::file::read_text_limited(p, crate::file::MAX_PROGRAM_BYTES).map_err(
+                |source| ScenarioError::ReadProgram {
+                    path: p.to_path_buf(),
+                    source,
+                },
+            )?;
             Ok((p.display().to_string(), text))
         }
     }
@@ -162,6 +175,23 @@ impl Scenario {
         f.plant
             .validate_for(n, f.mpc.ts)
             .map_err(|e| settings_error(e.into()))?;
+        // Two different masses whose run folders would share a name (the label keeps 6
+        // significant digits) are not a repeat: refused, naming both (a repeat is a warning).
+        let m = &f.payload.masses_kg;
+        for (i, &a) in m.iter().enumerate() {
+            if let Some(&b) = m[..i].iter().find(|&&b| {
+                b + 0.0 != a + 0.0 && ofmpc::sim::mass_label(a) == ofmpc::sim::mass_label(b)
+            }) {
+                return Err(ScenarioError::Parse {
+                    origin: format!("[payload] masses_kg = {m:?}"),
+                    message: format!(
+                        "the masses {b} and {a} kg differ but would share the run folder \
+                         _m{}: give masses that differ within 6 significant digits",
+                        ofmpc::sim::mass_label(a)
+                    ),
+                });
+            }
+        }
         let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
         let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let mut payloads = Vec::new();

@@ -3,7 +3,7 @@
 //! point payload that keeps the ratio inside it along the program, and the
 //! spectral radius against α as a figure.
 
-use crate::output::atomic::write_atomic;
+use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_REFERENCE};
 use anyhow::Context;
 use clap::Args;
@@ -179,7 +179,13 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
     f.robot.drives = setup.drives.clone();
     f.program.file = setup.program.clone();
     if let Some(o) = &setup.origin {
-        let v = super::parse_vector("--origin", o, Some(3))?;
+        let v = super::parse_fixed(
+            "--origin",
+            o,
+            3,
+            "x,y,z of the work offset in mm",
+            "450,0,400",
+        )?;
         f.program.origin_mm = Some([v[0], v[1], v[2]]);
     }
     if let Some(r) = &setup.rpy {
@@ -224,6 +230,9 @@ fn radius_figure(curves: &[RadiusCurve]) -> Figure {
     f
 }
 
+/// The files `analyze stability` writes into `--out`.
+const STABILITY: [&str; 2] = ["stability.png", "stability.svg"];
+
 /// Runs `ofmpc analyze stability`.
 pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     let kinds = super::parse_controllers("--controllers", &a.controllers)?;
@@ -235,6 +244,14 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     }
     let file = scenario_file(&a.setup, a.tuning.settings())?;
     let scenario = Scenario::resolve(&file)?;
+    // The same staged, input-checked output as `run`: checked before the analysis, moved into
+    // place only when both files are written.
+    let planned: Vec<PathBuf> = STABILITY.iter().map(PathBuf::from).collect();
+    let mut dir = super::experiment::open_output(
+        &a.out,
+        super::experiment::inputs(&scenario, None),
+        &planned,
+    )?;
     let mut out = serde_json::Map::new();
     let mut margins = Vec::new();
     for (i, &k) in kinds.iter().enumerate() {
@@ -253,16 +270,15 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
         &kinds,
     )?);
     let r = render_both(&fig).context("rendering the stability figure")?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    write_atomic(&a.out.join("stability.png"), &r.png)
-        .with_context(|| format!("writing {}", a.out.join("stability.png").display()))?;
-    write_atomic(&a.out.join("stability.svg"), r.svg.as_bytes())
-        .with_context(|| format!("writing {}", a.out.join("stability.svg").display()))?;
+    dir.write(STABILITY[0], &r.png)?;
+    dir.write(STABILITY[1], r.svg.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", a.out.display()))?;
     let text = if a.format.json() {
         serde_json::to_string_pretty(&serde_json::Value::Object(out))?
     } else {
         stability_words(&margins, &a.out.join("stability.png"))
     };
-    println!("{text}");
+    console::println(&text)?;
     Ok(())
 }

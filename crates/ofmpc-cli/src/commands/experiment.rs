@@ -45,7 +45,7 @@ fn figure(
 }
 
 /// The files a scenario reads (never overwritten by its outputs).
-fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
+pub(crate) fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
     let f = &scenario.file;
     let mut v = Vec::new();
     if let Some(p) = scenario_path {
@@ -54,7 +54,7 @@ fn inputs(scenario: &Scenario, scenario_path: Option<&Path>) -> Vec<Input> {
     if let Some(p) = &f.program.file {
         v.push(Input::new(p, "the program"));
     }
-    if Path::new(&f.robot.model).is_file() {
+    if ofmpc_scenario::is_model_path(&f.robot.model) && Path::new(&f.robot.model).is_file() {
         v.push(Input::new(&f.robot.model, "the robot model"));
     }
     if let Some(p) = &f.robot.drives {
@@ -72,6 +72,14 @@ pub(crate) fn open_output(
     planned: &[PathBuf],
 ) -> anyhow::Result<StagedDir> {
     if let Ok(to) = std::fs::read_link(out) {
+        if std::fs::metadata(out).is_err() {
+            anyhow::bail!(
+                "the output path {} is a symbolic link to {}, which does not exist: create that \
+                 folder, remove the link, or choose another output path (nothing was written)",
+                out.display(),
+                to.display()
+            );
+        }
         console::note(&format!(
             "{} is a symbolic link to {}: the results go there",
             out.display(),

@@ -6,7 +6,7 @@
 //! prints the choice as JSON.
 
 use super::analyze::{progress, scenario_file, FormatArgs, SetupArgs};
-use crate::output::atomic::write_atomic;
+use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND};
 use anyhow::{bail, Context};
 use clap::Args;
@@ -73,9 +73,31 @@ fn absolute(p: &Path) -> PathBuf {
     std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf())
 }
 
+/// The folder of `--out` and the files `tune` writes there: the scenario, `<stem>_tradeoff.png`
+/// and `<stem>_tradeoff.svg`.
+fn out_files(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 3])> {
+    let Some(name) = out.file_name() else {
+        bail!("--out {}: give the path of a file to write", out.display());
+    };
+    let folder = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let stem = Path::new(name).with_extension("");
+    let stem = stem.display();
+    Ok((
+        folder,
+        [
+            PathBuf::from(name),
+            PathBuf::from(format!("{stem}_tradeoff.png")),
+            PathBuf::from(format!("{stem}_tradeoff.svg")),
+        ],
+    ))
+}
+
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
-    let range = super::parse_vector("--payload-range", &a.payload_range, Some(2))?;
+    let range = super::parse_fixed("--payload-range", &a.payload_range, 2, "LO,HI in kg", "0,3")?;
     let (lo_kg, hi_kg) = (range[0], range[1]);
     if !(lo_kg >= 0.0 && hi_kg >= lo_kg) {
         bail!("--payload-range {lo_kg},{hi_kg}: give LO,HI with 0 ≤ LO ≤ HI (kg)");
@@ -88,12 +110,17 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         bail!("--controllers {k}: tune the non-adaptive controllers (the adaptive ones identify the payload)");
     }
     let mut setup = a.setup.clone();
-    if setup.robot.ends_with(".urdf") || Path::new(&setup.robot).is_file() {
+    if ofmpc_scenario::is_model_path(&setup.robot) {
         setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
     }
     setup.drives = setup.drives.as_deref().map(absolute);
     setup.program = setup.program.as_deref().map(absolute);
     let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    // The scenario and its figure go through the same staged, input-checked output as `run`:
+    // checked before the search, moved into place only when all three are written.
+    let (folder, names) = out_files(&a.out)?;
+    let mut dir =
+        super::experiment::open_output(&folder, super::experiment::inputs(&base, None), &names)?;
     progress(&format!(
         "searching the weights and the model payload for {lo_kg}–{hi_kg} kg, then simulating \
          the best candidates at the range's ends and middle (a minute or so)"
@@ -132,16 +159,15 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         chosen.rms_mm,
         tuning.file.to_toml()?
     );
-    write_atomic(&a.out, text.as_bytes())
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    // The trade-off figure beside it.
+    // The trade-off figure beside it; all three files staged and moved into place together.
     let fig = tradeoff_figure(candidates, chosen);
     let r = render_both(&fig).context("rendering the trade-off figure")?;
-    let stem = a.out.with_extension("");
-    let png = PathBuf::from(format!("{}_tradeoff.png", stem.display()));
-    let svg = PathBuf::from(format!("{}_tradeoff.svg", stem.display()));
-    write_atomic(&png, &r.png).with_context(|| format!("writing {}", png.display()))?;
-    write_atomic(&svg, r.svg.as_bytes()).with_context(|| format!("writing {}", svg.display()))?;
+    dir.write(&names[0], text.as_bytes())?;
+    dir.write(&names[1], &r.png)?;
+    dir.write(&names[2], r.svg.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", folder.display()))?;
+    let png = a.out.with_file_name(&names[1]);
     let summary = serde_json::json!({
             "q_dy": chosen.q_dy,
             "q_du": chosen.q_du,
@@ -161,7 +187,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     } else {
         tune_words(&summary, lo_kg, hi_kg)
     };
-    println!("{text}");
+    console::println(&text)?;
     Ok(())
 }
 
@@ -181,12 +207,18 @@ fn tune_baselines(
         );
     };
     let mut setup = a.setup.clone();
-    if setup.robot.ends_with(".urdf") || Path::new(&setup.robot).is_file() {
+    if ofmpc_scenario::is_model_path(&setup.robot) {
         setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
     }
     setup.drives = setup.drives.as_deref().map(absolute);
     setup.program = setup.program.as_deref().map(absolute);
     let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    let (folder, names) = out_files(&a.out)?;
+    let mut dir = super::experiment::open_output(
+        &folder,
+        super::experiment::inputs(&base, None),
+        &names[..1],
+    )?;
     let t = ofmpc_scenario::baseline_tuning::baseline_bandwidth(&base, lo_kg, hi_kg, *kind)?;
     let margin = match t.margin {
         Some(m) => format!("{m:.3} (ln of the first failing bandwidth over it)"),
@@ -201,19 +233,17 @@ fn tune_baselines(
         t.chosen.rms_mm,
         t.file.to_toml()?
     );
-    write_atomic(&a.out, text.as_bytes())
-        .with_context(|| format!("writing {}", a.out.display()))?;
-    println!(
-        "{}",
-        serde_json::to_string_pretty(&serde_json::json!({
+    dir.write(&names[0], text.as_bytes())?;
+    dir.commit()
+        .with_context(|| format!("moving the results into {}", folder.display()))?;
+    console::println(&serde_json::to_string_pretty(&serde_json::json!({
             "controller": kind.name(),
             "bandwidth_rad_s": t.chosen.bandwidth,
             "margin": t.margin,
             "worst_rms_mm": t.chosen.rms_mm,
             "candidates": t.candidates,
             "scenario": a.out.display().to_string(),
-        }))?
-    );
+    }))?)?;
     Ok(())
 }
 

@@ -240,48 +240,60 @@ pub fn remove_stale(dir: &Path) -> Vec<PathBuf> {
     removed
 }
 
-/// Exclusive use of an output folder by one process: the file [`LOCK_NAME`] in it, holding the
-/// pid. Created atomically with its content (hard link of a complete temporary file), removed
-/// on drop. A lock whose process is dead (Linux: no `/proc/<pid>`) is stale and taken over.
+/// Exclusive use of an output folder by one process: the file [`LOCK_NAME`] in it, held open
+/// with an exclusive `flock` (on Unix; `LockFileEx` elsewhere) for as long as the run writes,
+/// and removed on drop. The kernel releases the lock when the process ends in any way (even
+/// `kill -9`), and it holds across PID namespaces and containers sharing the folder: whether the
+/// lock is held never depends on seeing the holder's pid. The pid written in the file is only
+/// information (named in the message), and a file nobody holds is stale and taken over, unless
+/// it names a live process of this namespace (a run of an ofmpc that did not lock the file) or
+/// no pid at all (then it is respected, with a hint).
 #[derive(Debug)]
 pub struct DirLock {
     path: PathBuf,
+    /// The open, locked file (the lock lives as long as it stays open).
+    _file: File,
 }
 
 impl DirLock {
-    /// Takes the lock of `dir` (which must exist). Fails at once if another live process holds
+    /// Takes the lock of `dir` (which must exist). Fails at once if another process holds
     /// it, naming that process.
     pub fn acquire(dir: &Path) -> io::Result<Self> {
         let path = dir.join(LOCK_NAME);
         let me = std::process::id();
-        for _ in 0..4 {
-            match create_with(&path, format!("{me}\n").as_bytes()) {
-                Ok(()) => return Ok(Self { path }),
-                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => {}
+        for _ in 0..8 {
+            // A complete file with our pid, locked before it appears under its name.
+            match create_locked(&path, format!("{me}\n").as_bytes()) {
+                Ok(Some(file)) => return Ok(Self { path, _file: file }),
+                Ok(None) => {}
                 Err(e) => return Err(with_path(e, "cannot create lock file", &path)),
             }
+            let mut file = match OpenOptions::new().read(true).write(true).open(&path) {
+                Ok(f) => f,
+                Err(e) if e.kind() == io::ErrorKind::NotFound => continue, // removed meanwhile
+                Err(e) => return Err(with_path(e, "cannot open lock file", &path)),
+            };
             let held = fs::read_to_string(&path).ok();
             let pid = held.as_deref().and_then(|t| t.trim().parse::<u32>().ok());
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(fs::TryLockError::WouldBlock) => return Err(in_use(dir, &path, pid)),
+                Err(fs::TryLockError::Error(e)) => return Err(with_path(e, "cannot lock", &path)),
+            }
+            // Locked: but is it still the file under the name (its holder may have removed it
+            // between our open and our lock)?
+            if !same_file(&file, &path) {
+                continue;
+            }
             let mine = fs::symlink_metadata(&path).is_ok_and(|m| owned_by_me(&m));
             match pid.map(|p| (p, pid_alive(p))) {
-                Some((p, Some(false))) if mine => {
-                    // Stale: move it aside first (only one process wins the rename), then make
-                    // sure the moved file is the stale one and not a fresh lock of a competitor.
-                    let aside = tmp_sibling(dir, "stale-lock");
-                    if fs::rename(&path, &aside).is_ok() {
-                        let moved = fs::read_to_string(&aside).ok();
-                        if moved.as_deref().map(str::trim) == Some(p.to_string().as_str()) {
-                            let _ = fs::remove_file(&aside);
-                        } else {
-                            // A competitor's fresh lock: put it back and give up.
-                            let _ = fs::hard_link(&aside, &path);
-                            let _ = fs::remove_file(&aside);
-                            return Err(in_use(dir, &path, None));
-                        }
-                    }
+                // Nobody holds it and its process is gone: stale, ours now.
+                Some((p, Some(false))) if mine && p != me => {
+                    file.set_len(0)?;
+                    file.write_all(format!("{me}\n").as_bytes())?;
+                    return Ok(Self { path, _file: file });
                 }
                 Some((p, _)) => return Err(in_use(dir, &path, Some(p))),
-                None if held.is_none() => {} // removed meanwhile: try again
                 None => return Err(in_use(dir, &path, None)),
             }
         }
@@ -296,7 +308,65 @@ impl DirLock {
 
 impl Drop for DirLock {
     fn drop(&mut self) {
+        // Removed while still locked; a process that opened it meanwhile sees, once it gets the
+        // lock, that the name no longer leads to its file and starts again.
         let _ = fs::remove_file(&self.path);
+    }
+}
+
+/// Whether `path` names the open `file` (same device and inode on Unix).
+fn same_file(file: &File, path: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        match (file.metadata(), fs::metadata(path)) {
+            (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
+            _ => false,
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = file;
+        path.exists()
+    }
+}
+
+/// Creates `path` holding `bytes`, locked: a temporary file is written and locked, then
+/// hard-linked to `path`, so the name appears complete and already held. `None` if something
+/// is at `path` already. Falls back to `create_new` + lock + write on file systems without hard
+/// links.
+fn create_locked(path: &Path, bytes: &[u8]) -> io::Result<Option<File>> {
+    let dir = parent_dir(path);
+    let tmp = tmp_sibling(dir, "lock");
+    let mut f = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(&tmp)?;
+    let _guard = TmpGuard {
+        path: tmp.clone(),
+        armed: true,
+    };
+    f.write_all(bytes)?;
+    f.try_lock().map_err(io::Error::from)?;
+    match fs::hard_link(&tmp, path) {
+        Ok(()) => Ok(Some(f)),
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Ok(None),
+        Err(_) => {
+            let mut f = match OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create_new(true)
+                .open(path)
+            {
+                Ok(f) => f,
+                Err(e) if e.kind() == io::ErrorKind::AlreadyExists => return Ok(None),
+                Err(e) => return Err(e),
+            };
+            f.try_lock().map_err(io::Error::from)?;
+            f.write_all(bytes)?;
+            Ok(Some(f))
+        }
     }
 }
 
@@ -315,25 +385,6 @@ fn in_use(dir: &Path, lock: &Path, pid: Option<u32>) -> io::Error {
             lock.display()
         ),
     )
-}
-
-/// Creates `path` with `bytes` as its content in one step: a complete temporary file is
-/// hard-linked to `path` (fails with `AlreadyExists` if something is there). Falls back to
-/// `create_new` + write on file systems without hard links.
-fn create_with(path: &Path, bytes: &[u8]) -> io::Result<()> {
-    let dir = parent_dir(path);
-    let tmp = tmp_sibling(dir, "lock");
-    fs::write(&tmp, bytes)?;
-    let linked = fs::hard_link(&tmp, path);
-    let _ = fs::remove_file(&tmp);
-    match linked {
-        Ok(()) => Ok(()),
-        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => Err(e),
-        Err(_) => {
-            let mut f = OpenOptions::new().write(true).create_new(true).open(path)?;
-            f.write_all(bytes)
-        }
-    }
 }
 
 /// What a file-system entry is, in words.

@@ -82,14 +82,35 @@ fn remove_all(reg: &mut Vec<(u64, Item)>) {
     }
 }
 
-/// Installs the handler for SIGINT, SIGTERM and SIGHUP (Unix; elsewhere nothing happens). A
-/// thread waits for the signal (signal-hook's self-pipe, so nothing runs in signal context),
-/// removes the registered items and exits with 128 + the signal number.
+/// Whether `sig` was ignored (`SIG_IGN`) when this process started: `nohup` ignores SIGHUP, a
+/// non-interactive shell ignores SIGINT in `cmd &`, and such a signal must keep doing nothing
+/// (the GNU coding standards' rule: never catch a signal inherited as ignored).
+#[cfg(unix)]
+fn inherited_as_ignored(sig: i32) -> bool {
+    // SAFETY: sigaction with a null new action only reads the current disposition into `old`,
+    // a zeroed plain C struct owned by this frame.
+    unsafe {
+        let mut old: libc::sigaction = std::mem::zeroed();
+        libc::sigaction(sig, std::ptr::null(), &mut old) == 0 && old.sa_sigaction == libc::SIG_IGN
+    }
+}
+
+/// Installs the handler for SIGINT, SIGTERM and SIGHUP (Unix; elsewhere nothing happens), except
+/// for those inherited as ignored (`nohup ofmpc run … &` keeps running when the terminal
+/// closes). A thread waits for the signal (signal-hook's self-pipe, so nothing runs in signal
+/// context), removes the registered items and exits with 128 + the signal number.
 pub fn install_signal_handler() -> io::Result<()> {
     #[cfg(unix)]
     {
         use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
-        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP])?;
+        let watched: Vec<i32> = [SIGINT, SIGTERM, SIGHUP]
+            .into_iter()
+            .filter(|&s| !inherited_as_ignored(s))
+            .collect();
+        if watched.is_empty() {
+            return Ok(());
+        }
+        let mut signals = signal_hook::iterator::Signals::new(&watched)?;
         std::thread::Builder::new()
             .name("ofmpc-signals".into())
             .spawn(move || {

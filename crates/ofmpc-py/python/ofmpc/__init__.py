@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from typing import Any, Mapping, Optional, Sequence, Tuple, Union
 
 from ._ofmpc import (
@@ -48,20 +49,50 @@ __all__ = [
 _PROGRAM_SUFFIXES = (".gcode", ".nc", ".ngc", ".tap", ".cnc", ".txt")
 
 
+# The largest program read (bytes), as the command's limit (ofmpc_scenario::MAX_PROGRAM_BYTES).
+_MAX_PROGRAM_BYTES = 64 << 20
+
+
+def _read_program(path: str) -> str:
+    """The file's text: at most _MAX_PROGRAM_BYTES are read (a /dev/zero is never read whole);
+    text that is not UTF-8 is an OfmpcError naming the byte, line and the encoding to use."""
+    with open(path, "rb") as f:
+        data = f.read(_MAX_PROGRAM_BYTES + 1)
+    if len(data) > _MAX_PROGRAM_BYTES:
+        raise OfmpcError(
+            f"{path}: it is larger than the limit of {_MAX_PROGRAM_BYTES} bytes "
+            f"({_MAX_PROGRAM_BYTES >> 20} MiB; reading stopped there): split it, or check that it is the file you meant"
+        )
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        line = data[: e.start].count(b"\n") + 1
+        col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
+        raise OfmpcError(
+            f"{path}: not UTF-8 text: byte {e.start} (line {line}, column {col}) is 0x{data[e.start]:02x}: "
+            "save it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)"
+        ) from None
+
+
+# One word with a folder separator or a file extension: a file name, not G-code.
+_LOOKS_LIKE_FILE = re.compile(r"^[^\s;()]*(/[^\s;()]*|\.[A-Za-z][A-Za-z0-9_]*)$")
+
+
 def _program_text(program: Union[str, "os.PathLike[str]"]) -> Tuple[Optional[str], str]:
     """(text or None for the built-in program, name for messages)."""
     if isinstance(program, os.PathLike):
         path = os.fspath(program)
-        with open(path, encoding="utf-8") as f:
-            return f.read(), path
+        return _read_program(path), path
     if not isinstance(program, str):
         raise TypeError(f"program must be a path, G-code text or 'paper', not {type(program).__name__}")
     if program.strip().lower() == "paper":
         return None, "paper-table1.gcode (built in)"
     if "\n" not in program and os.path.isfile(program):
-        with open(program, encoding="utf-8") as f:
-            return f.read(), program
-    if "\n" not in program and program.strip().lower().endswith(_PROGRAM_SUFFIXES):
+        return _read_program(program), program
+    one_line = "\n" not in program.strip()
+    if one_line and (
+        program.strip().lower().endswith(_PROGRAM_SUFFIXES) or _LOOKS_LIKE_FILE.match(program.strip())
+    ):
         raise FileNotFoundError(f"program file {program!r} does not exist (give a path, G-code text or 'paper')")
     return program, "program"
 

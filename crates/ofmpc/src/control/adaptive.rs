@@ -168,13 +168,19 @@ impl Controller for AdaptiveMpc {
                     .estimator
                     .update(rd, &self.x_prev, x, &self.tau_prev, ts)
             {
-                // payload_of returns a payload that passes validation: the
-                // error branch (which would keep the previous payload) is
-                // not taken in practice.
-                // A convex combination of two physical bodies is physical.
+                // A convex combination of two physical bodies is physical, so the
+                // model should accept it; if it does not, the step is undone and says so.
                 let target = self.estimator.rls().model_estimate();
                 self.model_pi += (target - self.model_pi) * MODEL_RATE;
-                let _ = rd.robot_mut().set_payload(payload_of(&self.model_pi));
+                if rd
+                    .robot_mut()
+                    .set_payload(payload_of(&self.model_pi))
+                    .is_err()
+                {
+                    *self.estimator.rls_mut() = saved_rls;
+                    self.model_pi = saved_pi;
+                    return Err(StepError::PayloadRefused);
+                }
             }
         }
         match self.inner.step(model, x, w_k, preview, tau) {
@@ -187,8 +193,11 @@ impl Controller for AdaptiveMpc {
             Err(e) => {
                 *self.estimator.rls_mut() = saved_rls;
                 self.model_pi = saved_pi;
+                // The payload it had before this step, which it accepted then.
                 if let Some(rd) = model.robot_dynamics_mut() {
-                    let _ = rd.robot_mut().set_payload(saved_payload);
+                    if rd.robot_mut().set_payload(saved_payload).is_err() {
+                        return Err(StepError::PayloadRefused);
+                    }
                 }
                 Err(e)
             }

@@ -145,6 +145,10 @@ pub enum StepError {
     /// [`ControllerBuilder`], which supplies the drives, or set them first.
     #[error("torque limits or friction compensation are on but the controller has no drive model: give it the drives' limits and friction estimates before stepping")]
     NoDriveModel,
+    /// The adaptive controller's payload estimate was refused by the model (not a physical
+    /// body): the step is undone and the model keeps the payload it had.
+    #[error("the identified payload is not a physical body: the controller's model keeps its previous payload")]
+    PayloadRefused,
     /// An internal invariant failed (a bug: please report).
     #[error("internal error in the controller: {0} (please report this bug)")]
     Internal(&'static str),

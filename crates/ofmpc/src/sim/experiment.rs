@@ -94,6 +94,17 @@ impl Experiment {
             });
         }
         self.mpc.validate_for_dof(n)?;
+        // The controllers' limits are the robot's peak torques (`DriveModel::from_robot`): with
+        // none finite, a QP would never bind and the run would be unconstrained (the builder's
+        // rule, `BuildError::NoTorqueLimits`).
+        if self.mpc.torque_limits
+            && DriveModel::from_robot(&self.robot)
+                .max_torque_nm
+                .iter()
+                .all(|t| t.is_infinite())
+        {
+            return Err(crate::control::BuildError::NoTorqueLimits.into());
+        }
         self.loop_settings.validate()?;
         self.plant.validate_for(n, ts)?;
         let samples = self

@@ -308,6 +308,11 @@ pub enum ExperimentError {
     /// The payload is not a physical body, or the plant's start is invalid.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The controller's settings need data the experiment does not give (torque limits on a
+    /// robot with no finite peak torque): refused as [`crate::control::ControllerBuilder`]
+    /// refuses it, never run unconstrained.
+    #[error(transparent)]
+    Build(#[from] crate::control::BuildError),
     /// The run would record more values than [`MAX_RECORD_VALUES`].
     #[error(
         "the run would record {samples} samples × {columns} values = {values} values, more than the limit of {limit}: \
