@@ -68,6 +68,16 @@ pub fn load_robot_section(
     Ok((robot, warnings))
 }
 
+/// [`load_robot_section`] for runs and the stability analysis, which need the dynamics:
+/// an error names the moving links without `<inertial>`.
+fn load_robot_for_dynamics(
+    section: &crate::file::RobotSection,
+) -> Result<(Robot, Vec<String>), ScenarioError> {
+    let (robot, warnings) = load_robot_section(section)?;
+    robot.require_inertials()?;
+    Ok((robot, warnings))
+}
+
 /// [`load_robot`] with a chosen tip and tool centre point ([`ChainOptions`]); the built-in
 /// robot takes the tool centre point and refuses a tip other than its flange.
 pub fn load_robot_with(
@@ -158,9 +168,7 @@ impl Scenario {
         if f.payload.masses_kg.is_empty() {
             return Err(ScenarioError::NoPayloads);
         }
-        let (robot, mut warnings) = load_robot_section(&f.robot)?;
-        // Runs and the stability analysis need the dynamics: every moving link's inertial.
-        robot.require_inertials()?;
+        let (robot, mut warnings) = load_robot_for_dynamics(&f.robot)?;
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)
