@@ -1,5 +1,5 @@
 // ofmpc report: draws the interactive figures with uPlot (vendored, MIT, assets/uplot/).
-// Each <figure data-kind="chart"> holds its data in a <script type="application/json"> element
+// Each figure element of kind "chart" holds its data in a <script type="application/json"> element
 // (see crates/ofmpc-cli/src/output/chart.rs for the encoding: 16-bit values over [lo, hi]).
 // Drag a box: zoom; double-click: reset; shift + drag: pan; wheel: zoom x about the cursor.
 (function () {
