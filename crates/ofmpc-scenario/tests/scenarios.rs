@@ -69,3 +69,38 @@ fn loop_settings_carry_pick_up_safety_and_faults() {
     assert!(f.records_measurement());
     assert!(!ScenarioFile::default().records_measurement());
 }
+
+#[test]
+fn baselines_and_controller_shorthands() {
+    use ofmpc::control::{ControllerKind, Weight};
+    let f: ScenarioFile = toml::from_str(
+        "controllers = [\"second\", \"baselines\"]\n[baselines]\nctc_bandwidth = [100, 100, 100, 120, 120, 120]\n",
+    )
+    .unwrap();
+    let mut want = vec![ControllerKind::Second];
+    want.extend(ControllerKind::BASELINES);
+    assert_eq!(f.controllers, want);
+    assert_eq!(f.baselines.pid_bandwidth, Weight::Scalar(60.0));
+    let all: ScenarioFile = toml::from_str("controllers = [\"all\"]").unwrap();
+    assert_eq!(all.controllers, ControllerKind::EVERY.to_vec());
+    assert!(toml::from_str::<ScenarioFile>("controllers = [\"pidd\"]").is_err());
+    // The bandwidths reach the controllers' settings; a bad one names its key.
+    let s = Scenario::resolve(&f).unwrap();
+    assert_eq!(s.experiment.mpc.baselines, f.baselines);
+    let mut bad = f.clone();
+    bad.baselines.dob_observer_bandwidth = Weight::Scalar(0.0);
+    let e = match Scenario::resolve(&bad) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a zero bandwidth was accepted"),
+    };
+    assert!(
+        e.contains("[baselines]") && e.contains("dob_observer_bandwidth"),
+        "{e}"
+    );
+    // Written back only when set.
+    let text = toml::to_string(&f).unwrap();
+    assert!(text.contains("[baselines]"), "{text}");
+    assert!(!toml::to_string(&ScenarioFile::default())
+        .unwrap()
+        .contains("[baselines]"));
+}

@@ -264,7 +264,7 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
             ));
         }
         text.push_str(&format!(
-            "Complete at every payload: {}. ",
+            "Offset-free at every payload: {}. ",
             complete.join(", ")
         ));
     }

@@ -37,7 +37,7 @@
 //! a_k = (w_{k+2} − w_{k+1} − w_k + w_{k−1}) / (2 Ts²),   v_k = (w_{k+1} − w_k)/Ts − Ts a_k / 2
 //! ```
 //!
-//! ([`RefDerivatives`]): the feed-forward of the computed-torque law and the
+//! (`RefDerivatives`): the feed-forward of the computed-torque law and the
 //! reference velocity of every baseline's derivative term.
 //!
 //! # Anti-windup

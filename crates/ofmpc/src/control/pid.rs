@@ -9,7 +9,7 @@
 //! with the nominal model's gravity at the measured `q_k`, its inertia's
 //! diagonal at the start pose `q_0` (the state of the last
 //! [`Controller::reset`](super::Controller::reset)), the reference velocity
-//! of [`super::baseline::RefDerivatives`] and the gains of a discrete triple
+//! of [`super::baseline`] (module docs) and the gains of a discrete triple
 //! pole at `e^(−ωn·Ts)` ([`super::baseline`]), `ωn` =
 //! [`super::BaselineSettings::pid_bandwidth`] (default 60 rad/s). No
 //! acceleration feed-forward and no coupling: the inertia the law leaves out
