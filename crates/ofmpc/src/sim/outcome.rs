@@ -158,7 +158,7 @@ impl RunOutcome {
         matches!(
             self,
             RunOutcome::Stopped { at_rest_after_s, within_limits, final_speed, .. }
-                if !within_limits || (at_rest_after_s.is_none() && !(*final_speed <= FAILED_STOP_SPEED))
+                if !within_limits || (at_rest_after_s.is_none() && (*final_speed > FAILED_STOP_SPEED || final_speed.is_nan()))
         )
     }
     /// When the run was stopped early (s), `None` when it completed.
