@@ -98,6 +98,7 @@ fn an_encoder_dropout_ends_in_a_safe_stop_at_rest_within_half_a_second() {
             reason,
             at_rest_after_s,
             within_limits,
+            ..
         } = &r.outcome
         else {
             panic!("joint {joint}: expected a safe stop, got {}", r.outcome);

@@ -471,7 +471,12 @@ impl<'a> ClosedLoop<'a> {
         if let Some(s) = self.supervisor.stopping() {
             if outcome.is_completed() {
                 let last = rec.record().t.last().copied().unwrap_or(s.t) + ts;
+                let qd = &rec.record().qd;
+                let final_speed = qd[qd.len().saturating_sub(n)..]
+                    .iter()
+                    .fold(0.0, |a: f64, v| a.max(v.abs()));
                 outcome = RunOutcome::Stopped {
+                    final_speed,
                     t: s.t,
                     reason: s.reason.clone(),
                     at_rest_after_s: (s.moving_until < last - 1e-9).then_some(s.moving_until - s.t),

@@ -28,8 +28,8 @@ pub use closed_loop::{
 pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use outcome::{
-    ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, MAX_RECORD_VALUES,
-    MAX_SUBSTEPS,
+    ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, FAILED_STOP_SPEED,
+    MAX_RECORD_VALUES, MAX_SUBSTEPS,
 };
 pub use plant::{
     Fault, FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,

@@ -125,8 +125,16 @@ pub enum RunOutcome {
         at_rest_after_s: Option<f64>,
         /// The true joint positions stayed within the joint limits.
         within_limits: bool,
+        /// The largest true joint speed at the end of the record (rad/s).
+        final_speed: f64,
     },
 }
+
+/// A stop whose robot is still faster than this at the end of the record
+/// (rad/s, on any joint) did not stop it ([`RunOutcome::is_failed_stop`]):
+/// slower motion (a wrist hunting in friction at a few mrad/s while held)
+/// is a stop that has not settled, not a robot running away.
+pub const FAILED_STOP_SPEED: f64 = 0.05;
 
 impl RunOutcome {
     /// `Ok`, `Diverged`, `Failed`, `Stopped`, or `FailedStop` for a stop
@@ -142,15 +150,15 @@ impl RunOutcome {
         }
     }
 
-    /// A safe stop that is not one: the robot was not at rest by the end of
-    /// the record (every true joint speed below
-    /// [`crate::sim::REST_SPEED`]), or a joint left its position
-    /// limits after the stop began.
+    /// A safe stop that is not one: a joint left its position limits after
+    /// the stop began, or the robot was not at rest by the end of the record
+    /// (a true joint speed above [`crate::sim::REST_SPEED`]) and still
+    /// moved faster than [`FAILED_STOP_SPEED`] there.
     pub fn is_failed_stop(&self) -> bool {
         matches!(
             self,
-            RunOutcome::Stopped { at_rest_after_s, within_limits, .. }
-                if at_rest_after_s.is_none() || !within_limits
+            RunOutcome::Stopped { at_rest_after_s, within_limits, final_speed, .. }
+                if !within_limits || (at_rest_after_s.is_none() && (*final_speed > FAILED_STOP_SPEED || final_speed.is_nan()))
         )
     }
     /// When the run was stopped early (s), `None` when it completed.
@@ -201,6 +209,7 @@ impl fmt::Display for RunOutcome {
                 reason,
                 at_rest_after_s,
                 within_limits,
+                ..
             } => {
                 if self.is_failed_stop() {
                     write!(f, "the safe stop from t = {t:.3} s failed: {reason}; ")?;
