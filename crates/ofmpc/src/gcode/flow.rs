@@ -218,11 +218,7 @@ fn link_jump(
                 }
             }
         }
-        OKind::Return
-            if !stack
-                .iter()
-                .any(|t| t.kind == OKind::Sub && t.label == o.label) =>
-        {
+        OKind::Return if !stack.iter().any(|t| t.kind == OKind::Sub) => {
             let m = format!("o{} return outside the subroutine o{}", o.label, o.label);
             return Err(structure_error(
                 l,

@@ -129,7 +129,11 @@ impl Interpreter {
         );
     }
 
-    pub(super) fn finish(self) -> Result<Program, GcodeError> {
+    pub(super) fn finish(mut self) -> Result<Program, GcodeError> {
+        if let (None, Some(p0)) = (self.pos, self.initial) {
+            // No motion, but the tool position is known: an empty path from there.
+            self.begin_at(p0, 0);
+        }
         if self.pos.is_none() {
             return Err(err(
                 0,
@@ -232,13 +236,13 @@ impl Interpreter {
                         "move it to the front or remove it",
                     ));
                 }
-                if w.value < 0.0 || w.value.fract() != 0.0 {
+                if w.value < 0.0 {
                     return Err(err(
                         line,
                         w.col,
                         InvalidValue,
                         w.text,
-                        "an N label must be a non-negative integer",
+                        "an N label must not be negative (a non-negative integer)",
                         "write e.g. N010",
                     ));
                 }

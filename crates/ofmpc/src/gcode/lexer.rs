@@ -429,6 +429,27 @@ impl<'a> LineChars<'a> {
         if name == "EXISTS" {
             let (k2, c2) = self.peek(k + 1);
             let (k3, c3) = self.peek(k2 + 1);
+            if c2 == Some('#') && c3 != Some('<') {
+                let (e, k4) = self.real_value(k2 + 1, depth)?;
+                let (k5, c5) = self.peek(k4);
+                if c5 == Some(']') {
+                    // A numbered parameter exists when its number is valid.
+                    let exists = Expr::Bin(
+                        Op::And,
+                        Box::new(Expr::Bin(
+                            Op::Ge,
+                            Box::new(e.clone()),
+                            Box::new(Expr::Num(1.0)),
+                        )),
+                        Box::new(Expr::Bin(
+                            Op::Le,
+                            Box::new(e),
+                            Box::new(Expr::Num(super::expr::MAX_PARAMETER as f64)),
+                        )),
+                    );
+                    return Ok((exists, k5 + 1));
+                }
+            }
             if c2 == Some('#') && c3 == Some('<') {
                 let (n, k4) = self.name(k3)?;
                 let (k5, c5) = self.peek(k4);
@@ -612,7 +633,22 @@ impl<'a> LineChars<'a> {
             _ => return Ok(None),
         };
         let (k, _) = self.peek(k);
-        let (kw, k2) = self.letters(k);
+        // Blanks inside the keyword are ignored, as LinuxCNC removes them (`end sub`).
+        let mut kw = String::new();
+        let mut k2 = k;
+        loop {
+            let (w, e) = self.letters(k2);
+            if w.is_empty() {
+                break;
+            }
+            kw.push_str(&w);
+            k2 = e;
+            let (next, c) = self.peek(k2);
+            if !c.is_some_and(|c| c.is_ascii_alphabetic()) {
+                break;
+            }
+            k2 = next;
+        }
         let Some(kind) = OKind::from_word(&kw) else {
             if label.starts_with('<') {
                 return Err(self.syntax(
@@ -633,6 +669,7 @@ impl<'a> LineChars<'a> {
                     args.push(e);
                     k = k3;
                 }
+                Some('(') => k = self.comment(k1)?.0,
                 _ => break,
             }
         }
