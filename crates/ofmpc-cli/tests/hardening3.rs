@@ -278,7 +278,7 @@ fn a_run_in_another_pid_namespace_does_not_take_the_lock() {
     );
     let h = host.wait_with_output().unwrap();
     assert!(h.status.success(), "{}", stderr(&h));
-    assert_eq!(fs::read_dir(out.join("../o")).unwrap().count() > 3, true);
+    assert!(out.join("metrics.json").is_file());
     assert!(!out.join(".ofmpc-lock").exists());
 }
 

@@ -102,7 +102,7 @@ class Reference:
     def w(self, k: int) -> F64Array:
         """w_k (n,); past the end the last sample."""
     def preview(self, k: int, horizon: int) -> F64Array:
-        """w_{k+1..k+N} as (N, n), the last sample held past the end."""
+        """w_{k+1..k+N} as (N, n), the last sample held past the end; N ≤ 1000 (MAX_HORIZON), else OfmpcError."""
     def __len__(self) -> int: ...
 
 class Controller:
@@ -140,9 +140,12 @@ class Controller:
     def last_info(self) -> Optional[dict]:
         """{"cost", "r_diag_ratio", "zoh_squarings"} of the last step."""
     def reset(self, x0: ArrayLike) -> None:
-        """Starts a run at the measured state x0 = [q; q̇] (2n,)."""
+        """Starts a run at the measured state x0 = [q; q̇] (2n,); required before the first step."""
     def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
-        """Measured x (2n,), reference w_k (n,), preview (N, n) → torque τ_k (n,)."""
+        """Measured x (2n,), reference w_k (n,), preview (N, n) or (N·n,) → torque τ_k (n,).
+
+        Raises OfmpcError before the first reset, and for an argument of another shape (a
+        transposed preview, a column x) or a complex, datetime or string dtype, naming it."""
 
 def read_program(
     program: Union[str, os.PathLike[str]],
