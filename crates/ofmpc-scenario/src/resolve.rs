@@ -159,15 +159,37 @@ pub fn read_program(file: Option<&Path>) -> Result<(String, String), ScenarioErr
     }
 }
 
+/// Two different masses whose run folders would share a name (the label keeps 6 significant
+/// digits) are not a repeat: refused, naming both (a true repeat is a warning). No mass at
+/// all is refused too.
+fn check_mass_labels(m: &[f64]) -> Result<(), ScenarioError> {
+    if m.is_empty() {
+        return Err(ScenarioError::NoPayloads);
+    }
+    for (i, &a) in m.iter().enumerate() {
+        if let Some(&b) = m[..i].iter().find(|&&b| {
+            b + 0.0 != a + 0.0 && ofmpc::sim::mass_label(a) == ofmpc::sim::mass_label(b)
+        }) {
+            return Err(ScenarioError::Parse {
+                origin: format!("[payload] masses_kg = {m:?}"),
+                message: format!(
+                    "the masses {b} and {a} kg differ but would share the run folder \
+                     _m{}: give masses that differ within 6 significant digits",
+                    ofmpc::sim::mass_label(a)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 impl Scenario {
     /// Resolves a scenario file: loads, parses, times and maps to joint space.
     pub fn resolve(f: &ScenarioFile) -> Result<Self, ScenarioError> {
         if f.controllers.is_empty() {
             return Err(ScenarioError::NoControllers);
         }
-        if f.payload.masses_kg.is_empty() {
-            return Err(ScenarioError::NoPayloads);
-        }
+        check_mass_labels(&f.payload.masses_kg)?;
         let (robot, mut warnings) = load_robot_for_dynamics(&f.robot)?;
         let n = robot.dof();
         f.mpc
@@ -183,23 +205,6 @@ impl Scenario {
         f.plant
             .validate_for(n, f.mpc.ts)
             .map_err(|e| settings_error(e.into()))?;
-        // Two different masses whose run folders would share a name (the label keeps 6
-        // significant digits) are not a repeat: refused, naming both (a repeat is a warning).
-        let m = &f.payload.masses_kg;
-        for (i, &a) in m.iter().enumerate() {
-            if let Some(&b) = m[..i].iter().find(|&&b| {
-                b + 0.0 != a + 0.0 && ofmpc::sim::mass_label(a) == ofmpc::sim::mass_label(b)
-            }) {
-                return Err(ScenarioError::Parse {
-                    origin: format!("[payload] masses_kg = {m:?}"),
-                    message: format!(
-                        "the masses {b} and {a} kg differ but would share the run folder \
-                         _m{}: give masses that differ within 6 significant digits",
-                        ofmpc::sim::mass_label(a)
-                    ),
-                });
-            }
-        }
         let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
         let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
         let mut payloads = Vec::new();
