@@ -1,6 +1,5 @@
 //! The user guide cannot drift from the code or break its links:
-//! - every relative link and `#anchor` in README.md and docs/**/*.md resolves (the README draft
-//!   docs/guide/README-draft.md as if it stood at the repository's root, where it goes);
+//! - every relative link and `#anchor` in README.md and docs/**/*.md resolves;
 //! - every scenario key the code accepts is documented in docs/guide/reference/scenario.md, and
 //!   every key documented there is accepted. The keys are traced from the scenario file's types:
 //!   every section denies unknown keys, so serde's message for a probe key ("unknown field
@@ -210,12 +209,7 @@ fn markdown_files() -> Vec<(PathBuf, PathBuf)> {
     files
         .into_iter()
         .map(|f| {
-            // The README draft goes to the root: its links are written for there.
-            let base = if f.ends_with("docs/guide/README-draft.md") {
-                root.clone()
-            } else {
-                f.parent().unwrap().to_path_buf()
-            };
+            let base = f.parent().unwrap().to_path_buf();
             (f, base)
         })
         .collect()
