@@ -174,11 +174,6 @@ impl PyController {
         w_k: &Bound<'py, PyAny>,
         preview: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        if !self.started {
-            return Err(to_py(
-                "step before reset: call reset(x0) with the measured state [q, q̇] first",
-            ));
-        }
         let (n, h) = (self.dof, self.horizon);
         fill_shaped("x", x, &[("(2·dof,)", &[2 * n])], &mut self.x)?;
         fill_shaped("w_k", w_k, &[("(dof,)", &[n])], &mut self.w)?;
@@ -188,6 +183,13 @@ impl PyController {
             &[("(horizon, dof)", &[h, n]), ("(horizon·dof,)", &[h * n])],
             &mut self.preview,
         )?;
+        // The arguments first (an argument error names the argument whatever the state), then
+        // the state: a controller never reset has no state to step from.
+        if !self.started {
+            return Err(to_py(
+                "step before reset: call reset(x0) with the measured state [q, q̇] first",
+            ));
+        }
         let info = self
             .controller
             .get_mut()

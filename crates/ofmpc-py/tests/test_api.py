@@ -129,6 +129,7 @@ def test_controller_holds_a_rest_state_and_validates_its_inputs(robot, ref):
         c.step(x[:3], w, ref.preview(0, 10))
     with pytest.raises(ofmpc.OfmpcError, match="preview"):
         c.step(x, w, ref.preview(0, 9))
+    c.reset(x)  # a step needs a state to start from (issue #22 item 6)
     with pytest.raises(ofmpc.OfmpcError, match="not finite"):
         c.step(np.full(12, np.nan), w, ref.preview(0, 10))
 
