@@ -257,7 +257,7 @@ def test_sections_as_lists_and_robot_files_named_like_built_ins(tmp_path, monkey
             "simulation": {"hold_s": 0.2, "steady_window_s": 0.1},
         }
     )
-    assert m["runs"][0]["status"] == "completed"
+    assert m["runs"][0]["status"] == "ok"
 
 
 def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
@@ -268,7 +268,7 @@ def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
             ofmpc.plan(pathlib.Path("/dev/zero"), robot)
     latin = tmp_path / "p.gcode"
     latin.write_bytes("G0 X500 Y0 Z600 ; caf\xe9\n".encode("latin-1"))
-    with pytest.raises(ofmpc.OfmpcError, match=r"not UTF-8 text: byte 22 \(line 1, column 23\)"):
+    with pytest.raises(ofmpc.OfmpcError, match=r"not UTF-8 text: byte 21 \(line 1, column 22\)"):
         ofmpc.plan(str(latin), robot)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         ofmpc.plan("prog.gcode2", robot)

@@ -53,7 +53,7 @@ _PROGRAM_SUFFIXES = (".gcode", ".nc", ".ngc", ".tap", ".cnc", ".txt")
 _MAX_PROGRAM_BYTES = 64 << 20
 
 
-def _read_program(path: str) -> str:
+def _read_program_file(path: str) -> str:
     """The file's text: at most _MAX_PROGRAM_BYTES are read (a /dev/zero is never read whole);
     text that is not UTF-8 is an OfmpcError naming the byte, line and the encoding to use."""
     with open(path, "rb") as f:
@@ -82,13 +82,13 @@ def _program_text(program: Union[str, "os.PathLike[str]"]) -> Tuple[Optional[str
     """(text or None for the built-in program, name for messages)."""
     if isinstance(program, os.PathLike):
         path = os.fspath(program)
-        return _read_program(path), path
+        return _read_program_file(path), path
     if not isinstance(program, str):
         raise TypeError(f"program must be a path, G-code text or 'paper', not {type(program).__name__}")
     if program.strip().lower() == "paper":
         return None, "paper-table1.gcode (built in)"
     if "\n" not in program and os.path.isfile(program):
-        return _read_program(program), program
+        return _read_program_file(program), program
     one_line = "\n" not in program.strip()
     if one_line and (
         program.strip().lower().endswith(_PROGRAM_SUFFIXES) or _LOOKS_LIKE_FILE.match(program.strip())
