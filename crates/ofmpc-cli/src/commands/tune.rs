@@ -95,6 +95,21 @@ fn out_files(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 3])> {
     ))
 }
 
+/// The scenario of `tune`'s options with the paper's tuning, its paths absolute (the written
+/// scenario then runs from any folder).
+fn base_scenario(a: &TuneArgs) -> anyhow::Result<Scenario> {
+    let mut setup = a.setup.clone();
+    if ofmpc_scenario::is_model_path(&setup.robot) {
+        setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
+    }
+    setup.drives = setup.drives.as_deref().map(absolute);
+    setup.program = setup.program.as_deref().map(absolute);
+    Ok(Scenario::resolve(&scenario_file(
+        &setup,
+        MpcSettings::default(),
+    )?)?)
+}
+
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     let range = super::parse_fixed("--payload-range", &a.payload_range, 2, "LO,HI in kg", "0,3")?;
@@ -109,13 +124,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     if let Some(k) = kinds.iter().find(|k| k.is_adaptive()) {
         bail!("--controllers {k}: tune the non-adaptive controllers (the adaptive ones identify the payload)");
     }
-    let mut setup = a.setup.clone();
-    if ofmpc_scenario::is_model_path(&setup.robot) {
-        setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
-    }
-    setup.drives = setup.drives.as_deref().map(absolute);
-    setup.program = setup.program.as_deref().map(absolute);
-    let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    let base = base_scenario(a)?;
     // The scenario and its figure go through the same staged, input-checked output as `run`:
     // checked before the search, moved into place only when all three are written.
     let (folder, names) = out_files(&a.out)?;
@@ -206,13 +215,7 @@ fn tune_baselines(
             kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(",")
         );
     };
-    let mut setup = a.setup.clone();
-    if ofmpc_scenario::is_model_path(&setup.robot) {
-        setup.robot = absolute(Path::new(&setup.robot)).display().to_string();
-    }
-    setup.drives = setup.drives.as_deref().map(absolute);
-    setup.program = setup.program.as_deref().map(absolute);
-    let base = Scenario::resolve(&scenario_file(&setup, MpcSettings::default())?)?;
+    let base = base_scenario(a)?;
     let (folder, names) = out_files(&a.out)?;
     let mut dir = super::experiment::open_output(
         &folder,
