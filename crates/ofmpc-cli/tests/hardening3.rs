@@ -2,6 +2,7 @@
 //! exit status, the message and the file system before and after.
 
 mod bin;
+mod signals;
 use bin::*;
 
 use std::collections::BTreeMap;
@@ -290,7 +291,7 @@ fn an_ignored_sighup_stays_ignored() {
     let d = tmp.path();
     for (trap, code) in [("trap '' HUP; ", 0), ("", 129)] {
         let out = d.join(format!("o{code}"));
-        let run = Command::new("sh")
+        let run = signals::with_default_signals(&mut Command::new("sh"))
             .arg("-c")
             .arg(format!(
                 "{trap}exec \"$0\" reproduce --payload 0,0.5,1,2 --out \"$1\""

@@ -4,6 +4,7 @@
 //! the exit status, the message and the file system before and after.
 
 mod bin;
+mod signals;
 use bin::*;
 
 use serde_json::Value;
@@ -334,7 +335,7 @@ fn wait_for(what: &str, mut cond: impl FnMut() -> bool) {
 
 /// A long run (a payload sweep) into `out`, started in the background.
 fn long_run(cwd: &Path, out: &Path) -> Child {
-    Command::new(BIN)
+    signals::with_default_signals(&mut Command::new(BIN))
         .args([
             "reproduce",
             "--payload",
