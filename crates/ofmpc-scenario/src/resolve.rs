@@ -277,6 +277,8 @@ impl Scenario {
         {
             warnings.push(w);
         }
+        let end_s = planned.reference.duration() + f.simulation.hold_s;
+        warnings.extend(events_after_the_end(f, end_s));
         let (trajectory, reference) = (planned.trajectory, planned.reference);
         let experiment = Experiment {
             robot,
@@ -346,6 +348,39 @@ fn friction_substep_warning(
          resolved and steady errors are not to be trusted; use substep = {suggest:.3e} s or smaller",
         plant.substep
     ))
+}
+
+/// Events the scenario schedules after the run ends (the path, then the hold: `end_s`), which
+/// would silently do nothing: the payload's pick-up, `[faults]` and `[plant] faults`.
+fn events_after_the_end(f: &ScenarioFile, end_s: f64) -> Vec<String> {
+    use ofmpc::sim::Fault;
+    let after = |t: f64| t > end_s;
+    let end = format!(
+        "after the run's end ({end_s:.3} s: the path, then the hold of {} s): it never happens",
+        f.simulation.hold_s
+    );
+    let mut w = Vec::new();
+    if let Some(t) = f.payload.pick_up_at_s.filter(|&t| after(t)) {
+        w.push(format!("[payload] pick_up_at_s = {t} s is {end}"));
+    }
+    for &t in f.faults.nan_at_s.iter().filter(|&&t| after(t)) {
+        w.push(format!("[faults] nan_at_s: {t} s is {end}"));
+    }
+    for &[a, b] in f.faults.dropout_s.iter().filter(|d| after(d[0])) {
+        w.push(format!("[faults] dropout_s: [{a}, {b}] s starts {end}"));
+    }
+    for (i, fault) in f.plant.faults.iter().enumerate() {
+        let t = match fault {
+            Fault::EncoderGlitch { t, .. }
+            | Fault::EncoderDropout { t, .. }
+            | Fault::TorqueDrop { t, .. } => *t,
+            _ => continue,
+        };
+        if after(t) {
+            w.push(format!("[plant] faults[{i}]: t = {t} s is {end}"));
+        }
+    }
+    w
 }
 
 /// `[mpc]` with the bandwidths of `[baselines]`, checked for `n` joints.

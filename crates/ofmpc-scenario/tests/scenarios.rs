@@ -104,3 +104,37 @@ fn baselines_and_controller_shorthands() {
         .unwrap()
         .contains("[baselines]"));
 }
+
+/// Issue #22 item 13: events scheduled after the run's end (path + hold) are warned about,
+/// naming the key; events within it are not.
+#[test]
+fn events_after_the_end_are_warned_about() {
+    let text = "controllers = [\"usual\"]\n[payload]\nmasses_kg = [0.0]\npick_up_at_s = 1e6\n\
+                [faults]\nnan_at_s = [1.0, 500.0]\ndropout_s = [[2.0, 2.1], [600.0, 601.0]]\n\
+                [plant]\nfaults = [{ kind = \"torque_drop\", t = 700.0, joint = 1, fraction = 0.5, duration_s = 0.1 }, \
+                { kind = \"encoder_glitch\", t = 1.0, joint = 2, offset_rad = 0.01 }]\n";
+    let f: ScenarioFile = toml::from_str(text).unwrap();
+    let s = Scenario::resolve(&f).unwrap();
+    let late: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("never happens"))
+        .collect();
+    assert_eq!(late.len(), 4, "{late:#?}");
+    for key in [
+        "[payload] pick_up_at_s = 1000000 s",
+        "[faults] nan_at_s: 500 s",
+        "[faults] dropout_s: [600, 601] s",
+        "[plant] faults[0]: t = 700 s",
+    ] {
+        assert!(late.iter().any(|w| w.contains(key)), "{key} in {late:#?}");
+    }
+    // Within the run: no such warning.
+    let f: ScenarioFile = toml::from_str("[payload]\npick_up_at_s = 1.5\n").unwrap();
+    let s = Scenario::resolve(&f).unwrap();
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("never happens")),
+        "{:?}",
+        s.warnings
+    );
+}
