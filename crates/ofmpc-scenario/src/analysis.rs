@@ -472,9 +472,37 @@ fn best_model_payload(
     Ok(best)
 }
 
+/// Steady joint error (rad) below which a run counts as offset-free.
+pub(crate) const OFFSET_FREE_RAD: f64 = 1e-9;
+
+/// Runs `e` with each controller of `kinds` at each payload of `masses` (in that order) and
+/// returns whether every run completed offset-free (steady joint error ≤ [`OFFSET_FREE_RAD`])
+/// and the worst Cartesian RMS error (mm) of the runs made: after the first run that does
+/// not hold, the others are skipped (the candidate cannot be chosen any more).
+pub(crate) fn runs_hold<'a>(
+    e: &ofmpc::sim::Experiment,
+    kinds: &[ControllerKind],
+    masses: impl Iterator<Item = &'a f64> + Clone,
+) -> (bool, f64) {
+    let mut worst = 0.0f64;
+    for &k in kinds {
+        for &m in masses.clone() {
+            let Ok((r, metrics)) = e.run(k, &Payload::point_mass(m), &mut |_, _| {}) else {
+                return (false, worst);
+            };
+            worst = worst.max(metrics.cartesian_error_rms_mm);
+            let steady =
+                (metrics.steady_joint_error_max_rad.iter()).fold(0.0, |a: f64, &b| a.max(b));
+            if !(r.outcome.is_completed() && steady <= OFFSET_FREE_RAD) {
+                return (false, worst);
+            }
+        }
+    }
+    (true, worst)
+}
+
 /// Simulates candidate `c` for every controller of `kinds` at the payloads
-/// `masses`: its worst Cartesian RMS error and whether every run completed
-/// offset-free (steady joint error ≤ 1e-9 rad).
+/// `masses`, the heaviest first (the likeliest to fail): [`runs_hold`].
 fn simulate_candidate(
     exp: &ofmpc::sim::Experiment,
     c: &mut Candidate,
@@ -483,30 +511,5 @@ fn simulate_candidate(
 ) {
     let mut e = exp.clone();
     e.mpc = candidate_settings(c, exp.robot.dof());
-    let mut worst = 0.0f64;
-    let mut ok = true;
-    // The heaviest payload first: the likeliest to fail; after a failed run
-    // the candidate cannot be chosen and its other runs are skipped (its
-    // RMS is the worst of the runs made).
-    for &k in kinds {
-        for &m in masses.iter().rev() {
-            if !ok {
-                break;
-            }
-            match e.run(k, &Payload::point_mass(m), &mut |_, _| {}) {
-                Ok((r, metrics)) => {
-                    let steady = metrics
-                        .steady_joint_error_max_rad
-                        .iter()
-                        .copied()
-                        .fold(0.0, f64::max);
-                    ok &= r.outcome.is_completed() && steady <= 1e-9;
-                    worst = worst.max(metrics.cartesian_error_rms_mm);
-                }
-                Err(_) => ok = false,
-            }
-        }
-    }
-    c.rms_mm = worst;
-    c.offset_free = ok;
+    (c.offset_free, c.rms_mm) = runs_hold(&e, kinds, masses.iter().rev());
 }

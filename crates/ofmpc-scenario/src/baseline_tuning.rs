@@ -15,7 +15,6 @@ use crate::error::ScenarioError;
 use crate::file::ScenarioFile;
 use crate::resolve::Scenario;
 use ofmpc::control::{BaselineSettings, ControllerKind, Weight};
-use ofmpc::robot::Payload;
 use ofmpc::sim::Experiment;
 use rayon::prelude::*;
 
@@ -66,22 +65,7 @@ fn with_bandwidth(b: &BaselineSettings, kind: ControllerKind, w: f64) -> Baselin
 fn simulate(exp: &Experiment, kind: ControllerKind, w: f64, masses: &[f64]) -> BandwidthCandidate {
     let mut e = exp.clone();
     e.mpc.baselines = with_bandwidth(&exp.mpc.baselines, kind, w);
-    let mut worst = 0.0f64;
-    let mut ok = true;
-    for &m in masses {
-        match e.run(kind, &Payload::point_mass(m), &mut |_, _| {}) {
-            Ok((r, metrics)) => {
-                let steady = metrics
-                    .steady_joint_error_max_rad
-                    .iter()
-                    .copied()
-                    .fold(0.0, f64::max);
-                ok &= r.outcome.is_completed() && steady <= 1e-9;
-                worst = worst.max(metrics.cartesian_error_rms_mm);
-            }
-            Err(_) => ok = false,
-        }
-    }
+    let (ok, worst) = crate::analysis::runs_hold(&e, &[kind], masses.iter());
     BandwidthCandidate {
         bandwidth: w,
         rms_mm: worst,

@@ -46,7 +46,7 @@
 //! limit clipped at this sample is not accumulated (as the incremental
 //! algorithms' aggregated error, [`super::MpcSettings::torque_limits`]).
 
-use super::core::{check_finite, check_len};
+use super::core::{check_finite, check_len, check_result};
 use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
 use super::settings::{MpcSettings, SettingsError};
@@ -353,17 +353,7 @@ impl JointLawCore {
             .filter(|_| limited)
             .map(|d| d.max_torque_nm.as_slice());
         clip(&mut self.tau_new, limits, &mut self.clipped);
-        if let Some(index) = self
-            .u
-            .iter()
-            .chain(&self.tau_new)
-            .position(|v| !v.is_finite())
-        {
-            return Err(StepError::NonFiniteResult {
-                what: if index < n { "u" } else { "tau" },
-                index: index % n,
-            });
-        }
+        check_result(&self.u, &self.tau_new)?;
         tau.copy_from_slice(&self.tau_new);
         self.pid.commit(&self.clipped);
         self.refd.commit(w_k);

@@ -668,17 +668,7 @@ impl Core {
                 *t = t.clamp(-lim, *lim);
             }
         }
-        if let Some(index) = self
-            .u_new
-            .iter()
-            .chain(&self.tau_new)
-            .position(|v| !v.is_finite())
-        {
-            return Err(StepError::NonFiniteResult {
-                what: if index < n { "u" } else { "tau" },
-                index: index % n,
-            });
-        }
+        check_result(&self.u_new, &self.tau_new)?;
         tau.copy_from_slice(&self.tau_new);
         self.x_prev.copy_from_slice(x);
         self.u_prev.copy_from_slice(&self.u_new);
@@ -783,6 +773,19 @@ pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Resu
             expected,
             got,
         })
+    }
+}
+
+/// A step's result, the input `u` and the torque `τ` (same length), must be finite: else
+/// [`StepError::NonFiniteResult`] naming the first entry that is not (the step then changes
+/// no state, so the caller may stop safely).
+pub(crate) fn check_result(u: &[f64], tau: &[f64]) -> Result<(), StepError> {
+    match u.iter().chain(tau).position(|v| !v.is_finite()) {
+        Some(index) => Err(StepError::NonFiniteResult {
+            what: if index < u.len() { "u" } else { "tau" },
+            index: index % u.len(),
+        }),
+        None => Ok(()),
     }
 }
 

@@ -32,7 +32,7 @@
 //! QP would bound `τ̃`, not the applied torque) and the observer is given the
 //! input actually applied, so the disturbance estimate does not wind up.
 
-use super::core::{check_finite, check_len};
+use super::core::{check_finite, check_len, check_result};
 use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
 use super::settings::{bandwidths, MpcSettings, SettingsError};
@@ -216,17 +216,7 @@ impl Controller for DobMpc {
             .step(model, x, w_k, preview, &mut self.tau_tilde)?;
         self.observe(x);
         self.torque()?;
-        if let Some(index) = self
-            .u
-            .iter()
-            .chain(&self.tau_new)
-            .position(|v| !v.is_finite())
-        {
-            return Err(StepError::NonFiniteResult {
-                what: if index < n { "u" } else { "tau" },
-                index: index % n,
-            });
-        }
+        check_result(&self.u, &self.tau_new)?;
         tau.copy_from_slice(&self.tau_new);
         self.d_hat.copy_from_slice(&self.d_new);
         self.x_prev.copy_from_slice(x);
