@@ -121,9 +121,8 @@ pub fn triple_pole_is_stable(omega_n: f64, ts: f64, gamma: f64) -> bool {
 /// ([`triple_pole_is_stable`]). `(NaN, NaN)` when the loop is not stable at
 /// the nominal inertia (`omega_n` or `ts` not finite and `> 0`).
 pub fn triple_pole_inertia_ratio_range(omega_n: f64, ts: f64) -> (f64, f64) {
-    if !(omega_n > 0.0 && ts > 0.0 && omega_n.is_finite() && ts.is_finite())
-        || !triple_pole_is_stable(omega_n, ts, 1.0)
-    {
+    let valid = omega_n > 0.0 && ts > 0.0 && omega_n.is_finite() && ts.is_finite();
+    if !(valid && triple_pole_is_stable(omega_n, ts, 1.0)) {
         return (f64::NAN, f64::NAN);
     }
     let boundary = |mut stable: f64, mut unstable: f64| {
