@@ -261,6 +261,65 @@ fn tune_writes_a_scenario_that_runs_as_is() {
     }
 }
 
+/// A baseline's bandwidth on the test arm (issue #21): too slow to settle within the hold
+/// below 39.8 rad/s, unstable above 100 rad/s at 2 kg (the sampled triple pole's Jury
+/// bound, `control::baseline`); tune takes the top of the band that holds, and its scenario
+/// runs offset-free.
+#[test]
+fn tune_finds_the_band_of_a_baseline_that_holds_on_the_test_arm() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("ctc.toml");
+    let (urdf, drives, program) = (
+        test_data("arm6.urdf"),
+        test_data("arm6_drives.toml"),
+        test_data("arc_yz.gcode"),
+    );
+    let text = ok(&[
+        "tune",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--drives",
+        drives.to_str().unwrap(),
+        "--program",
+        program.to_str().unwrap(),
+        "--origin",
+        "500,110,500",
+        "--payload-range",
+        "0,2",
+        "--controllers",
+        "ctc",
+        "--out",
+        file.to_str().unwrap(),
+        "--json",
+    ]);
+    let v: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["bandwidth_rad_s"].as_f64().unwrap(), 100.0, "{text}");
+    let c = v["candidates"].as_array().unwrap();
+    assert_eq!(
+        c[0]["offset_free"], false,
+        "10 rad/s settles within the hold"
+    );
+    let m = v["margin"].as_f64().unwrap();
+    assert!((m - (126.0f64 / 100.0).ln()).abs() < 1e-9, "{m}");
+    let out = tmp.path().join("out");
+    ok(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let runs = metrics(&out)["runs"].as_array().unwrap().clone();
+    assert_eq!(runs.len(), 5);
+    for r in &runs {
+        assert_eq!(r["status"], "ok", "{}", r["name"]);
+        assert!(
+            max_of(&r["steady_joint_error_max_rad"]) <= 1e-9,
+            "{}",
+            r["name"]
+        );
+    }
+}
+
 /// `analyze stability` in words (`--words`; the default on a terminal) says what the numbers
 /// mean, in particular that the usual MPC's large payload is stability, not precision; `--json`
 /// gives the JSON that a pipe gets by default.

@@ -7,9 +7,13 @@
 //! disturbance observer. Faster is more accurate until the payload the model
 //! does not know (and the sampling) make the loop unstable. The search
 //! simulates the range's ends and middle for each bandwidth of
-//! [`BANDWIDTH_GRID`], ascending, up to the first that does not keep them
-//! all offset-free; the margin is `ln(ω_fail / ω)`, the logarithmic distance
-//! to that first failing bandwidth (`None`: none of the grid failed).
+//! [`BANDWIDTH_GRID`], ascending, and takes the last of the first run of
+//! bandwidths that keep them all offset-free: below that run a loop is too
+//! slow to settle within the hold (the integrator's pole scales with the
+//! bandwidth), above it the unmodelled inertia leaves the sampled loop's
+//! stable range (`control::baseline`, Jury bound). The margin is
+//! `ln(ω_fail / ω)`, the logarithmic distance to the first failing bandwidth
+//! above the chosen one (`None`: none above it failed).
 
 use crate::error::ScenarioError;
 use crate::file::ScenarioFile;
@@ -40,7 +44,7 @@ pub struct BandwidthCandidate {
 pub struct BandwidthTuning {
     /// Every bandwidth simulated, ascending.
     pub candidates: Vec<BandwidthCandidate>,
-    /// The largest bandwidth below the first failing one.
+    /// The largest bandwidth of the first run of offset-free ones.
     pub chosen: BandwidthCandidate,
     /// `ln(ω_fail / ω_chosen)`; `None` when no bandwidth of the grid failed.
     pub margin: Option<f64>,
@@ -94,10 +98,18 @@ pub fn baseline_bandwidth(
         .par_iter()
         .map(|&w| simulate(exp, kind, w, &masses))
         .collect();
-    let first_fail = candidates.iter().position(|c| !c.offset_free);
-    let chosen_at = match first_fail {
-        Some(i) => i.checked_sub(1),
-        None => candidates.len().checked_sub(1),
+    // The first run of offset-free bandwidths (module docs).
+    let first_ok = candidates.iter().position(|c| c.offset_free);
+    let first_fail = first_ok.and_then(|s| {
+        candidates[s..]
+            .iter()
+            .position(|c| !c.offset_free)
+            .map(|i| s + i)
+    });
+    let chosen_at = match (first_ok, first_fail) {
+        (None, _) => None,
+        (Some(_), Some(i)) => i.checked_sub(1),
+        (Some(_), None) => candidates.len().checked_sub(1),
     };
     let no_tuning = || ScenarioError::NoRobustTuning {
         controllers: kind.name().to_string(),

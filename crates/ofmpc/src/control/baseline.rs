@@ -26,6 +26,39 @@
 //! Control of Dynamic Systems*, 3rd ed., ch. 8; [`triple_pole_gains`]). The
 //! continuous limit (`Ts → 0`) is `kp = 3ωn²`, `kd = 3ωn`, `ki = ωn³`.
 //!
+//! # Robustness to an unmodelled inertia (Routh, Jury)
+//!
+//! When the plant's inertia is `r` times the one the gains were scaled by
+//! (a payload the nominal model leaves out), the loop gain of the error
+//! dynamics is `γ = 1/r` and the characteristic polynomial becomes
+//!
+//! ```text
+//! P_γ(z) = (z−1)³ + γ [a(z²−1) + b(z−1)² + c(z+1)]
+//!        = z³ + (γ(a+b) − 3) z² + (γ(c−2b) + 3) z + (γ(b+c−a) − 1).
+//! ```
+//!
+//! In continuous time (`Ts → 0`) this is `s³ + γ(kd s² + kp s + ki)`, which
+//! Routh–Hurwitz keeps stable only while `γ kd kp > ki`, i.e. `r < kd kp / ki
+//! = 9` for the triple pole. Sampled, the Jury conditions on the monic cubic
+//! `z³ + a₂z² + a₁z + a₀` (`P(1) > 0`, `−P(−1) > 0`, `|a₀| < 1`,
+//! `|a₀² − 1| > |a₀a₂ − a₁|`; Franklin, Powell & Workman, §4.5; Åström &
+//! Wittenmark, *Computer-Controlled Systems*, §3.3) bound `r` on both sides
+//! ([`triple_pole_inertia_ratio_range`]); at `Ts` = 10 ms:
+//!
+//! ```text
+//! ωn (rad/s)     20     60     100    150
+//! r_min        0.248  0.536  0.680  0.771
+//! r_max        7.02   4.71   3.56   2.83
+//! ```
+//!
+//! For computed torque on the nominal `Ĥ` the plant's error dynamics are
+//! `ë = H⁻¹Ĥ (…)`: the joints decouple along the eigenvectors of `Ĥ⁻¹H` and
+//! the ratio that counts is its largest generalized eigenvalue
+//! `r = λmax(Ĥ⁻¹H) = 1 + m λmax(J Ĥ⁻¹ Jᵀ)` for a point mass `m` at the point
+//! of the translational Jacobian `J` (not the diagonal's ratio). For the PID
+//! scaled by `D = diag Ĥ(q₀)` it is the spread of the eigenvalues of `D⁻¹H`,
+//! which the joints' coupling widens on both sides even without a payload.
+//!
 //! # Reference velocity and acceleration from the samples
 //!
 //! The controllers see the reference at the samples only. A double
@@ -65,6 +98,52 @@ pub fn triple_pole_gains(omega_n: f64, ts: f64) -> (f64, f64, f64) {
     let a = 3.0 - 3.0 * p - b;
     let c = 3.0 * p * p - 3.0 + 2.0 * b;
     (2.0 * a / (ts * ts), b / ts, 2.0 * c / (ts * ts * ts))
+}
+
+/// Whether the sampled triple-pole loop of [`triple_pole_gains`] at `omega_n`
+/// stays stable when the plant's inertia is `1/gamma` times the nominal one:
+/// the Jury conditions on `P_γ` (module docs).
+pub fn triple_pole_is_stable(omega_n: f64, ts: f64, gamma: f64) -> bool {
+    let (kp, kd, ki) = triple_pole_gains(omega_n, ts);
+    let (a, b, c) = (kp * ts * ts / 2.0, kd * ts, ki * ts * ts * ts / 2.0);
+    let a2 = gamma * (a + b) - 3.0;
+    let a1 = gamma * (c - 2.0 * b) + 3.0;
+    let a0 = gamma * (b + c - a) - 1.0;
+    let p1 = 1.0 + a2 + a1 + a0;
+    let pm1 = -1.0 + a2 - a1 + a0;
+    p1 > 0.0 && -pm1 > 0.0 && a0.abs() < 1.0 && (a0 * a0 - 1.0).abs() > (a0 * a2 - a1).abs()
+}
+
+/// The range `(r_min, r_max)` of inertia ratios (plant over nominal) over
+/// which the sampled triple-pole loop at `omega_n` stays stable (module
+/// docs), to a relative `1e-9`: the boundaries of the stable interval of
+/// `γ = 1/r` around `γ = 1`, found by bisection on the Jury test
+/// ([`triple_pole_is_stable`]). `(NaN, NaN)` when the loop is not stable at
+/// the nominal inertia (`omega_n` or `ts` not finite and `> 0`).
+pub fn triple_pole_inertia_ratio_range(omega_n: f64, ts: f64) -> (f64, f64) {
+    let valid = omega_n > 0.0 && ts > 0.0 && omega_n.is_finite() && ts.is_finite();
+    if !(valid && triple_pole_is_stable(omega_n, ts, 1.0)) {
+        return (f64::NAN, f64::NAN);
+    }
+    let boundary = |mut stable: f64, mut unstable: f64| {
+        while (stable - unstable).abs() > 1e-9 * stable.abs().max(unstable.abs()) {
+            let mid = 0.5 * (stable + unstable);
+            if triple_pole_is_stable(omega_n, ts, mid) {
+                stable = mid;
+            } else {
+                unstable = mid;
+            }
+        }
+        stable
+    };
+    // Small gains: the three poles meet at z = 1 as γ → 0 (unstable side).
+    let gamma_min = boundary(1.0, 0.0);
+    let mut hi = 2.0;
+    while triple_pole_is_stable(omega_n, ts, hi) && hi < 1e12 {
+        hi *= 2.0;
+    }
+    let gamma_max = boundary(1.0, hi);
+    (1.0 / gamma_max, 1.0 / gamma_min)
 }
 
 /// The reference's velocity and held acceleration at sample `k` from
@@ -449,6 +528,52 @@ mod tests {
         let (kp, kd, ki) = triple_pole_gains(10.0, 1e-5);
         assert!((kp / 300.0 - 1.0).abs() < 1e-3 && (kd / 30.0 - 1.0).abs() < 1e-3);
         assert!((ki / 1000.0 - 1.0).abs() < 1e-2);
+    }
+
+    /// Spectral radius of `P_γ` from its roots (the companion matrix's
+    /// eigenvalues, an independent check of the Jury test).
+    fn spectral_radius(omega_n: f64, ts: f64, gamma: f64) -> f64 {
+        let (kp, kd, ki) = triple_pole_gains(omega_n, ts);
+        let (a, b, c) = (kp * ts * ts / 2.0, kd * ts, ki * ts * ts * ts / 2.0);
+        let (a2, a1, a0) = (
+            gamma * (a + b) - 3.0,
+            gamma * (c - 2.0 * b) + 3.0,
+            gamma * (b + c - a) - 1.0,
+        );
+        let m = nalgebra::Matrix3::new(-a2, -a1, -a0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0);
+        m.complex_eigenvalues()
+            .iter()
+            .map(|z| z.norm())
+            .fold(0.0, f64::max)
+    }
+
+    #[test]
+    fn jury_test_and_ratio_range_agree_with_the_roots() {
+        // The module docs' table (Ts = 10 ms), and the continuous limit r < 9.
+        let table = [
+            (20.0, 0.248, 7.02),
+            (60.0, 0.536, 4.71),
+            (100.0, 0.680, 3.56),
+            (150.0, 0.771, 2.83),
+        ];
+        for (wn, rmin, rmax) in table {
+            let (lo, hi) = triple_pole_inertia_ratio_range(wn, 0.01);
+            assert!((lo / rmin - 1.0).abs() < 2e-3, "{wn}: r_min {lo}");
+            assert!((hi / rmax - 1.0).abs() < 2e-3, "{wn}: r_max {hi}");
+            // Inside the range every root is inside the unit circle, just
+            // outside it one is not.
+            for r in [lo * 1.01, 1.0, (lo * hi).sqrt(), hi * 0.99] {
+                assert!(spectral_radius(wn, 0.01, 1.0 / r) < 1.0, "{wn}, r {r}");
+                assert!(triple_pole_is_stable(wn, 0.01, 1.0 / r));
+            }
+            for r in [lo * 0.99, hi * 1.01, hi * 3.0] {
+                assert!(spectral_radius(wn, 0.01, 1.0 / r) > 1.0, "{wn}, r {r}");
+                assert!(!triple_pole_is_stable(wn, 0.01, 1.0 / r));
+            }
+        }
+        let (_, hi) = triple_pole_inertia_ratio_range(1.0, 1e-4);
+        assert!((hi / 9.0 - 1.0).abs() < 1e-3, "{hi}");
+        assert!(triple_pole_inertia_ratio_range(f64::NAN, 0.01).0.is_nan());
     }
 
     #[test]

@@ -58,7 +58,7 @@ pub mod zoh;
 use crate::dynamics::JointSpaceDynamics;
 
 pub use adaptive::AdaptiveMpc;
-pub use baseline::triple_pole_gains;
+pub use baseline::{triple_pole_gains, triple_pole_inertia_ratio_range, triple_pole_is_stable};
 pub use builder::{
     BuildError, ControllerBuilder, FrictionUse, Mpc, MpcParts, ObserverSettings, StepInput,
     StepOutput, DEFAULT_OBSERVER_POLE,
