@@ -62,7 +62,6 @@
   // labels such as -1.235e-4 at the canvas edge.
   function axisSize(u, values, i, cycle) {
     var a = u.axes[i];
-    if (cycle > 1 && a._size) { return a._size; }
     var w = 0;
     u.ctx.font = a.font[0];
     (values || []).forEach(function (v) { if (v != null) { w = Math.max(w, u.ctx.measureText(String(v)).width); } });

@@ -420,4 +420,65 @@ fn replay_follows_the_timeseries_in_chromium() {
             "{run}: the slider did not move the robot: {hashes:?}"
         );
     }
+    // The controller's predicted horizon (issue #25): at the frame of a recorded horizon the
+    // page draws a polyline that starts at the current sample's flange position, and its
+    // points (the page's forward kinematics of the predicted joints) lie on what the flange did
+    // next (the timeseries' x, y, z of the following samples). ctc has no horizon.
+    let check = unescape(
+        &attribute(&dom, "replay", "data-horizon-check").expect("the replay's horizon check"),
+    );
+    let horizons: serde_json::Value = serde_json::from_str(&check).unwrap();
+    let horizons = horizons.as_array().unwrap();
+    let names: Vec<&str> = horizons
+        .iter()
+        .map(|h| h["run"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["usual_m0.25", "second_m0.25"],
+        "runs with a horizon"
+    );
+    for h in horizons {
+        let run = h["run"].as_str().unwrap();
+        let (header, rows) = timeseries(&d.join("o").join(run).join("timeseries.csv"));
+        let col = |name: &str| header.iter().position(|c| c == name).unwrap();
+        let k = h["k"].as_u64().unwrap() as usize;
+        let hz = &h["horizon"];
+        assert_eq!(
+            hz["k"].as_u64(),
+            Some(k as u64),
+            "{run}: horizon of another sample"
+        );
+        let pts: Vec<f64> = hz["pts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(
+            pts.len(),
+            3 * 11,
+            "{run}: the flange and N = 10 predicted points"
+        );
+        for c in 0..3 {
+            let flange = h["flange"][c].as_f64().unwrap();
+            assert!(
+                (pts[c] - flange).abs() < 1e-4,
+                "{run}: the horizon does not start at the current sample"
+            );
+        }
+        for j in 1..=10 {
+            let Some(row) = rows.get(k + j) else { break };
+            let d2: f64 = ["x", "y", "z"]
+                .iter()
+                .enumerate()
+                .map(|(c, name)| (pts[3 * j + c] - row[col(name)]).powi(2))
+                .sum();
+            assert!(
+                d2.sqrt() < 1e-3,
+                "{run} sample {k}: predicted point {j} is {:.3e} m from the flange's",
+                d2.sqrt()
+            );
+        }
+    }
 }
