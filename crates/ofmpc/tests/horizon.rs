@@ -65,24 +65,37 @@ fn recorded_horizons_predict_the_run_and_change_nothing() {
             "{kind}"
         );
         assert_eq!(h.q.len(), 8 * nh * n);
-        let mut worst = 0.0f64;
-        let mut motion = 0.0f64;
+        let (mut worst, mut first_step) = (0.0f64, 0.0f64);
+        let (mut motion, mut step) = (0.0f64, 0.0f64);
         for (i, &k) in h.samples.iter().enumerate().skip(1) {
             let pred = h.at(i);
             for j in 0..nh {
                 for c in 0..n {
-                    let actual = a.q[(k + j + 1) * n + c];
-                    worst = worst.max((pred[j * n + c] - actual).abs());
-                    motion = motion.max((a.q[(k + nh) * n + c] - a.q[k * n + c]).abs());
+                    let err = (pred[j * n + c] - a.q[(k + j + 1) * n + c]).abs();
+                    worst = worst.max(err);
+                    if j == 0 {
+                        first_step = first_step.max(err);
+                    }
                 }
             }
+            for c in 0..n {
+                motion = motion.max((a.q[(k + nh) * n + c] - a.q[k * n + c]).abs());
+                step = step.max((a.q[(k + 1) * n + c] - a.q[k * n + c]).abs());
+            }
         }
-        // Over 0.1 s of the path the joints move by ~1e-2 rad; the prediction is off by far
-        // less (the model is exact up to its linearization over the horizon).
+        eprintln!("{kind}: horizon error {worst:.3e} of motion {motion:.3e} rad; first step {first_step:.3e} of {step:.3e} rad");
+        // Over the horizon (0.1 s of the path) the joints move by ~0.1 rad; the prediction is
+        // off by a few per cent at most (the model is exact but linearized at x_k over the
+        // horizon, and the controller does not follow its own plan exactly: it replans every
+        // sample); one step ahead it is off by far less than the step.
         assert!(motion > 1e-3, "{kind}: motion {motion}");
         assert!(
-            worst < 0.02 * motion,
+            worst < 0.05 * motion,
             "{kind}: prediction error {worst:e} rad, motion {motion:e} rad"
+        );
+        assert!(
+            first_step < 1e-3 * step,
+            "{kind}: one step ahead {first_step:e} rad, step {step:e} rad"
         );
     }
     for kind in [ControllerKind::Pid, ControllerKind::Ctc] {
