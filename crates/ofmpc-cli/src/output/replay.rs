@@ -185,4 +185,25 @@ mod tests {
         assert_eq!(*v.last().unwrap(), 13_000);
         assert!(v.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= s));
     }
+
+    #[test]
+    fn horizons_fall_on_frames_within_their_budget() {
+        for (samples, runs) in [(13_624, 1), (1_400, 6), (1_400, 21), (5, 1)] {
+            let h = horizon_sampling(samples, runs);
+            let (stride, _) = frame_indices(samples, frames_per_run(runs));
+            assert_eq!(
+                h.every % stride,
+                0,
+                "{samples} {runs}: every frame of the page"
+            );
+            let recorded = samples.div_ceil(h.every);
+            assert!(
+                recorded <= h.max,
+                "{samples} {runs}: {recorded} > {}",
+                h.max
+            );
+            assert!(h.max <= MAX_HORIZONS + 1);
+            assert!(runs * (h.max - 1) <= TOTAL_HORIZONS.max(runs * MIN_HORIZONS));
+        }
+    }
 }
