@@ -257,7 +257,8 @@ impl Writer<'_> {
         self.report.heading("3-D replay");
         self.report.paragraph(
             "The robot drawn from its kinematics (capsules between the joint frames), the reference \
-             path (grey) and the flange trace coloured by the Cartesian tracking error. Play/pause, \
+             path (grey), the flange trace coloured by the Cartesian tracking error and, in magenta, what the \
+             controller predicted over its horizon at the latest recorded sample. Play/pause, \
              the time slider and the run menu; drag to orbit, wheel to zoom. Stopped runs end at the stop.",
         );
         self.report
