@@ -58,6 +58,41 @@
       }, { passive: false });
     } } };
   }
+  // The y axis as wide as its widest tick label (uPlot's axis autosize): a fixed width cuts
+  // labels such as -1.235e-4 at the canvas edge.
+  function axisSize(u, values, i, cycle) {
+    var a = u.axes[i];
+    var w = 0;
+    u.ctx.font = a.font[0];
+    (values || []).forEach(function (v) { if (v != null) { w = Math.max(w, u.ctx.measureText(String(v)).width); } });
+    return Math.ceil(a.ticks.size + a.gap + w / (uPlot.pxRatio || 1) + 2);
+  }
+  // Text drawn on the canvas that does not fit (the page's clipped-text check reads it): a
+  // y tick label wider than its axis, an x tick label past the canvas edge, an axis title
+  // longer than its side.
+  function clipped(u) {
+    var bad = [], ctx = u.ctx, pr = uPlot.pxRatio || 1;
+    function width(font, s) { ctx.font = font; return ctx.measureText(String(s)).width / pr; }
+    u.axes.forEach(function (a, i) {
+      if (!a.show || !a._values) { return; }
+      var vertical = a.side === 1 || a.side === 3;
+      a._values.forEach(function (s, j) {
+        if (s == null || s === '') { return; }
+        var w = width(a.font[0], s);
+        if (vertical) {
+          if (w + a.ticks.size + a.gap > a._size + 0.5) { bad.push('y tick label ' + s + ' (' + w.toFixed(0) + ' px) wider than its axis (' + a._size + ' px)'); }
+        } else {
+          var x = u.bbox.left / pr + u.valToPos(a._splits[j], 'x');
+          if (x - w / 2 < -0.5 || x + w / 2 > u.width + 0.5) { bad.push('x tick label ' + s + ' cut at the canvas edge'); }
+        }
+      });
+      if (a.label) {
+        var lw = width(a.labelFont[0], a.label);
+        if (lw > (vertical ? u.height : u.width)) { bad.push('axis title ' + a.label + ' longer than its side'); }
+      }
+    });
+    return bad;
+  }
   function panel(fig, host, p, width) {
     var groups = p.x.map(function (q) { return [decode(q, false)]; });
     p.s.forEach(function (s) { groups[s.g].push(decode(s.y, p.log)); });
@@ -81,10 +116,15 @@
       title: p.t, width: width, height: 260, series: series,
       scales: { x: { time: false }, y: p.log ? { distr: 3 } : {} },
       axes: [{ label: p.xl, values: function (u, vs) { return vs.map(fmt); } },
-             { label: p.yl, size: 64, space: p.log ? 18 : 30, values: function (u, vs) { return vs.map(p.log ? fmtLog : fmt); } }],
+             { label: p.yl, size: axisSize, space: p.log ? 18 : 30, values: function (u, vs) { return vs.map(p.log ? fmtLog : fmt); } }],
       cursor: { drag: { x: true, y: true, uni: 20 } },
       legend: { live: true },
-      plugins: [panPlugin()]
+      plugins: [panPlugin()],
+      hooks: { draw: [function (u) {
+        var bad = clipped(u);
+        div.setAttribute('data-clipped', String(bad.length));
+        div.setAttribute('data-clipped-what', bad.slice(0, 5).join('; '));
+      }] }
     };
     return new uPlot(opts, data, div);
   }

@@ -6,7 +6,7 @@
 // The scene's state is exposed for tests: window.ofmpcReplay and the data-* attributes of
 // #replay-state (data-k: sample index of the record, data-t, data-q: joint angles drawn,
 // data-flange: flange position from the forward kinematics). With the URL hash #replay-check
-// the page moves the slider itself and writes what it drew into #replay's data-check.
+// (or a hash containing it) the page moves the slider itself and writes what it drew into #replay's data-check.
 (function () {
   'use strict';
   var root = document.getElementById('replay');
@@ -71,8 +71,34 @@
       // dark blue (small) → green → orange → red (large)
       col[3 * k] = Math.min(1, 2 * u); col[3 * k + 1] = u < 0.5 ? 0.3 + u : 1.3 - u; col[3 * k + 2] = Math.max(0, 0.8 - 1.6 * u);
     }
-    return { name: r.name, status: r.status, q: q, t: t, e: e, n: n, stride: r.stride, len: r.len, trace: trace, col: col };
+    // The predicted horizons: per recorded sample k, the flange at k (forward kinematics of
+    // the recorded joints there) and at the N predicted joint positions: a polyline of N + 1
+    // points in one buffer.
+    var hz = null;
+    if (r.horizon) {
+      var hk = r.horizon.k, hn = r.horizon.n, hq = r.horizon.q.map(decode), nh = hk.length;
+      var pts = new Float32Array(nh * (hn + 1) * 3), hc = new Float32Array(nh * (hn + 1) * 3);
+      for (var h = 0; h < nh; h++) {
+        var fr = Math.min(n - 1, Math.round(hk[h] / r.stride)), o = h * (hn + 1) * 3;
+        pts[o] = trace[3 * fr]; pts[o + 1] = trace[3 * fr + 1]; pts[o + 2] = trace[3 * fr + 2];
+        for (var j = 0; j < hn; j++) {
+          var qj = hq.map(function (c) { return c[h * hn + j]; });
+          var p = fk(qj)[J.length + 1], oj = o + 3 * (j + 1);
+          pts[oj] = p[0]; pts[oj + 1] = p[1]; pts[oj + 2] = p[2];
+        }
+      }
+      for (var c = 0; c < hc.length; c += 3) { hc[c] = 0.85; hc[c + 1] = 0.1; hc[c + 2] = 0.75; }
+      hz = { k: hk, n: hn, count: nh, pts: pts, col: hc };
+    }
+    return { name: r.name, status: r.status, q: q, t: t, e: e, n: n, stride: r.stride, len: r.len, trace: trace, col: col, hz: hz };
   });
+  // The latest recorded horizon at or before sample k (-1: none).
+  function horizonAt(r, k) {
+    if (!r.hz) { return -1; }
+    var lo = 0, hi = r.hz.count - 1, best = -1;
+    while (lo <= hi) { var mid = (lo + hi) >> 1; if (r.hz.k[mid] <= k) { best = mid; lo = mid + 1; } else { hi = mid - 1; } }
+    return best;
+  }
   var ref = D.reference ? D.reference.map(decode) : null;
   // ---- WebGL ----
   var canvas = document.getElementById('replay-canvas');
@@ -133,7 +159,10 @@
     for (var k = 0; k < refN; k++) { rp[3 * k] = ref[0][k]; rp[3 * k + 1] = ref[1][k]; rp[3 * k + 2] = ref[2][k]; rc[3 * k] = rc[3 * k + 1] = rc[3 * k + 2] = 0.55; }
     refB = buffer(rp); refCB = buffer(rc);
   }
-  runs.forEach(function (r) { r.traceB = buffer(r.trace); r.colB = buffer(r.col); });
+  runs.forEach(function (r) {
+    r.traceB = buffer(r.trace); r.colB = buffer(r.col);
+    if (r.hz) { r.hzB = buffer(r.hz.pts); r.hzCB = buffer(r.hz.col); }
+  });
   // ---- camera ----
   var cam = { yaw: -0.9, pitch: 0.45, dist: 2.2, target: [0.4, 0, 0.5] };
   function viewProj() {
@@ -177,7 +206,7 @@
   var sel = document.getElementById('replay-run'), playBtn = document.getElementById('replay-play');
   var cur = 0, frame = 0, playing = false, lastText = 0;
   runs.forEach(function (r, i) { var o = document.createElement('option'); o.value = String(i); o.textContent = r.name + ' (' + r.status + ')'; sel.appendChild(o); });
-  var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: D.horizon, horizonNote: D.horizon_note };
+  var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: null, horizonNote: D.horizon_note };
   function draw() {
     var r = runs[cur]; if (!r || r.n === 0) { return; }
     var q = r.q.map(function (c) { return c[frame]; });
@@ -193,6 +222,17 @@
     if (refB) { drawLines(refB, refCB, gl.LINE_STRIP, 0, refN, VP); }
     drawLines(r.traceB, r.colB, gl.LINE_STRIP, 0, frame + 1, VP);
     drawLines(r.traceB, r.colB, gl.POINTS, frame, 1, VP);
+    var k = Math.min(frame * r.stride, r.len - 1), hi = horizonAt(r, k);
+    if (hi >= 0) {
+      // The predicted horizon: its polyline and its points, over the trace.
+      var hn1 = r.hz.n + 1;
+      gl.uniform1f(locFlat.ps, 4.0);
+      drawLines(r.hzB, r.hzCB, gl.LINE_STRIP, hi * hn1, hn1, VP);
+      drawLines(r.hzB, r.hzCB, gl.POINTS, hi * hn1, hn1, VP);
+      S.horizon = { k: r.hz.k[hi], pts: Array.prototype.slice.call(r.hz.pts, 3 * hi * hn1, 3 * (hi + 1) * hn1) };
+    } else {
+      S.horizon = null;
+    }
     gl.disableVertexAttribArray(locFlat.c);
     gl.useProgram(lit);
     gl.enableVertexAttribArray(locLit.p); gl.enableVertexAttribArray(locLit.n);
@@ -205,7 +245,6 @@
     }
     drawMesh(sph, sphereMatrix(pts[pts.length - 1], radius * 0.6), [0.1, 0.1, 0.1], VP);
     gl.disableVertexAttribArray(locLit.n);
-    var k = Math.min(frame * r.stride, r.len - 1);
     S.frames = r.n; S.k = k; S.t = r.t[frame]; S.q = q; S.flange = pts[pts.length - 1]; S.run = r.name; S.draws++;
     stateEl.setAttribute('data-k', String(k));
     stateEl.setAttribute('data-t', String(r.t[frame]));
@@ -256,7 +295,7 @@
   selectRun(0);
   root.setAttribute('data-ready', 'yes');
   // Self-check for headless tests: move the slider as a user would and record the scene.
-  if (location.hash === '#replay-check') {
+  if (location.hash.indexOf('replay-check') >= 0) {
     var out = [], px = new Uint8Array(canvas.width * canvas.height * 4);
     runs.forEach(function (r, ri) {
       sel.value = String(ri); sel.dispatchEvent(new Event('change'));
@@ -272,5 +311,15 @@
       });
     });
     root.setAttribute('data-check', JSON.stringify(out));
+    // And at the frame of each run's middle recorded horizon: the horizon drawn there.
+    var hout = [];
+    runs.forEach(function (r, ri) {
+      if (!r.hz) { return; }
+      sel.value = String(ri); sel.dispatchEvent(new Event('change'));
+      var f = Math.min(r.n - 1, Math.round(r.hz.k[r.hz.count >> 1] / r.stride));
+      slider.value = String(f); slider.dispatchEvent(new Event('input'));
+      hout.push({ run: r.name, k: S.k, flange: S.flange, horizon: S.horizon });
+    });
+    root.setAttribute('data-horizon-check', JSON.stringify(hout));
   }
 })();

@@ -329,7 +329,10 @@ pub fn payload_sweep(title: &str, runs: &[RunMetrics]) -> Figure {
         ));
         if !bad.is_empty() {
             let x: Vec<f64> = bad.iter().map(|m| m.payload_kg).collect();
-            let y: Vec<f64> = bad.iter().map(|m| m.cartesian_error_max_mm).collect();
+            let y: Vec<f64> = bad
+                .iter()
+                .map(|m| m.cartesian_error_max_to_stop_mm)
+                .collect();
             steady.series.push(Series::markers(
                 format!("{name} diverged (error at stop)"),
                 x.clone(),

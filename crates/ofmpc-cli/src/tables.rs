@@ -152,8 +152,9 @@ pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
                 m.name.clone(),
                 m.controller.clone(),
                 format!("{}", m.payload_kg),
-                fmt_opt(m.cartesian_error_rms_mm, 4),
-                fmt_opt(m.cartesian_error_max_mm, 4),
+                // Up to the stop: after a safe stop the robot brakes while the reference goes on.
+                fmt_opt(m.cartesian_error_rms_to_stop_mm, 4),
+                fmt_opt(m.cartesian_error_max_to_stop_mm, 4),
                 fmt_opt(m.steady_cartesian_error_mm, 4),
                 fmt_opt(steady_joint, 4),
                 fmt_opt(m.step_time_us.median, 1),

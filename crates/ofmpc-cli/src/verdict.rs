@@ -289,6 +289,8 @@ mod tests {
             steady_joint_error_max_rad: vec![0.0; 6],
             cartesian_error_rms_mm: rms,
             cartesian_error_max_mm: rms * 3.0,
+            cartesian_error_rms_to_stop_mm: rms,
+            cartesian_error_max_to_stop_mm: rms * 3.0,
             steady_cartesian_error_mm: steady,
             torque_max_nm: vec![0.0; 6],
             torque_step_max_nm: 0.0,

@@ -1,7 +1,10 @@
 //! Every figure the `ofmpc` binary writes, checked for clipped text and legends over data
-//! (issue #9, item 20). A quick run with a payload sweep and three controllers writes every
-//! figure type (path, Cartesian reference, joint and Cartesian errors per payload, payload
-//! sweep, and per run joints/torques and Cartesian error), `trajectory` writes its two; then:
+//! (issue #9, item 20; issue #25: every figure kind). A quick run with a payload sweep, three
+//! controllers and the drives' effects writes the path, Cartesian reference, joint and
+//! Cartesian errors per payload, payload sweep, torque ratios, measurement errors, and per run
+//! joints/torques and Cartesian error; `trajectory` writes its three; a second run (an adaptive
+//! variant and a baseline) the identification and the comparison; `analyze stability` and
+//! `tune` their figures; then:
 //!
 //! * nothing is drawn within 3 px of a panel cell's edges, nor of the canvas edge (panel
 //!   content is inset by margins of 10 px or more, so ink there is text cut at the edge), in the
@@ -137,13 +140,78 @@ fn no_figure_has_clipped_text_or_a_legend_over_data() {
         "--out",
         "o/traj/reference.csv",
     ]);
+    // The figure kinds the first run does not draw: the identification of an adaptive
+    // variant and the comparison with a baseline (a second run), the stability figure of
+    // `analyze stability` and the trade-off of `tune`.
+    fs::write(
+        d.join("s2.toml"),
+        "title = \"Layout check, adaptive and baseline\"\n\
+         controllers = [\"second-adaptive\", \"pid\"]\n[payload]\nmasses_kg = [0.5]\n\
+         [simulation]\nhold_s = 0.3\nsteady_window_s = 0.1\n",
+    )
+    .unwrap();
+    run(&["run", "s2.toml", "--out", "o2"]);
+    run(&[
+        "analyze",
+        "stability",
+        "--controllers",
+        "usual,first,second",
+        "--json",
+        "--out",
+        "o3",
+    ]);
+    run(&[
+        "tune",
+        "--payload-range",
+        "0,1",
+        "--controllers",
+        "second",
+        "--json",
+        "--out",
+        "o4/t.toml",
+    ]);
 
     let mut svgs = Vec::new();
     all_files(&d.join("o"), "svg", &mut svgs);
-    svgs.sort();
     // 2 + 2 per payload + sweep + 2 per run + 3 of trajectory, and the
     // drives section: torque ratios per payload, measurement error per run.
     assert_eq!(svgs.len(), 2 + 2 * 3 + 1 + 2 * 9 + 3 + 3 + 9, "{svgs:?}");
+    let first = svgs.len();
+    for o in ["o2", "o3", "o4"] {
+        all_files(&d.join(o), "svg", &mut svgs);
+    }
+    // The second run: 2 + 2 + identification + comparison + 2 per run; stability; trade-off.
+    assert_eq!(
+        svgs.len() - first,
+        2 + 2 + 1 + 1 + 2 * 2 + 1 + 1,
+        "{svgs:?}"
+    );
+    svgs.sort();
+    // Every kind of figure the binary writes is among them.
+    for kind in [
+        "path",
+        "cartesian_reference",
+        "joint_errors_m",
+        "cartesian_errors_m",
+        "payload_sweep",
+        "joints_torques",
+        "cartesian_error",
+        "torque_ratios_m",
+        "measurement_error",
+        "reference_path",
+        "reference_cartesian",
+        "reference_speed",
+        "identification_m",
+        "controllers_compared",
+        "stability",
+        "t_tradeoff",
+    ] {
+        assert!(
+            svgs.iter()
+                .any(|p| p.file_name().unwrap().to_string_lossy().starts_with(kind)),
+            "no {kind} figure among {svgs:?}"
+        );
+    }
     let mut checked_legends = 0;
     let mut checked_title = false;
     for svg_path in &svgs {

@@ -227,6 +227,8 @@ fn check_script_detects_a_broken_figure() {
     };
     let good = plot::render_png(&edge_case_figure()).unwrap();
     let mut r = Report::new("broken");
+    // And text that cannot fit: one unbreakable word far wider than the window.
+    r.paragraph("x".repeat(600));
     r.figure("good", Image::Png(good));
     r.figure(
         "broken",
@@ -251,6 +253,12 @@ fn check_script_detects_a_broken_figure() {
         attribute(&dom, "figure-2", "data-rendered"),
         Some("no".into())
     );
+    // Negative control of the clipped-text check: the long word is past the window's edge.
+    let clipped: usize = attribute(&dom, "figure-check", "data-clipped")
+        .expect("the clipped-text check ran")
+        .parse()
+        .unwrap();
+    assert!(clipped >= 1, "the clipped word was not seen");
 }
 
 /// The text of `s` with the HTML attribute escapes of `report::escape` undone.
@@ -287,7 +295,7 @@ fn replay_follows_the_timeseries_in_chromium() {
     let d = tmp.path();
     std::fs::write(
         d.join("s.toml"),
-        "title = \"Replay check\"\ncontrollers = [\"usual\", \"second\"]\n\
+        "title = \"Replay check\"\ncontrollers = [\"usual\", \"second\", \"ctc\"]\n\
          [payload]\nmasses_kg = [0.25]\n[simulation]\nhold_s = 0.3\nsteady_window_s = 0.1\n",
     )
     .unwrap();
@@ -302,7 +310,8 @@ fn replay_follows_the_timeseries_in_chromium() {
     let html = std::fs::read_to_string(&page).unwrap();
     keep_artifact("run_report.html", html.as_bytes());
     let mut url = page.clone().into_os_string();
-    url.push("#replay-check");
+    // Every folded part open, so that the clipped-text check sees all of the page.
+    url.push("#replay-check,open-all");
     let dom = chromium(
         &bin,
         &d.join("profile"),
@@ -328,12 +337,42 @@ fn replay_follows_the_timeseries_in_chromium() {
         "not every figure rendered"
     );
     assert!(html.contains("data-kind=\"chart\""), "no interactive chart");
+    // With a baseline beside the paper's controllers the page compares them (issue #21): the
+    // section, its table and its figure, drawn; and no text anywhere is clipped (HTML text past
+    // the window or cut by its box, and the charts' axis labels on their canvases).
+    assert!(
+        dom.contains(">Controllers compared</h2>"),
+        "no comparison section"
+    );
+    let compare_fig = dom
+        .split("<figure ")
+        .skip(1)
+        .find(|f| f.contains("controllers_compared.png"))
+        .expect("the comparison figure");
+    assert!(
+        compare_fig.contains("data-rendered=\"yes\"") && compare_fig.contains("data-drawn=\"yes\""),
+        "the comparison figure did not render"
+    );
+    assert!(
+        compare_fig.contains("data-clipped=\"0\""),
+        "the comparison chart's text is clipped"
+    );
+    assert_eq!(
+        attribute(&dom, "figure-check", "data-clipped"),
+        Some("0".into()),
+        "clipped text: {:?}",
+        attribute(&dom, "figure-check", "data-clipped-what")
+    );
     assert_eq!(attribute(&dom, "replay", "data-ready"), Some("yes".into()));
     let check = unescape(&attribute(&dom, "replay", "data-check").expect("the replay's check"));
     let frames: serde_json::Value = serde_json::from_str(&check).unwrap();
     let frames = frames.as_array().unwrap();
-    assert_eq!(frames.len(), 2 * 4, "two runs, four slider positions each");
-    for run in ["usual_m0.25", "second_m0.25"] {
+    assert_eq!(
+        frames.len(),
+        3 * 4,
+        "three runs, four slider positions each"
+    );
+    for run in ["usual_m0.25", "second_m0.25", "ctc_m0.25"] {
         let (header, rows) = timeseries(&d.join("o").join(run).join("timeseries.csv"));
         let col = |name: &str| header.iter().position(|h| h == name).unwrap();
         let mine: Vec<&serde_json::Value> = frames.iter().filter(|f| f["run"] == run).collect();
@@ -380,5 +419,66 @@ fn replay_follows_the_timeseries_in_chromium() {
             hashes.len() >= 3,
             "{run}: the slider did not move the robot: {hashes:?}"
         );
+    }
+    // The controller's predicted horizon (issue #25): at the frame of a recorded horizon the
+    // page draws a polyline that starts at the current sample's flange position, and its
+    // points (the page's forward kinematics of the predicted joints) lie on what the flange did
+    // next (the timeseries' x, y, z of the following samples). ctc has no horizon.
+    let check = unescape(
+        &attribute(&dom, "replay", "data-horizon-check").expect("the replay's horizon check"),
+    );
+    let horizons: serde_json::Value = serde_json::from_str(&check).unwrap();
+    let horizons = horizons.as_array().unwrap();
+    let names: Vec<&str> = horizons
+        .iter()
+        .map(|h| h["run"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["usual_m0.25", "second_m0.25"],
+        "runs with a horizon"
+    );
+    for h in horizons {
+        let run = h["run"].as_str().unwrap();
+        let (header, rows) = timeseries(&d.join("o").join(run).join("timeseries.csv"));
+        let col = |name: &str| header.iter().position(|c| c == name).unwrap();
+        let k = h["k"].as_u64().unwrap() as usize;
+        let hz = &h["horizon"];
+        assert_eq!(
+            hz["k"].as_u64(),
+            Some(k as u64),
+            "{run}: horizon of another sample"
+        );
+        let pts: Vec<f64> = hz["pts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(
+            pts.len(),
+            3 * 11,
+            "{run}: the flange and N = 10 predicted points"
+        );
+        for c in 0..3 {
+            let flange = h["flange"][c].as_f64().unwrap();
+            assert!(
+                (pts[c] - flange).abs() < 1e-4,
+                "{run}: the horizon does not start at the current sample"
+            );
+        }
+        for j in 1..=10 {
+            let Some(row) = rows.get(k + j) else { break };
+            let d2: f64 = ["x", "y", "z"]
+                .iter()
+                .enumerate()
+                .map(|(c, name)| (pts[3 * j + c] - row[col(name)]).powi(2))
+                .sum();
+            assert!(
+                d2.sqrt() < 1e-3,
+                "{run} sample {k}: predicted point {j} is {:.3e} m from the flange's",
+                d2.sqrt()
+            );
+        }
     }
 }

@@ -166,7 +166,7 @@ pub fn stability_words(margins: &[(ControllerKind, Margin)], figure: &std::path:
         s.push_str(".\n");
     }
     s.push_str(&format!(
-        "Figure: {} (spectral radius against α; ρ < 1 is stable). `--json` prints the numbers.",
+        "Figure: {} (spectral radius against α, and against the payload in kg; ρ < 1 is stable). `--json` prints the numbers.",
         figure.display()
     ));
     s
@@ -197,23 +197,100 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
     Ok(f)
 }
 
+/// Payloads of the stability figure's kg axis: 0 to 6 kg (the paper's range) in 0.5 kg steps.
+const PAYLOAD_AXIS_KG: [f64; 13] = [
+    0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0, 5.5, 6.0,
+];
+
+/// Largest ρ drawn: beyond it the curves are flattened (and their legend says so).
+const RADIUS_CAP: f64 = 3.0;
+
+/// The spectral radius against the payload (kg) of each controller: for a point payload `m`
+/// at the flange unknown to the model, the inertia ratios along the program span
+/// `[α_lo(m), α_hi(m)]` (the eigenvalues of `H_plant⁻¹ H_model`,
+/// [`ofmpc::analysis::inertia_ratio_range`], as `max_payload_kg` uses them), and the radius is
+/// the larger of ρ(α_lo) and ρ(α_hi) near rest at `q0` ([`spectral_radius`]): the worst pose.
+fn payload_curves(
+    model: &ofmpc::robot::Robot,
+    mpc: &MpcSettings,
+    q0: &[f64],
+    poses: &[&[f64]],
+    kinds: &[ControllerKind],
+) -> anyhow::Result<Vec<Vec<f64>>> {
+    use ofmpc::analysis::{inertia_ratio_range, spectral_radius, StabilityOptions};
+    use rayon::prelude::*;
+    let opts = StabilityOptions::default();
+    let ranges = PAYLOAD_AXIS_KG
+        .par_iter()
+        .map(|&m| inertia_ratio_range(model, &ofmpc::robot::Payload::point_mass(m), poses))
+        .collect::<Result<Vec<_>, _>>()?;
+    kinds
+        .iter()
+        .map(|k| {
+            ranges
+                .par_iter()
+                .map(|&(lo, hi)| {
+                    let a = spectral_radius(model, k.base(), mpc, q0, lo, &opts)?;
+                    let b = spectral_radius(model, k.base(), mpc, q0, hi, &opts)?;
+                    Ok(a.max(b))
+                })
+                .collect::<anyhow::Result<Vec<f64>>>()
+        })
+        .collect()
+}
+
+/// A curve's legend entry: its controller, and that ρ above [`RADIUS_CAP`] is drawn at it.
+fn capped(kind: ControllerKind, radius: &[f64]) -> String {
+    if radius.iter().any(|&r| r > RADIUS_CAP) {
+        format!("{} (ρ > {RADIUS_CAP} drawn at {RADIUS_CAP})", kind.name())
+    } else {
+        kind.name().to_string()
+    }
+}
+
+/// The spectral radius against α and against the payload in kg for each controller, as a
+/// figure of two panels.
+fn radius_figure(curves: &[RadiusCurve], by_payload: &[Vec<f64>]) -> Figure {
+    let mut f = radius_alpha_figure(curves);
+    let mut p = Panel::new(
+        "the same against the payload the model does not know (worst pose of the program)",
+        "payload at the flange (kg)",
+        "spectral radius ρ",
+    );
+    for (c, radius) in curves.iter().zip(by_payload) {
+        p.series.push(Series::line(
+            capped(c.kind, radius),
+            PAYLOAD_AXIS_KG.to_vec(),
+            radius.iter().map(|r| r.min(RADIUS_CAP)).collect(),
+            crate::figures::controller_color(c.kind.name()),
+        ));
+    }
+    p.series.push(Series::dashed(
+        "ρ = 1 (stability limit)",
+        vec![
+            PAYLOAD_AXIS_KG[0],
+            PAYLOAD_AXIS_KG[PAYLOAD_AXIS_KG.len() - 1],
+        ],
+        vec![1.0, 1.0],
+        COLOR_REFERENCE,
+    ));
+    f.columns = 2;
+    f.panels.push(p);
+    f
+}
+
 /// The spectral radius against α for each controller, as a figure.
-fn radius_figure(curves: &[RadiusCurve]) -> Figure {
+fn radius_alpha_figure(curves: &[RadiusCurve]) -> Figure {
     let mut p = Panel::new(
         "closed loop near rest: spectral radius against the inertia ratio",
         "α = H_model / H_plant",
         "spectral radius ρ",
     );
     for c in curves {
-        let clipped = c.radius.iter().any(|&r| r > 3.0);
         p.series.push(Series::line(
-            if clipped {
-                format!("{} (ρ > 3 drawn at 3)", c.kind.name())
-            } else {
-                c.kind.name().to_string()
-            },
+            capped(c.kind, &c.radius),
             c.alpha.clone(),
-            c.radius.iter().map(|r| r.min(3.0)).collect(),
+            c.radius.iter().map(|r| r.min(RADIUS_CAP)).collect(),
             crate::figures::controller_color(c.kind.name()),
         ));
     }
@@ -263,12 +340,12 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     progress("the spectral radius against α (the figure)");
     let exp = &scenario.experiment;
     let robot = model_robot(&scenario)?;
-    let fig = radius_figure(&radius_curves(
-        &robot,
-        &exp.mpc,
-        exp.reference.q(0),
-        &kinds,
-    )?);
+    let curves = radius_curves(&robot, &exp.mpc, exp.reference.q(0), &kinds)?;
+    progress("the spectral radius against the payload (the figure's kg axis)");
+    let poses = ofmpc_scenario::analysis::program_poses(&scenario);
+    let by_payload = payload_curves(&robot, &exp.mpc, exp.reference.q(0), &poses, &kinds)
+        .context("the spectral radius against the payload")?;
+    let fig = radius_figure(&curves, &by_payload);
     let r = render_both(&fig).context("rendering the stability figure")?;
     dir.write(STABILITY[0], &r.png)?;
     dir.write(STABILITY[1], r.svg.as_bytes())?;

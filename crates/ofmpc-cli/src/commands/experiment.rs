@@ -101,9 +101,10 @@ pub(crate) fn open_output(
 
 /// Runs the scenario and writes everything into `out`. Prints the summary
 /// table on stdout; progress on stderr when it is a terminal. `scenario_path` is the file the
-/// scenario was read from, if any (never overwritten).
+/// scenario was read from, if any (never overwritten). The runs also record the predicted
+/// horizons the report's replay draws ([`crate::output::replay::horizon_sampling`]).
 pub fn execute(
-    scenario: &Scenario,
+    scenario: &mut Scenario,
     scenario_path: Option<&Path>,
     out: &Path,
 ) -> anyhow::Result<()> {
@@ -115,6 +116,11 @@ pub fn execute(
     for w in &repeats {
         console::warn(w);
     }
+    scenario.experiment.loop_settings.horizons = Some(crate::output::replay::horizon_sampling(
+        scenario.samples_per_run(),
+        payloads.len() * controllers.len(),
+    ));
+    let scenario = &*scenario;
     let files = RunFiles::new(&scenario.file, &payloads, &controllers);
     let mut dir = open_output(out, inputs(scenario, scenario_path), &files.files())?;
     let leftovers = files.earlier_leftovers(out);
@@ -251,7 +257,8 @@ impl Writer<'_> {
         self.report.heading("3-D replay");
         self.report.paragraph(
             "The robot drawn from its kinematics (capsules between the joint frames), the reference \
-             path (grey) and the flange trace coloured by the Cartesian tracking error. Play/pause, \
+             path (grey), the flange trace coloured by the Cartesian tracking error and, in magenta, what the \
+             controller predicted over its horizon at the latest recorded sample. Play/pause, \
              the time slider and the run menu; drag to orbit, wheel to zoom. Stopped runs end at the stop.",
         );
         self.report
@@ -290,7 +297,9 @@ impl Writer<'_> {
             exp.loop_settings.steady_window_s,
         ));
         report.table(Table {
-            caption: "Summary (metrics.json has every number)".into(),
+            caption: "Summary (metrics.json has every number; a run brought to a safe stop: \
+                      Cartesian RMS and max up to the stop, before it brakes)"
+                .into(),
             header: SUMMARY_HEADER.iter().map(|s| s.to_string()).collect(),
             rows: summary_rows(metrics),
         });

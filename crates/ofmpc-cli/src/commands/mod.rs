@@ -33,9 +33,9 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             if let Some(p) = &a.payload {
                 file.payload.masses_kg = parse_vector("--payload", p, None)?;
             }
-            let scenario = Scenario::resolve(&file)
+            let mut scenario = Scenario::resolve(&file)
                 .map_err(|e| anyhow::Error::new(e).context(a.scenario.display().to_string()))?;
-            experiment::execute(&scenario, Some(&a.scenario), &a.out)
+            experiment::execute(&mut scenario, Some(&a.scenario), &a.out)
         }
         Command::Reproduce(a) => {
             let mut file = ScenarioFile::default();
@@ -56,8 +56,8 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             let file = file
                 .with_overrides(&sets)
                 .map_err(|e| override_error(e, None))?;
-            let scenario = Scenario::resolve(&file)?;
-            experiment::execute(&scenario, None, &a.out)
+            let mut scenario = Scenario::resolve(&file)?;
+            experiment::execute(&mut scenario, None, &a.out)
         }
         Command::Analyze(Analyze::Stability(a)) => analyze::stability(&a),
         Command::Tune(a) => tune::tune(&a),

@@ -78,8 +78,8 @@ pub(crate) fn section(
             rows.push(vec![
                 k.name().to_string(),
                 num(m.payload_kg),
-                num(m.cartesian_error_rms_mm),
-                num(m.cartesian_error_max_mm),
+                num(m.cartesian_error_rms_to_stop_mm),
+                num(m.cartesian_error_max_to_stop_mm),
                 num(m.steady_cartesian_error_mm),
                 num(peak_ratio(m, limits)),
                 num(m.torque_step_max_nm),
@@ -144,7 +144,9 @@ pub(crate) fn rms_figure(metrics: &[RunMetrics], controllers: &[ControllerKind])
             p.series.push(Series::markers(
                 format!("{} {}", k.name(), "diverged/stopped"),
                 bad.iter().map(|m| m.payload_kg).collect(),
-                bad.iter().map(|m| m.cartesian_error_max_mm).collect(),
+                bad.iter()
+                    .map(|m| m.cartesian_error_max_to_stop_mm)
+                    .collect(),
                 color,
             ));
         }

@@ -5,13 +5,15 @@
 //! joint angles and the Cartesian tracking error at most [`MAX_FRAMES`] samples apart, quantized
 //! like the charts ([`super::chart::quantize`]).
 //!
-//! The controller's predicted horizon is not recorded by the simulation (the record holds the
-//! states, torques and references of each sample only), so the page says that it is not
-//! available.
+//! The controller's predicted horizon: the runs record, every few frames, the joint positions
+//! the controller's model predicts over its horizon ([`ofmpc::sim::PredictedHorizons`], at the
+//! samples of [`horizon_sampling`]); the page draws the latest one at or before the current
+//! sample as a polyline in Cartesian space (forward kinematics of the predicted joints), from
+//! the flange at its sample. The baselines without a horizon have none.
 
 use super::chart::quantize;
 use ofmpc::robot::{JointKind, Robot};
-use ofmpc::sim::Record;
+use ofmpc::sim::{HorizonSampling, Record};
 use serde_json::{json, Value};
 
 /// Most frames per run kept in the page: every `stride`-th sample of the record and its last.
@@ -23,6 +25,49 @@ pub const TOTAL_FRAMES: usize = 12_000;
 
 /// Fewest frames per run.
 pub const MIN_FRAMES: usize = 400;
+
+/// Predicted horizons of all runs together in the page (each has `N·n` values).
+pub const TOTAL_HORIZONS: usize = 1500;
+
+/// Most predicted horizons per run.
+pub const MAX_HORIZONS: usize = 400;
+
+/// Fewest predicted horizons per run.
+pub const MIN_HORIZONS: usize = 40;
+
+/// The samples at which each of `runs` runs of `samples` samples records its horizon: every
+/// `m`-th frame of the page ([`frame_indices`]), at most [`MAX_HORIZONS`] per run and
+/// [`TOTAL_HORIZONS`] in all (at least [`MIN_HORIZONS`] per run).
+pub fn horizon_sampling(samples: usize, runs: usize) -> HorizonSampling {
+    let stride = samples.div_ceil(frames_per_run(runs)).max(1);
+    let per_run = (TOTAL_HORIZONS / runs.max(1)).clamp(MIN_HORIZONS, MAX_HORIZONS);
+    let frames = samples.div_ceil(stride);
+    HorizonSampling {
+        every: stride * frames.div_ceil(per_run).max(1),
+        max: per_run + 1,
+    }
+}
+
+/// The predicted horizons of a record as JSON: the samples `k`, the horizon `N` and per joint
+/// the predicted positions (quantized, horizon after horizon); `null` without any.
+fn horizons_json(rec: &Record) -> Value {
+    match &rec.horizons {
+        Some(h) if !h.samples.is_empty() && h.horizon > 0 => {
+            let per = h.n * h.horizon;
+            let q: Vec<Value> = (0..h.n)
+                .map(|i| {
+                    quantize(
+                        &h.q.chunks_exact(per)
+                            .flat_map(|b| b.iter().skip(i).step_by(h.n).copied())
+                            .collect::<Vec<_>>(),
+                    )
+                })
+                .collect();
+            json!({"k": h.samples, "n": h.horizon, "q": q})
+        }
+        _ => Value::Null,
+    }
+}
 
 /// Frames per run for `runs` runs.
 pub fn frames_per_run(runs: usize) -> usize {
@@ -112,14 +157,14 @@ pub fn replay_json(robot: &Robot, runs: &[ReplayRun<'_>]) -> String {
             "t": quantize(&t),
             "q": q,
             "err": quantize(&err),
+            "horizon": horizons_json(rec),
         }));
     }
     json!({
         "robot": {"name": robot.name(), "joints": joints, "flange": transform(robot.flange_offset())},
         "reference": reference,
         "runs": out_runs,
-        "horizon": Value::Null,
-        "horizon_note": "The controller's predicted horizon is not recorded by the simulation: not available.",
+        "horizon_note": "Magenta: what the controller predicted over its horizon at the latest recorded sample (none for pid, ctc, ctc-adaptive).",
     })
     .to_string()
 }
@@ -139,5 +184,26 @@ mod tests {
         assert!(v.len() <= MAX_FRAMES + 1);
         assert_eq!(*v.last().unwrap(), 13_000);
         assert!(v.windows(2).all(|w| w[1] > w[0] && w[1] - w[0] <= s));
+    }
+
+    #[test]
+    fn horizons_fall_on_frames_within_their_budget() {
+        for (samples, runs) in [(13_624, 1), (1_400, 6), (1_400, 21), (5, 1)] {
+            let h = horizon_sampling(samples, runs);
+            let (stride, _) = frame_indices(samples, frames_per_run(runs));
+            assert_eq!(
+                h.every % stride,
+                0,
+                "{samples} {runs}: every frame of the page"
+            );
+            let recorded = samples.div_ceil(h.every);
+            assert!(
+                recorded <= h.max,
+                "{samples} {runs}: {recorded} > {}",
+                h.max
+            );
+            assert!(h.max <= MAX_HORIZONS + 1);
+            assert!(runs * (h.max - 1) <= TOTAL_HORIZONS.max(runs * MIN_HORIZONS));
+        }
     }
 }

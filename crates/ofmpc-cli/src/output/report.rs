@@ -567,7 +567,44 @@ const SCRIPT: &str = "
     try { b = svg.getBBox(); } catch (e) { return false; }
     return r.width > 0 && r.height > 0 && b.width > 0 && b.height > 0;
   }
+  // Text that does not fit: a text run past the window's left or right edge, or cut by a
+  // box that hides its overflow; and text on the charts' canvases (charts.js, data-clipped).
+  // Scrollable boxes (the scenario's <pre>) and closed <details> do not count.
+  function clippedText() {
+    var bad = [], vw = document.documentElement.clientWidth;
+    var walker = document.createTreeWalker(document.querySelector('main') || document.body, NodeFilter.SHOW_TEXT);
+    var range = document.createRange();
+    for (var node = walker.nextNode(); node; node = walker.nextNode()) {
+      if (!node.textContent.trim()) { continue; }
+      var el = node.parentElement;
+      if (!el || el.closest('script, style, svg, pre')) { continue; }
+      range.selectNodeContents(node);
+      var r = range.getBoundingClientRect();
+      if (r.width === 0 && r.height === 0) { continue; }
+      var what = node.textContent.trim().slice(0, 40);
+      if (r.left < -1 || r.right > vw + 1) { bad.push('[' + what + '] past the window edge'); continue; }
+      for (var a = el; a && a !== document.body; a = a.parentElement) {
+        var cs = getComputedStyle(a);
+        if (cs.overflowX === 'hidden' || cs.overflowX === 'clip' || cs.overflowY === 'hidden' || cs.overflowY === 'clip') {
+          var b = a.getBoundingClientRect();
+          if (r.left < b.left - 1 || r.right > b.right + 1 || r.top < b.top - 1 || r.bottom > b.bottom + 1) {
+            bad.push('[' + what + '] cut by its box'); break;
+          }
+        }
+      }
+    }
+    var panels = document.querySelectorAll('[data-clipped]');
+    for (var i = 0; i < panels.length; i++) {
+      if (panels[i].id === 'figure-check') { continue; }
+      if (+panels[i].getAttribute('data-clipped') > 0) { bad.push(panels[i].getAttribute('data-clipped-what')); }
+    }
+    return bad;
+  }
   function check() {
+    if (location.hash.indexOf('open-all') >= 0) {
+      var ds = document.querySelectorAll('details');
+      for (var d = 0; d < ds.length; d++) { ds[d].open = true; }
+    }
     var figs = document.querySelectorAll('figure.report-figure');
     var ok = 0;
     for (var i = 0; i < figs.length; i++) {
@@ -578,6 +615,9 @@ const SCRIPT: &str = "
     var el = document.getElementById('figure-check');
     el.setAttribute('data-ok', String(ok));
     el.setAttribute('data-total', String(figs.length));
+    var clip = clippedText();
+    el.setAttribute('data-clipped', String(clip.length));
+    el.setAttribute('data-clipped-what', clip.slice(0, 8).join(' | '));
     el.className = ok === figs.length ? 'ok' : 'bad';
     el.textContent = ok === figs.length
       ? 'All ' + figs.length + ' figures rendered.'

@@ -2,6 +2,7 @@
 
 use super::actuator::Actuator;
 use super::estimator::Estimator;
+use super::horizon::{HorizonRecorder, HorizonSampling};
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
@@ -63,6 +64,11 @@ pub struct LoopSettings {
     /// prediction over them).
     #[serde(skip)]
     pub measurement_faults: MeasurementFaults,
+    /// Record what a predictive controller predicts over its horizon at these samples
+    /// ([`Record::horizons`], for the report's replay; computed only at those samples, it
+    /// changes nothing of the run). `None`: off.
+    #[serde(skip)]
+    pub horizons: Option<HorizonSampling>,
 }
 
 /// [`LoopSettings`] as written in a file: the same keys, with
@@ -195,6 +201,7 @@ impl Default for LoopSettings {
             safe_stop: false,
             max_joint_error_rad: None,
             measurement_faults: MeasurementFaults::default(),
+            horizons: None,
         }
     }
 }
@@ -387,6 +394,8 @@ pub struct ClosedLoop<'a> {
     preview: Vec<f64>,
     /// The sample of the pick-up and the payload, until it happened.
     pick_up: Option<(usize, crate::robot::Payload)>,
+    /// The predicted horizons kept ([`LoopSettings::horizons`]).
+    horizon: Option<HorizonRecorder>,
 }
 
 /// How a run ends early: the outcome, recorded up to there.
@@ -407,6 +416,9 @@ impl<'a> ClosedLoop<'a> {
         let n = reference.dof();
         let ts = reference.ts();
         let horizon = controller.horizon();
+        let predicted = settings
+            .horizons
+            .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, ts, h.every, h.max));
         let lost = LossSchedule::new(&settings.measurement_faults, ts);
         let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
         let supervisor = Supervisor::new(plant.robot(), settings.supervisor()).sized_for(ts);
@@ -427,6 +439,7 @@ impl<'a> ClosedLoop<'a> {
             tau: vec![0.0; n],
             preview: vec![0.0; horizon * n],
             pick_up: None,
+            horizon: predicted,
         }
     }
 
@@ -485,8 +498,10 @@ impl<'a> ClosedLoop<'a> {
             }
         }
         progress(total, total);
+        let mut record = rec.into_record();
+        record.horizons = self.horizon.map(HorizonRecorder::into_horizons);
         RunResult {
-            record: rec.into_record(),
+            record,
             outcome,
             wall_s: start.elapsed().as_secs_f64(),
         }
@@ -503,6 +518,9 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
+        if let Some(h) = &mut self.horizon {
+            h.reset(&self.x);
+        }
         self.supervisor.reset(&self.x);
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
@@ -545,10 +563,14 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        let status = self
-            .estimator
-            .estimate(model, &self.x)
-            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
+        let horizon = &mut self.horizon;
+        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
+            let info = controller.step(model, xs, w0, preview, tau)?;
+            if let Some(h) = horizon {
+                h.observe(None, model, xs, controller);
+            }
+            Ok(info)
+        });
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
@@ -656,7 +678,7 @@ impl<'a> ClosedLoop<'a> {
                 stop_began = Some(k);
             }
         }
-        let status = self.control(w, ts);
+        let status = self.control(k, w, ts);
         self.sensor.record_torque(&self.tau);
         rec.loading(self.actuator.account(&self.tau));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
@@ -713,7 +735,7 @@ impl<'a> ClosedLoop<'a> {
 
     /// The torque of this sample into `self.tau`: the estimator's state
     /// through the controller, or the supervisor's stop law during a stop.
-    fn control(&mut self, w: &[f64], ts: f64) -> Result<(), StepError> {
+    fn control(&mut self, k: usize, w: &[f64], ts: f64) -> Result<(), StepError> {
         let model = &mut *self.model;
         let xs = self.estimator.estimate(model, &self.x)?;
         if self.supervisor.stopping().is_some() {
@@ -722,6 +744,9 @@ impl<'a> ClosedLoop<'a> {
         } else {
             self.controller
                 .step(model, xs, w, &self.preview, &mut self.tau)?;
+            if let Some(h) = &mut self.horizon {
+                h.observe(Some(k), model, xs, &*self.controller);
+            }
         }
         self.estimator.record_torque(&self.tau);
         Ok(())

@@ -48,6 +48,9 @@ pub struct Record {
     /// Largest `|τ_i| / τmax_i` of the commanded torque over joints and
     /// samples (0 without finite limits).
     pub max_torque_ratio: f64,
+    /// What the controller predicted over its horizon at some samples, when the loop was
+    /// asked to record it ([`super::LoopSettings::horizons`]); `None` otherwise.
+    pub horizons: Option<super::PredictedHorizons>,
 }
 
 impl Record {
@@ -69,6 +72,7 @@ impl Record {
             faults: 0,
             saturated_samples: 0,
             max_torque_ratio: 0.0,
+            horizons: None,
         }
     }
 
@@ -145,6 +149,15 @@ pub struct RunMetrics {
     pub cartesian_error_max_mm: f64,
     /// Maximum Cartesian error norm over the last 0.5 s of the hold (mm).
     pub steady_cartesian_error_mm: f64,
+    /// RMS of the Cartesian error norm up to the stop (mm): for a run brought to a safe stop
+    /// (status `stopped` or `failed_stop`) over the samples up to the stop's time, as the
+    /// record goes on while the robot brakes and the reference does not wait (the error
+    /// after the stop is not a tracking error); for every other run the same as
+    /// [`Self::cartesian_error_rms_mm`] (its record ends at its end or its stop).
+    pub cartesian_error_rms_to_stop_mm: f64,
+    /// Maximum Cartesian error norm up to the stop (mm), as
+    /// [`Self::cartesian_error_rms_to_stop_mm`].
+    pub cartesian_error_max_to_stop_mm: f64,
     /// Maximum absolute torque per joint (N·m).
     pub torque_max_nm: Vec<f64>,
     /// Controller step time.
@@ -220,6 +233,14 @@ pub fn compute(
         .iter()
         .position(|&t| t >= t_end - steady_window + 1e-9)
         .unwrap_or(len);
+    // A safe stop: the samples after its time brake and hold (`*_to_stop_mm`).
+    let to_stop = match outcome {
+        RunOutcome::Stopped { t: stop, .. } => {
+            rec.t.iter().position(|&t| t > stop + 1e-9).unwrap_or(len)
+        }
+        _ => len,
+    };
+    let (mut c_sq_stop, mut c_max_stop) = (0.0, 0.0f64);
     let mut rms = vec![0.0; n];
     let mut max = vec![0.0f64; n];
     let mut steady = vec![0.0f64; n];
@@ -239,6 +260,10 @@ pub fn compute(
         let norm = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt() * 1e3;
         c_sq += norm * norm;
         c_max = c_max.max(norm);
+        if k < to_stop {
+            c_sq_stop += norm * norm;
+            c_max_stop = c_max_stop.max(norm);
+        }
         if k >= steady_from {
             c_steady = c_steady.max(norm);
         }
@@ -269,6 +294,12 @@ pub fn compute(
         cartesian_error_rms_mm: recorded((c_sq / denom).sqrt()),
         cartesian_error_max_mm: recorded(c_max),
         steady_cartesian_error_mm: steady_or_nan(c_steady),
+        cartesian_error_rms_to_stop_mm: if to_stop == 0 {
+            f64::NAN
+        } else {
+            (c_sq_stop / to_stop as f64).sqrt()
+        },
+        cartesian_error_max_to_stop_mm: if to_stop == 0 { f64::NAN } else { c_max_stop },
         torque_max_nm: tmax.into_iter().map(recorded).collect(),
         step_time_us: StepTime {
             median: quantile(&rec.step_us, 0.5),
@@ -340,6 +371,48 @@ mod tests {
         );
         assert!(d.reason.contains("joint 1"), "{}", d.reason);
         assert!(d.cartesian_error_rms_mm.is_finite());
+        // A run that is not stopped safely: up to the stop is the whole record.
+        for m in [&m, &d] {
+            assert_eq!(m.cartesian_error_rms_to_stop_mm, m.cartesian_error_rms_mm);
+            assert_eq!(m.cartesian_error_max_to_stop_mm, m.cartesian_error_max_mm);
+        }
+    }
+
+    #[test]
+    fn a_safe_stop_ends_the_error_statistics_at_its_time() {
+        // Error 1 mm up to t = 0.5 s (the stop), 300 mm after (the robot brakes, the
+        // reference goes on).
+        let mut r = Record::with_capacity(1, 100);
+        for k in 0..100 {
+            let t = k as f64 * 0.01;
+            r.t.push(t);
+            r.q.push(0.0);
+            r.qd.push(0.0);
+            r.q_ref.push(0.0);
+            r.tau.push(0.0);
+            r.flange.push([0.0; 3]);
+            r.flange_ref
+                .push([if t <= 0.5 + 1e-12 { 0.001 } else { 0.3 }, 0.0, 0.0]);
+            r.step_us.push(1.0);
+        }
+        let stopped = RunOutcome::Stopped {
+            final_speed: 0.0,
+            t: 0.5,
+            reason: super::super::supervisor::StopReason::Diverged {
+                joint: 0,
+                error_rad: 0.3,
+            },
+            at_rest_after_s: Some(0.1),
+            within_limits: true,
+        };
+        let m = compute("x", "first", 0.0, &r, 0.1, 1.0, &stopped);
+        assert_eq!(m.status, RunStatus::Stopped);
+        assert!((m.cartesian_error_max_to_stop_mm - 1.0).abs() < 1e-9);
+        assert!((m.cartesian_error_rms_to_stop_mm - 1.0).abs() < 1e-9);
+        // The whole record's statistics keep their meaning.
+        assert!((m.cartesian_error_max_mm - 300.0).abs() < 1e-9);
+        let rms = ((51.0 * 1.0 + 49.0 * 300.0 * 300.0) / 100.0f64).sqrt();
+        assert!((m.cartesian_error_rms_mm - rms).abs() < 1e-9);
     }
 
     #[test]

@@ -6,6 +6,7 @@ mod actuator;
 mod closed_loop;
 mod estimator;
 mod experiment;
+mod horizon;
 mod metrics;
 mod outcome;
 mod plant;
@@ -16,6 +17,7 @@ mod supervisor;
 
 pub use actuator::{Actuator, Loading};
 pub use estimator::Estimator;
+pub use horizon::{HorizonRecorder, HorizonSampling, PredictedHorizons};
 pub use recorder::{Recorder, Sample};
 pub use schedule::{at_or_after, sample_at, LossSchedule, TIME_MATCH_TOLERANCE};
 pub use sensor::Sensor;
