@@ -5,13 +5,14 @@
 //!
 //! [`build_reference`] maps a timed Cartesian path to joint space by inverse
 //! kinematics: analytic (OPW) when the robot declares its OPW parameters
-//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric: damped
+//! ([`Robot::opw_parameters`], the built-in IRB 140 does), analytic (UR family) when its
+//! joint axes are of that geometry ([`Robot::ur_kinematics`]), else numeric: damped
 //! least squares from the previous sample (continuation: one branch along the path), and
 //! for the first sample, or when that fails, from the start pose
 //! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
 use crate::dynamics::RobotDynamics;
-use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings};
+use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings, UrSolver};
 use crate::motion::trajectory::CartesianTrajectory;
 use crate::robot::Robot;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -115,6 +116,8 @@ pub enum Orientation {
 
 enum Ik {
     Analytic(Box<IkSolver>),
+    /// The UR closed form, solving for the TCP directly.
+    Ur(Box<UrSolver>),
     Numeric(Box<RobustIk>),
 }
 
@@ -141,11 +144,16 @@ impl JointMap {
         };
         let lower = robot.lower_limits();
         let upper = robot.upper_limits();
-        let ik = match robot.opw_parameters() {
-            Some(opw) if n == 6 => {
+        let ik = match (robot.opw_parameters(), robot.ur_kinematics()) {
+            (Some(opw), _) if n == 6 => {
                 let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
                 let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
                 Ik::Analytic(Box::new(IkSolver::new(*opw, lo, up)?))
+            }
+            (None, Some(ur)) => {
+                let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
+                let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
+                Ik::Ur(Box::new(UrSolver::new(ur, lo, up)?))
             }
             _ => {
                 let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
@@ -185,6 +193,11 @@ impl JointMap {
                 let q = s.solve_near(&flange, &hint).map_err(ReferenceFailure::Ik)?;
                 self.prev.copy_from_slice(&q);
             }
+            Ik::Ur(s) => {
+                let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
+                let q = s.solve_near(&pose, &hint).map_err(ReferenceFailure::Ik)?;
+                self.prev.copy_from_slice(&q);
+            }
             Ik::Numeric(num) => {
                 let mut x = self.prev.clone();
                 num.solve(&mut self.fk, &pose, &mut x)
@@ -209,13 +222,19 @@ impl JointMap {
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
     fn branch_limit(&self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
-        let Ik::Analytic(s) = &self.ik else {
-            return None;
-        };
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
-        let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
-        let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
-        let q = wide.solve_near(&self.flange_pose(&pose), &hint).ok()?;
+        let hint: [f64; 6] = std::array::from_fn(|i| prev.get(i).copied().unwrap_or(0.0));
+        let q = match &self.ik {
+            Ik::Analytic(s) => {
+                let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
+                wide.solve_near(&self.flange_pose(&pose), &hint).ok()?
+            }
+            Ik::Ur(s) => {
+                let wide = UrSolver::new(*s.kinematics(), [-100.0; 6], [100.0; 6]).ok()?;
+                wide.solve_near(&pose, &hint).ok()?
+            }
+            Ik::Numeric(_) => return None,
+        };
         self.robot.joints().iter().enumerate().find_map(|(i, j)| {
             (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
                 ReferenceFailure::BranchLimit {
