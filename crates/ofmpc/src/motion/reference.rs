@@ -177,6 +177,31 @@ impl JointMap {
         })
     }
 
+    /// When the tool pose at `p` (with the path's orientation) is the start pose's, within
+    /// [`START_POSE_TOLERANCE`], and the last solution differs from the start pose by more than
+    /// that: makes the start pose the solution (the run then starts where the robot stands,
+    /// not in another configuration of the same tool pose) and returns it.
+    fn keep_start_pose(&mut self, p: &Vector3<f64>) -> Option<&[f64]> {
+        let start = self.robot.start_q();
+        let close = self
+            .prev
+            .iter()
+            .zip(start)
+            .all(|(a, b)| (a - b).abs() <= START_POSE_TOLERANCE);
+        if close {
+            return None;
+        }
+        let pose = self.fk.flange_pose(start);
+        let dp = (pose.translation.vector - p).norm();
+        let dr = self.rotation.angle_to(&pose.rotation);
+        if dp <= START_POSE_TOLERANCE && dr <= START_POSE_TOLERANCE {
+            self.prev.copy_from_slice(start);
+            Some(&self.prev)
+        } else {
+            None
+        }
+    }
+
     /// Restarts from the start pose (the next solution is the one nearest to it).
     pub(crate) fn reset(&mut self) {
         self.prev.copy_from_slice(self.robot.start_q());
@@ -264,6 +289,11 @@ impl JointMap {
     }
 }
 
+/// How close (m, rad) the path's first tool pose must be to the start pose's for the run to
+/// start at the start pose itself ([`build_reference`]), and how far (rad) the inverse
+/// kinematics' solution must then be from the start pose to be replaced by it.
+pub const START_POSE_TOLERANCE: f64 = 1e-9;
+
 /// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …
 /// up to and including the end).
 pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
@@ -276,7 +306,12 @@ pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
 /// Checks every sample: reachable, within the joint limits, and each joint's
 /// step within its speed limit times `ts`. The first sample takes the
 /// solution closest to the start pose ([`Robot::start_q`], within limits); each later
-/// one the solution closest to the previous sample. Refuses, before allocating, a path that
+/// one the solution closest to the previous sample. Where the path's first sample is the
+/// start pose's tool pose (within [`START_POSE_TOLERANCE`]; a program starts there), it is
+/// the start pose itself: the run's initial state is then the start pose even where the
+/// inverse kinematics would pick another configuration of that tool pose (a redundant arm,
+/// a singular wrist). Where they differ, the first sample is the inverse kinematics' solution
+/// nearest to the start pose. Refuses, before allocating, a path that
 /// needs more than [`MAX_PLAN_VALUES`] values.
 pub fn build_reference(
     robot: &Robot,
@@ -328,10 +363,15 @@ pub fn build_reference(
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
         let p = sample.position;
-        let sol = map
+        let mut sol = map
             .solve(&p)
             .map_err(|e| fail(sample.line, t, p, e))?
             .to_vec();
+        if k == 0 {
+            if let Some(start) = map.keep_start_pose(&p) {
+                sol.copy_from_slice(start);
+            }
+        }
         if k > 0 {
             // Blended runs are timed at the joint speed limits, which the mean speed over a
             // step may exceed by rounding: 1 % slack there (a jump to another arm
