@@ -225,3 +225,58 @@ fn a_square_with_an_arc_stays_on_one_branch_on_eight_arms() {
         );
     }
 }
+
+/// The run's initial state is the start pose (issue #19, deliver 2): a program planned from
+/// a start pose whose tool pose is the path's first sample starts at that joint vector
+/// (on a 7-joint arm, a UR with its closed form, and a numeric 6-joint arm); with another
+/// orientation the first sample is the inverse kinematics' solution (a different tool pose).
+#[test]
+fn the_reference_starts_at_the_start_pose() {
+    use ofmpc::gcode::ParseOptions;
+    use ofmpc::motion::{plan, Orientation, PlanOptions};
+    let program = "G21 G91 G17\nG1 X20 F600\nG1 Y20\n";
+    let cases: [(&str, Option<&str>, Vec<f64>); 3] = [
+        (
+            "panda/panda.urdf",
+            Some("panda_hand"),
+            vec![0.1, -0.785, 0.2, -2.356, 0.1, 1.571, 0.785],
+        ),
+        (
+            "ur/ur5_robot.urdf",
+            None,
+            vec![0.3, -1.2, 1.5, -1.9, -1.57, 0.4],
+        ),
+        (
+            "kinova/kinova.urdf",
+            None,
+            vec![0.2, 2.9, 1.3, -2.1, 1.4, 1.3],
+        ),
+    ];
+    for (file, tip, q) in cases {
+        let mut robot = load(file, tip);
+        robot.set_start_q(&q).unwrap();
+        let planned = plan(program, &robot, &PlanOptions::default())
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
+        // The start pose, or the IK's solution where that is the start pose to 1e-9 rad
+        // (kept as computed: results of existing scenarios stay bit-identical).
+        let q0 = planned.reference.q(0);
+        assert!(
+            q0.iter().zip(&q).all(|(a, b)| (a - b).abs() <= 1e-9),
+            "{file}: {q0:?}"
+        );
+        // Tilted by 0.1 rad: the path's first pose is not the start pose's.
+        let mut fk = RobotDynamics::new(robot.clone());
+        let rot = fk.flange_pose(&q).rotation;
+        let tilted = rot * UnitQuaternion::from_euler_angles(0.1, 0.0, 0.0);
+        let options = PlanOptions {
+            orientation: Orientation::Fixed(tilted),
+            parse: ParseOptions::default(),
+            ..PlanOptions::default()
+        };
+        let planned = plan(program, &robot, &options).unwrap_or_else(|e| panic!("{file}: {e}"));
+        let q0 = planned.reference.q(0);
+        assert_ne!(q0, &q[..], "{file}");
+        let (_, dr) = distance(&fk.flange_pose(q0), &fk.flange_pose(&q));
+        assert!((dr - 0.1).abs() < 1e-9, "{file}: {dr}");
+    }
+}

@@ -1,6 +1,6 @@
 //! Inverse kinematics: Cartesian flange pose → joint positions.
 //!
-//! Three parts, one per file:
+//! The parts, one per file:
 //!
 //! - [`opw`]: the closed-form solver of Brandstötter, Hofbaur et al. (2014) for
 //!   ortho-parallel arms with a spherical wrist (ABB, KUKA, Fanuc, Stäubli six-axis
@@ -9,6 +9,10 @@
 //! - [`solver`]: [`IkSolver`] picks, from the analytic solutions and their
 //!   2π-equivalents inside the joint limits, the one closest to the previous sample,
 //!   and keeps the result continuous through the wrist singularity.
+//! - [`ur`]: the closed form of the Universal Robots family (axes 2–4 parallel, axes 5
+//!   and 6 intersecting; Hawkins 2013) on the product-of-exponentials model read off the
+//!   robot's joint axes, up to 8 solutions, and [`UrSolver`], the nearest one within the
+//!   limits.
 //! - [`numeric`]: [`NumericIk`], damped least squares (Levenberg–Marquardt with
 //!   adaptive damping) for any robot that implements [`ForwardKinematics`].
 //!
@@ -37,11 +41,13 @@ pub mod numeric;
 pub mod opw;
 pub mod robust;
 pub mod solver;
+pub mod ur;
 
 pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
 pub use opw::{OpwParameters, OpwSolutions};
 pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
 pub use solver::IkSolver;
+pub use ur::{UrKinematics, UrSolutions, UrSolver};
 
 /// What the numeric IK needs of a robot model: flange pose and geometric Jacobian.
 ///

@@ -180,45 +180,21 @@ impl IkSolver {
             });
         }
         let sols = self.opw.inverse_near(pose, previous);
-        let mut best: Option<(f64, [f64; 6])> = None;
-        // (summed violation, joint index, value) of the least-violating solution.
-        let mut least: Option<(f64, usize, f64)> = None;
-        for sol in sols.as_slice() {
-            let mut cand = [0.0; 6];
-            let mut cost = 0.0;
-            let mut violation = 0.0;
-            let mut worst: (f64, usize, f64) = (-1.0, 0, 0.0);
-            for i in 0..6 {
-                match nearest_equivalent(sol[i], previous[i], self.lower[i], self.upper[i]) {
-                    Ok(v) => {
-                        cand[i] = v;
-                        cost += self.weights[i] * (v - previous[i]).powi(2);
-                    }
-                    Err((v, viol)) => {
-                        violation += viol;
-                        if viol > worst.0 {
-                            worst = (viol, i, v);
-                        }
-                    }
-                }
-            }
-            if violation == 0.0 {
-                if !matches!(best, Some((c, _)) if c <= cost) {
-                    best = Some((cost, cand));
-                }
-            } else if !matches!(least, Some((v, _, _)) if v <= violation) {
-                least = Some((violation, worst.1, worst.2));
-            }
-        }
-        match (best, least) {
-            (Some((_, q)), _) => Ok(q),
-            (None, Some((_, i, value))) => Err(IkError::JointLimit {
-                joint: i + 1,
+        match nearest_within_limits(
+            sols.as_slice(),
+            previous,
+            &self.lower,
+            &self.upper,
+            &self.weights,
+        ) {
+            LimitChoice::Inside(q) => Ok(q),
+            LimitChoice::Outside { joint, value } => Err(IkError::JointLimit {
+                joint: joint + 1,
                 value,
-                lower: self.lower[i],
-                upper: self.upper[i],
+                lower: self.lower[joint],
+                upper: self.upper[joint],
             }),
-            (None, None) => {
+            LimitChoice::None => {
                 let p = pose.translation.vector;
                 Err(IkError::Unreachable {
                     position: [p.x, p.y, p.z],
@@ -226,6 +202,63 @@ impl IkSolver {
                 })
             }
         }
+    }
+}
+
+/// What [`nearest_within_limits`] found.
+pub(crate) enum LimitChoice {
+    /// The nearest solution inside the limits.
+    Inside([f64; 6]),
+    /// Every solution leaves the limits: the least-violating one's worst joint (0-based)
+    /// and the value it would need.
+    Outside { joint: usize, value: f64 },
+    /// No solution at all.
+    None,
+}
+
+/// Among `sols` and their 2π-equivalents inside `[lower, upper]`, the one with the smallest
+/// weighted distance `Σ wᵢ (qᵢ − previousᵢ)²` to `previous`.
+pub(crate) fn nearest_within_limits(
+    sols: &[[f64; 6]],
+    previous: &[f64; 6],
+    lower: &[f64; 6],
+    upper: &[f64; 6],
+    weights: &[f64; 6],
+) -> LimitChoice {
+    let mut best: Option<(f64, [f64; 6])> = None;
+    // (summed violation, joint index, value) of the least-violating solution.
+    let mut least: Option<(f64, usize, f64)> = None;
+    for sol in sols {
+        let mut cand = [0.0; 6];
+        let mut cost = 0.0;
+        let mut violation = 0.0;
+        let mut worst: (f64, usize, f64) = (-1.0, 0, 0.0);
+        for i in 0..6 {
+            match nearest_equivalent(sol[i], previous[i], lower[i], upper[i]) {
+                Ok(v) => {
+                    cand[i] = v;
+                    cost += weights[i] * (v - previous[i]).powi(2);
+                }
+                Err((v, viol)) => {
+                    violation += viol;
+                    if viol > worst.0 {
+                        worst = (viol, i, v);
+                    }
+                }
+            }
+        }
+        if violation == 0.0 {
+            if !matches!(best, Some((c, _)) if c <= cost) {
+                best = Some((cost, cand));
+            }
+        } else if !matches!(least, Some((v, _, _)) if v <= violation) {
+            least = Some((violation, worst.1, worst.2));
+        }
+    }
+    match (best, least) {
+        (Some((_, q)), _) => LimitChoice::Inside(q),
+        (None, Some((_, joint, value))) => LimitChoice::Outside { joint, value },
+        (None, None) => LimitChoice::None,
     }
 }
 

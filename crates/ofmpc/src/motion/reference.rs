@@ -5,13 +5,14 @@
 //!
 //! [`build_reference`] maps a timed Cartesian path to joint space by inverse
 //! kinematics: analytic (OPW) when the robot declares its OPW parameters
-//! ([`Robot::opw_parameters`], the built-in IRB 140 does), else numeric: damped
+//! ([`Robot::opw_parameters`], the built-in IRB 140 does), analytic (UR family) when its
+//! joint axes are of that geometry ([`Robot::ur_kinematics`]), else numeric: damped
 //! least squares from the previous sample (continuation: one branch along the path), and
 //! for the first sample, or when that fails, from the start pose
 //! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
 use crate::dynamics::RobotDynamics;
-use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings};
+use crate::ik::{ForwardKinematics, IkError, IkSolver, RobustIk, RobustIkSettings, UrSolver};
 use crate::motion::trajectory::CartesianTrajectory;
 use crate::robot::Robot;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
@@ -115,6 +116,8 @@ pub enum Orientation {
 
 enum Ik {
     Analytic(Box<IkSolver>),
+    /// The UR closed form, solving for the TCP directly.
+    Ur(Box<UrSolver>),
     Numeric(Box<RobustIk>),
 }
 
@@ -141,11 +144,16 @@ impl JointMap {
         };
         let lower = robot.lower_limits();
         let upper = robot.upper_limits();
-        let ik = match robot.opw_parameters() {
-            Some(opw) if n == 6 => {
+        let ik = match (robot.opw_parameters(), robot.ur_kinematics()) {
+            (Some(opw), _) if n == 6 => {
                 let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
                 let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
                 Ik::Analytic(Box::new(IkSolver::new(*opw, lo, up)?))
+            }
+            (None, Some(ur)) => {
+                let lo: [f64; 6] = std::array::from_fn(|i| lower[i].max(-1e6));
+                let up: [f64; 6] = std::array::from_fn(|i| upper[i].min(1e6));
+                Ik::Ur(Box::new(UrSolver::new(ur, lo, up)?))
             }
             _ => {
                 let lo: Vec<f64> = lower.iter().map(|v| v.max(-1e6)).collect();
@@ -169,6 +177,31 @@ impl JointMap {
         })
     }
 
+    /// When the tool pose at `p` (with the path's orientation) is the start pose's, within
+    /// [`START_POSE_TOLERANCE`], and the last solution differs from the start pose by more than
+    /// that: makes the start pose the solution (the run then starts where the robot stands,
+    /// not in another configuration of the same tool pose) and returns it.
+    fn keep_start_pose(&mut self, p: &Vector3<f64>) -> Option<&[f64]> {
+        let start = self.robot.start_q();
+        let close = self
+            .prev
+            .iter()
+            .zip(start)
+            .all(|(a, b)| (a - b).abs() <= START_POSE_TOLERANCE);
+        if close {
+            return None;
+        }
+        let pose = self.fk.flange_pose(start);
+        let dp = (pose.translation.vector - p).norm();
+        let dr = self.rotation.angle_to(&pose.rotation);
+        if dp <= START_POSE_TOLERANCE && dr <= START_POSE_TOLERANCE {
+            self.prev.copy_from_slice(start);
+            Some(&self.prev)
+        } else {
+            None
+        }
+    }
+
     /// Restarts from the start pose (the next solution is the one nearest to it).
     pub(crate) fn reset(&mut self) {
         self.prev.copy_from_slice(self.robot.start_q());
@@ -183,6 +216,11 @@ impl JointMap {
             Ik::Analytic(s) => {
                 let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
                 let q = s.solve_near(&flange, &hint).map_err(ReferenceFailure::Ik)?;
+                self.prev.copy_from_slice(&q);
+            }
+            Ik::Ur(s) => {
+                let hint: [f64; 6] = std::array::from_fn(|i| self.prev[i]);
+                let q = s.solve_near(&pose, &hint).map_err(ReferenceFailure::Ik)?;
                 self.prev.copy_from_slice(&q);
             }
             Ik::Numeric(num) => {
@@ -209,13 +247,19 @@ impl JointMap {
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
     fn branch_limit(&self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
-        let Ik::Analytic(s) = &self.ik else {
-            return None;
-        };
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
-        let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
-        let hint: [f64; 6] = std::array::from_fn(|i| prev[i]);
-        let q = wide.solve_near(&self.flange_pose(&pose), &hint).ok()?;
+        let hint: [f64; 6] = std::array::from_fn(|i| prev.get(i).copied().unwrap_or(0.0));
+        let q = match &self.ik {
+            Ik::Analytic(s) => {
+                let wide = IkSolver::new(*s.parameters(), [-100.0; 6], [100.0; 6]).ok()?;
+                wide.solve_near(&self.flange_pose(&pose), &hint).ok()?
+            }
+            Ik::Ur(s) => {
+                let wide = UrSolver::new(*s.kinematics(), [-100.0; 6], [100.0; 6]).ok()?;
+                wide.solve_near(&pose, &hint).ok()?
+            }
+            Ik::Numeric(_) => return None,
+        };
         self.robot.joints().iter().enumerate().find_map(|(i, j)| {
             (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
                 ReferenceFailure::BranchLimit {
@@ -245,6 +289,11 @@ impl JointMap {
     }
 }
 
+/// How close (m, rad) the path's first tool pose must be to the start pose's for the run to
+/// start at the start pose itself ([`build_reference`]), and how far (rad) the inverse
+/// kinematics' solution must then be from the start pose to be replaced by it.
+pub const START_POSE_TOLERANCE: f64 = 1e-9;
+
 /// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …
 /// up to and including the end).
 pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
@@ -257,7 +306,12 @@ pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
 /// Checks every sample: reachable, within the joint limits, and each joint's
 /// step within its speed limit times `ts`. The first sample takes the
 /// solution closest to the start pose ([`Robot::start_q`], within limits); each later
-/// one the solution closest to the previous sample. Refuses, before allocating, a path that
+/// one the solution closest to the previous sample. Where the path's first sample is the
+/// start pose's tool pose (within [`START_POSE_TOLERANCE`]; a program starts there), it is
+/// the start pose itself: the run's initial state is then the start pose even where the
+/// inverse kinematics would pick another configuration of that tool pose (a redundant arm,
+/// a singular wrist). Where they differ, the first sample is the inverse kinematics' solution
+/// nearest to the start pose. Refuses, before allocating, a path that
 /// needs more than [`MAX_PLAN_VALUES`] values.
 pub fn build_reference(
     robot: &Robot,
@@ -309,10 +363,15 @@ pub fn build_reference(
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
         let p = sample.position;
-        let sol = map
+        let mut sol = map
             .solve(&p)
             .map_err(|e| fail(sample.line, t, p, e))?
             .to_vec();
+        if k == 0 {
+            if let Some(start) = map.keep_start_pose(&p) {
+                sol.copy_from_slice(start);
+            }
+        }
         if k > 0 {
             // Blended runs are timed at the joint speed limits, which the mean speed over a
             // step may exceed by rounding: 1 % slack there (a jump to another arm

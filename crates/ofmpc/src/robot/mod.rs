@@ -13,7 +13,7 @@ pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use urdf::TRIANGLE_TOLERANCE;
 
-use crate::ik::OpwParameters;
+use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 
@@ -205,6 +205,9 @@ pub struct Robot {
 pub enum IkMethod {
     /// The closed form of ortho-parallel arms with a spherical wrist ([`OpwParameters`]).
     Opw,
+    /// The closed form of the Universal Robots family: axes 2–4 parallel, axes 5 and 6
+    /// intersecting ([`UrKinematics`]), detected from the joint axes.
+    Ur,
     /// Multi-start damped least squares within the joint limits ([`crate::ik::RobustIk`]).
     Numeric,
 }
@@ -214,6 +217,7 @@ impl IkMethod {
     pub fn description(&self) -> &'static str {
         match self {
             IkMethod::Opw => "analytic: OPW closed form (ortho-parallel arm, spherical wrist; up to 8 branches)",
+            IkMethod::Ur => "analytic: UR closed form (axes 2-4 parallel, axes 5 and 6 intersecting; up to 8 branches)",
             IkMethod::Numeric => "numeric: damped least squares within the joint limits, multi-start (start pose, limits' centre, Halton points), null-space posture for redundant arms",
         }
     }
@@ -254,12 +258,34 @@ impl Robot {
         self.opw.as_ref()
     }
 
-    /// The inverse kinematics the planner uses for this robot.
+    /// The inverse kinematics the planner uses for this robot: OPW when the robot declares
+    /// its parameters, else the UR closed form when the joint axes are of that family
+    /// ([`Robot::ur_kinematics`]), else numeric.
     pub fn ik_method(&self) -> IkMethod {
         match self.opw {
             Some(_) if self.dof() == 6 => IkMethod::Opw,
+            _ if self.ur_kinematics().is_some() => IkMethod::Ur,
             _ => IkMethod::Numeric,
         }
+    }
+
+    /// The closed-form kinematics of the Universal Robots family ([`UrKinematics::detect`]:
+    /// six revolute joints, axes 2–4 parallel, axes 5 and 6 intersecting), from the joint
+    /// axes at q = 0 and the tool centre point; `None` for any other arm.
+    pub fn ur_kinematics(&self) -> Option<UrKinematics> {
+        if self.dof() != 6 || self.joints.iter().any(|j| j.kind != JointKind::Revolute) {
+            return None;
+        }
+        let mut frame = Transform::identity();
+        let mut axes = [Vector3::zeros(); 6];
+        let mut points = [Vector3::zeros(); 6];
+        for (i, j) in self.joints.iter().enumerate() {
+            frame = frame.compose(&j.placement);
+            axes[i] = frame.rot * j.axis;
+            points[i] = frame.pos;
+        }
+        let tool = frame.compose(&self.tool_offset()).to_isometry();
+        UrKinematics::detect(&axes, &points, &tool)
     }
 
     /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
