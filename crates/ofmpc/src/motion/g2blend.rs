@@ -269,7 +269,8 @@ mod tests {
         let poly: f64 = (0..10_000)
             .map(|i| (b.eval((i + 1) as f64 / 1e4) - b.eval(i as f64 / 1e4)).norm())
             .sum();
-        assert!((poly - len).abs() < 1e-9 * len, "{poly} vs {len}");
+        // A polyline of n chords is shorter by about L κ² (L/n)² / 24 (≈ 1e-9 L here).
+        assert!((poly - len).abs() < 1e-8 * len, "{poly} vs {len}");
         let h = len * 1e-4;
         for i in 1..100 {
             let s = len * i as f64 / 100.0;
