@@ -217,12 +217,8 @@ impl Timeline {
         let line = self.run[0].line;
         let moves = std::mem::take(&mut self.run);
         let pieces = blend_timed(&moves, options.max_accel, options.max_jerk);
-        // The exact-stop alternative, from the joint map's state at the run's start.
+        // The joint map's state at the run's start, for the exact-stop alternative.
         let saved = joints.as_deref().map(|jc| jc.map.state().to_vec());
-        let exact = exact_moves(&moves, options, joints.as_deref_mut());
-        if let (Some(jc), Some(q)) = (joints.as_deref_mut(), &saved) {
-            jc.map.set_state(q);
-        }
         let t = self.t;
         let timed = time_run(
             pieces,
@@ -230,7 +226,7 @@ impl Timeline {
                 max_accel: options.max_accel,
                 max_jerk: options.max_jerk,
             },
-            joints,
+            joints.as_deref_mut(),
         )
         .map_err(|e| match e {
             RunError::Joint {
@@ -250,8 +246,30 @@ impl Timeline {
             },
         })?;
         let dt = timed.duration();
+        // The exact-stop laws without the joint limits are a lower bound of the alternative
+        // (joint limits only stretch them): the joint-limited laws only when it is below.
+        let lower: f64 = moves
+            .iter()
+            .map(|m| {
+                TimeLaw::fastest(
+                    options.profile,
+                    m.segment.length(),
+                    m.feed,
+                    options.max_accel,
+                )
+                .duration
+            })
+            .sum();
+        let exact = if lower < dt {
+            if let (Some(jc), Some(q)) = (joints.as_deref_mut(), &saved) {
+                jc.map.set_state(q);
+            }
+            exact_moves(&moves, options, joints)
+        } else {
+            Vec::new()
+        };
         let exact_total: f64 = exact.iter().map(|e| e.law.duration).sum();
-        if exact_total < dt {
+        if !exact.is_empty() && exact_total < dt {
             for e in exact {
                 let dt = e.law.duration;
                 if let Some(j) = e.limited {
