@@ -176,7 +176,12 @@ fn arc_corner(a: &RunMove, b: &RunMove, d: f64) -> Option<(f64, QuinticBlend)> {
     None
 }
 
-fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
+/// The corner after each move: its tangent distance (0: no blend), whether the path stops
+/// there, and the curvature-continuous blend of a corner that involves an arc.
+type Corners = (Vec<f64>, Vec<bool>, Vec<Option<QuinticBlend>>);
+
+/// Decides every corner of `moves` (see [`blend`] and [`blend_timed`]).
+fn corners(moves: &[RunMove], timed: Option<(f64, f64)>) -> Corners {
     let m = moves.len();
     // Tangent distance at the corner after move k (0: no blend).
     let mut d = vec![0.0; m];
@@ -228,6 +233,12 @@ fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
             stop[k] = true;
         }
     }
+    (d, stop, curve)
+}
+
+fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
+    let m = moves.len();
+    let (d, stop, mut curve) = corners(moves, timed);
     let mut pieces: Vec<Piece> = Vec::with_capacity(2 * m);
     let push =
         |pieces: &mut Vec<Piece>, geometry: Geometry, feed: f64, line: usize, stop_after: bool| {
