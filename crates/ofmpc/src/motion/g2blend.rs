@@ -16,7 +16,7 @@
 //!
 //! # Arc length
 //!
-//! `s(u) = ∫ |p'|` is tabulated on [`TABLE`] intervals with 5-point Gauss–Legendre
+//! `s(u) = ∫ |p'|` is tabulated on `TABLE` (128) intervals with 5-point Gauss–Legendre
 //! quadrature; `u(s)` inside an interval is the cubic Hermite interpolant of the table with
 //! the slopes `du/ds = 1/|p'|`, so that `point(s)`, `tangent(s)` and `curvature(s)` are
 //! functions of the arc length as for the other pieces.
@@ -219,7 +219,7 @@ fn to_chord(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
 
 /// Largest distance from the blend to the programmed path it replaces: the last `d_in` of
 /// `incoming` and the first `d_out` of `outgoing` (each followed by a polyline of
-/// [`DEVIATION_SAMPLES`] chords, which lies within `d²/(8 R n²)` of an arc of radius `R`).
+/// `DEVIATION_SAMPLES` (32) chords, which lies within `d²/(8 R n²)` of an arc of radius `R`).
 pub fn blend_deviation(
     blend: &QuinticBlend,
     incoming: &Segment,
