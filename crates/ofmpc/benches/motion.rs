@@ -1,8 +1,10 @@
 //! Motion planning speed: a CAM-like program of 10,000 short segments under `G64 P0.01`
 //! (parse, blend, time-optimal timing with the IRB 140's joint limits, the joint reference
-//! every 10 ms), against the paper's 8-move program under `G61` in the same run.
+//! every 10 ms), against the paper's 8-move program under `G61` in the same run; and the
+//! same program with 100,000 segments (issue 26: planning stays linear, target ≤ 3 s).
 //!
 //! `cargo bench -p ofmpc --bench motion -- --warm-up-time 1 --measurement-time 10`
+//! (the 100,000 segments alone: `... --bench motion -- 100k`)
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
@@ -32,6 +34,7 @@ fn bench(c: &mut Criterion) {
     let options = PlanOptions::default();
     let text = long_program(10_000);
     let program = parse(&text, &ParseOptions::default()).expect("valid program");
+    let big = parse(&long_program(100_000), &ParseOptions::default()).expect("valid program");
     let mut g = c.benchmark_group("plan");
     g.sample_size(10);
     g.bench_function("paper_g61_8_moves", |b| {
@@ -42,6 +45,9 @@ fn bench(c: &mut Criterion) {
     });
     g.bench_function("cam_g64_10k_segments_from_text", |b| {
         b.iter(|| plan(&text, &robot, &options).expect("plans"))
+    });
+    g.bench_function("cam_g64_100k_segments_parsed", |b| {
+        b.iter(|| plan_program(big.clone(), &robot, &options).expect("plans"))
     });
     g.finish();
 }

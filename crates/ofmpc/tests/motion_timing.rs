@@ -123,3 +123,93 @@ fn tiny_segments_plan_under_g64() {
         assert!(p.diagnostics.duration.is_finite() && p.diagnostics.duration < 5.0);
     }
 }
+
+/// A run whose moves are faster timed as exact stops is timed so (issue 26: G64 is never
+/// longer than G61): the 10 µm arcs between two 10 mm lines took 1.07 s under G64 against
+/// 0.44 s under G61, and the 0.05 mm segment between two lines stops twice either way.
+#[test]
+fn a_run_is_never_slower_than_its_moves_as_exact_stops() {
+    let robot = Robot::irb140();
+    for text in [
+        "G21 G90 G64\nG0 X500 Y0 Z400\nG1 X510 F6000\nG3 X510.01 Y0.01 R0.01\nG1 Y10\n",
+        "G21 G90 G64\nG0 X500 Y0 Z400\nG1 X510 F6000\nG2 X510.01 Y0 I0.005 J0\nG1 X520\n",
+        "G21 G90 G64\nG0 X500 Y0 Z400\nG1 X510 F6000\nG3 X510.01 Y0.01 R0.01\nG1 Y10\nG1 X500 Y0\n",
+        "G21 G90 G64 P0.1\nG0 X400 Y0 Z400\nG1 X500 F6000\nX500.05\nX600 Y10\n",
+    ] {
+        let (g64, g61) = g64_and_g61(text, &robot);
+        let d = g64.diagnostics.duration;
+        assert!(d <= g61 * (1.0 + 1e-9), "{text}: G64 {d} s > G61 {g61} s");
+        let (v, a) = joint_ratios(&g64, &robot);
+        assert!(
+            v <= 1.02 && a <= 1.02,
+            "{text}: speed {v}, acceleration {a}"
+        );
+    }
+}
+
+/// Distance from `p` to the programmed path of `plan` (each move followed by a polyline of
+/// at most 0.02 mm chords, within 0.02² / (8 R) of an arc of radius R).
+fn distance_to_program(p: &ofmpc::motion::Plan, x: [f64; 3]) -> f64 {
+    use ofmpc::gcode::MoveKind;
+    let x = nalgebra::Vector3::from(x);
+    let mut best = f64::INFINITY;
+    for m in &p.program.moves {
+        if let MoveKind::Path { segment, .. } = &m.kind {
+            let len = segment.length();
+            let n = ((len / 2e-5).ceil() as usize).clamp(1, 100_000);
+            let mut a = segment.point(0.0);
+            for i in 1..=n {
+                let b = segment.point(len * i as f64 / n as f64);
+                let u = b - a;
+                let t = if u.norm_squared() > 0.0 {
+                    ((x - a).dot(&u) / u.norm_squared()).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                best = best.min((x - (a + u * t)).norm());
+                a = b;
+            }
+        }
+    }
+    best
+}
+
+/// Every sampled reference (G61 and G64, Ts = 1 ms) keeps each joint's speed and
+/// acceleration within 1.02× its limit, and under G64 P every sample lies within P of the
+/// programmed path, also at corners between lines and arcs (issue 26).
+#[test]
+fn sampled_references_keep_joint_limits_and_the_tolerance() {
+    let robot = Robot::irb140();
+    let programs = [
+        (
+            "G21 G90 G17 G64 P0.1\nG0 X450 Y-50 Z400\nG1 X550 F6000\nG3 X570 Y-30 R20\nG1 Y10\nG2 X590 Y30 R20\nG3 X610 Y50 R20\nG1 X450\n",
+            1e-4,
+        ),
+        (
+            "G21 G90 G64 P0.05\nG0 X450 Y-50 Z400\nG1 X550 F3000\nY50\nX450\nY-50\nX470 Y-20\nX490 Y-50\n",
+            5e-5,
+        ),
+    ];
+    for (text, tol) in programs {
+        for exact in [false, true] {
+            let t = if exact {
+                text.replace("G64 P0.1", "G61").replace("G64 P0.05", "G61")
+            } else {
+                text.to_string()
+            };
+            let p = plan(&t, &robot, &options(PathMode::ExactStop, 2.5, 50.0, 1e-3))
+                .unwrap_or_else(|e| panic!("{e}"));
+            let (v, a) = joint_ratios(&p, &robot);
+            assert!(v <= 1.02 && a <= 1.02, "{t}: speed {v}, acceleration {a}");
+            let r = &p.reference;
+            let worst = (0..r.len())
+                .step_by(5)
+                .map(|k| distance_to_program(&p, r.position(k)))
+                .fold(0.0, f64::max);
+            assert!(
+                worst <= tol * (1.0 + 1e-6) + 1e-9,
+                "{t}: deviation {worst} > {tol}"
+            );
+        }
+    }
+}

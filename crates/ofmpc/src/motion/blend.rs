@@ -13,10 +13,15 @@
 //! Joins that are already tangent-continuous (angle below [`TANGENT_ANGLE`]) are passed
 //! without a stop, and so are near-tangent joins (below [`NEAR_TANGENT_ANGLE`], such as the
 //! kinks that three-decimal CAM output leaves between arcs) when the move allows a
-//! deviation (`P` > 0): the path keeps its programmed points there. Corners that involve an arc (G02/G03) are not rounded: the path stops
-//! there (exact stop), as it does at a tolerance of 0 and at reversals.
+//! deviation (`P` > 0): the path keeps its programmed points there. Corners that involve an
+//! arc (G02/G03) are rounded by a curvature-continuous quintic ([`crate::motion::g2blend`])
+//! from a point of the incoming move to a point of the outgoing one, each at the tangent
+//! distance `d` of a line corner of the same angle (capped at half of each move), shortened
+//! until the blend keeps within the tolerance of the moves it replaces. The path stops at a
+//! tolerance of 0 and at reversals.
 
 use crate::geometry::Segment;
+use crate::motion::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
 use nalgebra::Vector3;
 
 /// The corner arc and the angles that classify a corner are path geometry
@@ -39,6 +44,10 @@ pub enum Geometry {
     Segment(Segment),
     /// A corner blend.
     Corner(CornerArc),
+    /// The part of an arc that the blends of its corners leave.
+    Part(SegmentPart),
+    /// A curvature-continuous blend of a corner that involves an arc.
+    Curve(QuinticBlend),
 }
 
 impl Geometry {
@@ -47,6 +56,8 @@ impl Geometry {
         match self {
             Geometry::Segment(s) => s.length(),
             Geometry::Corner(c) => c.length(),
+            Geometry::Part(p) => p.length,
+            Geometry::Curve(c) => c.length(),
         }
     }
     /// Point at arc length `s`.
@@ -54,6 +65,8 @@ impl Geometry {
         match self {
             Geometry::Segment(g) => g.point(s),
             Geometry::Corner(c) => c.point(s),
+            Geometry::Part(p) => p.point(s),
+            Geometry::Curve(c) => c.point(s),
         }
     }
     /// Unit tangent at arc length `s`.
@@ -61,6 +74,8 @@ impl Geometry {
         match self {
             Geometry::Segment(g) => g.tangent(s),
             Geometry::Corner(c) => c.tangent(s),
+            Geometry::Part(p) => p.tangent(s),
+            Geometry::Curve(c) => c.tangent(s),
         }
     }
     /// Curvature vector at arc length `s`.
@@ -68,6 +83,8 @@ impl Geometry {
         match self {
             Geometry::Segment(g) => g.curvature(s),
             Geometry::Corner(c) => c.curvature(s),
+            Geometry::Part(p) => p.curvature(s),
+            Geometry::Curve(c) => c.curvature(s),
         }
     }
 }
@@ -128,11 +145,49 @@ fn stop_is_faster(radius: f64, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) 
     2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
 }
 
-fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
+/// The blend of a corner that involves an arc ([`QuinticBlend`] from the incoming move at
+/// `d` before its end to the outgoing one at `d` after its start), `d` shortened (×0.7, at
+/// most 30 times) until the blend keeps within the incoming move's tolerance of the path it
+/// replaces; `None` if none does.
+fn arc_corner(a: &RunMove, b: &RunMove, d: f64) -> Option<(f64, QuinticBlend)> {
+    let (sa, sb) = (&a.segment, &b.segment);
+    let la = sa.length();
+    let mut d = d;
+    for _ in 0..30 {
+        if d.is_nan() || d <= 1e-9 {
+            return None;
+        }
+        let (s0, s1) = (la - d, d);
+        let c = QuinticBlend::new(
+            sa.point(s0),
+            sa.tangent(s0),
+            sa.curvature(s0),
+            sb.point(s1),
+            sb.tangent(s1),
+            sb.curvature(s1),
+        );
+        if let Some(c) = c {
+            if blend_deviation(&c, sa, d, sb, d) <= a.tolerance {
+                return Some((d, c));
+            }
+        }
+        d *= 0.7;
+    }
+    None
+}
+
+/// The corner after each move: its tangent distance (0: no blend), whether the path stops
+/// there, and the curvature-continuous blend of a corner that involves an arc.
+type Corners = (Vec<f64>, Vec<bool>, Vec<Option<QuinticBlend>>);
+
+/// Decides every corner of `moves` (see [`blend`] and [`blend_timed`]).
+fn corners(moves: &[RunMove], timed: Option<(f64, f64)>) -> Corners {
     let m = moves.len();
     // Tangent distance at the corner after move k (0: no blend).
     let mut d = vec![0.0; m];
     let mut stop = vec![false; m];
+    // The curvature-continuous blend of a corner that involves an arc.
+    let mut curve: Vec<Option<QuinticBlend>> = vec![None; m];
     for k in 0..m.saturating_sub(1) {
         let (a, b) = (&moves[k], &moves[k + 1]);
         let u1 = a.segment.tangent(a.segment.length());
@@ -143,25 +198,47 @@ fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
         }
         let both_lines =
             matches!(a.segment, Segment::Line { .. }) && matches!(b.segment, Segment::Line { .. });
-        if !both_lines || theta > REVERSAL_ANGLE {
+        if theta > REVERSAL_ANGLE || a.tolerance <= 0.0 {
             stop[k] = true;
             continue;
         }
         let half = theta / 2.0;
         let dev_per_radius = 1.0 / half.cos() - 1.0;
         let d_tol = a.tolerance / dev_per_radius * half.tan();
-        let dk = d_tol
+        let mut dk = d_tol
             .min(a.segment.length() / 2.0)
             .min(b.segment.length() / 2.0);
-        let slow = timed.is_some_and(|(a_max, j_max)| {
-            stop_is_faster(dk / half.tan(), a.feed, b.feed, a_max, j_max)
-        });
+        let mut radius = dk / half.tan();
+        if !both_lines {
+            match arc_corner(a, b, dk) {
+                Some((d, c)) => {
+                    dk = d;
+                    radius = 1.0 / c.max_curvature().max(1e-300);
+                    curve[k] = Some(c);
+                }
+                None => {
+                    stop[k] = true;
+                    continue;
+                }
+            }
+        }
+        let slow = timed
+            .is_some_and(|(a_max, j_max)| stop_is_faster(radius, a.feed, b.feed, a_max, j_max));
+        if slow {
+            curve[k] = None;
+        }
         if dk > 1e-12 && !slow {
             d[k] = dk;
         } else {
             stop[k] = true;
         }
     }
+    (d, stop, curve)
+}
+
+fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
+    let m = moves.len();
+    let (d, stop, mut curve) = corners(moves, timed);
     let mut pieces: Vec<Piece> = Vec::with_capacity(2 * m);
     let push =
         |pieces: &mut Vec<Piece>, geometry: Geometry, feed: f64, line: usize, stop_after: bool| {
@@ -192,6 +269,17 @@ fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
                     );
                 }
             }
+            seg if d_in > 0.0 || d_out > 0.0 => {
+                let length = seg.length() - d_in - d_out;
+                if length > 1e-9 {
+                    let part = SegmentPart {
+                        segment: seg.clone(),
+                        from: d_in,
+                        length,
+                    };
+                    push(&mut pieces, Geometry::Part(part), mv.feed, mv.line, false);
+                }
+            }
             seg => push(
                 &mut pieces,
                 Geometry::Segment(seg.clone()),
@@ -200,7 +288,10 @@ fn blend_within(moves: &[RunMove], timed: Option<(f64, f64)>) -> Vec<Piece> {
                 stop[k],
             ),
         }
-        if d_out > 0.0 {
+        if let Some(c) = curve[k].take() {
+            let feed = mv.feed.min(moves[k + 1].feed);
+            push(&mut pieces, Geometry::Curve(c), feed, mv.line, false);
+        } else if d_out > 0.0 {
             let next = &moves[k + 1];
             let u1 = mv.segment.tangent(mv.segment.length());
             let u2 = next.segment.tangent(0.0);
@@ -310,5 +401,94 @@ mod tests {
         assert!(p[0].stop_after && p.len() == 2);
         let p = blend(&[line_move(a, b, 0.0), line_move(b, v(0.1, 0.1, 0.0), 0.0)]);
         assert!(p[0].stop_after && p.len() == 2, "zero tolerance stops");
+    }
+
+    /// A line into an arc and an arc into an arc (issue 26: these corners stopped): each
+    /// corner is rounded by one curvature-continuous piece; position, tangent and curvature
+    /// are continuous at every join, and the path stays within the tolerance of the moves.
+    #[test]
+    fn arc_corners_are_blended_curvature_continuously_within_tolerance() {
+        use crate::geometry::segment::{ArcDirection, Plane};
+        let tol = 1e-4;
+        let a = v(0.0, 0.0, 0.0);
+        let b = v(0.05, 0.0, 0.0);
+        // An arc of radius 20 mm leaving b at 45° to the line, then an arc turning back.
+        let c1 = b + v(-1.0, 1.0, 0.0).normalize() * 0.02;
+        let rot = |p: Vector3<f64>, c: Vector3<f64>, ang: f64| {
+            let d = p - c;
+            c + v(
+                d.x * ang.cos() - d.y * ang.sin(),
+                d.x * ang.sin() + d.y * ang.cos(),
+                0.0,
+            )
+        };
+        let p1 = rot(b, c1, 0.6);
+        let arc1 = Segment::arc(b, c1, p1, Plane::XY, ArcDirection::CounterClockwise).unwrap();
+        // The second arc turns the other way from p1, with a 30° kink.
+        let t1 = arc1.tangent(arc1.length());
+        let kink = rot(t1, v(0.0, 0.0, 0.0), -0.5);
+        let n = v(kink.y, -kink.x, 0.0); // right of the direction: clockwise centre
+        let c2 = p1 + n * 0.015;
+        let p2 = rot(p1, c2, -0.8);
+        let arc2 = Segment::arc(p1, c2, p2, Plane::XY, ArcDirection::Clockwise).unwrap();
+        let moves = [
+            RunMove {
+                segment: Segment::line(a, b),
+                feed: 0.1,
+                tolerance: tol,
+                line: 1,
+            },
+            RunMove {
+                segment: arc1.clone(),
+                feed: 0.1,
+                tolerance: tol,
+                line: 2,
+            },
+            RunMove {
+                segment: arc2.clone(),
+                feed: 0.1,
+                tolerance: tol,
+                line: 3,
+            },
+        ];
+        let pieces = blend(&moves);
+        let curves = pieces
+            .iter()
+            .filter(|p| matches!(p.geometry, Geometry::Curve(_)))
+            .count();
+        assert_eq!(curves, 2, "{pieces:?}");
+        assert!(pieces
+            .iter()
+            .all(|p| !p.stop_after || std::ptr::eq(p, pieces.last().unwrap())));
+        for w in pieces.windows(2) {
+            let (p, q) = (&w[0], &w[1]);
+            let l = p.geometry.length();
+            assert!((p.geometry.point(l) - q.geometry.point(0.0)).norm() < 1e-12);
+            assert!((p.geometry.tangent(l) - q.geometry.tangent(0.0)).norm() < 1e-9);
+            let (k0, k1) = (p.geometry.curvature(l), q.geometry.curvature(0.0));
+            assert!(
+                (k0 - k1).norm() < 1e-6 * k0.norm().max(k1.norm()).max(1.0),
+                "{k0} {k1}"
+            );
+            assert!((q.start - (p.start + l)).abs() < 1e-12);
+        }
+        let poly: Vec<Vector3<f64>> = moves
+            .iter()
+            .flat_map(|m| {
+                let l = m.segment.length();
+                (0..=2000).map(move |i| m.segment.point(l * i as f64 / 2000.0))
+            })
+            .collect();
+        for p in &pieces {
+            let l = p.geometry.length();
+            for i in 0..=200 {
+                let x = p.geometry.point(l * i as f64 / 200.0);
+                let d = poly
+                    .windows(2)
+                    .map(|w| dist_to_segment(x, w[0], w[1]))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(d <= tol * (1.0 + 1e-6), "{d}");
+            }
+        }
     }
 }

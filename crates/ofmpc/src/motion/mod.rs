@@ -34,6 +34,7 @@
 
 pub mod blend;
 pub mod exact;
+pub mod g2blend;
 pub mod reference;
 pub mod segment;
 pub mod timelaw;

@@ -207,6 +207,16 @@ impl JointMap {
         self.prev.copy_from_slice(self.robot.start_q());
     }
 
+    /// The previous solution (the branch the next [`JointMap::solve`] stays near).
+    pub(crate) fn state(&self) -> &[f64] {
+        &self.prev
+    }
+
+    /// Sets the previous solution (a state saved by [`JointMap::state`]).
+    pub(crate) fn set_state(&mut self, q: &[f64]) {
+        self.prev.copy_from_slice(q);
+    }
+
     /// The joint positions at flange position `p`, nearest to the previous solution; they
     /// become the previous solution.
     pub(crate) fn solve(&mut self, p: &Vector3<f64>) -> Result<&[f64], ReferenceFailure> {

@@ -187,6 +187,8 @@ struct Timeline {
     segments: Vec<TimedSegment>,
     t: f64,
     run: Vec<RunMove>,
+    /// The exact-stop moves a joint limit slowed down (also those of a run timed as `G61`).
+    joint_limited: Vec<JointLimitedMove>,
 }
 
 impl Timeline {
@@ -201,18 +203,22 @@ impl Timeline {
         self.t += dt;
     }
 
-    /// Blends and times the collected run, if any ([`time_run`]), and appends it.
+    /// Blends and times the collected run, if any ([`time_run`]), and appends it; or, when
+    /// its moves timed as exact stops (`G61`, under the same joint limits) take less time,
+    /// appends them so: a blended run is never slower than stopping at every move's end.
     fn flush(
         &mut self,
         options: &TimingOptions,
-        joints: Option<&mut JointConstraints<'_>>,
+        mut joints: Option<&mut JointConstraints<'_>>,
     ) -> Result<(), TrajectoryError> {
         if self.run.is_empty() {
             return Ok(());
         }
         let line = self.run[0].line;
-        let pieces = blend_timed(&self.run, options.max_accel, options.max_jerk);
-        self.run.clear();
+        let moves = std::mem::take(&mut self.run);
+        let pieces = blend_timed(&moves, options.max_accel, options.max_jerk);
+        // The joint map's state at the run's start, for the exact-stop alternative.
+        let saved = joints.as_deref().map(|jc| jc.map.state().to_vec());
         let t = self.t;
         let timed = time_run(
             pieces,
@@ -220,7 +226,7 @@ impl Timeline {
                 max_accel: options.max_accel,
                 max_jerk: options.max_jerk,
             },
-            joints,
+            joints.as_deref_mut(),
         )
         .map_err(|e| match e {
             RunError::Joint {
@@ -240,9 +246,92 @@ impl Timeline {
             },
         })?;
         let dt = timed.duration();
-        self.push(TimedKind::Run(Box::new(timed)), dt, line);
+        // The exact-stop laws without the joint limits are a lower bound of the alternative
+        // (joint limits only stretch them): the joint-limited laws only when it is below.
+        let lower: f64 = moves
+            .iter()
+            .map(|m| {
+                TimeLaw::fastest(
+                    options.profile,
+                    m.segment.length(),
+                    m.feed,
+                    options.max_accel,
+                )
+                .duration
+            })
+            .sum();
+        let exact = if lower < dt {
+            if let (Some(jc), Some(q)) = (joints.as_deref_mut(), &saved) {
+                jc.map.set_state(q);
+            }
+            exact_moves(&moves, options, joints)
+        } else {
+            Vec::new()
+        };
+        let exact_total: f64 = exact.iter().map(|e| e.law.duration).sum();
+        if !exact.is_empty() && exact_total < dt {
+            for e in exact {
+                let dt = e.law.duration;
+                if let Some(j) = e.limited {
+                    self.joint_limited.push(j);
+                }
+                let kind = TimedKind::Path {
+                    segment: e.segment,
+                    law: e.law,
+                };
+                self.push(kind, dt, e.line);
+            }
+        } else {
+            self.push(TimedKind::Run(Box::new(timed)), dt, line);
+        }
         Ok(())
     }
+}
+
+/// A move of a run timed as an exact stop.
+struct ExactMove {
+    segment: Segment,
+    law: TimeLaw,
+    line: usize,
+    limited: Option<JointLimitedMove>,
+}
+
+/// The moves of a run timed each rest to rest as under `G61` (the fastest law within the
+/// move's feed and `max_accel`, slowed down for the joint limits, [`joint_limited_duration`]).
+fn exact_moves(
+    moves: &[RunMove],
+    options: &TimingOptions,
+    mut joints: Option<&mut JointConstraints<'_>>,
+) -> Vec<ExactMove> {
+    moves
+        .iter()
+        .map(|m| {
+            let mut law = TimeLaw::fastest(
+                options.profile,
+                m.segment.length(),
+                m.feed,
+                options.max_accel,
+            );
+            let mut limited = None;
+            if let Some(jc) = joints.as_deref_mut() {
+                if let Some((t, joint, quantity)) = joint_limited_duration(&m.segment, &law, jc) {
+                    limited = Some(JointLimitedMove {
+                        line: m.line,
+                        joint,
+                        quantity,
+                        factor: t / law.duration,
+                    });
+                    law.duration = t;
+                }
+            }
+            ExactMove {
+                segment: m.segment.clone(),
+                law,
+                line: m.line,
+                limited,
+            }
+        })
+        .collect()
 }
 
 impl CartesianTrajectory {
@@ -266,9 +355,9 @@ impl CartesianTrajectory {
             segments: Vec::with_capacity(program.moves.len()),
             t: 0.0,
             run: Vec::new(),
+            joint_limited: Vec::new(),
         };
         let mut pos = program.start;
-        let mut joint_limited = Vec::new();
         if let Some(jc) = joints.as_deref_mut() {
             jc.map.reset();
         }
@@ -284,7 +373,7 @@ impl CartesianTrajectory {
             if let (Some(jc), TimedKind::Path { segment, law }) = (joints.as_deref_mut(), &mut kind)
             {
                 if let Some((t, joint, quantity)) = joint_limited_duration(segment, law, jc) {
-                    joint_limited.push(JointLimitedMove {
+                    timeline.joint_limited.push(JointLimitedMove {
                         line: m.line,
                         joint,
                         quantity,
@@ -302,7 +391,7 @@ impl CartesianTrajectory {
             start_line: program.start_line,
             segments: timeline.segments,
             duration: timeline.t,
-            joint_limited,
+            joint_limited: timeline.joint_limited,
         })
     }
 
