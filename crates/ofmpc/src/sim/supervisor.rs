@@ -659,7 +659,7 @@ pub struct Inspection {
 /// limit on the joint error), the run (divergence), and when told, takes
 /// the robot over from the controller with the safe-stop law.
 ///
-/// Sized at construction ([`Supervisor::new`]); every other method
+/// Sized at construction ([`Supervisor::with_period`]); every other method
 /// allocates nothing.
 #[derive(Debug, Clone)]
 pub struct Supervisor {
@@ -676,14 +676,34 @@ pub struct Supervisor {
     x_hist: Vec<f64>,
     tau_hist: Vec<f64>,
     /// The growth rule's history of `ε` (a ring of `2M` samples,
-    /// [`Self::sized_for`]) and how many samples were judged.
+    /// [`Self::with_period`]) and how many samples were judged.
     errors: Vec<f64>,
     judged: usize,
 }
 
 impl Supervisor {
-    /// A supervisor for `robot` (its speed, position and torque limits).
+    /// A supervisor for `robot` (its speed, position and torque limits) at
+    /// the control period `ts` (s), which sizes the growth rule's history
+    /// (`2M` samples, `M = round(`[`GROWTH_WINDOW_S`]`/ts)`; a `ts` that is
+    /// not finite and positive gives `M = 1`). The one constructor that
+    /// judges every [`DivergenceRule`] in full.
+    pub fn with_period(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
+        let mut s = Self::without_period(robot, settings);
+        s.size_history(ts);
+        s
+    }
+
+    /// A supervisor without the control period: its growth rule judges only
+    /// the position limits and the ceiling ([`Self::with_period`] judges the
+    /// growth too).
+    #[deprecated(
+        note = "use Supervisor::with_period(robot, settings, ts): without the control period the growth rule judges only the limits and the ceiling"
+    )]
     pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
+        Self::without_period(robot, settings)
+    }
+
+    fn without_period(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
         let n = robot.dof();
         let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
         let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
@@ -706,17 +726,20 @@ impl Supervisor {
         }
     }
 
-    /// Sizes the growth rule's history for the control period `ts` (s):
-    /// needed by [`Self::judge`] with [`DivergenceRule::Growth`] (without
-    /// it only the limits and the ceiling judge growth).
+    /// Sizes the growth rule's history for the control period `ts` (s).
+    #[deprecated(note = "use Supervisor::with_period(robot, settings, ts)")]
     pub fn sized_for(mut self, ts: f64) -> Self {
+        self.size_history(ts);
+        self
+    }
+
+    fn size_history(&mut self, ts: f64) {
         let m = if ts.is_finite() && ts > 0.0 {
             ((GROWTH_WINDOW_S / ts).round() as usize).clamp(1, 1_000_000)
         } else {
             1
         };
         self.errors = vec![0.0; 2 * m];
-        self
     }
 
     /// What it was built with.
