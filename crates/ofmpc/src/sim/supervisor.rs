@@ -1074,12 +1074,7 @@ mod tests {
         };
         let n = robot.dof();
         let mut seed = 12345_u64;
-        let mut next = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = move || crate::linalg::random::uniform(&mut seed);
         for ts in [0.5, 0.25, 0.1, 0.03, 0.01] {
             let mut s = Supervisor::with_period(&robot, settings, ts);
             for run in 0..2 {
