@@ -90,7 +90,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..LoopSettings::default()
     };
     let mut sensor = Sensor::new(n, plant.settings().delay_samples, LossSchedule::default());
-    let mut supervisor = Supervisor::new(plant.robot(), loop_settings.supervisor());
+    let mut supervisor = Supervisor::with_period(plant.robot(), loop_settings.supervisor(), TS);
     let actuator = Actuator::for_robot(plant.robot());
     let mut max_torque_ratio = 0.0f64;
     plant.measure(&mut x)?;

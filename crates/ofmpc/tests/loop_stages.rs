@@ -114,7 +114,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let total = s.reference.len() + settings.hold_samples(ts);
     let lost = LossSchedule::new(&settings.measurement_faults, ts);
     let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost);
-    let mut supervisor = Supervisor::new(plant.robot(), settings.supervisor());
+    let mut supervisor = Supervisor::with_period(plant.robot(), settings.supervisor(), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
     let actuator = Actuator::for_robot(plant.robot());
     let mut rec = Recorder::new(n, total, true, false);

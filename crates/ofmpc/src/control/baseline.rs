@@ -445,52 +445,29 @@ impl JointLawCore {
     }
 }
 
-/// Implements [`Controller`](super::Controller) for a struct with a field
-/// `core: JointLawCore`.
-macro_rules! impl_joint_law {
-    ($ty:ty, $kind:expr) => {
-        impl $crate::control::Controller for $ty {
-            fn kind(&self) -> $crate::control::ControllerKind {
-                $kind
-            }
-            fn dof(&self) -> usize {
-                self.core.dof()
-            }
-            fn horizon(&self) -> usize {
-                self.core.horizon()
-            }
-            fn settings(&self) -> &$crate::control::MpcSettings {
-                self.core.settings()
-            }
-            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
-                self.core.reset(x0)
-            }
-            fn input(&self) -> &[f64] {
-                self.core.input()
-            }
-            fn increments(&self) -> &[f64] {
-                self.core.increments()
-            }
-            fn set_drive_model(
-                &mut self,
-                drives: &$crate::control::DriveModel,
-            ) -> Result<(), $crate::control::SettingsError> {
-                self.core.set_drive_model(drives)
-            }
-            fn step(
-                &mut self,
-                model: &mut dyn $crate::dynamics::JointSpaceDynamics,
-                x: &[f64],
-                w_k: &[f64],
-                preview: &[f64],
-                tau: &mut [f64],
-            ) -> Result<$crate::control::StepInfo, $crate::control::StepError> {
-                self.core.step(model, x, w_k, preview, tau)
-            }
-        }
-    };
+impl super::core::ControllerCore for JointLawCore {
+    fn dof(&self) -> usize {
+        JointLawCore::dof(self)
+    }
+    fn horizon(&self) -> usize {
+        JointLawCore::horizon(self)
+    }
+    fn settings(&self) -> &MpcSettings {
+        JointLawCore::settings(self)
+    }
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        JointLawCore::reset(self, x0)
+    }
+    fn input(&self) -> &[f64] {
+        JointLawCore::input(self)
+    }
+    fn increments(&self) -> &[f64] {
+        JointLawCore::increments(self)
+    }
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        JointLawCore::set_drive_model(self, drives)
+    }
 }
-pub(crate) use impl_joint_law;
 
 #[cfg(test)]
 mod tests {

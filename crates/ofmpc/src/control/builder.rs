@@ -188,6 +188,7 @@ pub struct ControllerBuilder<'r> {
     drives: Option<DriveModel>,
     observer: Option<ObserverSettings>,
     estimator: Option<RlsSettings>,
+    accept_ineffective: bool,
 }
 
 impl<'r> ControllerBuilder<'r> {
@@ -201,6 +202,7 @@ impl<'r> ControllerBuilder<'r> {
             drives: None,
             observer: None,
             estimator: None,
+            accept_ineffective: false,
         }
     }
 
@@ -231,6 +233,22 @@ impl<'r> ControllerBuilder<'r> {
         self
     }
 
+    /// Accepts the settings of the tuning that would have no effect instead
+    /// of refusing them, and builds the controller with them as they are (a
+    /// scenario run warns about them and runs): a constraint horizon without
+    /// torque limits ([`BuildError::ConstraintHorizonWithoutLimits`]), the
+    /// observer's friction model without an observer
+    /// ([`BuildError::ObserverFrictionWithoutObserver`]), friction use with
+    /// no friction estimate ([`BuildError::NoFrictionEstimates`]: it adds
+    /// zero), a model payload of an adaptive kind
+    /// ([`BuildError::PayloadWithIdentification`]: the identification
+    /// replaces it). Everything else is still refused, the parts given to
+    /// this builder that nothing uses included.
+    pub fn accept_ineffective_settings(mut self) -> Self {
+        self.accept_ineffective = true;
+        self
+    }
+
     /// Checks that everything fits together and builds the controller: the
     /// buffers are sized here (this allocates; [`Mpc::step`] does not).
     pub fn build(self) -> Result<Mpc, BuildError> {
@@ -241,10 +259,14 @@ impl<'r> ControllerBuilder<'r> {
             drives,
             observer,
             estimator,
+            accept_ineffective: lenient,
         } = self;
         let n = robot.dof();
         s.validate_for_dof(n)?;
-        if let Some(nc) = s.constraint_horizon.filter(|_| !s.torque_limits) {
+        if let Some(nc) = s
+            .constraint_horizon
+            .filter(|_| !(s.torque_limits || lenient))
+        {
             return Err(BuildError::ConstraintHorizonWithoutLimits(nc));
         }
         // The controller's model: the robot as given, with the payload the
@@ -252,7 +274,7 @@ impl<'r> ControllerBuilder<'r> {
         let carried = robot.payload().map(|p| p.mass);
         let assumed = (s.model_payload_kg > 0.0).then_some(s.model_payload_kg);
         if kind.is_adaptive() {
-            if let Some(mass) = assumed.or(carried) {
+            if let Some(mass) = assumed.or(carried).filter(|_| !lenient) {
                 return Err(BuildError::PayloadWithIdentification { kind, mass });
             }
         } else if estimator.is_some() {
@@ -262,7 +284,7 @@ impl<'r> ControllerBuilder<'r> {
             return Err(BuildError::TwoPayloads { carried, assumed });
         }
         let observed = s.state_observer || s.delay_compensation;
-        if s.observer_friction && !observed {
+        if s.observer_friction && !observed && !lenient {
             return Err(BuildError::ObserverFrictionWithoutObserver);
         }
         let observer = match (observed, observer) {
@@ -295,7 +317,7 @@ impl<'r> ControllerBuilder<'r> {
                 (s.friction_compensation, FrictionUse::Compensation),
                 (s.observer_friction, FrictionUse::Observer),
             ] {
-                if on && no_friction {
+                if on && no_friction && !lenient {
                     return Err(BuildError::NoFrictionEstimates(what));
                 }
             }

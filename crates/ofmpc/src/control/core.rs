@@ -46,50 +46,88 @@ use super::zoh::Zoh;
 use super::{ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// Implements [`Controller`](super::Controller) for a controller struct with a
-/// field `core: Core` and an inherent method `run_step` with the signature of
-/// [`Controller::step`](super::Controller::step): the accessors and `reset`
-/// are the same for all three algorithms, only the step differs.
+/// What a controller's core gives [`Controller`](super::Controller): the
+/// accessors, `reset` and the drives, the same for every controller built on
+/// it ([`Core`] for the predictive controllers, the baselines'
+/// `JointLawCore`); [`impl_controller`] delegates to it.
+pub(crate) trait ControllerCore {
+    /// Number of joints `n`.
+    fn dof(&self) -> usize;
+    /// Prediction horizon `N`.
+    fn horizon(&self) -> usize;
+    /// The tuning.
+    fn settings(&self) -> &MpcSettings;
+    /// [`Controller::reset`](super::Controller::reset).
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError>;
+    /// The input `u` of the last successful step.
+    fn input(&self) -> &[f64];
+    /// The optimal sequence of the last successful step.
+    fn increments(&self) -> &[f64];
+    /// [`Controller::set_drive_model`](super::Controller::set_drive_model).
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError>;
+    /// What the torque-limit QP did (`None`: no QP).
+    fn qp_status(&self) -> Option<QpStatus> {
+        None
+    }
+}
+
+/// Implements [`Controller`](super::Controller) for a controller struct with
+/// a field `core` of the type `$core` (a [`ControllerCore`]): everything but
+/// the step delegates to the core. The step is the core's own
+/// (`core.step`, the joint laws) or the struct's method named last
+/// (`run_step`, the predictive controllers), with the signature of
+/// [`Controller::step`](super::Controller::step):
+///
+/// ```text
+/// impl_controller!(FirstMpc, ControllerKind::First, Core, run_step);
+/// impl_controller!(PidController, ControllerKind::Pid, JointLawCore);
+/// ```
 macro_rules! impl_controller {
-    ($ty:ty, $kind:expr) => {
+    ($ty:ty, $kind:expr, $core:ty) => {
+        $crate::control::core::impl_controller!($ty, $kind, $core, core.step);
+    };
+    ($ty:ty, $kind:expr, $core:ty, $($step:ident).+) => {
         impl $crate::control::Controller for $ty {
             fn kind(&self) -> $crate::control::ControllerKind {
                 $kind
             }
 
             fn dof(&self) -> usize {
-                self.core.dof()
+                <$core as $crate::control::core::ControllerCore>::dof(&self.core)
             }
 
             fn horizon(&self) -> usize {
-                self.core.horizon()
+                <$core as $crate::control::core::ControllerCore>::horizon(&self.core)
             }
 
             fn settings(&self) -> &$crate::control::MpcSettings {
-                self.core.settings()
+                <$core as $crate::control::core::ControllerCore>::settings(&self.core)
             }
 
             fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
-                self.core.reset(x0)
+                <$core as $crate::control::core::ControllerCore>::reset(&mut self.core, x0)
             }
 
             fn input(&self) -> &[f64] {
-                self.core.input()
+                <$core as $crate::control::core::ControllerCore>::input(&self.core)
             }
 
             fn increments(&self) -> &[f64] {
-                self.core.increments()
+                <$core as $crate::control::core::ControllerCore>::increments(&self.core)
             }
 
             fn set_drive_model(
                 &mut self,
                 drives: &$crate::control::DriveModel,
             ) -> Result<(), $crate::control::SettingsError> {
-                self.core.set_drive_model(drives)
+                <$core as $crate::control::core::ControllerCore>::set_drive_model(
+                    &mut self.core,
+                    drives,
+                )
             }
 
             fn qp_status(&self) -> Option<$crate::control::QpStatus> {
-                self.core.qp_status()
+                <$core as $crate::control::core::ControllerCore>::qp_status(&self.core)
             }
 
             fn step(
@@ -100,12 +138,39 @@ macro_rules! impl_controller {
                 preview: &[f64],
                 tau: &mut [f64],
             ) -> Result<$crate::control::StepInfo, $crate::control::StepError> {
-                self.run_step(model, x, w_k, preview, tau)
+                self.$($step).+(model, x, w_k, preview, tau)
             }
         }
     };
 }
 pub(crate) use impl_controller;
+
+impl ControllerCore for Core {
+    fn dof(&self) -> usize {
+        Core::dof(self)
+    }
+    fn horizon(&self) -> usize {
+        Core::horizon(self)
+    }
+    fn settings(&self) -> &MpcSettings {
+        Core::settings(self)
+    }
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+        Core::reset(self, x0)
+    }
+    fn input(&self) -> &[f64] {
+        Core::input(self)
+    }
+    fn increments(&self) -> &[f64] {
+        Core::increments(self)
+    }
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        Core::set_drive_model(self, drives)
+    }
+    fn qp_status(&self) -> Option<QpStatus> {
+        Core::qp_status(self)
+    }
+}
 
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
 const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;

@@ -16,7 +16,8 @@
 //! removes at rest. With torque limits the torque is clipped and the clipped
 //! joint's integral frozen (anti-windup).
 
-use super::baseline::{impl_joint_law, JointLawCore, Law};
+use super::baseline::{JointLawCore, Law};
+use super::core::impl_controller;
 use super::settings::{bandwidths, MpcSettings, SettingsError};
 use super::ControllerKind;
 
@@ -26,7 +27,7 @@ pub struct CtcController {
     core: JointLawCore,
 }
 
-impl_joint_law!(CtcController, ControllerKind::Ctc);
+impl_controller!(CtcController, ControllerKind::Ctc, JointLawCore);
 
 impl CtcController {
     /// A controller for `n` joints with `settings.baselines.ctc_bandwidth`.

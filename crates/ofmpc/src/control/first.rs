@@ -20,7 +20,7 @@ pub struct FirstMpc {
     core: Core,
 }
 
-impl_controller!(FirstMpc, ControllerKind::First);
+impl_controller!(FirstMpc, ControllerKind::First, Core, run_step);
 
 impl FirstMpc {
     /// A controller for `n` joints (buffers sized once).

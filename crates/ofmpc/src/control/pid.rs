@@ -17,7 +17,8 @@
 //! integrator removes at rest. With torque limits the torque is clipped
 //! and the clipped joint's integral frozen (anti-windup).
 
-use super::baseline::{impl_joint_law, JointLawCore, Law};
+use super::baseline::{JointLawCore, Law};
+use super::core::impl_controller;
 use super::settings::{bandwidths, MpcSettings, SettingsError};
 use super::ControllerKind;
 
@@ -27,7 +28,7 @@ pub struct PidController {
     core: JointLawCore,
 }
 
-impl_joint_law!(PidController, ControllerKind::Pid);
+impl_controller!(PidController, ControllerKind::Pid, JointLawCore);
 
 impl PidController {
     /// A controller for `n` joints with `settings.baselines.pid_bandwidth`

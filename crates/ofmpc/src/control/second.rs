@@ -24,7 +24,7 @@ pub struct SecondMpc {
     ws: Vec<f64>,
 }
 
-impl_controller!(SecondMpc, ControllerKind::Second);
+impl_controller!(SecondMpc, ControllerKind::Second, Core, run_step);
 
 impl SecondMpc {
     /// A controller for `n` joints (buffers sized once).

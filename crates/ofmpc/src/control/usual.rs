@@ -15,7 +15,7 @@ pub struct UsualMpc {
     core: Core,
 }
 
-impl_controller!(UsualMpc, ControllerKind::Usual);
+impl_controller!(UsualMpc, ControllerKind::Usual, Core, run_step);
 
 impl UsualMpc {
     /// A controller for `n` joints (buffers sized once).

@@ -421,7 +421,7 @@ impl<'a> ClosedLoop<'a> {
             .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, ts, h.every, h.max));
         let lost = LossSchedule::new(&settings.measurement_faults, ts);
         let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
-        let supervisor = Supervisor::new(plant.robot(), settings.supervisor()).sized_for(ts);
+        let supervisor = Supervisor::with_period(plant.robot(), settings.supervisor(), ts);
         let actuator = Actuator::for_robot(plant.robot());
         Self {
             controller,

@@ -8,14 +8,16 @@ use super::closed_loop::{
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
-use crate::control::{new_controller, ControllerKind, DriveModel, MpcSettings, StateObserver};
+use crate::control::{
+    BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings, ObserverSettings,
+};
 
 /// Poles of the state observer's error dynamics (per sample). Measured on
 /// the paper's path with a 22-bit encoder and one sample of delay (second
 /// algorithm, 0.25 kg): 0.3 → steady joint error 1.7e-5 rad, 0.5 → 8.4e-6,
 /// 0.7 → 3.0e-6, 0.85 → 2.0e-6 rad but Cartesian RMS 0.068 mm (0.012 at 0.7).
-pub const OBSERVER_POLE: f64 = 0.7;
-use crate::dynamics::RobotDynamics;
+/// The builder's default ([`crate::control::DEFAULT_OBSERVER_POLE`]).
+pub const OBSERVER_POLE: f64 = crate::control::DEFAULT_OBSERVER_POLE;
 use crate::motion::JointReference;
 use crate::robot::{ModelError, Payload, Robot};
 
@@ -147,12 +149,22 @@ impl Experiment {
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
-        let n = self.robot.dof();
-        let mut controller = new_controller(kind, n, &self.mpc)?;
-        if self.mpc.torque_limits || self.mpc.friction_compensation {
-            controller.set_drive_model(&DriveModel::from_robot(&self.robot))?;
+        let observed = self.mpc.state_observer || self.mpc.delay_compensation;
+        let mut builder = ControllerBuilder::new(kind, &self.robot)
+            .settings(self.mpc.clone())
+            .accept_ineffective_settings();
+        if observed {
+            builder = builder.observer(ObserverSettings {
+                pole: OBSERVER_POLE,
+                measurement_delay: self.plant.delay_samples,
+            });
         }
-        let mut model = RobotDynamics::new(self.model_robot()?);
+        let mut mpc = builder.build().map_err(|e| match e {
+            // As the settings' and the model's own errors.
+            BuildError::Settings(e) => ExperimentError::Mpc(e),
+            BuildError::Model(e) => ExperimentError::Model(e),
+            e => ExperimentError::Build(e),
+        })?;
         let mut plant_robot = self.robot.clone();
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
@@ -170,27 +182,15 @@ impl Experiment {
             None => Some(*payload),
         })?;
         let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
-        let mut observer = (self.mpc.state_observer || self.mpc.delay_compensation).then(|| {
-            let delay = if self.mpc.delay_compensation {
-                self.plant.delay_samples
-            } else {
-                0
-            };
-            let mut o = StateObserver::new(n, self.mpc.ts, delay, OBSERVER_POLE);
-            if self.mpc.observer_friction {
-                let d = DriveModel::from_robot(&self.robot);
-                o.set_friction(&d.coulomb_nm, &d.viscous_nms);
-            }
-            o
-        });
+        let parts = mpc.parts_mut();
         let result = run_closed_loop_with(
-            controller.as_mut(),
-            &mut model,
+            parts.controller,
+            parts.model,
             &mut plant,
             &self.reference,
             ls,
             &events,
-            observer.as_mut(),
+            parts.observer,
             progress,
         );
         let metrics = compute(

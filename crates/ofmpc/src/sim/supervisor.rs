@@ -659,7 +659,7 @@ pub struct Inspection {
 /// limit on the joint error), the run (divergence), and when told, takes
 /// the robot over from the controller with the safe-stop law.
 ///
-/// Sized at construction ([`Supervisor::new`]); every other method
+/// Sized at construction ([`Supervisor::with_period`]); every other method
 /// allocates nothing.
 #[derive(Debug, Clone)]
 pub struct Supervisor {
@@ -676,14 +676,36 @@ pub struct Supervisor {
     x_hist: Vec<f64>,
     tau_hist: Vec<f64>,
     /// The growth rule's history of `ε` (a ring of `2M` samples,
-    /// [`Self::sized_for`]) and how many samples were judged.
+    /// [`Self::with_period`]) and how many samples were judged.
     errors: Vec<f64>,
     judged: usize,
+    /// The largest error of the growth rule's look-back window.
+    window: SlidingMax,
 }
 
 impl Supervisor {
-    /// A supervisor for `robot` (its speed, position and torque limits).
+    /// A supervisor for `robot` (its speed, position and torque limits) at
+    /// the control period `ts` (s), which sizes the growth rule's history
+    /// (`2M` samples, `M = round(`[`GROWTH_WINDOW_S`]`/ts)`; a `ts` that is
+    /// not finite and positive gives `M = 1`). The one constructor that
+    /// judges every [`DivergenceRule`] in full.
+    pub fn with_period(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
+        let mut s = Self::without_period(robot, settings);
+        s.size_history(ts);
+        s
+    }
+
+    /// A supervisor without the control period: its growth rule judges only
+    /// the position limits and the ceiling ([`Self::with_period`] judges the
+    /// growth too).
+    #[deprecated(
+        note = "use Supervisor::with_period(robot, settings, ts): without the control period the growth rule judges only the limits and the ceiling"
+    )]
     pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
+        Self::without_period(robot, settings)
+    }
+
+    fn without_period(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
         let n = robot.dof();
         let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
         let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
@@ -703,20 +725,25 @@ impl Supervisor {
             tau_hist: vec![0.0; FROZEN_SAMPLES * n],
             errors: Vec::new(),
             judged: 0,
+            window: SlidingMax::default(),
         }
     }
 
-    /// Sizes the growth rule's history for the control period `ts` (s):
-    /// needed by [`Self::judge`] with [`DivergenceRule::Growth`] (without
-    /// it only the limits and the ceiling judge growth).
+    /// Sizes the growth rule's history for the control period `ts` (s).
+    #[deprecated(note = "use Supervisor::with_period(robot, settings, ts)")]
     pub fn sized_for(mut self, ts: f64) -> Self {
+        self.size_history(ts);
+        self
+    }
+
+    fn size_history(&mut self, ts: f64) {
         let m = if ts.is_finite() && ts > 0.0 {
             ((GROWTH_WINDOW_S / ts).round() as usize).clamp(1, 1_000_000)
         } else {
             1
         };
         self.errors = vec![0.0; 2 * m];
-        self
+        self.window = SlidingMax::with_capacity(2 * m);
     }
 
     /// What it was built with.
@@ -736,6 +763,7 @@ impl Supervisor {
         self.tau_hist.fill(0.0);
         self.stop = None;
         self.judged = 0;
+        self.window.clear();
     }
 
     /// Judges the reading `x` (2n, after the sensor) against the reference
@@ -867,6 +895,7 @@ impl Supervisor {
                 (joint, eps) = (i, e);
             }
         }
+        self.slide();
         let grew = eps > self.settings.divergence_threshold_rad && self.grew(eps, q);
         let len = self.errors.len();
         if len > 0 {
@@ -876,8 +905,28 @@ impl Supervisor {
         grew.then(|| (joint, w[joint] - q[joint]))
     }
 
+    /// The growth rule's look-back window at the current sample `J`
+    /// (samples judged so far): `[J − 2m, J − m)` with `m = min(M, ⌊J/2⌋)`.
+    fn look_back(&self) -> (usize, usize) {
+        let m = (self.errors.len() / 2).min(self.judged / 2);
+        (self.judged - 2 * m, self.judged - m)
+    }
+
+    /// Moves the sliding maximum to the current look-back window. Before
+    /// `2M` samples the window starts at sample 0 or 1 by the parity of `J`:
+    /// the deque covers the window from sample 1 on (both its ends then move
+    /// only forward) and [`Self::grew`] adds sample 0 when the window holds it.
+    fn slide(&mut self) {
+        if self.errors.is_empty() {
+            return;
+        }
+        let (from, to) = self.look_back();
+        self.window.advance(&self.errors, from.max(1), to);
+    }
+
     /// The growth rule's test of an error `eps` beyond the floor
-    /// ([`DivergenceRule`]).
+    /// ([`DivergenceRule`]); the look-back's largest error is the sliding
+    /// maximum's ([`Self::slide`]), O(1) per sample.
     fn grew(&self, eps: f64, q: &[f64]) -> bool {
         if eps > GROWTH_CEILING_RAD
             || (0..self.n).any(|i| q[i] < self.lower[i] || q[i] > self.upper[i])
@@ -892,11 +941,30 @@ impl Supervisor {
         if m == 0 || self.judged < len / 4 {
             return false;
         }
-        let from = self.judged - 2 * m;
-        let past = (from..from + m)
-            .map(|j| self.errors[j % len])
-            .fold(0.0, f64::max);
-        eps >= GROWTH_FACTOR * past
+        eps >= GROWTH_FACTOR * self.past()
+    }
+
+    /// The largest error of the look-back window (0 when empty; NaN errors
+    /// count for nothing, as `f64::max` ignores them) after [`Self::slide`].
+    fn past(&self) -> f64 {
+        let (from, to) = self.look_back();
+        let past = self
+            .window
+            .max(&self.errors)
+            .map_or(0.0, |v| 0.0_f64.max(v));
+        match from == 0 && to > 0 {
+            true => past.max(self.errors[0]),
+            false => past,
+        }
+    }
+
+    /// The look-back's largest error by a fold over the window (the
+    /// definition [`Self::grew`]'s sliding maximum must match).
+    #[cfg(test)]
+    fn past_by_fold(&self) -> f64 {
+        let len = self.errors.len();
+        let (from, to) = self.look_back();
+        (from..to).map(|j| self.errors[j % len]).fold(0.0, f64::max)
     }
 
     /// The first joint whose error `w − q` (reference, true position) is
@@ -911,5 +979,163 @@ impl Supervisor {
         (0..self.n)
             .map(|i| (i, w[i] - q[i]))
             .find(|(_, e)| e.abs() > threshold)
+    }
+}
+
+/// The maximum of a window `[from, to)` of a ring of values whose ends only
+/// move forward: a monotone deque of indices (their values decreasing from
+/// front to back; D. Lemire, "Streaming maximum-minimum filter using no more
+/// than three comparisons per element", 2006), amortised O(1) per sample
+/// instead of a fold over the window. NaN values are left out. Sized at
+/// construction; allocates nothing after.
+#[derive(Debug, Clone, Default)]
+struct SlidingMax {
+    /// The deque: a ring of indices into the values.
+    idx: Vec<usize>,
+    head: usize,
+    len: usize,
+    /// The next index to take in.
+    next: usize,
+}
+
+impl SlidingMax {
+    /// A deque for windows of at most `capacity` samples.
+    fn with_capacity(capacity: usize) -> Self {
+        Self {
+            idx: vec![0; capacity.max(1)],
+            ..Self::default()
+        }
+    }
+
+    /// Empty, from index 0 on.
+    fn clear(&mut self) {
+        (self.head, self.len, self.next) = (0, 0, 0);
+    }
+
+    fn at(&self, k: usize) -> usize {
+        self.idx[(self.head + k) % self.idx.len()]
+    }
+
+    /// Moves the window to `[from, to)` of `values` (a ring: index `j` is
+    /// `values[j % len]`, valid for the last `len` indices). `from` and
+    /// `to` never decrease from one call to the next.
+    fn advance(&mut self, values: &[f64], from: usize, to: usize) {
+        let ring = values.len();
+        let cap = self.idx.len();
+        while self.next < to {
+            let j = self.next;
+            self.next += 1;
+            let v = values[j % ring];
+            if j < from || v.is_nan() {
+                continue;
+            }
+            // Values no larger than the new one can never be a maximum again.
+            while self.len > 0 && values[self.at(self.len - 1) % ring] <= v {
+                self.len -= 1;
+            }
+            if self.len == cap {
+                // Not reached (the window is shorter than the capacity).
+                self.head = (self.head + 1) % cap;
+                self.len -= 1;
+            }
+            let slot = (self.head + self.len) % cap;
+            self.idx[slot] = j;
+            self.len += 1;
+        }
+        while self.len > 0 && self.at(0) < from {
+            self.head = (self.head + 1) % cap;
+            self.len -= 1;
+        }
+    }
+
+    /// The window's largest value (`None`: empty, or NaN only).
+    fn max(&self, values: &[f64]) -> Option<f64> {
+        (self.len > 0).then(|| values[self.at(0) % values.len()])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::Robot;
+
+    /// The sliding maximum equals the fold over the look-back window at
+    /// every sample, for several periods, with NaN and repeated values,
+    /// from the start of a run and after a reset.
+    #[test]
+    fn the_sliding_maximum_is_the_fold_over_the_window() {
+        let robot = Robot::irb140();
+        let settings = SupervisorSettings {
+            divergence_threshold_rad: 1e9,
+            divergence: DivergenceRule::Growth,
+            plausibility_check: false,
+            safe_stop: false,
+            max_joint_error_rad: None,
+        };
+        let n = robot.dof();
+        let mut seed = 12345_u64;
+        let mut next = move || crate::linalg::random::uniform(&mut seed);
+        for ts in [0.5, 0.25, 0.1, 0.03, 0.01] {
+            let mut s = Supervisor::with_period(&robot, settings, ts);
+            for run in 0..2 {
+                s.reset(&vec![0.0; 2 * n]);
+                let len = s.errors.len();
+                for k in 0..5 * len + 7 {
+                    let r = next();
+                    // Errors of every kind: NaN, repeated, rising, falling.
+                    let e = match k % 7 {
+                        0 if r < 0.3 => f64::NAN,
+                        1 => 0.1,
+                        2 => 0.1,
+                        _ => r * (1.0 + (k % 13) as f64) * 1e-2,
+                    };
+                    let w = vec![0.0; n];
+                    let mut q = vec![0.0; n];
+                    q[(k + run) % n] = e;
+                    s.slide();
+                    let (past, fold) = (s.past(), s.past_by_fold());
+                    assert_eq!(past.to_bits(), fold.to_bits(), "ts {ts} run {run} k {k}");
+                    // judge slides again: the window is where it was (idempotent).
+                    let _ = s.judge(&w, &q);
+                }
+            }
+        }
+    }
+
+    /// `with_period` sizes the growth rule: an error beyond the floor that
+    /// quadruples against the look-back is a divergence, one that stays is
+    /// an offset; without the period (the deprecated constructor) only the
+    /// limits and the ceiling judge.
+    #[test]
+    fn the_period_given_at_construction_sizes_the_growth_rule() {
+        let robot = Robot::irb140();
+        let n = robot.dof();
+        let settings = SupervisorSettings {
+            divergence_threshold_rad: 0.01,
+            divergence: DivergenceRule::Growth,
+            plausibility_check: false,
+            safe_stop: false,
+            max_joint_error_rad: None,
+        };
+        let ts = 0.01;
+        let m = (GROWTH_WINDOW_S / ts).round() as usize;
+        let run = |s: &mut Supervisor| {
+            s.reset(&vec![0.0; 2 * n]);
+            let w = vec![0.0; n];
+            let mut q = vec![0.0; n];
+            // An offset of 0.02 rad for 2M samples, then 0.1 rad.
+            for k in 0..2 * m {
+                q[1] = 0.02;
+                assert_eq!(s.judge(&w, &q), None, "offset at {k}");
+            }
+            q[1] = 0.1;
+            s.judge(&w, &q)
+        };
+        let mut sized = Supervisor::with_period(&robot, settings, ts);
+        assert_eq!(sized.errors.len(), 2 * m);
+        assert_eq!(run(&mut sized), Some((1, -0.1)));
+        #[allow(deprecated)]
+        let mut without = Supervisor::new(&robot, settings);
+        assert_eq!(run(&mut without), None);
     }
 }
