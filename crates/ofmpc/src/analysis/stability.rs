@@ -334,6 +334,12 @@ pub struct LinearizedLoop {
     /// `[J_q J_q̇ J_τ]` of the plant's acceleration at `α = 1` (n × 3n).
     jac: DMatrix<f64>,
     options: StabilityOptions,
+    /// What [`spectral_radius`] needs where the linearization's eigenvalues
+    /// do not converge.
+    robot: Robot,
+    kind: ControllerKind,
+    settings: MpcSettings,
+    q0: Vec<f64>,
 }
 
 impl LinearizedLoop {
@@ -363,6 +369,10 @@ impl LinearizedLoop {
             gains,
             jac,
             options: *options,
+            robot: robot.clone(),
+            kind,
+            settings: settings.clone(),
+            q0: q0.to_vec(),
         })
     }
 
@@ -432,18 +442,37 @@ impl LinearizedLoop {
     }
 
     /// `ρ` of [`LinearizedLoop::matrix`]: the loop is stable near rest at
-    /// `alpha` iff it is below 1.
-    pub fn spectral_radius(&self, alpha: f64) -> f64 {
-        self.matrix(alpha)
-            .complex_eigenvalues()
-            .iter()
-            .map(|l| l.norm())
-            .fold(0.0, f64::max)
+    /// `alpha` iff it is below 1. `None` when the eigenvalue iteration (Schur,
+    /// at most 10 000 sweeps) does not converge.
+    pub fn spectral_radius(&self, alpha: f64) -> Option<f64> {
+        let schur = nalgebra::linalg::Schur::try_new(self.matrix(alpha), f64::EPSILON, 10_000)?;
+        Some(
+            schur
+                .complex_eigenvalues()
+                .iter()
+                .map(|l| l.norm())
+                .fold(0.0, f64::max),
+        )
     }
 
-    /// The interval of `α` with `ρ < 1` ([`alpha_interval`]'s bisection).
+    /// The interval of `α` with `ρ < 1` ([`alpha_interval`]'s bisection);
+    /// where the eigenvalues of the linearization do not converge, `ρ` of
+    /// the perturbation runs at that `α` ([`spectral_radius`]).
     pub fn alpha_interval(&self) -> Result<(f64, f64), StabilityError> {
-        bisect_interval(|a| Ok(self.spectral_radius(a)), &self.options)
+        bisect_interval(
+            |a| match self.spectral_radius(a) {
+                Some(r) => Ok(r),
+                None => spectral_radius(
+                    &self.robot,
+                    self.kind,
+                    &self.settings,
+                    &self.q0,
+                    a,
+                    &self.options,
+                ),
+            },
+            &self.options,
+        )
     }
 }
 
