@@ -337,13 +337,6 @@ fn mpc_candidates(
             Some(iv)
         })
         .collect();
-    eprintln!(std::fs::read_to_string("/proc/self/stat")
-        .unwrap()
-        .split(' ')
-        .skip(13)
-        .take(2)
-        .collect::<Vec<_>>()
-        .join(" "));
     // 2. The model payload with the largest margin per pair.
     let mut candidates = Vec::new();
     for (c, iv) in grid.into_iter().zip(&intervals) {
@@ -356,26 +349,12 @@ fn mpc_candidates(
             });
         }
     }
-    eprintln!(std::fs::read_to_string("/proc/self/stat")
-        .unwrap()
-        .split(' ')
-        .skip(13)
-        .take(2)
-        .collect::<Vec<_>>()
-        .join(" "));
     // 3. Simulate the stable candidates at the range's ends and middle.
     let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
     candidates
         .par_iter_mut()
         .filter(|c| c.margin > 0.0)
         .for_each(|c| simulate_candidate(exp, c, kinds, &masses));
-    eprintln!(std::fs::read_to_string("/proc/self/stat")
-        .unwrap()
-        .split(' ')
-        .skip(13)
-        .take(2)
-        .collect::<Vec<_>>()
-        .join(" "));
     Ok(candidates)
 }
 
