@@ -212,7 +212,8 @@ pub fn robust_tuning(
     }
     // The search per family of controllers: the incremental MPC (and the
     // usual one) here; other families add their own search beside it.
-    let mut candidates = mpc_candidates(base, (lo_kg, hi_kg), kinds, &[1.0])?;
+    let ranges = model_ratio_ranges(&base.experiment, (lo_kg, hi_kg), &program_poses(base))?;
+    let mut candidates = mpc_candidates(base, (lo_kg, hi_kg), &ranges, kinds, &[1.0])?;
     let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
     let best = |cs: &[Candidate]| {
         cs.iter()
@@ -223,7 +224,7 @@ pub fn robust_tuning(
     let mut chosen = best(&candidates);
     if chosen.is_none() && base.experiment.robot.dof() >= 4 {
         // Per-joint weights: the wrist weighted apart from the arm.
-        let more = mpc_candidates(base, (lo_kg, hi_kg), kinds, &TUNING_WRIST_SCALES)?;
+        let more = mpc_candidates(base, (lo_kg, hi_kg), &ranges, kinds, &TUNING_WRIST_SCALES)?;
         chosen = best(&more);
         candidates.extend(more);
     }
@@ -280,16 +281,17 @@ pub fn robust_tuning(
 /// Steps 1–3 of [`robust_tuning`] for the MPC controllers `kinds` with the
 /// wrist scales `scales` ([`Candidate::wrist_scale`]): every weight pair of
 /// the grid with its best model payload, the stable ones simulated.
+/// `ranges`: [`model_ratio_ranges`] of the range.
 fn mpc_candidates(
     base: &Scenario,
     (lo_kg, hi_kg): (f64, f64),
+    ranges: &[(f64, f64)],
     kinds: &[ControllerKind],
     scales: &[f64],
 ) -> Result<Vec<Candidate>, ScenarioError> {
     let exp = &base.experiment;
     let n = exp.robot.dof();
     let q0 = exp.reference.q(0).to_vec();
-    let poses = program_poses(base);
     let opts = StabilityOptions {
         tolerance: 4e-3,
         ..Default::default()
@@ -297,7 +299,9 @@ fn mpc_candidates(
     // The smallest span hi/lo of α any model payload needs over the range:
     // a pair whose interval is narrower is rejected before its other
     // controllers are analysed (and never simulated).
-    let span = required_span(exp, (lo_kg, hi_kg), &poses)?;
+    let span = (ranges.iter())
+        .map(|(amin, amax)| amax / amin)
+        .fold(f64::INFINITY, f64::min);
     let grid: Vec<Candidate> = scales
         .iter()
         .flat_map(|&w| {
@@ -337,7 +341,7 @@ fn mpc_candidates(
     let mut candidates = Vec::new();
     for (c, iv) in grid.into_iter().zip(&intervals) {
         let Some(interval) = *iv else { continue };
-        if let Some((m, margin)) = best_model_payload(exp, interval, (lo_kg, hi_kg), &poses)? {
+        if let Some((m, margin)) = best_model_payload(interval, (lo_kg, hi_kg), ranges) {
             candidates.push(Candidate {
                 model_payload_kg: m,
                 margin,
@@ -354,19 +358,18 @@ fn mpc_candidates(
     Ok(candidates)
 }
 
-/// The smallest `max α / min α` over the model-payload grid of
-/// [`best_model_payload`]: what a stable interval must span at least.
-fn required_span(
+/// [`model_ratio_range`] of every point of the model-payload grid (computed
+/// once per tuning: they depend on the range, not on the weights). The
+/// smallest `max α / min α` among them is what a stable interval must span
+/// at least.
+fn model_ratio_ranges(
     exp: &ofmpc::sim::Experiment,
     (lo_kg, hi_kg): (f64, f64),
     poses: &[&[f64]],
-) -> Result<f64, ScenarioError> {
-    let mut span = f64::INFINITY;
-    for i in 0..MODEL_GRID {
-        let (amin, amax) = model_ratio_range(exp, i, (lo_kg, hi_kg), poses)?;
-        span = span.min(amax / amin);
-    }
-    Ok(span)
+) -> Result<Vec<(f64, f64)>, ScenarioError> {
+    (0..MODEL_GRID)
+        .map(|i| model_ratio_range(exp, i, (lo_kg, hi_kg), poses))
+        .collect()
 }
 
 /// The inertia-ratio range over the poses, for the lightest and the
@@ -452,24 +455,23 @@ fn adaptive_fallback(
 }
 
 /// The model payload on a grid over `[lo_kg, hi_kg]` whose inertia-ratio
-/// range over the poses keeps the largest logarithmic margin inside the
-/// stable `interval` of α, with that margin (`None` without a grid point).
+/// range over the poses (`ranges`, [`model_ratio_ranges`]) keeps the largest
+/// logarithmic margin inside the stable `interval` of α, with that margin
+/// (`None` without a grid point).
 fn best_model_payload(
-    exp: &ofmpc::sim::Experiment,
     (lo, hi): (f64, f64),
     (lo_kg, hi_kg): (f64, f64),
-    poses: &[&[f64]],
-) -> Result<Option<(f64, f64)>, ScenarioError> {
+    ranges: &[(f64, f64)],
+) -> Option<(f64, f64)> {
     let mut best: Option<(f64, f64)> = None;
-    for i in 0..MODEL_GRID {
+    for (i, &(amin, amax)) in ranges.iter().enumerate() {
         let m = model_grid_kg(i, (lo_kg, hi_kg));
-        let (amin, amax) = model_ratio_range(exp, i, (lo_kg, hi_kg), poses)?;
         let margin = (amin / lo).ln().min((hi / amax).ln());
         if !matches!(best, Some((_, b)) if b >= margin) {
             best = Some((m, margin));
         }
     }
-    Ok(best)
+    best
 }
 
 /// Steady joint error (rad) below which a run counts as offset-free.

@@ -4,10 +4,10 @@
 //! with the paper tuning's known intervals (NOTES.md).
 
 use ofmpc::analysis::{
-    alpha_interval, inertia_ratio_range, max_payload, simulated_growth, StabilityError,
-    StabilityOptions,
+    alpha_interval, alpha_interval_by_perturbation, inertia_ratio_range, max_payload,
+    simulated_growth, spectral_radius, LinearizedLoop, StabilityError, StabilityOptions,
 };
-use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 
 const Q0: [f64; 6] = [0.0, 0.4, 0.1, 0.0, 0.9, 0.0];
@@ -103,4 +103,56 @@ fn adaptive_variants_and_bad_options_are_errors() {
         ),
         Err(StabilityError::Model(_))
     ));
+}
+
+/// The loop linearized once ([`LinearizedLoop`]: the controller's gains from
+/// one controller's steps by central differences, the plant's Jacobian, RK4
+/// of the linearization per α) has the spectral radius of the per-α
+/// perturbation runs of the actual controller and plant ([`spectral_radius`],
+/// whose one-sided perturbations carry a bias of order `perturbation`: about
+/// 1e-5 relative where ρ ≈ 5, 1e-9 where ρ ≈ 1), for the three algorithms,
+/// scalar and per-joint weights; it does not move when the perturbation
+/// changes tenfold (no first-order bias); and it bisects to the same interval.
+#[test]
+fn loop_linearized_once_matches_the_perturbation_runs() {
+    let robot = Robot::irb140();
+    let opts = StabilityOptions {
+        tolerance: 4e-3,
+        ..Default::default()
+    };
+    let larger = StabilityOptions {
+        perturbation: 1e-6,
+        ..opts
+    };
+    let per_joint = MpcSettings {
+        q_dy: Weight::Diagonal(vec![0.5, 0.5, 0.5, 5.0, 5.0, 5.0]),
+        q_du: Weight::Diagonal(vec![1e-3, 1e-3, 1e-3, 1e-2, 1e-2, 1e-2]),
+        ..MpcSettings::default()
+    };
+    for s in [MpcSettings::default(), per_joint] {
+        for kind in [
+            ControllerKind::Usual,
+            ControllerKind::First,
+            ControllerKind::Second,
+        ] {
+            let lin = LinearizedLoop::new(&robot, kind, &s, &Q0, &opts).unwrap();
+            let lin6 = LinearizedLoop::new(&robot, kind, &s, &Q0, &larger).unwrap();
+            for a in [0.05, 0.5, 0.8, 1.0, 1.1, 1.3, 2.5] {
+                let fast = lin.spectral_radius(a).unwrap();
+                let slow = spectral_radius(&robot, kind, &s, &Q0, a, &opts).unwrap();
+                assert!(
+                    (fast - slow).abs() <= 2e-5 * slow.max(1.0),
+                    "{kind} α = {a}: {fast} against {slow}"
+                );
+                let fast6 = lin6.spectral_radius(a).unwrap();
+                assert!(
+                    (fast - fast6).abs() <= 1e-7 * fast.max(1.0),
+                    "{kind} α = {a}: {fast} against {fast6} (perturbation 1e-6)"
+                );
+            }
+            let iv = lin.alpha_interval().unwrap();
+            let slow = alpha_interval_by_perturbation(&robot, kind, &s, &Q0, &opts).unwrap();
+            assert_eq!(iv, slow, "{kind}");
+        }
+    }
 }

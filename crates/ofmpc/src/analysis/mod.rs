@@ -4,6 +4,7 @@
 pub mod stability;
 
 pub use stability::{
-    alpha_interval, closed_loop_matrix, inertia_ratio_range, max_payload, simulated_growth,
-    spectral_radius, StabilityError, StabilityOptions,
+    alpha_interval, alpha_interval_by_perturbation, closed_loop_matrix, inertia_ratio_range,
+    max_payload, simulated_growth, spectral_radius, LinearizedLoop, StabilityError,
+    StabilityOptions,
 };

@@ -32,7 +32,9 @@
 //! `(H_model, H_plant)` lies in the interval of scalar `α`
 //! ([`inertia_ratio_range`], [`max_payload`]).
 
-use crate::control::{new_controller, ControllerKind, MpcSettings, SettingsError, StepError};
+use crate::control::{
+    new_controller, Controller, ControllerKind, MpcSettings, SettingsError, StepError,
+};
 use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
 use crate::linalg::{random, rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Payload, Robot};
@@ -298,23 +300,358 @@ pub fn spectral_radius(
         .fold(0.0, f64::max))
 }
 
-/// The interval `[lo, hi] ∋ 1` of `α` over which the loop near rest at `q0`
-/// is stable (`ρ < 1`), by bisection from `α = 1` towards
-/// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
-/// bound still stable there is reported as that end). Assumes one interval.
-pub fn alpha_interval(
+/// The closed loop near rest at `q0`, linearized once and reused for every
+/// inertia ratio `α`: [`closed_loop_matrix`] repeats the controller's
+/// perturbation runs for each `α`, although only the plant depends on it.
+///
+/// * The controller's one-sample map is linear near rest in
+///   `ξ_k = [δx_k; δx_{k−1}; u_{k−1}; ē_{k−1}]` (`ē` for the second
+///   algorithm only; [`closed_loop_matrix`]'s module doc lists the memory):
+///   `u_k = K ξ_k`, `δτ_k = T ξ_k`. `K`, `T` come from the **actual
+///   controller step** ([`crate::control::Controller::step`]) by least
+///   squares over steps from small random inputs (one controller, reset
+///   between runs; exact for the linear part as in [`closed_loop_matrix`]).
+/// * The plant `q̈ = α H⁻¹(τ − C q̇ − g)` linearized at the equilibrium
+///   `(q₀, 0, τ₀ = g(q₀))`: `δq̈ = α (J_q δq + J_q̇ δq̇ + J_τ δτ)` (the bracket
+///   vanishes at rest, so `∂H⁻¹` drops out; `J` by central differences of the
+///   plant's acceleration at `α = 1`), discretized by the same RK4 substeps as
+///   the analysis plant (RK4 of the linearization is the linearization of
+///   RK4): `δx_{k+1} = Φ_α δx_k + Γ_α δτ_k`.
+/// * The closed loop in `ξ`: `ξ_{k+1} = [Φ_α S_x + Γ_α T; S_x; K; S_ē − S_q] ξ_k`
+///   with `S` selecting the blocks of `ξ` (reference `q₀`: `ē_k = ē_{k−1} − δq_k`).
+///   `ξ` is redundant (`x_k = Φ x_{k−1} + Γ τ_{k−1}` on every trajectory of
+///   the loop), but the defect `x_k − Φ x_{k−1} − Γ τ_{k−1}` is zero after
+///   one sample whatever it was, so the extra eigenvalues are 0 and the
+///   spectral radius is that of [`closed_loop_matrix`]'s `M`.
+#[derive(Debug, Clone)]
+pub struct LinearizedLoop {
+    n: usize,
+    with_ebar: bool,
+    ts: f64,
+    substeps: usize,
+    /// `[K; T]`: `u_k` (rows `0..n`) and `δτ_k` (rows `n..2n`) from `ξ_k`.
+    gains: DMatrix<f64>,
+    /// `[J_q J_q̇ J_τ]` of the plant's acceleration at `α = 1` (n × 3n).
+    jac: DMatrix<f64>,
+    options: StabilityOptions,
+    /// What [`spectral_radius`] needs where the linearization's eigenvalues
+    /// do not converge.
+    robot: Robot,
+    kind: ControllerKind,
+    settings: MpcSettings,
+    q0: Vec<f64>,
+}
+
+impl LinearizedLoop {
+    /// Linearizes the loop of `kind` with `settings` near rest at `q0` on the
+    /// model `robot` (the errors of [`closed_loop_matrix`]).
+    pub fn new(
+        robot: &Robot,
+        kind: ControllerKind,
+        settings: &MpcSettings,
+        q0: &[f64],
+        options: &StabilityOptions,
+    ) -> Result<Self, StabilityError> {
+        options.validate()?;
+        if kind.is_adaptive() {
+            return Err(StabilityError::Adaptive(kind));
+        }
+        robot.check_vector("q0", q0)?;
+        let n = robot.dof();
+        let (_, with_ebar) = memory(kind);
+        let (gains, tau0) = controller_gains(robot, kind, settings, q0, options.perturbation)?;
+        let jac = plant_jacobian(robot, q0, &tau0)?;
+        Ok(Self {
+            n,
+            with_ebar,
+            ts: settings.ts,
+            substeps: options.substeps,
+            gains,
+            jac,
+            options: *options,
+            robot: robot.clone(),
+            kind,
+            settings: settings.clone(),
+            q0: q0.to_vec(),
+        })
+    }
+
+    /// Size of `ξ`.
+    fn dim(&self) -> usize {
+        5 * self.n + if self.with_ebar { self.n } else { 0 }
+    }
+
+    /// The plant's one-sample map `[Φ_α Γ_α]` (2n × 3n) of the linearization.
+    fn plant_map(&self, alpha: f64) -> DMatrix<f64> {
+        let n = self.n;
+        let h = self.ts / self.substeps as f64;
+        let jac = &self.jac * alpha;
+        let mut out = DMatrix::zeros(2 * n, 3 * n);
+        let mut work = vec![0.0; RK4_WORK_PER_DOF * n];
+        for col in 0..3 * n {
+            let mut q = vec![0.0; n];
+            let mut v = vec![0.0; n];
+            let mut tau = vec![0.0; n];
+            match col {
+                c if c < n => q[c] = 1.0,
+                c if c < 2 * n => v[c - n] = 1.0,
+                c => tau[c - 2 * n] = 1.0,
+            }
+            for _ in 0..self.substeps {
+                let _ = rk4_second_order_step(&mut q, &mut v, h, &mut work, |q, v, a| {
+                    for (i, ai) in a.iter_mut().enumerate() {
+                        let r = jac.row(i);
+                        *ai = (0..n)
+                            .map(|j| r[j] * q[j] + r[n + j] * v[j] + r[2 * n + j] * tau[j])
+                            .sum();
+                    }
+                    Ok::<(), ()>(())
+                });
+            }
+            for i in 0..n {
+                out[(i, col)] = q[i];
+                out[(n + i, col)] = v[i];
+            }
+        }
+        out
+    }
+
+    /// The closed loop's one-sample map in `ξ` for the inertia ratio `alpha`.
+    pub fn matrix(&self, alpha: f64) -> DMatrix<f64> {
+        let n = self.n;
+        let m = self.dim();
+        let pm = self.plant_map(alpha);
+        let (phi, gamma) = (pm.columns(0, 2 * n), pm.columns(2 * n, n));
+        let (k, t) = (self.gains.rows(0, n), self.gains.rows(n, n));
+        let mut e = DMatrix::zeros(m, m);
+        // δx_{k+1} = Φ δx_k + Γ T ξ.
+        e.view_mut((0, 0), (2 * n, m)).copy_from(&(gamma * t));
+        let mut top = e.view_mut((0, 0), (2 * n, 2 * n));
+        top += phi;
+        // δx_k moves down; u_k = K ξ.
+        e.view_mut((2 * n, 0), (2 * n, 2 * n))
+            .copy_from(&DMatrix::identity(2 * n, 2 * n));
+        e.view_mut((4 * n, 0), (n, m)).copy_from(&k);
+        if self.with_ebar {
+            for i in 0..n {
+                e[(5 * n + i, 5 * n + i)] = 1.0;
+                e[(5 * n + i, i)] = -1.0;
+            }
+        }
+        e
+    }
+
+    /// `ρ` of [`LinearizedLoop::matrix`]: the loop is stable near rest at
+    /// `alpha` iff it is below 1. `None` when the eigenvalue iteration (Schur,
+    /// at most 10 000 sweeps) does not converge.
+    pub fn spectral_radius(&self, alpha: f64) -> Option<f64> {
+        let schur = nalgebra::linalg::Schur::try_new(self.matrix(alpha), f64::EPSILON, 10_000)?;
+        Some(
+            schur
+                .complex_eigenvalues()
+                .iter()
+                .map(|l| l.norm())
+                .fold(0.0, f64::max),
+        )
+    }
+
+    /// The interval of `α` with `ρ < 1` ([`alpha_interval`]'s bisection);
+    /// where the eigenvalues of the linearization do not converge, `ρ` of
+    /// the perturbation runs at that `α` ([`spectral_radius`]).
+    pub fn alpha_interval(&self) -> Result<(f64, f64), StabilityError> {
+        bisect_interval(
+            |a| match self.spectral_radius(a) {
+                Some(r) => Ok(r),
+                None => spectral_radius(
+                    &self.robot,
+                    self.kind,
+                    &self.settings,
+                    &self.q0,
+                    a,
+                    &self.options,
+                ),
+            },
+            &self.options,
+        )
+    }
+}
+
+/// `[K; T]` of [`LinearizedLoop`] by least squares over steps of one
+/// controller from random inputs of size `eps` about rest at `q0`, and the
+/// torque at rest `τ₀` the controller returns there. Each run is stepped
+/// twice, with the deviations `+eps·r` and `−eps·r`, and the least squares
+/// uses half their differences (central differences: the second-order terms
+/// of the controller's nonlinearity cancel, a bias `O(eps²)` instead of
+/// `O(eps)`).
+fn controller_gains(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
     q0: &[f64],
+    eps: f64,
+) -> Result<(DMatrix<f64>, Vec<f64>), StabilityError> {
+    let n = robot.dof();
+    let (_, with_ebar) = memory(kind);
+    let m = 5 * n + if with_ebar { n } else { 0 };
+    let mut pass = GainPass {
+        model: RobotDynamics::new(robot.clone()),
+        ctrl: new_controller(kind, n, settings)?,
+        x0: [q0, &vec![0.0; n]].concat(),
+        q0: q0.to_vec(),
+        preview0: q0.repeat(settings.horizon),
+        tau0: vec![0.0; n],
+        with_ebar,
+    };
+    let (x0, p0) = (pass.x0.clone(), pass.preview0.clone());
+    pass.ctrl.reset(&x0)?;
+    pass.ctrl
+        .step(&mut pass.model, &x0, q0, &p0, &mut pass.tau0)?;
+    let mut rng = Lcg(0x5eed);
+    let runs = 8;
+    let per_run = (2 * m).div_ceil(runs);
+    let rows = runs * per_run;
+    let mut xi = DMatrix::zeros(rows, m);
+    let mut out = DMatrix::zeros(rows, 2 * n);
+    for run in 0..runs {
+        let mut draw = |len: usize| (0..len).map(|_| rng.next()).collect::<Vec<f64>>();
+        let draws = RunDraws {
+            x_minus: draw(2 * n),
+            x_first: draw(2 * n),
+            w: draw(n),
+            preview: draw(settings.horizon * n),
+            xs: (0..per_run).map(|_| draw(2 * n)).collect(),
+        };
+        let plus = pass.run(&draws, eps)?;
+        let minus = pass.run(&draws, -eps)?;
+        for (k, ((xp, op), (xm, om))) in plus.iter().zip(&minus).enumerate() {
+            let row = run * per_run + k;
+            for j in 0..m {
+                xi[(row, j)] = (xp[j] - xm[j]) / (2.0 * eps);
+            }
+            for j in 0..2 * n {
+                out[(row, j)] = (op[j] - om[j]) / (2.0 * eps);
+            }
+        }
+    }
+    // Ξ [K; T]ᵀ = [U T], least squares by SVD.
+    let svd = xi.svd(true, true);
+    let gt = svd
+        .solve(&out, 1e-12)
+        .map_err(|_| StabilityError::NonFinite { alpha: 1.0 })?;
+    if !gt.iter().all(|v| v.is_finite()) {
+        return Err(StabilityError::NonFinite { alpha: 1.0 });
+    }
+    Ok((gt.transpose(), pass.tau0))
+}
+
+/// The random draws of one run of [`controller_gains`] (in `[−1, 1)`, scaled
+/// by `±eps`): `x_{−1}`, the first step's state, reference and preview (they
+/// excite `u` and `ē`), then the states of the recorded steps.
+struct RunDraws {
+    x_minus: Vec<f64>,
+    x_first: Vec<f64>,
+    w: Vec<f64>,
+    preview: Vec<f64>,
+    xs: Vec<Vec<f64>>,
+}
+
+/// The controller of [`controller_gains`] with its model and rest point.
+struct GainPass {
+    model: RobotDynamics,
+    ctrl: Box<dyn Controller + Send>,
+    x0: Vec<f64>,
+    q0: Vec<f64>,
+    preview0: Vec<f64>,
+    tau0: Vec<f64>,
+    with_ebar: bool,
+}
+
+impl GainPass {
+    /// Steps one run with the deviations `scale · draws` about rest: per
+    /// recorded step, `ξ_k` and `[u_k; τ_k − τ₀]` (unscaled).
+    #[allow(clippy::type_complexity)]
+    fn run(&mut self, d: &RunDraws, scale: f64) -> Result<Vec<(Vec<f64>, Vec<f64>)>, StepError> {
+        let n = self.q0.len();
+        let about = |base: &[f64], r: &[f64]| -> Vec<f64> {
+            base.iter().zip(r).map(|(b, r)| b + scale * r).collect()
+        };
+        let mut tau = vec![0.0; n];
+        let mut x_prev = about(&self.x0, &d.x_minus);
+        self.ctrl.reset(&x_prev)?;
+        let x = about(&self.x0, &d.x_first);
+        let w = about(&self.q0, &d.w);
+        let preview = about(&self.preview0, &d.preview);
+        self.ctrl
+            .step(&mut self.model, &x, &w, &preview, &mut tau)?;
+        let mut ebar: Vec<f64> = (0..n).map(|i| w[i] - x[i]).collect();
+        x_prev.copy_from_slice(&x);
+        let mut rows = Vec::with_capacity(d.xs.len());
+        for r in &d.xs {
+            let x = about(&self.x0, r);
+            let xi: Vec<f64> = (x.iter().zip(&self.x0).map(|(a, b)| a - b))
+                .chain(x_prev.iter().zip(&self.x0).map(|(a, b)| a - b))
+                .chain(self.ctrl.input().iter().copied())
+                .chain(
+                    ebar.iter()
+                        .copied()
+                        .take(if self.with_ebar { n } else { 0 }),
+                )
+                .collect();
+            self.ctrl
+                .step(&mut self.model, &x, &self.q0, &self.preview0, &mut tau)?;
+            let out: Vec<f64> = (self.ctrl.input().iter().copied())
+                .chain(tau.iter().zip(&self.tau0).map(|(t, t0)| t - t0))
+                .collect();
+            for i in 0..n {
+                ebar[i] += self.q0[i] - x[i];
+            }
+            x_prev.copy_from_slice(&x);
+            rows.push((xi, out));
+        }
+        Ok(rows)
+    }
+}
+
+/// `[J_q J_q̇ J_τ]` (n × 3n): the Jacobian of the plant's acceleration
+/// `H⁻¹(τ − C q̇ − g)` at `(q0, 0, tau0)`, by central differences (step
+/// `1e-6` in `q`, `q̇`; the acceleration is affine in `τ`, step 1).
+fn plant_jacobian(robot: &Robot, q0: &[f64], tau0: &[f64]) -> Result<DMatrix<f64>, StabilityError> {
+    let n = robot.dof();
+    let mut plant = ScaledPlant {
+        model: RobotDynamics::new(robot.clone()),
+        alpha: 1.0,
+        h: DMatrix::zeros(n, n),
+        c: DMatrix::zeros(n, n),
+        g: DVector::zeros(n),
+    };
+    let mut jac = DMatrix::zeros(n, 3 * n);
+    let base = [q0.to_vec(), vec![0.0; n], tau0.to_vec()];
+    for col in 0..3 * n {
+        let (block, i) = (col / n, col % n);
+        let step = if block == 2 { 1.0 } else { 1e-6 };
+        let mut acc = |sign: f64| {
+            let mut args = base.clone();
+            args[block][i] += sign * step;
+            plant
+                .accel(&args[0], &args[1], &args[2])
+                .ok_or(StabilityError::NonFinite { alpha: 1.0 })
+        };
+        let d = (acc(1.0)? - acc(-1.0)?) / (2.0 * step);
+        jac.set_column(col, &d);
+    }
+    Ok(jac)
+}
+
+/// The bisection of [`alpha_interval`] on the spectral radius `rho(α)`.
+fn bisect_interval(
+    mut rho: impl FnMut(f64) -> Result<f64, StabilityError>,
     options: &StabilityOptions,
 ) -> Result<(f64, f64), StabilityError> {
-    let rho = |a: f64| spectral_radius(robot, kind, settings, q0, a, options);
     let at_one = rho(1.0)?;
     if at_one >= 1.0 {
         return Err(StabilityError::UnstableAtExactModel { radius: at_one });
     }
-    let edge = |stable: f64, far: f64| -> Result<f64, StabilityError> {
+    let mut edge = |stable: f64, far: f64| -> Result<f64, StabilityError> {
         if rho(far)? < 1.0 {
             return Ok(far);
         }
@@ -332,6 +669,37 @@ pub fn alpha_interval(
     let lo = edge(1.0, options.alpha_min)?;
     let hi = edge(1.0, options.alpha_max)?;
     Ok((lo, hi))
+}
+
+/// The interval `[lo, hi] ∋ 1` of `α` over which the loop near rest at `q0`
+/// is stable (`ρ < 1`), by bisection from `α = 1` towards
+/// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
+/// bound still stable there is reported as that end). Assumes one interval.
+/// `ρ(α)` is that of the loop linearized once ([`LinearizedLoop`]).
+pub fn alpha_interval(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    options: &StabilityOptions,
+) -> Result<(f64, f64), StabilityError> {
+    LinearizedLoop::new(robot, kind, settings, q0, options)?.alpha_interval()
+}
+
+/// [`alpha_interval`] with `ρ` of [`spectral_radius`] (the controller's
+/// perturbation runs repeated at every `α`): the slower reference the
+/// linearized loop is checked against.
+pub fn alpha_interval_by_perturbation(
+    robot: &Robot,
+    kind: ControllerKind,
+    settings: &MpcSettings,
+    q0: &[f64],
+    options: &StabilityOptions,
+) -> Result<(f64, f64), StabilityError> {
+    bisect_interval(
+        |a| spectral_radius(robot, kind, settings, q0, a, options),
+        options,
+    )
 }
 
 /// The range of the generalized eigenvalues of `(H_model, H_plant)` over the
