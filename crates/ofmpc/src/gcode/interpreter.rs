@@ -283,6 +283,9 @@ impl Interpreter {
                     gcodes.push((g, w));
                 }
                 'M' => mcodes.push((classify_m(w, line)?, w)),
+                // An axis the robot does not have, kept at 0 where LinuxCNC starts it
+                // (A0, or an increment of 0): no motion, nothing to reject.
+                'A' | 'B' | 'C' | 'U' | 'V' | 'W' if w.value == 0.0 => {}
                 c => match letter_index(c) {
                     Some(k) => {
                         if let Some(prev) = args[k] {
@@ -313,12 +316,12 @@ impl Interpreter {
         let c = w.letter;
         let (message, hint) = match c {
             'A' | 'B' | 'C' => (
-                format!("rotary axis word {c} is not supported"),
-                "the tool orientation is constant; remove the word",
+                format!("rotary axis word {c} moves the {c} axis: rotary axes are not supported"),
+                "the tool orientation is constant; remove the word (A0, B0, C0 are read: the axis stays at 0)",
             ),
             'U' | 'V' | 'W' => (
-                format!("axis word {c} is not supported"),
-                "only X, Y and Z are robot path axes",
+                format!("axis word {c} moves the {c} axis: only X, Y and Z are robot path axes"),
+                "remove the word (U0, V0, W0 are read: the axis stays at 0)",
             ),
             'E' => (
                 "E (extruder) words are not supported".to_string(),
@@ -346,6 +349,9 @@ impl Interpreter {
     /// Records the line's S and T words and M codes (with the words they use) as events.
     fn record_events(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
         let after_moves = self.moves.len();
+        if let Some(t) = sorted.args.get('T') {
+            self.ext.tool_selected = t.value;
+        }
         for c in ['S', 'T'] {
             if let Some(w) = sorted.args.get(c) {
                 self.events.push(ProgramEvent {
@@ -361,6 +367,7 @@ impl Interpreter {
                 .chars()
                 .filter_map(|c| sorted.args.get(c).map(|a| (c, a.value)))
                 .collect();
+            self.track_m_state(w.value, &sorted.args);
             let code = if w.value.fract() == 0.0 {
                 format!("M{}", w.value as i64)
             } else {
@@ -372,6 +379,23 @@ impl Interpreter {
                 words,
                 after_moves,
             });
+        }
+    }
+
+    /// Keeps the spindle, coolant and tool state of M code `m` (for the predefined
+    /// parameters `#<_spindle_on>`, `#<_flood>`, `#<_current_tool>`, …).
+    fn track_m_state(&mut self, m: f64, args: &Args<'_, '_>) {
+        let e = &mut self.ext;
+        match m as i64 {
+            3 => e.spindle_dir = 1,
+            4 => e.spindle_dir = -1,
+            5 => e.spindle_dir = 0,
+            6 => e.tool_current = e.tool_selected,
+            7 => e.mist = true,
+            8 => e.flood = true,
+            9 => (e.mist, e.flood) = (false, false),
+            61 => e.tool_current = args.get('Q').map_or(e.tool_current, |q| q.value),
+            _ => {}
         }
     }
 
@@ -491,6 +515,19 @@ impl Interpreter {
                 Some(q) if q.value > 0.0 => Some(q.value * self.scale()),
                 _ => None,
             };
+            let r_of_motion = cmd
+                .explicit_motion
+                .is_some_and(|(m, _)| matches!(m, Motion::Cw | Motion::Ccw | Motion::Cycle(_)));
+            if let (Some(r), false) = (args.get('R'), r_of_motion) {
+                self.warn(
+                    line,
+                    r.col,
+                    format!(
+                        "{} (G64 R: LinuxCNC's planner selection) ignored: the robot's planner is chosen by the scenario ([timing])",
+                        r.text
+                    ),
+                );
+            }
         }
         Ok(())
     }
@@ -567,7 +604,7 @@ impl Interpreter {
         };
         use_letters(mletters);
         if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
-            use_letters("PQ");
+            use_letters("PQR");
         }
         match cmd.tool {
             Some((430, _)) => use_letters("H"),

@@ -114,8 +114,11 @@ impl OKind {
 /// An O-word statement (`o100 while [#1 LT 3]`, `o<name> call [1] [2]`).
 #[derive(Debug, Clone)]
 pub(super) struct OStmt<'a> {
-    /// The label: the number (without leading zeros) or `<name>` in lower case.
+    /// The label: the number (without leading zeros) or `<name>` in lower case; for a
+    /// computed label, its source text.
     pub(super) label: String,
+    /// A computed label (`o[#1 + 2] call`, `o#<sub> call`), evaluated when the line runs.
+    pub(super) label_expr: Option<Expr>,
     pub(super) kind: OKind,
     pub(super) args: Vec<Expr>,
     pub(super) col: usize,
@@ -609,10 +612,18 @@ impl<'a> LineChars<'a> {
     /// followed by a number and no keyword (a program number, read as a word).
     fn o_word(&self, i: usize) -> Result<Option<(OStmt<'a>, usize)>, GcodeError> {
         let (j, c) = self.peek(i + 1);
+        let mut label_expr = None;
         let (label, k) = match c {
             Some('<') => {
                 let (n, k) = self.name(j)?;
                 (format!("<{n}>"), k)
+            }
+            // LinuxCNC reads the number of an O-word as an integer value: a parameter or an
+            // expression gives a computed label ("O codes: indirection").
+            Some('#' | '[') => {
+                let (e, k) = self.real_value(j, 1)?;
+                label_expr = Some(e);
+                (self.raw[self.byte_at(j)..self.byte_at(k)].to_string(), k)
             }
             Some(c) if c.is_ascii_digit() => {
                 let mut k = j;
@@ -650,7 +661,7 @@ impl<'a> LineChars<'a> {
             k2 = next;
         }
         let Some(kind) = OKind::from_word(&kw) else {
-            if label.starts_with('<') {
+            if label.starts_with('<') || label_expr.is_some() {
                 return Err(self.syntax(
                     k,
                     format!("O-word {label} without a keyword"),
@@ -677,6 +688,7 @@ impl<'a> LineChars<'a> {
         Ok(Some((
             OStmt {
                 label,
+                label_expr,
                 kind,
                 args,
                 col: i + 1,
