@@ -199,3 +199,61 @@ M2
     // Parameters outside the kept ranges stay free (#5070: probe result, #5599: debug).
     ok("#5070 = 1\n#5599 = 1\nG0 X#5070 Y0 Z0\n");
 }
+
+#[test]
+fn corpus_constructs_read_or_are_refused_by_their_own_name() {
+    // G04 uses no axis words: a motion may follow it on its line; the dwell comes first.
+    let p = ok("G0 X0 Y0 Z0\nG4 P0.5 G0 X1 Y1 M3 $0 S1000\nM52 P1\nM19 R90 Q2 $0\nM2\n");
+    assert!(matches!(p.moves[0].kind, MoveKind::Dwell { seconds } if seconds == 0.5));
+    assert_ends(&p, &[[1.0, 1.0, 0.0]]);
+    let m3 = p.events.iter().find(|e| e.code == "M3").expect("M3 event");
+    assert_eq!(m3.words, vec![('$', 0.0)]);
+    assert!(p
+        .events
+        .iter()
+        .any(|e| e.code == "M52" && e.words == vec![('P', 1.0)]));
+    // Each refusal names its construct, at its column.
+    let cases: [(&str, usize, &str); 5] = [
+        (
+            "G0 X0 Y0 Z0\nF#<_hal[plasmac.cut-feed-rate]>\n",
+            1,
+            "reads a HAL pin",
+        ),
+        (
+            "G0 X0 Y0 Z0\nG0 Z#<_ini[probe]z_max>\n",
+            4,
+            "reads LinuxCNC's INI file",
+        ),
+        (
+            "G0 X0 Y0 Z0\nG91 G38.2 Z-10 F100\n",
+            5,
+            "G38.2 (straight probe)",
+        ),
+        (
+            "G0 X0 Y0 Z0\nO<g20sub> callsub\n",
+            11,
+            "unknown O-word keyword `callsub`",
+        ),
+        ("gsw_meta:51\nG0 X0 Y0 Z0\n", 1, "`gsw_meta` is not G-code"),
+    ];
+    for (text, col, what) in cases {
+        let e = fail(text);
+        assert!(e.to_string().contains(what), "{e}");
+        assert_eq!(e.column, col, "{e}");
+    }
+}
+
+#[test]
+fn g10_rotation_is_refused_by_name_and_r0_is_read() {
+    let p = ok("G10 L2 P1 X1 R0\nG0 X0 Y0 Z0\nM2\n");
+    assert!((p.start.x - 1e-3).abs() < 1e-15);
+    let e = fail("G10 L2 P1 R45\nG0 X0 Y0 Z0\n");
+    assert_eq!(
+        (e.line, e.column, e.kind),
+        (1, 11, GcodeErrorKind::Unsupported)
+    );
+    assert!(
+        e.to_string().contains("rotation of the coordinate system"),
+        "{e}"
+    );
+}

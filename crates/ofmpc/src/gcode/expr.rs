@@ -135,6 +135,16 @@ impl EvalError {
     /// Message and hint.
     pub(super) fn describe(&self) -> (String, String) {
         match self {
+            // LinuxCNC's `#<_hal[pin]>` and `#<_ini[section]name>` read the running
+            // machine's HAL pins and INI file ("G-code overview: HAL pins and INI values").
+            EvalError::Undefined(n) if n.starts_with("_hal[") => (
+                format!("#<{n}> reads a HAL pin of a running LinuxCNC, which the reader does not have"),
+                format!("replace #<{n}> by the value the pin has, e.g. a number or #<_my_value> set at the top"),
+            ),
+            EvalError::Undefined(n) if n.starts_with("_ini[") => (
+                format!("#<{n}> reads LinuxCNC's INI file, which the reader does not have"),
+                format!("replace #<{n}> by the value of the INI entry"),
+            ),
             EvalError::Undefined(n) => (
                 format!("the named parameter #<{n}> is read before it is set"),
                 format!("set it first, e.g. #<{n}> = 0"),

@@ -201,7 +201,7 @@ impl Interpreter {
             }
         }
         if let Some(g4) = cmd.dwell {
-            self.dwell(line, line_text, g4, args)?;
+            self.dwell(line, line_text, g4, args, cmd.explicit_motion.is_some())?;
         }
         if let Some(m) = cmd.explicit_motion {
             if !matches!(m.0, Motion::Cycle(_)) {
@@ -210,7 +210,10 @@ impl Interpreter {
             self.motion = Some(m.0);
         }
         let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
-        if cmd.dwell.is_none() && cmd.set_offset.is_none() && !consumes_axes {
+        // G04 uses no axis words, so a motion may share its line (LinuxCNC: the dwell
+        // runs first); without one, G04 X… is a dwell time.
+        let dwell_only = cmd.dwell.is_some() && cmd.explicit_motion.is_none();
+        if !dwell_only && cmd.set_offset.is_none() && !consumes_axes {
             if let Some(m) = motion_mode {
                 self.line_motion(line, line_text, words, &cmd, m, args)?;
             }
@@ -590,7 +593,7 @@ impl Interpreter {
         mletters: &str,
     ) -> [bool; N_ARGS] {
         let mut used = [false; N_ARGS];
-        for c in ['F', 'S', 'T', 'O'] {
+        for c in ['F', 'S', 'T', 'O', '$'] {
             if let Some(k) = letter_index(c) {
                 used[k] = true;
             }
@@ -615,11 +618,14 @@ impl Interpreter {
             use_letters("XYZ");
             return used;
         }
-        if cmd.dwell.is_some() {
+        if cmd.dwell.is_some() && cmd.explicit_motion.is_none() {
             use_letters("PX");
         } else if cmd.set_offset.is_some() {
-            use_letters("LPXYZ");
+            use_letters("LPXYZR");
         } else if let Some(m) = motion_mode {
+            if cmd.dwell.is_some() {
+                use_letters("P");
+            }
             use_letters("XYZ@^");
             if matches!(m, Motion::Cw | Motion::Ccw) {
                 use_letters("IJKR");
@@ -638,9 +644,11 @@ impl Interpreter {
         line_text: &str,
         g4: &Word<'_>,
         args: &Args<'_, '_>,
+        motion_on_line: bool,
     ) -> Result<(), GcodeError> {
         use GcodeErrorKind::*;
-        let (p, x) = (args.get('P'), args.get('X'));
+        let p = args.get('P');
+        let x = args.get('X').filter(|_| !motion_on_line);
         let w = match (p, x) {
             (Some(p), None) => p,
             (None, Some(x)) => x,
@@ -758,6 +766,20 @@ impl Interpreter {
                 ))
             }
             Some(_) => {}
+        }
+        // LinuxCNC's G10 L2/L20 R: the rotation of the coordinate system about Z.
+        if let Some(r) = arg('R').filter(|r| r.value != 0.0) {
+            return Err(err(
+                line,
+                r.col,
+                Unsupported,
+                r.text,
+                format!(
+                    "G10 {} (rotation of the coordinate system about Z) is not supported",
+                    r.text
+                ),
+                "rotate the program in the CAM system, or remove R (R0 is read: no rotation)",
+            ));
         }
         let p = arg('P').ok_or_else(|| {
             err(
@@ -1047,10 +1069,10 @@ struct LineCommands<'l, 'w> {
 }
 
 impl LineCommands<'_, '_> {
-    /// Rejects a motion on the same line as a non-modal command (G04 or G10).
+    /// Rejects a motion on the same line as G10 (both use the axis words; G04 uses none, so
+    /// a motion may follow it on its line, as in LinuxCNC).
     fn check_non_modal_conflict(&self, line: usize, line_text: &str) -> Result<(), GcodeError> {
-        let non_modal = self.dwell.or(self.set_offset);
-        if let (Some(nm), Some((_, mw))) = (non_modal, self.explicit_motion) {
+        if let (Some(nm), Some((_, mw))) = (self.set_offset, self.explicit_motion) {
             return Err(err(
                 line,
                 mw.col,

@@ -243,7 +243,7 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
                 continue;
             }
         }
-        if c.is_ascii_alphabetic() || c == '@' || c == '^' {
+        if c.is_ascii_alphabetic() || c == '@' || c == '^' || c == '$' {
             let (word, j) = text.word(i, c)?;
             block.words.push(word);
             i = j;
@@ -661,6 +661,14 @@ impl<'a> LineChars<'a> {
             k2 = next;
         }
         let Some(kind) = OKind::from_word(&kw) else {
+            if kw.len() >= 2 && (label.starts_with('<') || label_expr.is_some() || kw.len() >= 3) {
+                let shown = self.raw[self.byte_at(k)..self.byte_at(k2)].to_lowercase();
+                return Err(self.syntax(
+                    k,
+                    format!("unknown O-word keyword `{shown}` after o{label}"),
+                    "O-word keywords: sub endsub call return if elseif else endif while endwhile do repeat endrepeat break continue",
+                ));
+            }
             if label.starts_with('<') || label_expr.is_some() {
                 return Err(self.syntax(
                     k,
@@ -772,6 +780,26 @@ impl<'a> LineChars<'a> {
     /// `j`), with a hint for the likely mistake (O for 0, `#` parameters, `[ ]` expressions).
     fn no_number(&self, i: usize, j: usize, letter: char) -> GcodeError {
         let next = self.chars.get(j).map(|&(_, ch)| ch);
+        // A run of letters (`gsw_meta`, `GOTO`, `IF`) is text of another language.
+        let mut k = i;
+        while matches!(self.chars.get(k), Some(&(_, ch)) if ch.is_ascii_alphanumeric() || ch == '_')
+        {
+            k += 1;
+        }
+        let run = &self.raw[self.byte_at(i)..self.byte_at(k)];
+        if next.is_some_and(|c| c.is_ascii_alphabetic() && c != 'O' && c != 'o') && k > i + 2 {
+            return err(
+                self.line,
+                i + 1,
+                GcodeErrorKind::Syntax,
+                &escape(run),
+                format!(
+                    "`{}` is not G-code: a word is one letter and a number",
+                    escape(run)
+                ),
+                "is this a G-code file? Comments go in ( ) or after ;",
+            );
+        }
         let hint = if matches!(next, Some('O' | 'o')) {
             format!("the letter O where the digit 0 was meant? write {letter}0")
         } else {
