@@ -111,20 +111,7 @@ fn link_one(
         at: i,
         branches: vec![i],
     };
-    if o.label_expr.is_some() && o.kind != OKind::Call {
-        return Err(err(
-            l.no,
-            o.col,
-            GcodeErrorKind::Unsupported,
-            o.text,
-            format!(
-                "a computed O-word label (o{}) is read for call only, not for {}",
-                o.label,
-                o.kind.name()
-            ),
-            "write the label as a number or <name>, e.g. o100 sub",
-        ));
-    }
+    check_computed_label(l, o)?;
     let top_is = |s: &[Open], kinds: &[OKind]| {
         s.last()
             .is_some_and(|t| kinds.contains(&t.kind) && t.label == o.label)
@@ -244,6 +231,26 @@ fn link_jump(
             ));
         }
         _ => {}
+    }
+    Ok(())
+}
+
+/// Rejects a computed label (`o[#1] sub`) on anything but a call: the statements are linked
+/// before the program runs.
+fn check_computed_label(l: &SourceLine<'_>, o: &OStmt<'_>) -> Result<(), GcodeError> {
+    if o.label_expr.is_some() && o.kind != OKind::Call {
+        return Err(err(
+            l.no,
+            o.col,
+            GcodeErrorKind::Unsupported,
+            o.text,
+            format!(
+                "a computed O-word label (o{}) is read for call only, not for {}",
+                o.label,
+                o.kind.name()
+            ),
+            "write the label as a number or <name>, e.g. o100 sub",
+        ));
     }
     Ok(())
 }
