@@ -742,12 +742,13 @@ fn command_errors() {
         InvalidValue,
         &["P1..P6"],
     );
+    // R of G10 L2 is LinuxCNC's rotation of the coordinate system: named (issue #20).
     check(
         &fail_after_start("G10 L2 P1 X0 R5\n"),
         2,
         14,
-        Conflict,
-        &["R is only used by arcs"],
+        Unsupported,
+        &["G10 R5 (rotation of the coordinate system about Z)", "R0 is read"],
     );
 }
 
