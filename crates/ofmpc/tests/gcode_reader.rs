@@ -705,12 +705,14 @@ fn command_errors() {
         Conflict,
         &["Y is not used by G04", "P (or X) seconds"],
     );
+    // G10 and a motion both use the axis words: refused. (G04 uses none: `G4 P1 G1 X1`
+    // dwells, then moves, as in LinuxCNC; see gcode_linuxcnc.rs.)
     check(
-        &fail_after_start("G4 G1 P1\n"),
+        &fail_after_start("G10 L2 P1 G1 X0\n"),
         2,
-        4,
+        11,
         Conflict,
-        &["G4 and G1 on one line", "own line"],
+        &["G10 and G1 on one line", "own line"],
     );
     check(
         &fail_after_start("G10 P1 X0\n"),
@@ -740,12 +742,13 @@ fn command_errors() {
         InvalidValue,
         &["P1..P6"],
     );
+    // R of G10 L2 is LinuxCNC's rotation of the coordinate system: named (issue #20).
     check(
         &fail_after_start("G10 L2 P1 X0 R5\n"),
         2,
         14,
-        Conflict,
-        &["R is only used by arcs"],
+        Unsupported,
+        &["G10 R5 (rotation of the coordinate system about Z)", "R0 is read"],
     );
 }
 

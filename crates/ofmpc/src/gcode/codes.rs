@@ -159,6 +159,12 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
                 "give the tool length with G43.1 Z<length>",
             ))
         }
+        382..=385 => {
+            return Err(unsupported(
+                &format!("{} (straight probe) is not supported", w.text),
+                "a robot path has no probe input: remove the probing moves (and what uses their result, #5061–#5070)",
+            ))
+        }
         330 | 331 => {
             return Err(unsupported(
                 "G33 (spindle-synchronized motion, threading) is not supported",
@@ -205,10 +211,14 @@ pub(super) enum MCode {
     Warn(String),
 }
 
-/// The argument letters M code `m` uses (LinuxCNC: M62–M65 P; M66 P E L Q; M67/M68 E Q;
-/// M61 Q; M100–M199 P Q; M3/M4 S; M6 T).
+/// The argument letters M code `m` uses (LinuxCNC: M3/M4/M5 `$` (spindle number); M19 R Q P
+/// `$`; M50–M53 P (overrides, adaptive feed, feed stop); M62–M65 P; M66 P E L Q; M67/M68 E Q;
+/// M61 Q; M100–M199 P Q).
 pub(super) fn m_letters(m: f64) -> &'static str {
     match m as i64 {
+        3..=5 => "$",
+        19 => "RQP$",
+        50..=53 => "P",
         62..=65 => "P",
         66 => "PELQ",
         67 | 68 => "EQ",
@@ -247,10 +257,10 @@ pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError>
 }
 
 /// Letters that carry arguments (not G, M, N).
-pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZDEHQ@^";
+pub(super) const ARG_LETTERS: &str = "FIJKLOPRSTXYZDEHQ@^$";
 
 /// Number of [`ARG_LETTERS`].
-pub(super) const N_ARGS: usize = 19;
+pub(super) const N_ARGS: usize = 20;
 
 pub(super) fn letter_index(c: char) -> Option<usize> {
     ARG_LETTERS.find(c)

@@ -135,6 +135,16 @@ impl EvalError {
     /// Message and hint.
     pub(super) fn describe(&self) -> (String, String) {
         match self {
+            // LinuxCNC's `#<_hal[pin]>` and `#<_ini[section]name>` read the running
+            // machine's HAL pins and INI file ("G-code overview: HAL pins and INI values").
+            EvalError::Undefined(n) if n.starts_with("_hal[") => (
+                format!("#<{n}> reads a HAL pin of a running LinuxCNC, which the reader does not have"),
+                format!("replace #<{n}> by the value the pin has, e.g. a number or #<_my_value> set at the top"),
+            ),
+            EvalError::Undefined(n) if n.starts_with("_ini[") => (
+                format!("#<{n}> reads LinuxCNC's INI file, which the reader does not have"),
+                format!("replace #<{n}> by the value of the INI entry"),
+            ),
             EvalError::Undefined(n) => (
                 format!("the named parameter #<{n}> is read before it is set"),
                 format!("set it first, e.g. #<{n}> = 0"),
@@ -159,13 +169,99 @@ impl EvalError {
     }
 }
 
-/// The parameters of a program: numbered, named globals (`#<_x>`) and the named locals of
-/// the running subroutine (or of the main program).
+/// LinuxCNC's read-only named parameters (`lookup_named_param` and `init_named_parameters`
+/// in interp_namedparams.cc; "G-code overview: predefined named parameters"), in the order of
+/// [`Params::predefined`]. The first four belong to the O-word runner, the others to the
+/// modal state.
+pub(super) const PREDEFINED: [&str; N_PREDEFINED] = [
+    "_line",
+    "_value",
+    "_value_returned",
+    "_call_level",
+    "_remap_level",
+    "_task",
+    "_vmajor",
+    "_vminor",
+    "_metric_machine",
+    "_motion_mode",
+    "_plane",
+    "_ccomp",
+    "_metric",
+    "_imperial",
+    "_absolute",
+    "_incremental",
+    "_inverse_time",
+    "_units_per_minute",
+    "_units_per_rev",
+    "_coord_system",
+    "_tool_offset",
+    "_retract_r_plane",
+    "_retract_old_z",
+    "_spindle_rpm_mode",
+    "_spindle_css_mode",
+    "_ijk_absolute_mode",
+    "_lathe_diameter_mode",
+    "_lathe_radius_mode",
+    "_spindle_on",
+    "_spindle_cw",
+    "_mist",
+    "_flood",
+    "_speed_override",
+    "_feed_override",
+    "_adaptive_feed",
+    "_feed_hold",
+    "_feed",
+    "_rpm",
+    "_current_tool",
+    "_current_pocket",
+    "_selected_pocket",
+    "_selected_tool",
+    "_x",
+    "_y",
+    "_z",
+    "_a",
+    "_b",
+    "_c",
+    "_u",
+    "_v",
+    "_w",
+    "_abs_x",
+    "_abs_y",
+    "_abs_z",
+    "_abs_a",
+    "_abs_b",
+    "_abs_c",
+    "_abs_u",
+    "_abs_v",
+    "_abs_w",
+];
+
+/// Number of [`PREDEFINED`] parameters.
+pub(super) const N_PREDEFINED: usize = 60;
+
+/// Index of `_line` … `_call_level` in [`PREDEFINED`] (kept by the O-word runner).
+pub(super) const P_LINE: usize = 0;
+pub(super) const P_VALUE: usize = 1;
+pub(super) const P_VALUE_RETURNED: usize = 2;
+pub(super) const P_CALL_LEVEL: usize = 3;
+
+/// Numbered parameters the reader keeps from its state (LinuxCNC's "numbered parameters"
+/// table): G28 and G30 positions (5161–5169, 5181–5189), G92 (5210–5219), the active
+/// coordinate system and the work offsets (5220–5390), the tool (5400–5413) and the
+/// position (5420–5428). A program reads them; it cannot set them.
+pub(super) fn is_system_parameter(i: usize) -> bool {
+    matches!(i, 5161..=5169 | 5181..=5189 | 5210..=5390 | 5400..=5413 | 5420..=5428)
+}
+
+/// The parameters of a program: numbered, named globals (`#<_x>`), the named locals of
+/// the running subroutine (or of the main program) and the read-only predefined ones.
 #[derive(Debug, Clone)]
 pub(super) struct Params {
     pub(super) numbered: Vec<f64>,
     pub(super) globals: HashMap<String, f64>,
     pub(super) locals: Vec<HashMap<String, f64>>,
+    /// Values of the [`PREDEFINED`] parameters, refreshed before each line.
+    pub(super) predefined: [f64; N_PREDEFINED],
 }
 
 impl Default for Params {
@@ -174,6 +270,7 @@ impl Default for Params {
             numbered: vec![0.0; MAX_PARAMETER + 1],
             globals: HashMap::new(),
             locals: vec![HashMap::new()],
+            predefined: [0.0; N_PREDEFINED],
         }
     }
 }
@@ -188,7 +285,18 @@ impl Params {
         Ok(r as usize)
     }
 
+    /// The index of `name` in [`PREDEFINED`].
+    pub(super) fn predefined_index(name: &str) -> Option<usize> {
+        if !name.starts_with('_') {
+            return None;
+        }
+        PREDEFINED.iter().position(|p| *p == name)
+    }
+
     pub(super) fn named(&self, name: &str) -> Option<f64> {
+        if let Some(i) = Self::predefined_index(name) {
+            return Some(self.predefined[i]);
+        }
         if name.starts_with('_') {
             self.globals.get(name).copied()
         } else {

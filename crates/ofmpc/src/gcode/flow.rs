@@ -3,7 +3,9 @@
 //! `break/continue`; parameter settings and messages; and the walk over the lines with a step
 //! limit, so that an endless loop ends with an error naming the loop.
 
-use super::expr::{EvalError, Expr, Params};
+use super::expr::{
+    is_system_parameter, EvalError, Expr, Params, P_CALL_LEVEL, P_LINE, P_VALUE, P_VALUE_RETURNED,
+};
 use super::interpreter::Interpreter;
 use super::lexer::{escape, Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
 use super::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
@@ -109,6 +111,7 @@ fn link_one(
         at: i,
         branches: vec![i],
     };
+    check_computed_label(l, o)?;
     let top_is = |s: &[Open], kinds: &[OKind]| {
         s.last()
             .is_some_and(|t| kinds.contains(&t.kind) && t.label == o.label)
@@ -232,6 +235,26 @@ fn link_jump(
     Ok(())
 }
 
+/// Rejects a computed label (`o[#1] sub`) on anything but a call: the statements are linked
+/// before the program runs.
+fn check_computed_label(l: &SourceLine<'_>, o: &OStmt<'_>) -> Result<(), GcodeError> {
+    if o.label_expr.is_some() && o.kind != OKind::Call {
+        return Err(err(
+            l.no,
+            o.col,
+            GcodeErrorKind::Unsupported,
+            o.text,
+            format!(
+                "a computed O-word label (o{}) is read for call only, not for {}",
+                o.label,
+                o.kind.name()
+            ),
+            "write the label as a number or <name>, e.g. o100 sub",
+        ));
+    }
+    Ok(())
+}
+
 fn close_loop(stack: &mut Vec<Open>, k: &mut Links, i: usize) {
     if let Some(t) = stack.pop() {
         k.end[t.at] = i;
@@ -257,6 +280,8 @@ pub(super) struct Runner<'s, 'a> {
     /// The last loop that jumped back (named by the step-limit error).
     last_loop: usize,
     warned_delete: bool,
+    /// The program reads parameters (has a `#`): the predefined ones are kept up to date.
+    uses_parameters: bool,
 }
 
 impl<'s, 'a> Runner<'s, 'a> {
@@ -269,6 +294,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             repeats: Vec::new(),
             last_loop: NONE,
             warned_delete: false,
+            uses_parameters: lines.iter().any(|l| l.raw.contains('#')),
         })
     }
 
@@ -288,6 +314,11 @@ impl<'s, 'a> Runner<'s, 'a> {
                 return Err(self.step_limit(pc, max_steps));
             }
             let l = &self.lines[pc];
+            if self.uses_parameters {
+                self.params.predefined[P_LINE] = l.no as f64;
+                it.predefined(&mut self.params.predefined);
+                it.system_parameters(&mut self.params.numbered);
+            }
             let b = match &l.lexed {
                 Err(e) => return Err(e.clone()),
                 Ok(Lexed::Percent) => {
@@ -473,15 +504,45 @@ impl<'s, 'a> Runner<'s, 'a> {
         }
     }
 
+    /// The label a call names: its own, or the value of its computed label (an integer,
+    /// as LinuxCNC's `read_integer_value`).
+    fn call_label(&self, l: &SourceLine<'_>, o: &OStmt<'_>) -> Result<String, GcodeError> {
+        let Some(e) = &o.label_expr else {
+            return Ok(o.label.clone());
+        };
+        let v = self.eval(l, o.col, o.text, e)?;
+        let r = v.round();
+        if (v - r).abs() > 1e-4 || r < 0.0 {
+            return Err(err(
+                l.no,
+                o.col,
+                GcodeErrorKind::InvalidValue,
+                o.text,
+                format!(
+                    "the computed O-word label o{} is {v}, not a whole number >= 0",
+                    o.label
+                ),
+                "compute the number of a subroutine, e.g. o[#1 * 100] call with #1 = 2 calls o200",
+            ));
+        }
+        Ok(format!("{r:.0}"))
+    }
+
     fn call(&mut self, pc: usize, o: &OStmt<'_>) -> Result<usize, GcodeError> {
         let l = &self.lines[pc];
-        let Some(&sub) = self.links.subs.get(&o.label) else {
+        let label = self.call_label(l, o)?;
+        let Some(&sub) = self.links.subs.get(&label) else {
+            let computed = if o.label_expr.is_some() {
+                format!(" (o{} is o{label})", o.label)
+            } else {
+                String::new()
+            };
             return Err(err(
                 l.no,
                 o.col,
                 GcodeErrorKind::Unsupported,
                 o.text,
-                format!("o{} call: no subroutine o{} sub in this file", o.label, o.label),
+                format!("o{label} call{computed}: no subroutine o{label} sub in this file"),
                 "subroutines in other files are not read: define it in this file with o… sub … o… endsub",
             ));
         };
@@ -508,6 +569,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             saved,
             repeats: self.repeats.len(),
         });
+        self.params.predefined[P_CALL_LEVEL] = self.frames.len() as f64;
         self.last_loop = sub;
         Ok(sub + 1)
     }
@@ -526,12 +588,11 @@ impl<'s, 'a> Runner<'s, 'a> {
         self.params.numbered[1..31].copy_from_slice(&f.saved);
         self.params.locals.pop();
         self.repeats.truncate(f.repeats);
-        if let Some(v) = value {
-            self.params.globals.insert("_value".into(), v);
-            self.params.globals.insert("_value_returned".into(), 1.0);
-        } else {
-            self.params.globals.insert("_value_returned".into(), 0.0);
-        }
+        // LinuxCNC (interp_read.cc, read_o): a return or endsub without a value sets
+        // #<_value> to 0 and #<_value_returned> to 0.
+        self.params.predefined[P_VALUE] = value.unwrap_or(0.0);
+        self.params.predefined[P_VALUE_RETURNED] = f64::from(u8::from(value.is_some()));
+        self.params.predefined[P_CALL_LEVEL] = self.frames.len() as f64;
         Ok(f.return_to)
     }
 
@@ -574,10 +635,17 @@ impl<'s, 'a> Runner<'s, 'a> {
         for a in &b.assigns {
             let v = self.eval(l, a.col, a.text, &a.value)?;
             let target = match &a.target {
+                Target::Named(n) if Params::predefined_index(n).is_some() => {
+                    return Err(read_only(l.no, a.col, a.text, &format!("#<{n}>")));
+                }
                 Target::Named(n) => Err(n.as_str()),
                 Target::Numbered(e) => {
                     let i = self.eval(l, a.col, a.text, e)?;
-                    Ok(Params::index(i).map_err(|e| eval_error(l.no, a.col, a.text, &e))?)
+                    let i = Params::index(i).map_err(|e| eval_error(l.no, a.col, a.text, &e))?;
+                    if is_system_parameter(i) {
+                        return Err(read_only(l.no, a.col, a.text, &format!("#{i}")));
+                    }
+                    Ok(i)
                 }
             };
             sets.push((target, v));
@@ -645,6 +713,18 @@ impl<'s, 'a> Runner<'s, 'a> {
         out.push_str(rest);
         out.trim().to_string()
     }
+}
+
+/// The error for a setting of a predefined parameter (`#<_x>`, `#5220`, …).
+fn read_only(line: usize, col: usize, text: &str, name: &str) -> GcodeError {
+    err(
+        line,
+        col,
+        GcodeErrorKind::InvalidValue,
+        text,
+        format!("{name} is a predefined parameter that the reader keeps (read-only)"),
+        "set work offsets with G10 L2/L20, the position with a move, the tool with T and M6; use another parameter for your own values",
+    )
 }
 
 fn eval_error(line: usize, col: usize, text: &str, e: &EvalError) -> GcodeError {

@@ -201,7 +201,7 @@ impl Interpreter {
             }
         }
         if let Some(g4) = cmd.dwell {
-            self.dwell(line, line_text, g4, args)?;
+            self.dwell(line, line_text, g4, args, cmd.explicit_motion.is_some())?;
         }
         if let Some(m) = cmd.explicit_motion {
             if !matches!(m.0, Motion::Cycle(_)) {
@@ -210,7 +210,10 @@ impl Interpreter {
             self.motion = Some(m.0);
         }
         let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
-        if cmd.dwell.is_none() && cmd.set_offset.is_none() && !consumes_axes {
+        // G04 uses no axis words, so a motion may share its line (LinuxCNC: the dwell
+        // runs first); without one, G04 X… is a dwell time.
+        let dwell_only = cmd.dwell.is_some() && cmd.explicit_motion.is_none();
+        if !dwell_only && cmd.set_offset.is_none() && !consumes_axes {
             if let Some(m) = motion_mode {
                 self.line_motion(line, line_text, words, &cmd, m, args)?;
             }
@@ -283,6 +286,9 @@ impl Interpreter {
                     gcodes.push((g, w));
                 }
                 'M' => mcodes.push((classify_m(w, line)?, w)),
+                // An axis the robot does not have, kept at 0 where LinuxCNC starts it
+                // (A0, or an increment of 0): no motion, nothing to reject.
+                'A' | 'B' | 'C' | 'U' | 'V' | 'W' if w.value == 0.0 => {}
                 c => match letter_index(c) {
                     Some(k) => {
                         if let Some(prev) = args[k] {
@@ -313,12 +319,12 @@ impl Interpreter {
         let c = w.letter;
         let (message, hint) = match c {
             'A' | 'B' | 'C' => (
-                format!("rotary axis word {c} is not supported"),
-                "the tool orientation is constant; remove the word",
+                format!("rotary axis word {c} moves the {c} axis: rotary axes are not supported"),
+                "the tool orientation is constant; remove the word (A0, B0, C0 are read: the axis stays at 0)",
             ),
             'U' | 'V' | 'W' => (
-                format!("axis word {c} is not supported"),
-                "only X, Y and Z are robot path axes",
+                format!("axis word {c} moves the {c} axis: only X, Y and Z are robot path axes"),
+                "remove the word (U0, V0, W0 are read: the axis stays at 0)",
             ),
             'E' => (
                 "E (extruder) words are not supported".to_string(),
@@ -346,6 +352,9 @@ impl Interpreter {
     /// Records the line's S and T words and M codes (with the words they use) as events.
     fn record_events(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
         let after_moves = self.moves.len();
+        if let Some(t) = sorted.args.get('T') {
+            self.ext.tool_selected = t.value;
+        }
         for c in ['S', 'T'] {
             if let Some(w) = sorted.args.get(c) {
                 self.events.push(ProgramEvent {
@@ -361,6 +370,7 @@ impl Interpreter {
                 .chars()
                 .filter_map(|c| sorted.args.get(c).map(|a| (c, a.value)))
                 .collect();
+            self.track_m_state(w.value, &sorted.args);
             let code = if w.value.fract() == 0.0 {
                 format!("M{}", w.value as i64)
             } else {
@@ -372,6 +382,23 @@ impl Interpreter {
                 words,
                 after_moves,
             });
+        }
+    }
+
+    /// Keeps the spindle, coolant and tool state of M code `m` (for the predefined
+    /// parameters `#<_spindle_on>`, `#<_flood>`, `#<_current_tool>`, …).
+    fn track_m_state(&mut self, m: f64, args: &Args<'_, '_>) {
+        let e = &mut self.ext;
+        match m as i64 {
+            3 => e.spindle_dir = 1,
+            4 => e.spindle_dir = -1,
+            5 => e.spindle_dir = 0,
+            6 => e.tool_current = e.tool_selected,
+            7 => e.mist = true,
+            8 => e.flood = true,
+            9 => (e.mist, e.flood) = (false, false),
+            61 => e.tool_current = args.get('Q').map_or(e.tool_current, |q| q.value),
+            _ => {}
         }
     }
 
@@ -491,6 +518,19 @@ impl Interpreter {
                 Some(q) if q.value > 0.0 => Some(q.value * self.scale()),
                 _ => None,
             };
+            let r_of_motion = cmd
+                .explicit_motion
+                .is_some_and(|(m, _)| matches!(m, Motion::Cw | Motion::Ccw | Motion::Cycle(_)));
+            if let (Some(r), false) = (args.get('R'), r_of_motion) {
+                self.warn(
+                    line,
+                    r.col,
+                    format!(
+                        "{} (G64 R: LinuxCNC's planner selection) ignored: the robot's planner is chosen by the scenario ([timing])",
+                        r.text
+                    ),
+                );
+            }
         }
         Ok(())
     }
@@ -553,7 +593,7 @@ impl Interpreter {
         mletters: &str,
     ) -> [bool; N_ARGS] {
         let mut used = [false; N_ARGS];
-        for c in ['F', 'S', 'T', 'O'] {
+        for c in ['F', 'S', 'T', 'O', '$'] {
             if let Some(k) = letter_index(c) {
                 used[k] = true;
             }
@@ -567,7 +607,7 @@ impl Interpreter {
         };
         use_letters(mletters);
         if cmd.blend.is_some() && cmd.dwell.is_none() && cmd.set_offset.is_none() {
-            use_letters("PQ");
+            use_letters("PQR");
         }
         match cmd.tool {
             Some((430, _)) => use_letters("H"),
@@ -578,11 +618,14 @@ impl Interpreter {
             use_letters("XYZ");
             return used;
         }
-        if cmd.dwell.is_some() {
+        if cmd.dwell.is_some() && cmd.explicit_motion.is_none() {
             use_letters("PX");
         } else if cmd.set_offset.is_some() {
-            use_letters("LPXYZ");
+            use_letters("LPXYZR");
         } else if let Some(m) = motion_mode {
+            if cmd.dwell.is_some() {
+                use_letters("P");
+            }
             use_letters("XYZ@^");
             if matches!(m, Motion::Cw | Motion::Ccw) {
                 use_letters("IJKR");
@@ -601,9 +644,11 @@ impl Interpreter {
         line_text: &str,
         g4: &Word<'_>,
         args: &Args<'_, '_>,
+        motion_on_line: bool,
     ) -> Result<(), GcodeError> {
         use GcodeErrorKind::*;
-        let (p, x) = (args.get('P'), args.get('X'));
+        let p = args.get('P');
+        let x = args.get('X').filter(|_| !motion_on_line);
         let w = match (p, x) {
             (Some(p), None) => p,
             (None, Some(x)) => x,
@@ -721,6 +766,20 @@ impl Interpreter {
                 ))
             }
             Some(_) => {}
+        }
+        // LinuxCNC's G10 L2/L20 R: the rotation of the coordinate system about Z.
+        if let Some(r) = arg('R').filter(|r| r.value != 0.0) {
+            return Err(err(
+                line,
+                r.col,
+                Unsupported,
+                r.text,
+                format!(
+                    "G10 {} (rotation of the coordinate system about Z) is not supported",
+                    r.text
+                ),
+                "rotate the program in the CAM system, or remove R (R0 is read: no rotation)",
+            ));
         }
         let p = arg('P').ok_or_else(|| {
             err(
@@ -1010,10 +1069,10 @@ struct LineCommands<'l, 'w> {
 }
 
 impl LineCommands<'_, '_> {
-    /// Rejects a motion on the same line as a non-modal command (G04 or G10).
+    /// Rejects a motion on the same line as G10 (both use the axis words; G04 uses none, so
+    /// a motion may follow it on its line, as in LinuxCNC).
     fn check_non_modal_conflict(&self, line: usize, line_text: &str) -> Result<(), GcodeError> {
-        let non_modal = self.dwell.or(self.set_offset);
-        if let (Some(nm), Some((_, mw))) = (non_modal, self.explicit_motion) {
+        if let (Some(nm), Some((_, mw))) = (self.set_offset, self.explicit_motion) {
             return Err(err(
                 line,
                 mw.col,

@@ -114,8 +114,11 @@ impl OKind {
 /// An O-word statement (`o100 while [#1 LT 3]`, `o<name> call [1] [2]`).
 #[derive(Debug, Clone)]
 pub(super) struct OStmt<'a> {
-    /// The label: the number (without leading zeros) or `<name>` in lower case.
+    /// The label: the number (without leading zeros) or `<name>` in lower case; for a
+    /// computed label, its source text.
     pub(super) label: String,
+    /// A computed label (`o[#1 + 2] call`, `o#<sub> call`), evaluated when the line runs.
+    pub(super) label_expr: Option<Expr>,
     pub(super) kind: OKind,
     pub(super) args: Vec<Expr>,
     pub(super) col: usize,
@@ -240,7 +243,7 @@ pub(super) fn lex_line(raw: &str, line: usize) -> Result<Lexed<'_>, GcodeError> 
                 continue;
             }
         }
-        if c.is_ascii_alphabetic() || c == '@' || c == '^' {
+        if c.is_ascii_alphabetic() || c == '@' || c == '^' || c == '$' {
             let (word, j) = text.word(i, c)?;
             block.words.push(word);
             i = j;
@@ -609,10 +612,18 @@ impl<'a> LineChars<'a> {
     /// followed by a number and no keyword (a program number, read as a word).
     fn o_word(&self, i: usize) -> Result<Option<(OStmt<'a>, usize)>, GcodeError> {
         let (j, c) = self.peek(i + 1);
+        let mut label_expr = None;
         let (label, k) = match c {
             Some('<') => {
                 let (n, k) = self.name(j)?;
                 (format!("<{n}>"), k)
+            }
+            // LinuxCNC reads the number of an O-word as an integer value: a parameter or an
+            // expression gives a computed label ("O codes: indirection").
+            Some('#' | '[') => {
+                let (e, k) = self.real_value(j, 1)?;
+                label_expr = Some(e);
+                (self.raw[self.byte_at(j)..self.byte_at(k)].to_string(), k)
             }
             Some(c) if c.is_ascii_digit() => {
                 let mut k = j;
@@ -650,7 +661,15 @@ impl<'a> LineChars<'a> {
             k2 = next;
         }
         let Some(kind) = OKind::from_word(&kw) else {
-            if label.starts_with('<') {
+            if kw.len() >= 2 && (label.starts_with('<') || label_expr.is_some() || kw.len() >= 3) {
+                let shown = self.raw[self.byte_at(k)..self.byte_at(k2)].to_lowercase();
+                return Err(self.syntax(
+                    k,
+                    format!("unknown O-word keyword `{shown}` after o{label}"),
+                    "O-word keywords: sub endsub call return if elseif else endif while endwhile do repeat endrepeat break continue",
+                ));
+            }
+            if label.starts_with('<') || label_expr.is_some() {
                 return Err(self.syntax(
                     k,
                     format!("O-word {label} without a keyword"),
@@ -677,6 +696,7 @@ impl<'a> LineChars<'a> {
         Ok(Some((
             OStmt {
                 label,
+                label_expr,
                 kind,
                 args,
                 col: i + 1,
@@ -760,6 +780,26 @@ impl<'a> LineChars<'a> {
     /// `j`), with a hint for the likely mistake (O for 0, `#` parameters, `[ ]` expressions).
     fn no_number(&self, i: usize, j: usize, letter: char) -> GcodeError {
         let next = self.chars.get(j).map(|&(_, ch)| ch);
+        // A run of letters (`gsw_meta`, `GOTO`, `IF`) is text of another language.
+        let mut k = i;
+        while matches!(self.chars.get(k), Some(&(_, ch)) if ch.is_ascii_alphanumeric() || ch == '_')
+        {
+            k += 1;
+        }
+        let run = &self.raw[self.byte_at(i)..self.byte_at(k)];
+        if next.is_some_and(|c| c.is_ascii_alphabetic() && c != 'O' && c != 'o') && k > i + 2 {
+            return err(
+                self.line,
+                i + 1,
+                GcodeErrorKind::Syntax,
+                &escape(run),
+                format!(
+                    "`{}` is not G-code: a word is one letter and a number",
+                    escape(run)
+                ),
+                "is this a G-code file? Comments go in ( ) or after ;",
+            );
+        }
         let hint = if matches!(next, Some('O' | 'o')) {
             format!("the letter O where the digit 0 was meant? write {letter}0")
         } else {

@@ -59,6 +59,7 @@ mod flow;
 mod interpreter;
 mod lexer;
 mod modal;
+mod predefined;
 
 use crate::geometry::Segment;
 pub use flow::DEFAULT_MAX_STEPS;

@@ -42,6 +42,13 @@ pub(super) struct Extra {
     /// G64 Q tolerance (m) and the points removed from the last move by merging.
     pub(super) merge_q: Option<f64>,
     pub(super) merged: Vec<Vector3<f64>>,
+    /// Spindle direction from M3 (1), M4 (-1), M5 (0); coolant from M7/M8/M9.
+    pub(super) spindle_dir: i8,
+    pub(super) mist: bool,
+    pub(super) flood: bool,
+    /// Tool selected by T and the tool in the spindle (M6, M61 Q).
+    pub(super) tool_selected: f64,
+    pub(super) tool_current: f64,
 }
 
 impl Interpreter {
@@ -57,7 +64,7 @@ impl Interpreter {
 
     /// Where the tool is, for commands that need it before any motion: the position, else
     /// the tool position before the program, else machine zero.
-    fn here(&self) -> Vector3<f64> {
+    pub(super) fn here(&self) -> Vector3<f64> {
         self.pos.or(self.initial).unwrap_or_else(Vector3::zeros)
     }
 
