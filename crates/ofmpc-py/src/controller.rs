@@ -190,17 +190,17 @@ impl PyController {
                 "step before reset: call reset(x0) with the measured state [q, q̇] first",
             ));
         }
-        let info = self
-            .controller
-            .get_mut()
-            .unwrap_or_else(|e| e.into_inner())
-            .step(
-                &mut self.model,
-                &self.x,
-                &self.w,
-                &self.preview,
-                &mut self.tau,
-            )
+        let controller = self.controller.get_mut().unwrap_or_else(|e| e.into_inner());
+        let (model, x, w, preview, tau) = (
+            &mut self.model,
+            &self.x,
+            &self.w,
+            &self.preview,
+            &mut self.tau,
+        );
+        // The GIL released: a large robot's step may take long (other Python threads run).
+        let info = py
+            .detach(|| controller.step(model, x, w, preview, tau))
             .map_err(to_py)?;
         self.info = Some(info);
         Ok(array1(py, &self.tau))

@@ -186,6 +186,8 @@ def run(scenario: Union[Mapping[str, Any], str, "os.PathLike[str]"]) -> dict:
 
     Raises:
         OfmpcError: the scenario is invalid (the message names the key).
+        KeyboardInterrupt: Ctrl-C during the runs: they stop at their next sample
+            (signals are checked every 20 ms) and no result is returned.
     """
     if isinstance(scenario, Mapping):
         text = _run_json(json.dumps(scenario))

@@ -13,6 +13,7 @@ use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Settings of a closed-loop run.
@@ -387,6 +388,8 @@ pub struct ClosedLoop<'a> {
     preview: Vec<f64>,
     /// The sample of the pick-up and the payload, until it happened.
     pick_up: Option<(usize, crate::robot::Payload)>,
+    /// Set by another thread to end the run ([`ClosedLoop::cancel_on`]).
+    cancel: Option<&'a AtomicBool>,
 }
 
 /// How a run ends early: the outcome, recorded up to there.
@@ -427,7 +430,22 @@ impl<'a> ClosedLoop<'a> {
             tau: vec![0.0; n],
             preview: vec![0.0; horizon * n],
             pick_up: None,
+            cancel: None,
         }
+    }
+
+    /// Ends the run when `flag` becomes true (set by another thread, e.g. on a
+    /// user's Ctrl-C): checked before each sample of the pre-roll, the path and
+    /// the hold (one relaxed atomic load, outside the controller's `step`), the run
+    /// then ends [`RunOutcome::Failed`] with [`RunFailure::Interrupted`].
+    pub fn cancel_on(mut self, flag: &'a AtomicBool) -> Self {
+        self.cancel = Some(flag);
+        self
+    }
+
+    /// Whether the caller asked the run to end ([`Self::cancel_on`]).
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
     /// With a pre-roll at rest and a payload picked up mid-path.
@@ -507,6 +525,9 @@ impl<'a> ClosedLoop<'a> {
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
+            if self.cancelled() {
+                return Err(failed(t, RunFailure::Interrupted));
+            }
             if self.pre_roll_sample(j, t)? {
                 // A safe stop began: the path's samples brake and hold.
                 break;
@@ -606,6 +627,12 @@ impl<'a> ClosedLoop<'a> {
         };
         let mut k = 0;
         while k < end {
+            if self.cancelled() {
+                return RunOutcome::Failed {
+                    t: k as f64 * ts,
+                    cause: RunFailure::Interrupted,
+                };
+            }
             match self.sample(k, rec) {
                 Ok(None) => {}
                 Ok(Some(stop_began_at)) => end = stop_began_at + stop_samples,

@@ -84,6 +84,10 @@ pub enum RunFailure {
         /// 0-based joint.
         joint: usize,
     },
+    /// The caller asked the loop to stop ([`super::ClosedLoop::cancel_on`]): a user's
+    /// Ctrl-C, not a fault of the run.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// How one closed-loop run ended.
@@ -336,6 +340,13 @@ pub enum ExperimentError {
         values: usize,
         /// [`MAX_RECORD_VALUES`].
         limit: usize,
+    },
+    /// The caller interrupted the run ([`super::Experiment::run_cancellable`]) at path time
+    /// `t` (s; negative in an adaptive controller's identification): no result.
+    #[error("interrupted at t = {t} s")]
+    Interrupted {
+        /// The time of the sample at which the run stopped (s).
+        t: f64,
     },
 }
 
