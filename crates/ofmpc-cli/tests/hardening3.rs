@@ -479,3 +479,64 @@ fn inputs_are_read_with_a_limit_and_their_encoding_named() {
     assert!(e.contains("not UTF-8 text"), "{e}");
     assert_eq!(snapshot(d), before);
 }
+
+/// Item 15: URDF and drives files are read with a limit too (64 MiB and 4 MiB, said with the
+/// file's size), `/dev/zero` is refused, and a Latin-1 URDF names the byte; nothing is written.
+#[test]
+fn robot_files_are_read_with_a_limit_and_their_encoding_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let urdf = Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140/irb140.urdf");
+    // A sparse file one byte past the limit: no disk used, never read whole.
+    let big = fs::File::create(d.join("big.urdf")).unwrap();
+    big.set_len((64 << 20) + 1).unwrap();
+    drop(big);
+    let big_drives = fs::File::create(d.join("big.toml")).unwrap();
+    big_drives.set_len((4 << 20) + 1).unwrap();
+    drop(big_drives);
+    let mut latin = fs::read(&urdf).unwrap();
+    let at = latin.len();
+    latin.extend_from_slice(b"<!-- caf\xe9 -->\n");
+    fs::write(d.join("latin.urdf"), &latin).unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["inspect", "robot", "--robot", "big.urdf"]);
+    assert!(
+        e.contains("big.urdf")
+            && e.contains(
+                "67108865 bytes, larger than the limit of 67108864 bytes (64 MiB) for a URDF"
+            ),
+        "{e}"
+    );
+    let drives = [
+        "inspect",
+        "robot",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--drives",
+    ];
+    let e = fails_in(d, &[&drives[..], &["big.toml"]].concat());
+    assert!(
+        e.contains("big.toml")
+            && e.contains("larger than the limit of 4194304 bytes (4 MiB) for a drives file"),
+        "{e}"
+    );
+    if Path::new("/dev/zero").exists() {
+        let e = fails_in(d, &["inspect", "robot", "--robot", "/dev/zero"]);
+        assert!(
+            e.contains("/dev/zero: it is larger than the limit of 67108864"),
+            "{e}"
+        );
+        let e = fails_in(d, &[&drives[..], &["/dev/zero"]].concat());
+        assert!(
+            e.contains("/dev/zero: it is larger than the limit of 4194304"),
+            "{e}"
+        );
+    }
+    let e = fails_in(d, &["inspect", "robot", "--robot", "latin.urdf"]);
+    assert!(
+        e.contains("latin.urdf") && e.contains(&format!("not UTF-8 text: byte {}", at + 8)),
+        "{e}"
+    );
+    assert!(e.contains("0xe9") && e.contains("save it as UTF-8"), "{e}");
+    assert_eq!(snapshot(d), before);
+}

@@ -103,6 +103,14 @@ pub enum ScenarioError {
         /// The library's error.
         error: Box<PayloadError>,
     },
+    /// `[mpc] model_payload_kg` is not a payload the robot can carry.
+    #[error("[mpc] model_payload_kg = {mass}: {error}")]
+    ModelPayload {
+        /// The mass (kg).
+        mass: f64,
+        /// The library's error.
+        error: Box<ModelError>,
+    },
     /// The program file could not be read.
     #[error("cannot read program {}", path.display())]
     ReadProgram {

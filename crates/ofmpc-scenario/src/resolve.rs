@@ -220,6 +220,17 @@ impl Scenario {
             })?;
             payloads.push(p);
         }
+        // The controllers' model carries `[mpc] model_payload_kg` (Experiment::model_robot):
+        // checked here to name the key (the run would only say "[payload]").
+        if f.mpc.model_payload_kg > 0.0 {
+            robot
+                .clone()
+                .set_payload(Some(Payload::point_mass(f.mpc.model_payload_kg)))
+                .map_err(|error| ScenarioError::ModelPayload {
+                    mass: f.mpc.model_payload_kg,
+                    error: Box::new(error),
+                })?;
+        }
         let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
             .program

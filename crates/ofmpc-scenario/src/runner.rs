@@ -98,24 +98,24 @@ pub fn run_jobs_cancellable(
     jobs.par_iter()
         .map(|&(kind, payload)| {
             let mut last = 0usize;
-            let interrupted = || ExperimentError::Interrupted { t: 0.0 };
-            let (result, metrics) = (!cancel.load(Ordering::Relaxed))
-                .then(|| {
-                    exp.run_cancellable(
-                        kind,
-                        &payload,
-                        &mut |k, _| {
-                            progress((k - last) as u64);
-                            last = k;
-                        },
-                        cancel,
-                    )
-                })
-                .unwrap_or_else(|| Err(interrupted()))
-                .map_err(|error| ScenarioError::Run {
-                    run: run_name(kind, &payload),
-                    error: Box::new(error),
-                })?;
+            // A run not started when the flag is set does not start.
+            let ran = if cancel.load(Ordering::Relaxed) {
+                Err(ExperimentError::Interrupted { t: 0.0 })
+            } else {
+                exp.run_cancellable(
+                    kind,
+                    &payload,
+                    &mut |k, _| {
+                        progress((k - last) as u64);
+                        last = k;
+                    },
+                    cancel,
+                )
+            };
+            let (result, metrics) = ran.map_err(|error| ScenarioError::Run {
+                run: run_name(kind, &payload),
+                error: Box::new(error),
+            })?;
             Ok(Run {
                 kind,
                 payload,
