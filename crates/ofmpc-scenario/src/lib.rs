@@ -27,7 +27,7 @@ pub mod resolve;
 pub mod runner;
 
 pub use error::{
-    experiment_error, experiment_key, plan_error_message, ScenarioError, SettingNames,
+    chain_text, experiment_error, experiment_key, plan_error_message, ScenarioError, SettingNames,
     SCENARIO_KEYS,
 };
 pub use file::{

@@ -235,7 +235,11 @@ pub enum UrdfError {
 pub enum UrdfWarning {
     /// `<dynamics damping friction>`: the model has no joint friction (the
     /// plant's friction is a setting of the simulation).
-    #[error("joint '{joint}': <dynamics damping=\"{damping}\" friction=\"{friction}\"> is ignored (the robot model has no joint friction; set the simulated plant's friction instead)")]
+    /// The message quotes the non-zero values only (a value the file leaves out reads as 0:
+    /// a `friction="0"` the file does not have is never quoted).
+    #[error("joint '{joint}': <dynamics{}{}> is ignored (the robot model has no joint friction; set the simulated plant's friction instead)",
+        if *damping != 0.0 { format!(" damping=\"{damping}\"") } else { String::new() },
+        if *friction != 0.0 { format!(" friction=\"{friction}\"") } else { String::new() })]
     IgnoredDynamics {
         /// The joint.
         joint: String,

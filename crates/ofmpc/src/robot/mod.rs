@@ -9,6 +9,7 @@ mod drives;
 mod error;
 mod read;
 mod urdf;
+mod urdf_locate;
 
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
