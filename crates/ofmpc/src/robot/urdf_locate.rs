@@ -109,7 +109,7 @@ fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) 
             }
         }
     };
-    let mut i = 0;
+    let (mut i, mut counted, mut line, mut line_start) = (0, 0, 1, 0);
     while let Some(open) = text[i..].find('<').map(|o| i + o) {
         let rest = &text[open..];
         let skip_to = |end: &str| rest.find(end).map_or(text.len(), |e| open + e + end.len());
@@ -123,20 +123,24 @@ fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) 
             i = skip_to(">");
             let name = close.split(|c: char| c == '>' || c.is_whitespace()).next();
             if let Some(pos) = stack.iter().rposition(|t| Some(t.name) == name) {
-                while stack.len() > pos {
-                    let tag = stack.pop().expect("len > pos");
+                for tag in stack.drain(pos..) {
                     settle(tag, &mut found);
                 }
             }
         } else {
-            let end = rest.find('>').map_or(rest.len(), |e| e);
+            let end = rest.find('>').unwrap_or(rest.len());
             let inside = &rest[1..end];
             let self_closing = inside.ends_with('/');
             let inside = inside.trim_end_matches('/');
             let name_end = inside.find(char::is_whitespace).unwrap_or(inside.len());
-            let before = &text[..open];
-            let line = before.matches('\n').count() + 1;
-            let column = before.len() - before.rfind('\n').map_or(0, |n| n + 1) + 1;
+            // Lines counted from the last tag on (linear in the text's length).
+            let between = &text[counted..open];
+            line += between.matches('\n').count();
+            if let Some(n) = between.rfind('\n') {
+                line_start = counted + n + 1;
+            }
+            counted = open;
+            let column = open - line_start + 1;
             let tag = Tag {
                 line,
                 column,
@@ -174,15 +178,21 @@ pub(super) fn locate(text: &str, message: &str) -> String {
             let has = t.attributes.iter().any(|(k, _)| *k == f) || t.children.contains(&f);
             (holders(f).contains(&t.name) && !has).then_some(None)
         }),
-        _ => find(text, &|t| {
-            t.attributes
-                .iter()
-                .find(|(k, v)| {
-                    numeric_attribute(t.name, k)
-                        && v.split_whitespace().any(|x| x.parse::<f64>().is_err())
-                })
-                .map(|(k, _)| Some(*k))
-        }),
+        _ if ["float", "digit", "number"]
+            .iter()
+            .any(|w| message.contains(w)) =>
+        {
+            find(text, &|t| {
+                t.attributes
+                    .iter()
+                    .find(|(k, v)| {
+                        numeric_attribute(t.name, k)
+                            && v.split_whitespace().any(|x| x.parse::<f64>().is_err())
+                    })
+                    .map(|(k, _)| Some(*k))
+            })
+        }
+        _ => None,
     };
     match place {
         Some(p) => format!("{message} ({p})"),
