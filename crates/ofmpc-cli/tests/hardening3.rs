@@ -582,19 +582,19 @@ fn urdf_errors_have_a_line_and_messages_say_things_once() {
     .unwrap();
     let line_of =
         |text: &str, needle: &str| text[..text.find(needle).unwrap()].matches('\n').count() + 1;
-    // The first <origin xyz="..."> with a comma for a decimal point.
-    let at = urdf.find("<origin xyz=\"").unwrap() + "<origin xyz=\"".len();
+    // The first <mass value="..."> with a comma for a decimal point.
+    let at = urdf.find("<mass value=\"").unwrap() + "<mass value=\"".len();
     let mut bad = urdf.clone();
-    bad.insert_str(at, "1,5 ");
+    bad.insert_str(at, "1,5");
     fs::write(d.join("comma.urdf"), &bad).unwrap();
     let e = fails_in(d, &["inspect", "robot", "--robot", "comma.urdf"]);
-    let line = line_of(&bad, "1,5 ");
+    let line = line_of(&bad, "1,5");
     assert!(
         e.contains("comma.urdf") && e.contains("invalid float literal"),
         "{e}"
     );
     assert!(
-        e.contains(&format!("(line {line}, column ")) && e.contains("<origin xyz=\"1,5 "),
+        e.contains(&format!("(line {line}, column ")) && e.contains("<mass value=\"1,5"),
         "{e}"
     );
     // An <inertia> without ixy.

@@ -40,12 +40,12 @@ def test_controller_keywords_are_named_as_python_names_them():
 
 def test_urdf_errors_have_a_line_and_a_payload_limit_is_said_once(tmp_path):
     text = IRB140_URDF.read_text()
-    at = text.index('<origin xyz="') + len('<origin xyz="')
-    bad = text[:at] + "1,5 " + text[at:]
+    at = text.index('<mass value="') + len('<mass value="')
+    bad = text[:at] + "1,5" + text[at:]
     p = tmp_path / "comma.urdf"
     p.write_text(bad)
-    line = bad[: bad.index("1,5 ")].count("\n") + 1
-    with pytest.raises(ofmpc.OfmpcError, match=rf"invalid float literal \(line {line}, column \d+: <origin"):
+    line = bad[: bad.index("1,5")].count("\n") + 1
+    with pytest.raises(ofmpc.OfmpcError, match=rf"invalid float literal \(line {line}, column \d+: <mass"):
         ofmpc.Robot.from_urdf(p)
     with pytest.raises(ofmpc.OfmpcError) as e:
         ofmpc.run({"mpc": {"model_payload_kg": 1e6}})
