@@ -81,8 +81,6 @@ pub fn run_jobs(
 /// user's Ctrl-C): the running runs end at their next sample and the others do not start;
 /// the result is then the error of an interrupted run ([`ExperimentError::Interrupted`]
 /// in [`ScenarioError::Run`]).
-///
-/// [`ExperimentError::Interrupted`]: ofmpc::sim::ExperimentError::Interrupted
 pub fn run_jobs_cancellable(
     scenario: &Scenario,
     payloads: &[Payload],
