@@ -220,17 +220,7 @@ impl Scenario {
             })?;
             payloads.push(p);
         }
-        // The controllers' model carries `[mpc] model_payload_kg` (Experiment::model_robot):
-        // checked here to name the key (the run would only say "[payload]").
-        if f.mpc.model_payload_kg > 0.0 {
-            robot
-                .clone()
-                .set_payload(Some(Payload::point_mass(f.mpc.model_payload_kg)))
-                .map_err(|error| ScenarioError::ModelPayload {
-                    mass: f.mpc.model_payload_kg,
-                    error: Box::new(error),
-                })?;
-        }
+        check_model_payload(&robot, f.mpc.model_payload_kg)?;
         let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
             .program
@@ -331,6 +321,21 @@ impl Scenario {
         file.controllers = controllers.to_vec();
         file
     }
+}
+
+/// The controllers' model carries `[mpc] model_payload_kg` (`Experiment::model_robot`):
+/// checked at resolve to name the key (the run would only say "[payload]").
+fn check_model_payload(robot: &Robot, mass: f64) -> Result<(), ScenarioError> {
+    if mass > 0.0 {
+        robot
+            .clone()
+            .set_payload(Some(Payload::point_mass(mass)))
+            .map_err(|error| ScenarioError::ModelPayload {
+                mass,
+                error: Box::new(error),
+            })?;
+    }
+    Ok(())
 }
 
 /// A warning when the plant's RK4 substep is too coarse for its smoothed
