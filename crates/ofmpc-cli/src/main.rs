@@ -23,7 +23,12 @@ fn main() -> ExitCode {
         Err(e) if console::is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             use std::io::Write;
-            let _ = writeln!(std::io::stderr().lock(), "error: {e:#}");
+            // The chain `a: b: c`, a cause the message already holds said once.
+            let _ = writeln!(
+                std::io::stderr().lock(),
+                "error: {}",
+                ofmpc_scenario::chain_text(e.as_ref())
+            );
             // 1: the runs were made and written, but some failed; 2: nothing was run.
             if e.downcast_ref::<ofmpc_cli::errors::RunsFailed>().is_some() {
                 ExitCode::from(1)

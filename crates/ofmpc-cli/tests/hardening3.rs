@@ -479,3 +479,158 @@ fn inputs_are_read_with_a_limit_and_their_encoding_named() {
     assert!(e.contains("not UTF-8 text"), "{e}");
     assert_eq!(snapshot(d), before);
 }
+
+/// Item 15: URDF and drives files are read with a limit too (64 MiB and 4 MiB, said with the
+/// file's size), `/dev/zero` is refused, and a Latin-1 URDF names the byte; nothing is written.
+#[test]
+fn robot_files_are_read_with_a_limit_and_their_encoding_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let urdf = Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140/irb140.urdf");
+    // A sparse file one byte past the limit: no disk used, never read whole.
+    let big = fs::File::create(d.join("big.urdf")).unwrap();
+    big.set_len((64 << 20) + 1).unwrap();
+    drop(big);
+    let big_drives = fs::File::create(d.join("big.toml")).unwrap();
+    big_drives.set_len((4 << 20) + 1).unwrap();
+    drop(big_drives);
+    let mut latin = fs::read(&urdf).unwrap();
+    let at = latin.len();
+    latin.extend_from_slice(b"<!-- caf\xe9 -->\n");
+    fs::write(d.join("latin.urdf"), &latin).unwrap();
+    let before = snapshot(d);
+    let e = fails_in(d, &["inspect", "robot", "--robot", "big.urdf"]);
+    assert!(
+        e.contains("big.urdf")
+            && e.contains(
+                "67108865 bytes, larger than the limit of 67108864 bytes (64 MiB) for a URDF"
+            ),
+        "{e}"
+    );
+    let drives = [
+        "inspect",
+        "robot",
+        "--robot",
+        urdf.to_str().unwrap(),
+        "--drives",
+    ];
+    let e = fails_in(d, &[&drives[..], &["big.toml"]].concat());
+    assert!(
+        e.contains("big.toml")
+            && e.contains("larger than the limit of 4194304 bytes (4 MiB) for a drives file"),
+        "{e}"
+    );
+    if Path::new("/dev/zero").exists() {
+        let e = fails_in(d, &["inspect", "robot", "--robot", "/dev/zero"]);
+        assert!(
+            e.contains("/dev/zero: it is larger than the limit of 67108864"),
+            "{e}"
+        );
+        let e = fails_in(d, &[&drives[..], &["/dev/zero"]].concat());
+        assert!(
+            e.contains("/dev/zero: it is larger than the limit of 4194304"),
+            "{e}"
+        );
+    }
+    let e = fails_in(d, &["inspect", "robot", "--robot", "latin.urdf"]);
+    assert!(
+        e.contains("latin.urdf") && e.contains(&format!("not UTF-8 text: byte {}", at + 8)),
+        "{e}"
+    );
+    assert!(e.contains("0xe9") && e.contains("save it as UTF-8"), "{e}");
+    assert_eq!(snapshot(d), before);
+}
+
+/// Item 17: a model payload the robot cannot carry names its key (was "second_m0.25:
+/// [payload]: invalid payload"); nothing is written.
+#[test]
+fn a_model_payload_too_heavy_names_its_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    quick_scenario(d);
+    let before = snapshot(d);
+    let e = fails_in(
+        d,
+        &[
+            "run",
+            "s.toml",
+            "--out",
+            "o",
+            "--set",
+            "mpc.model_payload_kg=1e6",
+        ],
+    );
+    assert!(
+        e.contains("[mpc] model_payload_kg = 1000000: invalid payload"),
+        "{e}"
+    );
+    assert!(!e.contains("[payload]"), "{e}");
+    assert_eq!(snapshot(d), before);
+}
+
+/// Item 17: a URDF error says the line and the element ("custom: invalid float literal" and
+/// "missing field `ixy`" had no position); a payload the robot cannot carry is said once (the
+/// chain `a: b` no longer repeats a cause the message holds); a `<dynamics>` warning quotes
+/// only what the file says (no `friction="0"` the file does not have).
+#[test]
+fn urdf_errors_have_a_line_and_messages_say_things_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let urdf = fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140/irb140.urdf"),
+    )
+    .unwrap();
+    let line_of =
+        |text: &str, needle: &str| text[..text.find(needle).unwrap()].matches('\n').count() + 1;
+    // The first <mass value="..."> with a comma for a decimal point.
+    let at = urdf.find("<mass value=\"").unwrap() + "<mass value=\"".len();
+    let mut bad = urdf.clone();
+    bad.insert_str(at, "1,5");
+    fs::write(d.join("comma.urdf"), &bad).unwrap();
+    let e = fails_in(d, &["inspect", "robot", "--robot", "comma.urdf"]);
+    let line = line_of(&bad, "1,5");
+    assert!(
+        e.contains("comma.urdf") && e.contains("invalid float literal"),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!("(line {line}, column ")) && e.contains("<mass value=\"1,5"),
+        "{e}"
+    );
+    // An <inertia> without ixy.
+    let at = urdf.find(" ixy=\"").unwrap();
+    let end = at + 6 + urdf[at + 6..].find('"').unwrap() + 1;
+    let no_ixy = format!("{}{}", &urdf[..at], &urdf[end..]);
+    fs::write(d.join("no_ixy.urdf"), &no_ixy).unwrap();
+    let e = fails_in(d, &["inspect", "robot", "--robot", "no_ixy.urdf"]);
+    let line = line_of(&no_ixy, &urdf[urdf[..at].rfind('<').unwrap()..at]);
+    assert!(
+        e.contains("missing field `ixy`") && e.contains(&format!("(line {line}, column ")),
+        "{e}"
+    );
+    assert!(e.contains("<inertia>"), "{e}");
+    // Said once.
+    let e = fails_in(
+        d,
+        &[
+            "inspect",
+            "dynamics",
+            "--q",
+            "0,0,0,0,0,0",
+            "--payload",
+            "1e6",
+        ],
+    );
+    assert_eq!(e.matches("more than 1000 times").count(), 1, "{e}");
+    // <dynamics damping="0.5"/> without friction: the warning quotes damping only.
+    let damped = urdf.replacen("</joint>", "<dynamics damping=\"0.5\"/></joint>", 1);
+    fs::write(d.join("damped.urdf"), &damped).unwrap();
+    let o = ofmpc_in(d, &["inspect", "robot", "--robot", "damped.urdf"]);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("<dynamics damping=\"0.5\"> is ignored"),
+        "{err}"
+    );
+    assert!(!err.contains("friction=\"0\""), "{err}");
+}

@@ -5,7 +5,9 @@ use crate::arrays::{array1, fill_shaped};
 use crate::errors::to_py;
 use crate::robot::PyRobot;
 use numpy::PyArray1;
-use ofmpc::control::{new_controller, Controller, ControllerKind, MpcSettings, StepInfo, Weight};
+use ofmpc::control::{
+    new_controller, Controller, ControllerKind, MpcSettings, Solver, StepInfo, Weight,
+};
 use ofmpc::dynamics::RobotDynamics;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -31,6 +33,29 @@ pub struct PyController {
     started: bool,
 }
 
+/// The keyword arguments of `Controller()` that are weights.
+const WEIGHTS: [&str; 7] = [
+    "q_yw",
+    "q_dy",
+    "q_du",
+    "q_u",
+    "pid_bandwidth",
+    "ctc_bandwidth",
+    "dob_observer_bandwidth",
+];
+
+/// Reads `solver=`: `"dense-qr"`, `"structured"` or `"auto"` (the scenario's names).
+fn solver(value: &Bound<'_, PyAny>) -> PyResult<Solver> {
+    match value.extract::<String>().as_deref() {
+        Ok("dense-qr") => Ok(Solver::DenseQr),
+        Ok("structured") => Ok(Solver::Structured),
+        Ok("auto") => Ok(Solver::Auto),
+        _ => Err(to_py(format!(
+            "solver={value}: give \"dense-qr\", \"structured\" or \"auto\""
+        ))),
+    }
+}
+
 /// Reads a weight: a number (times I) or one value per joint.
 fn weight(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Weight> {
     if let Ok(s) = value.extract::<f64>() {
@@ -41,7 +66,7 @@ fn weight(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Weight> {
         .map(Weight::Diagonal)
         .map_err(|_| {
             to_py(format!(
-                "weight {name} = {value}: give a number (times I) or one number per joint"
+                "{name}={value}: give a number (times I) or one number per joint"
             ))
         })
 }
@@ -66,6 +91,18 @@ impl PyController {
         if let Some(w) = weights {
             for (key, value) in w.iter() {
                 let key: String = key.extract()?;
+                if key == "solver" {
+                    settings.solver = solver(&value)?;
+                    continue;
+                }
+                if !WEIGHTS.contains(&key.as_str()) {
+                    return Err(to_py(format!(
+                        "unknown weight or keyword argument {key:?}: Controller() takes ts, \
+                         horizon, solver (\"dense-qr\", \"structured\" or \"auto\"), the weights \
+                         q_yw, q_dy, q_du and q_u, and the baselines' bandwidths pid_bandwidth, \
+                         ctc_bandwidth and dob_observer_bandwidth"
+                    )));
+                }
                 let wt = weight(&key, &value)?;
                 match key.as_str() {
                     "q_yw" => settings.q_yw = wt,
@@ -190,17 +227,17 @@ impl PyController {
                 "step before reset: call reset(x0) with the measured state [q, q̇] first",
             ));
         }
-        let info = self
-            .controller
-            .get_mut()
-            .unwrap_or_else(|e| e.into_inner())
-            .step(
-                &mut self.model,
-                &self.x,
-                &self.w,
-                &self.preview,
-                &mut self.tau,
-            )
+        let controller = self.controller.get_mut().unwrap_or_else(|e| e.into_inner());
+        let (model, x, w, preview, tau) = (
+            &mut self.model,
+            &self.x,
+            &self.w,
+            &self.preview,
+            &mut self.tau,
+        );
+        // The GIL released: a large robot's step may take long (other Python threads run).
+        let info = py
+            .detach(|| controller.step(model, x, w, preview, tau))
             .map_err(to_py)?;
         self.info = Some(info);
         Ok(array1(py, &self.tau))

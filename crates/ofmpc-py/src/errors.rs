@@ -17,7 +17,8 @@ pub fn to_py<E: std::fmt::Display>(e: E) -> PyErr {
     OfmpcError::new_err(e.to_string())
 }
 
-/// An `anyhow` error with its whole chain (`a: b: c`), as the CLI prints it.
+/// An `anyhow` error with its whole chain (`a: b: c`), as the CLI prints it (a cause the
+/// message already holds said once).
 pub fn chain_to_py(e: anyhow::Error) -> PyErr {
-    OfmpcError::new_err(format!("{e:#}"))
+    OfmpcError::new_err(ofmpc_scenario::chain_text(e.as_ref()))
 }

@@ -40,6 +40,7 @@ impl PyRobot {
     #[staticmethod]
     #[pyo3(signature = (path, drives=None, tip=None, tcp=None, start_q=None))]
     fn from_urdf(
+        py: Python<'_>,
         path: PathBuf,
         drives: Option<PathBuf>,
         tip: Option<String>,
@@ -63,16 +64,22 @@ impl PyRobot {
             }
         };
         let options = ChainOptions { tip, tcp };
-        let mut robot = Robot::from_urdf_file_with(&path, &options).map_err(to_py)?;
-        if let Some(d) = drives {
-            let drives = Drives::from_file(&d).map_err(to_py)?;
-            robot.apply_drives(&drives).map_err(to_py)?;
-        }
-        if let Some(q) = start_q {
-            robot.set_start_q(&vec_of(&q)).map_err(to_py)?;
-        }
+        let start_q = start_q.map(|q| vec_of(&q));
+        // The GIL released: a large URDF takes a while to read and check.
+        let robot = py.detach(move || -> Result<Robot, String> {
+            let mut robot =
+                Robot::from_urdf_file_with(&path, &options).map_err(|e| e.to_string())?;
+            if let Some(d) = drives {
+                let drives = Drives::from_file(&d).map_err(|e| e.to_string())?;
+                robot.apply_drives(&drives).map_err(|e| e.to_string())?;
+            }
+            if let Some(q) = start_q {
+                robot.set_start_q(&q).map_err(|e| e.to_string())?;
+            }
+            Ok(robot)
+        });
         Ok(Self {
-            dynamics: RobotDynamics::new(robot),
+            dynamics: RobotDynamics::new(robot.map_err(to_py)?),
         })
     }
 
@@ -182,9 +189,11 @@ impl PyRobot {
         qd: Vector<'_>,
         qdd: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, qd, qdd) = (vec_of(&q), vec_of(&qd), vec_of(&qdd));
         let (robot, ws) = self.dynamics.parts();
-        let tau =
-            dynamics::rnea(robot, ws, &vec_of(&q), &vec_of(&qd), &vec_of(&qdd)).map_err(to_py)?;
+        let tau = py
+            .detach(|| dynamics::rnea(robot, ws, &q, &qd, &qdd))
+            .map_err(to_py)?;
         Ok(array1(py, tau.as_slice()))
     }
 
@@ -194,8 +203,9 @@ impl PyRobot {
         py: Python<'py>,
         q: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let q = vec_of(&q);
         let (robot, ws) = self.dynamics.parts();
-        let h = dynamics::crba(robot, ws, &vec_of(&q)).map_err(to_py)?;
+        let h = py.detach(|| dynamics::crba(robot, ws, &q)).map_err(to_py)?;
         Ok(matrix(py, h))
     }
 
@@ -206,8 +216,11 @@ impl PyRobot {
         q: Vector<'_>,
         qd: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let (q, qd) = (vec_of(&q), vec_of(&qd));
         let (robot, ws) = self.dynamics.parts();
-        let c = dynamics::coriolis_matrix(robot, ws, &vec_of(&q), &vec_of(&qd)).map_err(to_py)?;
+        let c = py
+            .detach(|| dynamics::coriolis_matrix(robot, ws, &q, &qd))
+            .map_err(to_py)?;
         Ok(matrix(py, c))
     }
 
@@ -217,8 +230,11 @@ impl PyRobot {
         py: Python<'py>,
         q: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let q = vec_of(&q);
         let (robot, ws) = self.dynamics.parts();
-        let g = dynamics::gravity(robot, ws, &vec_of(&q)).map_err(to_py)?;
+        let g = py
+            .detach(|| dynamics::gravity(robot, ws, &q))
+            .map_err(to_py)?;
         Ok(array1(py, g.as_slice()))
     }
 
@@ -244,8 +260,11 @@ impl PyRobot {
         py: Python<'py>,
         q: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let q = vec_of(&q);
         let (robot, ws) = self.dynamics.parts();
-        let j = dynamics::flange_jacobian(robot, ws, &vec_of(&q)).map_err(to_py)?;
+        let j = py
+            .detach(|| dynamics::flange_jacobian(robot, ws, &q))
+            .map_err(to_py)?;
         Ok(matrix(py, j))
     }
 
@@ -257,8 +276,10 @@ impl PyRobot {
         qd: Vector<'_>,
         tau: Vector<'_>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let (q, qd, tau) = (vec_of(&q), vec_of(&qd), vec_of(&tau));
         let (robot, ws) = self.dynamics.parts();
-        let a = dynamics::forward_dynamics(robot, ws, &vec_of(&q), &vec_of(&qd), &vec_of(&tau))
+        let a = py
+            .detach(|| dynamics::forward_dynamics(robot, ws, &q, &qd, &tau))
             .map_err(to_py)?;
         Ok(array1(py, a.as_slice()))
     }

@@ -2,31 +2,82 @@
 //! the GIL released, through the scenario crate's loader and runner (those of
 //! the `ofmpc` command); the result is the text of `metrics.json` (the Python
 //! side parses it).
+//!
+//! The runs go on in a worker thread while the calling thread waits with the
+//! GIL released and checks for signals every [`SIGNAL_POLL`]: a Ctrl-C sets the
+//! runs' cancel flag (each run checks it before every sample), the worker is
+//! joined, and the signal's exception (`KeyboardInterrupt`) is raised.
 
 use crate::errors::chain_to_py;
-use ofmpc_scenario::{metrics_json, run_metrics, Scenario, ScenarioFile};
+use ofmpc_scenario::{metrics_json, run_metrics_cancellable, Scenario, ScenarioFile};
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
-fn run_file_inner(file: &ScenarioFile, origin: &str) -> anyhow::Result<String> {
+/// How often the waiting thread checks for signals (Ctrl-C is raised within about this
+/// long plus one sample of each running run).
+const SIGNAL_POLL: Duration = Duration::from_millis(20);
+
+fn run_file_inner(
+    file: &ScenarioFile,
+    origin: &str,
+    cancel: &AtomicBool,
+) -> anyhow::Result<String> {
     let scenario =
         Scenario::resolve(file).map_err(|e| anyhow::Error::new(e).context(origin.to_string()))?;
     // The robot's and the drives' warnings, on stderr as the command prints them.
     for w in &scenario.warnings {
         eprintln!("warning: {w}");
     }
-    Ok(metrics_json(&run_metrics(&scenario)?)?)
+    Ok(metrics_json(&run_metrics_cancellable(&scenario, cancel)?)?)
+}
+
+/// Runs `work` in a worker thread, the GIL released, checking for signals meanwhile: on a
+/// signal's exception (Ctrl-C: `KeyboardInterrupt`) the work is cancelled through its
+/// flag, joined, and the exception raised.
+fn interruptible<F>(py: Python<'_>, work: F) -> PyResult<String>
+where
+    F: FnOnce(&AtomicBool) -> anyhow::Result<String> + Send,
+{
+    let cancel = AtomicBool::new(false);
+    let cancel = &cancel;
+    let waiter = std::thread::current();
+    std::thread::scope(|s| {
+        let worker = s.spawn(move || {
+            let result = work(cancel);
+            waiter.unpark();
+            result
+        });
+        loop {
+            if worker.is_finished() {
+                return match worker.join() {
+                    Ok(result) => result.map_err(chain_to_py),
+                    Err(_) => Err(chain_to_py(anyhow::anyhow!(
+                        "the run stopped on an internal error (a bug: please report it)"
+                    ))),
+                };
+            }
+            // A spurious or early wake-up only checks again.
+            py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
+            if let Err(signal) = py.check_signals() {
+                cancel.store(true, Ordering::Relaxed);
+                // The runs end at their next sample; their result is dropped.
+                let _ = py.detach(|| worker.join());
+                return Err(signal);
+            }
+        }
+    })
 }
 
 /// Runs a scenario file (TOML, paths inside relative to it); returns metrics.json's text.
 #[pyfunction]
 #[pyo3(name = "_run_file")]
 pub fn run_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
-    py.detach(|| {
+    interruptible(py, move |cancel| {
         let file = ScenarioFile::from_file(&path)?;
-        run_file_inner(&file, &path.display().to_string())
+        run_file_inner(&file, &path.display().to_string(), cancel)
     })
-    .map_err(chain_to_py)
 }
 
 /// Runs a scenario given as JSON text with the keys of the TOML file (paths
@@ -34,10 +85,9 @@ pub fn run_file(py: Python<'_>, path: PathBuf) -> PyResult<String> {
 #[pyfunction]
 #[pyo3(name = "_run_json")]
 pub fn run_json(py: Python<'_>, text: String) -> PyResult<String> {
-    py.detach(|| {
+    interruptible(py, move |cancel| {
         // Sections written as lists are refused, naming them (never read by position).
         let file = ScenarioFile::from_json(&text)?;
-        run_file_inner(&file, "scenario")
+        run_file_inner(&file, "scenario", cancel)
     })
-    .map_err(chain_to_py)
 }

@@ -103,6 +103,14 @@ pub enum ScenarioError {
         /// The library's error.
         error: Box<PayloadError>,
     },
+    /// `[mpc] model_payload_kg` is not a payload the robot can carry.
+    #[error("[mpc] model_payload_kg = {mass}: {error}")]
+    ModelPayload {
+        /// The mass (kg).
+        mass: f64,
+        /// The library's error.
+        error: Box<ModelError>,
+    },
     /// The program file could not be read.
     #[error("cannot read program {}", path.display())]
     ReadProgram {
@@ -366,5 +374,57 @@ pub fn experiment_error(e: &ExperimentError) -> String {
     match experiment_key(e) {
         Some(k) => format!("{k}: {e}"),
         None => e.to_string(),
+    }
+}
+
+/// An error with its sources as `a: b: c` (what `anyhow`'s `{:#}` prints), leaving out a
+/// source whose text the message already holds: a variant written `"...: {0}"` that also
+/// names `{0}` its source would otherwise say it twice ("invalid payload: mass 1e6 kg …:
+/// mass 1e6 kg …").
+pub fn chain_text(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut text = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        let m = c.to_string();
+        if !m.is_empty() && !text.contains(&m) {
+            text.push_str(": ");
+            text.push_str(&m);
+        }
+        cause = c.source();
+    }
+    text
+}
+
+#[cfg(test)]
+mod chain_tests {
+    use super::chain_text;
+
+    #[test]
+    fn a_source_already_in_the_message_is_said_once() {
+        let e = ofmpc::robot::Robot::irb140()
+            .set_payload(Some(ofmpc::robot::Payload::point_mass(1e6)))
+            .unwrap_err();
+        let a = anyhow_like(&e);
+        assert_eq!(a.matches("more than").count(), 1, "{a}");
+        let io = std::io::Error::other("disk full");
+        let w = ScenarioLike(io);
+        assert_eq!(chain_text(&w), "cannot write: disk full");
+    }
+
+    fn anyhow_like(e: &(dyn std::error::Error + 'static)) -> String {
+        chain_text(e)
+    }
+
+    #[derive(Debug)]
+    struct ScenarioLike(std::io::Error);
+    impl std::fmt::Display for ScenarioLike {
+        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+            f.write_str("cannot write")
+        }
+    }
+    impl std::error::Error for ScenarioLike {
+        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+            Some(&self.0)
+        }
     }
 }

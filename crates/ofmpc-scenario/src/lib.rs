@@ -27,7 +27,7 @@ pub mod resolve;
 pub mod runner;
 
 pub use error::{
-    experiment_error, experiment_key, plan_error_message, ScenarioError, SettingNames,
+    chain_text, experiment_error, experiment_key, plan_error_message, ScenarioError, SettingNames,
     SCENARIO_KEYS,
 };
 pub use file::{
@@ -39,4 +39,7 @@ pub use program_json::program_json;
 pub use resolve::{
     is_model_path, load_robot, load_robot_section, load_robot_with, read_program, Scenario,
 };
-pub use runner::{metrics_json, run_jobs, run_metrics, unique_runs, Run};
+pub use runner::{
+    metrics_json, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,
+    unique_runs, Run,
+};

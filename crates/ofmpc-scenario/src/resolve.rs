@@ -8,7 +8,7 @@ use ofmpc::control::ControllerKind;
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::{plan, CartesianTrajectory, Orientation, PlanOptions, TimingOptions};
 use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, PlantSettings};
+use ofmpc::sim::{Experiment, PlantSettings, MAX_SUBSTEPS};
 use std::path::Path;
 
 /// A resolved scenario: the experiment and what to run.
@@ -220,6 +220,7 @@ impl Scenario {
             })?;
             payloads.push(p);
         }
+        check_model_payload(&robot, f.mpc.model_payload_kg)?;
         let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
             .program
@@ -322,6 +323,21 @@ impl Scenario {
     }
 }
 
+/// The controllers' model carries `[mpc] model_payload_kg` (`Experiment::model_robot`):
+/// checked at resolve to name the key (the run would only say "[payload]").
+fn check_model_payload(robot: &Robot, mass: f64) -> Result<(), ScenarioError> {
+    if mass > 0.0 {
+        robot
+            .clone()
+            .set_payload(Some(Payload::point_mass(mass)))
+            .map_err(|error| ScenarioError::ModelPayload {
+                mass,
+                error: Box::new(error),
+            })?;
+    }
+    Ok(())
+}
+
 /// A warning when the plant's RK4 substep is too coarse for its smoothed
 /// Coulomb friction: more than 4 of the friction's time constants at rest
 /// ([`ofmpc::sim::Plant::coulomb_time_constant`] at the path's start; measured
@@ -340,12 +356,26 @@ fn friction_substep_warning(
     if plant.substep <= 4.0 * tau {
         return None;
     }
-    // The largest substep ≤ 4τ that divides the control period.
-    let suggest = ts / (ts / (4.0 * tau)).ceil();
+    // The largest substep ≤ 4τ that divides the control period, unless it is finer than the
+    // finest the plant allows (MAX_SUBSTEPS per period): then τ itself must grow
+    // (τ ∝ coulomb_velocity).
+    let k = (ts / (4.0 * tau)).ceil();
+    let advice = if k <= MAX_SUBSTEPS as f64 {
+        format!("use substep = {:.3e} s or smaller", ts / k)
+    } else {
+        let finest = ts / MAX_SUBSTEPS as f64;
+        format!(
+            "even the finest substep ({finest:.3e} s, {MAX_SUBSTEPS} per period) is too coarse: \
+             raise [plant] coulomb_velocity (now {}; τ grows with it) to at least {:.3e} and use \
+             substep = {finest:.3e} s",
+            plant.coulomb_velocity,
+            plant.coulomb_velocity * finest / (4.0 * tau)
+        )
+    };
     Some(format!(
         "[plant] substep = {} s is coarser than 4 time constants of the Coulomb friction at rest \
          (τ = {tau:.1e} s = min H_ii·coulomb_velocity/coulomb_friction): a joint's sticking is not \
-         resolved and steady errors are not to be trusted; use substep = {suggest:.3e} s or smaller",
+         resolved and steady errors are not to be trusted; {advice}",
         plant.substep
     ))
 }

@@ -6,8 +6,9 @@ use crate::error::ScenarioError;
 use crate::resolve::Scenario;
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
-use ofmpc::sim::{kind_name, mass_label, run_name, RunMetrics, RunResult};
+use ofmpc::sim::{kind_name, mass_label, run_name, ExperimentError, RunMetrics, RunResult};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One finished run.
 pub struct Run {
@@ -67,6 +68,26 @@ pub fn run_jobs(
     controllers: &[ControllerKind],
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Run>, ScenarioError> {
+    run_jobs_cancellable(
+        scenario,
+        payloads,
+        controllers,
+        progress,
+        &AtomicBool::new(false),
+    )
+}
+
+/// [`run_jobs`] that stops when `cancel` becomes true (set by another thread, e.g. on a
+/// user's Ctrl-C): the running runs end at their next sample and the others do not start;
+/// the result is then the error of an interrupted run ([`ExperimentError::Interrupted`]
+/// in [`ScenarioError::Run`]).
+pub fn run_jobs_cancellable(
+    scenario: &Scenario,
+    payloads: &[Payload],
+    controllers: &[ControllerKind],
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Vec<Run>, ScenarioError> {
     let exp = &scenario.experiment;
     let jobs: Vec<(ControllerKind, Payload)> = payloads
         .iter()
@@ -75,15 +96,24 @@ pub fn run_jobs(
     jobs.par_iter()
         .map(|&(kind, payload)| {
             let mut last = 0usize;
-            let (result, metrics) = exp
-                .run(kind, &payload, &mut |k, _| {
-                    progress((k - last) as u64);
-                    last = k;
-                })
-                .map_err(|error| ScenarioError::Run {
-                    run: run_name(kind, &payload),
-                    error: Box::new(error),
-                })?;
+            // A run not started when the flag is set does not start.
+            let ran = if cancel.load(Ordering::Relaxed) {
+                Err(ExperimentError::Interrupted { t: 0.0 })
+            } else {
+                exp.run_cancellable(
+                    kind,
+                    &payload,
+                    &mut |k, _| {
+                        progress((k - last) as u64);
+                        last = k;
+                    },
+                    cancel,
+                )
+            };
+            let (result, metrics) = ran.map_err(|error| ScenarioError::Run {
+                run: run_name(kind, &payload),
+                error: Box::new(error),
+            })?;
             Ok(Run {
                 kind,
                 payload,
@@ -97,11 +127,21 @@ pub fn run_jobs(
 /// Runs a scenario as `ofmpc run` does (repeats removed; the caller warns about them
 /// from [`unique_runs`]) and returns the metrics of its runs.
 pub fn run_metrics(scenario: &Scenario) -> Result<Vec<RunMetrics>, ScenarioError> {
+    run_metrics_cancellable(scenario, &AtomicBool::new(false))
+}
+
+/// [`run_metrics`] that stops when `cancel` becomes true ([`run_jobs_cancellable`]).
+pub fn run_metrics_cancellable(
+    scenario: &Scenario,
+    cancel: &AtomicBool,
+) -> Result<Vec<RunMetrics>, ScenarioError> {
     let (payloads, controllers, _) = unique_runs(scenario);
-    Ok(run_jobs(scenario, &payloads, &controllers, &|_| {})?
-        .into_iter()
-        .map(|r| r.metrics)
-        .collect())
+    Ok(
+        run_jobs_cancellable(scenario, &payloads, &controllers, &|_| {}, cancel)?
+            .into_iter()
+            .map(|r| r.metrics)
+            .collect(),
+    )
 }
 
 /// The text of `metrics.json` for these metrics: `{"runs": [...]}`, pretty-printed.

@@ -138,3 +138,35 @@ fn events_after_the_end_are_warned_about() {
         s.warnings
     );
 }
+
+/// Issue #22 item 17: with a friction time constant far below what any substep resolves, the
+/// warning does not suggest an impossible substep (it was "use substep = 2e-301 s"): it says
+/// the finest allowed one and to raise `coulomb_velocity`. A model payload the robot cannot
+/// carry names `[mpc] model_payload_kg`.
+#[test]
+fn friction_advice_is_possible_and_model_payload_names_its_key() {
+    let text = "controllers = [\"usual\"]\n[payload]\nmasses_kg = [0.0]\n\
+                [plant]\ncoulomb_friction = [1.0]\ncoulomb_velocity = 1e-300\n";
+    let f: ScenarioFile = toml::from_str(text).unwrap();
+    let s = Scenario::resolve(&f).unwrap();
+    let w: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("coarser than 4 time constants"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:#?}", s.warnings);
+    let finest = f.mpc.ts / ofmpc::sim::MAX_SUBSTEPS as f64;
+    assert!(w[0].contains("raise [plant] coulomb_velocity"), "{}", w[0]);
+    assert!(
+        w[0].contains(&format!("substep = {finest:.3e} s")),
+        "{}",
+        w[0]
+    );
+    assert!(!w[0].contains("or smaller"), "{}", w[0]);
+    let f: ScenarioFile = toml::from_str("[mpc]\nmodel_payload_kg = 1e6\n").unwrap();
+    let e = Scenario::resolve(&f).err().expect("refused").to_string();
+    assert!(
+        e.starts_with("[mpc] model_payload_kg = 1000000: invalid payload"),
+        "{e}"
+    );
+}

@@ -437,3 +437,37 @@ fn horizon_size_limit_is_checked_by_validation() {
     };
     auto.validate_for_dof(6).unwrap();
 }
+
+/// Issue #22 item 17: the structured solver's size error does not advise the structured
+/// solver (it advises the horizons); the dense solver's still does.
+#[test]
+fn a_size_error_advises_what_fits_its_solver() {
+    use ofmpc::control::{MpcSettings, SettingsError, Solver};
+    let structured = MpcSettings {
+        horizon: 1000,
+        solver: Solver::Structured,
+        torque_limits: true,
+        ..MpcSettings::default()
+    };
+    let e = structured.validate_for_dof(200).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            SettingsError::TooLarge {
+                solver: Solver::Structured,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    let text = e.to_string();
+    assert!(!text.contains("use the structured solver"), "{text}");
+    assert!(text.contains("constraint horizon"), "{text}");
+    let dense = MpcSettings {
+        horizon: 1000,
+        solver: Solver::DenseQr,
+        ..MpcSettings::default()
+    };
+    let text = dense.validate_for_dof(6).unwrap_err().to_string();
+    assert!(text.contains("use the structured solver"), "{text}");
+}

@@ -669,7 +669,8 @@ fn diverged_explanation(scenario: &Scenario, stopped: &[&Run]) -> String {
                  i.e. a point payload up to {:.2} kg that the model does not know;",
                 m.alpha_interval[0], m.alpha_interval[1], m.max_payload_kg
             )),
-            Err(e) => text.push_str(&format!(" the {k} algorithm's margin could not be computed ({e:#});")),
+            Err(e) => text.push_str(&format!(" the {k} algorithm's margin could not be computed ({});",
+                ofmpc_scenario::chain_text(e.as_ref()))),
         }
     }
     text.push_str(

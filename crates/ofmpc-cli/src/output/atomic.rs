@@ -273,7 +273,9 @@ impl DirLock {
                 Err(e) if e.kind() == io::ErrorKind::NotFound => continue, // removed meanwhile
                 Err(e) => return Err(with_path(e, "cannot open lock file", &path)),
             };
-            let held = fs::read_to_string(&path).ok();
+            // The pid only, as information: at most 64 bytes of a regular file (a FIFO or a
+            // huge file put there is never read whole, never waited on).
+            let held = read_pid_text(&path);
             let pid = held.as_deref().and_then(|t| t.trim().parse::<u32>().ok());
             match file.try_lock() {
                 Ok(()) => {}
@@ -312,6 +314,22 @@ impl Drop for DirLock {
         // lock, that the name no longer leads to its file and starts again.
         let _ = fs::remove_file(&self.path);
     }
+}
+
+/// The first 64 bytes of a lock file as text, if it is a regular file (never a FIFO, which a
+/// read would wait on, nor more than a pid's worth of a huge file).
+fn read_pid_text(path: &Path) -> Option<String> {
+    use std::io::Read;
+    if !fs::symlink_metadata(path).ok()?.is_file() {
+        return None;
+    }
+    let mut text = String::new();
+    fs::File::open(path)
+        .ok()?
+        .take(64)
+        .read_to_string(&mut text)
+        .ok()?;
+    Some(text)
 }
 
 /// Whether `path` names the open `file` (same device and inode on Unix).

@@ -170,6 +170,29 @@ def read_program(
     return json.loads(_read_program(text, name, o, robot))
 
 
+def _check_numbers(value: Any, key: str) -> None:
+    """Raises OfmpcError naming the key (``mpc.ts``, ``payload.masses_kg[1]``) of a value JSON
+    and TOML cannot carry: NaN, an infinity, or an integer beyond 64 bits (JSON would write
+    them, and the scenario's reader would only say "expected value")."""
+    import math
+
+    if isinstance(value, Mapping):
+        for k, v in value.items():
+            _check_numbers(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(value, (list, tuple)):
+        for i, v in enumerate(value):
+            _check_numbers(v, f"{key}[{i}]")
+    elif isinstance(value, bool):
+        return
+    elif isinstance(value, int) and not -(2**63) <= value < 2**63:
+        raise OfmpcError(
+            f"scenario: {key} = an integer of {value.bit_length()} bits: out of range "
+            "(integers have 64 bits; give a float for a large number)"
+        )
+    elif isinstance(value, float) and not math.isfinite(value):
+        raise OfmpcError(f"scenario: {key} = {value}: give a finite number")
+
+
 def run(scenario: Union[Mapping[str, Any], str, "os.PathLike[str]"]) -> dict:
     """Runs a scenario in Rust (the GIL released) and returns its metrics.
 
@@ -186,8 +209,11 @@ def run(scenario: Union[Mapping[str, Any], str, "os.PathLike[str]"]) -> dict:
 
     Raises:
         OfmpcError: the scenario is invalid (the message names the key).
+        KeyboardInterrupt: Ctrl-C during the runs: they stop at their next sample
+            (signals are checked every 20 ms) and no result is returned.
     """
     if isinstance(scenario, Mapping):
+        _check_numbers(scenario, "")
         text = _run_json(json.dumps(scenario))
     elif isinstance(scenario, (str, os.PathLike)):
         text = _run_file(os.fspath(scenario))

@@ -114,7 +114,8 @@ class Controller:
     ``q_u`` (input, usual MPC). Defaults: the paper's tuning. The baselines ``"pid"``,
     ``"ctc"``, ``"ctc-adaptive"``, ``"dob-mpc"`` take their bandwidths (rad/s, a number or
     one per joint) the same way: ``pid_bandwidth`` (default 60), ``ctc_bandwidth`` (150),
-    ``dob_observer_bandwidth`` (100).
+    ``dob_observer_bandwidth`` (100). ``solver="dense-qr"``, ``"structured"`` or ``"auto"``
+    (the default) chooses the least-squares solver, as ``[mpc] solver`` does.
     """
 
     def __init__(
@@ -123,7 +124,7 @@ class Controller:
         robot: Robot,
         ts: float = 0.01,
         horizon: int = 10,
-        **weights: Union[float, Sequence[float]],
+        **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property
     def kind(self) -> str: ...

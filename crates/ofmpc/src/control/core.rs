@@ -757,6 +757,7 @@ fn dense_workspace(
     let p = nh * n;
     let m = 2 * p;
     let too_large = SettingsError::TooLarge {
+        solver: Solver::DenseQr,
         rows: m,
         cols: p,
         limit: MAX_ENTRIES,
@@ -788,6 +789,7 @@ fn structured_backend(
     let fits = |r: usize| matches!(r.checked_mul(cols), Some(e) if e <= MAX_ENTRIES);
     if !(fits(p) && fits(n + nq + nz)) {
         return Err(SettingsError::TooLarge {
+            solver: Solver::Structured,
             rows: p,
             cols,
             limit: MAX_ENTRIES,
@@ -811,6 +813,7 @@ fn structured_backend(
         let nc = settings.constraint_horizon.unwrap_or(nh).clamp(1, nh);
         let (m, p) = StageLq::head_dims(st.nu, st.nz, st.nq, nc);
         let too_large = SettingsError::TooLarge {
+            solver: Solver::Structured,
             rows: m,
             cols: p,
             limit: MAX_ENTRIES,

@@ -365,6 +365,7 @@ impl MpcSettings {
             let entries = super::tracking::dense_entries(dof, self.horizon, true);
             if !matches!(entries, Some(e) if e <= MAX_SYSTEM_ENTRIES) {
                 return Err(SettingsError::TooLarge {
+                    solver: Solver::DenseQr,
                     rows,
                     cols: p,
                     limit: MAX_SYSTEM_ENTRIES,
@@ -380,6 +381,7 @@ impl MpcSettings {
                 .saturating_add(4 * dof);
             if rows.saturating_mul(p + 1) > MAX_SYSTEM_ENTRIES {
                 return Err(SettingsError::TooLarge {
+                    solver: Solver::Structured,
                     rows,
                     cols: p,
                     limit: MAX_SYSTEM_ENTRIES,
@@ -522,8 +524,19 @@ pub enum SettingsError {
     #[error("the robot has 0 joints: a controller needs at least one")]
     ZeroDof,
     /// The least-squares system would be too large to allocate.
-    #[error("the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: reduce the horizon, or use the structured solver (its size grows linearly with the horizon)")]
+    #[error(
+        "the least-squares system would have {rows} x {cols} entries, more than the limit of {limit}: {}",
+        match solver {
+            Solver::Structured => "reduce the horizon, or with torque limits the constraint horizon \
+                (the structured solver's limited head grows with its square)",
+            _ => "reduce the horizon, or use the structured solver (its size grows linearly with \
+                the horizon)",
+        }
+    )]
     TooLarge {
+        /// The solver whose system it is ([`Solver::DenseQr`] or [`Solver::Structured`]):
+        /// the advice depends on it.
+        solver: Solver,
         /// Rows of 𝒜 (dense solver) or of the stored stage factors
         /// (structured solver: N·n).
         rows: usize,

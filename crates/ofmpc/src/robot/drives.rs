@@ -163,10 +163,7 @@ impl Drives {
 
     /// Reads a drives file.
     pub fn from_file(path: &std::path::Path) -> Result<Self, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = super::read::read_text_limited(path, super::MAX_DRIVES_BYTES, "a drives file")?;
         Self::from_toml_str(&text).map_err(|e| match e {
             ModelError::Drives { error, .. } => ModelError::Drives {
                 file: format!("{}: ", path.display()),

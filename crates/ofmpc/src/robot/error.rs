@@ -235,7 +235,11 @@ pub enum UrdfError {
 pub enum UrdfWarning {
     /// `<dynamics damping friction>`: the model has no joint friction (the
     /// plant's friction is a setting of the simulation).
-    #[error("joint '{joint}': <dynamics damping=\"{damping}\" friction=\"{friction}\"> is ignored (the robot model has no joint friction; set the simulated plant's friction instead)")]
+    /// The message quotes the non-zero values only (a value the file leaves out reads as 0:
+    /// a `friction="0"` the file does not have is never quoted).
+    #[error("joint '{joint}': <dynamics{}{}> is ignored (the robot model has no joint friction; set the simulated plant's friction instead)",
+        if *damping != 0.0 { format!(" damping=\"{damping}\"") } else { String::new() },
+        if *friction != 0.0 { format!(" friction=\"{friction}\"") } else { String::new() })]
     IgnoredDynamics {
         /// The joint.
         joint: String,
@@ -287,6 +291,44 @@ pub enum ModelError {
         path: String,
         /// The operating system's message.
         message: String,
+    },
+    /// A file is larger than its limit ([`super::MAX_URDF_BYTES`],
+    /// [`super::MAX_DRIVES_BYTES`]): reading stopped at the limit.
+    #[error(
+        "cannot read {path}: it is {} than the limit of {limit} bytes ({} MiB) for {what}; reading \
+         stopped there: check that it is the file you meant",
+        match size { Some(s) => format!("{s} bytes, larger"), None => "larger".to_string() },
+        limit >> 20
+    )]
+    FileTooLarge {
+        /// The file.
+        path: String,
+        /// What it was read as: `"a URDF"`, `"a drives file"`.
+        what: &'static str,
+        /// Its size (bytes), when the file system knows it (not for a device or a pipe).
+        size: Option<u64>,
+        /// The limit (bytes).
+        limit: u64,
+    },
+    /// A file is not UTF-8 text.
+    #[error(
+        "cannot read {path}: not UTF-8 text: byte {offset} (line {line}, column {column}) is \
+         0x{byte:02x} ({}): save it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)",
+        if *utf16 { "it looks like UTF-16" } else { "it may be Latin-1 or another 8-bit encoding" }
+    )]
+    NotUtf8 {
+        /// The file.
+        path: String,
+        /// 0-based offset of the first byte that is not UTF-8.
+        offset: usize,
+        /// Its 1-based line.
+        line: usize,
+        /// Its 1-based column (bytes).
+        column: usize,
+        /// The byte.
+        byte: u8,
+        /// The file starts with a UTF-16 byte-order mark.
+        utf16: bool,
     },
     /// The URDF is not well-formed XML or lacks required elements.
     #[error("{file}invalid URDF: {message}")]

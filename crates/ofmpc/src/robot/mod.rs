@@ -7,10 +7,13 @@
 
 mod drives;
 mod error;
+mod read;
 mod urdf;
+mod urdf_locate;
 
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
+pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::TRIANGLE_TOLERANCE;
 
 use crate::ik::{OpwParameters, UrKinematics};
@@ -327,10 +330,7 @@ impl Robot {
         path: &std::path::Path,
         options: &ChainOptions,
     ) -> Result<Self, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ModelError::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let text = read::read_text_limited(path, MAX_URDF_BYTES, "a URDF")?;
         Self::from_urdf_str_with(&text, options).map_err(|e| e.in_file(path))
     }
 

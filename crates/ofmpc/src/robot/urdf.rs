@@ -229,7 +229,8 @@ const FLANGE_NAME_PARTS: [&str; 5] = ["end_effector", "tool0", "flange", "ee_lin
 pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> {
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
-        message: e.to_string(),
+        // The deserializer gives no position: the element's line, found in the text.
+        message: super::urdf_locate::locate(text, &e.to_string()),
     })?;
     let mut tree = Tree::new(&urdf)?;
     let root = tree.root()?;

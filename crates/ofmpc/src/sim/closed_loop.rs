@@ -14,6 +14,7 @@ use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Settings of a closed-loop run.
@@ -396,6 +397,8 @@ pub struct ClosedLoop<'a> {
     pick_up: Option<(usize, crate::robot::Payload)>,
     /// The predicted horizons kept ([`LoopSettings::horizons`]).
     horizon: Option<HorizonRecorder>,
+    /// Set by another thread to end the run ([`ClosedLoop::cancel_on`]).
+    cancel: Option<&'a AtomicBool>,
 }
 
 /// How a run ends early: the outcome, recorded up to there.
@@ -440,7 +443,22 @@ impl<'a> ClosedLoop<'a> {
             preview: vec![0.0; horizon * n],
             pick_up: None,
             horizon: predicted,
+            cancel: None,
         }
+    }
+
+    /// Ends the run when `flag` becomes true (set by another thread, e.g. on a
+    /// user's Ctrl-C): checked before each sample of the pre-roll, the path and
+    /// the hold (one relaxed atomic load, outside the controller's `step`), the run
+    /// then ends [`RunOutcome::Failed`] with [`RunFailure::Interrupted`].
+    pub fn cancel_on(mut self, flag: &'a AtomicBool) -> Self {
+        self.cancel = Some(flag);
+        self
+    }
+
+    /// Whether the caller asked the run to end ([`Self::cancel_on`]).
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
     /// With a pre-roll at rest and a payload picked up mid-path.
@@ -525,6 +543,9 @@ impl<'a> ClosedLoop<'a> {
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
+            if self.cancelled() {
+                return Err(failed(t, RunFailure::Interrupted));
+            }
             if self.pre_roll_sample(j, t)? {
                 // A safe stop began: the path's samples brake and hold.
                 break;
@@ -628,6 +649,12 @@ impl<'a> ClosedLoop<'a> {
         };
         let mut k = 0;
         while k < end {
+            if self.cancelled() {
+                return RunOutcome::Failed {
+                    t: k as f64 * ts,
+                    cause: RunFailure::Interrupted,
+                };
+            }
             match self.sample(k, rec) {
                 Ok(None) => {}
                 Ok(Some(stop_began_at)) => end = stop_began_at + stop_samples,

@@ -3,10 +3,10 @@
 //! reference; run, then judged.
 
 use super::closed_loop::{
-    record_columns, records_measurement, run_closed_loop_with, LoopSettings, RunEvents, RunResult,
+    record_columns, records_measurement, ClosedLoop, LoopSettings, RunEvents, RunResult,
 };
 use super::metrics::{compute, RunMetrics};
-use super::outcome::{ExperimentError, MAX_RECORD_VALUES};
+use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{
     BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings, ObserverSettings,
@@ -20,6 +20,7 @@ use crate::control::{
 pub const OBSERVER_POLE: f64 = crate::control::DEFAULT_OBSERVER_POLE;
 use crate::motion::JointReference;
 use crate::robot::{ModelError, Payload, Robot};
+use std::sync::atomic::AtomicBool;
 
 /// Everything a run needs but the controller kind and the payload.
 #[derive(Debug, Clone)]
@@ -148,6 +149,19 @@ impl Experiment {
         payload: &Payload,
         progress: &mut dyn FnMut(usize, usize),
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
+        self.run_cancellable(kind, payload, progress, &AtomicBool::new(false))
+    }
+
+    /// [`Self::run`] that ends early when `cancel` becomes true (set by another thread,
+    /// e.g. on a user's Ctrl-C; checked before every sample, [`ClosedLoop::cancel_on`]):
+    /// then [`ExperimentError::Interrupted`], no result.
+    pub fn run_cancellable(
+        &self,
+        kind: ControllerKind,
+        payload: &Payload,
+        progress: &mut dyn FnMut(usize, usize),
+        cancel: &AtomicBool,
+    ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
         let observed = self.mpc.state_observer || self.mpc.delay_compensation;
         let mut builder = ControllerBuilder::new(kind, &self.robot)
@@ -183,16 +197,24 @@ impl Experiment {
         })?;
         let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
         let parts = mpc.parts_mut();
-        let result = run_closed_loop_with(
+        let result = ClosedLoop::new(
             parts.controller,
             parts.model,
             &mut plant,
             &self.reference,
             ls,
-            &events,
             parts.observer,
-            progress,
-        );
+        )
+        .events(&events)
+        .cancel_on(cancel)
+        .run(progress);
+        if let RunOutcome::Failed {
+            t,
+            cause: RunFailure::Interrupted,
+        } = result.outcome
+        {
+            return Err(ExperimentError::Interrupted { t });
+        }
         let metrics = compute(
             &run_name(kind, payload),
             kind_name(kind),

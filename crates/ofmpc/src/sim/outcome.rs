@@ -13,6 +13,16 @@ use std::fmt;
 /// before anything is allocated ([`ExperimentError::TooManySamples`]).
 pub const MAX_RECORD_VALUES: usize = 100_000_000;
 
+/// An angle (rad) for a message: 4 decimals from 1 mrad up (as always written), else 3
+/// significant digits in exponent form, so that a small error never reads "0.0000 rad".
+pub(crate) fn angle_text(rad: f64) -> String {
+    if rad == 0.0 || !rad.is_finite() || rad.abs() >= 1e-3 {
+        format!("{rad:.4}")
+    } else {
+        format!("{rad:.2e}")
+    }
+}
+
 /// The largest number of integration substeps per control period.
 pub const MAX_SUBSTEPS: usize = 100_000;
 
@@ -84,6 +94,10 @@ pub enum RunFailure {
         /// 0-based joint.
         joint: usize,
     },
+    /// The caller asked the loop to stop ([`super::ClosedLoop::cancel_on`]): a user's
+    /// Ctrl-C, not a fault of the run.
+    #[error("interrupted")]
+    Interrupted,
 }
 
 /// How one closed-loop run ended.
@@ -189,9 +203,10 @@ impl fmt::Display for RunOutcome {
             } => {
                 write!(
                     f,
-                    "diverged: the error of joint {} reached {error_rad:.4} rad at t = {t:.3} s, beyond the \
+                    "diverged: the error of joint {} reached {} rad at t = {t:.3} s, beyond the \
                      divergence threshold {threshold_rad} rad",
-                    joint + 1
+                    joint + 1,
+                    angle_text(*error_rad)
                 )?;
                 match rule {
                     DivergenceRule::Threshold => Ok(()),
@@ -337,10 +352,30 @@ pub enum ExperimentError {
         /// [`MAX_RECORD_VALUES`].
         limit: usize,
     },
+    /// The caller interrupted the run ([`super::Experiment::run_cancellable`]) at path time
+    /// `t` (s; negative in an adaptive controller's identification): no result.
+    #[error("interrupted at t = {t} s")]
+    Interrupted {
+        /// The time of the sample at which the run stopped (s).
+        t: f64,
+    },
 }
 
 impl From<PlantSettingsError> for ExperimentError {
     fn from(e: PlantSettingsError) -> Self {
         ExperimentError::Plant(PlantError::Settings(e))
+    }
+}
+
+#[cfg(test)]
+mod angle_tests {
+    use super::angle_text;
+
+    #[test]
+    fn small_angles_keep_their_digits() {
+        assert_eq!(angle_text(0.12345), "0.1235");
+        assert_eq!(angle_text(-0.002), "-0.0020");
+        assert_eq!(angle_text(3.2e-5), "3.20e-5");
+        assert_eq!(angle_text(0.0), "0.0000");
     }
 }

@@ -139,8 +139,9 @@ impl fmt::Display for StopReason {
         match self {
             StopReason::Diverged { joint, error_rad } => write!(
                 f,
-                "the error of joint {} reached {error_rad:.4} rad (divergence)",
-                joint + 1
+                "the error of joint {} reached {} rad (divergence)",
+                joint + 1,
+                super::outcome::angle_text(*error_rad)
             ),
             StopReason::JointErrorLimit {
                 joint,
@@ -148,8 +149,9 @@ impl fmt::Display for StopReason {
                 limit_rad,
             } => write!(
                 f,
-                "the error of joint {} reached {error_rad:.4} rad, beyond the safety limit of {limit_rad} rad",
-                joint + 1
+                "the error of joint {} reached {} rad, beyond the safety limit of {limit_rad} rad",
+                joint + 1,
+                super::outcome::angle_text(*error_rad)
             ),
             StopReason::ControllerFailed(e) => write!(f, "the controller step failed: {e}"),
             StopReason::ImplausibleMeasurement {

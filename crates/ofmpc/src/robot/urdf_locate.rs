@@ -1,0 +1,229 @@
+//! Where in a URDF's text a parse error is (issue #22 item 17): the XML
+//! deserializer says "custom: invalid float literal" or "missing field `ixy`"
+//! without a position; this scan of the text finds the element it is about
+//! and gives its line, column and the element as written.
+
+/// Attributes read as numbers (one or a list): a value that does not parse is the first
+/// suspect of a number error.
+const NUMERIC: [&str; 22] = [
+    "xyz",
+    "rpy",
+    "value",
+    "ixx",
+    "ixy",
+    "ixz",
+    "iyy",
+    "iyz",
+    "izz",
+    "lower",
+    "upper",
+    "effort",
+    "velocity",
+    "damping",
+    "friction",
+    "radius",
+    "length",
+    "size",
+    "scale",
+    "multiplier",
+    "offset",
+    "soft_lower_limit",
+];
+
+/// Elements whose `value` attribute is a number (`<mass value>`; not e.g. `<param value>`).
+fn numeric_attribute(element: &str, attribute: &str) -> bool {
+    match attribute {
+        "value" => element == "mass",
+        a => NUMERIC.contains(&a),
+    }
+}
+
+/// The elements that must carry the field `field` (as an attribute or a child element).
+fn holders(field: &str) -> &'static [&'static str] {
+    match field {
+        "ixx" | "ixy" | "ixz" | "iyy" | "iyz" | "izz" => &["inertia"],
+        "value" => &["mass"],
+        "mass" | "inertia" => &["inertial"],
+        "name" => &["robot", "link", "joint"],
+        "type" => &["joint"],
+        "parent" | "child" => &["joint"],
+        "link" => &["parent", "child"],
+        "filename" => &["mesh"],
+        "radius" => &["cylinder", "sphere", "capsule"],
+        "length" => &["cylinder", "capsule"],
+        "size" => &["box"],
+        "geometry" => &["visual", "collision"],
+        "effort" | "velocity" => &["limit"],
+        _ => &[],
+    }
+}
+
+/// One start tag: where, its name, its attributes and (once closed) its child elements.
+struct Tag<'t> {
+    line: usize,
+    column: usize,
+    name: &'t str,
+    attributes: Vec<(&'t str, &'t str)>,
+    children: Vec<&'t str>,
+}
+
+impl Tag<'_> {
+    fn describe(&self, attribute: Option<&str>) -> String {
+        let shown = match attribute.and_then(|a| self.attributes.iter().find(|(k, _)| *k == a)) {
+            Some((k, v)) => format!("<{} {k}=\"{v}\">", self.name),
+            None => format!("<{}>", self.name),
+        };
+        format!("line {}, column {}: {shown}", self.line, self.column)
+    }
+}
+
+/// The attributes of a start tag's inside (`name a="1" b='2'`).
+fn attributes(inside: &str) -> Vec<(&str, &str)> {
+    let mut out = Vec::new();
+    let mut rest = inside;
+    while let Some(eq) = rest.find('=') {
+        let key = rest[..eq].trim();
+        let after = rest[eq + 1..].trim_start();
+        let Some(quote) = after.chars().next().filter(|c| *c == '"' || *c == '\'') else {
+            break;
+        };
+        let Some(end) = after[1..].find(quote) else {
+            break;
+        };
+        out.push((key, &after[1..1 + end]));
+        rest = &after[end + 2..];
+    }
+    out
+}
+
+/// The first tag (in document order) for which `judge(tag)` is `Some(attribute)`; tags are
+/// judged when they close (their child elements known).
+fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) -> Option<String> {
+    let mut stack: Vec<Tag<'t>> = Vec::new();
+    let mut found: Option<(usize, String)> = None;
+    let settle = |tag: Tag<'t>, found: &mut Option<(usize, String)>| {
+        if let Some(attr) = judge(&tag) {
+            let key = tag.line * 1_000_000 + tag.column;
+            if found.as_ref().is_none_or(|(k, _)| key < *k) {
+                *found = Some((key, tag.describe(attr)));
+            }
+        }
+    };
+    let (mut i, mut counted, mut line, mut line_start) = (0, 0, 1, 0);
+    while let Some(open) = text[i..].find('<').map(|o| i + o) {
+        let rest = &text[open..];
+        let skip_to = |end: &str| rest.find(end).map_or(text.len(), |e| open + e + end.len());
+        if rest.starts_with("<!--") {
+            i = skip_to("-->");
+        } else if rest.starts_with("<![CDATA[") {
+            i = skip_to("]]>");
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            i = skip_to(">");
+        } else if let Some(close) = rest.strip_prefix("</") {
+            i = skip_to(">");
+            let name = close.split(|c: char| c == '>' || c.is_whitespace()).next();
+            if let Some(pos) = stack.iter().rposition(|t| Some(t.name) == name) {
+                for tag in stack.drain(pos..) {
+                    settle(tag, &mut found);
+                }
+            }
+        } else {
+            let end = rest.find('>').unwrap_or(rest.len());
+            let inside = &rest[1..end];
+            let self_closing = inside.ends_with('/');
+            let inside = inside.trim_end_matches('/');
+            let name_end = inside.find(char::is_whitespace).unwrap_or(inside.len());
+            // Lines counted from the last tag on (linear in the text's length).
+            let between = &text[counted..open];
+            line += between.matches('\n').count();
+            if let Some(n) = between.rfind('\n') {
+                line_start = counted + n + 1;
+            }
+            counted = open;
+            let column = open - line_start + 1;
+            let tag = Tag {
+                line,
+                column,
+                name: &inside[..name_end],
+                attributes: attributes(&inside[name_end..]),
+                children: Vec::new(),
+            };
+            if let Some(parent) = stack.last_mut() {
+                parent.children.push(tag.name);
+            }
+            if self_closing {
+                settle(tag, &mut found);
+            } else {
+                stack.push(tag);
+            }
+            i = open + end;
+        }
+    }
+    while let Some(tag) = stack.pop() {
+        settle(tag, &mut found);
+    }
+    found.map(|(_, s)| s)
+}
+
+/// `message` with where it happened when the text shows it: `missing field `f``: the first
+/// element that should hold `f` and does not; a number error: the first numeric attribute
+/// whose value is not a list of numbers.
+pub(super) fn locate(text: &str, message: &str) -> String {
+    let field = message
+        .split_once("missing field `")
+        .and_then(|(_, r)| r.split_once('`'))
+        .map(|(f, _)| f);
+    let place = match field {
+        Some(f) if !holders(f).is_empty() => find(text, &|t| {
+            let has = t.attributes.iter().any(|(k, _)| *k == f) || t.children.contains(&f);
+            (holders(f).contains(&t.name) && !has).then_some(None)
+        }),
+        _ if ["float", "digit", "number"]
+            .iter()
+            .any(|w| message.contains(w)) =>
+        {
+            find(text, &|t| {
+                t.attributes
+                    .iter()
+                    .find(|(k, v)| {
+                        numeric_attribute(t.name, k)
+                            && v.split_whitespace().any(|x| x.parse::<f64>().is_err())
+                    })
+                    .map(|(k, _)| Some(*k))
+            })
+        }
+        _ => None,
+    };
+    match place {
+        Some(p) => format!("{message} ({p})"),
+        None => message.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::locate;
+
+    #[test]
+    fn number_and_missing_field_errors_get_their_line_and_element() {
+        let text = "<robot name=\"r\">\n  <link name=\"a\">\n    <inertial>\n      <mass value=\"1\"/>\n      <inertia ixx=\"1\" iyy=\"1\" izz=\"1\" ixz=\"0\" iyz=\"0\"/>\n    </inertial>\n  </link>\n  <!-- <origin xyz=\"x\"/> -->\n  <joint name=\"j\">\n    <origin xyz=\"0 0 1,5\"/>\n  </joint>\n</robot>\n";
+        assert_eq!(
+            locate(text, "missing field `ixy`"),
+            "missing field `ixy` (line 5, column 7: <inertia>)"
+        );
+        assert_eq!(
+            locate(text, "custom: invalid float literal"),
+            "custom: invalid float literal (line 10, column 5: <origin xyz=\"0 0 1,5\">)"
+        );
+        assert_eq!(
+            locate(text, "missing field `type`"),
+            "missing field `type` (line 9, column 3: <joint>)"
+        );
+        assert_eq!(locate(text, "something else"), "something else");
+        let no_mass = "<robot><link name=\"a\"><inertial>\n<inertia/></inertial></link></robot>";
+        assert_eq!(
+            locate(no_mass, "missing field `mass`"),
+            "missing field `mass` (line 1, column 23: <inertial>)"
+        );
+    }
+}
