@@ -748,7 +748,10 @@ fn command_errors() {
         2,
         14,
         Unsupported,
-        &["G10 R5 (rotation of the coordinate system about Z)", "R0 is read"],
+        &[
+            "G10 R5 (rotation of the coordinate system about Z)",
+            "R0 is read",
+        ],
     );
 }
 
