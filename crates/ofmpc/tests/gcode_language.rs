@@ -2,32 +2,10 @@
 //! events, messages, the start from the tool position, the step limit.
 
 use nalgebra::Vector3;
-use ofmpc::gcode::{parse, GcodeErrorKind, MoveKind, ParseOptions, Program};
+mod common;
 
-fn ok(text: &str) -> Program {
-    parse(text, &ParseOptions::default()).unwrap_or_else(|e| panic!("{e}\n{text}"))
-}
-
-/// End points of the path moves, in mm.
-fn ends(p: &Program) -> Vec<[f64; 3]> {
-    p.moves
-        .iter()
-        .filter_map(|m| match &m.kind {
-            MoveKind::Path { segment, .. } => {
-                let e = segment.end() * 1e3;
-                Some([e.x, e.y, e.z])
-            }
-            MoveKind::Dwell { .. } => None,
-        })
-        .collect()
-}
-
-fn close(a: &[[f64; 3]], b: &[[f64; 3]]) -> bool {
-    a.len() == b.len()
-        && a.iter()
-            .zip(b)
-            .all(|(p, q)| (0..3).all(|k| (p[k] - q[k]).abs() < 1e-9))
-}
+use common::gcode::{close, ends, ok};
+use ofmpc::gcode::{parse, GcodeErrorKind, ParseOptions};
 
 #[test]
 fn expressions_follow_the_dialect() {

@@ -4,42 +4,10 @@
 //! programs are the project's own; the expected values follow LinuxCNC's documentation
 //! ("G-code overview: predefined named parameters", "O codes: indirection", "G64").
 
-use ofmpc::gcode::{parse, GcodeErrorKind, MoveKind, ParseOptions, Program};
+mod common;
 
-fn ok(text: &str) -> Program {
-    parse(text, &ParseOptions::default()).unwrap_or_else(|e| panic!("{e}\n{text}"))
-}
-
-fn fail(text: &str) -> ofmpc::gcode::GcodeError {
-    match parse(text, &ParseOptions::default()) {
-        Ok(_) => panic!("read, but should be refused:\n{text}"),
-        Err(e) => e,
-    }
-}
-
-/// End points of the path moves, in mm.
-fn ends(p: &Program) -> Vec<[f64; 3]> {
-    p.moves
-        .iter()
-        .filter_map(|m| match &m.kind {
-            MoveKind::Path { segment, .. } => {
-                let e = segment.end() * 1e3;
-                Some([e.x, e.y, e.z])
-            }
-            MoveKind::Dwell { .. } => None,
-        })
-        .collect()
-}
-
-fn assert_ends(p: &Program, want: &[[f64; 3]]) {
-    let got = ends(p);
-    assert_eq!(got.len(), want.len(), "{got:?} vs {want:?}");
-    for (g, w) in got.iter().zip(want) {
-        for k in 0..3 {
-            assert!((g[k] - w[k]).abs() < 1e-9, "{got:?} vs {want:?}");
-        }
-    }
-}
+use common::gcode::{assert_ends, fail, ok};
+use ofmpc::gcode::{GcodeErrorKind, MoveKind};
 
 #[test]
 fn exists_reads_with_axes_kept_at_zero() {

@@ -3,34 +3,10 @@
 //! hand from LinuxCNC's documented semantics.
 
 use nalgebra::Vector3;
+mod common;
+
+use common::gcode::{assert_ends, ends, ok};
 use ofmpc::gcode::{parse, MoveKind, ParseOptions, Program};
-
-fn ok(text: &str) -> Program {
-    parse(text, &ParseOptions::default()).unwrap_or_else(|e| panic!("{e}\n{text}"))
-}
-
-fn ends(p: &Program) -> Vec<[f64; 3]> {
-    p.moves
-        .iter()
-        .filter_map(|m| match &m.kind {
-            MoveKind::Path { segment, .. } => {
-                let e = segment.end() * 1e3;
-                Some([e.x, e.y, e.z])
-            }
-            MoveKind::Dwell { .. } => None,
-        })
-        .collect()
-}
-
-fn assert_ends(p: &Program, want: &[[f64; 3]]) {
-    let got = ends(p);
-    let same = got.len() == want.len()
-        && got
-            .iter()
-            .zip(want)
-            .all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-9));
-    assert!(same, "got {got:?}\nwant {want:?}");
-}
 
 #[test]
 fn g92_family_g52_and_g53() {

@@ -1,26 +1,15 @@
 //! G-code reader: the paper's program, language features, arc geometry, and every error case
 //! (line, column, and a hint that names the fix).
 
+mod common;
+
+use common::gcode::{fail, ok};
 use nalgebra::Vector3;
 use ofmpc::gcode::{
     parse, GcodeError, GcodeErrorKind, MoveKind, ParseOptions, Program, PAPER_TABLE1,
 };
 use ofmpc::motion::segment::{Plane, Segment};
 use std::f64::consts::PI;
-
-fn ok(text: &str) -> Program {
-    match parse(text, &ParseOptions::default()) {
-        Ok(p) => p,
-        Err(e) => panic!("unexpected error: {e}\n{text}"),
-    }
-}
-
-fn fail(text: &str) -> GcodeError {
-    match parse(text, &ParseOptions::default()) {
-        Ok(p) => panic!("expected an error, got {p:?}\n{text}"),
-        Err(e) => e,
-    }
-}
 
 /// Asserts position and kind, and that the rendered message contains every `needle`.
 fn check(e: &GcodeError, line: usize, column: usize, kind: GcodeErrorKind, needles: &[&str]) {

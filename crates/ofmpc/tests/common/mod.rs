@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 use ofmpc::dynamics::JointSpaceDynamics;
 
+pub mod gcode;
 pub mod rng;
 
 /// Deterministic pseudo-random numbers (`next()` in [-1, 1)): the tests' one LCG.
