@@ -609,6 +609,21 @@ fn urdf_errors_have_a_line_and_messages_say_things_once() {
         "{e}"
     );
     assert!(e.contains("<inertia>"), "{e}");
+    // An <origin xyz> with a decimal comma and a fourth number: the XML reader takes it
+    // without an error, the robot would be moved silently; refused with its line.
+    let at = urdf.find("<origin xyz=\"").unwrap() + "<origin xyz=\"".len();
+    let end = at + urdf[at..].find('"').unwrap();
+    let commas = format!("{}1,5 0 0 0{}", &urdf[..at], &urdf[end..]);
+    fs::write(d.join("commas.urdf"), &commas).unwrap();
+    let e = fails_in(d, &["inspect", "robot", "--robot", "commas.urdf"]);
+    let line = line_of(&commas, "1,5 0 0 0");
+    assert!(
+        e.contains("commas.urdf")
+            && e.contains("three numbers")
+            && e.contains(&format!("(line {line}, column "))
+            && e.contains("xyz=\"1,5 0 0 0\""),
+        "{e}"
+    );
     // Said once.
     let e = fails_in(
         d,

@@ -232,6 +232,15 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
         // The deserializer gives no position: the element's line, found in the text.
         message: super::urdf_locate::locate(text, &e.to_string()),
     })?;
+    if let Some(place) = super::urdf_locate::malformed_vector(text) {
+        return Err(ModelError::Urdf {
+            file: String::new(),
+            message: format!(
+                "expected three numbers separated by spaces ({place}); write e.g. \
+                 xyz=\"0 0 0.1\" (a decimal point, not a comma)"
+            ),
+        });
+    }
     let mut tree = Tree::new(&urdf)?;
     let root = tree.root()?;
     if let Some(t) = tip {

@@ -200,9 +200,27 @@ pub(super) fn locate(text: &str, message: &str) -> String {
     }
 }
 
+/// The first `xyz` or `rpy` attribute that is not three numbers separated by white space,
+/// with its line, column and element. The XML deserializer reads such a value without an
+/// error in some forms (`xyz="1,5 0 0 0"`: a decimal comma and a fourth number), which
+/// would silently move a joint: the text is checked once after it parsed.
+pub(super) fn malformed_vector(text: &str) -> Option<String> {
+    find(text, &|t| {
+        t.attributes
+            .iter()
+            .find(|(k, v)| {
+                (*k == "xyz" || *k == "rpy") && {
+                    let parts: Vec<&str> = v.split_whitespace().collect();
+                    parts.len() != 3 || parts.iter().any(|x| x.parse::<f64>().is_err())
+                }
+            })
+            .map(|(k, _)| Some(*k))
+    })
+}
+
 #[cfg(test)]
 mod tests {
-    use super::locate;
+    use super::{locate, malformed_vector};
 
     #[test]
     fn number_and_missing_field_errors_get_their_line_and_element() {
@@ -220,6 +238,17 @@ mod tests {
             "missing field `type` (line 9, column 3: <joint>)"
         );
         assert_eq!(locate(text, "something else"), "something else");
+        assert_eq!(
+            malformed_vector(text).as_deref(),
+            Some("line 10, column 5: <origin xyz=\"0 0 1,5\">")
+        );
+        let four = "<robot>\n<joint><origin xyz=\"1 0 0 0\" rpy=\"0 0 0\"/><axis xyz=\"0 0 1\"/></joint></robot>";
+        assert_eq!(
+            malformed_vector(four).as_deref(),
+            Some("line 2, column 8: <origin xyz=\"1 0 0 0\">")
+        );
+        let fine = "<robot><joint><origin xyz=\" 1 0\t0 \" rpy=\"0 0 1e-3\"/></joint></robot>";
+        assert_eq!(malformed_vector(fine), None);
         let no_mass = "<robot><link name=\"a\"><inertial>\n<inertia/></inertial></link></robot>";
         assert_eq!(
             locate(no_mass, "missing field `mass`"),
