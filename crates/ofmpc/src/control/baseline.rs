@@ -79,7 +79,7 @@
 //! limit clipped at this sample is not accumulated (as the incremental
 //! algorithms' aggregated error, [`super::MpcSettings::torque_limits`]).
 
-use super::core::{check_finite, check_len, check_result};
+use super::core::{check_finite, check_len, check_result, check_step_input};
 use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
 use super::settings::{MpcSettings, SettingsError};
@@ -374,13 +374,7 @@ impl JointLawCore {
         tau: &mut [f64],
     ) -> Result<StepInfo, StepError> {
         let n = self.n;
-        check_len("x", x.len(), 2 * n)?;
-        check_len("w_k", w_k.len(), n)?;
-        check_len("preview", preview.len(), self.settings.horizon * n)?;
-        check_len("tau", tau.len(), n)?;
-        check_finite("x", x)?;
-        check_finite("w_k", w_k)?;
-        check_finite("preview", preview)?;
+        check_step_input(n, self.settings.horizon, x, w_k, preview, tau.len())?;
         let limited = self.settings.torque_limits;
         if (limited || self.settings.friction_compensation) && self.drives.is_none() {
             return Err(StepError::NoDriveModel);

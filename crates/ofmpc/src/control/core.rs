@@ -483,13 +483,7 @@ impl Core {
         tau_len: usize,
     ) -> Result<(), StepError> {
         let n = self.n;
-        check_len("x", x.len(), 2 * n)?;
-        check_len("w_k", w_k.len(), n)?;
-        check_len("preview", preview.len(), self.nh * n)?;
-        check_len("tau", tau_len, n)?;
-        check_finite("x", x)?;
-        check_finite("w_k", w_k)?;
-        check_finite("preview", preview)?;
+        check_step_input(n, self.nh, x, w_k, preview, tau_len)?;
         self.check_drives()?;
         self.model.update(model, &x[..n], &x[n..])?;
         if self.settings.friction_compensation {
@@ -842,6 +836,27 @@ pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Resu
             got,
         })
     }
+}
+
+/// A step's input for `n` joints and a horizon of `nh` samples: `x = [q; q̇]` (`2n`), the
+/// reference `w_k` (`n`), its preview (`nh·n`), all finite, and room for `τ` (`n`); else
+/// [`StepError::WrongLength`] or [`StepError::NonFiniteInput`] naming the argument. The one
+/// check of every controller's `step`.
+pub(crate) fn check_step_input(
+    n: usize,
+    nh: usize,
+    x: &[f64],
+    w_k: &[f64],
+    preview: &[f64],
+    tau_len: usize,
+) -> Result<(), StepError> {
+    check_len("x", x.len(), 2 * n)?;
+    check_len("w_k", w_k.len(), n)?;
+    check_len("preview", preview.len(), nh * n)?;
+    check_len("tau", tau_len, n)?;
+    check_finite("x", x)?;
+    check_finite("w_k", w_k)?;
+    check_finite("preview", preview)
 }
 
 /// A step's result, the input `u` and the torque `τ` (same length), must be finite: else

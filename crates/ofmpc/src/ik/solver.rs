@@ -169,38 +169,61 @@ impl IkSolver {
         pose: &Isometry3<f64>,
         previous: &[f64; 6],
     ) -> Result<[f64; 6], IkError> {
-        if !pose_is_finite(pose) {
-            return Err(IkError::NonFinite {
-                what: "target pose",
-            });
-        }
-        if !previous.iter().all(|x| x.is_finite()) {
-            return Err(IkError::NonFinite {
-                what: "previous joint position",
-            });
-        }
+        check_inputs(pose, previous)?;
         let sols = self.opw.inverse_near(pose, previous);
-        match nearest_within_limits(
+        choose_branch(
             sols.as_slice(),
+            sols.reach_excess(),
+            pose,
             previous,
-            &self.lower,
-            &self.upper,
+            (&self.lower, &self.upper),
             &self.weights,
-        ) {
-            LimitChoice::Inside(q) => Ok(q),
-            LimitChoice::Outside { joint, value } => Err(IkError::JointLimit {
-                joint: joint + 1,
-                value,
-                lower: self.lower[joint],
-                upper: self.upper[joint],
-            }),
-            LimitChoice::None => {
-                let p = pose.translation.vector;
-                Err(IkError::Unreachable {
-                    position: [p.x, p.y, p.z],
-                    excess: sols.reach_excess(),
-                })
-            }
+        )
+    }
+}
+
+/// The inputs of a closed-form solver's `solve_near`: a finite target pose and previous
+/// sample, else [`IkError::NonFinite`] naming which.
+pub(crate) fn check_inputs(pose: &Isometry3<f64>, previous: &[f64; 6]) -> Result<(), IkError> {
+    if !pose_is_finite(pose) {
+        return Err(IkError::NonFinite {
+            what: "target pose",
+        });
+    }
+    if !previous.iter().all(|x| x.is_finite()) {
+        return Err(IkError::NonFinite {
+            what: "previous joint position",
+        });
+    }
+    Ok(())
+}
+
+/// A closed-form solver's answer among its branches `sols` ([`nearest_within_limits`]):
+/// the one nearest `previous` within the limits; else [`IkError::JointLimit`] for the
+/// least-violating one, or [`IkError::Unreachable`] with the reach `excess` (m) when there
+/// is no branch. Shared by the OPW and the UR solvers.
+pub(crate) fn choose_branch(
+    sols: &[[f64; 6]],
+    excess: f64,
+    pose: &Isometry3<f64>,
+    previous: &[f64; 6],
+    (lower, upper): (&[f64; 6], &[f64; 6]),
+    weights: &[f64; 6],
+) -> Result<[f64; 6], IkError> {
+    match nearest_within_limits(sols, previous, lower, upper, weights) {
+        LimitChoice::Inside(q) => Ok(q),
+        LimitChoice::Outside { joint, value } => Err(IkError::JointLimit {
+            joint: joint + 1,
+            value,
+            lower: lower[joint],
+            upper: upper[joint],
+        }),
+        LimitChoice::None => {
+            let p = pose.translation.vector;
+            Err(IkError::Unreachable {
+                position: [p.x, p.y, p.z],
+                excess,
+            })
         }
     }
 }

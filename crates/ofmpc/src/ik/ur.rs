@@ -33,7 +33,7 @@
 use nalgebra::{Isometry3, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
 
 use super::opw::wrap_angle;
-use super::solver::{nearest_within_limits, LimitChoice};
+use super::solver::{check_inputs, choose_branch};
 use super::{pose_is_finite, rotation_log, IkError};
 
 /// Largest angle (rad) between two axes that the detection still calls parallel, and
@@ -510,39 +510,16 @@ impl UrSolver {
         pose: &Isometry3<f64>,
         previous: &[f64; 6],
     ) -> Result<[f64; 6], IkError> {
-        if !pose_is_finite(pose) {
-            return Err(IkError::NonFinite {
-                what: "target pose",
-            });
-        }
-        if !previous.iter().all(|x| x.is_finite()) {
-            return Err(IkError::NonFinite {
-                what: "previous joint position",
-            });
-        }
+        check_inputs(pose, previous)?;
         let sols = self.kin.inverse_near(pose, previous);
-        match nearest_within_limits(
+        choose_branch(
             sols.as_slice(),
+            sols.reach_excess().max(0.0),
+            pose,
             previous,
-            &self.lower,
-            &self.upper,
+            (&self.lower, &self.upper),
             &[1.0; 6],
-        ) {
-            LimitChoice::Inside(q) => Ok(q),
-            LimitChoice::Outside { joint, value } => Err(IkError::JointLimit {
-                joint: joint + 1,
-                value,
-                lower: self.lower[joint],
-                upper: self.upper[joint],
-            }),
-            LimitChoice::None => {
-                let p = pose.translation.vector;
-                Err(IkError::Unreachable {
-                    position: [p.x, p.y, p.z],
-                    excess: sols.reach_excess().max(0.0),
-                })
-            }
-        }
+        )
     }
 }
 
