@@ -3,52 +3,19 @@
 //! the plain second algorithm diverge), a payload picked up mid-path, other
 //! programs, and a robot that is not an IRB 140.
 
+mod common;
+
+use common::experiment::{experiment, run, steady};
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, RunMetrics, RunStatus};
-
-fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Experiment {
-    let program = parse(
-        program,
-        &ParseOptions {
-            origin,
-            ..ParseOptions::default()
-        },
-    )
-    .unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
-    Experiment {
-        robot,
-        reference,
-        mpc: MpcSettings::default(),
-        plant: Default::default(),
-        loop_settings: LoopSettings::default(),
-    }
-}
 
 fn arm6() -> Robot {
     let mut r = Robot::from_urdf_str(include_str!("data/arm6.urdf")).unwrap();
     let d = Drives::from_toml_str(include_str!("data/arm6_drives.toml")).unwrap();
     r.apply_drives(&d).unwrap();
     r
-}
-
-fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
-    let (_, m) = exp
-        .run(kind, &Payload::point_mass(mass), &mut |_, _| {})
-        .unwrap();
-    m
-}
-
-fn steady(m: &RunMetrics) -> f64 {
-    m.steady_joint_error_max_rad
-        .iter()
-        .copied()
-        .fold(0.0, f64::max)
 }
 
 /// Offset-free, never diverged, mass estimate within 5 %.

@@ -10,14 +10,17 @@
 //! URDF's limits). `cargo test --release --workspace --test arms_closed_loop -- --nocapture`
 //! prints each run.
 
+mod common;
+
+use common::experiment::{run, steady};
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::{parse, ParseOptions};
 use ofmpc::ik::ForwardKinematics;
 use ofmpc::motion::reference::{build_reference, Orientation};
 use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
-use ofmpc::robot::{ChainOptions, Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings, RunMetrics, RunStatus};
+use ofmpc::robot::{ChainOptions, Robot};
+use ofmpc::sim::{Experiment, LoopSettings, RunStatus};
 use std::path::Path;
 
 /// (name, file, tip, start pose, rated payload in kg: the makers' data sheets).
@@ -134,19 +137,6 @@ fn experiment(arm: &Arm) -> Experiment {
         plant: Default::default(),
         loop_settings: LoopSettings::default(),
     }
-}
-
-fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
-    exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})
-        .unwrap()
-        .1
-}
-
-fn steady(m: &RunMetrics) -> f64 {
-    m.steady_joint_error_max_rad
-        .iter()
-        .copied()
-        .fold(0.0, f64::max)
 }
 
 #[test]

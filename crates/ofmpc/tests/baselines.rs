@@ -6,48 +6,16 @@
 //! 6 kg for ctc-adaptive); torque limits respected with the
 //! integrators' anti-windup.
 
+mod common;
+
+use common::experiment::{experiment, run, steady};
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::baseline::DEFAULT_CTC_BANDWIDTH;
-use ofmpc::control::{triple_pole_inertia_ratio_range, ControllerKind, MpcSettings};
+use ofmpc::control::{triple_pole_inertia_ratio_range, ControllerKind};
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
-use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::robot::{Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunStatus};
-
-fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Experiment {
-    let program = parse(
-        program,
-        &ParseOptions {
-            origin,
-            ..Default::default()
-        },
-    )
-    .unwrap();
-    let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
-    let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
-    Experiment {
-        robot,
-        reference,
-        mpc: MpcSettings::default(),
-        plant: Default::default(),
-        loop_settings: LoopSettings::default(),
-    }
-}
-
-fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
-    exp.run(kind, &Payload::point_mass(mass), &mut |_, _| {})
-        .unwrap()
-        .1
-}
-
-fn steady(m: &RunMetrics) -> f64 {
-    m.steady_joint_error_max_rad
-        .iter()
-        .copied()
-        .fold(0.0, f64::max)
-}
+use ofmpc::sim::{PlantSettings, RunMetrics, RunStatus};
 
 fn assert_offset_free(m: &RunMetrics) {
     assert_eq!(m.status, RunStatus::Ok, "{}: {}", m.name, m.reason);

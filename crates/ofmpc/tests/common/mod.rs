@@ -4,6 +4,7 @@
 use nalgebra::{DMatrix, DVector};
 use ofmpc::dynamics::JointSpaceDynamics;
 
+pub mod experiment;
 pub mod gcode;
 pub mod rng;
 
