@@ -39,12 +39,14 @@ use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 
 pub mod numeric;
 pub mod opw;
+pub mod opw_detect;
 pub mod robust;
 pub mod solver;
 pub mod ur;
 
 pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
 pub use opw::{OpwParameters, OpwSolutions};
+pub use opw_detect::OPW_DETECT_TOLERANCE;
 pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
 pub use solver::IkSolver;
 pub use ur::{UrKinematics, UrSolutions, UrSolver};

@@ -161,7 +161,7 @@ fn angle_about(w: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>, floor: f64)
 
 /// Closest points of two lines: the distance between lines (p, a) and (q, b) and the
 /// midpoint of the common perpendicular (`None` when parallel).
-fn line_intersection(
+pub(crate) fn line_intersection(
     p: &Vector3<f64>,
     a: &Vector3<f64>,
     q: &Vector3<f64>,
