@@ -123,6 +123,28 @@ fn the_irb140_urdf_gives_the_hand_written_parameters() {
     println!("IRB 140 URDF: detected {d:?}");
 }
 
+/// The IRB 2400 URDF gives the parameters ROS-Industrial `opw_kinematics` publishes for
+/// that arm (`opw_parameters_examples.h`, `makeIrb2400_10`: a1 0.100, a2 −0.135, b 0,
+/// c1 0.615, c2 0.705, c3 0.755, c4 0.085 m, offsets (0, 0, −π/2, 0, 0, 0), signs +1),
+/// with `tool0` the raw OPW end frame up to the URDF's rounded π/2 (`1.57079632679`).
+#[test]
+fn the_irb2400_urdf_gives_the_published_opw_parameters() {
+    let robot = load_str(&data("abb/irb2400.urdf"), Some("tool0"));
+    let d = robot.detected_opw_parameters().unwrap();
+    let got = [d.a1, d.a2, d.b, d.c1, d.c2, d.c3, d.c4];
+    let published = [0.100, -0.135, 0.0, 0.615, 0.705, 0.755, 0.085];
+    for (g, p) in got.iter().zip(published) {
+        assert!((g - p).abs() < 1e-12, "{got:?}");
+    }
+    let offsets = [0.0, 0.0, -PI / 2.0, 0.0, 0.0, 0.0];
+    for (got, want) in d.offsets.iter().zip(offsets) {
+        assert!((got - want).abs() < 1e-12, "{:?}", d.offsets);
+    }
+    assert_eq!(d.signs, [1.0; 6]);
+    let (dp, dr) = distance(&d.tool, &Isometry3::identity());
+    assert!(dp < 1e-12 && dr < 1e-10, "tool {dp:e} m {dr:e} rad");
+}
+
 #[test]
 fn abb_urdfs_use_the_opw_closed_form_and_solve_every_reachable_pose() {
     for (k, (name, robot)) in abb_arms().into_iter().enumerate() {

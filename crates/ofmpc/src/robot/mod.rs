@@ -202,6 +202,10 @@ pub struct Robot {
     missing_inertials: Vec<(String, String)>,
 }
 
+/// The joint axes of a six-joint chain at q = 0: unit directions, a point on each (base
+/// frame), and the last body's frame ([`Robot::ur_kinematics`], [`Robot::detected_opw_parameters`]).
+type ZeroPoseAxes = ([Vector3<f64>; 6], [Vector3<f64>; 6], Transform);
+
 /// Which inverse kinematics the planner uses for a robot ([`Robot::ik_method`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -285,7 +289,7 @@ impl Robot {
 
     /// The joint axes of a six-revolute chain at q = 0 (directions and a point on each, base
     /// frame) and the last body's frame there; `None` for any other chain.
-    fn zero_pose_axes(&self) -> Option<([Vector3<f64>; 6], [Vector3<f64>; 6], Transform)> {
+    fn zero_pose_axes(&self) -> Option<ZeroPoseAxes> {
         if self.dof() != 6 || self.joints.iter().any(|j| j.kind != JointKind::Revolute) {
             return None;
         }
