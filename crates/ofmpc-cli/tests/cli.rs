@@ -466,6 +466,43 @@ fn inspect_robot_lists_joints_limits_and_drives() {
     assert_eq!(v["joints"][5]["max_effort"].as_f64().unwrap(), 16.0);
 }
 
+/// The inverse kinematics is chosen from the kinematics and named (issue #19): the
+/// built-in IRB 140 and ROS-Industrial's IRB 2400 use the OPW closed form, with the
+/// parameters read off the URDF (the IRB 2400's upper arm is 0.705 m, its forearm offset
+/// a2 = −0.135 m as in ROS-Industrial `opw_kinematics`); a UR uses its own closed form.
+#[test]
+fn inspect_robot_names_the_closed_form_and_its_parameters() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/tests/data/robots");
+    let v: Value = serde_json::from_str(&ok(&["inspect", "robot"])).unwrap();
+    assert!(v["ik_solver"].as_str().unwrap().contains("OPW closed form"));
+    assert_eq!(v["opw_parameters"]["c2_m"].as_f64().unwrap(), 0.36);
+    let abb = data.join("abb/irb2400.urdf");
+    let args = [
+        "inspect",
+        "robot",
+        "--robot",
+        abb.to_str().unwrap(),
+        "--tip",
+        "tool0",
+    ];
+    let v: Value = serde_json::from_str(&ok(&args)).unwrap();
+    assert!(
+        v["ik_solver"].as_str().unwrap().contains("OPW closed form"),
+        "{v}"
+    );
+    let p = &v["opw_parameters"];
+    assert!((p["c2_m"].as_f64().unwrap() - 0.705).abs() < 1e-12, "{p}");
+    assert!((p["a2_m"].as_f64().unwrap() + 0.135).abs() < 1e-12, "{p}");
+    let ur = data.join("ur/ur5_robot.urdf");
+    let v: Value =
+        serde_json::from_str(&ok(&["inspect", "robot", "--robot", ur.to_str().unwrap()])).unwrap();
+    assert!(
+        v["ik_solver"].as_str().unwrap().contains("UR closed form"),
+        "{v}"
+    );
+    assert!(v["opw_parameters"].is_null());
+}
+
 /// `ofmpc run FILE --set key=value`: the value as if written in the file. One quick run
 /// (usual, one payload, a short hold set from the command line) that the written
 /// `scenario.toml` reflects, and the file's checks and messages for what does not fit.

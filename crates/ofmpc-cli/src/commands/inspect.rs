@@ -63,7 +63,8 @@ pub fn dynamics(a: &InspectDynamics) -> anyhow::Result<()> {
 }
 
 /// Prints the robot as loaded: joints (kind, axis, limits, drive data, the
-/// moved body's mass and centre of mass), flange frame, total moving mass.
+/// moved body's mass and centre of mass), flange frame, total moving mass, the inverse
+/// kinematics (`ik_solver`, and `opw_parameters` when it is the OPW closed form).
 /// Unknown limits (infinite) print as `null`.
 pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
     let robot = load_robot(&a.robot, 0.0)?;
@@ -106,6 +107,10 @@ pub fn robot(a: &InspectRobot) -> anyhow::Result<()> {
         },
         "start_q": robot.start_q(),
         "ik_solver": robot.ik_method().description(),
+        "opw_parameters": robot.opw_parameters().filter(|_| robot.ik_method() == ofmpc::robot::IkMethod::Opw).map(|p| json!({
+            "a1_m": p.a1, "a2_m": p.a2, "b_m": p.b, "c1_m": p.c1, "c2_m": p.c2, "c3_m": p.c3, "c4_m": p.c4,
+            "offsets_rad": p.offsets, "signs": p.signs,
+        })),
         "links_without_inertial": robot.require_inertials().err().map(|e| e.to_string()),
         "joints": joints,
     });

@@ -6,7 +6,11 @@
 //!   ortho-parallel arms with a spherical wrist (ABB, KUKA, Fanuc, Stäubli six-axis
 //!   arms), with [`OpwParameters::irb140`] matching this project's URDF `flange` frame.
 //!   It returns all (up to 8) solutions without allocating.
-//! - [`solver`]: [`IkSolver`] picks, from the analytic solutions and their
+//! - [`opw_detect`]: [`OpwParameters::detect`] reads the OPW parameters off any
+//!   six-revolute chain's joint axes (a URDF as ROS-Industrial ships it), or says it is
+//!   not of that form.
+//! - [`solver`]: [`ClosedFormSolver`] ([`IkSolver`] for OPW arms, [`UrSolver`] for the UR
+//!   family) picks, from the analytic solutions and their
 //!   2π-equivalents inside the joint limits, the one closest to the previous sample,
 //!   and keeps the result continuous through the wrist singularity.
 //! - [`ur`]: the closed form of the Universal Robots family (axes 2–4 parallel, axes 5
@@ -39,14 +43,16 @@ use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 
 pub mod numeric;
 pub mod opw;
+pub mod opw_detect;
 pub mod robust;
 pub mod solver;
 pub mod ur;
 
 pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
 pub use opw::{OpwParameters, OpwSolutions};
+pub use opw_detect::OPW_DETECT_TOLERANCE;
 pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
-pub use solver::IkSolver;
+pub use solver::{ClosedFormBranches, ClosedFormKinematics, ClosedFormSolver, IkSolver};
 pub use ur::{UrKinematics, UrSolutions, UrSolver};
 
 /// What the numeric IK needs of a robot model: flange pose and geometric Jacobian.

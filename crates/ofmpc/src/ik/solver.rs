@@ -1,11 +1,14 @@
 //! Choice among the analytic solutions: closest to the previous sample, inside the
-//! joint limits, continuous through singularities.
+//! joint limits, continuous through singularities. One solver, [`ClosedFormSolver`], over
+//! any closed form ([`ClosedFormKinematics`]): [`IkSolver`] for OPW arms and
+//! [`super::UrSolver`] for the UR family.
 
 use std::f64::consts::PI;
 
 use nalgebra::Isometry3;
 
 use super::opw::OpwParameters;
+use super::ur::UrKinematics;
 use super::{pose_is_finite, IkError};
 
 /// Joint values may exceed a limit by this much (rad) and still count as inside:
@@ -15,28 +18,97 @@ pub const LIMIT_TOLERANCE: f64 = 1e-9;
 
 const TWO_PI: f64 = 2.0 * PI;
 
-/// Sequential inverse kinematics of an OPW arm: for each pose, the solution with the
-/// smallest weighted joint distance `Σ w_i (q_i − q_prev,i)²` to the previous
-/// sample among all analytic solutions and all their 2π-equivalents that respect the
-/// joint limits (joints 4 and 6 of the IRB 140 travel ±200° and ±400°, so the
-/// equivalent matters).
+/// What [`ClosedFormSolver`] needs of a closed-form kinematics: every branch of a pose,
+/// with the joints the pose leaves free (at a singularity) taken from a hint. Implemented
+/// by [`OpwParameters`] (OPW arms) and [`UrKinematics`] (the UR family).
+pub trait ClosedFormKinematics {
+    /// Checks the kinematics' constants ([`ClosedFormSolver::new`] calls it).
+    fn validate(&self) -> Result<(), IkError> {
+        Ok(())
+    }
+
+    /// All branches of `pose` (up to 8, each joint wrapped to (−π, π] unless taken from
+    /// the finite `hint`), and the distance (m) by which the pose misses the workspace
+    /// when there is none. Allocation-free.
+    fn branches(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> ClosedFormBranches;
+}
+
+/// The branches of one pose ([`ClosedFormKinematics::branches`]): up to 8 joint vectors
+/// and the reach excess, no allocation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClosedFormBranches {
+    solutions: [[f64; 6]; 8],
+    count: usize,
+    reach_excess: f64,
+}
+
+impl ClosedFormBranches {
+    /// The first 8 of `solutions` and the reach excess (m; 0 when there are solutions).
+    pub fn new(solutions: &[[f64; 6]], reach_excess: f64) -> Self {
+        let mut out = Self {
+            solutions: [[0.0; 6]; 8],
+            count: solutions.len().min(8),
+            reach_excess,
+        };
+        out.solutions[..out.count].copy_from_slice(&solutions[..out.count]);
+        out
+    }
+
+    /// The branches.
+    pub fn as_slice(&self) -> &[[f64; 6]] {
+        &self.solutions[..self.count]
+    }
+
+    /// Distance (m) by which the pose misses the workspace (+∞ for a non-finite pose).
+    pub fn reach_excess(&self) -> f64 {
+        self.reach_excess
+    }
+}
+
+impl ClosedFormKinematics for OpwParameters {
+    fn validate(&self) -> Result<(), IkError> {
+        OpwParameters::validate(self)
+    }
+
+    fn branches(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> ClosedFormBranches {
+        let s = self.inverse_near(pose, hint);
+        ClosedFormBranches::new(s.as_slice(), s.reach_excess())
+    }
+}
+
+impl ClosedFormKinematics for UrKinematics {
+    fn branches(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> ClosedFormBranches {
+        let s = self.inverse_near(pose, hint);
+        ClosedFormBranches::new(s.as_slice(), s.reach_excess().max(0.0))
+    }
+}
+
+/// Sequential inverse kinematics of an arm with a closed form ([`ClosedFormKinematics`]):
+/// for each pose, the solution with the smallest weighted joint distance
+/// `Σ w_i (q_i − q_prev,i)²` to the previous sample among all closed-form branches and
+/// all their 2π-equivalents that respect the joint limits (joints 4 and 6 of the IRB 140
+/// travel ±200° and ±400°, so the equivalent matters).
 ///
-/// Singularities: inside the wrist singularity band (`|sin q5| ≤`
-/// [`super::opw::WRIST_SINGULAR_SIN`]) only q4 + q6 is determined by the pose; the
-/// solver keeps q4 at its previous value and puts the rest into q6, as long as that
-/// costs at most [`super::opw::SINGULAR_ORIENTATION_TOLERANCE`] rad of orientation.
-/// The shoulder singularity (wrist centre on axis 1) keeps q1 likewise. See
-/// [`OpwParameters::inverse_near`].
+/// Singularities: the kinematics keep the joints a pose leaves free at the hint, the
+/// previous sample. For OPW arms ([`IkSolver`]): inside the wrist singularity band
+/// (`|sin q5| ≤` [`super::opw::WRIST_SINGULAR_SIN`]) only q4 + q6 is determined by the
+/// pose; q4 stays at its previous value and the rest goes into q6, as long as that costs
+/// at most [`super::opw::SINGULAR_ORIENTATION_TOLERANCE`] rad of orientation. The
+/// shoulder singularity (wrist centre on axis 1) keeps q1 likewise. See
+/// [`OpwParameters::inverse_near`] and [`UrKinematics::inverse_near`].
 ///
-/// Allocation-free; [`IkSolver::solve`] may be called per control step.
+/// Allocation-free; [`ClosedFormSolver::solve`] may be called per control step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct IkSolver {
-    opw: OpwParameters,
+pub struct ClosedFormSolver<K> {
+    kin: K,
     lower: [f64; 6],
     upper: [f64; 6],
     weights: [f64; 6],
     previous: [f64; 6],
 }
+
+/// The closed-form solver of OPW arms (ortho-parallel, spherical wrist).
+pub type IkSolver = ClosedFormSolver<OpwParameters>;
 
 /// Nearest 2π-equivalent of `value` to `reference` inside `[lower, upper]` (with
 /// [`LIMIT_TOLERANCE`]); `Err((v, violation))` with the least-violating equivalent if
@@ -63,12 +135,12 @@ fn nearest_equivalent(
     }
 }
 
-impl IkSolver {
-    /// Solver with joint limits `lower`/`upper` (rad), unit weights, and previous
-    /// sample q = 0 (the calibration position) until [`IkSolver::set_previous`] is
-    /// called.
-    pub fn new(opw: OpwParameters, lower: [f64; 6], upper: [f64; 6]) -> Result<Self, IkError> {
-        opw.validate()?;
+impl<K: ClosedFormKinematics> ClosedFormSolver<K> {
+    /// Solver with joint limits `lower`/`upper` (rad, finite), unit weights, and previous
+    /// sample q = 0 (the calibration position) until [`ClosedFormSolver::set_previous`]
+    /// is called. Errors: the kinematics' own check, [`IkError::InvalidLimits`].
+    pub fn new(kin: K, lower: [f64; 6], upper: [f64; 6]) -> Result<Self, IkError> {
+        kin.validate()?;
         for (i, (&l, &u)) in lower.iter().zip(&upper).enumerate() {
             if !(l.is_finite() && u.is_finite() && l <= u) {
                 return Err(IkError::InvalidLimits {
@@ -79,32 +151,12 @@ impl IkSolver {
             }
         }
         Ok(Self {
-            opw,
+            kin,
             lower,
             upper,
             weights: [1.0; 6],
             previous: [0.0; 6],
         })
-    }
-
-    /// ABB IRB 140 with the data-sheet joint limits of the project URDF
-    /// (±180°, −90…110°, −230…50°, ±200°, ±115°, ±400°).
-    pub fn irb140() -> Self {
-        let d = |x: f64| x.to_radians();
-        Self {
-            opw: OpwParameters::irb140(),
-            lower: [
-                d(-180.0),
-                d(-90.0),
-                d(-230.0),
-                d(-200.0),
-                d(-115.0),
-                d(-400.0),
-            ],
-            upper: [d(180.0), d(110.0), d(50.0), d(200.0), d(115.0), d(400.0)],
-            weights: [1.0; 6],
-            previous: [0.0; 6],
-        }
     }
 
     /// Sets the joint weights of the distance (all must be finite and > 0).
@@ -120,9 +172,9 @@ impl IkSolver {
         Ok(self)
     }
 
-    /// The kinematic parameters.
-    pub fn parameters(&self) -> &OpwParameters {
-        &self.opw
+    /// The kinematics.
+    pub fn kinematics(&self) -> &K {
+        &self.kin
     }
 
     /// Lower joint limits (rad).
@@ -135,7 +187,7 @@ impl IkSolver {
         &self.upper
     }
 
-    /// The previous sample that the next [`IkSolver::solve`] stays close to.
+    /// The previous sample that the next [`ClosedFormSolver::solve`] stays close to.
     pub fn previous(&self) -> &[f64; 6] {
         &self.previous
     }
@@ -159,9 +211,9 @@ impl IkSolver {
         Ok(q)
     }
 
-    /// Solution of `pose` (flange in base frame) closest to `previous` within the
-    /// joint limits. Errors: [`IkError::NonFinite`] for NaN/∞ input,
-    /// [`IkError::Unreachable`] when no configuration reaches the pose,
+    /// Solution of `pose` (the kinematics' end frame in the base frame) closest to
+    /// `previous` within the joint limits. Errors: [`IkError::NonFinite`] for NaN/∞
+    /// input, [`IkError::Unreachable`] when no configuration reaches the pose,
     /// [`IkError::JointLimit`] (the least-violating configuration, summed violation)
     /// when all of them leave the limits.
     pub fn solve_near(
@@ -170,7 +222,7 @@ impl IkSolver {
         previous: &[f64; 6],
     ) -> Result<[f64; 6], IkError> {
         check_inputs(pose, previous)?;
-        let sols = self.opw.inverse_near(pose, previous);
+        let sols = self.kin.branches(pose, previous);
         choose_branch(
             sols.as_slice(),
             sols.reach_excess(),
@@ -179,6 +231,33 @@ impl IkSolver {
             (&self.lower, &self.upper),
             &self.weights,
         )
+    }
+}
+
+impl ClosedFormSolver<OpwParameters> {
+    /// ABB IRB 140 with the data-sheet joint limits of the project URDF
+    /// (±180°, −90…110°, −230…50°, ±200°, ±115°, ±400°).
+    pub fn irb140() -> Self {
+        let d = |x: f64| x.to_radians();
+        Self {
+            kin: OpwParameters::irb140(),
+            lower: [
+                d(-180.0),
+                d(-90.0),
+                d(-230.0),
+                d(-200.0),
+                d(-115.0),
+                d(-400.0),
+            ],
+            upper: [d(180.0), d(110.0), d(50.0), d(200.0), d(115.0), d(400.0)],
+            weights: [1.0; 6],
+            previous: [0.0; 6],
+        }
+    }
+
+    /// The kinematic parameters.
+    pub fn parameters(&self) -> &OpwParameters {
+        &self.kin
     }
 }
 

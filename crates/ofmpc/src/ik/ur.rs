@@ -33,8 +33,8 @@
 use nalgebra::{Isometry3, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
 
 use super::opw::wrap_angle;
-use super::solver::{check_inputs, choose_branch};
-use super::{pose_is_finite, rotation_log, IkError};
+use super::solver::ClosedFormSolver;
+use super::{pose_is_finite, rotation_log};
 
 /// Largest angle (rad) between two axes that the detection still calls parallel, and
 /// largest distance (m) between axes 5 and 6 that it calls intersecting.
@@ -161,7 +161,7 @@ fn angle_about(w: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>, floor: f64)
 
 /// Closest points of two lines: the distance between lines (p, a) and (q, b) and the
 /// midpoint of the common perpendicular (`None` when parallel).
-fn line_intersection(
+pub(crate) fn line_intersection(
     p: &Vector3<f64>,
     a: &Vector3<f64>,
     q: &Vector3<f64>,
@@ -450,78 +450,10 @@ impl UrKinematics {
 
 /// Sequential inverse kinematics of a UR-type arm: for each pose, the solution nearest to
 /// the previous sample (weighted joint distance) among all closed-form solutions and their
-/// 2π-equivalents inside the joint limits (as [`super::IkSolver`] does for OPW arms).
+/// 2π-equivalents inside the joint limits ([`ClosedFormSolver`], as [`super::IkSolver`]
+/// for OPW arms; [`ClosedFormSolver::kinematics`] gives the [`UrKinematics`]).
 /// Allocation-free.
-#[derive(Debug, Clone, PartialEq)]
-pub struct UrSolver {
-    kin: UrKinematics,
-    lower: [f64; 6],
-    upper: [f64; 6],
-    previous: [f64; 6],
-}
-
-impl UrSolver {
-    /// Solver with joint limits `lower`/`upper` (rad, finite); previous sample q = 0.
-    pub fn new(kin: UrKinematics, lower: [f64; 6], upper: [f64; 6]) -> Result<Self, IkError> {
-        for (i, (&l, &u)) in lower.iter().zip(&upper).enumerate() {
-            if !(l.is_finite() && u.is_finite() && l <= u) {
-                return Err(IkError::InvalidLimits {
-                    joint: i + 1,
-                    lower: l,
-                    upper: u,
-                });
-            }
-        }
-        Ok(Self {
-            kin,
-            lower,
-            upper,
-            previous: [0.0; 6],
-        })
-    }
-
-    /// The kinematics.
-    pub fn kinematics(&self) -> &UrKinematics {
-        &self.kin
-    }
-
-    /// Sets the previous sample.
-    pub fn set_previous(&mut self, q: &[f64; 6]) -> Result<(), IkError> {
-        if !q.iter().all(|x| x.is_finite()) {
-            return Err(IkError::NonFinite {
-                what: "previous joint position",
-            });
-        }
-        self.previous = *q;
-        Ok(())
-    }
-
-    /// Solves near the stored previous sample and stores the result.
-    pub fn solve(&mut self, pose: &Isometry3<f64>) -> Result<[f64; 6], IkError> {
-        let q = self.solve_near(pose, &self.previous)?;
-        self.previous = q;
-        Ok(q)
-    }
-
-    /// The solution of `pose` nearest to `previous` within the joint limits. Errors as
-    /// [`super::IkSolver::solve_near`].
-    pub fn solve_near(
-        &self,
-        pose: &Isometry3<f64>,
-        previous: &[f64; 6],
-    ) -> Result<[f64; 6], IkError> {
-        check_inputs(pose, previous)?;
-        let sols = self.kin.inverse_near(pose, previous);
-        choose_branch(
-            sols.as_slice(),
-            sols.reach_excess().max(0.0),
-            pose,
-            previous,
-            (&self.lower, &self.upper),
-            &[1.0; 6],
-        )
-    }
-}
+pub type UrSolver = ClosedFormSolver<UrKinematics>;
 
 #[cfg(test)]
 mod tests {

@@ -202,6 +202,10 @@ pub struct Robot {
     missing_inertials: Vec<(String, String)>,
 }
 
+/// The joint axes of a six-joint chain at q = 0: unit directions, a point on each (base
+/// frame), and the last body's frame ([`Robot::ur_kinematics`], [`Robot::detected_opw_parameters`]).
+type ZeroPoseAxes = ([Vector3<f64>; 6], [Vector3<f64>; 6], Transform);
+
 /// Which inverse kinematics the planner uses for a robot ([`Robot::ik_method`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
@@ -256,13 +260,15 @@ impl Robot {
 
     /// The arm's closed-form (OPW) kinematic parameters, if it has them: the motion planner
     /// then uses the analytic inverse kinematics, else the numeric one. The built-in IRB 140
-    /// has them ([`OpwParameters::irb140`]); a robot loaded from a URDF has none.
+    /// has them ([`OpwParameters::irb140`]); a robot loaded from a URDF has them when its
+    /// kinematics are of that form ([`Robot::detected_opw_parameters`], e.g. the ABB
+    /// IRB 140, 2400 and 6640 as ROS-Industrial ships them).
     pub fn opw_parameters(&self) -> Option<&OpwParameters> {
         self.opw.as_ref()
     }
 
-    /// The inverse kinematics the planner uses for this robot: OPW when the robot declares
-    /// its parameters, else the UR closed form when the joint axes are of that family
+    /// The inverse kinematics the planner uses for this robot: OPW when the robot has its
+    /// parameters (declared, or detected from the URDF), else the UR closed form when the joint axes are of that family
     /// ([`Robot::ur_kinematics`]), else numeric.
     pub fn ik_method(&self) -> IkMethod {
         match self.opw {
@@ -276,6 +282,14 @@ impl Robot {
     /// six revolute joints, axes 2–4 parallel, axes 5 and 6 intersecting), from the joint
     /// axes at q = 0 and the tool centre point; `None` for any other arm.
     pub fn ur_kinematics(&self) -> Option<UrKinematics> {
+        let (axes, points, frame) = self.zero_pose_axes()?;
+        let tool = frame.compose(&self.tool_offset()).to_isometry();
+        UrKinematics::detect(&axes, &points, &tool)
+    }
+
+    /// The joint axes of a six-revolute chain at q = 0 (directions and a point on each, base
+    /// frame) and the last body's frame there; `None` for any other chain.
+    fn zero_pose_axes(&self) -> Option<ZeroPoseAxes> {
         if self.dof() != 6 || self.joints.iter().any(|j| j.kind != JointKind::Revolute) {
             return None;
         }
@@ -287,8 +301,17 @@ impl Robot {
             axes[i] = frame.rot * j.axis;
             points[i] = frame.pos;
         }
-        let tool = frame.compose(&self.tool_offset()).to_isometry();
-        UrKinematics::detect(&axes, &points, &tool)
+        Some((axes, points, frame))
+    }
+
+    /// The OPW parameters of the chain's flange ([`OpwParameters::detect`]: six revolute
+    /// joints, an ortho-parallel arm with a spherical wrist, axis 1 the base z axis), from
+    /// the joint axes at q = 0; `None` for any other arm. The tool centre point is not part
+    /// of them: the planner solves for the flange and maps the TCP to it.
+    pub fn detected_opw_parameters(&self) -> Option<OpwParameters> {
+        let (axes, points, frame) = self.zero_pose_axes()?;
+        let flange = frame.compose(&self.flange).to_isometry();
+        OpwParameters::detect(&axes, &points, &flange)
     }
 
     /// Declares (or with `None`, removes) the arm's OPW parameters. They must reproduce the
@@ -399,7 +422,7 @@ impl Robot {
     ) -> Self {
         let bodies = joints.iter().map(|j| j.body).collect();
         let start_q = default_start_q(&joints);
-        Self {
+        let mut robot = Self {
             name,
             joints,
             flange,
@@ -412,7 +435,9 @@ impl Robot {
             start_q,
             tcp: Transform::identity(),
             missing_inertials: Vec::new(),
-        }
+        };
+        robot.opw = robot.detected_opw_parameters();
+        robot
     }
 
     /// The start pose (rad for revolute joints, m for prismatic ones): the robot's initial
