@@ -11,7 +11,7 @@ use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::reference::{build_reference, Orientation};
 use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, HorizonSampling, LoopSettings, Record};
+use ofmpc::sim::{Experiment, HorizonSampling, LoopSettings, Record, RunConditions};
 
 fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
     let robot = Robot::builtin("irb140").unwrap();
@@ -26,6 +26,9 @@ fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
         loop_settings: LoopSettings {
             hold_s: 0.3,
             steady_window_s: 0.1,
+            ..Default::default()
+        },
+        conditions: RunConditions {
             horizons,
             ..Default::default()
         },

@@ -24,7 +24,7 @@ use crate::control::zoh::Zoh;
 use crate::control::{Controller, ControllerKind};
 use crate::dynamics::JointSpaceDynamics;
 
-/// Which horizons a run records ([`super::LoopSettings::horizons`]): the samples `0, every,
+/// Which horizons a run records ([`super::RunConditions::horizons`]): the samples `0, every,
 /// 2·every, …`, at most `max` of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HorizonSampling {
