@@ -336,7 +336,7 @@ impl<'a> ClosedLoop<'a> {
         let horizon = controller.horizon();
         let predicted = conditions
             .horizons
-            .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, ts, h.every, h.max));
+            .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, h.every, h.max));
         let lost = LossSchedule::new(&conditions.faults, ts);
         let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
         let supervisor =
@@ -453,9 +453,6 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
-        if let Some(h) = &mut self.horizon {
-            h.reset(&self.x);
-        }
         self.supervisor.reset(&self.x);
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
@@ -501,14 +498,10 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        let horizon = &mut self.horizon;
-        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
-            let info = controller.step(model, xs, w0, preview, tau)?;
-            if let Some(h) = horizon {
-                h.observe(None, model, xs, controller);
-            }
-            Ok(info)
-        });
+        let status = self
+            .estimator
+            .estimate(model, &self.x)
+            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
@@ -689,7 +682,7 @@ impl<'a> ClosedLoop<'a> {
             self.controller
                 .step(model, xs, w, &self.preview, &mut self.tau)?;
             if let Some(h) = &mut self.horizon {
-                h.observe(Some(k), model, xs, &*self.controller);
+                h.observe(k, &mut *self.controller);
             }
         }
         self.estimator.record_torque(&self.tau);
