@@ -217,6 +217,7 @@ fn predicted_outputs_equal_the_prediction_built_again() {
             x_prev.copy_from_slice(&x);
             plant.step(&tau, ts).unwrap();
         }
+        eprintln!("{kind} ({solver:?}): largest difference {worst:e} rad");
         assert!(worst <= 1e-12, "{kind} ({solver:?}): {worst:e} rad");
         assert!(!controller.predicted_outputs(&mut vec![0.0; nh * n + 1]));
     }
