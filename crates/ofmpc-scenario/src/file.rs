@@ -2,7 +2,9 @@
 //! and its sections. The sections that configure the library are the
 //! library's own settings types, deserialized as they are (`[mpc]` =
 //! [`MpcSettings`], `[simulation]` = [`LoopSettings`], `[plant]` =
-//! [`PlantSettings`]). Overrides ([`Override`], `key=value` with a dotted key)
+//! [`PlantSettings`], `[faults]` = [`MeasurementFaults`], `[safety]` =
+//! [`ofmpc::sim::SafetySettings`]; with `[payload]`'s pick-up time the last
+//! two are the run's [`RunConditions`], [`ScenarioFile::run_conditions`]). Overrides ([`Override`], `key=value` with a dotted key)
 //! are applied to the document before it is deserialized, so they meet the
 //! same checks and messages as the key written in the file.
 
@@ -10,7 +12,7 @@ use crate::error::ScenarioError;
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
 use ofmpc::motion::timelaw::Profile;
 use ofmpc::motion::{PathMode, TimingOptions};
-use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings};
+use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings, RunConditions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -372,12 +374,20 @@ impl ScenarioFile {
         Ok(s)
     }
 
-    /// The closed loop's settings: `[simulation]` with the pick-up time of
-    /// `[payload]`, `[safety]` and `[faults]` ([`LoopSettings::with_sections`]).
+    /// The closed loop's settings: `[simulation]` as it is.
     pub fn loop_settings(&self) -> LoopSettings {
-        self.simulation
-            .clone()
-            .with_sections(self.payload.pick_up_at_s, &self.safety, &self.faults)
+        self.simulation.clone()
+    }
+
+    /// The run's conditions, each section as it is: the pick-up time of
+    /// `[payload]`, `[safety]` and `[faults]` (no horizon recorded).
+    pub fn run_conditions(&self) -> RunConditions {
+        RunConditions {
+            pick_up_at_s: self.payload.pick_up_at_s,
+            safety: self.safety.clone(),
+            faults: self.faults.clone(),
+            horizons: None,
+        }
     }
 
     /// The drive, sensor and fault effects this scenario turns on, in its keys' words

@@ -198,8 +198,12 @@ impl Scenario {
                 error: Box::new(error),
             })?;
         let loop_settings = f.loop_settings();
+        let conditions = f.run_conditions();
         let settings_error = |error| ScenarioError::experiment(None, error);
         loop_settings
+            .validate()
+            .map_err(|e| settings_error(e.into()))?;
+        conditions
             .validate()
             .map_err(|e| settings_error(e.into()))?;
         f.plant
@@ -287,6 +291,7 @@ impl Scenario {
             mpc: mpc_with_baselines(f, n)?,
             plant: f.plant.clone(),
             loop_settings,
+            conditions,
         };
         experiment
             .validate()

@@ -57,15 +57,15 @@ fn overrides_are_applied_before_the_files_checks() {
 }
 
 #[test]
-fn loop_settings_carry_pick_up_safety_and_faults() {
+fn run_conditions_carry_pick_up_safety_and_faults() {
     let text = "[payload]\npick_up_at_s = 1.5\n[safety]\nmax_joint_error_rad = 0.05\n\
                 [faults]\nnan_at_s = [1.0]\ndropout_s = [[2.0, 2.1]]\n";
     let f: ScenarioFile = toml::from_str(text).unwrap();
-    let s = f.loop_settings();
+    let s = f.run_conditions();
     assert_eq!(s.pick_up_at_s, Some(1.5));
-    assert_eq!(s.max_joint_error_rad, Some(0.05));
-    assert_eq!(s.measurement_faults.nan_at_s, [1.0]);
-    assert_eq!(s.measurement_faults.dropout_s, [[2.0, 2.1]]);
+    assert_eq!(s.safety.max_joint_error_rad, Some(0.05));
+    assert_eq!(s.faults.nan_at_s, [1.0]);
+    assert_eq!(s.faults.dropout_s, [[2.0, 2.1]]);
     assert!(f.records_measurement());
     assert!(!ScenarioFile::default().records_measurement());
 }

@@ -5,7 +5,7 @@ use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings};
+use ofmpc::sim::{Experiment, RunConditions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -28,7 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         reference,
         mpc: MpcSettings::default(),
         plant: Default::default(),
-        loop_settings: LoopSettings {
+        loop_settings: Default::default(),
+        conditions: RunConditions {
             pick_up_at_s: pick_up,
             ..Default::default()
         },

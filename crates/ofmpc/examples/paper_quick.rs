@@ -16,6 +16,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let robot = Robot::irb140();
     let reference = plan(PAPER_TABLE1, &robot, &PlanOptions::default())?.reference;
     let exp = Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings::default(),

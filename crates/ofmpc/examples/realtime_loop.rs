@@ -90,7 +90,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..LoopSettings::default()
     };
     let mut sensor = Sensor::new(n, plant.settings().delay_samples, LossSchedule::default());
-    let mut supervisor = Supervisor::with_period(plant.robot(), loop_settings.supervisor(), TS);
+    let mut supervisor = Supervisor::with_period(
+        plant.robot(),
+        loop_settings.supervisor(&Default::default()),
+        TS,
+    );
     let actuator = Actuator::for_robot(plant.robot());
     let mut max_torque_ratio = 0.0f64;
     plant.measure(&mut x)?;

@@ -34,6 +34,7 @@
 //!     mpc: MpcSettings::default(), // the paper's tuning
 //!     plant: Default::default(),
 //!     loop_settings: Default::default(), // 2 s hold after the path
+//!     conditions: Default::default(),    // no pick-up, safety limit or fault
 //! };
 //! let (_run, metrics) = experiment.run(ControllerKind::Second, &Payload::point_mass(0.25), &mut |_, _| {})?;
 //! assert!(metrics.steady_joint_error_max_rad.iter().all(|e| *e < 1e-9)); // offset-free

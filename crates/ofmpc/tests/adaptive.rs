@@ -9,7 +9,7 @@ use common::experiment::{experiment, run, steady};
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::robot::{Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, LoopSettings, RunMetrics, RunStatus};
+use ofmpc::sim::{Experiment, LoopSettings, RunConditions, RunMetrics, RunStatus};
 
 fn arm6() -> Robot {
     let mut r = Robot::from_urdf_str(include_str!("data/arm6.urdf")).unwrap();
@@ -67,7 +67,7 @@ fn paper_path_at_2_and_6_kg() {
 #[test]
 fn a_payload_picked_up_mid_path() {
     let mut exp = experiment(Robot::irb140(), PAPER_TABLE1, None);
-    exp.loop_settings.pick_up_at_s = Some(5.0);
+    exp.conditions.pick_up_at_s = Some(5.0);
     for kind in [
         ControllerKind::FirstAdaptive,
         ControllerKind::SecondAdaptive,
@@ -195,7 +195,8 @@ mod never_panics {
                 reference,
                 mpc: MpcSettings { q_dy: ofmpc::control::Weight::Scalar(q_dy), q_du: ofmpc::control::Weight::Scalar(q_du), ..Default::default() },
                 plant: PlantSettings { coulomb_friction: vec![friction], position_noise: noise, torque_limits: true, ..Default::default() },
-                loop_settings: LoopSettings { hold_s: 0.8, identification_s: identification, pick_up_at_s: pick_up, ..Default::default() },
+                loop_settings: LoopSettings { hold_s: 0.8, identification_s: identification, ..Default::default() },
+                conditions: RunConditions { pick_up_at_s: pick_up, ..Default::default() },
             };
             let kind = if second { ControllerKind::SecondAdaptive } else { ControllerKind::FirstAdaptive };
             let (r, m) = exp.run(kind, &Payload::point_mass(payload), &mut |_, _| {}).unwrap();

@@ -131,6 +131,7 @@ fn experiment(arm: &Arm) -> Experiment {
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings::default(),

@@ -11,6 +11,7 @@ fn hold(kind: ControllerKind, payload_kg: f64) -> Vec<f64> {
     let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
     let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
     let exp = Experiment {
+        conditions: Default::default(),
         robot: Robot::irb140(),
         reference,
         mpc: MpcSettings::default(),
@@ -55,6 +56,7 @@ fn divergence_beyond_the_tunings_margin_is_flagged() {
     let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
     let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
     let exp = Experiment {
+        conditions: Default::default(),
         robot: Robot::irb140(),
         reference,
         mpc: MpcSettings::default(),
@@ -102,6 +104,7 @@ fn drive_inertia_decides_whether_a_quarter_kilogram_breaks_the_second_algorithm(
         let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
         let reference = JointReference::from_samples(6, 0.01, q, vec![[0.0; 3]], vec![0]).unwrap();
         let exp = Experiment {
+            conditions: Default::default(),
             robot,
             reference,
             mpc: MpcSettings::default(),

@@ -16,6 +16,7 @@ fn experiment(robot: Robot, rule: DivergenceRule) -> Experiment {
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
     Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings::default(),

@@ -28,6 +28,7 @@ fn all_effects_together_on_the_paper_path() {
     let robot = robot_with_friction_estimate();
     let reference = common::paper_reference(&robot);
     let exp = Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings {
@@ -113,6 +114,7 @@ proptest! {
             _ => Vec::new(),
         };
         let exp = Experiment {
+            conditions: Default::default(),
             robot: robot_with_friction_estimate(),
             reference,
             mpc: MpcSettings {
@@ -168,6 +170,7 @@ fn friction_stick_slip_passes_the_plausibility_check() {
         let reference = common::paper_reference(&robot);
         let run = |check: bool| {
             let exp = Experiment {
+                conditions: Default::default(),
                 robot: robot.clone(),
                 reference: reference.clone(),
                 mpc: MpcSettings {
@@ -220,6 +223,7 @@ fn all_effects_with_the_friction_aware_observer_complete() {
     let robot = robot_with_friction_estimate();
     let reference = common::paper_reference(&robot);
     let exp = |observer_friction: bool| Experiment {
+        conditions: Default::default(),
         robot: robot.clone(),
         reference: reference.clone(),
         mpc: MpcSettings {

@@ -9,23 +9,24 @@ mod common;
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{
-    Experiment, LoopSettings, LoopSettingsError, MeasurementFaults, PlantSettings, RunMetrics,
-    RunOutcome, RunResult, StopReason,
+    Experiment, LoopSettingsError, MeasurementFaults, PlantSettings, RunConditions, RunMetrics,
+    RunOutcome, RunResult, SafetySettings, StopReason,
 };
 
 fn experiment(
     robot: Robot,
     mpc: MpcSettings,
     plant: PlantSettings,
-    ls: LoopSettings,
+    conditions: RunConditions,
 ) -> Experiment {
     let reference = common::paper_reference(&robot);
     Experiment {
+        conditions,
         robot,
         reference,
         mpc,
         plant,
-        loop_settings: ls,
+        loop_settings: Default::default(),
     }
 }
 
@@ -52,14 +53,14 @@ fn nan_and_missing_measurements_run_on_the_prediction() {
             robot.clone(),
             MpcSettings::default(),
             PlantSettings::default(),
-            LoopSettings::default(),
+            RunConditions::default(),
         );
         let faulty = experiment(
             robot.clone(),
             MpcSettings::default(),
             PlantSettings::default(),
-            LoopSettings {
-                measurement_faults: faults(),
+            RunConditions {
+                faults: faults(),
                 ..Default::default()
             },
         );
@@ -116,8 +117,8 @@ fn a_first_measurement_lost_is_predicted_from_rest() {
         Robot::irb140(),
         MpcSettings::default(),
         PlantSettings::default(),
-        LoopSettings {
-            measurement_faults: MeasurementFaults {
+        RunConditions {
+            faults: MeasurementFaults {
                 nan_at_s: vec![0.0],
                 dropout_s: vec![[0.02, 0.05]],
             },
@@ -155,7 +156,7 @@ fn torque_counters_see_the_limits() {
             ..Default::default()
         },
         plant.clone(),
-        LoopSettings::default(),
+        RunConditions::default(),
     );
     let (r, m) = run(&limited, ControllerKind::First, 0.25);
     assert!(r.outcome.is_completed(), "{}", r.outcome);
@@ -165,7 +166,7 @@ fn torque_counters_see_the_limits() {
         robot,
         MpcSettings::default(),
         plant,
-        LoopSettings::default(),
+        RunConditions::default(),
     );
     let (_, m) = run(&plant_only, ControllerKind::Usual, 0.25);
     assert!(m.max_torque_ratio > 1.0, "{}", m.max_torque_ratio);
@@ -185,7 +186,7 @@ fn the_record_holds_the_true_state_and_the_measurement() {
             encoder_counts: counts,
             ..Default::default()
         },
-        LoopSettings::default(),
+        RunConditions::default(),
     );
     let (r, _) = run(&exp, ControllerKind::First, 0.25);
     let rec = &r.record;
@@ -214,8 +215,10 @@ fn a_joint_error_limit_stops_the_robot_safely() {
             torque_limits: true,
             ..Default::default()
         },
-        LoopSettings {
-            max_joint_error_rad: Some(0.05),
+        RunConditions {
+            safety: SafetySettings {
+                max_joint_error_rad: Some(0.05),
+            },
             ..Default::default()
         },
     );
@@ -223,7 +226,7 @@ fn a_joint_error_limit_stops_the_robot_safely() {
         Robot::irb140(),
         MpcSettings::default(),
         PlantSettings::default(),
-        LoopSettings::default(),
+        RunConditions::default(),
     );
     let (rd, _) = run(&free, ControllerKind::Second, 6.0);
     assert!(
@@ -289,15 +292,17 @@ fn bad_fault_settings_are_errors_with_the_value() {
         ),
     ];
     for (f, text) in bad {
-        let ls = LoopSettings {
-            measurement_faults: f,
+        let ls = RunConditions {
+            faults: f,
             ..Default::default()
         };
         let e = ls.validate().unwrap_err();
         assert!(e.to_string().contains(text), "{e}");
     }
-    let ls = LoopSettings {
-        max_joint_error_rad: Some(0.0),
+    let ls = RunConditions {
+        safety: SafetySettings {
+            max_joint_error_rad: Some(0.0),
+        },
         ..Default::default()
     };
     assert_eq!(ls.validate(), Err(LoopSettingsError::MaxJointError(0.0)));

@@ -16,6 +16,7 @@ fn run(kind: ControllerKind, faults: Vec<Fault>, supervised: bool) -> (RunResult
     let robot = Robot::irb140();
     let reference = common::paper_reference(&robot);
     let exp = Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings {

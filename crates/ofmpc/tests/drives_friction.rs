@@ -37,6 +37,7 @@ fn run_n(
         .unwrap();
     let reference = common::paper_reference(&robot);
     let exp = Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings {

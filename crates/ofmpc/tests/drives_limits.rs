@@ -35,6 +35,7 @@ fn robot_with_joint1_limit(limit: Option<f64>) -> Robot {
 fn limited_experiment(limit: f64, nh: usize, solver: ofmpc::control::Solver) -> Experiment {
     let robot = robot_with_joint1_limit(Some(limit));
     Experiment {
+        conditions: Default::default(),
         reference: common::paper_reference(&robot),
         robot,
         mpc: MpcSettings {
@@ -60,6 +61,7 @@ fn run(
 ) -> (RunResult, RunMetrics) {
     let robot = robot_with_joint1_limit(limit);
     let exp = Experiment {
+        conditions: Default::default(),
         reference: common::paper_reference(&robot),
         robot,
         mpc: MpcSettings {

@@ -14,6 +14,7 @@ fn run(kind: ControllerKind, observer: bool) -> (RunResult, RunMetrics) {
     let robot = Robot::irb140();
     let reference = common::paper_reference(&robot);
     let exp = Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings {

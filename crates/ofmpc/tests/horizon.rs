@@ -6,12 +6,16 @@
 //! for the positional (usual, dob-mpc) and the incremental (first, second) forms; the baselines
 //! without a horizon record none.
 
-use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::control::zoh::Zoh;
+use ofmpc::control::{new_controller, ControllerKind, LinearLikeModel, MpcSettings, Solver};
+use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::reference::{build_reference, Orientation};
 use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, HorizonSampling, LoopSettings, Record};
+use ofmpc::sim::{
+    Experiment, HorizonSampling, LoopSettings, Plant, PlantSettings, Record, RunConditions,
+};
 
 fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
     let robot = Robot::builtin("irb140").unwrap();
@@ -26,6 +30,9 @@ fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
         loop_settings: LoopSettings {
             hold_s: 0.3,
             steady_window_s: 0.1,
+            ..Default::default()
+        },
+        conditions: RunConditions {
             horizons,
             ..Default::default()
         },
@@ -100,5 +107,128 @@ fn recorded_horizons_predict_the_run_and_change_nothing() {
     }
     for kind in [ControllerKind::Pid, ControllerKind::Ctc] {
         assert!(run(&with, kind, 0.0).horizons.is_none(), "{kind}");
+    }
+}
+
+/// The old recorder's computation, kept as an independent implementation: the controller's
+/// model linearized again at `x` (`f0 = −H⁻¹C`), discretized again by ZOH (Eq. (13)) and
+/// rolled out with the controller's sequence from `x_k` (positional) or `x_k − x_{k−1}`
+/// (incremental).
+fn predicted_again(
+    incremental: bool,
+    model: &mut dyn ofmpc::dynamics::JointSpaceDynamics,
+    x: &[f64],
+    x_prev: &[f64],
+    sequence: &[f64],
+    ts: f64,
+) -> Vec<f64> {
+    let n = x.len() / 2;
+    let mut lin = LinearLikeModel::new(n);
+    lin.update(model, &x[..n], &x[n..]).unwrap();
+    let mut zoh = Zoh::new(n);
+    zoh.discretize(lin.f0(), ts).unwrap();
+    let mut z: Vec<f64> = if incremental {
+        x.iter().zip(x_prev).map(|(a, b)| a - b).collect()
+    } else {
+        x.to_vec()
+    };
+    let mut y = x[..n].to_vec();
+    let mut out = Vec::new();
+    let (phi1, phi2, e) = (zoh.phi1(), zoh.phi2(), zoh.e());
+    for u in sequence.chunks_exact(n) {
+        let mut next = vec![0.0; 2 * n];
+        for i in 0..n {
+            let (mut dq, mut dv) = (0.0, 0.0);
+            for j in 0..n {
+                dq += phi1[(i, j)] * z[n + j] + phi2[(i, j)] * u[j];
+                dv += e[(i, j)] * z[n + j] + phi1[(i, j)] * u[j];
+            }
+            next[i] = z[i] + dq;
+            next[n + i] = dv;
+        }
+        z = next;
+        for i in 0..n {
+            y[i] = if incremental { y[i] + z[i] } else { z[i] };
+        }
+        out.extend_from_slice(&y);
+    }
+    out
+}
+
+/// `Controller::predicted_outputs` (the controller's own model of its step) equals the
+/// prediction built again from scratch (the recorder's former computation) within 1e-12 rad,
+/// at every sample of a closed loop with a payload, for every controller with a horizon and
+/// both solvers; the baselines predict nothing.
+#[test]
+fn predicted_outputs_equal_the_prediction_built_again() {
+    let robot = Robot::irb140();
+    let reference = experiment(None).reference;
+    let n = robot.dof();
+    let ts = reference.ts();
+    let cases = [
+        (ControllerKind::Usual, Solver::Auto),
+        (ControllerKind::First, Solver::DenseQr),
+        (ControllerKind::Second, Solver::DenseQr),
+        (ControllerKind::First, Solver::Structured),
+        (ControllerKind::Second, Solver::Structured),
+        (ControllerKind::DobMpc, Solver::Auto),
+        (ControllerKind::FirstAdaptive, Solver::Auto),
+        (ControllerKind::SecondAdaptive, Solver::Auto),
+    ];
+    for (kind, solver) in cases {
+        let settings = MpcSettings {
+            solver,
+            ..Default::default()
+        };
+        let nh = settings.horizon;
+        let mut controller = new_controller(kind, n, &settings).unwrap();
+        let mut model = RobotDynamics::new(robot.clone());
+        let mut plant_robot = robot.clone();
+        plant_robot
+            .set_payload(Some(Payload::point_mass(1.0)))
+            .unwrap();
+        let mut plant = Plant::new(plant_robot, PlantSettings::default(), reference.q(0)).unwrap();
+        let (mut x, mut x_prev, mut tau) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; n]);
+        let (mut preview, mut own) = (vec![0.0; nh * n], vec![0.0; nh * n]);
+        plant.measure(&mut x).unwrap();
+        controller.reset(&x).unwrap();
+        x_prev.copy_from_slice(&x);
+        let mut worst = 0.0f64;
+        for k in 0..150 {
+            if k > 0 {
+                plant.measure(&mut x).unwrap();
+            }
+            reference.preview(k, nh, &mut preview);
+            controller
+                .step(&mut model, &x, reference.q(k), &preview, &mut tau)
+                .unwrap();
+            assert!(controller.predicted_outputs(&mut own), "{kind}");
+            let again = predicted_again(
+                kind != ControllerKind::Usual && kind != ControllerKind::DobMpc,
+                &mut model,
+                &x,
+                &x_prev,
+                controller.increments(),
+                ts,
+            );
+            for (a, b) in own.iter().zip(&again) {
+                worst = worst.max((a - b).abs());
+            }
+            x_prev.copy_from_slice(&x);
+            plant.step(&tau, ts).unwrap();
+        }
+        eprintln!("{kind} ({solver:?}): largest difference {worst:e} rad");
+        assert!(worst <= 1e-12, "{kind} ({solver:?}): {worst:e} rad");
+        assert!(!controller.predicted_outputs(&mut vec![0.0; nh * n + 1]));
+    }
+    for kind in [
+        ControllerKind::Pid,
+        ControllerKind::Ctc,
+        ControllerKind::CtcAdaptive,
+    ] {
+        let settings = MpcSettings::default();
+        let mut controller = new_controller(kind, n, &settings).unwrap();
+        let mut out = vec![0.0; settings.horizon * n];
+        assert!(!controller.predicted_outputs(&mut out), "{kind}");
     }
 }

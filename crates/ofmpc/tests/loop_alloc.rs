@@ -12,7 +12,10 @@ mod alloc_counter;
 use alloc_counter::allocations_during;
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Experiment, HorizonSampling, LoopSettings, MeasurementFaults, PlantSettings};
+use ofmpc::sim::{
+    Experiment, HorizonSampling, LoopSettings, MeasurementFaults, PlantSettings, RunConditions,
+    SafetySettings,
+};
 
 #[global_allocator]
 static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
@@ -38,8 +41,13 @@ fn experiment(hold_s: f64) -> Experiment {
             hold_s,
             steady_window_s: 0.3,
             plausibility_check: true,
-            max_joint_error_rad: Some(0.5),
-            measurement_faults: MeasurementFaults {
+            ..Default::default()
+        },
+        conditions: RunConditions {
+            safety: SafetySettings {
+                max_joint_error_rad: Some(0.5),
+            },
+            faults: MeasurementFaults {
                 nan_at_s: vec![1.0, 12.0],
                 dropout_s: vec![[2.0, 2.05], [12.1, 12.15]],
             },

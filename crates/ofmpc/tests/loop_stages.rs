@@ -15,7 +15,7 @@ use ofmpc::dynamics::RobotDynamics;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
     Actuator, ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
-    PlantSettings, Record, Recorder, Sample, Sensor, Supervisor,
+    PlantSettings, Record, Recorder, RunConditions, Sample, Sensor, Supervisor,
 };
 
 #[global_allocator]
@@ -26,7 +26,13 @@ fn loop_settings() -> LoopSettings {
         hold_s: 0.5,
         steady_window_s: 0.2,
         plausibility_check: true,
-        measurement_faults: MeasurementFaults {
+        ..Default::default()
+    }
+}
+
+fn conditions() -> RunConditions {
+    RunConditions {
+        faults: MeasurementFaults {
             nan_at_s: vec![1.0, 3.0],
             dropout_s: vec![[2.0, 2.05]],
         },
@@ -88,13 +94,15 @@ fn with_closed_loop(s: &Setup) -> Record {
     let mut model = RobotDynamics::new(s.robot.clone());
     let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
     let settings = loop_settings();
+    let conditions = conditions();
     let mut obs = observer(s);
-    let run = ClosedLoop::new(
+    let run = ClosedLoop::with_conditions(
         controller.as_mut(),
         &mut model,
         &mut plant,
         &s.reference,
         &settings,
+        &conditions,
         Some(&mut obs),
     )
     .run(&mut |_, _| {});
@@ -112,9 +120,11 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
     let mut obs = observer(s);
     let total = s.reference.len() + settings.hold_samples(ts);
-    let lost = LossSchedule::new(&settings.measurement_faults, ts);
+    let conditions = conditions();
+    let lost = LossSchedule::new(&conditions.faults, ts);
     let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost);
-    let mut supervisor = Supervisor::with_period(plant.robot(), settings.supervisor(), ts);
+    let mut supervisor =
+        Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
     let actuator = Actuator::for_robot(plant.robot());
     let mut rec = Recorder::new(n, total, true, false);

@@ -50,6 +50,7 @@ proptest! {
         let reference = JointReference::from_samples(6, ts, q, vec![[0.0; 3]], vec![0]).unwrap();
         let mpc = MpcSettings { ts, horizon, q_dy: Weight::Scalar(q_dy), q_du: Weight::Scalar(q_du), q_u: Weight::Scalar(q_u), ..Default::default() };
         let exp = Experiment {
+            conditions: Default::default(),
             robot: Robot::irb140(),
             reference,
             mpc,

@@ -14,6 +14,7 @@ fn paper() -> Experiment {
     let robot = Robot::irb140();
     let reference = common::paper_reference(&robot);
     Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings::default(),

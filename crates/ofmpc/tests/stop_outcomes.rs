@@ -15,6 +15,7 @@ fn paper(plant: PlantSettings, mpc: MpcSettings) -> Experiment {
     let robot = Robot::irb140();
     let reference = common::paper_reference(&robot);
     Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc,

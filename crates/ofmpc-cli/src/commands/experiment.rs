@@ -116,7 +116,7 @@ pub fn execute(
     for w in &repeats {
         console::warn(w);
     }
-    scenario.experiment.loop_settings.horizons = Some(crate::output::replay::horizon_sampling(
+    scenario.experiment.conditions.horizons = Some(crate::output::replay::horizon_sampling(
         scenario.samples_per_run(),
         payloads.len() * controllers.len(),
     ));
@@ -408,7 +408,7 @@ impl Writer<'_> {
     /// The adaptive variants' identified mass against time.
     fn identification(&mut self) -> anyhow::Result<()> {
         let (exp, runs) = (&self.scenario.experiment, self.runs);
-        let pick_up = exp.loop_settings.pick_up_at_s;
+        let pick_up = exp.conditions.pick_up_at_s;
         self.report
             .heading("Online payload identification (adaptive variants)");
         self.report.paragraph(format!(

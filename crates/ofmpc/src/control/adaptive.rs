@@ -137,6 +137,9 @@ impl Controller for AdaptiveMpc {
     fn increments(&self) -> &[f64] {
         self.inner.increments()
     }
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        self.inner.predicted_outputs(out)
+    }
     fn set_drive_model(&mut self, drives: &super::DriveModel) -> Result<(), SettingsError> {
         self.inner.set_drive_model(drives)
     }

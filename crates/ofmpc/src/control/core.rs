@@ -1,4 +1,6 @@
-//! Parts shared by the three controllers: buffers sized once, the per-sample
+//! Parts shared by the predictive controllers (the paper's three, their
+//! adaptive variants and the disturbance-observer MPC's inner usual MPC):
+//! buffers sized once, the per-sample
 //! model pipeline (terms → `f0` → ZOH → predictions), the layout of the
 //! least-squares system and the final `u`, `τ` update.
 //!
@@ -38,7 +40,7 @@ use super::dense::gemm;
 use super::drive_model::DriveModel;
 use super::lsq::{LsqError, LsqInfo, LsqWorkspace};
 use super::model::LinearLikeModel;
-use super::prediction::Predictions;
+use super::prediction::{predicted_outputs, predicted_outputs_work, PredictionError, Predictions};
 use super::settings::{MpcSettings, SettingsError, Solver};
 use super::structured::{StageError, StageLq};
 use super::tracking::{dense_entries, TrackingRows};
@@ -68,6 +70,12 @@ pub(crate) trait ControllerCore {
     /// What the torque-limit QP did (`None`: no QP).
     fn qp_status(&self) -> Option<QpStatus> {
         None
+    }
+    /// [`Controller::predicted_outputs`](super::Controller::predicted_outputs)
+    /// (`false`: no prediction horizon).
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        let _ = out;
+        false
     }
 }
 
@@ -130,6 +138,13 @@ macro_rules! impl_controller {
                 <$core as $crate::control::core::ControllerCore>::qp_status(&self.core)
             }
 
+            fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+                <$core as $crate::control::core::ControllerCore>::predicted_outputs(
+                    &mut self.core,
+                    out,
+                )
+            }
+
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
@@ -169,6 +184,9 @@ impl ControllerCore for Core {
     }
     fn qp_status(&self) -> Option<QpStatus> {
         Core::qp_status(self)
+    }
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        Core::predicted_outputs(self, out).is_ok()
     }
 }
 
@@ -242,7 +260,7 @@ impl Backend {
     }
 }
 
-/// The state and buffers shared by the three algorithms (module docs).
+/// The state and buffers shared by the predictive controllers (module docs).
 #[derive(Debug, Clone)]
 pub(crate) struct Core {
     pub(super) n: usize,
@@ -287,6 +305,8 @@ pub(crate) struct Core {
     qp: Option<Box<TorqueLimitQp>>,
     /// Per-joint friction feed-forward `F̂(v_ref)` of the current sample.
     damping: Vec<f64>,
+    /// Work of [`Core::predicted_outputs`].
+    predicted_work: Vec<f64>,
 }
 
 impl Core {
@@ -368,6 +388,7 @@ impl Core {
             drives: None,
             qp: None,
             damping: vec![0.0; n],
+            predicted_work: vec![0.0; predicted_outputs_work(n)],
         })
     }
 
@@ -399,6 +420,22 @@ impl Core {
     /// What the torque-limit QP did at the last step (`None` without limits).
     pub fn qp_status(&self) -> Option<QpStatus> {
         self.qp.as_ref().map(|q| q.status)
+    }
+
+    /// The outputs the controller predicted at its last successful step,
+    /// `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values, block `i − 1` is
+    /// `ŷ_{k+i}`): the step's own ZOH model (Eq. (13), at `x_k`) driven by its
+    /// optimal sequence ([`Core::increments`]) from `x_k` (positional, Eq. (16))
+    /// or from `Δx_k` and `y_k` (incremental, Eq. (20)–(29)),
+    /// [`super::prediction::predicted_outputs`]. Allocates nothing.
+    pub fn predicted_outputs(&mut self, out: &mut [f64]) -> Result<(), PredictionError> {
+        let n = self.n;
+        let (z0, y_k) = if self.incremental {
+            (&self.dx[..], Some(&self.x_prev[..n]))
+        } else {
+            (&self.x_prev[..], None)
+        };
+        predicted_outputs(&self.zoh, z0, y_k, &self.du, &mut self.predicted_work, out)
     }
 
     /// Gives the controller the drives' limits and friction estimates; with

@@ -187,6 +187,10 @@ impl Controller for DobMpc {
     fn increments(&self) -> &[f64] {
         self.inner.increments()
     }
+    /// The inner usual MPC's prediction: its sequence is `Ũ = U + d̂`.
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        self.inner.predicted_outputs(out)
+    }
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
         drives.validate(self.n)?;
         if self.settings.friction_compensation {

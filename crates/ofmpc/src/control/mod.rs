@@ -189,6 +189,18 @@ pub trait Controller {
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
+    /// The outputs (joint positions) the controller's model predicted at its
+    /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
+    /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal
+    /// sequence ([`Controller::increments`]) of that step
+    /// ([`prediction::predicted_outputs`]). `false` (and `out` unspecified)
+    /// for a controller without a prediction horizon (the baselines `pid`,
+    /// `ctc`, `ctc-adaptive`) or an `out` not N·n long. Allocates nothing
+    /// (mutable for its work buffer only: the controller's state is unchanged).
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        let _ = out;
+        false
+    }
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);

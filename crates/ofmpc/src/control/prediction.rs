@@ -336,6 +336,73 @@ fn check_shape(
     }
 }
 
+/// Work values [`predicted_outputs`] needs for `n` joints.
+pub const fn predicted_outputs_work(n: usize) -> usize {
+    5 * n
+}
+
+/// The outputs `ŷ_{k+1}, …, ŷ_{k+N}` (joint positions) a controller's ZOH model predicts for
+/// its optimal `sequence` (N·n values, block `j` = `u_{k+j}` or `Δu_{k+j}`), into `out`
+/// (N·n values, block `j` = `ŷ_{k+j+1}`), by the recursion of Eq. (13)
+/// (`q⁺ = q + Φ1 v + Φ2 u`, `v⁺ = e^M v + Φ1 u`):
+///
+/// * positional (the usual MPC, Eq. (16) and (43); `y_k = None`): from `z_0 = x_k`,
+///   `ŷ = q`;
+/// * incremental (Eq. (20)–(29); `y_k = Some(q_k)`): from `z_0 = Δx_k = x_k − x_{k−1}`,
+///   `ŷ_{k+j+1} = ŷ_{k+j} + Δq_{j+1}` from `ŷ_k = y_k` (`F_I y_k + F2 Δx_k + G2 ΔU`).
+///
+/// `work` holds [`predicted_outputs_work`]`(n)` values. Allocates nothing.
+pub fn predicted_outputs(
+    zoh: &Zoh,
+    z0: &[f64],
+    y_k: Option<&[f64]>,
+    sequence: &[f64],
+    work: &mut [f64],
+    out: &mut [f64],
+) -> Result<(), PredictionError> {
+    let n = zoh.dof();
+    check_shape("z0", (z0.len(), 1), (2 * n, 1))?;
+    if let Some(y) = y_k {
+        check_shape("y_k", (y.len(), 1), (n, 1))?;
+    }
+    check_shape("out", (out.len(), 1), (sequence.len(), 1))?;
+    if sequence.len().checked_rem(n) != Some(0) {
+        return Err(PredictionError::WrongShape {
+            what: "sequence (a multiple of n values)",
+            expected: (n * (sequence.len() / n.max(1)), 1),
+            got: (sequence.len(), 1),
+        });
+    }
+    check_shape("work", (work.len(), 1), (predicted_outputs_work(n), 1))?;
+    let (mut z, rest) = work.split_at_mut(2 * n);
+    let (mut znext, y) = rest.split_at_mut(2 * n);
+    z.copy_from_slice(z0);
+    y.copy_from_slice(y_k.unwrap_or(&z0[..n]));
+    let (phi1, phi2, e) = (zoh.phi1(), zoh.phi2(), zoh.e());
+    for (u, o) in sequence.chunks_exact(n).zip(out.chunks_exact_mut(n)) {
+        // q⁺ = q + Φ1 v + Φ2 u, v⁺ = e^M v + Φ1 u (Eq. (13)).
+        for i in 0..n {
+            let (mut dq, mut dv) = (0.0, 0.0);
+            for j in 0..n {
+                dq += phi1[(i, j)] * z[n + j] + phi2[(i, j)] * u[j];
+                dv += e[(i, j)] * z[n + j] + phi1[(i, j)] * u[j];
+            }
+            znext[i] = z[i] + dq;
+            znext[n + i] = dv;
+        }
+        std::mem::swap(&mut z, &mut znext);
+        for i in 0..n {
+            // y_{j+1} = y_j + Δq_{j+1} (incremental), or q_{j+1}.
+            y[i] = match y_k {
+                None => z[i],
+                Some(_) => y[i] + z[i],
+            };
+        }
+        o.copy_from_slice(y);
+    }
+    Ok(())
+}
+
 /// `F_I = [I; I; …; I]` (N·n × n), Eq. (25)/(28).
 pub fn fill_f_i(n: usize, horizon: usize, out: &mut DMatrix<f64>) -> Result<(), PredictionError> {
     check_shape("F_I", out.shape(), (horizon * n, n))?;

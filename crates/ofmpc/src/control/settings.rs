@@ -234,7 +234,8 @@ pub fn bandwidths(name: &'static str, w: &Weight, n: usize) -> Result<Vec<f64>, 
     Ok(out)
 }
 
-/// Settings shared by the three controllers. Defaults are the paper's tuning
+/// Settings shared by every controller (the baselines read their part,
+/// [`BaselineSettings`]). Defaults are the paper's tuning
 /// (Section IV): `Ts = 0.01 s`, `N = 10`, `Q_yw = I`, `Q_Δy = 0.5 I`,
 /// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
 ///

@@ -1,13 +1,14 @@
 //! The closed loop: measure, control, apply the torque over one period.
 
 use super::actuator::Actuator;
+use super::conditions::{MeasurementFaults, RunConditions, SafetySettings};
 use super::estimator::Estimator;
-use super::horizon::{HorizonRecorder, HorizonSampling};
+use super::horizon::HorizonRecorder;
 use super::metrics::Record;
 use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use super::recorder::{Recorder, Sample};
-use super::schedule::{at_or_after, sample_at, LossSchedule};
+use super::schedule::{sample_at, LossSchedule};
 use super::sensor::Sensor;
 use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
@@ -43,11 +44,6 @@ pub struct LoopSettings {
     /// load at rest. Not recorded (the record starts with the path at
     /// t = 0); ignored by the other controllers.
     pub identification_s: f64,
-    /// When the plant picks up its payload (s, path time): it carries none
-    /// before and the payload of the run from then on. `None`: from the
-    /// start. The controllers are not told.
-    #[serde(skip)]
-    pub pick_up_at_s: Option<f64>,
     /// Check each measurement for plausibility (jumps, frozen encoders;
     /// `supervisor` module) and replace rejected values by predictions.
     pub plausibility_check: bool,
@@ -55,21 +51,6 @@ pub struct LoopSettings {
     /// measurement, bring the robot to a safe stop (brake, hold) and record
     /// [`SAFE_STOP_RECORD_S`] more seconds, instead of ending the run.
     pub safe_stop: bool,
-    /// A safety function: when the error of a joint (of the state the
-    /// controller is given) passes this (rad), the robot is brought to a
-    /// safe stop as with [`Self::safe_stop`] and the run ends "stopped".
-    /// `None`: off.
-    #[serde(skip)]
-    pub max_joint_error_rad: Option<f64>,
-    /// Invalid and missing measurements (the controller runs on its own
-    /// prediction over them).
-    #[serde(skip)]
-    pub measurement_faults: MeasurementFaults,
-    /// Record what a predictive controller predicts over its horizon at these samples
-    /// ([`Record::horizons`], for the report's replay; computed only at those samples, it
-    /// changes nothing of the run). `None`: off.
-    #[serde(skip)]
-    pub horizons: Option<HorizonSampling>,
 }
 
 /// [`LoopSettings`] as written in a file: the same keys, with
@@ -119,67 +100,7 @@ impl From<LoopSettingsFile> for LoopSettings {
             identification_s: f.identification_s,
             plausibility_check: f.plausibility_check,
             safe_stop: f.safe_stop,
-            ..d
         }
-    }
-}
-
-/// The safety function of a run: a joint error (of the state the controller
-/// is given) beyond `max_joint_error_rad` brings the robot to a safe stop
-/// ([`super::Supervisor`]). A scenario's `[safety]` section.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct SafetySettings {
-    /// Joint error limit (rad); off when absent.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub max_joint_error_rad: Option<f64>,
-}
-
-/// Faults of the measurement channel, at path times: at the sample at (or
-/// first after) each `nan_at_s` the measurement is NaN; in each
-/// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
-/// loop then hands the controller a model prediction
-/// (the supervisor module) and counts the fault.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MeasurementFaults {
-    /// Times of single invalid (NaN) measurements (s).
-    pub nan_at_s: Vec<f64>,
-    /// Intervals without measurements, `[from, to)` (s).
-    pub dropout_s: Vec<[f64; 2]>,
-}
-
-impl MeasurementFaults {
-    /// No fault.
-    pub fn is_empty(&self) -> bool {
-        self.nan_at_s.is_empty() && self.dropout_s.is_empty()
-    }
-
-    /// Whether the measurement of the sample at `t` (period `ts`) is lost.
-    pub fn lost_at(&self, t: f64, ts: f64) -> bool {
-        let within = |from: f64, to: f64| at_or_after(t, from, ts) && !at_or_after(t, to, ts);
-        self.nan_at_s.iter().any(|&f| within(f, f + ts))
-            || self.dropout_s.iter().any(|&[from, to]| within(from, to))
-    }
-
-    fn validate(&self) -> Result<(), LoopSettingsError> {
-        if let Some((index, &value)) = self
-            .nan_at_s
-            .iter()
-            .enumerate()
-            .find(|(_, t)| !(t.is_finite() && **t >= 0.0))
-        {
-            return Err(LoopSettingsError::FaultTime { index, value });
-        }
-        if let Some((index, &[from, to])) = self
-            .dropout_s
-            .iter()
-            .enumerate()
-            .find(|(_, [a, b])| !(a.is_finite() && b.is_finite() && *a >= 0.0 && a < b))
-        {
-            return Err(LoopSettingsError::DropoutInterval { index, from, to });
-        }
-        Ok(())
     }
 }
 
@@ -197,12 +118,8 @@ impl Default for LoopSettings {
             divergence: DivergenceRule::Growth,
             steady_window_s: 0.5,
             identification_s: 0.5,
-            pick_up_at_s: None,
             plausibility_check: false,
             safe_stop: false,
-            max_joint_error_rad: None,
-            measurement_faults: MeasurementFaults::default(),
-            horizons: None,
         }
     }
 }
@@ -235,42 +152,18 @@ impl LoopSettings {
                 max: MAX_IDENTIFICATION_S,
             });
         }
-        if let Some(t) = self.pick_up_at_s {
-            if !(t.is_finite() && t >= 0.0) {
-                return Err(LoopSettingsError::PickUpTime(t));
-            }
-        }
-        if let Some(e) = self.max_joint_error_rad {
-            if !(e.is_finite() && e > 0.0) {
-                return Err(LoopSettingsError::MaxJointError(e));
-            }
-        }
-        self.measurement_faults.validate()
+        Ok(())
     }
 
-    /// These settings with the events and checks a scenario keeps in their
-    /// own sections: the payload's pick-up time, the safety function and the
-    /// measurement faults (the fields not read from `[simulation]`).
-    pub fn with_sections(
-        mut self,
-        pick_up_at_s: Option<f64>,
-        safety: &SafetySettings,
-        faults: &MeasurementFaults,
-    ) -> Self {
-        self.pick_up_at_s = pick_up_at_s;
-        self.max_joint_error_rad = safety.max_joint_error_rad;
-        self.measurement_faults = faults.clone();
-        self
-    }
-
-    /// The [`Supervisor`]'s part of these settings.
-    pub fn supervisor(&self) -> SupervisorSettings {
+    /// The [`Supervisor`]'s part of these settings, with the run's safety
+    /// function ([`RunConditions::safety`]).
+    pub fn supervisor(&self, safety: &SafetySettings) -> SupervisorSettings {
         SupervisorSettings {
             divergence_threshold_rad: self.divergence_threshold_rad,
             divergence: self.divergence,
             plausibility_check: self.plausibility_check,
             safe_stop: self.safe_stop,
-            max_joint_error_rad: self.max_joint_error_rad,
+            max_joint_error_rad: safety.max_joint_error_rad,
         }
     }
 
@@ -383,6 +276,7 @@ pub struct ClosedLoop<'a> {
     plant: &'a mut Plant,
     reference: &'a JointReference,
     settings: &'a LoopSettings,
+    conditions: &'a RunConditions,
     events: RunEvents,
     estimator: Estimator<'a>,
     sensor: Sensor,
@@ -395,7 +289,7 @@ pub struct ClosedLoop<'a> {
     preview: Vec<f64>,
     /// The sample of the pick-up and the payload, until it happened.
     pick_up: Option<(usize, crate::robot::Payload)>,
-    /// The predicted horizons kept ([`LoopSettings::horizons`]).
+    /// The predicted horizons kept ([`RunConditions::horizons`]).
     horizon: Option<HorizonRecorder>,
     /// Set by another thread to end the run ([`ClosedLoop::cancel_on`]).
     cancel: Option<&'a AtomicBool>,
@@ -407,7 +301,9 @@ type Ended = RunOutcome;
 impl<'a> ClosedLoop<'a> {
     /// The loop of `controller` (acting on its `model`) against `plant`
     /// along `reference` and its hold, with an optional `observer` between
-    /// the sensor and the controller. Sizes every stage.
+    /// the sensor and the controller, and no [`RunConditions`] (no pick-up
+    /// time, safety limit, fault or recorded horizon): [`Self::with_conditions`]
+    /// with [`RunConditions::NONE`]. Sizes every stage.
     pub fn new(
         controller: &'a mut dyn Controller,
         model: &'a mut dyn JointSpaceDynamics,
@@ -416,15 +312,35 @@ impl<'a> ClosedLoop<'a> {
         settings: &'a LoopSettings,
         observer: Option<&'a mut StateObserver>,
     ) -> Self {
+        const NONE: &RunConditions = &RunConditions::NONE;
+        Self::with_conditions(
+            controller, model, plant, reference, settings, NONE, observer,
+        )
+    }
+
+    /// [`Self::new`] with the run's `conditions`: the safety limit (the
+    /// [`Supervisor`]), the lost measurements (the [`Sensor`]'s
+    /// [`LossSchedule`]) and the horizons to record. The pick-up time is an
+    /// event of the run ([`Self::events`]). Sizes every stage.
+    pub fn with_conditions(
+        controller: &'a mut dyn Controller,
+        model: &'a mut dyn JointSpaceDynamics,
+        plant: &'a mut Plant,
+        reference: &'a JointReference,
+        settings: &'a LoopSettings,
+        conditions: &'a RunConditions,
+        observer: Option<&'a mut StateObserver>,
+    ) -> Self {
         let n = reference.dof();
         let ts = reference.ts();
         let horizon = controller.horizon();
-        let predicted = settings
+        let predicted = conditions
             .horizons
-            .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, ts, h.every, h.max));
-        let lost = LossSchedule::new(&settings.measurement_faults, ts);
+            .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, h.every, h.max));
+        let lost = LossSchedule::new(&conditions.faults, ts);
         let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
-        let supervisor = Supervisor::with_period(plant.robot(), settings.supervisor(), ts);
+        let supervisor =
+            Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
         let actuator = Actuator::for_robot(plant.robot());
         Self {
             controller,
@@ -432,6 +348,7 @@ impl<'a> ClosedLoop<'a> {
             plant,
             reference,
             settings,
+            conditions,
             events: RunEvents::default(),
             estimator: Estimator::new(n, observer),
             sensor,
@@ -472,7 +389,7 @@ impl<'a> ClosedLoop<'a> {
     /// Whether the readings differ from the true state (a noisy, delayed or
     /// faulty sensor, lost samples): they are recorded too.
     fn measured(&self) -> bool {
-        records_measurement(self.plant.settings(), &self.settings.measurement_faults)
+        records_measurement(self.plant.settings(), &self.conditions.faults)
     }
 
     /// Runs the pre-roll, the path and the hold. `progress(k, total)` is
@@ -536,9 +453,6 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
-        if let Some(h) = &mut self.horizon {
-            h.reset(&self.x);
-        }
         self.supervisor.reset(&self.x);
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
@@ -584,14 +498,10 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        let horizon = &mut self.horizon;
-        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
-            let info = controller.step(model, xs, w0, preview, tau)?;
-            if let Some(h) = horizon {
-                h.observe(None, model, xs, controller);
-            }
-            Ok(info)
-        });
+        let status = self
+            .estimator
+            .estimate(model, &self.x)
+            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
@@ -772,7 +682,7 @@ impl<'a> ClosedLoop<'a> {
             self.controller
                 .step(model, xs, w, &self.preview, &mut self.tau)?;
             if let Some(h) = &mut self.horizon {
-                h.observe(Some(k), model, xs, &*self.controller);
+                h.observe(k, &mut *self.controller);
             }
         }
         self.estimator.record_torque(&self.tau);

@@ -5,6 +5,7 @@
 use super::closed_loop::{
     record_columns, records_measurement, ClosedLoop, LoopSettings, RunEvents, RunResult,
 };
+use super::conditions::RunConditions;
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
@@ -35,6 +36,9 @@ pub struct Experiment {
     pub plant: PlantSettings,
     /// Hold, divergence threshold, steady window.
     pub loop_settings: LoopSettings,
+    /// The payload's pick-up time, the safety limit, the measurement faults
+    /// and the horizons to record ([`RunConditions::NONE`]: none).
+    pub conditions: RunConditions,
 }
 
 /// Name of a run's folder: `<controller>_m<payload>`, e.g. `second_m0.25`.
@@ -109,15 +113,13 @@ impl Experiment {
             return Err(crate::control::BuildError::NoTorqueLimits.into());
         }
         self.loop_settings.validate()?;
+        self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
         let samples = self
             .reference
             .len()
             .saturating_add(self.loop_settings.hold_samples(ts));
-        let columns = record_columns(
-            n,
-            records_measurement(&self.plant, &self.loop_settings.measurement_faults),
-        );
+        let columns = record_columns(n, records_measurement(&self.plant, &self.conditions.faults));
         let values = samples.saturating_mul(columns);
         if values > MAX_RECORD_VALUES {
             return Err(ExperimentError::TooManySamples {
@@ -188,7 +190,7 @@ impl Experiment {
             } else {
                 0
             },
-            pick_up: ls.pick_up_at_s.map(|t| (t, *payload)),
+            pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
         // Before a pick-up the plant carries nothing.
         plant_robot.set_payload(match events.pick_up {
@@ -197,12 +199,13 @@ impl Experiment {
         })?;
         let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
         let parts = mpc.parts_mut();
-        let result = ClosedLoop::new(
+        let result = ClosedLoop::with_conditions(
             parts.controller,
             parts.model,
             &mut plant,
             &self.reference,
             ls,
+            &self.conditions,
             parts.observer,
         )
         .events(&events)

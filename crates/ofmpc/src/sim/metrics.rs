@@ -49,7 +49,7 @@ pub struct Record {
     /// samples (0 without finite limits).
     pub max_torque_ratio: f64,
     /// What the controller predicted over its horizon at some samples, when the loop was
-    /// asked to record it ([`super::LoopSettings::horizons`]); `None` otherwise.
+    /// asked to record it ([`super::RunConditions::horizons`]); `None` otherwise.
     pub horizons: Option<super::PredictedHorizons>,
 }
 

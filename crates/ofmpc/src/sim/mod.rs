@@ -4,6 +4,7 @@
 
 mod actuator;
 mod closed_loop;
+mod conditions;
 mod estimator;
 mod experiment;
 mod horizon;
@@ -24,9 +25,9 @@ pub use sensor::Sensor;
 
 pub use closed_loop::{
     record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,
-    LoopSettings, MeasurementFaults, RunEvents, RunResult, SafetySettings, MAX_IDENTIFICATION_S,
-    SAFE_STOP_RECORD_S,
+    LoopSettings, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
+pub use conditions::{MeasurementFaults, RunConditions, SafetySettings};
 pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
 pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
 pub use outcome::{

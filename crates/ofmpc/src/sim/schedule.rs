@@ -7,7 +7,7 @@
 //! with a tolerance of `10⁻⁹·Ts` for times that are whole multiples of `Ts`
 //! up to rounding (`0.1 + 0.2` s at `Ts = 0.1` s is sample 3).
 
-use super::closed_loop::MeasurementFaults;
+use super::conditions::MeasurementFaults;
 
 /// Relative tolerance (of `Ts`) when a time is matched to a sample.
 pub const TIME_MATCH_TOLERANCE: f64 = 1e-9;
@@ -57,7 +57,7 @@ pub struct LossSchedule {
 
 impl LossSchedule {
     /// The schedule of `faults` at the control period `ts` (the faults are
-    /// checked by [`super::LoopSettings::validate`]).
+    /// checked by [`super::RunConditions::validate`]).
     pub fn new(faults: &MeasurementFaults, ts: f64) -> Self {
         let nan = faults.nan_at_s.iter().map(|&t| {
             let from = sample_at(t, ts);

@@ -22,6 +22,7 @@ pub fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Expe
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();
     Experiment {
+        conditions: Default::default(),
         robot,
         reference,
         mpc: MpcSettings::default(),
