@@ -268,14 +268,10 @@ fn node_transform(node: &Element, name: &str) -> Result<Matrix4<f64>, MeshError>
     Ok(m)
 }
 
-/// The triangles of one `<mesh>`, in its own coordinates.
-fn geometry(mesh: &Element, name: &str) -> Result<TriMesh, MeshError> {
-    let bad = |what: String| MeshError::Malformed {
-        path: name.to_string(),
-        what,
-    };
-    // Sources: id → (values, stride).
-    let mut sources: HashMap<&str, (Vec<f64>, usize)> = HashMap::new();
+/// The positions a primitive's `VERTEX` input may name: each `<vertices id>` (its
+/// `POSITION` input) and each `<source id>` of at least three values a point.
+fn positions(mesh: &Element, name: &str) -> Result<HashMap<String, Vec<[f64; 3]>>, MeshError> {
+    let mut sources: HashMap<String, Vec<[f64; 3]>> = HashMap::new();
     for s in mesh.all("source") {
         let (Some(id), Some(fa)) = (s.attr("id"), s.child("float_array")) else {
             continue;
@@ -285,121 +281,134 @@ fn geometry(mesh: &Element, name: &str) -> Result<TriMesh, MeshError> {
             .and_then(|t| t.child("accessor"))
             .and_then(|a| a.attr("stride"))
             .and_then(|v| v.parse::<usize>().ok())
-            .unwrap_or(3)
-            .max(1);
-        sources.insert(id, (numbers(&fa.text, "float_array", name)?, stride));
+            .unwrap_or(3);
+        if stride >= 3 {
+            let v: Vec<f64> = numbers(&fa.text, "float_array", name)?;
+            let p = v.chunks_exact(stride).map(|c| [c[0], c[1], c[2]]).collect();
+            sources.insert(id.to_string(), p);
+        }
     }
-    let position_source = |src: &str| -> Option<Vec<[f64; 3]>> {
-        let (v, stride) = sources.get(src.trim_start_matches('#'))?;
-        (*stride >= 3).then(|| {
-            v.chunks_exact(*stride)
-                .map(|c| [c[0], c[1], c[2]])
-                .collect()
-        })
-    };
-    // <vertices id>: its POSITION input.
-    let mut vertices: HashMap<&str, Vec<[f64; 3]>> = HashMap::new();
+    let mut out = sources.clone();
     for v in mesh.all("vertices") {
         let pos = v
             .all("input")
             .find(|i| i.attr("semantic") == Some("POSITION"))
             .and_then(|i| i.attr("source"))
-            .and_then(position_source);
+            .and_then(|s| sources.get(s.trim_start_matches('#')));
         if let (Some(id), Some(p)) = (v.attr("id"), pos) {
-            vertices.insert(id, p);
-        }
-    }
-    let mut out = TriMesh::default();
-    for prim in &mesh.children {
-        let polygons: Vec<usize> = match prim.name.as_str() {
-            "triangles" => Vec::new(),
-            "polylist" => prim
-                .child("vcount")
-                .map(|v| numbers(&v.text, "vcount", name))
-                .transpose()?
-                .unwrap_or_default(),
-            "polygons" => Vec::new(),
-            _ => continue,
-        };
-        let inputs: Vec<&Element> = prim.all("input").collect();
-        let offset = |i: &Element| {
-            i.attr("offset")
-                .and_then(|o| o.parse::<usize>().ok())
-                .unwrap_or(0)
-        };
-        let stride = inputs.iter().map(|i| offset(i) + 1).max().unwrap_or(1);
-        let Some(vin) = inputs.iter().find(|i| i.attr("semantic") == Some("VERTEX")) else {
-            return Err(bad(format!(
-                "<{}> without an <input semantic=\"VERTEX\">",
-                prim.name
-            )));
-        };
-        let src = vin.attr("source").unwrap_or("").trim_start_matches('#');
-        let Some(pos) = vertices.get(src).cloned().or_else(|| position_source(src)) else {
-            return Err(bad(format!(
-                "<{}>: no positions for source {src:?}",
-                prim.name
-            )));
-        };
-        let voff = offset(vin);
-        let base = out.positions.len() as u32;
-        out.positions.extend_from_slice(&pos);
-        let fan = |idx: &[u32], out: &mut TriMesh| -> Result<(), MeshError> {
-            if let Some(&i) = idx.iter().find(|&&i| i as usize >= pos.len()) {
-                return Err(bad(format!(
-                    "<{}>: vertex index {i} but only {} positions",
-                    prim.name,
-                    pos.len()
-                )));
-            }
-            for j in 1..idx.len().saturating_sub(1) {
-                out.triangles
-                    .push([base + idx[0], base + idx[j], base + idx[j + 1]]);
-            }
-            Ok(())
-        };
-        let corners = |p: &Element| -> Result<Vec<u32>, MeshError> {
-            let all: Vec<u32> = numbers(&p.text, "p", name)?;
-            Ok(all.iter().skip(voff).step_by(stride).copied().collect())
-        };
-        match prim.name.as_str() {
-            "polygons" => {
-                for p in prim.all("p") {
-                    fan(&corners(p)?, &mut out)?;
-                }
-            }
-            "triangles" => {
-                for p in prim.all("p") {
-                    for t in corners(p)?.chunks_exact(3) {
-                        fan(t, &mut out)?;
-                    }
-                }
-            }
-            _ => {
-                let c = prim
-                    .child("p")
-                    .map(corners)
-                    .transpose()?
-                    .unwrap_or_default();
-                let mut at = 0usize;
-                for &k in &polygons {
-                    let Some(poly) = c.get(at..at + k) else {
-                        return Err(bad(format!(
-                            "<polylist>: <vcount> asks for {} corners, <p> has {}",
-                            polygons.iter().sum::<usize>(),
-                            c.len()
-                        )));
-                    };
-                    fan(poly, &mut out)?;
-                    at += k;
-                }
-            }
-        }
-        if out.triangles.len() > MAX_TRIANGLES {
-            return Err(bad(format!("more than {MAX_TRIANGLES} triangles")));
+            out.insert(id.to_string(), p.clone());
         }
     }
     Ok(out)
+}
+
+/// The triangles of one `<mesh>`, in its own coordinates.
+fn geometry(mesh: &Element, name: &str) -> Result<TriMesh, MeshError> {
+    let positions = positions(mesh, name)?;
+    let mut out = TriMesh::default();
+    for prim in &mesh.children {
+        if matches!(prim.name.as_str(), "triangles" | "polylist" | "polygons") {
+            primitive(prim, &positions, name, &mut out)?;
+        }
+        if out.triangles.len() > MAX_TRIANGLES {
+            return Err(MeshError::Malformed {
+                path: name.to_string(),
+                what: format!("more than {MAX_TRIANGLES} triangles"),
+            });
+        }
+    }
+    Ok(out)
+}
+
+/// Appends the triangles of a `<triangles>`, `<polylist>` or `<polygons>` element to `out`
+/// (polygons as fans).
+fn primitive(
+    prim: &Element,
+    positions: &HashMap<String, Vec<[f64; 3]>>,
+    name: &str,
+    out: &mut TriMesh,
+) -> Result<(), MeshError> {
+    let bad = |what: String| MeshError::Malformed {
+        path: name.to_string(),
+        what,
+    };
+    let inputs: Vec<&Element> = prim.all("input").collect();
+    let offset = |i: &Element| {
+        i.attr("offset")
+            .and_then(|o| o.parse::<usize>().ok())
+            .unwrap_or(0)
+    };
+    let stride = inputs.iter().map(|i| offset(i) + 1).max().unwrap_or(1);
+    let Some(vin) = inputs.iter().find(|i| i.attr("semantic") == Some("VERTEX")) else {
+        return Err(bad(format!(
+            "<{}> without an <input semantic=\"VERTEX\">",
+            prim.name
+        )));
+    };
+    let src = vin.attr("source").unwrap_or("").trim_start_matches('#');
+    let Some(pos) = positions.get(src) else {
+        return Err(bad(format!(
+            "<{}>: no positions for source {src:?}",
+            prim.name
+        )));
+    };
+    let voff = offset(vin);
+    let base = out.positions.len() as u32;
+    out.positions.extend_from_slice(pos);
+    let fan = |idx: &[u32], out: &mut TriMesh| -> Result<(), MeshError> {
+        if let Some(&i) = idx.iter().find(|&&i| i as usize >= pos.len()) {
+            return Err(bad(format!(
+                "<{}>: vertex index {i} but only {} positions",
+                prim.name,
+                pos.len()
+            )));
+        }
+        for j in 1..idx.len().saturating_sub(1) {
+            out.triangles
+                .push([base + idx[0], base + idx[j], base + idx[j + 1]]);
+        }
+        Ok(())
+    };
+    let corners = |p: &Element| -> Result<Vec<u32>, MeshError> {
+        let all: Vec<u32> = numbers(&p.text, "p", name)?;
+        Ok(all.iter().skip(voff).step_by(stride).copied().collect())
+    };
+    match prim.name.as_str() {
+        "polygons" => {
+            for p in prim.all("p") {
+                fan(&corners(p)?, out)?;
+            }
+        }
+        "triangles" => {
+            for p in prim.all("p") {
+                for t in corners(p)?.chunks_exact(3) {
+                    fan(t, out)?;
+                }
+            }
+        }
+        _ => {
+            let counts: Vec<usize> = match prim.child("vcount") {
+                Some(v) => numbers(&v.text, "vcount", name)?,
+                None => Vec::new(),
+            };
+            let c = match prim.child("p") {
+                Some(p) => corners(p)?,
+                None => Vec::new(),
+            };
+            let mut at = 0usize;
+            for &k in &counts {
+                let Some(poly) = c.get(at..at.saturating_add(k)) else {
+                    return Err(bad(format!(
+                        "<polylist>: <vcount> asks for more corners than the {} of <p>",
+                        c.len()
+                    )));
+                };
+                fan(poly, out)?;
+                at += k;
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
