@@ -246,24 +246,34 @@
   var cur = 0, frame = 0, playing = false, lastText = 0;
   runs.forEach(function (r, i) { var o = document.createElement('option'); o.value = String(i); o.textContent = r.name + ' (' + r.status + ')'; sel.appendChild(o); });
   var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: null, horizonNote: D.horizon_note, meshes: meshes.length };
-  // For tests: per mesh, the pixels of its colour (shaded: colour × 0.3 … 1) in the 15 × 15
-  // window around the projection of its box's centre at the pose drawn (px: readPixels' RGBA).
+  // For tests: each mesh drawn alone at the pose shown; the pixels of its colour (shaded:
+  // colour × 0.3 … 1) inside and outside the screen box of its 8 projected box corners.
+  var only = -1;
   function meshProbe(px) {
-    var VP = viewProj(), mats = fk(S.q).mats, w = canvas.width, h = canvas.height;
-    return meshes.map(function (m, i) {
-      var d = D.robot.meshes[i], c = [0, 1, 2].map(function (x) { return (d.lo[x] + d.hi[x]) / 2; });
-      var M = mul(VP, mats[m.body]), cl = [0, 1, 2, 3].map(function (r) { return M[r] * c[0] + M[4 + r] * c[1] + M[8 + r] * c[2] + M[12 + r]; });
-      var sx = Math.round((cl[0] / cl[3] + 1) / 2 * w), sy = Math.round((cl[1] / cl[3] + 1) / 2 * h), hit = 0;
-      for (var y = sy - 7; y <= sy + 7; y++) { for (var x = sx - 7; x <= sx + 7; x++) {
-        if (x < 0 || y < 0 || x >= w || y >= h) { continue; }
-        var o = 4 * (y * w + x), s = px[o] + px[o + 1] + px[o + 2], cs = 255 * (m.color[0] + m.color[1] + m.color[2]);
-        if (cs <= 0) { continue; }
-        var f = s / cs, ok = f > 0.3 && f < 1.02;
+    var w = canvas.width, h = canvas.height, out = [];
+    for (var i = 0; i < meshes.length; i++) {
+      only = i; draw();
+      gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+      var m = meshes[i], d = D.robot.meshes[i], M = mul(viewProj(), fk(S.q).mats[m.body]);
+      var x0 = w, x1 = -1, y0 = h, y1 = -1;
+      for (var c = 0; c < 8; c++) {
+        var p = [c & 1 ? d.hi[0] : d.lo[0], c & 2 ? d.hi[1] : d.lo[1], c & 4 ? d.hi[2] : d.lo[2]];
+        var cl = [0, 1, 2, 3].map(function (r) { return M[r] * p[0] + M[4 + r] * p[1] + M[8 + r] * p[2] + M[12 + r]; });
+        var sx = (cl[0] / cl[3] + 1) / 2 * w, sy = (cl[1] / cl[3] + 1) / 2 * h;
+        x0 = Math.min(x0, sx); x1 = Math.max(x1, sx); y0 = Math.min(y0, sy); y1 = Math.max(y1, sy);
+      }
+      var inside = 0, outside = 0, cs = 255 * (m.color[0] + m.color[1] + m.color[2]);
+      for (var o = 0; o < px.length && cs > 0; o += 4) {
+        var f = (px[o] + px[o + 1] + px[o + 2]) / cs, ok = f > 0.3 && f < 1.02;
         for (var k = 0; k < 3 && ok; k++) { ok = Math.abs(px[o + k] - 255 * m.color[k] * f) < 8; }
-        if (ok) { hit++; }
-      } }
-      return { body: m.body, x: sx, y: sy, hit: hit };
-    });
+        if (!ok) { continue; }
+        var x = (o >> 2) % w, y = Math.floor((o >> 2) / w);
+        if (x >= x0 - 1 && x <= x1 + 1 && y >= y0 - 1 && y <= y1 + 1) { inside++; } else { outside++; }
+      }
+      out.push({ body: m.body, inside: inside, outside: outside, box: [x0, y0, x1, y1].map(Math.round) });
+    }
+    only = -1; draw();
+    return out;
   }
   function draw() {
     var r = runs[cur]; if (!r || r.n === 0) { return; }
@@ -296,7 +306,7 @@
     gl.enableVertexAttribArray(locLit.p); gl.enableVertexAttribArray(locLit.n);
     gl.uniformMatrix4fv(locLit.VP, false, new Float32Array(VP));
     var radius = 0.045;
-    for (var mi = 0; mi < meshes.length; mi++) { drawMesh(meshes[mi].mesh, pts.mats[meshes[mi].body], meshes[mi].color, VP); }
+    for (var mi = 0; mi < meshes.length; mi++) { if (only >= 0 && mi !== only) { continue; } drawMesh(meshes[mi].mesh, pts.mats[meshes[mi].body], meshes[mi].color, VP); }
     // Capsules: segment i (joint frame i to i + 1, the flange last) is rigid in body i.
     for (var i = 0; i + 1 < pts.length; i++) {
       if (capsule && !capsule[Math.min(i, capsule.length - 1)]) { continue; }
