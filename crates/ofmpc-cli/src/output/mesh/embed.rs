@@ -42,8 +42,8 @@ pub fn cluster(m: &TriMesh, lo: [f64; 3], cell: f64) -> TriMesh {
                 (sums.len() - 1) as u32
             });
             let s = &mut sums[k as usize];
-            for c in 0..3 {
-                s.0[c] += p[c];
+            for (sum, x) in s.0.iter_mut().zip(p) {
+                *sum += x;
             }
             s.1 += 1.0;
             id[v] = k;
