@@ -16,7 +16,7 @@ use std::collections::{HashMap, HashSet};
 
 /// Triangles of all the robot's meshes together in the page: about 9 bytes each (three 16-bit
 /// indices and half a vertex), ≈ 290 KB of base64 for a UR5-class arm.
-pub const TOTAL_TRIANGLES: usize = 24_000;
+pub const TOTAL_TRIANGLES: usize = 12_000;
 
 /// Fewest triangles a mesh keeps when the budget is shared (a small link stays recognisable).
 pub const MIN_TRIANGLES: usize = 300;
