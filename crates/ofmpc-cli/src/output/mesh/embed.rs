@@ -23,7 +23,7 @@ pub const TOTAL_TRIANGLES: usize = 12_000;
 pub const MIN_TRIANGLES: usize = 300;
 
 /// Largest number of vertices of one mesh (16-bit indices).
-const MAX_VERTICES: usize = 65_535;
+pub const MAX_VERTICES: usize = 65_535;
 
 /// The mesh after vertex clustering on a grid of cubic cells of edge `cell` from `lo`.
 pub fn cluster(m: &TriMesh, lo: [f64; 3], cell: f64) -> TriMesh {

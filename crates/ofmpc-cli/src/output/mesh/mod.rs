@@ -6,7 +6,7 @@
 //! * [`stl`], [`collada`], [`obj`]: the file readers, into a [`TriMesh`] in the file's units.
 //! * [`visuals`]: the URDF's `<visual>` elements, file paths resolved (relative,
 //!   `package://`, `file://`), each in its body's frame; a file that cannot be found or read
-//!   is a [`MeshWarning`] and its link falls back to the capsules.
+//!   is a warning and its link falls back to the capsules.
 //! * [`embed`]: vertex clustering to a budget and the page's JSON.
 
 pub mod collada;
