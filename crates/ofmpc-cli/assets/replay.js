@@ -1,5 +1,9 @@
 // ofmpc report: 3-D replay of the runs with raw WebGL (no library, no network).
-// The robot is drawn as capsules between its joint frames, computed here by forward kinematics
+// The robot is drawn from its URDF's visual meshes where the data has them (robot.meshes: per
+// body, 16-bit positions in the body's frame and triangles, crates/ofmpc-cli/src/output/mesh/),
+// flat-shaded with per-face normals computed here, at the body's pose T_body from forward
+// kinematics; bodies without a mesh (robot.capsules) as capsules between their joint frames,
+// computed here by forward kinematics
 // from the placements and axes in the data (crates/ofmpc-cli/src/output/replay.rs); the
 // reference flange path in grey; the flange trace coloured by the Cartesian tracking error
 // (log scale). Play/pause, a time slider, one run at a time (the menu). Drag: orbit; wheel: zoom.
@@ -12,6 +16,11 @@
   var root = document.getElementById('replay');
   var dataEl = document.getElementById('replay-data');
   if (!root || !dataEl) { return; }
+  // Errors (a script exception, a shader that does not compile, a GL error after a check
+  // frame) are listed in #replay's data-errors for the tests.
+  var errors = [];
+  function fail(what) { errors.push(String(what)); root.setAttribute('data-errors', JSON.stringify(errors)); }
+  window.addEventListener('error', function (e) { fail(e.message); });
   var D = JSON.parse(dataEl.textContent);
   var GAP = 65535;
   function decode(q) {
@@ -44,9 +53,10 @@
   var J = D.robot.joints;
   var placements = J.map(function (j) { return fromRp(j.t.r, j.t.p); });
   var flangeT = fromRp(D.robot.flange.r, D.robot.flange.p);
-  // Joint frame origins (base, joint 1..n) and the flange, for angles q.
+  // Joint frame origins (base, joint 1..n) and the flange, for angles q; pts.mats: the body
+  // frames (0: base, i: after joint i's motion), 4x4 column-major.
   function fk(q) {
-    var T = ident(), pts = [[0, 0, 0]];
+    var T = ident(), pts = [[0, 0, 0]], mats = [T];
     for (var i = 0; i < J.length; i++) {
       T = mul(T, placements[i]);
       var m = J[i].prismatic
@@ -54,8 +64,10 @@
         : axisAngle(J[i].axis, q[i]);
       T = mul(T, m);
       pts.push(origin(T));
+      mats.push(T);
     }
     pts.push(origin(mul(T, flangeT)));
+    pts.mats = mats;
     return pts;
   }
   // ---- runs ----
@@ -105,7 +117,11 @@
   var gl = canvas.getContext('webgl', { antialias: false, preserveDrawingBuffer: false });
   var stateEl = document.getElementById('replay-state');
   if (!gl) { stateEl.textContent = 'WebGL is not available in this browser: no 3-D replay.'; root.setAttribute('data-ready', 'no-webgl'); return; }
-  function shader(type, src) { var s = gl.createShader(type); gl.shaderSource(s, src); gl.compileShader(s); return s; }
+  function shader(type, src) {
+    var s = gl.createShader(type); gl.shaderSource(s, src); gl.compileShader(s);
+    if (!gl.getShaderParameter(s, gl.COMPILE_STATUS)) { fail('shader: ' + gl.getShaderInfoLog(s)); }
+    return s;
+  }
   function program(vs, fs) {
     var p = gl.createProgram();
     gl.attachShader(p, shader(gl.VERTEX_SHADER, vs)); gl.attachShader(p, shader(gl.FRAGMENT_SHADER, fs));
@@ -115,7 +131,7 @@
     'attribute vec3 p; attribute vec3 n; uniform mat4 M, VP; varying vec3 vn;' +
     'void main(){ vn = mat3(M) * n; gl_Position = VP * M * vec4(p, 1.0); }',
     'precision mediump float; varying vec3 vn; uniform vec3 c;' +
-    'void main(){ float d = max(dot(normalize(vn), normalize(vec3(0.4, -0.5, 0.8))), 0.0); gl_FragColor = vec4(c * (0.35 + 0.65 * d), 1.0); }');
+    'void main(){ vec3 nn = normalize(vn); if (!gl_FrontFacing) { nn = -nn; } float d = max(dot(nn, normalize(vec3(0.4, -0.5, 0.8))), 0.0); gl_FragColor = vec4(c * (0.35 + 0.65 * d), 1.0); }');
   var flat = program(
     'attribute vec3 p; attribute vec3 c; uniform mat4 VP; varying vec3 vc; uniform float ps;' +
     'void main(){ vc = c; gl_PointSize = ps; gl_Position = VP * vec4(p, 1.0); }',
@@ -143,6 +159,29 @@
     return { p: buffer(f), n: buffer(f), count: p.length / 3 };
   }
   var cyl = cylinder(18), sph = sphere(10);
+  // The robot's meshes: per body, triangles with per-face normals (flat shading) in the body's
+  // frame; decoded from 16-bit positions in the mesh's box and 16-bit triangle corners.
+  function bytes16(b64) {
+    var bin = atob(b64), out = new Uint16Array(bin.length >> 1);
+    for (var i = 0; i < out.length; i++) { out[i] = bin.charCodeAt(2 * i) | (bin.charCodeAt(2 * i + 1) << 8); }
+    return out;
+  }
+  var meshes = (D.robot.meshes || []).map(function (m) {
+    var v = bytes16(m.v), idx = bytes16(m.i), nt = idx.length / 3;
+    var pos = new Float32Array(nt * 9), nor = new Float32Array(nt * 9);
+    function P(k, c) { return m.lo[c] + (m.hi[c] - m.lo[c]) * v[3 * k + c] / 65535; }
+    for (var t = 0; t < nt; t++) {
+      var a = idx[3 * t], b = idx[3 * t + 1], c = idx[3 * t + 2], o = 9 * t;
+      for (var x = 0; x < 3; x++) { pos[o + x] = P(a, x); pos[o + 3 + x] = P(b, x); pos[o + 6 + x] = P(c, x); }
+      var u = [pos[o + 3] - pos[o], pos[o + 4] - pos[o + 1], pos[o + 5] - pos[o + 2]];
+      var w = [pos[o + 6] - pos[o], pos[o + 7] - pos[o + 1], pos[o + 8] - pos[o + 2]];
+      var nx = u[1] * w[2] - u[2] * w[1], ny = u[2] * w[0] - u[0] * w[2], nz = u[0] * w[1] - u[1] * w[0];
+      var nl = Math.hypot(nx, ny, nz) || 1;
+      for (var k = 0; k < 3; k++) { nor[o + 3 * k] = nx / nl; nor[o + 3 * k + 1] = ny / nl; nor[o + 3 * k + 2] = nz / nl; }
+    }
+    return { body: m.body, color: m.color, mesh: { p: buffer(pos), n: buffer(nor), count: nt * 3 } };
+  });
+  var capsule = D.robot.capsules || null; // per body: drawn as a capsule (null: all)
   // Grid on the floor (z = 0), 1 m square, 0.1 m spacing.
   var grid = [], gridC = [];
   for (var g = -10; g <= 10; g++) {
@@ -206,7 +245,36 @@
   var sel = document.getElementById('replay-run'), playBtn = document.getElementById('replay-play');
   var cur = 0, frame = 0, playing = false, lastText = 0;
   runs.forEach(function (r, i) { var o = document.createElement('option'); o.value = String(i); o.textContent = r.name + ' (' + r.status + ')'; sel.appendChild(o); });
-  var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: null, horizonNote: D.horizon_note };
+  var S = window.ofmpcReplay = { frames: 0, k: 0, t: 0, q: [], flange: [], run: '', draws: 0, horizon: null, horizonNote: D.horizon_note, meshes: meshes.length };
+  // For tests: each mesh drawn alone at the pose shown; the pixels of its colour (shaded:
+  // colour × 0.3 … 1) inside and outside the screen box of its 8 projected box corners.
+  var only = -1;
+  function meshProbe(px) {
+    var w = canvas.width, h = canvas.height, out = [];
+    for (var i = 0; i < meshes.length; i++) {
+      only = i; draw();
+      gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, px);
+      var m = meshes[i], d = D.robot.meshes[i], M = mul(viewProj(), fk(S.q).mats[m.body]);
+      var x0 = w, x1 = -1, y0 = h, y1 = -1;
+      for (var c = 0; c < 8; c++) {
+        var p = [c & 1 ? d.hi[0] : d.lo[0], c & 2 ? d.hi[1] : d.lo[1], c & 4 ? d.hi[2] : d.lo[2]];
+        var cl = [0, 1, 2, 3].map(function (r) { return M[r] * p[0] + M[4 + r] * p[1] + M[8 + r] * p[2] + M[12 + r]; });
+        var sx = (cl[0] / cl[3] + 1) / 2 * w, sy = (cl[1] / cl[3] + 1) / 2 * h;
+        x0 = Math.min(x0, sx); x1 = Math.max(x1, sx); y0 = Math.min(y0, sy); y1 = Math.max(y1, sy);
+      }
+      var inside = 0, outside = 0, cs = 255 * (m.color[0] + m.color[1] + m.color[2]);
+      for (var o = 0; o < px.length && cs > 0; o += 4) {
+        var f = (px[o] + px[o + 1] + px[o + 2]) / cs, ok = f > 0.3 && f < 1.02;
+        for (var k = 0; k < 3 && ok; k++) { ok = Math.abs(px[o + k] - 255 * m.color[k] * f) < 8; }
+        if (!ok) { continue; }
+        var x = (o >> 2) % w, y = Math.floor((o >> 2) / w);
+        if (x >= x0 - 1 && x <= x1 + 1 && y >= y0 - 1 && y <= y1 + 1) { inside++; } else { outside++; }
+      }
+      out.push({ body: m.body, inside: inside, outside: outside, box: [x0, y0, x1, y1].map(Math.round) });
+    }
+    only = -1; draw();
+    return out;
+  }
   function draw() {
     var r = runs[cur]; if (!r || r.n === 0) { return; }
     var q = r.q.map(function (c) { return c[frame]; });
@@ -238,12 +306,15 @@
     gl.enableVertexAttribArray(locLit.p); gl.enableVertexAttribArray(locLit.n);
     gl.uniformMatrix4fv(locLit.VP, false, new Float32Array(VP));
     var radius = 0.045;
+    for (var mi = 0; mi < meshes.length; mi++) { if (only >= 0 && mi !== only) { continue; } drawMesh(meshes[mi].mesh, pts.mats[meshes[mi].body], meshes[mi].color, VP); }
+    // Capsules: segment i (joint frame i to i + 1, the flange last) is rigid in body i.
     for (var i = 0; i + 1 < pts.length; i++) {
+      if (capsule && !capsule[Math.min(i, capsule.length - 1)]) { continue; }
       var a = pts[i], b = pts[i + 1];
       if (Math.hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]) > 1e-6) { drawMesh(cyl, linkMatrix(a, b, radius * (i === pts.length - 2 ? 0.5 : 1)), [0.93, 0.55, 0.1], VP); }
       drawMesh(sph, sphereMatrix(a, radius * 1.15), [0.3, 0.3, 0.35], VP);
     }
-    drawMesh(sph, sphereMatrix(pts[pts.length - 1], radius * 0.6), [0.1, 0.1, 0.1], VP);
+    if (!capsule || capsule[capsule.length - 1]) { drawMesh(sph, sphereMatrix(pts[pts.length - 1], radius * 0.6), [0.1, 0.1, 0.1], VP); }
     gl.disableVertexAttribArray(locLit.n);
     S.frames = r.n; S.k = k; S.t = r.t[frame]; S.q = q; S.flange = pts[pts.length - 1]; S.run = r.name; S.draws++;
     stateEl.setAttribute('data-k', String(k));
@@ -302,12 +373,13 @@
       [0, Math.floor(r.n / 3), Math.floor(2 * r.n / 3), r.n - 1].forEach(function (f) {
         slider.value = String(f); slider.dispatchEvent(new Event('input'));
         gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, px);
+        var glErr = gl.getError(); if (glErr !== gl.NO_ERROR) { fail('WebGL error ' + glErr); }
         var ink = 0, sum = 0;
         for (var i = 0; i < px.length; i += 4) {
           if (px[i] < 200 || px[i + 1] < 200 || px[i + 2] < 200) { ink++; }
           sum = (sum * 31 + px[i] + 7 * px[i + 1] + 13 * px[i + 2]) % 1000000007;
         }
-        out.push({ run: r.name, k: S.k, t: S.t, q: S.q, flange: S.flange, ink: ink, hash: sum });
+        out.push({ run: r.name, k: S.k, t: S.t, q: S.q, flange: S.flange, ink: ink, hash: sum, meshes: meshProbe(px) });
       });
     });
     root.setAttribute('data-check', JSON.stringify(out));

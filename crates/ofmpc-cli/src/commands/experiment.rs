@@ -7,7 +7,7 @@ use crate::figures;
 use crate::output::atomic::{Input, StagedDir};
 use crate::output::console;
 use crate::output::plot::{render_both, Figure};
-use crate::output::replay::{replay_json, ReplayRun};
+use crate::output::replay::{replay_json_with, ReplayRun};
 use crate::output::report::{Image, Report, Table};
 use crate::output::run_files::{
     controllers_in_words, per_payload, per_run, the_controllers, RunFiles, CARTESIAN_REFERENCE,
@@ -254,15 +254,36 @@ impl Writer<'_> {
                 record: &r.result.record,
             })
             .collect();
+        let robot = &self.scenario.experiment.robot;
+        let model = &self.scenario.file.robot.model;
+        let visuals = ofmpc_scenario::is_model_path(model).then(|| {
+            crate::output::mesh::visuals::load(
+                std::path::Path::new(model),
+                robot,
+                std::env::var("ROS_PACKAGE_PATH").ok().as_deref(),
+            )
+        });
+        for w in visuals.iter().flat_map(|v| &v.warnings) {
+            console::warn(&format!("3-D replay: {w}"));
+        }
+        let drawn = match &visuals {
+            Some(v) if !v.meshes.is_empty() => {
+                "its URDF's visual meshes (capsules between the joint frames for links without one)"
+            }
+            _ => "its kinematics (capsules between the joint frames)",
+        };
         self.report.heading("3-D replay");
-        self.report.paragraph(
-            "The robot drawn from its kinematics (capsules between the joint frames), the reference \
+        self.report.paragraph(format!(
+            "The robot drawn from {drawn}, the reference \
              path (grey), the flange trace coloured by the Cartesian tracking error and, in magenta, what the \
              controller predicted over its horizon at the latest recorded sample. Play/pause, \
              the time slider and the run menu; drag to orbit, wheel to zoom. Stopped runs end at the stop.",
-        );
+        ));
+        for w in visuals.iter().flat_map(|v| &v.warnings) {
+            self.report.paragraph(format!("Not drawn: {w}."));
+        }
         self.report
-            .replay(replay_json(&self.scenario.experiment.robot, &runs));
+            .replay(replay_json_with(robot, &runs, visuals.as_ref()));
     }
 
     /// Folds the figures of one payload (`<details>`) when there are more than two payloads.

@@ -10,6 +10,7 @@ pub mod chart;
 pub mod cleanup;
 pub(crate) mod compare;
 pub mod console;
+pub mod mesh;
 pub mod plot;
 pub mod replay;
 pub mod report;

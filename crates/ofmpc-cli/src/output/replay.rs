@@ -106,8 +106,19 @@ pub struct ReplayRun<'a> {
     pub record: &'a Record,
 }
 
-/// The replay's data as JSON.
+/// The replay's data as JSON (the robot drawn as capsules).
 pub fn replay_json(robot: &Robot, runs: &[ReplayRun<'_>]) -> String {
+    replay_json_with(robot, runs, None)
+}
+
+/// The replay's data as JSON, with the robot's meshes when `visuals` has any
+/// ([`super::mesh`]): `robot.meshes` (per body, [`super::mesh::embed::meshes_json`]) and
+/// `robot.capsules` (per body 0..=n: drawn as a capsule).
+pub fn replay_json_with(
+    robot: &Robot,
+    runs: &[ReplayRun<'_>],
+    visuals: Option<&super::mesh::visuals::Visuals>,
+) -> String {
     let joints: Vec<Value> = robot
         .joints()
         .iter()
@@ -160,8 +171,14 @@ pub fn replay_json(robot: &Robot, runs: &[ReplayRun<'_>]) -> String {
             "horizon": horizons_json(rec),
         }));
     }
+    let mut robot_json =
+        json!({"name": robot.name(), "joints": joints, "flange": transform(robot.flange_offset())});
+    if let Some(v) = visuals.filter(|v| !v.meshes.is_empty()) {
+        robot_json["meshes"] = super::mesh::embed::meshes_json(v);
+        robot_json["capsules"] = json!(v.capsule);
+    }
     json!({
-        "robot": {"name": robot.name(), "joints": joints, "flange": transform(robot.flange_offset())},
+        "robot": robot_json,
         "reference": reference,
         "runs": out_runs,
         "horizon_note": "Magenta: what the controller predicted over its horizon at the latest recorded sample (none for pid, ctc, ctc-adaptive).",

@@ -7,12 +7,14 @@
 
 mod drives;
 mod error;
+mod links;
 mod read;
 mod urdf;
 mod urdf_locate;
 
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
+pub use links::LinkFrame;
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::TRIANGLE_TOLERANCE;
 
@@ -200,6 +202,8 @@ pub struct Robot {
     tcp: Transform,
     /// Moving links without `<inertial>` and their joints ([`Robot::require_inertials`]).
     missing_inertials: Vec<(String, String)>,
+    /// Every URDF link and the body it is attached to ([`Robot::link_frames`]).
+    link_frames: Vec<LinkFrame>,
 }
 
 /// The joint axes of a six-joint chain at q = 0: unit directions, a point on each (base
@@ -435,6 +439,7 @@ impl Robot {
             start_q,
             tcp: Transform::identity(),
             missing_inertials: Vec::new(),
+            link_frames: Vec::new(),
         };
         robot.opw = robot.detected_opw_parameters();
         robot
@@ -522,6 +527,11 @@ impl Robot {
     /// Name of the flange frame (`tool0`, `flange` or the last link).
     pub fn flange_name(&self) -> &str {
         &self.flange_name
+    }
+    /// Every link of the URDF (document order) with the body it is rigidly attached to and
+    /// its pose there: where the report draws the link's `<visual>` geometry.
+    pub fn link_frames(&self) -> &[LinkFrame] {
+        &self.link_frames
     }
     /// Pose of the flange frame in the last body's frame.
     pub fn flange_offset(&self) -> &Transform {

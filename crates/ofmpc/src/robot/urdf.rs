@@ -310,6 +310,18 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
     let mut robot = Robot::assemble(name, joints, flange, flange_name);
     robot.warnings = warnings;
     robot.missing_inertials = missing;
+    robot.link_frames = urdf
+        .links
+        .iter()
+        .filter_map(|l| {
+            let (body, pose) = frames.get(l.name.as_str())?;
+            Some(super::LinkFrame {
+                name: l.name.clone(),
+                body: *body,
+                pose: *pose,
+            })
+        })
+        .collect();
     Ok(robot)
 }
 

@@ -1,0 +1,350 @@
+//! The URDF's `<visual>` elements as triangle meshes in the frames of the robot's bodies.
+//!
+//! A visual's vertex `p` (in its mesh file's units, z up) is placed in the frame of the body
+//! `b` that carries its link as `T_link · T_visual · diag(scale) · p` (URDF specification:
+//! `<visual><origin>` is the visual's frame in the link's frame, `<mesh scale>` scales the
+//! mesh along its own axes; `T_link` is the link's pose in its body, [`LinkFrame`]). The page
+//! then draws the mesh at the body's forward-kinematics pose. Primitives follow the URDF
+//! specification: `<box size>` centred on its frame, `<cylinder>` and `<capsule>` along z
+//! centred, `<sphere>` centred.
+
+use super::{read_limited, read_mesh, resolve, TriMesh};
+use nalgebra::Vector3;
+use ofmpc::robot::{LinkFrame, Robot};
+use ofmpc::spatial::Transform;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Triangle meshes of one body, of one colour.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BodyMesh {
+    /// The body: 0 for the base, `i + 1` for the body of joint `i` ([`Robot::joints`]).
+    pub body: usize,
+    /// RGB in 0..1 (the visual's `<material><color rgba>`, or a default grey).
+    pub color: [f64; 3],
+    /// The triangles in the body's frame (m).
+    pub mesh: TriMesh,
+}
+
+/// The robot's visuals: meshes per body and what could not be drawn.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Visuals {
+    /// Meshes, one per body and colour.
+    pub meshes: Vec<BodyMesh>,
+    /// Per body (`0..=n`): drawn as a capsule (no visual, or one could not be read).
+    pub capsule: Vec<bool>,
+    /// A sentence per visual that could not be used (the link, the file, why).
+    pub warnings: Vec<String>,
+}
+
+/// Default colours of meshes without a material: two greys, alternating along the chain.
+const GREYS: [[f64; 3]; 2] = [[0.80, 0.81, 0.84], [0.62, 0.64, 0.68]];
+
+/// The visuals of the URDF file `urdf` from which `robot` was read (`ros_package_path`: the
+/// `ROS_PACKAGE_PATH` variable). The URDF not readable again: no meshes, one warning.
+pub fn load(urdf: &Path, robot: &Robot, ros_package_path: Option<&str>) -> Visuals {
+    let n = robot.dof();
+    let mut out = Visuals {
+        capsule: vec![true; n + 1],
+        ..Visuals::default()
+    };
+    let parsed = read_limited(urdf, ofmpc::robot::MAX_URDF_BYTES)
+        .map_err(|e| e.to_string())
+        .and_then(|b| String::from_utf8(b).map_err(|e| e.to_string()))
+        .and_then(|t| urdf_rs::read_from_string(&t).map_err(|e| e.to_string()));
+    let doc = match parsed {
+        Ok(d) => d,
+        Err(e) => {
+            out.warnings.push(format!("{}: {e}", urdf.display()));
+            return out;
+        }
+    };
+    let dir = urdf.parent().unwrap_or(Path::new("."));
+    let frames: std::collections::HashMap<&str, &LinkFrame> = robot
+        .link_frames()
+        .iter()
+        .map(|f| (f.name.as_str(), f))
+        .collect();
+    let mut has_mesh = vec![false; n + 1];
+    let mut failed = vec![false; n + 1];
+    for link in &doc.links {
+        let Some(frame) = frames.get(link.name.as_str()) else {
+            continue;
+        };
+        let body = frame.body.map_or(0, |i| i + 1);
+        for v in &link.visual {
+            let mut mesh = match geometry(&v.geometry, dir, ros_package_path) {
+                Ok(m) => m,
+                Err(e) => {
+                    out.warnings.push(format!(
+                        "link {:?}: {e}; the link is drawn as a capsule",
+                        link.name
+                    ));
+                    failed[body] = true;
+                    continue;
+                }
+            };
+            let t = frame
+                .pose
+                .compose(&Transform::from_xyz_rpy(*v.origin.xyz, *v.origin.rpy));
+            mesh.map(|p| {
+                let q = t.apply_point(&Vector3::new(p[0], p[1], p[2]));
+                [q[0], q[1], q[2]]
+            });
+            let color =
+                material_color(v.material.as_ref(), &doc.materials).unwrap_or(GREYS[body % 2]);
+            has_mesh[body] = true;
+            match out
+                .meshes
+                .iter_mut()
+                .find(|m| m.body == body && m.color == color)
+            {
+                Some(m) => m.mesh.append(&mesh),
+                None => out.meshes.push(BodyMesh { body, color, mesh }),
+            }
+        }
+    }
+    out.capsule = (0..=n).map(|b| !has_mesh[b] || failed[b]).collect();
+    out
+}
+
+/// A `<material>`'s colour: its own `<color rgba>`, else that of the robot-level material
+/// of the same name.
+fn material_color(m: Option<&urdf_rs::Material>, all: &[urdf_rs::Material]) -> Option<[f64; 3]> {
+    let m = m?;
+    let c = m.color.as_ref().or_else(|| {
+        all.iter()
+            .find(|g| g.name == m.name)
+            .and_then(|g| g.color.as_ref())
+    })?;
+    let rgba = *c.rgba;
+    rgba[..3]
+        .iter()
+        .all(|v| v.is_finite())
+        .then(|| [rgba[0], rgba[1], rgba[2]].map(|v| v.clamp(0.0, 1.0)))
+}
+
+/// A `<geometry>` as triangles in the visual's frame (scale applied).
+fn geometry(
+    g: &urdf_rs::Geometry,
+    dir: &Path,
+    ros_package_path: Option<&str>,
+) -> Result<TriMesh, String> {
+    let check = |what: &str, v: &[f64]| {
+        if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            Ok(())
+        } else {
+            Err(format!("<{what}> with {v:?}: sizes must be finite and ≥ 0"))
+        }
+    };
+    match g {
+        urdf_rs::Geometry::Mesh { filename, scale } => {
+            let s = scale.as_ref().map_or([1.0; 3], |s| **s);
+            if !s.iter().all(|x| x.is_finite()) {
+                return Err(format!(
+                    "<mesh filename={filename:?}> scale {s:?} is not finite"
+                ));
+            }
+            let path = resolve(filename, dir, ros_package_path).map_err(|e| e.to_string())?;
+            let mut m = read_mesh(&path).map_err(|e| e.to_string())?;
+            m.map(|p| [p[0] * s[0], p[1] * s[1], p[2] * s[2]]);
+            Ok(m)
+        }
+        urdf_rs::Geometry::Box { size } => {
+            check("box", &size[..])?;
+            Ok(cuboid([size[0], size[1], size[2]]))
+        }
+        urdf_rs::Geometry::Cylinder { radius, length } => {
+            check("cylinder", &[*radius, *length])?;
+            Ok(cylinder(*radius, *length))
+        }
+        urdf_rs::Geometry::Sphere { radius } => {
+            check("sphere", &[*radius])?;
+            Ok(sphere(*radius, 0.0))
+        }
+        urdf_rs::Geometry::Capsule { radius, length } => {
+            check("capsule", &[*radius, *length])?;
+            let mut m = cylinder(*radius, *length);
+            m.append(&sphere(*radius, length / 2.0));
+            m.append(&sphere(*radius, -length / 2.0));
+            Ok(m)
+        }
+    }
+}
+
+/// A box of the given edge lengths centred on the origin (12 triangles, outward).
+pub fn cuboid(size: [f64; 3]) -> TriMesh {
+    let h = size.map(|s| s / 2.0);
+    let corner = |i: u32| {
+        [
+            if i & 1 == 0 { -h[0] } else { h[0] },
+            if i & 2 == 0 { -h[1] } else { h[1] },
+            if i & 4 == 0 { -h[2] } else { h[2] },
+        ]
+    };
+    let faces: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    TriMesh {
+        positions: (0..8).map(corner).collect(),
+        triangles: faces
+            .iter()
+            .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
+            .collect(),
+    }
+}
+
+/// Segments around a cylinder or sphere.
+const SEGMENTS: u32 = 24;
+
+/// A closed cylinder along z, centred, of `radius` and `length`.
+pub fn cylinder(radius: f64, length: f64) -> TriMesh {
+    let s = SEGMENTS;
+    let mut m = TriMesh::default();
+    for z in [-length / 2.0, length / 2.0] {
+        for i in 0..s {
+            let a = 2.0 * PI * f64::from(i) / f64::from(s);
+            m.positions.push([radius * a.cos(), radius * a.sin(), z]);
+        }
+        m.positions.push([0.0, 0.0, z]);
+    }
+    let top = s + 1;
+    for i in 0..s {
+        let j = (i + 1) % s;
+        m.triangles.push([i, j, top + j]);
+        m.triangles.push([i, top + j, top + i]);
+        m.triangles.push([s, j, i]);
+        m.triangles.push([top + s, top + i, top + j]);
+    }
+    m
+}
+
+/// A sphere of `radius` centred at `(0, 0, z)`.
+pub fn sphere(radius: f64, z: f64) -> TriMesh {
+    let (rings, s) = (SEGMENTS / 2, SEGMENTS);
+    let mut m = TriMesh::default();
+    for i in 0..=rings {
+        let th = PI * f64::from(i) / f64::from(rings);
+        for j in 0..s {
+            let ph = 2.0 * PI * f64::from(j) / f64::from(s);
+            m.positions.push([
+                radius * th.sin() * ph.cos(),
+                radius * th.sin() * ph.sin(),
+                z + radius * th.cos(),
+            ]);
+        }
+    }
+    for i in 0..rings {
+        for j in 0..s {
+            let (a, b) = (i * s + j, i * s + (j + 1) % s);
+            m.triangles.push([a, a + s, b + s]);
+            m.triangles.push([a, b + s, b]);
+        }
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn arm() -> std::path::PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mesh_arm/urdf/mesh_arm.urdf")
+    }
+
+    /// The test arm's visuals land in their bodies' frames: each body's bounding box is the
+    /// one worked out by hand from the mesh files (their units, node matrix, scale) and the
+    /// URDF's visual and fixed-joint origins.
+    #[test]
+    fn the_test_arm_visuals_sit_in_their_bodies() {
+        let robot = Robot::from_urdf_file(&arm()).unwrap();
+        let v = load(&arm(), &robot, None);
+        assert!(v.warnings.is_empty(), "{:?}", v.warnings);
+        assert_eq!(v.capsule, vec![false; 7]);
+        let want: [(usize, [f64; 3], [f64; 3], usize); 7] = [
+            // Binary STL in mm, scale 0.001.
+            (0, [-0.15, -0.15, 0.0], [0.15, 0.15, 0.2], 12),
+            // ASCII STL.
+            (1, [-0.08, -0.08, 0.2], [0.12, 0.08, 0.4], 12),
+            // Collada in cm, node matrix +18 cm along z, through package://.
+            (2, [-0.06, -0.09, 0.0], [0.06, -0.03, 0.36], 12),
+            // OBJ along z turned onto x by rpy (0, π/2, 0): (x, y, z) → (z, y, −x).
+            (3, [-0.03, -0.05, -0.05], [0.24, 0.05, 0.05], 12),
+            // Cylinder along x, centred at x = 0.07.
+            (
+                4,
+                [0.01, -0.045, -0.045],
+                [0.13, 0.045, 0.045],
+                4 * SEGMENTS as usize,
+            ),
+            (
+                5,
+                [-0.05; 3],
+                [0.05; 3],
+                2 * (SEGMENTS * SEGMENTS / 2) as usize,
+            ),
+            // The flange's box (z out of the flange) on body 6: flange rpy (0, π/2, 0).
+            (6, [0.0, -0.035, -0.035], [0.02, 0.035, 0.035], 12),
+        ];
+        assert_eq!(v.meshes.len(), want.len());
+        for (body, lo, hi, tris) in want {
+            let m = v.meshes.iter().find(|m| m.body == body).unwrap();
+            let (l, h) = m.mesh.bounds().unwrap();
+            for c in 0..3 {
+                assert!(
+                    (l[c] - lo[c]).abs() < 1e-6 && (h[c] - hi[c]).abs() < 1e-6,
+                    "body {body}: {l:?} {h:?}"
+                );
+            }
+            assert_eq!(m.mesh.triangles.len(), tris, "body {body}");
+        }
+        let blue = [0.15, 0.35, 0.85];
+        assert_eq!(v.meshes[0].color, blue, "the robot-level material by name");
+        assert_eq!(
+            v.meshes.iter().find(|m| m.body == 6).unwrap().color,
+            [0.95, 0.45, 0.05]
+        );
+    }
+
+    /// A missing mesh file: a warning naming the link and the file, that body drawn as a
+    /// capsule, the others as meshes.
+    #[test]
+    fn a_missing_mesh_falls_back_to_the_capsule_with_a_warning() {
+        let tmp = std::env::temp_dir().join(format!("ofmpc-visuals-{}", std::process::id()));
+        std::fs::create_dir_all(&tmp).unwrap();
+        let text = std::fs::read_to_string(arm())
+            .unwrap()
+            .replace("../meshes/link1.stl", "../meshes/nowhere.stl")
+            .replace(
+                "../meshes/",
+                &format!("{}/", arm().parent().unwrap().join("../meshes").display()),
+            );
+        let urdf = tmp.join("arm.urdf");
+        std::fs::write(&urdf, text).unwrap();
+        let robot = Robot::from_urdf_file(&urdf).unwrap();
+        let v = load(&urdf, &robot, None);
+        assert_eq!(v.warnings.len(), 2, "{:?}", v.warnings);
+        assert!(
+            v.warnings[0].contains("link \"link_1\"") && v.warnings[0].contains("nowhere.stl"),
+            "{:?}",
+            v.warnings
+        );
+        // package://mesh_arm/ is not above the temporary folder.
+        assert!(
+            v.warnings[1].contains("link \"link_2\""),
+            "{:?}",
+            v.warnings
+        );
+        assert_eq!(
+            v.capsule,
+            vec![false, true, true, false, false, false, false]
+        );
+        assert_eq!(v.meshes.len(), 5);
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+}
