@@ -11,6 +11,7 @@ use ofmpc::analysis::{
 use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The heaviest payload `max_payload_kg` reports (kg): a controller still
 /// inside its interval there reports this bound.
@@ -124,6 +125,11 @@ pub struct Candidate {
     pub rms_mm: f64,
     /// Whether every simulated run completed without steady error.
     pub offset_free: bool,
+    /// Its runs were stopped early because it could no longer win: the
+    /// worst RMS error of the runs made already exceeded that of a
+    /// candidate simulated completely and offset-free (branch and bound;
+    /// `rms_mm` is then that partial worst, `offset_free` false).
+    pub pruned: bool,
 }
 
 /// What [`robust_tuning`] found.
@@ -314,6 +320,7 @@ fn mpc_candidates(
                     margin: f64::NAN,
                     rms_mm: f64::NAN,
                     offset_free: false,
+                    pruned: false,
                 })
             })
         })
@@ -351,10 +358,7 @@ fn mpc_candidates(
     }
     // 3. Simulate the stable candidates at the range's ends and middle.
     let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
-    candidates
-        .par_iter_mut()
-        .filter(|c| c.margin > 0.0)
-        .for_each(|c| simulate_candidate(exp, c, kinds, &masses));
+    simulate_bounded(exp, &mut candidates, kinds, &masses);
     Ok(candidates)
 }
 
@@ -436,6 +440,7 @@ fn adaptive_fallback(
         margin: f64::NAN,
         rms_mm: f64::NAN,
         offset_free: false,
+        pruned: false,
     };
     let q0 = exp.reference.q(0);
     let opts = StabilityOptions::default();
@@ -450,7 +455,7 @@ fn adaptive_fallback(
         margin = margin.min((1.0 / lo).ln().min(hi.ln()));
     }
     c.margin = margin;
-    simulate_candidate(exp, &mut c, &adaptive, masses);
+    simulate_candidate(exp, &mut c, &adaptive, masses, f64::INFINITY);
     Ok(c.offset_free.then_some((c, adaptive)))
 }
 
@@ -503,15 +508,131 @@ pub(crate) fn runs_hold<'a>(
     (true, worst)
 }
 
+/// Simulates the candidates with a positive margin, branch and bound.
+///
+/// The winner is the offset-free candidate with the least worst RMS error
+/// (the first in grid order on equal RMS), so a candidate one of whose runs
+/// already has a larger RMS error than the best candidate simulated
+/// completely cannot win: its other runs are stopped ([`Candidate::pruned`]).
+/// The candidates are simulated one after another, the likeliest winner
+/// first ([`simulation_order`]), each one's runs in parallel; the bound
+/// changes only between candidates, so the chosen candidate is the one an
+/// exhaustive simulation chooses and does not depend on thread timing.
+fn simulate_bounded(
+    exp: &ofmpc::sim::Experiment,
+    candidates: &mut [Candidate],
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) {
+    let mut bound = f64::INFINITY;
+    for i in simulation_order(candidates) {
+        let c = &mut candidates[i];
+        simulate_candidate(exp, c, kinds, masses, bound);
+        if c.offset_free {
+            bound = bound.min(c.rms_mm);
+        }
+    }
+}
+
+/// The indices of the candidates with a positive margin in the order
+/// [`simulate_bounded`] simulates them: the likeliest winner first, so that
+/// the bound is tight early (any order gives the same choice).
+fn simulation_order(candidates: &[Candidate]) -> Vec<usize> {
+    (0..candidates.len())
+        .filter(|&i| candidates[i].margin > 0.0)
+        .collect()
+}
+
+/// What became of one run of a candidate ([`simulate_candidate`]).
+#[derive(Debug, Clone, Copy)]
+enum RunVerdict {
+    /// Completed offset-free with this RMS Cartesian error (mm).
+    Holds(f64),
+    /// Diverged, failed or kept a steady error (its RMS error in mm; NaN
+    /// without a result).
+    Fails(f64),
+    /// Ended early: another run of the candidate decided its fate.
+    Cancelled,
+}
+
+/// One run of `e` with controller `kind` and a point payload of `mass` kg,
+/// ended early when `stop` becomes true.
+fn run_verdict(
+    e: &ofmpc::sim::Experiment,
+    kind: ControllerKind,
+    mass: f64,
+    stop: &AtomicBool,
+) -> RunVerdict {
+    match e.run_cancellable(kind, &Payload::point_mass(mass), &mut |_, _| {}, stop) {
+        Err(ofmpc::sim::ExperimentError::Interrupted { .. }) => RunVerdict::Cancelled,
+        Err(_) => RunVerdict::Fails(f64::NAN),
+        Ok((r, metrics)) => {
+            let rms = metrics.cartesian_error_rms_mm;
+            let steady =
+                (metrics.steady_joint_error_max_rad.iter()).fold(0.0, |a: f64, &b| a.max(b));
+            if r.outcome.is_completed() && steady <= OFFSET_FREE_RAD {
+                RunVerdict::Holds(rms)
+            } else {
+                RunVerdict::Fails(rms)
+            }
+        }
+    }
+}
+
 /// Simulates candidate `c` for every controller of `kinds` at the payloads
-/// `masses`, the heaviest first (the likeliest to fail): [`runs_hold`].
+/// `masses` (each controller's heaviest payload first: the likeliest to
+/// fail), the runs in parallel. A run that fails, or holds with an RMS error
+/// above `bound` (the best complete candidate's), ends the candidate: its
+/// other runs stop. `c.offset_free` when every run held within the bound;
+/// `c.pruned` when a run exceeded the bound and none of those made failed;
+/// `c.rms_mm` the worst RMS error of the runs made.
 fn simulate_candidate(
     exp: &ofmpc::sim::Experiment,
     c: &mut Candidate,
     kinds: &[ControllerKind],
     masses: &[f64],
+    bound: f64,
 ) {
     let mut e = exp.clone();
     e.mpc = candidate_settings(c, exp.robot.dof());
-    (c.offset_free, c.rms_mm) = runs_hold(&e, kinds, masses.iter().rev());
+    let runs: Vec<(ControllerKind, f64)> = (kinds.iter())
+        .flat_map(|&k| masses.iter().rev().map(move |&m| (k, m)))
+        .collect();
+    let stop = AtomicBool::new(false);
+    let t0 = std::time::Instant::now();
+    let verdicts: Vec<RunVerdict> = runs
+        .par_iter()
+        .map(|&(k, m)| {
+            if stop.load(Ordering::Relaxed) {
+                return RunVerdict::Cancelled;
+            }
+            let v = run_verdict(&e, k, m, &stop);
+            if !matches!(v, RunVerdict::Holds(rms) if !(rms > bound))
+                && !matches!(v, RunVerdict::Cancelled)
+            {
+                stop.store(true, Ordering::Relaxed);
+            }
+            v
+        })
+        .collect();
+    let rms_of = |v: &RunVerdict| match *v {
+        RunVerdict::Holds(r) | RunVerdict::Fails(r) => Some(r),
+        RunVerdict::Cancelled => None,
+    };
+    c.rms_mm = verdicts.iter().filter_map(rms_of).fold(0.0, f64::max);
+    let failed = verdicts.iter().any(|v| matches!(v, RunVerdict::Fails(_)));
+    if std::env::var_os("OFMPC_TUNE_TRACE").is_some() {
+        eprintln!(
+            "TRACE dy {} du {} w {} m {} margin {:.4} bound {bound} t {:.3} {:?}",
+            c.q_dy,
+            c.q_du,
+            c.wrist_scale,
+            c.model_payload_kg,
+            c.margin,
+            t0.elapsed().as_secs_f64(),
+            runs.iter().zip(&verdicts).collect::<Vec<_>>()
+        );
+    }
+    c.offset_free = !stop.load(Ordering::Relaxed);
+    c.pruned = !c.offset_free && !failed;
 }
