@@ -524,8 +524,20 @@ fn simulate_bounded(
     kinds: &[ControllerKind],
     masses: &[f64],
 ) {
+    let order = simulation_order(candidates);
+    simulate_in_order(exp, candidates, &order, kinds, masses);
+}
+
+/// [`simulate_bounded`] in the given order of the candidates' indices.
+fn simulate_in_order(
+    exp: &ofmpc::sim::Experiment,
+    candidates: &mut [Candidate],
+    order: &[usize],
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) {
     let mut bound = f64::INFINITY;
-    for i in simulation_order(candidates) {
+    for &i in order {
         let c = &mut candidates[i];
         simulate_candidate(exp, c, kinds, masses, bound);
         if c.offset_free {
@@ -536,11 +548,20 @@ fn simulate_bounded(
 
 /// The indices of the candidates with a positive margin in the order
 /// [`simulate_bounded`] simulates them: the likeliest winner first, so that
-/// the bound is tight early (any order gives the same choice).
+/// the bound is tight early (any order gives the same choice). The lightest
+/// increment weights first (`Q_Δu`, then `Q_Δy`; grid order among equal
+/// weights): the cost weighs the tracking error against the increments, so
+/// among the stable candidates the lightest increment weights usually track
+/// closest (a heuristic: it orders the work, not the choice).
 fn simulation_order(candidates: &[Candidate]) -> Vec<usize> {
-    (0..candidates.len())
+    let mut order: Vec<usize> = (0..candidates.len())
         .filter(|&i| candidates[i].margin > 0.0)
-        .collect()
+        .collect();
+    order.sort_by(|&a, &b| {
+        let (ca, cb) = (&candidates[a], &candidates[b]);
+        (ca.q_du.total_cmp(&cb.q_du)).then(ca.q_dy.total_cmp(&cb.q_dy))
+    });
+    order
 }
 
 /// What became of one run of a candidate ([`simulate_candidate`]).
@@ -635,4 +656,66 @@ fn simulate_candidate(
     }
     c.offset_free = !stop.load(Ordering::Relaxed);
     c.pruned = !c.offset_free && !failed;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chosen candidate: the offset-free one with the least worst RMS
+    /// error, the first in grid order on equal RMS (as [`robust_tuning`]).
+    fn chosen(cs: &[Candidate]) -> Option<usize> {
+        (0..cs.len())
+            .filter(|&i| cs[i].offset_free)
+            .min_by(|&a, &b| cs[a].rms_mm.total_cmp(&cs[b].rms_mm))
+    }
+
+    /// Branch and bound chooses what simulating every candidate fully
+    /// chooses, in any order of simulation: a pruned candidate's runs
+    /// already exceed the chosen one's worst RMS, and every candidate not
+    /// pruned has the verdict and RMS of its full simulation.
+    #[test]
+    fn branch_and_bound_chooses_as_the_exhaustive_search() {
+        let base = Scenario::resolve(&ScenarioFile::default()).unwrap();
+        let exp = &base.experiment;
+        let kinds = [ControllerKind::First, ControllerKind::Second];
+        let masses = [0.0, 1.5, 3.0];
+        let grid: Vec<Candidate> = [(0.1, 1e-3), (0.5, 1e-2), (0.1, 1e-4), (2.0, 1e-1)]
+            .iter()
+            .map(|&(q_dy, q_du)| Candidate {
+                q_dy,
+                q_du,
+                wrist_scale: 1.0,
+                model_payload_kg: 1.5,
+                margin: 1.0,
+                rms_mm: f64::NAN,
+                offset_free: false,
+                pruned: false,
+            })
+            .collect();
+        let mut full = grid.clone();
+        for c in &mut full {
+            simulate_candidate(exp, c, &kinds, &masses, f64::INFINITY);
+            assert!(!c.pruned);
+        }
+        let want = chosen(&full).expect("an offset-free candidate");
+        assert!(full.iter().filter(|c| c.offset_free).count() >= 2);
+        let n = grid.len();
+        for order in [(0..n).collect::<Vec<_>>(), (0..n).rev().collect()] {
+            let mut cs = grid.clone();
+            simulate_in_order(exp, &mut cs, &order, &kinds, &masses);
+            assert_eq!(chosen(&cs), Some(want), "order {order:?}");
+            for (c, f) in cs.iter().zip(&full) {
+                if c.pruned {
+                    assert!(c.rms_mm > full[want].rms_mm, "order {order:?}: {c:?}");
+                    assert!(!c.offset_free);
+                } else {
+                    assert_eq!(c.offset_free, f.offset_free, "order {order:?}: {c:?}");
+                    if c.offset_free {
+                        assert_eq!(c.rms_mm, f.rms_mm, "order {order:?}: {c:?}");
+                    }
+                }
+            }
+        }
+    }
 }
