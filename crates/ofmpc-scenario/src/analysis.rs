@@ -628,9 +628,13 @@ fn simulate_candidate(
                 return RunVerdict::Cancelled;
             }
             let v = run_verdict(&e, k, m, &stop);
-            if !matches!(v, RunVerdict::Holds(rms) if !(rms > bound))
-                && !matches!(v, RunVerdict::Cancelled)
-            {
+            // A run that held within the bound (or without an RMS to compare) decides nothing.
+            let decides = match v {
+                RunVerdict::Holds(rms) => rms > bound,
+                RunVerdict::Fails(_) => true,
+                RunVerdict::Cancelled => false,
+            };
+            if decides {
                 stop.store(true, Ordering::Relaxed);
             }
             v
