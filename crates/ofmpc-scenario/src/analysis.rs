@@ -620,7 +620,6 @@ fn simulate_candidate(
         .flat_map(|&k| masses.iter().rev().map(move |&m| (k, m)))
         .collect();
     let stop = AtomicBool::new(false);
-    let t0 = std::time::Instant::now();
     let verdicts: Vec<RunVerdict> = runs
         .par_iter()
         .map(|&(k, m)| {
@@ -646,18 +645,6 @@ fn simulate_candidate(
     };
     c.rms_mm = verdicts.iter().filter_map(rms_of).fold(0.0, f64::max);
     let failed = verdicts.iter().any(|v| matches!(v, RunVerdict::Fails(_)));
-    if std::env::var_os("OFMPC_TUNE_TRACE").is_some() {
-        eprintln!(
-            "TRACE dy {} du {} w {} m {} margin {:.4} bound {bound} t {:.3} {:?}",
-            c.q_dy,
-            c.q_du,
-            c.wrist_scale,
-            c.model_payload_kg,
-            c.margin,
-            t0.elapsed().as_secs_f64(),
-            runs.iter().zip(&verdicts).collect::<Vec<_>>()
-        );
-    }
     c.offset_free = !stop.load(Ordering::Relaxed);
     c.pruned = !c.offset_free && !failed;
 }
