@@ -200,7 +200,10 @@ pub fn candidate_settings(c: &Candidate, n: usize) -> MpcSettings {
 ///    the largest margin `min(ln(α_min/lo), ln(hi/α_max))`.
 /// 3. The candidates with a positive margin are simulated along the program
 ///    at the range's ends and middle; the tuning with the least worst RMS
-///    Cartesian error among the runs that completed offset-free wins.
+///    Cartesian error among the runs that completed offset-free wins. The
+///    simulation is a branch and bound (the likeliest winner first; a
+///    candidate that can no longer win is stopped, [`Candidate::pruned`]):
+///    the same choice as simulating every candidate fully.
 pub fn robust_tuning(
     base: &Scenario,
     lo_kg: f64,
