@@ -11,6 +11,7 @@ use ofmpc::analysis::{
 use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The heaviest payload `max_payload_kg` reports (kg): a controller still
 /// inside its interval there reports this bound.
@@ -124,6 +125,11 @@ pub struct Candidate {
     pub rms_mm: f64,
     /// Whether every simulated run completed without steady error.
     pub offset_free: bool,
+    /// Its runs were stopped early because it could no longer win: the
+    /// worst RMS error of the runs made already exceeded that of a
+    /// candidate simulated completely and offset-free (branch and bound;
+    /// `rms_mm` is then that partial worst, `offset_free` false).
+    pub pruned: bool,
 }
 
 /// What [`robust_tuning`] found.
@@ -194,7 +200,10 @@ pub fn candidate_settings(c: &Candidate, n: usize) -> MpcSettings {
 ///    the largest margin `min(ln(α_min/lo), ln(hi/α_max))`.
 /// 3. The candidates with a positive margin are simulated along the program
 ///    at the range's ends and middle; the tuning with the least worst RMS
-///    Cartesian error among the runs that completed offset-free wins.
+///    Cartesian error among the runs that completed offset-free wins. The
+///    simulation is a branch and bound (the likeliest winner first; a
+///    candidate that can no longer win is stopped, [`Candidate::pruned`]):
+///    the same choice as simulating every candidate fully.
 pub fn robust_tuning(
     base: &Scenario,
     lo_kg: f64,
@@ -314,6 +323,7 @@ fn mpc_candidates(
                     margin: f64::NAN,
                     rms_mm: f64::NAN,
                     offset_free: false,
+                    pruned: false,
                 })
             })
         })
@@ -351,10 +361,7 @@ fn mpc_candidates(
     }
     // 3. Simulate the stable candidates at the range's ends and middle.
     let masses = [lo_kg, 0.5 * (lo_kg + hi_kg), hi_kg];
-    candidates
-        .par_iter_mut()
-        .filter(|c| c.margin > 0.0)
-        .for_each(|c| simulate_candidate(exp, c, kinds, &masses));
+    simulate_bounded(exp, &mut candidates, kinds, &masses);
     Ok(candidates)
 }
 
@@ -436,6 +443,7 @@ fn adaptive_fallback(
         margin: f64::NAN,
         rms_mm: f64::NAN,
         offset_free: false,
+        pruned: false,
     };
     let q0 = exp.reference.q(0);
     let opts = StabilityOptions::default();
@@ -450,7 +458,7 @@ fn adaptive_fallback(
         margin = margin.min((1.0 / lo).ln().min(hi.ln()));
     }
     c.margin = margin;
-    simulate_candidate(exp, &mut c, &adaptive, masses);
+    simulate_candidate(exp, &mut c, &adaptive, masses, f64::INFINITY);
     Ok(c.offset_free.then_some((c, adaptive)))
 }
 
@@ -503,15 +511,205 @@ pub(crate) fn runs_hold<'a>(
     (true, worst)
 }
 
+/// Simulates the candidates with a positive margin, branch and bound.
+///
+/// The winner is the offset-free candidate with the least worst RMS error
+/// (the first in grid order on equal RMS), so a candidate one of whose runs
+/// already has a larger RMS error than the best candidate simulated
+/// completely cannot win: its other runs are stopped ([`Candidate::pruned`]).
+/// The candidates are simulated one after another, the likeliest winner
+/// first ([`simulation_order`]), each one's runs in parallel; the bound
+/// changes only between candidates, so the chosen candidate is the one an
+/// exhaustive simulation chooses and does not depend on thread timing.
+fn simulate_bounded(
+    exp: &ofmpc::sim::Experiment,
+    candidates: &mut [Candidate],
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) {
+    let order = simulation_order(candidates);
+    simulate_in_order(exp, candidates, &order, kinds, masses);
+}
+
+/// [`simulate_bounded`] in the given order of the candidates' indices.
+fn simulate_in_order(
+    exp: &ofmpc::sim::Experiment,
+    candidates: &mut [Candidate],
+    order: &[usize],
+    kinds: &[ControllerKind],
+    masses: &[f64],
+) {
+    let mut bound = f64::INFINITY;
+    for &i in order {
+        let c = &mut candidates[i];
+        simulate_candidate(exp, c, kinds, masses, bound);
+        if c.offset_free {
+            bound = bound.min(c.rms_mm);
+        }
+    }
+}
+
+/// The indices of the candidates with a positive margin in the order
+/// [`simulate_bounded`] simulates them: the likeliest winner first, so that
+/// the bound is tight early (any order gives the same choice). The lightest
+/// increment weights first (`Q_Δu`, then `Q_Δy`; grid order among equal
+/// weights): the cost weighs the tracking error against the increments, so
+/// among the stable candidates the lightest increment weights usually track
+/// closest (a heuristic: it orders the work, not the choice).
+fn simulation_order(candidates: &[Candidate]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..candidates.len())
+        .filter(|&i| candidates[i].margin > 0.0)
+        .collect();
+    order.sort_by(|&a, &b| {
+        let (ca, cb) = (&candidates[a], &candidates[b]);
+        (ca.q_du.total_cmp(&cb.q_du)).then(ca.q_dy.total_cmp(&cb.q_dy))
+    });
+    order
+}
+
+/// What became of one run of a candidate ([`simulate_candidate`]).
+#[derive(Debug, Clone, Copy)]
+enum RunVerdict {
+    /// Completed offset-free with this RMS Cartesian error (mm).
+    Holds(f64),
+    /// Diverged, failed or kept a steady error (its RMS error in mm; NaN
+    /// without a result).
+    Fails(f64),
+    /// Ended early: another run of the candidate decided its fate.
+    Cancelled,
+}
+
+/// One run of `e` with controller `kind` and a point payload of `mass` kg,
+/// ended early when `stop` becomes true.
+fn run_verdict(
+    e: &ofmpc::sim::Experiment,
+    kind: ControllerKind,
+    mass: f64,
+    stop: &AtomicBool,
+) -> RunVerdict {
+    match e.run_cancellable(kind, &Payload::point_mass(mass), &mut |_, _| {}, stop) {
+        Err(ofmpc::sim::ExperimentError::Interrupted { .. }) => RunVerdict::Cancelled,
+        Err(_) => RunVerdict::Fails(f64::NAN),
+        Ok((r, metrics)) => {
+            let rms = metrics.cartesian_error_rms_mm;
+            let steady =
+                (metrics.steady_joint_error_max_rad.iter()).fold(0.0, |a: f64, &b| a.max(b));
+            if r.outcome.is_completed() && steady <= OFFSET_FREE_RAD {
+                RunVerdict::Holds(rms)
+            } else {
+                RunVerdict::Fails(rms)
+            }
+        }
+    }
+}
+
 /// Simulates candidate `c` for every controller of `kinds` at the payloads
-/// `masses`, the heaviest first (the likeliest to fail): [`runs_hold`].
+/// `masses` (each controller's heaviest payload first: the likeliest to
+/// fail), the runs in parallel. A run that fails, or holds with an RMS error
+/// above `bound` (the best complete candidate's), ends the candidate: its
+/// other runs stop. `c.offset_free` when every run held within the bound;
+/// `c.pruned` when a run exceeded the bound and none of those made failed;
+/// `c.rms_mm` the worst RMS error of the runs made.
 fn simulate_candidate(
     exp: &ofmpc::sim::Experiment,
     c: &mut Candidate,
     kinds: &[ControllerKind],
     masses: &[f64],
+    bound: f64,
 ) {
     let mut e = exp.clone();
     e.mpc = candidate_settings(c, exp.robot.dof());
-    (c.offset_free, c.rms_mm) = runs_hold(&e, kinds, masses.iter().rev());
+    let runs: Vec<(ControllerKind, f64)> = (kinds.iter())
+        .flat_map(|&k| masses.iter().rev().map(move |&m| (k, m)))
+        .collect();
+    let stop = AtomicBool::new(false);
+    let verdicts: Vec<RunVerdict> = runs
+        .par_iter()
+        .map(|&(k, m)| {
+            if stop.load(Ordering::Relaxed) {
+                return RunVerdict::Cancelled;
+            }
+            let v = run_verdict(&e, k, m, &stop);
+            // A run that held within the bound (or without an RMS to compare) decides nothing.
+            let decides = match v {
+                RunVerdict::Holds(rms) => rms > bound,
+                RunVerdict::Fails(_) => true,
+                RunVerdict::Cancelled => false,
+            };
+            if decides {
+                stop.store(true, Ordering::Relaxed);
+            }
+            v
+        })
+        .collect();
+    let rms_of = |v: &RunVerdict| match *v {
+        RunVerdict::Holds(r) | RunVerdict::Fails(r) => Some(r),
+        RunVerdict::Cancelled => None,
+    };
+    c.rms_mm = verdicts.iter().filter_map(rms_of).fold(0.0, f64::max);
+    let failed = verdicts.iter().any(|v| matches!(v, RunVerdict::Fails(_)));
+    c.offset_free = !stop.load(Ordering::Relaxed);
+    c.pruned = !c.offset_free && !failed;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The chosen candidate: the offset-free one with the least worst RMS
+    /// error, the first in grid order on equal RMS (as [`robust_tuning`]).
+    fn chosen(cs: &[Candidate]) -> Option<usize> {
+        (0..cs.len())
+            .filter(|&i| cs[i].offset_free)
+            .min_by(|&a, &b| cs[a].rms_mm.total_cmp(&cs[b].rms_mm))
+    }
+
+    /// Branch and bound chooses what simulating every candidate fully
+    /// chooses, in any order of simulation: a pruned candidate's runs
+    /// already exceed the chosen one's worst RMS, and every candidate not
+    /// pruned has the verdict and RMS of its full simulation.
+    #[test]
+    fn branch_and_bound_chooses_as_the_exhaustive_search() {
+        let base = Scenario::resolve(&ScenarioFile::default()).unwrap();
+        let exp = &base.experiment;
+        let kinds = [ControllerKind::First, ControllerKind::Second];
+        let masses = [0.0, 1.5, 3.0];
+        let grid: Vec<Candidate> = [(0.1, 1e-3), (0.5, 1e-2), (0.1, 1e-4), (2.0, 1e-1)]
+            .iter()
+            .map(|&(q_dy, q_du)| Candidate {
+                q_dy,
+                q_du,
+                wrist_scale: 1.0,
+                model_payload_kg: 1.5,
+                margin: 1.0,
+                rms_mm: f64::NAN,
+                offset_free: false,
+                pruned: false,
+            })
+            .collect();
+        let mut full = grid.clone();
+        for c in &mut full {
+            simulate_candidate(exp, c, &kinds, &masses, f64::INFINITY);
+            assert!(!c.pruned);
+        }
+        let want = chosen(&full).expect("an offset-free candidate");
+        assert!(full.iter().filter(|c| c.offset_free).count() >= 2);
+        let n = grid.len();
+        for order in [(0..n).collect::<Vec<_>>(), (0..n).rev().collect()] {
+            let mut cs = grid.clone();
+            simulate_in_order(exp, &mut cs, &order, &kinds, &masses);
+            assert_eq!(chosen(&cs), Some(want), "order {order:?}");
+            for (c, f) in cs.iter().zip(&full) {
+                if c.pruned {
+                    assert!(c.rms_mm > full[want].rms_mm, "order {order:?}: {c:?}");
+                    assert!(!c.offset_free);
+                } else {
+                    assert_eq!(c.offset_free, f.offset_free, "order {order:?}: {c:?}");
+                    if c.offset_free {
+                        assert_eq!(c.rms_mm, f.rms_mm, "order {order:?}: {c:?}");
+                    }
+                }
+            }
+        }
+    }
 }

@@ -7,7 +7,9 @@
 
 use super::analyze::{progress, scenario_file, FormatArgs, SetupArgs};
 use crate::output::console;
-use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND};
+use crate::output::plot::{
+    render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND, COLOR_USUAL,
+};
 use anyhow::{bail, Context};
 use clap::Args;
 use ofmpc::control::MpcSettings;
@@ -52,7 +54,8 @@ fn tune_words(summary: &serde_json::Value, lo_kg: f64, hi_kg: f64) -> String {
          assuming {} kg.\n\
          Stability margin {:.3} (ln of the distance to the interval's ends; > 0 is stable): {verdict}.\n\
          Worst RMS Cartesian error at the range's ends and middle: {:.4} mm.\n\
-         Candidates searched: {} stable, {} offset-free over the range.\n\
+         Candidates searched: {} stable, {} offset-free over the range, {} stopped early (could \
+         not beat the best).\n\
          Written: {} (run it with `ofmpc run {}`) and the trade-off figure {}. `--json` prints the numbers.",
         f("q_dy"),
         f("q_du"),
@@ -61,6 +64,7 @@ fn tune_words(summary: &serde_json::Value, lo_kg: f64, hi_kg: f64) -> String {
         f("worst_rms_mm"),
         n("candidates_stable"),
         n("candidates_offset_free"),
+        n("candidates_pruned"),
         s("scenario"),
         s("scenario"),
         s("figure"),
@@ -188,6 +192,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
             "worst_rms_mm": chosen.rms_mm,
             "candidates_stable": candidates.iter().filter(|c| c.margin > 0.0).count(),
             "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
+            "candidates_pruned": candidates.iter().filter(|c| c.pruned).count(),
             "scenario": a.out.display().to_string(),
             "figure": png.display().to_string(),
     });
@@ -259,7 +264,8 @@ fn tradeoff_figure(candidates: &[Candidate], chosen: &Candidate) -> Figure {
     p.log_y = true;
     let sim: Vec<&Candidate> = candidates.iter().filter(|c| c.rms_mm.is_finite()).collect();
     let ok: Vec<&&Candidate> = sim.iter().filter(|c| c.offset_free).collect();
-    let bad: Vec<&&Candidate> = sim.iter().filter(|c| !c.offset_free).collect();
+    let bad: Vec<&&Candidate> = sim.iter().filter(|c| !c.offset_free && !c.pruned).collect();
+    let pruned: Vec<&&Candidate> = sim.iter().filter(|c| c.pruned).collect();
     p.series.push(Series::markers(
         "offset-free over the range",
         ok.iter().map(|c| c.margin).collect(),
@@ -272,6 +278,14 @@ fn tradeoff_figure(candidates: &[Candidate], chosen: &Candidate) -> Figure {
             bad.iter().map(|c| c.margin).collect(),
             bad.iter().map(|c| c.rms_mm.max(1e-9)).collect(),
             COLOR_FIRST,
+        ));
+    }
+    if !pruned.is_empty() {
+        p.series.push(Series::markers(
+            "stopped early: worse than the best (RMS of the runs made)",
+            pruned.iter().map(|c| c.margin).collect(),
+            pruned.iter().map(|c| c.rms_mm.max(1e-9)).collect(),
+            COLOR_USUAL,
         ));
     }
     p.series.push(Series::markers(
