@@ -503,6 +503,41 @@ fn inspect_robot_names_the_closed_form_and_its_parameters() {
     assert!(v["opw_parameters"].is_null());
 }
 
+/// `ofmpc init robot --tip`: the Panda (a hand with two prismatic fingers: a branched
+/// tree) is refused without a tip and starts with `--tip panda_hand`; the written scenario
+/// carries the tip and loads the 7-joint arm that `inspect robot --tip` describes.
+#[test]
+fn init_robot_with_a_tip_starts_a_branched_arm() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/tests/data/robots");
+    let panda = data.join("panda/panda.urdf");
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("panda");
+    let p = panda.to_str().unwrap();
+    let o = out.to_str().unwrap();
+    let e = fails(&["init", "robot", p, "--out", o]);
+    assert!(!out.join("scenario.toml").exists(), "{e}");
+    ok(&["init", "robot", p, "--out", o, "--tip", "panda_hand"]);
+    let scenario = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
+    let file: toml::Value = toml::from_str(&scenario).unwrap();
+    assert_eq!(
+        file["robot"]["tip"].as_str(),
+        Some("panda_hand"),
+        "{scenario}"
+    );
+    let drives = std::fs::read_to_string(out.join("drives.toml")).unwrap();
+    assert_eq!(drives.matches("[joints.").count(), 7, "{drives}");
+    let v: Value = serde_json::from_str(&ok(&[
+        "inspect",
+        "robot",
+        "--robot",
+        p,
+        "--tip",
+        "panda_hand",
+    ]))
+    .unwrap();
+    assert_eq!(v["dof"].as_u64(), Some(7), "{v}");
+}
+
 /// `ofmpc run FILE --set key=value`: the value as if written in the file. One quick run
 /// (usual, one payload, a short hold set from the command line) that the written
 /// `scenario.toml` reflects, and the file's checks and messages for what does not fit.

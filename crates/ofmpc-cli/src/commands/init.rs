@@ -18,6 +18,10 @@ pub struct InitRobotArgs {
     /// replaced).
     #[arg(long, default_value = ".")]
     pub out: PathBuf,
+    /// The link that ends the chain (as `--tip` of run, written as `[robot] tip`): a branched
+    /// tree such as an arm with a hand and fingers loads with the hand as its tip.
+    #[arg(long)]
+    pub tip: Option<String>,
 }
 
 /// A TOML number for a known limit, or the line commented out with a note when unknown.
@@ -74,6 +78,12 @@ fn toml_key(name: &str) -> String {
 
 /// The scenario skeleton for the URDF at `model` (as written in the scenario).
 pub fn scenario_skeleton(model: &str) -> String {
+    scenario_skeleton_with_tip(model, None)
+}
+
+/// [`scenario_skeleton`] with the chain's tip link written as `[robot] tip` when given.
+pub fn scenario_skeleton_with_tip(model: &str, tip: Option<&str>) -> String {
+    let tip = tip.map(|t| format!("tip = {t:?}\n")).unwrap_or_default();
     format!(
         "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
          # default (examples/scenario.toml, docs/guide/reference/scenario.md). Paths are relative to\n\
@@ -81,7 +91,7 @@ pub fn scenario_skeleton(model: &str) -> String {
          title = \"My robot\"\n\
          controllers = [\"usual\", \"first\", \"second\"]\n\n\
          [robot]\n\
-         model = {model:?}\n\
+         model = {model:?}\n{tip}\
          drives = \"drives.toml\"\n\n\
          [program]\n\
          # file = \"my-program.gcode\"      # default: the paper's Table I program\n\
@@ -93,7 +103,11 @@ pub fn scenario_skeleton(model: &str) -> String {
 
 /// Runs `ofmpc init robot`.
 pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
-    let robot = Robot::from_urdf_file(&a.urdf)
+    let options = ofmpc::robot::ChainOptions {
+        tip: a.tip.clone(),
+        tcp: None,
+    };
+    let robot = Robot::from_urdf_file_with(&a.urdf, &options)
         .with_context(|| format!("reading the URDF {}", a.urdf.display()))?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let drives = a.out.join("drives.toml");
@@ -117,7 +131,7 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing {}", drives.display()))?;
     write_atomic(
         &scenario,
-        scenario_skeleton(&model.display().to_string()).as_bytes(),
+        scenario_skeleton_with_tip(&model.display().to_string(), a.tip.as_deref()).as_bytes(),
     )
     .with_context(|| format!("writing {}", scenario.display()))?;
     crate::output::console::println(&format!(
