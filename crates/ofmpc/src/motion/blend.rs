@@ -1,24 +1,26 @@
-//! Corner blending under `G64 P<tol>`: consecutive moves are joined by circular arcs that
-//! leave each corner by at most the tolerance, so the path need not stop there.
+//! Corner blending under `G64 P<tol>`: consecutive moves are joined by curvature-continuous
+//! (G2) quintic blends ([`crate::motion::g2blend`]) that leave the programmed path by at most
+//! the tolerance, so the path need not stop there and its curvature never steps.
 //!
 //! A corner between two straight lines with unit directions `u₁`, `u₂` turns by
-//! `θ = acos(u₁·u₂)`. It is replaced by the circular arc of radius `R` tangent to both lines
-//! at distance `d = R tan(θ/2)` from the corner; the arc's midpoint, its farthest point from
-//! the corner, lies `R (1/cos(θ/2) − 1)` from it (LinuxCNC's circular blend). With the
-//! tolerance `tol`: `R = tol cos(θ/2) / (1 − cos(θ/2))`; `d` is also capped at half of each
-//! line, so that neighbouring blends never overlap (on a fine polygon the blends then meet and
-//! the path becomes the circle through the edges' midpoints). The blend is tangent-continuous
-//! (G1); its curvature `1/R` starts at the tangent points.
+//! `θ = acos(u₁·u₂)`. It is replaced by the quintic from `d` before the corner to `d` after
+//! it with zero end curvatures, whose midpoint (its farthest point from the lines) lies
+//! `d · 2 sin(θ/2) cos(θ/2) (1/2 − (5/16) α cos(θ/2))` from them (`α` the scale of its end
+//! derivatives, 1 or 1.4, whichever allows the higher speed); `d` is set so that this is
+//! 0.98 `tol`, and capped at half of each line, so that neighbouring blends never overlap.
+//! (Until issue 26 these corners were circular arcs, LinuxCNC's circular blend, whose
+//! curvature `1/R` steps at the tangent points: the path acceleration stepped there.)
 //!
 //! Joins that are already tangent-continuous (angle below [`TANGENT_ANGLE`]) are passed
 //! without a stop, and so are near-tangent joins (below [`NEAR_TANGENT_ANGLE`], such as the
 //! kinks that three-decimal CAM output leaves between arcs) when the move allows a
-//! deviation (`P` > 0): the path keeps its programmed points there. Corners that involve an
-//! arc (G02/G03) are rounded by a curvature-continuous quintic ([`crate::motion::g2blend`])
-//! from a point of the incoming move to a point of the outgoing one, each at the tangent
-//! distance `d` of a line corner of the same angle (capped at half of each move), shortened
-//! until the blend keeps within the tolerance of the moves it replaces. The path stops at a
-//! tolerance of 0 and at reversals.
+//! deviation (`P` > 0): the path keeps its programmed points there, except where the
+//! curvature jumps enough to step the centripetal acceleration (a line into an arc): that
+//! jump is spread by a quintic blend within the tolerance too. Corners that involve an arc
+//! (G02/G03) are rounded by a quintic from a point of the incoming move to a point of the
+//! outgoing one, each at the tangent distance `d` of a circular corner of the same angle
+//! (capped at half of each move), shortened until the blend keeps within the tolerance of the
+//! moves it replaces. The path stops at a tolerance of 0 and at reversals.
 
 use crate::geometry::Segment;
 use crate::motion::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
