@@ -208,7 +208,12 @@ fn g2_corner(a: &RunMove, b: &RunMove, d: f64, alpha: f64) -> Option<(f64, Quint
             alpha,
         );
         if let Some(c) = c {
-            if blend_deviation(&c, sa, d, sb, d) <= a.tolerance {
+            let deviation = if is_line(sa) && is_line(sb) {
+                lines_deviation(&c, sa.end(), sa.tangent(0.0), sb.tangent(0.0), d)
+            } else {
+                blend_deviation(&c, sa, d, sb, d)
+            };
+            if deviation <= a.tolerance {
                 return Some((d, c));
             }
         }
@@ -217,27 +222,25 @@ fn g2_corner(a: &RunMove, b: &RunMove, d: f64, alpha: f64) -> Option<(f64, Quint
     None
 }
 
-/// The blend of a corner between two lines, of half turning angle `half`: of the quintics
-/// with end derivatives scaled by 1 and by [`LINE_TANGENT_SCALE`], each as long as the
-/// tolerance allows (its midpoint 0.98 `P` from the lines, [`line_corner_distance`]) or
-/// `cap` (half of each line), the one that allows the higher speed under the default
-/// limits ([`turn_speed`]).
+/// The blend of a corner between two lines, of half turning angle `half`: the quintic with
+/// end derivatives scaled by [`LINE_TANGENT_SCALE`] as long as the tolerance allows (its
+/// midpoint 0.98 `P` from the lines, [`line_corner_distance`]), or if that is longer than
+/// `cap` allows (half of each line), the one scaled by 1, capped.
 fn line_corner(
     a: &RunMove,
     b: &RunMove,
     half: f64,
     cap: impl Fn(f64) -> f64,
 ) -> Option<(f64, QuinticBlend)> {
-    [1.0, LINE_TANGENT_SCALE]
-        .into_iter()
-        .filter_map(|alpha| {
-            let d = 0.98 * a.tolerance / line_corner_distance(half, alpha);
-            g2_corner(a, b, cap(d), alpha)
-        })
-        .max_by(|x, y| {
-            let v = |c: &QuinticBlend| turn_speed(c, DEFAULT_ACCEL, DEFAULT_JERK);
-            v(&x.1).total_cmp(&v(&y.1))
-        })
+    // Bounded by the tolerance, the scale 1.4 allows the higher speed (a quarter of the
+    // largest `|dk/ds|` at a 90° corner); at a length fixed by the lines, 1 does.
+    let d = 0.98 * a.tolerance / line_corner_distance(half, LINE_TANGENT_SCALE);
+    if cap(d) >= d {
+        g2_corner(a, b, d, LINE_TANGENT_SCALE)
+    } else {
+        let d = 0.98 * a.tolerance / line_corner_distance(half, 1.0);
+        g2_corner(a, b, cap(d), 1.0)
+    }
 }
 
 /// The highest speed through `curve` under the centripetal limit `√(a/κ)` and the jerk of
@@ -257,6 +260,29 @@ fn turn_speed(curve: &QuinticBlend, max_accel: f64, max_jerk: f64) -> f64 {
 /// [`crate::motion::TimingOptions`].
 const DEFAULT_ACCEL: f64 = 2.5;
 const DEFAULT_JERK: f64 = 50.0;
+
+/// Largest distance from `blend` (33 points) to the two lines it replaces: from
+/// `corner − d u₁` to the corner and on to `corner + d u₂` (what [`blend_deviation`] computes
+/// for any moves, without following the lines by 64 chords).
+fn lines_deviation(
+    blend: &QuinticBlend,
+    corner: Vector3<f64>,
+    u1: Vector3<f64>,
+    u2: Vector3<f64>,
+    d: f64,
+) -> f64 {
+    let to_line = |p: &Vector3<f64>, dir: &Vector3<f64>, from: f64| {
+        let t = ((p - corner).dot(dir)).clamp(from, from + d);
+        (p - (corner + dir * t)).norm()
+    };
+    let len = blend.length();
+    (0..=32)
+        .map(|i| {
+            let p = blend.point(len * i as f64 / 32.0);
+            to_line(&p, &u1, -d).min(to_line(&p, &u2, 0.0))
+        })
+        .fold(0.0, f64::max)
+}
 
 /// Whether `s` is a straight line.
 fn is_line(s: &Segment) -> bool {

@@ -46,6 +46,8 @@ pub struct QuinticBlend {
     s: Vec<f64>,
     /// `|p'|` at `u = i / TABLE`.
     speed: Vec<f64>,
+    /// Largest curvature and `|dk/ds|` over the table (computed once).
+    bounds: (f64, f64),
 }
 
 impl QuinticBlend {
@@ -94,6 +96,7 @@ impl QuinticBlend {
             c,
             s: Vec::with_capacity(TABLE + 1),
             speed: Vec::with_capacity(TABLE + 1),
+            bounds: (0.0, 0.0),
         };
         let h = 1.0 / TABLE as f64;
         let mut s = 0.0;
@@ -115,6 +118,7 @@ impl QuinticBlend {
                     * h;
             }
         }
+        blend.bounds = blend.table_bounds();
         Some(blend)
     }
 
@@ -186,17 +190,15 @@ impl QuinticBlend {
 
     /// Largest curvature (1/m) over the table's points.
     pub fn max_curvature(&self) -> f64 {
-        (0..=TABLE)
-            .map(|i| self.curvature(self.s[i]).norm())
-            .fold(0.0, f64::max)
+        self.bounds.0
     }
 
-    /// Largest rate of change of the curvature vector along the arc length, `|dk/ds|`
-    /// (1/m²), over the table's intervals (differences of the curvature vectors at their
-    /// ends). Along the blend the Cartesian jerk at constant path speed is `ṡ³ dk/ds`.
-    pub fn max_curvature_rate(&self) -> f64 {
+    /// Largest curvature and largest `|dk/ds|` over the table (see
+    /// [`QuinticBlend::max_curvature_rate`]).
+    fn table_bounds(&self) -> (f64, f64) {
         let k: Vec<Vector3<f64>> = (0..=TABLE).map(|i| self.curvature(self.s[i])).collect();
-        (0..TABLE)
+        let kmax = k.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        let rate = (0..TABLE)
             .map(|i| {
                 let ds = self.s[i + 1] - self.s[i];
                 if ds > 0.0 {
@@ -205,7 +207,15 @@ impl QuinticBlend {
                     0.0
                 }
             })
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        (kmax, rate)
+    }
+
+    /// Largest rate of change of the curvature vector along the arc length, `|dk/ds|`
+    /// (1/m²), over the table's intervals (differences of the curvature vectors at their
+    /// ends). Along the blend the Cartesian jerk at constant path speed is `ṡ³ dk/ds`.
+    pub fn max_curvature_rate(&self) -> f64 {
+        self.bounds.1
     }
 }
 
