@@ -97,6 +97,99 @@ fn drilling_cycles() {
     );
 }
 
+/// The G17 drilling of `program` with its axes permuted by `perm` (program axis k of the
+/// G17 program becomes axis perm[k]): LinuxCNC's G18/G19 cycles drill along Y / X as G17
+/// drills along Z.
+fn permuted(points: &[[f64; 3]], perm: [usize; 3]) -> Vec<[f64; 3]> {
+    points
+        .iter()
+        .map(|p| {
+            let mut q = [0.0; 3];
+            for k in 0..3 {
+                q[perm[k]] = p[k];
+            }
+            q
+        })
+        .collect()
+}
+
+#[test]
+fn drilling_cycles_in_g18_and_g19_are_the_g17_cycles_with_the_axes_permuted() {
+    // G17: position X Y, depth Z. G18 (ZX plane): position Z X, depth Y. G19 (YZ plane):
+    // position Y Z, depth X.
+    let g17 = ok("G17 G0 X0 Y0 Z10\nG98 G83 X1 Y2 R2 Z-3 Q2 F60\nG91 G81 X1 Y1 R-1 Z-2 L2\n");
+    let want = ends(&g17);
+    let g18 = ok("G18 G0 Z0 X0 Y10\nG98 G83 Z1 X2 R2 Y-3 Q2 F60\nG91 G81 Z1 X1 R-1 Y-2 L2\n");
+    assert_ends(&g18, &permuted(&want, [2, 0, 1]));
+    let g19 = ok("G19 G0 Y0 Z0 X10\nG98 G83 Y1 Z2 R2 X-3 Q2 F60\nG91 G81 Y1 Z1 R-1 X-2 L2\n");
+    assert_ends(&g19, &permuted(&want, [1, 2, 0]));
+    // The depth word is the drilling axis's letter: a G18 cycle without Y names it.
+    let e = common::gcode::fail("G18 G0 X0 Y10 Z0\nG81 X1 Z1 R2 F60\n");
+    assert!(e.to_string().contains("G81 without R or Y"), "{e}");
+}
+
+#[test]
+fn tapping_feeds_in_reverses_the_spindle_and_feeds_out_to_the_clear_plane() {
+    // G84 (right hand, spindle M3) and G74 (left hand, M4): feed to the bottom, M5 and the
+    // reverse direction, dwell P, feed out to the clear plane (G98: the initial Z), M5 and
+    // the first direction again (LinuxCNC's convert_cycle_g74_g84).
+    for (n, start, rev) in [(84, "M3", "M4"), (74, "M4", "M3")] {
+        let p = ok(&format!(
+            "{start} S500\nG0 X0 Y0 Z10\nG98 G{n} X1 Y1 R2 Z-3 P0.5 F60\nM5\n"
+        ));
+        assert_ends(
+            &p,
+            &[
+                [1.0, 1.0, 10.0],
+                [1.0, 1.0, 2.0],
+                [1.0, 1.0, -3.0],
+                [1.0, 1.0, 10.0],
+            ],
+        );
+        let kinds: Vec<bool> = p
+            .moves
+            .iter()
+            .map(|m| matches!(m.kind, MoveKind::Dwell { seconds } if seconds == 0.5))
+            .collect();
+        assert_eq!(kinds, [false, false, false, true, false]);
+        let feeds: Vec<bool> = p
+            .moves
+            .iter()
+            .filter_map(|m| match &m.kind {
+                MoveKind::Path { feed, .. } => Some(feed.is_some()),
+                MoveKind::Dwell { .. } => None,
+            })
+            .collect();
+        assert_eq!(feeds, [false, false, true, true], "in and out at the feed");
+        let events: Vec<(&str, usize)> = p
+            .events
+            .iter()
+            .filter(|e| e.code.starts_with('M'))
+            .map(|e| (e.code.as_str(), e.after_moves))
+            .collect();
+        assert_eq!(
+            events,
+            [
+                (start, 0),
+                ("M5", 3),
+                (rev, 3),
+                ("M5", 5),
+                (start, 5),
+                ("M5", 5)
+            ]
+        );
+    }
+    // Without the spindle turning the right way LinuxCNC refuses the cycle; so does the reader.
+    let e = common::gcode::fail("G0 X0 Y0 Z10\nG84 X1 Y1 R2 Z-3 F60\n");
+    assert!(
+        e.to_string()
+            .contains("needs the spindle turning clockwise"),
+        "{e}"
+    );
+    let e = common::gcode::fail("M3 S100\nG0 X0 Y0 Z10\nG74 X1 Y1 R2 Z-3 F60\n");
+    assert!(e.to_string().contains("M4"), "{e}");
+}
+
 #[test]
 fn g64_q_merges_collinear_moves_within_q() {
     let p =
