@@ -277,3 +277,20 @@ fn g10_l20_in_a_rotated_system_makes_the_current_point_read_as_given() {
     assert_eq!((e.line, e.kind), (3, GcodeErrorKind::Unsupported));
     assert!(e.to_string().contains("rotated coordinate system"), "{e}");
 }
+
+#[test]
+fn a_program_name_o_word_alone_on_its_line_is_read_as_a_title() {
+    // LinuxCNC reads `O<name>` alone on a line as the program's name, like `O42`.
+    let p = ok("%\n(title)\nO<MyProgram> (the name)\nG0 X1 Y2 Z3\nG1 X2 F100\nM30\n%\n");
+    assert_ends(&p, &[[2.0, 2.0, 3.0]]);
+    assert!(
+        p.warnings
+            .iter()
+            .any(|w| w.line == 3 && w.message.contains("o<myprogram> (program name) ignored")),
+        "{:?}",
+        p.warnings
+    );
+    // With a word after it, it is still an O-word without a keyword.
+    let e = fail("O<name> G0 X0 Y0 Z0\n");
+    assert!(e.to_string().contains("without a keyword"), "{e}");
+}

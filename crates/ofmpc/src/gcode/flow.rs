@@ -177,7 +177,7 @@ fn link_one(
         OKind::Endrepeat if top_is(stack, &[OKind::Repeat]) => close_loop(stack, k, i),
         OKind::Endsub if top_is(stack, &[OKind::Sub]) => close_loop(stack, k, i),
         OKind::Break | OKind::Continue | OKind::Return => link_jump(l, stack, k, i, o)?,
-        OKind::Call => {}
+        OKind::Call | OKind::Title => {}
         _ => {
             let m = match stack.last() {
                 Some(t) => format!(
@@ -425,6 +425,11 @@ impl<'s, 'a> Runner<'s, 'a> {
             OKind::If => self.branch(pc)?,
             OKind::Elseif | OKind::Else => k.end[pc] + 1,
             OKind::Endif | OKind::Do => pc + 1,
+            OKind::Title => {
+                let text = format!("o{} (program name) ignored: no effect on the path", o.label);
+                it.warn(l.no, o.col, text);
+                pc + 1
+            }
             OKind::While if k.do_while[pc] => {
                 if self.arg0(l, o)? != 0.0 {
                     self.last_loop = pc;
