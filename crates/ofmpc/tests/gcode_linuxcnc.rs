@@ -294,3 +294,12 @@ fn a_program_name_o_word_alone_on_its_line_is_read_as_a_title() {
     let e = fail("O<name> G0 X0 Y0 Z0\n");
     assert!(e.to_string().contains("without a keyword"), "{e}");
 }
+
+#[test]
+fn debug_and_print_formats_set_the_decimals_of_the_values_after_them() {
+    // LinuxCNC's convert_param_comment: %lf by default, %d no decimals, %f four, %.Nf N;
+    // a format holds for the rest of the comment; another % is kept.
+    let p = ok("#<v> = 2.718281828\n#1 = 0.5\n(DEBUG, a #<v> %d#<v> b #1)\n(PRINT, %.2f#<v> and #1, 50%)\n(DEBUG, %f#<v>)\nG0 X0 Y0 Z0\nM2\n");
+    let texts: Vec<&str> = p.messages.iter().map(|m| m.text.as_str()).collect();
+    assert_eq!(texts, ["a 2.718282 3 b 0", "2.72 and 0.50, 50%", "2.7183"]);
+}
