@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 mod common;
 
 use common::gcode::{assert_ends, ends, ok};
-use ofmpc::gcode::{parse, MoveKind, ParseOptions, Program};
+use ofmpc::gcode::{parse, MoveKind, ParseOptions, Program, ToolTable};
 
 #[test]
 fn g92_family_g52_and_g53() {
@@ -52,6 +52,51 @@ fn tool_length_is_kept_for_the_tcp() {
         ok("G0 X0 Y0 Z0\nG43.1 Z12.5\nG49\nG1 Z1\n").tool_length,
         0.0
     );
+}
+
+#[test]
+fn g43_h_takes_the_length_from_the_tool_table() {
+    let table = ToolTable::parse(
+        "; LinuxCNC tool table\nT1 P1 Z+1.5 D0.25 ;comment\n\nT7 P3 X0.1 Z-20 D6 I0 J0 Q1 ;\nt12 p4 d3\n",
+    )
+    .unwrap();
+    assert_eq!(table.len(), 3);
+    assert_eq!(table.length(12), Some(0.0));
+    let options = ParseOptions {
+        tool_table: Some(table),
+        ..ParseOptions::default()
+    };
+    let read = |text: &str| parse(text, &options);
+    let length = |text: &str| read(text).unwrap().tool_length;
+    assert!((length("G0 X0 Y0 Z0\nG43 H1\n") - 1.5e-3).abs() < 1e-15);
+    assert!((length("G0 X0 Y0 Z0\nG43 H7\nG1 Z1 F100\n") + 0.02).abs() < 1e-15);
+    // Without H: the tool in the spindle (T7 M6); H0 and G49: no length.
+    assert!((length("T7 M6\nG0 X0 Y0 Z0\nG43\n") + 0.02).abs() < 1e-15);
+    assert_eq!(length("G0 X0 Y0 Z0\nG43 H1\nG43 H0\n"), 0.0);
+    assert_eq!(length("G0 X0 Y0 Z0\nG43 H1\nG49\n"), 0.0);
+    // The length goes to the TCP, not to the points.
+    assert_ends(
+        &read("G0 X0 Y0 Z0\nG43 H7\nG1 Z1 F100\n").unwrap(),
+        &[[0.0, 0.0, 1.0]],
+    );
+    let e = read("G0 X0 Y0 Z0\nG43 H3\n").unwrap_err();
+    assert_eq!((e.line, e.column), (2, 5));
+    assert!(
+        e.to_string().contains("the tool table has no tool 3"),
+        "{e}"
+    );
+    // Without a table, G43 H<n> is refused by name and says to give one.
+    let e = common::gcode::fail("G0 X0 Y0 Z0\nG43 H1\n");
+    assert!(e.to_string().contains("no tool table was given"), "{e}");
+    assert!(e.to_string().contains("give a tool table"), "{e}");
+    // A malformed table names its line and column.
+    let e = ToolTable::parse("T1 Z1\nT2 Z1,5\n").unwrap_err();
+    assert_eq!((e.line, e.column), (2, 4));
+    let e = ToolTable::parse("T1 Z1\nP2 Z3\n").unwrap_err();
+    assert!(e.to_string().contains("without T"), "{e}");
+    let e = ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap_err();
+    assert!(e.to_string().contains("tool 1 is listed twice"), "{e}");
+    assert!(ToolTable::parse("T1 K3\n").is_err());
 }
 
 #[test]

@@ -48,6 +48,8 @@ pub(super) struct Interpreter {
     pub(super) tool_length: f64,
     /// State of the codes of [`super::modal`].
     pub(super) ext: Extra,
+    /// The tool table of the options (G43 H).
+    pub(super) tools: Option<super::ToolTable>,
     /// The warning that the origin option applies to G54 only was given.
     warned_wcs: bool,
 }
@@ -95,6 +97,7 @@ impl Interpreter {
                 feed_mode: 94,
                 ..Extra::default()
             },
+            tools: options.tool_table.clone(),
             warned_wcs: false,
         })
     }
@@ -192,7 +195,7 @@ impl Interpreter {
             self.ext.spindle = Some(sw.value);
         }
         if let Some((c, w)) = cmd.tool {
-            self.tool_length_code(line, w, c, args);
+            self.tool_length_code(line, w, c, args)?;
         }
         if let Some((g, c, w)) = cmd.axis_cmd {
             match g {

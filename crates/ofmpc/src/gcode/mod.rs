@@ -61,6 +61,7 @@ mod interpreter;
 mod lexer;
 mod modal;
 mod predefined;
+mod tools;
 
 use crate::geometry::Segment;
 pub use flow::DEFAULT_MAX_STEPS;
@@ -69,6 +70,7 @@ use interpreter::Interpreter;
 use lexer::lex_line;
 use nalgebra::Vector3;
 use std::fmt;
+pub use tools::{ToolTable, ToolTableError};
 
 /// The paper's Table I test program (section IV), corrected to `G17` and placed with a work
 /// offset; see the comments in the file `examples/paper-table1.gcode` (the crate embeds its
@@ -97,6 +99,9 @@ pub struct ParseOptions {
     /// Lines the program may execute beyond its own length (loops, calls) before it is
     /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`].
     pub max_steps: Option<usize>,
+    /// The tool table `G43 H<n>` takes tool n's length from; `None`: `G43 H<n>` (n > 0)
+    /// is refused.
+    pub tool_table: Option<ToolTable>,
 }
 
 impl ParseOptions {

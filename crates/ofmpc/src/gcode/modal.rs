@@ -1,6 +1,6 @@
 //! The modal codes CAM output uses beyond the basic ones (LinuxCNC's G-code reference):
-//! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43/G43.1/G49
-//! tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
+//! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43 H (tool
+//! table)/G43.1/G49 tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
 //! feed modes, polar `@ ^`, the canned cycles G73 G74 G81 G82 G83 G84 G85 G86 G89 with G98/G99
 //! and L in G17, G18 and G19,
 //! and G64 Q (collinear moves within Q merged, LinuxCNC's naive-CAM detector).
@@ -168,29 +168,67 @@ impl Interpreter {
         Ok(())
     }
 
-    /// G43 H (no tool table: length 0, with a warning), G43.1 Z<length>, G49.
+    /// G43 H<n> (tool n's length from the tool table; without H the tool in the spindle;
+    /// H0: no length), G43.1 Z<length>, G49 (LinuxCNC's G43).
     pub(super) fn tool_length_code(
         &mut self,
         line: usize,
         w: &Word<'_>,
         code: u16,
         args: &Args<'_, '_>,
-    ) {
+    ) -> Result<(), GcodeError> {
         self.tool_length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
             (430, _) => {
-                self.warn(
-                    line,
-                    w.col,
-                    format!(
-                        "{}: the tool table is not known, tool length 0 used (give the length with G43.1 Z…)",
-                        w.text
-                    ),
-                );
-                0.0
+                let (n, at) = match args.get('H') {
+                    Some(h) => (h.value, h),
+                    None => (self.ext.tool_current, w),
+                };
+                let fail = |message: String, hint: &str| {
+                    Err(err(
+                        line,
+                        at.col,
+                        GcodeErrorKind::InvalidValue,
+                        at.text,
+                        message,
+                        hint,
+                    ))
+                };
+                if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
+                    return fail(
+                        format!("G43 H{n}: the tool number must be a whole number >= 0"),
+                        "write e.g. G43 H1",
+                    );
+                }
+                if n == 0.0 {
+                    0.0
+                } else {
+                    match &self.tools {
+                        None => {
+                            return Err(err(
+                                line,
+                                at.col,
+                                GcodeErrorKind::Missing,
+                                at.text,
+                                format!("G43 with tool {n}: no tool table was given, so its length is not known"),
+                                "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
+                            ))
+                        }
+                        Some(t) => match t.length(n as u32) {
+                            Some(z) => z,
+                            None => {
+                                return fail(
+                                    format!("G43 with tool {n}: the tool table has no tool {n}"),
+                                    "add the tool to the table (T<n> Z<length>) or use a tool it lists",
+                                )
+                            }
+                        },
+                    }
+                }
             }
             _ => 0.0,
         };
+        Ok(())
     }
 
     /// The feed (m/s) of a move of `length` m in the active feed mode.
