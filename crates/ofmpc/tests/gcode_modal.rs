@@ -94,8 +94,14 @@ fn g43_h_takes_the_length_from_the_tool_table() {
     assert_eq!((e.line, e.column), (2, 4));
     let e = ToolTable::parse("T1 Z1\nP2 Z3\n").unwrap_err();
     assert!(e.to_string().contains("without T"), "{e}");
-    let e = ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap_err();
-    assert!(e.to_string().contains("tool 1 is listed twice"), "{e}");
+    // A tool listed twice: the first line counts (LinuxCNC finds the first pocket).
+    assert_eq!(
+        ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap().length(1),
+        Some(1e-3)
+    );
+    let e =
+        ToolTable::parse("TOOLNO POCKET LENGTH DIAMETER COMMENT\n1 1 0.5 0.1 mill\n").unwrap_err();
+    assert!(e.to_string().contains("old tool table format"), "{e}");
     assert!(ToolTable::parse("T1 K3\n").is_err());
 }
 

@@ -42,7 +42,19 @@ impl ToolTable {
             let content = raw.split(';').next().unwrap_or("");
             let mut tool = None;
             let mut z = 0.0;
-            let mut first_col = 0;
+            if content
+                .trim_start()
+                .to_ascii_uppercase()
+                .starts_with("TOOLNO")
+            {
+                return Err(ToolTableError {
+                    line: i + 1,
+                    column: 1,
+                    text: super::lexer::escape(content.trim()),
+                    message: "LinuxCNC's old tool table format (a TOOLNO POCKET LENGTH … header and columns) is not read".into(),
+                    hint: "write one tool a line as T<tool> P<pocket> Z<length> D<diameter> (LinuxCNC's current format)".into(),
+                });
+            }
             for (col, word) in words(content) {
                 let fail = |message: String, hint: &str| ToolTableError {
                     line: i + 1,
@@ -73,7 +85,6 @@ impl ToolTable {
                 match letter {
                     'T' if value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) => {
                         tool = Some(value as u32);
-                        first_col = col;
                     }
                     'T' => {
                         return Err(fail(
@@ -86,16 +97,10 @@ impl ToolTable {
                 }
             }
             match tool {
+                // A tool listed twice: LinuxCNC finds the first pocket that holds it
+                // (tooldata_find_index_for_tool), so the first line counts.
                 Some(t) => {
-                    if lengths.insert(t, z).is_some() {
-                        return Err(ToolTableError {
-                            line: i + 1,
-                            column: first_col,
-                            text: format!("T{t}"),
-                            message: format!("tool {t} is listed twice"),
-                            hint: "give each tool one line".into(),
-                        });
-                    }
+                    lengths.entry(t).or_insert(z);
                 }
                 None if content.trim().is_empty() => {}
                 None => {
