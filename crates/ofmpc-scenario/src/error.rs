@@ -139,7 +139,7 @@ pub enum ScenarioError {
         /// The file.
         path: PathBuf,
         /// The library's error.
-        error: ofmpc::gcode::ToolTableError,
+        error: Box<ofmpc::gcode::ToolTableError>,
     },
     /// An unknown time law.
     #[error("{key} '{value}': use 'septic' (the paper's) or 'quintic'")]

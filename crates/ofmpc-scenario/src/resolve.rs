@@ -173,7 +173,7 @@ pub fn read_tool_table(path: &Path, key: &str) -> Result<ToolTable, ScenarioErro
     ToolTable::parse(&text).map_err(|error| ScenarioError::ToolTable {
         key: key.into(),
         path: path.to_path_buf(),
-        error,
+        error: Box::new(error),
     })
 }
 
