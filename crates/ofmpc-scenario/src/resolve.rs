@@ -177,6 +177,14 @@ pub fn read_tool_table(path: &Path, key: &str) -> Result<ToolTable, ScenarioErro
     })
 }
 
+/// The tool table of `[program] tool_table`, if set.
+fn program_tool_table(p: &crate::ProgramSection) -> Result<Option<ToolTable>, ScenarioError> {
+    p.tool_table
+        .as_deref()
+        .map(|path| read_tool_table(path, "[program] tool_table"))
+        .transpose()
+}
+
 /// Two different masses whose run folders would share a name (the label keeps 6 significant
 /// digits) are not a repeat: refused, naming both (a true repeat is a warning). No mass at
 /// all is refused too.
@@ -256,15 +264,9 @@ impl Scenario {
             key: "[timing] profile".into(),
             value: f.timing.profile.clone(),
         })?;
-        let tool_table = f
-            .program
-            .tool_table
-            .as_deref()
-            .map(|p| read_tool_table(p, "[program] tool_table"))
-            .transpose()?;
         let options = PlanOptions {
             parse: ParseOptions {
-                tool_table,
+                tool_table: program_tool_table(&f.program)?,
                 ..ParseOptions::with_origin(origin)
             },
             timing: TimingOptions {

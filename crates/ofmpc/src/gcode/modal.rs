@@ -406,19 +406,7 @@ impl Interpreter {
                 "give Q, e.g. Q1",
             );
         }
-        let turning = if n == 74 { -1 } else { 1 };
-        if matches!(n, 74 | 84) && self.ext.spindle_dir != turning {
-            let (m, dir) = if n == 74 {
-                ("M4", "counter-clockwise")
-            } else {
-                ("M3", "clockwise")
-            };
-            return fail(
-                Conflict,
-                format!("{code} (tapping) needs the spindle turning {dir} (LinuxCNC refuses it otherwise)"),
-                &format!("start the spindle with {m} S… before the cycle"),
-            );
-        }
+        self.check_tapping_spindle(line, w_col, line_text, n)?;
         let repeats = cycle_repeats(line, args)?;
         let Some(mut p) = self.pos.or(self.initial) else {
             return fail(
@@ -481,6 +469,37 @@ impl Interpreter {
             p = end;
         }
         Ok(())
+    }
+
+    /// G74 needs the spindle turning counter-clockwise, G84 clockwise (LinuxCNC's
+    /// `check_g74_g84_spindle`).
+    fn check_tapping_spindle(
+        &self,
+        line: usize,
+        col: usize,
+        line_text: &str,
+        n: u8,
+    ) -> Result<(), GcodeError> {
+        let turning = if n == 74 { -1 } else { 1 };
+        if !matches!(n, 74 | 84) || self.ext.spindle_dir == turning {
+            return Ok(());
+        }
+        let (m, dir) = if n == 74 {
+            ("M4", "counter-clockwise")
+        } else {
+            ("M3", "clockwise")
+        };
+        Err(err(
+            line,
+            col,
+            GcodeErrorKind::Conflict,
+            line_text,
+            format!(
+                "{} (tapping) needs the spindle turning {dir} (LinuxCNC refuses it otherwise)",
+                Motion::Cycle(n).code()
+            ),
+            format!("start the spindle with {m} S… before the cycle"),
+        ))
     }
 
     /// The drilling of one hole from `top` (on R) to the bottom, ending at the bottom or,
