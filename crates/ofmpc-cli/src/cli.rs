@@ -74,6 +74,9 @@ pub struct TrajectoryArgs {
     /// G54 work offset X,Y,Z in mm, for programs that set none.
     #[arg(long, allow_hyphen_values = true)]
     pub origin: Option<String>,
+    /// Tool table (LinuxCNC's .tbl format, lengths in mm) for `G43 H<n>`.
+    #[arg(long)]
+    pub tool_table: Option<PathBuf>,
     /// Sample period (s).
     #[arg(long, default_value_t = PlanOptions::default().ts)]
     pub ts: f64,
@@ -235,6 +238,9 @@ pub struct InspectProgram {
     /// The robot's start pose, comma-separated joint positions (rad or m).
     #[arg(long, allow_hyphen_values = true)]
     pub start_q: Option<String>,
+    /// Tool table (LinuxCNC's .tbl format, lengths in mm) for `G43 H<n>`.
+    #[arg(long)]
+    pub tool_table: Option<PathBuf>,
 }
 
 /// `ofmpc inspect robot`

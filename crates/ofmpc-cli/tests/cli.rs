@@ -695,3 +695,33 @@ fn inspect_program_prints_the_moves_in_machine_coordinates() {
     let v: Value = serde_json::from_str(&out).unwrap();
     assert!(v["start"][0].as_f64().unwrap() > 100.0, "{out}");
 }
+
+#[test]
+fn g43_h_reads_with_a_tool_table_and_is_refused_without_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("p.ngc");
+    std::fs::write(&f, "G0 X0 Y0 Z0\nG43 H2\nG1 Z1 F600\nM30\n").unwrap();
+    let tbl = dir.path().join("tools.tbl");
+    std::fs::write(&tbl, "T2 P2 Z+12.5 D3 ;drill\n").unwrap();
+    let (f, tbl) = (f.to_str().unwrap(), tbl.to_str().unwrap());
+    let e = fails(&["inspect", "program", f]);
+    assert!(e.contains("no tool table was given"), "{e}");
+    let out = ok(&["inspect", "program", f, "--tool-table", tbl]);
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["moves"].as_array().unwrap().len(), 1, "{out}");
+    assert_eq!(v["tool_length_mm"], 12.5);
+    // A malformed table is named with the option, its line and column.
+    std::fs::write(dir.path().join("bad.tbl"), "T1 Z1\nT2 Z1,5\n").unwrap();
+    let bad = dir.path().join("bad.tbl");
+    let e = fails(&[
+        "inspect",
+        "program",
+        f,
+        "--tool-table",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(
+        e.contains("--tool-table") && e.contains("line 2, column 4"),
+        "{e}"
+    );
+}

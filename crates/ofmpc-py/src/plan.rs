@@ -194,17 +194,22 @@ pub fn plan(
 
 /// Reads a program (`text`) as `ofmpc inspect program` does; returns its JSON text.
 /// `start_mm`: the tool position before the program (default machine zero), or the start
-/// pose of `robot`.
+/// pose of `robot`; `tool_table`: the path of a tool table (LinuxCNC's .tbl) for G43 H.
 #[pyfunction]
-#[pyo3(name = "_read_program", signature = (text, name, origin_mm, robot))]
+#[pyo3(name = "_read_program", signature = (text, name, origin_mm, robot, tool_table=None))]
 pub fn read_program(
     py: Python<'_>,
     text: Option<String>,
     name: String,
     origin_mm: Option<(f64, f64, f64)>,
     robot: Option<&PyRobot>,
+    tool_table: Option<std::path::PathBuf>,
 ) -> PyResult<String> {
     let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
+    let tool_table = tool_table
+        .map(|p| ofmpc_scenario::read_tool_table(&p, "tool_table"))
+        .transpose()
+        .map_err(to_py)?;
     let robot = robot.map(|r| r.robot().clone());
     py.detach(move || {
         let start = match &robot {
@@ -215,6 +220,7 @@ pub fn read_program(
         let options = ParseOptions {
             origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
             start: Some(start),
+            tool_table,
             ..ParseOptions::default()
         };
         let program =

@@ -207,6 +207,15 @@ def test_read_program_returns_the_moves_events_and_messages():
     assert p["messages"] == [{"line": 2, "kind": "MSG", "text": "hi"}]
 
 
+def test_read_program_takes_a_tool_table_for_g43_h(tmp_path):
+    table = tmp_path / "tools.tbl"
+    table.write_text("T2 P2 Z+12.5 D3 ;drill\n")
+    text = "G0 X0 Y0 Z0\nG43 H2\nG1 Z1 F600\n"
+    assert ofmpc.read_program(text, tool_table=table)["tool_length_mm"] == 12.5
+    with pytest.raises(ofmpc.OfmpcError, match="no tool table was given"):
+        ofmpc.read_program(text)
+
+
 def test_hostile_arguments_raise_ofmpc_error_naming_them(robot, ref):
     """Issue #22 items 1, 6, 7: no abort or panic from a size, no step before reset, no array
     of the right count but the wrong shape or dtype read by position."""

@@ -120,6 +120,27 @@ pub enum ScenarioError {
         #[source]
         source: std::io::Error,
     },
+    /// A tool table file could not be read.
+    #[error("cannot read the tool table {} ({key})", path.display())]
+    ReadToolTable {
+        /// The setting that names it (`[program] tool_table` or a command-line option).
+        key: String,
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A tool table is not in LinuxCNC's .tbl format.
+    #[error("tool table {} ({key}): {error}", path.display())]
+    ToolTable {
+        /// The setting that names it.
+        key: String,
+        /// The file.
+        path: PathBuf,
+        /// The library's error.
+        error: Box<ofmpc::gcode::ToolTableError>,
+    },
     /// An unknown time law.
     #[error("{key} '{value}': use 'septic' (the paper's) or 'quintic'")]
     Profile {

@@ -112,6 +112,10 @@ pub struct ProgramSection {
     pub file: Option<PathBuf>,
     /// G54 work offset (mm) for programs that set none.
     pub origin_mm: Option<[f64; 3]>,
+    /// Tool table (LinuxCNC's .tbl format, lengths in mm; relative to the scenario file)
+    /// for `G43 H<n>`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tool_table: Option<PathBuf>,
 }
 
 /// `[timing]`
@@ -341,6 +345,11 @@ impl ScenarioFile {
             .file
             .as_deref()
             .map(|p| resolve("program.file", p));
+        s.program.tool_table = s
+            .program
+            .tool_table
+            .as_deref()
+            .map(|p| resolve("program.tool_table", p));
         Ok(s)
     }
 
@@ -370,6 +379,9 @@ impl ScenarioFile {
         }
         if set("program.file") {
             s.program.file = s.program.file.as_deref().map(absolute);
+        }
+        if set("program.tool_table") {
+            s.program.tool_table = s.program.tool_table.as_deref().map(absolute);
         }
         Ok(s)
     }

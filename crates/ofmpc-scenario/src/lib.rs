@@ -37,7 +37,8 @@ pub use file::{
 };
 pub use program_json::program_json;
 pub use resolve::{
-    is_model_path, load_robot, load_robot_section, load_robot_with, read_program, Scenario,
+    is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
+    Scenario,
 };
 pub use runner::{
     metrics_json, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,

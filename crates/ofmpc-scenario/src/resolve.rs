@@ -5,7 +5,7 @@ use crate::error::ScenarioError;
 use crate::file::{parse_mode, parse_profile, ScenarioFile};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use ofmpc::control::ControllerKind;
-use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
+use ofmpc::gcode::{ParseOptions, ToolTable, PAPER_TABLE1};
 use ofmpc::motion::{plan, CartesianTrajectory, Orientation, PlanOptions, TimingOptions};
 use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, PlantSettings, MAX_SUBSTEPS};
@@ -159,6 +159,32 @@ pub fn read_program(file: Option<&Path>) -> Result<(String, String), ScenarioErr
     }
 }
 
+/// Reads a tool table (LinuxCNC's .tbl format, lengths in mm) named by setting `key`
+/// (`[program] tool_table`, or a command-line option).
+pub fn read_tool_table(path: &Path, key: &str) -> Result<ToolTable, ScenarioError> {
+    let text =
+        crate::file::read_text_limited(path, crate::file::MAX_PROGRAM_BYTES).map_err(|source| {
+            ScenarioError::ReadToolTable {
+                key: key.into(),
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    ToolTable::parse(&text).map_err(|error| ScenarioError::ToolTable {
+        key: key.into(),
+        path: path.to_path_buf(),
+        error: Box::new(error),
+    })
+}
+
+/// The tool table of `[program] tool_table`, if set.
+fn program_tool_table(p: &crate::ProgramSection) -> Result<Option<ToolTable>, ScenarioError> {
+    p.tool_table
+        .as_deref()
+        .map(|path| read_tool_table(path, "[program] tool_table"))
+        .transpose()
+}
+
 /// Two different masses whose run folders would share a name (the label keeps 6 significant
 /// digits) are not a repeat: refused, naming both (a true repeat is a warning). No mass at
 /// all is refused too.
@@ -243,7 +269,10 @@ impl Scenario {
             value: f.timing.profile.clone(),
         })?;
         let options = PlanOptions {
-            parse: ParseOptions::with_origin(origin),
+            parse: ParseOptions {
+                tool_table: program_tool_table(&f.program)?,
+                ..ParseOptions::with_origin(origin)
+            },
             timing: TimingOptions {
                 profile,
                 max_speed: f.timing.max_speed_m_s,

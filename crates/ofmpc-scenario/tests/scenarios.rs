@@ -170,3 +170,60 @@ fn friction_advice_is_possible_and_model_payload_names_its_key() {
         "{e}"
     );
 }
+
+/// `[program] tool_table` (issue #20): a file relative to the scenario, read for `G43 H`;
+/// a missing one is named with its key.
+#[test]
+fn program_tool_table_is_read_relative_to_the_scenario() {
+    let dir = std::env::temp_dir().join(format!("ofmpc-tool-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Dir(dir);
+    std::fs::write(
+        dir.path().join("p.ngc"),
+        "G0 X500 Y0 Z600\nG43 H1\nG1 X510 F600\nM30\n",
+    )
+    .unwrap();
+    std::fs::write(dir.path().join("t.tbl"), "T1 P1 Z+20 ;tool\n").unwrap();
+    let path = dir.path().join("s.toml");
+    std::fs::write(
+        &path,
+        "[program]\nfile = \"p.ngc\"\ntool_table = \"t.tbl\"\n",
+    )
+    .unwrap();
+    let f = ScenarioFile::from_file(&path).unwrap();
+    assert_eq!(f.program.tool_table, Some(dir.path().join("t.tbl")));
+    // G43 H1 reads (without the table it is refused by name).
+    Scenario::resolve(&f).unwrap();
+    std::fs::write(&path, "[program]\nfile = \"p.ngc\"\n").unwrap();
+    let e = Scenario::resolve(&ScenarioFile::from_file(&path).unwrap())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("no tool table was given"), "{e}");
+    std::fs::write(
+        &path,
+        "[program]\nfile = \"p.ngc\"\ntool_table = \"none.tbl\"\n",
+    )
+    .unwrap();
+    let f = ScenarioFile::from_file(&path).unwrap();
+    let e = Scenario::resolve(&f).err().unwrap().to_string();
+    assert!(
+        e.contains("[program] tool_table") && e.contains("none.tbl"),
+        "{e}"
+    );
+}
+
+/// A scratch folder removed at the end of the test.
+struct Dir(std::path::PathBuf);
+
+impl Dir {
+    fn path(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Dir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}

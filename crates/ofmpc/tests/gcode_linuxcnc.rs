@@ -211,17 +211,95 @@ fn corpus_constructs_read_or_are_refused_by_their_own_name() {
     }
 }
 
+/// A program point `p` (mm) of a system with offset `o` rotated by `deg` about Z, as the
+/// machine point (mm): `Rz(deg)·(p + g92) + o` (LinuxCNC's emccanon.cc, written here
+/// independently of the reader).
+fn machine(p: [f64; 3], g92: [f64; 3], o: [f64; 3], deg: f64) -> [f64; 3] {
+    let (s, c) = deg.to_radians().sin_cos();
+    let (x, y) = (p[0] + g92[0], p[1] + g92[1]);
+    [
+        c * x - s * y + o[0],
+        s * x + c * y + o[1],
+        p[2] + g92[2] + o[2],
+    ]
+}
+
 #[test]
-fn g10_rotation_is_refused_by_name_and_r0_is_read() {
+fn g10_l2_r_rotates_the_xy_plane_of_the_system_about_its_origin() {
+    // R0 is no rotation; R45 rotates the programmed XY before the offset is added.
     let p = ok("G10 L2 P1 X1 R0\nG0 X0 Y0 Z0\nM2\n");
     assert!((p.start.x - 1e-3).abs() < 1e-15);
-    let e = fail("G10 L2 P1 R45\nG0 X0 Y0 Z0\n");
-    assert_eq!(
-        (e.line, e.column, e.kind),
-        (1, 11, GcodeErrorKind::Unsupported)
-    );
+    let o = [10.0, 20.0, 5.0];
+    let p = ok("G10 L2 P1 X10 Y20 Z5 R45\nG0 X0 Y0 Z0\nG1 X4 F100\nY3\nG91 X1 Y1\nG90 Z2\nM2\n");
+    let want = [
+        [4.0, 0.0, 0.0],
+        [4.0, 3.0, 0.0],
+        [5.0, 4.0, 0.0],
+        [5.0, 4.0, 2.0],
+    ]
+    .map(|q| machine(q, [0.0; 3], o, 45.0));
+    assert_ends(&p, &want);
+    assert!((p.start - nalgebra::Vector3::new(10.0, 20.0, 5.0) * 1e-3).norm() < 1e-15);
+    // G92 is added to the program point before the rotation: G92 X0 Y0 at program (4, 0)
+    // makes g92 = (4, 0), so X1 Y0 is program (5, 0).
+    let p = ok("G10 L2 P2 X10 R90\nG55 G0 X4 Y0 Z0\nG92 X0 Y0\nG1 X1 F100\nM2\n");
+    let want = [machine(
+        [1.0, 0.0, 0.0],
+        [4.0, 0.0, 0.0],
+        [10.0, 0.0, 0.0],
+        90.0,
+    )];
+    assert_ends(&p, &want);
+    // Arcs turn with the system: a half circle from program (0, 0) about (5, 0).
+    let p = ok("G10 L2 P1 R30\nG0 X0 Y0 Z0\nG2 X10 Y0 I5 J0 F100\nM2\n");
+    assert_ends(&p, &[machine([10.0, 0.0, 0.0], [0.0; 3], [0.0; 3], 30.0)]);
+    let p = ok("G10 L2 P1 R30\nG90.1 G0 X0 Y0 Z0\nG3 X10 Y0 I5 J0 F100\nM2\n");
+    assert_ends(&p, &[machine([10.0, 0.0, 0.0], [0.0; 3], [0.0; 3], 30.0)]);
+    // G53 moves in machine coordinates, unrotated; #5230 holds the rotation and #5420/#5421
+    // read the position back in the rotated system.
+    let p = ok("G10 L2 P1 R90\nG0 X0 Y0 Z0\nG53 G0 X2 Y0\n(DEBUG, #5230 #5420 #5421)\nM2\n");
+    assert_ends(&p, &[[2.0, 0.0, 0.0]]);
+    assert_eq!(p.messages[0].text, "90.000000 0.000000 -2.000000");
+}
+
+#[test]
+fn g10_l20_in_a_rotated_system_makes_the_current_point_read_as_given() {
+    // LinuxCNC's tests/interp g10-l20 scenario, written anew: in a system rotated by 45°,
+    // G10 L20 X-1 makes the current point (machine 0, 0) read X = -1; G1 X0 then moves
+    // one unit along the rotated X axis.
+    let p =
+        ok("G10 L2 P1 R45\nG0 G53 X0 Y0 Z0\nG10 L20 P1 X-1\n(DEBUG, #5420 #5421)\nG1 X0 F60\nM2\n");
+    assert_eq!(p.messages[0].text, "-1.000000 0.000000");
+    let h = 0.5_f64.sqrt();
+    assert_ends(&p, &[[h, h, 0.0]]);
+    // Arcs in G18/G19 of a rotated system leave the plane: refused by name.
+    let e = fail("G10 L2 P1 R45\nG0 X0 Y0 Z0\nG18 G2 X2 Z0 I1 K0\n");
+    assert_eq!((e.line, e.kind), (3, GcodeErrorKind::Unsupported));
+    assert!(e.to_string().contains("rotated coordinate system"), "{e}");
+}
+
+#[test]
+fn a_program_name_o_word_alone_on_its_line_is_read_as_a_title() {
+    // LinuxCNC reads `O<name>` alone on a line as the program's name, like `O42`.
+    let p = ok("%\n(title)\nO<MyProgram> (the name)\nG0 X1 Y2 Z3\nG1 X2 F100\nM30\n%\n");
+    assert_ends(&p, &[[2.0, 2.0, 3.0]]);
     assert!(
-        e.to_string().contains("rotation of the coordinate system"),
-        "{e}"
+        p.warnings
+            .iter()
+            .any(|w| w.line == 3 && w.message.contains("o<myprogram> (program name) ignored")),
+        "{:?}",
+        p.warnings
     );
+    // With a word after it, it is still an O-word without a keyword.
+    let e = fail("O<name> G0 X0 Y0 Z0\n");
+    assert!(e.to_string().contains("without a keyword"), "{e}");
+}
+
+#[test]
+fn debug_and_print_formats_set_the_decimals_of_the_values_after_them() {
+    // LinuxCNC's convert_param_comment: %lf by default, %d no decimals, %f four, %.Nf N;
+    // a format holds for the rest of the comment; another % is kept.
+    let p = ok("#<v> = 2.718281828\n#1 = 0.5\n(DEBUG, a #<v> %d#<v> b #1)\n(PRINT, %.2f#<v> and #1, 50%)\n(DEBUG, %f#<v>)\nG0 X0 Y0 Z0\nM2\n");
+    let texts: Vec<&str> = p.messages.iter().map(|m| m.text.as_str()).collect();
+    assert_eq!(texts, ["a 2.718282 3 b 0", "2.72 and 0.50, 50%", "2.7183"]);
 }

@@ -6,7 +6,7 @@ use nalgebra::Vector3;
 mod common;
 
 use common::gcode::{assert_ends, ends, ok};
-use ofmpc::gcode::{parse, MoveKind, ParseOptions, Program};
+use ofmpc::gcode::{parse, MoveKind, ParseOptions, Program, ToolTable};
 
 #[test]
 fn g92_family_g52_and_g53() {
@@ -55,6 +55,57 @@ fn tool_length_is_kept_for_the_tcp() {
 }
 
 #[test]
+fn g43_h_takes_the_length_from_the_tool_table() {
+    let table = ToolTable::parse(
+        "; LinuxCNC tool table\nT1 P1 Z+1.5 D0.25 ;comment\n\nT7 P3 X0.1 Z-20 D6 I0 J0 Q1 ;\nt12 p4 d3\n",
+    )
+    .unwrap();
+    assert_eq!(table.len(), 3);
+    assert_eq!(table.length(12), Some(0.0));
+    let options = ParseOptions {
+        tool_table: Some(table),
+        ..ParseOptions::default()
+    };
+    let read = |text: &str| parse(text, &options);
+    let length = |text: &str| read(text).unwrap().tool_length;
+    assert!((length("G0 X0 Y0 Z0\nG43 H1\n") - 1.5e-3).abs() < 1e-15);
+    assert!((length("G0 X0 Y0 Z0\nG43 H7\nG1 Z1 F100\n") + 0.02).abs() < 1e-15);
+    // Without H: the tool in the spindle (T7 M6); H0 and G49: no length.
+    assert!((length("T7 M6\nG0 X0 Y0 Z0\nG43\n") + 0.02).abs() < 1e-15);
+    assert_eq!(length("G0 X0 Y0 Z0\nG43 H1\nG43 H0\n"), 0.0);
+    assert_eq!(length("G0 X0 Y0 Z0\nG43 H1\nG49\n"), 0.0);
+    // The length goes to the TCP, not to the points.
+    assert_ends(
+        &read("G0 X0 Y0 Z0\nG43 H7\nG1 Z1 F100\n").unwrap(),
+        &[[0.0, 0.0, 1.0]],
+    );
+    let e = read("G0 X0 Y0 Z0\nG43 H3\n").unwrap_err();
+    assert_eq!((e.line, e.column), (2, 5));
+    assert!(
+        e.to_string().contains("the tool table has no tool 3"),
+        "{e}"
+    );
+    // Without a table, G43 H<n> is refused by name and says to give one.
+    let e = common::gcode::fail("G0 X0 Y0 Z0\nG43 H1\n");
+    assert!(e.to_string().contains("no tool table was given"), "{e}");
+    assert!(e.to_string().contains("give a tool table"), "{e}");
+    // A malformed table names its line and column.
+    let e = ToolTable::parse("T1 Z1\nT2 Z1,5\n").unwrap_err();
+    assert_eq!((e.line, e.column), (2, 4));
+    let e = ToolTable::parse("T1 Z1\nP2 Z3\n").unwrap_err();
+    assert!(e.to_string().contains("without T"), "{e}");
+    // A tool listed twice: the first line counts (LinuxCNC finds the first pocket).
+    assert_eq!(
+        ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap().length(1),
+        Some(1e-3)
+    );
+    let e =
+        ToolTable::parse("TOOLNO POCKET LENGTH DIAMETER COMMENT\n1 1 0.5 0.1 mill\n").unwrap_err();
+    assert!(e.to_string().contains("old tool table format"), "{e}");
+    assert!(ToolTable::parse("T1 K3\n").is_err());
+}
+
+#[test]
 fn absolute_arc_centres() {
     let a = ok("G0 X10 Y0 Z0\nG90.1 G3 X0 Y10 I0 J0\n");
     let b = ok("G0 X10 Y0 Z0\nG3 X0 Y10 I-10 J0\n");
@@ -95,6 +146,99 @@ fn drilling_cycles() {
         xs,
         [10.0, 10.0, 10.0, 10.0, 20.0, 20.0, 20.0, 30.0, 30.0, 30.0]
     );
+}
+
+/// The G17 drilling of `program` with its axes permuted by `perm` (program axis k of the
+/// G17 program becomes axis perm[k]): LinuxCNC's G18/G19 cycles drill along Y / X as G17
+/// drills along Z.
+fn permuted(points: &[[f64; 3]], perm: [usize; 3]) -> Vec<[f64; 3]> {
+    points
+        .iter()
+        .map(|p| {
+            let mut q = [0.0; 3];
+            for k in 0..3 {
+                q[perm[k]] = p[k];
+            }
+            q
+        })
+        .collect()
+}
+
+#[test]
+fn drilling_cycles_in_g18_and_g19_are_the_g17_cycles_with_the_axes_permuted() {
+    // G17: position X Y, depth Z. G18 (ZX plane): position Z X, depth Y. G19 (YZ plane):
+    // position Y Z, depth X.
+    let g17 = ok("G17 G0 X0 Y0 Z10\nG98 G83 X1 Y2 R2 Z-3 Q2 F60\nG91 G81 X1 Y1 R-1 Z-2 L2\n");
+    let want = ends(&g17);
+    let g18 = ok("G18 G0 Z0 X0 Y10\nG98 G83 Z1 X2 R2 Y-3 Q2 F60\nG91 G81 Z1 X1 R-1 Y-2 L2\n");
+    assert_ends(&g18, &permuted(&want, [2, 0, 1]));
+    let g19 = ok("G19 G0 Y0 Z0 X10\nG98 G83 Y1 Z2 R2 X-3 Q2 F60\nG91 G81 Y1 Z1 R-1 X-2 L2\n");
+    assert_ends(&g19, &permuted(&want, [1, 2, 0]));
+    // The depth word is the drilling axis's letter: a G18 cycle without Y names it.
+    let e = common::gcode::fail("G18 G0 X0 Y10 Z0\nG81 X1 Z1 R2 F60\n");
+    assert!(e.to_string().contains("G81 without R or Y"), "{e}");
+}
+
+#[test]
+fn tapping_feeds_in_reverses_the_spindle_and_feeds_out_to_the_clear_plane() {
+    // G84 (right hand, spindle M3) and G74 (left hand, M4): feed to the bottom, M5 and the
+    // reverse direction, dwell P, feed out to the clear plane (G98: the initial Z), M5 and
+    // the first direction again (LinuxCNC's convert_cycle_g74_g84).
+    for (n, start, rev) in [(84, "M3", "M4"), (74, "M4", "M3")] {
+        let p = ok(&format!(
+            "{start} S500\nG0 X0 Y0 Z10\nG98 G{n} X1 Y1 R2 Z-3 P0.5 F60\nM5\n"
+        ));
+        assert_ends(
+            &p,
+            &[
+                [1.0, 1.0, 10.0],
+                [1.0, 1.0, 2.0],
+                [1.0, 1.0, -3.0],
+                [1.0, 1.0, 10.0],
+            ],
+        );
+        let kinds: Vec<bool> = p
+            .moves
+            .iter()
+            .map(|m| matches!(m.kind, MoveKind::Dwell { seconds } if seconds == 0.5))
+            .collect();
+        assert_eq!(kinds, [false, false, false, true, false]);
+        let feeds: Vec<bool> = p
+            .moves
+            .iter()
+            .filter_map(|m| match &m.kind {
+                MoveKind::Path { feed, .. } => Some(feed.is_some()),
+                MoveKind::Dwell { .. } => None,
+            })
+            .collect();
+        assert_eq!(feeds, [false, false, true, true], "in and out at the feed");
+        let events: Vec<(&str, usize)> = p
+            .events
+            .iter()
+            .filter(|e| e.code.starts_with('M'))
+            .map(|e| (e.code.as_str(), e.after_moves))
+            .collect();
+        assert_eq!(
+            events,
+            [
+                (start, 0),
+                ("M5", 3),
+                (rev, 3),
+                ("M5", 5),
+                (start, 5),
+                ("M5", 5)
+            ]
+        );
+    }
+    // Without the spindle turning the right way LinuxCNC refuses the cycle; so does the reader.
+    let e = common::gcode::fail("G0 X0 Y0 Z10\nG84 X1 Y1 R2 Z-3 F60\n");
+    assert!(
+        e.to_string()
+            .contains("needs the spindle turning clockwise"),
+        "{e}"
+    );
+    let e = common::gcode::fail("M3 S100\nG0 X0 Y0 Z10\nG74 X1 Y1 R2 Z-3 F60\n");
+    assert!(e.to_string().contains("M4"), "{e}");
 }
 
 #[test]

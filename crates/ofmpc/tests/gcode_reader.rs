@@ -731,16 +731,14 @@ fn command_errors() {
         InvalidValue,
         &["P1..P6"],
     );
-    // R of G10 L2 is LinuxCNC's rotation of the coordinate system: named (issue #20).
+    // R of G10 L2 is LinuxCNC's rotation of the coordinate system (read, issue #20); with
+    // L20 LinuxCNC refuses it, and so does the reader.
     check(
-        &fail_after_start("G10 L2 P1 X0 R5\n"),
+        &fail_after_start("G10 L20 P1 X0 R5\n"),
         2,
-        14,
-        Unsupported,
-        &[
-            "G10 R5 (rotation of the coordinate system about Z)",
-            "R0 is read",
-        ],
+        15,
+        Conflict,
+        &["R is not allowed in G10 L20", "G10 L2 Pn R"],
     );
 }
 

@@ -157,6 +157,7 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
     let options = ofmpc::gcode::ParseOptions {
         origin,
         start: Some(start),
+        tool_table: super::read_tool_table(a.tool_table.as_deref())?,
         ..Default::default()
     };
     let program = ofmpc::gcode::parse(&text, &options)

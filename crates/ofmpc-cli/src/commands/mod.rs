@@ -180,3 +180,12 @@ pub(crate) fn parse_controllers(
     }
     Ok(v)
 }
+
+/// The tool table of `--tool-table FILE`, if given.
+fn read_tool_table(
+    path: Option<&std::path::Path>,
+) -> anyhow::Result<Option<ofmpc::gcode::ToolTable>> {
+    Ok(path
+        .map(|p| ofmpc_scenario::read_tool_table(p, "--tool-table"))
+        .transpose()?)
+}

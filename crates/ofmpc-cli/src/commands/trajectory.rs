@@ -98,7 +98,10 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         None => Orientation::AtZero,
     };
     let options = PlanOptions {
-        parse: ParseOptions::with_origin(origin),
+        parse: ParseOptions {
+            tool_table: super::read_tool_table(a.tool_table.as_deref())?,
+            ..ParseOptions::with_origin(origin)
+        },
         timing: TimingOptions {
             profile: parse_profile(&a.profile)?,
             max_speed: a.speed,

@@ -146,6 +146,7 @@ def read_program(
     program: Union[str, "os.PathLike[str]"],
     origin: Optional[Sequence[float]] = None,
     robot: Optional[Robot] = None,
+    tool_table: Optional[Union[str, "os.PathLike[str]"]] = None,
 ) -> dict:
     """Reads a G-code program without planning it, as ``ofmpc inspect program`` does.
 
@@ -154,6 +155,8 @@ def read_program(
         origin: G54 work offset ``(x, y, z)`` in mm; default none.
         robot: the program starts from the tool position of the robot's start pose;
             default: machine zero (0, 0, 0).
+        tool_table: path of a tool table (LinuxCNC's ``.tbl`` format, lengths in mm) for
+            ``G43 H<n>``; without one ``G43 H<n>`` is refused.
 
     Returns:
         ``{"units": "mm", "start", "tool_length_mm", "moves": [{"line", "kind", "end",
@@ -167,7 +170,8 @@ def read_program(
     o = None if origin is None else tuple(float(v) for v in origin)
     if o is not None and len(o) != 3:
         raise OfmpcError(f"origin has {len(o)} values: give (x, y, z) in mm")
-    return json.loads(_read_program(text, name, o, robot))
+    t = None if tool_table is None else os.fspath(tool_table)
+    return json.loads(_read_program(text, name, o, robot, t))
 
 
 def _check_numbers(value: Any, key: str) -> None:

@@ -152,6 +152,7 @@ def read_program(
     program: Union[str, os.PathLike[str]],
     origin: Optional[Sequence[float]] = None,
     robot: Optional[Robot] = None,
+    tool_table: Optional[Union[str, os.PathLike[str]]] = None,
 ) -> dict:
     """Reads a program as ``ofmpc inspect program`` does (mm, machine coordinates)."""
 

@@ -3,6 +3,7 @@
 //! would fit.
 
 use super::codes::{Args, Motion};
+use super::frames::rotate_z;
 use super::interpreter::Interpreter;
 use super::lexer::Word;
 use super::{arc_tolerance, err, GcodeError, GcodeErrorKind};
@@ -92,10 +93,19 @@ impl Interpreter {
                 Plane::ZX => (2, 0),
                 Plane::YZ => (1, 2),
             };
+            let local = self.to_program(start);
             for a in [u, v] {
-                off[a] += work[a] - start[a];
+                off[a] += if self.rotation() == 0.0 {
+                    work[a] - start[a]
+                } else {
+                    -local[a]
+                };
                 given[a] = true;
             }
+        }
+        if self.rotation() != 0.0 {
+            // A rotated system (G10 L2 R, G17 only): the offsets rotate with it.
+            off = rotate_z(off, self.rotation());
         }
         let tol = arc_tolerance(self.inch);
         let center = start + off;

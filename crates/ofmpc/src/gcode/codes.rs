@@ -10,7 +10,7 @@ pub(super) enum Motion {
     Linear,
     Cw,
     Ccw,
-    /// A canned cycle: G73, G81, G82, G83, G85, G86, G89 (the number).
+    /// A canned cycle: G73, G74, G81, G82, G83, G84, G85, G86, G89 (the number).
     Cycle(u8),
 }
 
@@ -22,6 +22,8 @@ impl Motion {
             Motion::Cw => "G02",
             Motion::Ccw => "G03",
             Motion::Cycle(73) => "G73",
+            Motion::Cycle(74) => "G74",
+            Motion::Cycle(84) => "G84",
             Motion::Cycle(81) => "G81",
             Motion::Cycle(82) => "G82",
             Motion::Cycle(83) => "G83",
@@ -99,7 +101,7 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
             GcodeErrorKind::UnknownCode,
             w.text,
             format!("unknown G code {}", w.text),
-            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G28 G30 G40 G43 G49 G52 G53 G54-G59 G61 G64 G73 G80-G83 G85 G86 G89 G90 G91 G92 G93-G95 G98 G99",
+            "supported: G00 G01 G02 G03 G04 G10 G17 G18 G19 G20 G21 G28 G30 G40 G43 G49 G52 G53 G54-G59 G61 G64 G73 G74 G80-G86 G89 G90 G91 G92 G93-G95 G98 G99",
         )
     };
     if (w.value * 10.0 - tenths).abs() > 1e-9 {
@@ -146,7 +148,7 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
         430 | 431 | 490 => GCode::ToolLength(code as u16),
         980 => GCode::Retract(true),
         990 => GCode::Retract(false),
-        730 | 810 | 820 | 830 | 850 | 860 | 890 => GCode::Motion(Motion::Cycle((code / 10) as u8)),
+        730 | 740 | 810 | 820 | 830 | 840 | 850 | 860 | 890 => GCode::Motion(Motion::Cycle((code / 10) as u8)),
         410 | 420 | 411 | 421 => {
             return Err(unsupported(
                 "G41/G42 cutter radius compensation is not supported",
@@ -171,10 +173,10 @@ pub(super) fn classify_g(w: &Word<'_>, line: usize) -> Result<GCode, GcodeError>
                 "a robot path has no spindle synchronization; remove the threading",
             ))
         }
-        740 | 760 | 840 | 870 | 880 => {
+        760 | 870 | 880 => {
             return Err(unsupported(
                 &format!("canned cycle {} is not supported", w.text),
-                "supported cycles: G73 G81 G82 G83 G85 G86 G89; expand this one into G00/G01 moves",
+                "supported cycles: G73 G74 G81 G82 G83 G84 G85 G86 G89; expand this one into G00/G01 moves",
             ))
         }
         50 | 51 | 52 | 53 | 62 => {

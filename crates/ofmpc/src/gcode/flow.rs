@@ -177,7 +177,7 @@ fn link_one(
         OKind::Endrepeat if top_is(stack, &[OKind::Repeat]) => close_loop(stack, k, i),
         OKind::Endsub if top_is(stack, &[OKind::Sub]) => close_loop(stack, k, i),
         OKind::Break | OKind::Continue | OKind::Return => link_jump(l, stack, k, i, o)?,
-        OKind::Call => {}
+        OKind::Call | OKind::Title => {}
         _ => {
             let m = match stack.last() {
                 Some(t) => format!(
@@ -425,6 +425,11 @@ impl<'s, 'a> Runner<'s, 'a> {
             OKind::If => self.branch(pc)?,
             OKind::Elseif | OKind::Else => k.end[pc] + 1,
             OKind::Endif | OKind::Do => pc + 1,
+            OKind::Title => {
+                let text = format!("o{} (program name) ignored: no effect on the path", o.label);
+                it.warn(l.no, o.col, text);
+                pc + 1
+            }
             OKind::While if k.do_while[pc] => {
                 if self.arg0(l, o)? != 0.0 {
                     self.last_loop = pc;
@@ -677,14 +682,36 @@ impl<'s, 'a> Runner<'s, 'a> {
         Ok(())
     }
 
-    /// `text` with `#n` and `#<name>` replaced by their values (`%lf`, as LinuxCNC's
-    /// `(PRINT,…)` and `(DEBUG,…)`).
+    /// `text` with `#n` and `#<name>` replaced by their values, as LinuxCNC's `(PRINT,…)`
+    /// and `(DEBUG,…)` (`Interp::convert_param_comment`, interp_convert.cc): `%lf` (six
+    /// decimals) until a format in the text changes it for the values after it: `%d` (no
+    /// decimals), `%f` (four), `%.Nf` (N, one digit).
     fn substitute(&self, text: &str) -> String {
         let mut out = String::new();
+        let mut decimals = 6;
         let mut rest = text;
-        while let Some(i) = rest.find('#') {
+        while let Some(i) = rest.find(['#', '%']) {
             out.push_str(&rest[..i]);
             let after = &rest[i + 1..];
+            if rest[i..].starts_with('%') {
+                let b = after.as_bytes();
+                (decimals, rest) = match b {
+                    [b'd', ..] => (0, &after[1..]),
+                    [b'f', ..] => (4, &after[1..]),
+                    [b'.', d, b'f', ..] if d.is_ascii_digit() => {
+                        (usize::from(d - b'0'), &after[3..])
+                    }
+                    [b'.', ..] => {
+                        out.push('.');
+                        (decimals, &after[1..])
+                    }
+                    _ => {
+                        out.push('%');
+                        (decimals, after)
+                    }
+                };
+                continue;
+            }
             if let Some(name) = after.strip_prefix('<').and_then(|a| a.split_once('>')) {
                 let key: String = name
                     .0
@@ -693,7 +720,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                     .flat_map(char::to_lowercase)
                     .collect();
                 match self.params.named(&key) {
-                    Some(v) => out.push_str(&format!("{v:.6}")),
+                    Some(v) => out.push_str(&format!("{v:.decimals$}")),
                     None => out.push_str("######"),
                 }
                 rest = name.1;
@@ -705,7 +732,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                 .ok()
                 .and_then(|v| Params::index(v).ok())
             {
-                Some(k) => out.push_str(&format!("{:.6}", self.params.numbered[k])),
+                Some(k) => out.push_str(&format!("{:.decimals$}", self.params.numbered[k])),
                 None => out.push('#'),
             }
             rest = &after[digits..];

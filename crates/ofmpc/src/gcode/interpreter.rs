@@ -48,6 +48,8 @@ pub(super) struct Interpreter {
     pub(super) tool_length: f64,
     /// State of the codes of [`super::modal`].
     pub(super) ext: Extra,
+    /// The tool table of the options (G43 H).
+    pub(super) tools: Option<super::ToolTable>,
     /// The warning that the origin option applies to G54 only was given.
     warned_wcs: bool,
 }
@@ -95,6 +97,7 @@ impl Interpreter {
                 feed_mode: 94,
                 ..Extra::default()
             },
+            tools: options.tool_table.clone(),
             warned_wcs: false,
         })
     }
@@ -192,7 +195,7 @@ impl Interpreter {
             self.ext.spindle = Some(sw.value);
         }
         if let Some((c, w)) = cmd.tool {
-            self.tool_length_code(line, w, c, args);
+            self.tool_length_code(line, w, c, args)?;
         }
         if let Some((g, c, w)) = cmd.axis_cmd {
             match g {
@@ -767,18 +770,16 @@ impl Interpreter {
             }
             Some(_) => {}
         }
-        // LinuxCNC's G10 L2/L20 R: the rotation of the coordinate system about Z.
-        if let Some(r) = arg('R').filter(|r| r.value != 0.0) {
+        // LinuxCNC's G10 L2 R: the rotation of the coordinate system about Z (not with L20).
+        let l20 = arg('L').is_some_and(|l| l.value == 20.0);
+        if let (Some(r), true) = (arg('R'), l20) {
             return Err(err(
                 line,
                 r.col,
-                Unsupported,
+                Conflict,
                 r.text,
-                format!(
-                    "G10 {} (rotation of the coordinate system about Z) is not supported",
-                    r.text
-                ),
-                "rotate the program in the CAM system, or remove R (R0 is read: no rotation)",
+                "R is not allowed in G10 L20 (as in LinuxCNC)",
+                "set the rotation with G10 L2 Pn R<degrees>, then the origin with G10 L20",
             ));
         }
         let p = arg('P').ok_or_else(|| {
@@ -806,7 +807,6 @@ impl Interpreter {
         } else {
             p.value as usize - 1
         };
-        let l20 = arg('L').is_some_and(|l| l.value == 20.0);
         if k == 0 && self.p1_from_options {
             self.p1_from_options = false;
             if self.origin_given {
@@ -817,6 +817,14 @@ impl Interpreter {
                 );
             }
             self.offsets[0] = [0.0; 3];
+        }
+        if let (Some(r), Some(rot)) = (arg('R'), self.ext.rotation.get_mut(k)) {
+            *rot = r.value;
+        }
+        let theta = self.ext.rotation.get(k).copied().unwrap_or(0.0);
+        if l20 && theta != 0.0 {
+            self.set_offset_l20_rotated(k, args);
+            return Ok(());
         }
         let scale = self.scale();
         let here = self.pos.or(self.initial).unwrap_or_else(Vector3::zeros);
@@ -932,7 +940,6 @@ impl Interpreter {
         let (line, col, line_text) = (b.line, b.col, b.line_text);
         let arg = |c| b.args.get(c);
         let scale = self.scale();
-        let offset = self.work();
         let xyz = [arg('X'), arg('Y'), arg('Z')];
         if matches!(b.mode, Motion::Cw | Motion::Ccw) {
             return Err(err(
@@ -973,10 +980,8 @@ impl Interpreter {
                 "give all three coordinates of the start point, e.g. G00 X630 Y-200 Z400",
             ));
         }
-        let mut p = Vector3::zeros();
-        for (a, w) in xyz.iter().enumerate() {
-            p[a] = w.map_or(0.0, |w| w.value) * scale + offset[a];
-        }
+        let given = xyz.map(|w| Some(w.map_or(0.0, |w| w.value) * scale));
+        let p = self.place(Vector3::zeros(), given);
         self.pos = Some(p);
         self.start = p;
         self.start_line = line;
@@ -987,19 +992,12 @@ impl Interpreter {
     /// work offset (G90) or relative to `pos` (G91), the others unchanged.
     pub(super) fn motion_target(&self, pos: Vector3<f64>, args: &Args<'_, '_>) -> Vector3<f64> {
         let scale = self.scale();
-        let offset = self.work();
-        let xyz = [args.get('X'), args.get('Y'), args.get('Z')];
-        let mut target = pos;
-        for (a, w) in xyz.iter().enumerate() {
-            if let Some(w) = w {
-                target[a] = if self.absolute {
-                    w.value * scale + offset[a]
-                } else {
-                    pos[a] + w.value * scale
-                };
-            }
+        let xyz = ['X', 'Y', 'Z'].map(|c| args.get(c).map(|w| w.value * scale));
+        if self.absolute {
+            self.place(pos, xyz)
+        } else {
+            self.shift_by(pos, xyz)
         }
-        target
     }
 
     /// The arc (G02/G03) from `pos` to `target`, its centre given by R or by I/J/K; warns
@@ -1017,6 +1015,19 @@ impl Interpreter {
         } else {
             ArcDirection::CounterClockwise
         };
+        if self.rotation() != 0.0 && self.plane != Plane::XY {
+            return Err(err(
+                line,
+                col,
+                GcodeErrorKind::Unsupported,
+                line_text,
+                format!(
+                    "an arc in the {} plane of a rotated coordinate system (G10 L2 R) is not supported",
+                    self.plane.gcode()
+                ),
+                "program arcs of a rotated system in G17, or rotate the program in the CAM system",
+            ));
+        }
         let seg = if let Some(r) = arg('R') {
             if let Some(w) = arg('I').or(arg('J')).or(arg('K')) {
                 return Err(err(

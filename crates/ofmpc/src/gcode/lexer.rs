@@ -65,6 +65,9 @@ pub(super) enum OKind {
     Endrepeat,
     Break,
     Continue,
+    /// `O<name>` alone on a line: the program's name (LinuxCNC reads it as the program
+    /// number line of Fanuc-style programs, `O42`); no effect.
+    Title,
 }
 
 impl OKind {
@@ -107,6 +110,7 @@ impl OKind {
             OKind::Endrepeat => "endrepeat",
             OKind::Break => "break",
             OKind::Continue => "continue",
+            OKind::Title => "(program name)",
         }
     }
 }
@@ -668,6 +672,19 @@ impl<'a> LineChars<'a> {
                     format!("unknown O-word keyword `{shown}` after o{label}"),
                     "O-word keywords: sub endsub call return if elseif else endif while endwhile do repeat endrepeat break continue",
                 ));
+            }
+            if label.starts_with('<') && kw.is_empty() {
+                return Ok(Some((
+                    OStmt {
+                        label,
+                        label_expr: None,
+                        kind: OKind::Title,
+                        args: Vec::new(),
+                        col: i + 1,
+                        text: self.raw[self.byte_at(i)..self.byte_at(k)].trim_end(),
+                    },
+                    k,
+                )));
             }
             if label.starts_with('<') || label_expr.is_some() {
                 return Err(self.syntax(

@@ -15,7 +15,7 @@
 //! | `G01` | linear move, at the modal feed `F` if one was given, else at the speed limit |
 //! | `G02` / `G03` | clockwise / counter-clockwise arc (seen from the positive plane normal), centre by `I J K` offsets from the start point, or by `R` (`R < 0`: the long way, more than 180°); a move along the plane normal makes a helix; end = start with `I J K` is a full circle; an arc line without `X Y Z` is a full circle |
 //! | `G04 P…` / `G04 X…` | dwell, in seconds (both `P` and `X` are seconds) |
-//! | `G10 L2 Pn X Y Z` | set the work offset of `G54 … G59` (`n = 1 … 6`) in the current units; always absolute; omitted axes keep their value |
+//! | `G10 L2 Pn X Y Z R` | set the work offset of `G54 … G59` (`n = 1 … 6`) in the current units; always absolute; omitted axes keep their value; `R`: the system's rotation about Z in degrees (machine = Rz(R)·(program + G92) + offset, LinuxCNC's order; see `frames.rs`) |
 //! | `G17` `G18` `G19` | arc plane XY (default), ZX, YZ |
 //! | `G20` / `G21` | inch / millimetre (default) |
 //! | `G54 … G59` | select a work offset (default `G54`); base-frame point = program point + offset |
@@ -56,10 +56,12 @@ mod arcs;
 mod codes;
 mod expr;
 mod flow;
+mod frames;
 mod interpreter;
 mod lexer;
 mod modal;
 mod predefined;
+mod tools;
 
 use crate::geometry::Segment;
 pub use flow::DEFAULT_MAX_STEPS;
@@ -68,6 +70,7 @@ use interpreter::Interpreter;
 use lexer::lex_line;
 use nalgebra::Vector3;
 use std::fmt;
+pub use tools::{ToolTable, ToolTableError};
 
 /// The paper's Table I test program (section IV), corrected to `G17` and placed with a work
 /// offset; see the comments in the file `examples/paper-table1.gcode` (the crate embeds its
@@ -96,6 +99,9 @@ pub struct ParseOptions {
     /// Lines the program may execute beyond its own length (loops, calls) before it is
     /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`].
     pub max_steps: Option<usize>,
+    /// The tool table `G43 H<n>` takes tool n's length from; `None`: `G43 H<n>` (n > 0)
+    /// is refused.
+    pub tool_table: Option<ToolTable>,
 }
 
 impl ParseOptions {

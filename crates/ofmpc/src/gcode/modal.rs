@@ -1,13 +1,17 @@
 //! The modal codes CAM output uses beyond the basic ones (LinuxCNC's G-code reference):
-//! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43/G43.1/G49
-//! tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
-//! feed modes, polar `@ ^`, the canned cycles G73 G81 G82 G83 G85 G86 G89 with G98/G99 and L,
+//! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43 H (tool
+//! table)/G43.1/G49 tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
+//! feed modes, polar `@ ^`, the canned cycles G73 G74 G81 G82 G83 G84 G85 G86 G89 with G98/G99
+//! and L in G17, G18 and G19,
 //! and G64 Q (collinear moves within Q merged, LinuxCNC's naive-CAM detector).
 
 use super::codes::{Args, Motion};
+use super::frames::rotate_z;
 use super::interpreter::Interpreter;
 use super::lexer::Word;
-use super::{err, GcodeError, GcodeErrorKind, Move, MoveKind, PathMode, MIN_MOVE_LENGTH};
+use super::{
+    err, GcodeError, GcodeErrorKind, Move, MoveKind, PathMode, ProgramEvent, MIN_MOVE_LENGTH,
+};
 use crate::geometry::{Plane, Segment};
 use nalgebra::Vector3;
 
@@ -46,6 +50,8 @@ pub(super) struct Extra {
     pub(super) spindle_dir: i8,
     pub(super) mist: bool,
     pub(super) flood: bool,
+    /// Rotation (degrees about Z) of the coordinate systems G54 … G59 (G10 L2 R).
+    pub(super) rotation: [f64; 6],
     /// Tool selected by T and the tool in the spindle (M6, M61 Q).
     pub(super) tool_selected: f64,
     pub(super) tool_current: f64,
@@ -75,9 +81,16 @@ impl Interpreter {
         let o = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
         match code {
             920 => {
+                // With a rotation θ: g92 = Rz(-θ)·(here - o) - p (see super::frames).
+                let theta = self.ext.rotation.get(self.wcs).copied().unwrap_or(0.0);
+                let unrotated = rotate_z(here - Vector3::from(o), -theta);
                 for (a, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
                     if let Some(w) = args.get(c) {
-                        self.ext.g92[a] = here[a] - w.value * scale - o[a];
+                        self.ext.g92[a] = if theta == 0.0 {
+                            here[a] - w.value * scale - o[a]
+                        } else {
+                            unrotated[a] - w.value * scale
+                        };
                     }
                 }
             }
@@ -155,29 +168,67 @@ impl Interpreter {
         Ok(())
     }
 
-    /// G43 H (no tool table: length 0, with a warning), G43.1 Z<length>, G49.
+    /// G43 H<n> (tool n's length from the tool table; without H the tool in the spindle;
+    /// H0: no length), G43.1 Z<length>, G49 (LinuxCNC's G43).
     pub(super) fn tool_length_code(
         &mut self,
         line: usize,
         w: &Word<'_>,
         code: u16,
         args: &Args<'_, '_>,
-    ) {
+    ) -> Result<(), GcodeError> {
         self.tool_length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
             (430, _) => {
-                self.warn(
-                    line,
-                    w.col,
-                    format!(
-                        "{}: the tool table is not known, tool length 0 used (give the length with G43.1 Z…)",
-                        w.text
-                    ),
-                );
-                0.0
+                let (n, at) = match args.get('H') {
+                    Some(h) => (h.value, h),
+                    None => (self.ext.tool_current, w),
+                };
+                let fail = |message: String, hint: &str| {
+                    Err(err(
+                        line,
+                        at.col,
+                        GcodeErrorKind::InvalidValue,
+                        at.text,
+                        message,
+                        hint,
+                    ))
+                };
+                if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
+                    return fail(
+                        format!("G43 H{n}: the tool number must be a whole number >= 0"),
+                        "write e.g. G43 H1",
+                    );
+                }
+                if n == 0.0 {
+                    0.0
+                } else {
+                    match &self.tools {
+                        None => {
+                            return Err(err(
+                                line,
+                                at.col,
+                                GcodeErrorKind::Missing,
+                                at.text,
+                                format!("G43 with tool {n}: no tool table was given, so its length is not known"),
+                                "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
+                            ))
+                        }
+                        Some(t) => match t.length(n as u32) {
+                            Some(z) => z,
+                            None => {
+                                return fail(
+                                    format!("G43 with tool {n}: the tool table has no tool {n}"),
+                                    "add the tool to the table (T<n> Z<length>) or use a tool it lists",
+                                )
+                            }
+                        },
+                    }
+                }
             }
             _ => 0.0,
         };
+        Ok(())
     }
 
     /// The feed (m/s) of a move of `length` m in the active feed mode.
@@ -298,26 +349,18 @@ impl Interpreter {
         let scale = self.scale();
         let (s, c) = t.value.to_radians().sin_cos();
         let (dx, dy) = (r.value * scale * c, r.value * scale * s);
-        let work = self.work();
-        let mut p = pos;
-        if self.absolute {
-            p.x = work[0] + dx;
-            p.y = work[1] + dy;
+        let given = [Some(dx), Some(dy), args.get('Z').map(|z| z.value * scale)];
+        Ok(Some(if self.absolute {
+            self.place(pos, given)
         } else {
-            p.x += dx;
-            p.y += dy;
-        }
-        if let Some(z) = args.get('Z') {
-            p.z = if self.absolute {
-                z.value * scale + work[2]
-            } else {
-                pos.z + z.value * scale
-            };
-        }
-        Ok(Some(p))
+            self.shift_by(pos, given)
+        }))
     }
 
-    /// A canned cycle (G73 G81 G82 G83 G85 G86 G89) at the line's X Y, in G17.
+    /// A canned cycle (G73 G74 G81 G82 G83 G84 G85 G86 G89) at the line's position in the
+    /// selected plane, drilling along the plane's normal: G17 along Z (position X Y), G18
+    /// along Y (position Z X), G19 along X (position Y Z), LinuxCNC's `convert_cycle_xy`,
+    /// `_zx`, `_yz`. R and the bottom are coordinates of the drilling axis.
     pub(super) fn cycle(
         &mut self,
         line: usize,
@@ -328,109 +371,99 @@ impl Interpreter {
     ) -> Result<(), GcodeError> {
         use GcodeErrorKind::*;
         let code = Motion::Cycle(n).code();
-        if self.plane != Plane::XY {
-            return Err(err(
-                line,
-                w_col,
+        let fail = |kind, message: String, hint: &str| {
+            Err(err(line, w_col, kind, line_text, message, hint))
+        };
+        let (_, _, d) = self.plane.axes();
+        if self.plane != Plane::XY && self.rotation() != 0.0 {
+            return fail(
                 Unsupported,
-                line_text,
                 format!(
-                    "{code} in the {} plane is not supported",
+                    "{code} in the {} plane of a rotated coordinate system (G10 L2 R) is not supported",
                     self.plane.gcode()
                 ),
-                "canned cycles are read in G17 (drilling along Z)",
-            ));
+                "drill in G17 in a rotated system, or rotate the program in the CAM system",
+            );
         }
-        for (k, c) in ['R', 'Z', 'Q', 'P'].into_iter().enumerate() {
+        let letters = ['X', 'Y', 'Z'];
+        for (k, c) in ['R', letters[d], 'Q', 'P'].into_iter().enumerate() {
             if let Some(w) = args.get(c) {
                 self.ext.cycle[k] = Some(w.value);
             }
         }
         let [Some(r), Some(z)] = [self.ext.cycle[0], self.ext.cycle[1]] else {
-            return Err(err(
-                line,
-                w_col,
+            return fail(
                 Missing,
-                line_text,
-                format!("{code} without R or Z"),
-                "give the retract plane R and the bottom Z (they stay in force for the next holes)",
-            ));
+                format!("{code} without R or {}", letters[d]),
+                "give the retract plane R and the bottom along the drilling axis (Z in G17, Y in G18, X in G19; they stay in force for the next holes)",
+            );
         };
         let q = self.ext.cycle[2].unwrap_or(0.0);
         if matches!(n, 73 | 83) && q <= 0.0 {
-            return Err(err(
-                line,
-                w_col,
+            return fail(
                 Missing,
-                line_text,
                 format!("{code} needs a peck depth Q > 0"),
                 "give Q, e.g. Q1",
-            ));
+            );
         }
-        let repeats = match args.get('L') {
-            Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 && l.value <= 1e6 => {
-                l.value as usize
-            }
-            Some(l) => {
-                return Err(err(
-                    line,
-                    l.col,
-                    InvalidValue,
-                    l.text,
-                    "L (repeats) must be a whole number >= 0",
-                    "write e.g. L3",
-                ))
-            }
-            None => 1,
-        };
+        self.check_tapping_spindle(line, w_col, line_text, n)?;
+        let repeats = cycle_repeats(line, args)?;
         let Some(mut p) = self.pos.or(self.initial) else {
-            return Err(err(
-                line,
-                w_col,
+            return fail(
                 StartPoint,
-                line_text,
                 format!("{code} before the start point is known"),
                 "start the program with G00 X.. Y.. Z..",
-            ));
+            );
         };
         if self.pos.is_none() {
             self.begin_at(p, line);
         }
         let scale = self.scale();
         let work = self.work();
-        let z0 = *self.ext.cycle_z0.get_or_insert(p.z);
+        let z0 = *self.ext.cycle_z0.get_or_insert(p[d]);
         let (r_m, bottom) = if self.absolute {
-            (r * scale + work[2], z * scale + work[2])
+            (r * scale + work[d], z * scale + work[d])
         } else {
-            (p.z + r * scale, p.z + r * scale + z * scale)
+            (p[d] + r * scale, p[d] + r * scale + z * scale)
         };
         let clear = if self.ext.retract_initial {
             z0.max(r_m)
         } else {
             r_m
         };
-        if p.z < r_m {
-            let to = Vector3::new(p.x, p.y, r_m);
+        if p[d] < r_m {
+            let mut to = p;
+            to[d] = r_m;
             self.push_line(line, p, to, true);
             p = to;
         }
         let dwell = self.ext.cycle[3].unwrap_or(0.0);
-        for _ in 0..repeats {
-            let mut xy = p;
-            for (a, c) in ['X', 'Y'].into_iter().enumerate() {
-                if let Some(w) = args.get(c) {
-                    xy[a] = if self.absolute {
-                        w.value * scale + work[a]
-                    } else {
-                        xy[a] + w.value * scale
-                    };
-                }
+        let mut given = [None; 3];
+        for (a, c) in letters.into_iter().enumerate() {
+            if a != d {
+                given[a] = args.get(c).map(|w| w.value * scale);
             }
+        }
+        for _ in 0..repeats {
+            let mut xy = if self.absolute {
+                self.place(p, given)
+            } else {
+                self.shift_by(p, given)
+            };
+            xy[d] = p[d];
             self.push_line(line, p, xy, true);
-            let top = Vector3::new(xy.x, xy.y, r_m);
+            let mut top = xy;
+            top[d] = r_m;
             self.push_line(line, xy, top, true);
-            self.drill(line, n, top, bottom, q * scale, dwell);
-            let end = Vector3::new(xy.x, xy.y, clear);
+            let hole = Hole {
+                top,
+                axis: d,
+                bottom,
+                clear,
+            };
+            self.drill(line, n, &hole, q * scale, dwell);
+            let mut end = xy;
+            end[d] = clear;
             let here = self.here();
             self.push_line(line, here, end, true);
             p = end;
@@ -438,42 +471,134 @@ impl Interpreter {
         Ok(())
     }
 
-    /// The drilling of one hole from `top` (on R) to `bottom`, ending at the bottom or,
-    /// for G85/G89, back on R.
-    fn drill(&mut self, line: usize, n: u8, top: Vector3<f64>, bottom: f64, q: f64, dwell: f64) {
-        let at = |z: f64| Vector3::new(top.x, top.y, z);
+    /// G74 needs the spindle turning counter-clockwise, G84 clockwise (LinuxCNC's
+    /// `check_g74_g84_spindle`).
+    fn check_tapping_spindle(
+        &self,
+        line: usize,
+        col: usize,
+        line_text: &str,
+        n: u8,
+    ) -> Result<(), GcodeError> {
+        let turning = if n == 74 { -1 } else { 1 };
+        if !matches!(n, 74 | 84) || self.ext.spindle_dir == turning {
+            return Ok(());
+        }
+        let (m, dir) = if n == 74 {
+            ("M4", "counter-clockwise")
+        } else {
+            ("M3", "clockwise")
+        };
+        Err(err(
+            line,
+            col,
+            GcodeErrorKind::Conflict,
+            line_text,
+            format!(
+                "{} (tapping) needs the spindle turning {dir} (LinuxCNC refuses it otherwise)",
+                Motion::Cycle(n).code()
+            ),
+            format!("start the spindle with {m} S… before the cycle"),
+        ))
+    }
+
+    /// The drilling of one hole from `top` (on R) to the bottom, ending at the bottom or,
+    /// for G85/G89, back on R, for G74/G84 back on the clear plane.
+    fn drill(&mut self, line: usize, n: u8, hole: &Hole, q: f64, dwell: f64) {
+        let (top, d, bottom) = (hole.top, hole.axis, hole.bottom);
+        let at = |z: f64| {
+            let mut v = top;
+            v[d] = z;
+            v
+        };
         let delta = PECK_DELTA_INCH * 0.0254;
         match n {
             73 | 83 => {
-                let mut depth = top.z;
+                let mut depth = top[d];
                 while depth > bottom + MIN_MOVE_LENGTH {
                     let next = (depth - q).max(bottom);
                     let here = self.here();
-                    if n == 83 && depth < top.z {
+                    if n == 83 && depth < top[d] {
                         self.push_line(line, here, at(depth + delta), true);
                     }
                     let here = self.here();
                     self.push_line(line, here, at(next), false);
                     depth = next;
                     if depth > bottom + MIN_MOVE_LENGTH {
-                        let up = if n == 83 { top.z } else { depth + delta };
+                        let up = if n == 83 { top[d] } else { depth + delta };
                         self.push_line(line, at(depth), at(up), true);
                     }
                 }
             }
+            74 | 84 => {
+                // LinuxCNC's convert_cycle_g74_g84: feed in, stop and reverse the spindle,
+                // dwell, feed out to the clear plane, stop and restore the spindle.
+                let (reverse, forward) = if n == 84 { ("M4", "M3") } else { ("M3", "M4") };
+                self.push_line(line, top, at(bottom), false);
+                self.spindle_event(line, "M5");
+                self.spindle_event(line, reverse);
+                self.push_dwell(line, dwell);
+                self.push_line(line, at(bottom), at(hole.clear), false);
+                self.spindle_event(line, "M5");
+                self.spindle_event(line, forward);
+            }
             _ => {
                 self.push_line(line, top, at(bottom), false);
-                if matches!(n, 82 | 89) && dwell > 0.0 {
-                    self.moves.push(Move {
-                        line,
-                        kind: MoveKind::Dwell { seconds: dwell },
-                    });
+                if matches!(n, 82 | 89) {
+                    self.push_dwell(line, dwell);
                 }
                 if matches!(n, 85 | 89) {
                     self.push_line(line, at(bottom), top, false);
                 }
             }
         }
+    }
+
+    /// A dwell move of `seconds` if it is positive.
+    fn push_dwell(&mut self, line: usize, seconds: f64) {
+        if seconds > 0.0 {
+            self.moves.push(Move {
+                line,
+                kind: MoveKind::Dwell { seconds },
+            });
+        }
+    }
+
+    /// A spindle event of a tapping cycle (`M3`, `M4`, `M5`), after the moves so far.
+    fn spindle_event(&mut self, line: usize, code: &str) {
+        self.events.push(ProgramEvent {
+            line,
+            code: code.to_string(),
+            words: Vec::new(),
+            after_moves: self.moves.len(),
+        });
+    }
+}
+
+/// One hole of a canned cycle: its top (on R, m, machine), the drilling axis (0 X, 1 Y,
+/// 2 Z), the bottom and the clear plane (coordinates along that axis, m).
+struct Hole {
+    top: Vector3<f64>,
+    axis: usize,
+    bottom: f64,
+    clear: f64,
+}
+
+/// The L word of a canned cycle (repeats; default 1).
+fn cycle_repeats(line: usize, args: &Args<'_, '_>) -> Result<usize, GcodeError> {
+    match args.get('L') {
+        Some(l) if l.value >= 0.0 && l.value.fract() == 0.0 && l.value <= 1e6 => {
+            Ok(l.value as usize)
+        }
+        Some(l) => Err(err(
+            line,
+            l.col,
+            GcodeErrorKind::InvalidValue,
+            l.text,
+            "L (repeats) must be a whole number >= 0",
+            "write e.g. L3",
+        )),
+        None => Ok(1),
     }
 }
 

@@ -21,8 +21,8 @@ impl Interpreter {
         let t = |b: bool| f64::from(u8::from(b));
         let scale = self.scale();
         let here = self.here();
-        let work = self.work();
-        let prog = [0, 1, 2].map(|a| (here[a] - work[a]) / scale);
+        let local = self.to_program_modal(here);
+        let prog = [0, 1, 2].map(|a| local[a] / scale);
         let motion = match self.motion {
             Some(Motion::Rapid) => 0.0,
             Some(Motion::Linear) => 10.0,
@@ -101,7 +101,8 @@ impl Interpreter {
     /// Writes the numbered system parameters into `numbered` (see
     /// [`super::expr::is_system_parameter`]), in program units: #5161–5163 and #5181–5183
     /// the G28/G30 positions, #5210 G92 on, #5211–5213 the G92 offset, #5220 the
-    /// coordinate system (1 = G54), #5221 + 20 k the offset of G54 + k, #5400 the tool,
+    /// coordinate system (1 = G54), #5221 + 20 k the offset of G54 + k (#5230 + 20 k its
+    /// rotation, degrees), #5400 the tool,
     /// #5403 its length, #5420–5422 the position (program coordinates).
     pub(super) fn system_parameters(&self, numbered: &mut [f64]) {
         if numbered.len() <= MAX_PARAMETER.min(5428) {
@@ -124,13 +125,13 @@ impl Interpreter {
             for a in 0..3 {
                 numbered[5221 + 20 * k + a] = o[a] / scale;
             }
+            numbered[5230 + 20 * k] = e.rotation.get(k).copied().unwrap_or(0.0);
         }
         numbered[5400] = e.tool_current;
         numbered[5403] = self.tool_length / scale;
-        let here = self.here();
-        let work = self.work();
+        let local = self.to_program_modal(self.here());
         for a in 0..3 {
-            numbered[5420 + a] = (here[a] - work[a]) / scale;
+            numbered[5420 + a] = local[a] / scale;
         }
     }
 }
