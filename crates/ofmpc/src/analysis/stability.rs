@@ -300,6 +300,10 @@ pub fn spectral_radius(
         .fold(0.0, f64::max))
 }
 
+/// Schur sweeps per matrix dimension before [`LinearizedLoop::spectral_radius`]
+/// shifts the matrix (a converging iteration needs a few per eigenvalue).
+const SCHUR_SWEEPS_PER_DIM: usize = 100;
+
 /// The closed loop near rest at `q0`, linearized once and reused for every
 /// inertia ratio `α`: [`closed_loop_matrix`] repeats the controller's
 /// perturbation runs for each `α`, although only the plant depends on it.
@@ -442,17 +446,30 @@ impl LinearizedLoop {
     }
 
     /// `ρ` of [`LinearizedLoop::matrix`]: the loop is stable near rest at
-    /// `alpha` iff it is below 1. `None` when the eigenvalue iteration (Schur,
-    /// at most 10 000 sweeps) does not converge.
+    /// `alpha` iff it is below 1. `None` when the eigenvalue iteration (Schur)
+    /// does not converge, also on the shifted matrix.
+    ///
+    /// nalgebra's Schur iteration deflates a subdiagonal entry when it is below
+    /// `ε (|t_ii| + |t_i+1,i+1|)`: relative to the diagonal, a test that
+    /// eigenvalues at 0 (the redundant memory states of `ξ`, and the states a
+    /// light arm barely moves) can stall forever (seen on the UR5). When the plain
+    /// iteration does not converge within `SCHUR_SWEEPS_PER_DIM · dim` sweeps, the
+    /// eigenvalues `μ` of `M + I` are computed instead (the same Schur vectors,
+    /// every diagonal entry near 1) and `λ = μ − 1`.
     pub fn spectral_radius(&self, alpha: f64) -> Option<f64> {
-        let schur = nalgebra::linalg::Schur::try_new(self.matrix(alpha), f64::EPSILON, 10_000)?;
-        Some(
-            schur
-                .complex_eigenvalues()
-                .iter()
-                .map(|l| l.norm())
-                .fold(0.0, f64::max),
-        )
+        let m = self.matrix(alpha);
+        let sweeps = SCHUR_SWEEPS_PER_DIM * m.nrows();
+        let radius = |schur: nalgebra::linalg::Schur<f64, nalgebra::Dyn>, shift: f64| {
+            (schur.complex_eigenvalues().iter())
+                .map(|l| (l - shift).norm())
+                .fold(0.0, f64::max)
+        };
+        if let Some(schur) = nalgebra::linalg::Schur::try_new(m.clone(), f64::EPSILON, sweeps) {
+            return Some(radius(schur, 0.0));
+        }
+        let dim = m.nrows();
+        let shifted = m + DMatrix::identity(dim, dim);
+        nalgebra::linalg::Schur::try_new(shifted, f64::EPSILON, sweeps).map(|s| radius(s, 1.0))
     }
 
     /// The interval of `α` with `ρ < 1` ([`alpha_interval`]'s bisection);
