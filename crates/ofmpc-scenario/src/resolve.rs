@@ -209,6 +209,50 @@ fn check_mass_labels(m: &[f64]) -> Result<(), ScenarioError> {
     Ok(())
 }
 
+/// The file's payloads (`[payload] masses_kg` with its centre of mass and inertia), each
+/// checked.
+fn file_payloads(f: &ScenarioFile) -> Result<Vec<Payload>, ScenarioError> {
+    let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
+    let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
+    let mut payloads = Vec::new();
+    for &mass in &f.payload.masses_kg {
+        let p = Payload {
+            mass,
+            com: Vector3::from(f.payload.com_m),
+            inertia,
+        };
+        p.validate().map_err(|error| ScenarioError::Payload {
+            mass,
+            error: Box::new(error),
+        })?;
+        payloads.push(p);
+    }
+    Ok(payloads)
+}
+
+/// Warnings for friction settings that have no effect on `robot`.
+fn friction_warnings(f: &ScenarioFile, robot: &Robot) -> Vec<String> {
+    let mut warnings = Vec::new();
+    if f.mpc.observer_friction && !(f.mpc.state_observer || f.mpc.delay_compensation) {
+        warnings.push(
+            "[mpc] observer_friction = true without an observer (state_observer or \
+             delay_compensation): it has no effect"
+                .into(),
+        );
+    }
+    if f.mpc.friction_compensation {
+        let d = ofmpc::control::DriveModel::from_robot(robot);
+        if d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0) {
+            warnings.push(
+                "[mpc] friction_compensation = true but the robot's drives give no friction \
+                 estimate (coulomb_nm, viscous_nms): nothing is compensated"
+                    .into(),
+            );
+        }
+    }
+    warnings
+}
+
 impl Scenario {
     /// Resolves a scenario file: loads, parses, times and maps to joint space.
     pub fn resolve(f: &ScenarioFile) -> Result<Self, ScenarioError> {
@@ -235,21 +279,7 @@ impl Scenario {
         f.plant
             .validate_for(n, f.mpc.ts)
             .map_err(|e| settings_error(e.into()))?;
-        let [ixx, iyy, izz, ixy, ixz, iyz] = f.payload.inertia_kgm2;
-        let inertia = Matrix3::new(ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz);
-        let mut payloads = Vec::new();
-        for &mass in &f.payload.masses_kg {
-            let p = Payload {
-                mass,
-                com: Vector3::from(f.payload.com_m),
-                inertia,
-            };
-            p.validate().map_err(|error| ScenarioError::Payload {
-                mass,
-                error: Box::new(error),
-            })?;
-            payloads.push(p);
-        }
+        let payloads = file_payloads(f)?;
         check_model_payload(&robot, f.mpc.model_payload_kg)?;
         let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
@@ -289,23 +319,7 @@ impl Scenario {
             error: Box::new(error),
         })?;
         warnings.extend(plan_warnings(&program_name, &planned));
-        if f.mpc.observer_friction && !(f.mpc.state_observer || f.mpc.delay_compensation) {
-            warnings.push(
-                "[mpc] observer_friction = true without an observer (state_observer or \
-                 delay_compensation): it has no effect"
-                    .into(),
-            );
-        }
-        if f.mpc.friction_compensation {
-            let d = ofmpc::control::DriveModel::from_robot(&robot);
-            if d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0) {
-                warnings.push(
-                    "[mpc] friction_compensation = true but the robot's drives give no friction \
-                     estimate (coulomb_nm, viscous_nms): nothing is compensated"
-                        .into(),
-                );
-            }
-        }
+        warnings.extend(friction_warnings(f, &robot));
         if let Some(w) =
             friction_substep_warning(&robot, &f.plant, planned.reference.q(0), f.mpc.ts)
         {

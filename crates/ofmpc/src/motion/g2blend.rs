@@ -182,7 +182,12 @@ impl QuinticBlend {
 
     /// Curvature vector `d²p/ds²` at arc length `s`.
     pub fn curvature(&self, s: f64) -> Vector3<f64> {
-        let u = self.param(s);
+        self.curvature_at(self.param(s))
+    }
+
+    /// Curvature vector `d²p/ds²` at the parameter `u`:
+    /// `(p'' |p'|² − p' (p'·p'')) / |p'|⁴`.
+    fn curvature_at(&self, u: f64) -> Vector3<f64> {
         let (d1, d2) = (self.d1(u), self.d2(u));
         let n2 = d1.norm_squared();
         (d2 * n2 - d1 * d1.dot(&d2)) / (n2 * n2)
@@ -195,19 +200,22 @@ impl QuinticBlend {
 
     /// Largest curvature and largest `|dk/ds|` over the table (see
     /// [`QuinticBlend::max_curvature_rate`]).
+    ///
+    /// The table's point `i` is at `u = i / TABLE` exactly (`param(s[i])` returns it), so
+    /// the curvature is evaluated there directly, without the search of `param`.
     fn table_bounds(&self) -> (f64, f64) {
-        let k: Vec<Vector3<f64>> = (0..=TABLE).map(|i| self.curvature(self.s[i])).collect();
-        let kmax = k.iter().map(|v| v.norm()).fold(0.0, f64::max);
-        let rate = (0..TABLE)
-            .map(|i| {
-                let ds = self.s[i + 1] - self.s[i];
-                if ds > 0.0 {
-                    (k[i + 1] - k[i]).norm() / ds
-                } else {
-                    0.0
-                }
-            })
-            .fold(0.0, f64::max);
+        let h = 1.0 / TABLE as f64;
+        let mut previous = self.curvature_at(0.0);
+        let (mut kmax, mut rate) = (0.0f64.max(previous.norm()), 0.0f64);
+        for i in 0..TABLE {
+            let k = self.curvature_at((i + 1) as f64 * h);
+            kmax = kmax.max(k.norm());
+            let ds = self.s[i + 1] - self.s[i];
+            if ds > 0.0 {
+                rate = rate.max((k - previous).norm() / ds);
+            }
+            previous = k;
+        }
         (kmax, rate)
     }
 
