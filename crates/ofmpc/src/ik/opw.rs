@@ -131,13 +131,13 @@ impl OpwSolutions {
 }
 
 /// Rotation about z by `t`.
-fn rz(t: f64) -> Matrix3<f64> {
+pub(super) fn rz(t: f64) -> Matrix3<f64> {
     let (s, c) = t.sin_cos();
     Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
 /// Rotation about y by `t`.
-fn ry(t: f64) -> Matrix3<f64> {
+pub(super) fn ry(t: f64) -> Matrix3<f64> {
     let (s, c) = t.sin_cos();
     Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }

@@ -32,7 +32,7 @@ use std::f64::consts::{FRAC_PI_2, PI};
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use super::opw::{wrap_angle, OpwParameters};
+use super::opw::{ry, rz, wrap_angle, OpwParameters};
 use super::pose_is_finite;
 use super::ur::line_intersection;
 
@@ -40,18 +40,6 @@ use super::ur::line_intersection;
 /// angle), between lines that must meet (m), and between the closed form's forward
 /// kinematics and the chain's at the test poses (m and rad).
 pub const OPW_DETECT_TOLERANCE: f64 = 1e-9;
-
-/// Rotation about z by `t`.
-fn rz(t: f64) -> Matrix3<f64> {
-    let (s, c) = t.sin_cos();
-    Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
-}
-
-/// Rotation about y by `t`.
-fn ry(t: f64) -> Matrix3<f64> {
-    let (s, c) = t.sin_cos();
-    Matrix3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
-}
 
 /// +1 for `x ≥ 0`, else −1.
 fn sign(x: f64) -> f64 {
