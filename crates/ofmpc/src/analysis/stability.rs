@@ -204,11 +204,7 @@ pub fn closed_loop_matrix(
     alpha: f64,
     options: &StabilityOptions,
 ) -> Result<DMatrix<f64>, StabilityError> {
-    options.validate()?;
-    if kind.is_adaptive() {
-        return Err(StabilityError::Adaptive(kind));
-    }
-    robot.check_vector("q0", q0)?;
+    check_input(robot, kind, q0, options)?;
     let n = robot.dof();
     let (with_u, with_ebar) = memory(kind);
     let dim = 2 * n + if with_u { n } else { 0 } + if with_ebar { n } else { 0 };
@@ -284,6 +280,23 @@ pub fn closed_loop_matrix(
     Ok(mt.transpose())
 }
 
+/// The checks both linearizations make of their input: valid options, a
+/// non-adaptive controller (its model changes while it runs) and a finite `q0`
+/// of the robot's size.
+fn check_input(
+    robot: &Robot,
+    kind: ControllerKind,
+    q0: &[f64],
+    options: &StabilityOptions,
+) -> Result<(), StabilityError> {
+    options.validate()?;
+    if kind.is_adaptive() {
+        return Err(StabilityError::Adaptive(kind));
+    }
+    robot.check_vector("q0", q0)?;
+    Ok(())
+}
+
 /// `ρ(M)`: the largest eigenvalue modulus of [`closed_loop_matrix`].
 pub fn spectral_radius(
     robot: &Robot,
@@ -356,11 +369,7 @@ impl LinearizedLoop {
         q0: &[f64],
         options: &StabilityOptions,
     ) -> Result<Self, StabilityError> {
-        options.validate()?;
-        if kind.is_adaptive() {
-            return Err(StabilityError::Adaptive(kind));
-        }
-        robot.check_vector("q0", q0)?;
+        check_input(robot, kind, q0, options)?;
         let n = robot.dof();
         let (_, with_ebar) = memory(kind);
         let (gains, tau0) = controller_gains(robot, kind, settings, q0, options.perturbation)?;
