@@ -46,6 +46,8 @@ pub struct QuinticBlend {
     s: Vec<f64>,
     /// `|p'|` at `u = i / TABLE`.
     speed: Vec<f64>,
+    /// Largest curvature and `|dk/ds|` over the table (computed once).
+    bounds: (f64, f64),
 }
 
 impl QuinticBlend {
@@ -59,7 +61,24 @@ impl QuinticBlend {
         t1: Vector3<f64>,
         k1: Vector3<f64>,
     ) -> Option<Self> {
-        let lambda = (p1 - p0).norm();
+        Self::with_tangent_scale(p0, t0, k0, p1, t1, k1, 1.0)
+    }
+
+    /// [`QuinticBlend::new`] with the end derivatives `λ = alpha · |P₁ − P₀|` (`alpha` > 0):
+    /// any `λ` gives the same end tangents and curvatures; between two lines `alpha` = 1.4
+    /// spreads the curvature change more evenly than 1 (its largest `|dk/ds|` times the
+    /// squared deviation is about a quarter of that at 1 for a 90° corner).
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_tangent_scale(
+        p0: Vector3<f64>,
+        t0: Vector3<f64>,
+        k0: Vector3<f64>,
+        p1: Vector3<f64>,
+        t1: Vector3<f64>,
+        k1: Vector3<f64>,
+        alpha: f64,
+    ) -> Option<Self> {
+        let lambda = (p1 - p0).norm() * alpha;
         if lambda.is_nan() || lambda <= 1e-12 {
             return None;
         }
@@ -77,6 +96,7 @@ impl QuinticBlend {
             c,
             s: Vec::with_capacity(TABLE + 1),
             speed: Vec::with_capacity(TABLE + 1),
+            bounds: (0.0, 0.0),
         };
         let h = 1.0 / TABLE as f64;
         let mut s = 0.0;
@@ -98,6 +118,7 @@ impl QuinticBlend {
                     * h;
             }
         }
+        blend.bounds = blend.table_bounds();
         Some(blend)
     }
 
@@ -161,7 +182,12 @@ impl QuinticBlend {
 
     /// Curvature vector `d²p/ds²` at arc length `s`.
     pub fn curvature(&self, s: f64) -> Vector3<f64> {
-        let u = self.param(s);
+        self.curvature_at(self.param(s))
+    }
+
+    /// Curvature vector `d²p/ds²` at the parameter `u`:
+    /// `(p'' |p'|² − p' (p'·p'')) / |p'|⁴`.
+    fn curvature_at(&self, u: f64) -> Vector3<f64> {
         let (d1, d2) = (self.d1(u), self.d2(u));
         let n2 = d1.norm_squared();
         (d2 * n2 - d1 * d1.dot(&d2)) / (n2 * n2)
@@ -169,9 +195,35 @@ impl QuinticBlend {
 
     /// Largest curvature (1/m) over the table's points.
     pub fn max_curvature(&self) -> f64 {
-        (0..=TABLE)
-            .map(|i| self.curvature(self.s[i]).norm())
-            .fold(0.0, f64::max)
+        self.bounds.0
+    }
+
+    /// Largest curvature and largest `|dk/ds|` over the table (see
+    /// [`QuinticBlend::max_curvature_rate`]).
+    ///
+    /// The table's point `i` is at `u = i / TABLE` exactly (`param(s[i])` returns it), so
+    /// the curvature is evaluated there directly, without the search of `param`.
+    fn table_bounds(&self) -> (f64, f64) {
+        let h = 1.0 / TABLE as f64;
+        let mut previous = self.curvature_at(0.0);
+        let (mut kmax, mut rate) = (0.0f64.max(previous.norm()), 0.0f64);
+        for i in 0..TABLE {
+            let k = self.curvature_at((i + 1) as f64 * h);
+            kmax = kmax.max(k.norm());
+            let ds = self.s[i + 1] - self.s[i];
+            if ds > 0.0 {
+                rate = rate.max((k - previous).norm() / ds);
+            }
+            previous = k;
+        }
+        (kmax, rate)
+    }
+
+    /// Largest rate of change of the curvature vector along the arc length, `|dk/ds|`
+    /// (1/m²), over the table's intervals (differences of the curvature vectors at their
+    /// ends). Along the blend the Cartesian jerk at constant path speed is `ṡ³ dk/ds`.
+    pub fn max_curvature_rate(&self) -> f64 {
+        self.bounds.1
     }
 }
 

@@ -43,7 +43,7 @@
 //! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
 //! and both constrain it.
 
-use crate::motion::blend::Piece;
+use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
 use crate::motion::reference::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
 use nalgebra::Vector3;
 
@@ -259,7 +259,7 @@ pub(crate) fn time_run(
 ) -> Result<Run, RunError> {
     let length = pieces.last().map_or(0.0, |p| p.start + p.geometry.length());
     let step = grid_step(&pieces);
-    let mut nodes = grid_nodes(&pieces, step, limits.max_accel);
+    let mut nodes = grid_nodes(&pieces, step, limits);
     let a_max = limits.max_accel;
     let acc: Vec<f64> = joints
         .as_ref()
@@ -325,7 +325,24 @@ fn grid_step(pieces: &[Piece]) -> f64 {
 /// Grid nodes: piece boundaries and interior points at most `step` apart, with the path part
 /// of the velocity limit, `x̄ = min(F², a_max / κ)` (feed and curvature of both pieces at a
 /// boundary), and rest at the ends and after stopping pieces.
-fn grid_nodes(pieces: &[Piece], step: f64, max_accel: f64) -> Vec<Node> {
+fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
+    let max_accel = limits.max_accel;
+    // Per piece: the speed² within which the turning of its curvature vector keeps the jerk
+    // `ṡ³ |dk/ds|` within its share of the bound, and its largest curvature (a blend's peak
+    // may fall between the nodes).
+    let bounds: Vec<(f64, f64)> = pieces
+        .iter()
+        .map(|p| {
+            let (kappa, rate) = p.geometry.curvature_bounds();
+            let x_turn = if rate > 0.0 {
+                (TURN_JERK_SHARE * limits.max_jerk / rate).powf(2.0 / 3.0)
+            } else {
+                f64::INFINITY
+            };
+            let curved = matches!(p.geometry, Geometry::Curve(_) | Geometry::Corner(_));
+            (x_turn, if curved { kappa } else { 0.0 })
+        })
+        .collect();
     let mut nodes: Vec<Node> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let len = p.geometry.length();
@@ -344,16 +361,23 @@ fn grid_nodes(pieces: &[Piece], step: f64, max_accel: f64) -> Vec<Node> {
             let local = len * i as f64 / m as f64;
             let at_end = i == m;
             let next = pieces.get(k + 1).filter(|_| at_end);
-            let mut kappa = p.geometry.curvature(local).norm();
+            let mut kappa = p.geometry.curvature(local).norm().max(bounds[k].1);
             let mut feed = p.feed;
+            let mut x_turn = bounds[k].0;
             if let Some(nx) = next {
-                kappa = kappa.max(nx.geometry.curvature(0.0).norm());
+                kappa = kappa
+                    .max(nx.geometry.curvature(0.0).norm())
+                    .max(bounds[k + 1].1);
                 feed = feed.min(nx.feed);
+                x_turn = x_turn.min(bounds[k + 1].0);
             }
             if i == 0 {
                 feed = feed.min(p.feed);
+                if k > 0 {
+                    x_turn = x_turn.min(bounds[k - 1].0);
+                }
             }
-            let mut xbar = feed * feed;
+            let mut xbar = (feed * feed).min(x_turn);
             if kappa > 0.0 {
                 xbar = xbar.min(max_accel / kappa);
             }
