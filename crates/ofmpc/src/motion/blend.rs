@@ -266,7 +266,7 @@ fn turn_speed(curve: &QuinticBlend, max_accel: f64, max_jerk: f64) -> f64 {
 const DEFAULT_ACCEL: f64 = 2.5;
 const DEFAULT_JERK: f64 = 50.0;
 
-/// Largest distance from `blend` (33 points) to the two lines it replaces: from
+/// Largest distance from `blend` (33 points evenly spaced in its parameter) to the two lines it replaces: from
 /// `corner − d u₁` to the corner and on to `corner + d u₂` (what [`blend_deviation`] computes
 /// for any moves, without following the lines by 64 chords).
 fn lines_deviation(
@@ -280,10 +280,9 @@ fn lines_deviation(
         let t = ((p - corner).dot(dir)).clamp(from, from + d);
         (p - (corner + dir * t)).norm()
     };
-    let len = blend.length();
     (0..=32)
         .map(|i| {
-            let p = blend.point(len * i as f64 / 32.0);
+            let p = blend.point_at_parameter(i as f64 / 32.0);
             to_line(&p, &u1, -d).min(to_line(&p, &u2, 0.0))
         })
         .fold(0.0, f64::max)

@@ -24,17 +24,19 @@
 use crate::geometry::Segment;
 use nalgebra::Vector3;
 
-/// Intervals of the arc-length table.
-const TABLE: usize = 128;
+/// Intervals of the arc-length table (64: the table of every corner blend is most of the
+/// planning cost of a CAM program; 128 intervals and a 5-point rule took a quarter of the
+/// 100 000-segment plan).
+const TABLE: usize = 64;
 
-/// Nodes and weights of 5-point Gauss–Legendre quadrature on `[-1, 1]` (Abramowitz &
-/// Stegun, table 25.4).
-const GAUSS: [(f64, f64); 5] = [
-    (0.0, 0.568_888_888_888_888_9),
-    (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
-    (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
-    (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
-    (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+/// Nodes and weights of 3-point Gauss–Legendre quadrature on `[-1, 1]` (Abramowitz &
+/// Stegun, table 25.4): exact for polynomials of degree 5; on each of the [`TABLE`]
+/// intervals the speed `|p'(u)|` of a blend is smooth, and the error is below 1e-11 of the
+/// length on line corners from 10° to 170° (test below).
+const GAUSS: [(f64, f64); 3] = [
+    (0.0, 0.888_888_888_888_888_9),
+    (-0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
+    (0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
 ];
 
 /// A quintic G2 blend parameterised by arc length (see the module documentation).
@@ -168,6 +170,12 @@ impl QuinticBlend {
             + (-2.0 * x3 + 3.0 * x2) * (u0 + h)
             + (x3 - x2) * m1;
         u.clamp(u0, u0 + h)
+    }
+
+    /// Point at the parameter `u ∈ [0, 1]` (not arc length: points evenly spaced in `u`,
+    /// without the arc-length search).
+    pub(crate) fn point_at_parameter(&self, u: f64) -> Vector3<f64> {
+        self.eval(u.clamp(0.0, 1.0))
     }
 
     /// Point at arc length `s`.
@@ -334,6 +342,40 @@ mod tests {
                 (fk - k).norm() < 1e-3 * k.norm().max(1.0),
                 "{s}: {fk} vs {k}"
             );
+        }
+    }
+
+    /// The 3-point rule's arc-length table agrees with a reference quadrature (Simpson's rule
+    /// on 2¹⁶ intervals) to 1e-11 of the length on line corners from 10° to 170° and a
+    /// line-to-arc join.
+    #[test]
+    fn arc_length_table_matches_a_fine_quadrature() {
+        let mut cases = Vec::new();
+        for deg in [10.0f64, 45.0, 90.0, 135.0, 170.0] {
+            let th = deg.to_radians();
+            let (t0, t1) = (v(1.0, 0.0, 0.0), v(th.cos(), th.sin(), 0.0));
+            let d = 1e-4;
+            let (p0, p1) = (-t0 * d, t1 * d);
+            cases.push((p0, t0, Vector3::zeros(), p1, t1, Vector3::zeros()));
+        }
+        cases.push((
+            v(0.0, 0.0, 0.0),
+            v(1.0, 0.0, 0.0),
+            Vector3::zeros(),
+            v(0.001, 0.001, 0.0),
+            v(0.0, 1.0, 0.0),
+            v(-200.0, 0.0, 0.0),
+        ));
+        for (p0, t0, k0, p1, t1, k1) in cases {
+            let b = QuinticBlend::new(p0, t0, k0, p1, t1, k1).unwrap();
+            let n = 1 << 16;
+            let f = |i: usize| b.d1(i as f64 / n as f64).norm();
+            let simpson: f64 = (0..n / 2)
+                .map(|k| f(2 * k) + 4.0 * f(2 * k + 1) + f(2 * k + 2))
+                .sum::<f64>()
+                / (3.0 * n as f64);
+            let len = b.length();
+            assert!((len - simpson).abs() < 1e-11 * len, "{len} vs {simpson}");
         }
     }
 }
