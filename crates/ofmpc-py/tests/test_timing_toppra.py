@@ -23,13 +23,10 @@ TS = 0.002
 RAPID = 0.5  # m/s: the planner's default path speed of moves without F (G0)
 ACCEL = 2.5  # m/s²: the planner's default path acceleration
 
-# Cases the timing did not bring within the bound when this test was written (issue 26 open
-# items): expected to fail (strict: a case that starts passing fails the run, so it is moved
-# out of this list and the bound holds for it from then on).
-NOT_YET = {
-    "rapid_between_feeds": "the erosion of the slow feeds' limit around the rapid (0.5 mm each way)",
-    "arc_10um_between_lines": "the 10 µm arc: its corners are shorter than their blends need",
-}
+# Cases the timing did not bring within the bound (issue 26 open items): expected to fail
+# (strict: a case that starts passing fails the run, so it is moved out of this list and the
+# bound holds for it from then on). None left.
+NOT_YET: dict[str, str] = {}
 
 _PROGRAMS = benchmarks()
 

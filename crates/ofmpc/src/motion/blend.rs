@@ -1,24 +1,26 @@
-//! Corner blending under `G64 P<tol>`: consecutive moves are joined by circular arcs that
-//! leave each corner by at most the tolerance, so the path need not stop there.
+//! Corner blending under `G64 P<tol>`: consecutive moves are joined by curvature-continuous
+//! (G2) quintic blends ([`crate::motion::g2blend`]) that leave the programmed path by at most
+//! the tolerance, so the path need not stop there and its curvature never steps.
 //!
 //! A corner between two straight lines with unit directions `u₁`, `u₂` turns by
-//! `θ = acos(u₁·u₂)`. It is replaced by the circular arc of radius `R` tangent to both lines
-//! at distance `d = R tan(θ/2)` from the corner; the arc's midpoint, its farthest point from
-//! the corner, lies `R (1/cos(θ/2) − 1)` from it (LinuxCNC's circular blend). With the
-//! tolerance `tol`: `R = tol cos(θ/2) / (1 − cos(θ/2))`; `d` is also capped at half of each
-//! line, so that neighbouring blends never overlap (on a fine polygon the blends then meet and
-//! the path becomes the circle through the edges' midpoints). The blend is tangent-continuous
-//! (G1); its curvature `1/R` starts at the tangent points.
+//! `θ = acos(u₁·u₂)`. It is replaced by the quintic from `d` before the corner to `d` after
+//! it with zero end curvatures, whose midpoint (its farthest point from the lines) lies
+//! `d · 2 sin(θ/2) cos(θ/2) (1/2 − (5/16) α cos(θ/2))` from them (`α` the scale of its end
+//! derivatives, 1 or 1.4, whichever allows the higher speed); `d` is set so that this is
+//! 0.98 `tol`, and capped at half of each line, so that neighbouring blends never overlap.
+//! (Until issue 26 these corners were circular arcs, LinuxCNC's circular blend, whose
+//! curvature `1/R` steps at the tangent points: the path acceleration stepped there.)
 //!
 //! Joins that are already tangent-continuous (angle below [`TANGENT_ANGLE`]) are passed
 //! without a stop, and so are near-tangent joins (below [`NEAR_TANGENT_ANGLE`], such as the
 //! kinks that three-decimal CAM output leaves between arcs) when the move allows a
-//! deviation (`P` > 0): the path keeps its programmed points there. Corners that involve an
-//! arc (G02/G03) are rounded by a curvature-continuous quintic ([`crate::motion::g2blend`])
-//! from a point of the incoming move to a point of the outgoing one, each at the tangent
-//! distance `d` of a line corner of the same angle (capped at half of each move), shortened
-//! until the blend keeps within the tolerance of the moves it replaces. The path stops at a
-//! tolerance of 0 and at reversals.
+//! deviation (`P` > 0): the path keeps its programmed points there, except where the
+//! curvature jumps enough to step the centripetal acceleration (a line into an arc): that
+//! jump is spread by a quintic blend within the tolerance too. Corners that involve an arc
+//! (G02/G03) are rounded by a quintic from a point of the incoming move to a point of the
+//! outgoing one, each at the tangent distance `d` of a circular corner of the same angle
+//! (capped at half of each move), shortened until the blend keeps within the tolerance of the
+//! moves it replaces. The path stops at a tolerance of 0 and at reversals.
 
 use crate::geometry::Segment;
 use crate::motion::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
@@ -89,6 +91,31 @@ impl Geometry {
     }
 }
 
+impl Geometry {
+    /// Largest curvature (1/m) and largest `|dk/ds|` (1/m², the rate of change of the
+    /// curvature vector along the arc length) over the piece: zero on a line; `κ` and `κ²`
+    /// on a circle (`κ` times the turning rate of the curvature vector on a helix, from its
+    /// curvature vectors 1/16 of the piece apart); over the table of a quintic blend
+    /// ([`QuinticBlend::max_curvature_rate`]).
+    pub fn curvature_bounds(&self) -> (f64, f64) {
+        let segment = match self {
+            Geometry::Segment(s) | Geometry::Part(SegmentPart { segment: s, .. }) => s,
+            Geometry::Corner(c) => return (1.0 / c.radius, 1.0 / (c.radius * c.radius)),
+            Geometry::Curve(c) => return (c.max_curvature(), c.max_curvature_rate()),
+        };
+        match segment {
+            Segment::Line { .. } => (0.0, 0.0),
+            Segment::Arc { .. } => {
+                let len = segment.length();
+                let k0 = segment.curvature(0.0);
+                let h = (len / 16.0).max(1e-12);
+                let rate = (segment.curvature(h) - k0).norm() / h;
+                (k0.norm(), rate)
+            }
+        }
+    }
+}
+
 /// One piece of a blended path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Piece {
@@ -136,20 +163,38 @@ pub fn blend_timed(moves: &[RunMove], max_accel: f64, max_jerk: f64) -> Vec<Piec
     blend_within(moves, Some((max_accel, max_jerk)))
 }
 
-/// Whether a corner blend of radius `radius` between moves of feeds `f1`, `f2` is slower
-/// than stopping (see [`blend_timed`]).
-fn stop_is_faster(radius: f64, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) -> bool {
+/// Whether the corner blend `curve` between moves of feeds `f1`, `f2` is slower than
+/// stopping (see [`blend_timed`]): its speed is also held within the jerk bound of its
+/// curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j` ([`crate::motion::topp`]).
+fn stop_is_faster(curve: &QuinticBlend, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) -> bool {
     let feed = f1.min(f2);
-    let v_c = feed.min((max_accel * radius).sqrt());
+    let v_c = feed.min(turn_speed(curve, max_accel, max_jerk));
     let t_j = 2.0 * max_accel / max_jerk;
     2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
 }
+
+/// Share of the jerk setting that the turning of the path's curvature vector may take,
+/// `ṡ³ |dk/ds|` (the rest of the Cartesian jerk `s⃛ t + 3 ṡ s̈ κ n + ṡ³ dk/ds` is the
+/// tangential jerk, within the setting, and `3 ṡ s̈ κ`, small where the speed is held at this
+/// bound). Issue 26 bounds the Cartesian jerk by twice the setting: where the speed is held by
+/// this bound the tangential jerk is zero, and where the speed changes the two add as vectors
+/// at an angle; 1.25 keeps every benchmark program within 2× (worst 96 m/s³ at the setting
+/// 50, `tests/motion_jerk.rs`) while the three-decimal kinks of CAM output (0.005 rad over
+/// 0.2 mm) still pass at 0.044 m/s instead of 0.041 m/s at 1.0 (the zigzag pocket's
+/// TOPP-RA bound needs ≥ 1.2).
+pub const TURN_JERK_SHARE: f64 = 1.25;
 
 /// The blend of a corner that involves an arc ([`QuinticBlend`] from the incoming move at
 /// `d` before its end to the outgoing one at `d` after its start), `d` shortened (×0.7, at
 /// most 30 times) until the blend keeps within the incoming move's tolerance of the path it
 /// replaces; `None` if none does.
 fn arc_corner(a: &RunMove, b: &RunMove, d: f64) -> Option<(f64, QuinticBlend)> {
+    g2_corner(a, b, d, 1.0)
+}
+
+/// [`arc_corner`] with the quintic's end derivatives scaled by `alpha`
+/// ([`QuinticBlend::with_tangent_scale`]).
+fn g2_corner(a: &RunMove, b: &RunMove, d: f64, alpha: f64) -> Option<(f64, QuinticBlend)> {
     let (sa, sb) = (&a.segment, &b.segment);
     let la = sa.length();
     let mut d = d;
@@ -158,22 +203,153 @@ fn arc_corner(a: &RunMove, b: &RunMove, d: f64) -> Option<(f64, QuinticBlend)> {
             return None;
         }
         let (s0, s1) = (la - d, d);
-        let c = QuinticBlend::new(
+        let c = QuinticBlend::with_tangent_scale(
             sa.point(s0),
             sa.tangent(s0),
             sa.curvature(s0),
             sb.point(s1),
             sb.tangent(s1),
             sb.curvature(s1),
+            alpha,
         );
         if let Some(c) = c {
-            if blend_deviation(&c, sa, d, sb, d) <= a.tolerance {
+            let deviation = if is_line(sa) && is_line(sb) {
+                lines_deviation(&c, sa.end(), sa.tangent(0.0), sb.tangent(0.0), d)
+            } else {
+                blend_deviation(&c, sa, d, sb, d)
+            };
+            if deviation <= a.tolerance {
                 return Some((d, c));
             }
         }
         d *= 0.7;
     }
     None
+}
+
+/// The blend of a corner between two lines, of half turning angle `half`: the quintic with
+/// end derivatives scaled by [`LINE_TANGENT_SCALE`] as long as the tolerance allows (its
+/// midpoint 0.98 `P` from the lines, [`line_corner_distance`]), or if that is longer than
+/// `cap` allows (half of each line), the one scaled by 1, capped.
+fn line_corner(
+    a: &RunMove,
+    b: &RunMove,
+    half: f64,
+    cap: impl Fn(f64) -> f64,
+) -> Option<(f64, QuinticBlend)> {
+    // Bounded by the tolerance, the scale 1.4 allows the higher speed (a quarter of the
+    // largest `|dk/ds|` at a 90° corner); at a length fixed by the lines, 1 does.
+    let d = 0.98 * a.tolerance / line_corner_distance(half, LINE_TANGENT_SCALE);
+    if cap(d) >= d {
+        g2_corner(a, b, d, LINE_TANGENT_SCALE)
+    } else {
+        let d = 0.98 * a.tolerance / line_corner_distance(half, 1.0);
+        g2_corner(a, b, cap(d), 1.0)
+    }
+}
+
+/// The highest speed through `curve` under the centripetal limit `√(a/κ)` and the jerk of
+/// its curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j`.
+fn turn_speed(curve: &QuinticBlend, max_accel: f64, max_jerk: f64) -> f64 {
+    let radius = 1.0 / curve.max_curvature().max(1e-300);
+    let rate = curve.max_curvature_rate();
+    let v_turn = if rate > 0.0 {
+        (TURN_JERK_SHARE * max_jerk / rate).cbrt()
+    } else {
+        f64::INFINITY
+    };
+    (max_accel * radius).sqrt().min(v_turn)
+}
+
+/// Path acceleration (m/s²) and jerk (m/s³) of the untimed [`blend`]: the defaults of
+/// [`crate::motion::TimingOptions`].
+const DEFAULT_ACCEL: f64 = 2.5;
+const DEFAULT_JERK: f64 = 50.0;
+
+/// Largest distance from `blend` (33 points evenly spaced in its parameter) to the two lines it replaces: from
+/// `corner − d u₁` to the corner and on to `corner + d u₂` (what [`blend_deviation`] computes
+/// for any moves, without following the lines by 64 chords).
+fn lines_deviation(
+    blend: &QuinticBlend,
+    corner: Vector3<f64>,
+    u1: Vector3<f64>,
+    u2: Vector3<f64>,
+    d: f64,
+) -> f64 {
+    let to_line = |p: &Vector3<f64>, dir: &Vector3<f64>, from: f64| {
+        let t = ((p - corner).dot(dir)).clamp(from, from + d);
+        (p - (corner + dir * t)).norm()
+    };
+    (0..=32)
+        .map(|i| {
+            let p = blend.point_at_parameter(i as f64 / 32.0);
+            to_line(&p, &u1, -d).min(to_line(&p, &u2, 0.0))
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Whether `s` is a straight line.
+fn is_line(s: &Segment) -> bool {
+    matches!(s, Segment::Line { .. })
+}
+
+/// Scale of the end derivatives of a blend between two lines
+/// ([`QuinticBlend::with_tangent_scale`]).
+const LINE_TANGENT_SCALE: f64 = 1.4;
+
+/// Distance from the lines to the midpoint of the quintic blend of their corner
+/// ([`QuinticBlend`] with zero end curvatures and end derivatives `α |P₁ − P₀|`, from `d`
+/// before the corner to `d` after it), per unit of `d`, for the half turning angle `h`:
+/// `2 sin h cos h (1/2 − (5/16) α cos h)`.
+///
+/// The quintic Hermite basis at `u = 1/2` weighs both end points `1/2` and the end
+/// derivatives `±5/32`; with `P₀ = C − d t₀`, `P₁ = C + d t₁`, `λ = α |P₁ − P₀| = 2 α d cos h`,
+/// the midpoint is `C + (t₁ − t₀) d (1/2 − (5/16) α cos h)`, `|t₁ − t₀| = 2 sin h`, on the
+/// bisector inside the corner, `cos h` times that from either line. The midpoint is where
+/// the blend is farthest from the lines (to within a few per cent at sharp corners; the
+/// blend is then checked against the tolerance, [`arc_corner`]).
+fn line_corner_distance(h: f64, alpha: f64) -> f64 {
+    2.0 * h.sin() * h.cos() * (0.5 - 5.0 / 16.0 * alpha * h.cos())
+}
+
+/// Time (s) over which a step of the centripetal acceleration at a tangent join is read
+/// as jerk: the 1 ms sample period at which issue 26 measures the path jerk.
+const JUMP_READ_TIME: f64 = 1e-3;
+
+/// The blend of a tangent join whose curvature jumps by `Δκ` so that, at the speed `v` the
+/// moves allow there (their feeds and the centripetal limit `√(a/κ)` of both sides), the
+/// centripetal acceleration steps by more than half the jerk bound over [`JUMP_READ_TIME`]:
+/// `v² Δκ > j · 1 ms / 2` (1.25 m/s² where the paper's path enters its 200 mm arcs at
+/// 0.5 m/s; a spiral of tangent arcs whose radius grows by 5 µm per quarter turn steps by
+/// 0.0125 m/s² and is left as it is). Only when the move allows a deviation: a
+/// [`QuinticBlend`] from `d` before the join to `d` after it,
+/// `d` first `2 √(6 P / Δκ)` (a transition of length `L` that ramps the curvature by `Δκ`
+/// shifts the path by about `Δκ L²/24`, as a clothoid does), capped at half of each move,
+/// then shortened until within the tolerance ([`arc_corner`]).
+fn curvature_jump_blend(
+    a: &RunMove,
+    b: &RunMove,
+    limits: (f64, f64),
+) -> Option<(f64, QuinticBlend)> {
+    if a.tolerance <= 0.0 {
+        return None;
+    }
+    let (a_max, j_max) = limits;
+    let (sa, sb) = (&a.segment, &b.segment);
+    let (ka, kb) = (sa.curvature(sa.length()), sb.curvature(0.0));
+    let jump = (ka - kb).norm();
+    let kappa = ka.norm().max(kb.norm());
+    let mut v2 = a.feed.min(b.feed).powi(2);
+    if kappa > 0.0 {
+        v2 = v2.min(a_max / kappa);
+    }
+    if jump.is_nan() || v2 * jump <= 0.5 * j_max * JUMP_READ_TIME {
+        return None;
+    }
+    let d = (2.0 * (6.0 * a.tolerance / jump).sqrt())
+        .min(sa.length() / 2.0)
+        .min(sb.length() / 2.0);
+    arc_corner(a, b, d)
 }
 
 /// The corner after each move: its tangent distance (0: no blend), whether the path stops
@@ -194,38 +370,40 @@ fn corners(moves: &[RunMove], timed: Option<(f64, f64)>) -> Corners {
         let u2 = b.segment.tangent(0.0);
         let theta = u1.dot(&u2).clamp(-1.0, 1.0).acos();
         if theta < TANGENT_ANGLE || (theta < NEAR_TANGENT_ANGLE && a.tolerance > 0.0) {
+            // A tangent join where the curvature jumps (a line into an arc): the jump is
+            // spread over a curvature-continuous blend within the tolerance.
+            let limits = timed.unwrap_or((DEFAULT_ACCEL, DEFAULT_JERK));
+            if let Some((dk, c)) = curvature_jump_blend(a, b, limits) {
+                d[k] = dk;
+                curve[k] = Some(c);
+            }
             continue;
         }
-        let both_lines =
-            matches!(a.segment, Segment::Line { .. }) && matches!(b.segment, Segment::Line { .. });
+        let both_lines = is_line(&a.segment) && is_line(&b.segment);
         if theta > REVERSAL_ANGLE || a.tolerance <= 0.0 {
             stop[k] = true;
             continue;
         }
         let half = theta / 2.0;
-        let dev_per_radius = 1.0 / half.cos() - 1.0;
-        let d_tol = a.tolerance / dev_per_radius * half.tan();
-        let mut dk = d_tol
-            .min(a.segment.length() / 2.0)
-            .min(b.segment.length() / 2.0);
-        let mut radius = dk / half.tan();
-        if !both_lines {
-            match arc_corner(a, b, dk) {
-                Some((d, c)) => {
-                    dk = d;
-                    radius = 1.0 / c.max_curvature().max(1e-300);
-                    curve[k] = Some(c);
-                }
-                None => {
-                    stop[k] = true;
-                    continue;
-                }
-            }
-        }
-        let slow = timed
-            .is_some_and(|(a_max, j_max)| stop_is_faster(radius, a.feed, b.feed, a_max, j_max));
-        if slow {
-            curve[k] = None;
+        let cap = |d: f64| {
+            d.min(a.segment.length() / 2.0)
+                .min(b.segment.length() / 2.0)
+        };
+        let candidate = if both_lines {
+            line_corner(a, b, half, cap)
+        } else {
+            // From the tangent distance of a circular blend of the same angle.
+            let d_arc = a.tolerance / (1.0 / half.cos() - 1.0) * half.tan();
+            arc_corner(a, b, cap(d_arc))
+        };
+        let Some((dk, c)) = candidate else {
+            stop[k] = true;
+            continue;
+        };
+        let slow =
+            timed.is_some_and(|(a_max, j_max)| stop_is_faster(&c, a.feed, b.feed, a_max, j_max));
+        if !slow {
+            curve[k] = Some(c);
         }
         if dk > 1e-12 && !slow {
             d[k] = dk;
@@ -336,8 +514,9 @@ mod tests {
         }
     }
 
-    /// The blended path is continuous with a continuous tangent, the corner arc keeps within
-    /// the tolerance of the corner (dense scan), and reaches it (the tolerance is used).
+    /// The blended path is continuous with a continuous tangent and curvature (issue 26:
+    /// line corners are quintic G2 blends), the blend keeps within the tolerance of the lines
+    /// (dense scan) and uses it (0.98 P, or half a line when that is shorter).
     #[test]
     fn square_corner_within_tolerance_and_tangent_continuous() {
         for (tol, turn) in [(0.5e-3, 90f64), (0.05e-3, 30.0), (1e-3, 150.0), (2e-3, 5.0)] {
@@ -353,6 +532,8 @@ mod tests {
                 let l = p.geometry.length();
                 assert!((p.geometry.point(l) - q.geometry.point(0.0)).norm() < 1e-15);
                 assert!((p.geometry.tangent(l) - q.geometry.tangent(0.0)).norm() < 1e-12);
+                let (k0, k1) = (p.geometry.curvature(l), q.geometry.curvature(0.0));
+                assert!((k0 - k1).norm() < 1e-6 * pieces[1].geometry.curvature_bounds().0);
                 assert!((q.start - (p.start + l)).abs() < 1e-15);
             }
             let arc = &pieces[1].geometry;
@@ -364,28 +545,21 @@ mod tests {
                     b,
                 )));
                 // Finite-difference tangent and curvature.
-                let h = 1e-7;
+                let h = arc.length() * 1e-5;
                 let fd = (arc.point(s + h) - arc.point(s - h)) / (2.0 * h);
                 if s > h && s < arc.length() - h {
-                    assert!((fd - arc.tangent(s)).norm() < 1e-7);
+                    assert!((fd - arc.tangent(s)).norm() < 1e-5);
                     let fdk = (arc.tangent(s + h) - arc.tangent(s - h)) / (2.0 * h);
-                    assert!((fdk - arc.curvature(s)).norm() < 1e-5 * arc.curvature(s).norm());
+                    let kmax = arc.curvature_bounds().0;
+                    assert!((fdk - arc.curvature(s)).norm() < 1e-3 * kmax, "{turn} {s}");
                 }
             }
-            // Off the polygon by at most the tolerance; the arc's midpoint is exactly `tol` from
-            // the corner (the tolerance is used, LinuxCNC's meaning of P).
+            // Off the polygon by at most the tolerance, and the tolerance is used (LinuxCNC's
+            // meaning of P), unless half a line is shorter than the blend needs (here at 5°).
             assert!(worst <= tol * (1.0 + 1e-9), "{turn}: {worst} > {tol}");
-            // (unless half a line is shorter than the tangent distance: then the blend uses
-            // half the line, here at 5°).
-            let half = (c - a).normalize().dot(&(b - c).normalize()).acos() / 2.0;
-            let d = (tol / (1.0 / half.cos() - 1.0) * half.tan()).min(0.05);
-            let expected = d / half.tan() * (1.0 / half.cos() - 1.0);
-            let mid = (arc.point(arc.length() / 2.0) - c).norm();
-            assert!(expected <= tol * (1.0 + 1e-12));
-            assert!(
-                (mid - expected).abs() < 1e-12,
-                "{turn}: {mid} vs {expected}"
-            );
+            let start = pieces[1].geometry.point(0.0);
+            let capped = ((start - c).norm() - 0.05).abs() < 1e-12;
+            assert!(capped || worst >= 0.9 * tol, "{turn}: {worst} vs {tol}");
         }
     }
 

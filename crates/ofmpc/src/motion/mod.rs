@@ -22,11 +22,12 @@
 //! use ofmpc::robot::Robot;
 //!
 //! let robot = Robot::irb140();
-//! let program = "G21 G90 G64 P0.5\nG0 X500 Y-100 Z400\nG1 X600 F6000\nY0\nX500\nY-100\n";
+//! let program = "G21 G90 G64 P0.5\nG0 X500 Y-100 Z400\nG1 X600 F1200\nY0\nX500\nY-100\n";
 //! let plan = plan(program, &robot, &PlanOptions::default())?;
 //! let r = &plan.reference; // joint reference sampled every 10 ms
 //! assert!(r.len() > 100);
-//! // The square's corners are rounded within 0.5 mm: the path never stops between them.
+//! // The square's corners are rounded within 0.5 mm (quintic blends, passed at the feed:
+//! // their jerk-bounded speed is above 20 mm/s): the path never stops between them.
 //! let mid = (r.len() / 4..3 * r.len() / 4).map(|k| r.qd(k).iter().map(|v| v.abs()).sum::<f64>());
 //! assert!(mid.fold(f64::INFINITY, f64::min) > 1e-3);
 //! # Ok::<(), ofmpc::motion::PlanError>(())

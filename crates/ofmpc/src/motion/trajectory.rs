@@ -32,7 +32,9 @@ pub struct TimingOptions {
     /// Path acceleration limit (m/s²) of every move, also those with `F`: tangential under
     /// `G61`; tangential and, separately, centripetal under `G64`. Default 2.5.
     pub max_accel: f64,
-    /// Path jerk limit (m/s³) of `G64` runs. Default 50.
+    /// Path jerk limit (m/s³) of `G64` runs (their tangential jerk; the Cartesian jerk,
+    /// curvature terms included, stays within twice it), and the bound within twice which
+    /// `G61` moves keep their Cartesian jerk. Default 50.
     pub max_jerk: f64,
     /// Corner tolerance (m) of `G64` without `P`. Default 0.1 mm.
     pub blend_tolerance: f64,
@@ -288,6 +290,49 @@ impl Timeline {
     }
 }
 
+/// The fastest rest-to-rest law of an exact-stop move within its speed and `max_accel`
+/// ([`TimeLaw::fastest`]), lengthened where needed so that its Cartesian jerk stays within
+/// twice `max_jerk` (issue 26).
+///
+/// Along a path of curvature `κ` the jerk is `s⃛ t + 3 ṡ s̈ κ n + ṡ³ dk/ds` (the derivative of
+/// `ṡ t`, Frenet–Serret), `|dk/ds| = κ²` on a circle (`κ √(κ² + τ²)` on a helix, `κ`
+/// times the turning rate of its curvature vector). With the profile's peak factors
+/// `f_v`, `f_a`, `f_j` ([`Profile`]) the peaks of the three terms are `f_j L/T³`,
+/// `3 f_v f_a L² κ/T³` and `(f_v L/T)³ |dk/ds|`; each is kept within a share of the bound,
+/// `J`, `J/2` and `J/2`. A move whose fastest law keeps them is left exactly as it was (the
+/// paper's program, whose moves are long, is unchanged).
+fn exact_law(options: &TimingOptions, segment: &Segment, speed: f64) -> TimeLaw {
+    let profile = options.profile;
+    let len = segment.length();
+    let mut law = TimeLaw::fastest(profile, len, speed, options.max_accel);
+    let j = options.max_jerk;
+    if !(len > 0.0 && law.duration > 0.0) {
+        return law;
+    }
+    let (fv, fa, fj) = (
+        profile.peak_velocity_factor(),
+        profile.peak_acceleration_factor(),
+        profile.peak_jerk_factor(),
+    );
+    let (kappa, rate) = match segment {
+        Segment::Line { .. } => (0.0, 0.0),
+        Segment::Arc { .. } => {
+            let k = segment.curvature(0.0).norm();
+            let h = (len / 8.0).clamp(1e-12, 1e-3);
+            let rate = (segment.curvature(h) - segment.curvature(0.0)).norm() / h;
+            (k, rate)
+        }
+    };
+    let t_jerk = (fj * len / j).cbrt();
+    let t_normal = (6.0 * fv * fa * len * len * kappa / j).cbrt();
+    let t_turn = fv * len * (2.0 * rate / j).cbrt();
+    let t = t_jerk.max(t_normal).max(t_turn);
+    if t.is_finite() && t > law.duration {
+        law.duration = t;
+    }
+    law
+}
+
 /// A move of a run timed as an exact stop.
 struct ExactMove {
     segment: Segment,
@@ -306,12 +351,7 @@ fn exact_moves(
     moves
         .iter()
         .map(|m| {
-            let mut law = TimeLaw::fastest(
-                options.profile,
-                m.segment.length(),
-                m.feed,
-                options.max_accel,
-            );
+            let mut law = exact_law(options, &m.segment, m.feed);
             let mut limited = None;
             if let Some(jc) = joints.as_deref_mut() {
                 if let Some((t, joint, quantity)) = joint_limited_duration(&m.segment, &law, jc) {
@@ -487,8 +527,7 @@ impl CartesianTrajectory {
     fn time_step(step: Step<'_>, options: &TimingOptions, pos: Vector3<f64>) -> (TimedKind, f64) {
         match step {
             Step::Exact(segment, speed) => {
-                let law =
-                    TimeLaw::fastest(options.profile, segment.length(), speed, options.max_accel);
+                let law = exact_law(options, segment, speed);
                 let dt = law.duration;
                 (
                     TimedKind::Path {
