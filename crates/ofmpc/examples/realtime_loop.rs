@@ -137,7 +137,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sensor.record_torque(&tau);
         supervisor.record_torque(&tau);
         // In a real system: write τ to the drives. Here the plant integrates it over Ts.
-        if plant.step(&tau, TS).is_err() {
+        if plant.advance(&tau).is_err() {
             break;
         }
         for i in 0..n {
@@ -272,6 +272,6 @@ fn set_up(
         substep: TS, // one RK4 step per period
         ..PlantSettings::default()
     };
-    let plant = Plant::new(plant_robot, plant_settings, reference.q(0))?;
+    let plant = Plant::with_period(plant_robot, plant_settings, reference.q(0), TS)?;
     Ok((reference, controller, model, plant))
 }

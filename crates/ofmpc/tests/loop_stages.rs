@@ -92,7 +92,13 @@ fn with_closed_loop(s: &Setup) -> Record {
     let n = s.robot.dof();
     let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
     let mut model = RobotDynamics::new(s.robot.clone());
-    let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
+    let mut plant = Plant::with_period(
+        s.plant_robot.clone(),
+        plant_settings(),
+        s.reference.q(0),
+        s.reference.ts(),
+    )
+    .unwrap();
     let settings = loop_settings();
     let conditions = conditions();
     let mut obs = observer(s);
@@ -117,7 +123,13 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let settings = loop_settings();
     let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
     let mut model = RobotDynamics::new(s.robot.clone());
-    let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
+    let mut plant = Plant::with_period(
+        s.plant_robot.clone(),
+        plant_settings(),
+        s.reference.q(0),
+        ts,
+    )
+    .unwrap();
     let mut obs = observer(s);
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
@@ -157,7 +169,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             sensor.record_torque(&tau);
             rec.loading(actuator.account(&tau));
             supervisor.record_torque(&tau);
-            plant.step(&tau, ts).unwrap();
+            plant.advance(&tau).unwrap();
             rec.push(&Sample {
                 t,
                 q: &x_true[..n],

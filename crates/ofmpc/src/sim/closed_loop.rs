@@ -446,6 +446,12 @@ impl<'a> ClosedLoop<'a> {
     /// on the path's first point.
     fn start(&mut self) -> Result<(), Ended> {
         let failed = |t: f64, cause: RunFailure| RunOutcome::Failed { t, cause };
+        // The plant runs at the reference's period, and its faults (path
+        // times) begin with the path, after the pre-roll.
+        self.plant
+            .set_period(self.reference.ts())
+            .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
+        self.plant.start_path_after(self.events.pre_roll);
         self.plant
             .measure(&mut self.x)
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
@@ -511,7 +517,7 @@ impl<'a> ClosedLoop<'a> {
         }
         self.estimator.record_torque(&self.tau);
         self.plant
-            .step(&self.tau, ts)
+            .advance(&self.tau)
             .map_err(|e| failed(RunFailure::Plant(e)))?;
         let threshold = self.settings.divergence_threshold_rad;
         let q = self.plant.q();
@@ -632,7 +638,7 @@ impl<'a> ClosedLoop<'a> {
         }
         self.supervisor.record_torque(&self.tau);
         self.plant
-            .step(&self.tau, ts)
+            .advance(&self.tau)
             .map_err(|e| failed(RunFailure::Plant(e)))?;
         self.supervisor
             .watch(self.plant.q(), self.plant.qd(), t, ts);
