@@ -134,7 +134,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
     let lost = LossSchedule::new(&conditions.faults, ts);
-    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost);
+    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
@@ -156,8 +156,8 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             x_true[n..].copy_from_slice(plant.qd());
             rec.reading(&x);
             let w = s.reference.q(k);
-            let repaired = sensor.repair(&mut model, &mut x, ts);
-            let inspection = supervisor.inspect(&mut x, w, ts);
+            let repaired = sensor.repair(&mut model, &mut x);
+            let inspection = supervisor.inspect(&mut x, w);
             rec.fault(repaired || inspection.rejected);
             let flange = plant.flange_position();
             s.reference.preview(k, controller.horizon(), &mut preview);
