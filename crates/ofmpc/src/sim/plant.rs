@@ -1006,4 +1006,33 @@ mod tests {
         .validate(6)
         .is_err());
     }
+
+    /// The deprecated `new` + `step(tau, ts)` is `with_period` + `advance`:
+    /// the same states bit for bit, the faults matched to the same samples.
+    #[test]
+    #[allow(deprecated)]
+    fn the_deprecated_step_is_advance_at_its_period() {
+        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
+        let s = PlantSettings {
+            faults: vec![Fault::TorqueDrop {
+                t: 0.05,
+                joint: 2,
+                fraction: 0.0,
+                duration_s: 0.03,
+            }],
+            ..Default::default()
+        };
+        let mut old = Plant::new(Robot::irb140(), s.clone(), &q0).unwrap();
+        let mut new = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for _ in 0..20 {
+            old.step(&[1.0; 6], 0.01).unwrap();
+            new.advance(&[1.0; 6]).unwrap();
+            assert_eq!(bits(old.applied_torque()), bits(new.applied_torque()));
+        }
+        assert_eq!(bits(old.q()), bits(new.q()));
+        assert_eq!(bits(old.qd()), bits(new.qd()));
+        assert_eq!(old.fault_schedule(), new.fault_schedule());
+        assert_eq!(new.fault_schedule().range(0), Some((5, 8)));
+    }
 }
