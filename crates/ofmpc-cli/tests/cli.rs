@@ -181,12 +181,13 @@ fn replay_matches_the_recorded_states(csv: &Path, payload: f64) {
     robot
         .set_payload(Some(Payload::point_mass(payload)))
         .unwrap();
-    let mut plant = Plant::new(robot, PlantSettings::default(), &rows[0][1..7]).unwrap();
     let mut worst = 0.0f64;
     let ts = rows[1][0] - rows[0][0];
+    let mut plant =
+        Plant::with_period(robot, PlantSettings::default(), &rows[0][1..7], ts).unwrap();
     for k in 0..rows.len() - 1 {
         plant.set_state(&rows[k][1..7], &rows[k][7..13]).unwrap();
-        plant.step(&rows[k][13..19], ts).unwrap();
+        plant.advance(&rows[k][13..19]).unwrap();
         for i in 0..6 {
             worst = worst.max((plant.q()[i] - rows[k + 1][1 + i]).abs());
             worst = worst.max((plant.qd()[i] - rows[k + 1][7 + i]).abs() * ts);

@@ -399,7 +399,9 @@ fn friction_substep_warning(
     if plant.coulomb_friction.iter().all(|c| *c <= 0.0) {
         return None;
     }
-    let mut p = ofmpc::sim::Plant::new(robot.clone(), plant.clone(), q0).ok()?;
+    // τ does not depend on the control period: one substep is a period every valid plant has.
+    let mut p =
+        ofmpc::sim::Plant::with_period(robot.clone(), plant.clone(), q0, plant.substep).ok()?;
     let tau = p.coulomb_time_constant().ok()??;
     if plant.substep <= 4.0 * tau {
         return None;

@@ -57,12 +57,12 @@ fn bench(c: &mut Criterion) {
         })
     });
     // The simulated robot: one control period (10 ms) of RK4 in 1 ms substeps.
-    let mut plant = ofmpc::sim::Plant::new(robot.clone(), Default::default(), &q)
+    let mut plant = ofmpc::sim::Plant::with_period(robot.clone(), Default::default(), &q, 0.01)
         .unwrap_or_else(|e| panic!("{e}"));
     g.bench_function("plant step (10 ms, 10 RK4 substeps)", |b| {
         b.iter(|| {
             let _ = plant.set_state(&q, &qd);
-            plant.step(black_box(&tau), 0.01).map(|_| plant.q()[0])
+            plant.advance(black_box(&tau)).map(|_| plant.q()[0])
         })
     });
     // Baseline in the same run: H column by column from n inverse dynamics

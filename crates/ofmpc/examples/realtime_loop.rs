@@ -89,7 +89,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         safe_stop: true,
         ..LoopSettings::default()
     };
-    let mut sensor = Sensor::new(n, plant.settings().delay_samples, LossSchedule::default());
+    let mut sensor = Sensor::new(
+        n,
+        plant.settings().delay_samples,
+        LossSchedule::default(),
+        TS,
+    );
     let mut supervisor = Supervisor::with_period(
         plant.robot(),
         loop_settings.supervisor(&Default::default()),
@@ -112,16 +117,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         lateness_us[k] = woke.saturating_duration_since(release).as_secs_f64() * 1e6;
         let t = k as f64 * TS;
         sensor.read(&mut plant, k, true, &mut x)?; // in a real system: read the encoders
-        sensor.repair(&mut model, &mut x, TS); // an invalid value: the model's prediction
+        sensor.repair(&mut model, &mut x); // an invalid value: the model's prediction
         let w = reference.q(k);
-        let inspection = supervisor.inspect(&mut x, w, TS);
+        let inspection = supervisor.inspect(&mut x, w);
         if let Some(reason) = inspection.trigger {
-            supervisor.begin_stop(t, reason, &x, &mut model, TS);
+            supervisor.begin_stop(t, reason, &x, &mut model);
         }
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();
         let status = if supervisor.stopping().is_some() {
-            supervisor.stop_torque(&mut model, &x, &x, TS, &mut tau)
+            supervisor.stop_torque(&mut model, &x, &x, &mut tau)
         } else {
             controller
                 .step(&mut model, &x, w, &preview, &mut tau)
@@ -131,13 +136,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         if let Err(e) = status {
             // Brake and hold; the torque of this sample is the last one.
             failure = failure.or(Some((k, e)));
-            supervisor.begin_stop(t, StopReason::ControllerFailed(e), &x, &mut model, TS);
+            supervisor.begin_stop(t, StopReason::ControllerFailed(e), &x, &mut model);
         }
         max_torque_ratio = max_torque_ratio.max(actuator.account(&tau).max_ratio);
         sensor.record_torque(&tau);
         supervisor.record_torque(&tau);
         // In a real system: write τ to the drives. Here the plant integrates it over Ts.
-        if plant.step(&tau, TS).is_err() {
+        if plant.advance(&tau).is_err() {
             break;
         }
         for i in 0..n {
@@ -272,6 +277,6 @@ fn set_up(
         substep: TS, // one RK4 step per period
         ..PlantSettings::default()
     };
-    let plant = Plant::new(plant_robot, plant_settings, reference.q(0))?;
+    let plant = Plant::with_period(plant_robot, plant_settings, reference.q(0), TS)?;
     Ok((reference, controller, model, plant))
 }

@@ -52,7 +52,8 @@ fn adaptive_steps_allocate_nothing() {
     ] {
         let mut ctrl = new_controller(kind, 6, &settings).unwrap();
         let mut model = RobotDynamics::new(robot.clone());
-        let mut plant = Plant::new(loaded.clone(), PlantSettings::default(), &q0).unwrap();
+        let mut plant =
+            Plant::with_period(loaded.clone(), PlantSettings::default(), &q0, settings.ts).unwrap();
         let mut x = vec![0.0; 12];
         plant.measure(&mut x).unwrap();
         ctrl.reset(&x).unwrap();
@@ -63,7 +64,7 @@ fn adaptive_steps_allocate_nothing() {
         for _ in 0..150 {
             plant.measure(&mut x).unwrap();
             ctrl.step(&mut model, &x, &q0, &preview, &mut tau).unwrap();
-            plant.step(&tau, settings.ts).unwrap();
+            plant.advance(&tau).unwrap();
             assert!(ctrl
                 .step(&mut model, &bad_x, &q0, &preview, &mut tau)
                 .is_err());

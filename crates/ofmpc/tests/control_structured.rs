@@ -342,7 +342,13 @@ fn structured_equals_dense_qr_along_the_paper_path() {
         plant_robot
             .set_payload(Some(Payload::point_mass(0.25)))
             .unwrap();
-        let mut plant = Plant::new(plant_robot, PlantSettings::default(), reference.q(0)).unwrap();
+        let mut plant = Plant::with_period(
+            plant_robot,
+            PlantSettings::default(),
+            reference.q(0),
+            reference.ts(),
+        )
+        .unwrap();
         let mut model = RobotDynamics::new(robot.clone());
         let result = run_closed_loop(
             &mut lock,

@@ -13,13 +13,14 @@ fn algorithms_and_plant_do_not_allocate() {
     let mut robot = Robot::irb140();
     robot.set_payload(Some(Payload::point_mass(1.0))).unwrap();
     let mut ws = Workspace::new(&robot);
-    let mut plant = Plant::new(
+    let mut plant = Plant::with_period(
         robot.clone(),
         PlantSettings {
             position_noise: 1e-6,
             ..Default::default()
         },
         &[0.1; 6],
+        0.01,
     )
     .unwrap();
     let mut d = RobotDynamics::new(robot.clone());
@@ -83,7 +84,7 @@ fn algorithms_and_plant_do_not_allocate() {
     );
     assert_eq!(
         count(&mut || {
-            plant.step(&[1.0; 6], 0.01).unwrap();
+            plant.advance(&[1.0; 6]).unwrap();
         }),
         0,
         "pstep"
@@ -100,7 +101,7 @@ fn algorithms_and_plant_do_not_allocate() {
         forward_dynamics(&robot, &mut ws, &q, &qd, &qd).unwrap();
         d.terms(&q, &qd, &mut h, &mut c, &mut g);
         plant.measure(&mut x).unwrap();
-        plant.step(&[1.0; 6], 0.01).unwrap();
+        plant.advance(&[1.0; 6]).unwrap();
     }
     assert_eq!(alloc_counter::allocations() - before, 0);
 }

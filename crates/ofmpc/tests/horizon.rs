@@ -187,7 +187,8 @@ fn predicted_outputs_equal_the_prediction_built_again() {
         plant_robot
             .set_payload(Some(Payload::point_mass(1.0)))
             .unwrap();
-        let mut plant = Plant::new(plant_robot, PlantSettings::default(), reference.q(0)).unwrap();
+        let mut plant =
+            Plant::with_period(plant_robot, PlantSettings::default(), reference.q(0), ts).unwrap();
         let (mut x, mut x_prev, mut tau) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; n]);
         let (mut preview, mut own) = (vec![0.0; nh * n], vec![0.0; nh * n]);
         plant.measure(&mut x).unwrap();
@@ -215,7 +216,7 @@ fn predicted_outputs_equal_the_prediction_built_again() {
                 worst = worst.max((a - b).abs());
             }
             x_prev.copy_from_slice(&x);
-            plant.step(&tau, ts).unwrap();
+            plant.advance(&tau).unwrap();
         }
         eprintln!("{kind} ({solver:?}): largest difference {worst:e} rad");
         assert!(worst <= 1e-12, "{kind} ({solver:?}): {worst:e} rad");

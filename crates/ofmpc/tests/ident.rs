@@ -145,11 +145,11 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
     let mut loaded = robot.clone();
     loaded.set_payload(Some(truth)).unwrap();
     let q0 = [0.1, 0.3, -0.2, 0.2, 0.8, 0.1];
-    let mut plant = Plant::new(loaded.clone(), PlantSettings::default(), &q0).unwrap();
+    let ts = 0.01;
+    let mut plant = Plant::with_period(loaded.clone(), PlantSettings::default(), &q0, ts).unwrap();
     let mut model = RobotDynamics::new(robot.clone());
     let mut est = PayloadEstimator::new(n, RlsSettings::default(), PayloadParams::zeros()).unwrap();
     let mut ws = Workspace::new(&loaded);
-    let ts = 0.01;
     let mut x_prev = vec![0.0; 2 * n];
     let mut x = vec![0.0; 2 * n];
     plant.measure(&mut x_prev).unwrap();
@@ -168,7 +168,7 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
         let tau = rnea(&loaded, &mut ws, &x_prev[..n], &x_prev[n..], &qdd)
             .unwrap()
             .clone();
-        plant.step(tau.as_slice(), ts).unwrap();
+        plant.advance(tau.as_slice()).unwrap();
         plant.measure(&mut x).unwrap();
         assert!(est.update(&mut model, &x_prev, &x, tau.as_slice(), ts));
         // The controller's model follows the estimate.

@@ -92,7 +92,13 @@ fn with_closed_loop(s: &Setup) -> Record {
     let n = s.robot.dof();
     let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
     let mut model = RobotDynamics::new(s.robot.clone());
-    let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
+    let mut plant = Plant::with_period(
+        s.plant_robot.clone(),
+        plant_settings(),
+        s.reference.q(0),
+        s.reference.ts(),
+    )
+    .unwrap();
     let settings = loop_settings();
     let conditions = conditions();
     let mut obs = observer(s);
@@ -117,12 +123,18 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let settings = loop_settings();
     let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
     let mut model = RobotDynamics::new(s.robot.clone());
-    let mut plant = Plant::new(s.plant_robot.clone(), plant_settings(), s.reference.q(0)).unwrap();
+    let mut plant = Plant::with_period(
+        s.plant_robot.clone(),
+        plant_settings(),
+        s.reference.q(0),
+        ts,
+    )
+    .unwrap();
     let mut obs = observer(s);
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
     let lost = LossSchedule::new(&conditions.faults, ts);
-    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost);
+    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
@@ -144,8 +156,8 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             x_true[n..].copy_from_slice(plant.qd());
             rec.reading(&x);
             let w = s.reference.q(k);
-            let repaired = sensor.repair(&mut model, &mut x, ts);
-            let inspection = supervisor.inspect(&mut x, w, ts);
+            let repaired = sensor.repair(&mut model, &mut x);
+            let inspection = supervisor.inspect(&mut x, w);
             rec.fault(repaired || inspection.rejected);
             let flange = plant.flange_position();
             s.reference.preview(k, controller.horizon(), &mut preview);
@@ -157,7 +169,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             sensor.record_torque(&tau);
             rec.loading(actuator.account(&tau));
             supervisor.record_torque(&tau);
-            plant.step(&tau, ts).unwrap();
+            plant.advance(&tau).unwrap();
             rec.push(&Sample {
                 t,
                 q: &x_true[..n],

@@ -150,6 +150,8 @@ pub fn triple_pole_inertia_ratio_range(omega_n: f64, ts: f64) -> (f64, f64) {
 /// `w_{k−1}, w_k, w_{k+1}, w_{k+2}` (module docs). Keeps `w_{k−1}`.
 #[derive(Debug, Clone)]
 pub(crate) struct RefDerivatives {
+    /// The control period (s).
+    ts: f64,
     w_prev: Vec<f64>,
     has_prev: bool,
     /// `v_k` (n values).
@@ -159,8 +161,10 @@ pub(crate) struct RefDerivatives {
 }
 
 impl RefDerivatives {
-    pub fn new(n: usize) -> Self {
+    /// For `n` joints sampled every `ts` (s).
+    pub fn new(n: usize, ts: f64) -> Self {
         Self {
+            ts,
             w_prev: vec![0.0; n],
             has_prev: false,
             v: vec![0.0; n],
@@ -175,8 +179,8 @@ impl RefDerivatives {
 
     /// Computes `v_k`, `a_k` from `w_k` and the preview (`w_{k+1}, …`, at
     /// least one block; `w_{k+2} = w_{k+1}` with a horizon of one).
-    pub fn update(&mut self, w_k: &[f64], preview: &[f64], ts: f64) {
-        let n = w_k.len();
+    pub fn update(&mut self, w_k: &[f64], preview: &[f64]) {
+        let (n, ts) = (w_k.len(), self.ts);
         let w1 = &preview[..n];
         let w2 = preview.get(n..2 * n).unwrap_or(w1);
         for i in 0..n {
@@ -314,7 +318,7 @@ impl JointLawCore {
             settings: settings.clone(),
             model: LinearLikeModel::new(n),
             pid: JointPid::new(omega_n, settings.ts),
-            refd: RefDerivatives::new(n),
+            refd: RefDerivatives::new(n, settings.ts),
             scale: vec![1.0; n],
             scale_ready: false,
             x0: vec![0.0; 2 * n],
@@ -387,7 +391,7 @@ impl JointLawCore {
             self.scale_ready = true;
         }
         self.model.update(model, &x[..n], &x[n..])?;
-        self.refd.update(w_k, preview, self.settings.ts);
+        self.refd.update(w_k, preview);
         self.pid.law(x, w_k, &self.refd.v, &mut self.fb);
         match self.law {
             Law::Pid => {
@@ -553,10 +557,10 @@ mod tests {
         // (w_k, v_k), and v_k, a_k are within O(Ts²) of w', mean w''.
         let ts = 0.01;
         let w = |k: f64| (k * ts).powi(3);
-        let mut r = RefDerivatives::new(1);
+        let mut r = RefDerivatives::new(1, ts);
         let k = 50.0;
         r.commit(&[w(k - 1.0)]);
-        r.update(&[w(k)], &[w(k + 1.0), w(k + 2.0)], ts);
+        r.update(&[w(k)], &[w(k + 1.0), w(k + 2.0)]);
         let reached = w(k) + ts * r.v[0] + 0.5 * ts * ts * r.a[0];
         assert!((reached - w(k + 1.0)).abs() < 1e-15);
         let t = k * ts;

@@ -45,6 +45,7 @@ pub mod numeric;
 pub mod opw;
 pub mod opw_detect;
 pub mod robust;
+mod solutions;
 pub mod solver;
 pub mod ur;
 
@@ -52,6 +53,7 @@ pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
 pub use opw::{OpwParameters, OpwSolutions};
 pub use opw_detect::OPW_DETECT_TOLERANCE;
 pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
+pub use solutions::Solutions;
 pub use solver::{ClosedFormBranches, ClosedFormKinematics, ClosedFormSolver, IkSolver};
 pub use ur::{UrKinematics, UrSolutions, UrSolver};
 

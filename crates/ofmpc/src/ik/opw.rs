@@ -20,6 +20,7 @@ use std::f64::consts::PI;
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
+use super::solutions::Solutions;
 use super::{pose_is_finite, IkError};
 
 /// Distance (m) by which a wrist centre may lie outside the reachable shell and
@@ -77,58 +78,9 @@ pub struct OpwParameters {
     pub tool: Isometry3<f64>,
 }
 
-/// All closed-form solutions of one pose: up to 8 joint vectors, no allocation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OpwSolutions {
-    solutions: [[f64; 6]; 8],
-    count: usize,
-    wrist_centre: Vector3<f64>,
-    reach_excess: f64,
-}
-
-impl OpwSolutions {
-    fn empty() -> Self {
-        Self {
-            solutions: [[0.0; 6]; 8],
-            count: 0,
-            wrist_centre: Vector3::zeros(),
-            reach_excess: f64::INFINITY,
-        }
-    }
-
-    fn push(&mut self, q: [f64; 6]) {
-        if let Some(slot) = self.solutions.get_mut(self.count) {
-            *slot = q;
-            self.count += 1;
-        }
-    }
-
-    /// The valid solutions (0 to 8), in user joint coordinates.
-    pub fn as_slice(&self) -> &[[f64; 6]] {
-        &self.solutions[..self.count]
-    }
-
-    /// Number of valid solutions.
-    pub fn len(&self) -> usize {
-        self.count
-    }
-
-    /// True when the pose is unreachable (or not finite).
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-
-    /// Wrist centre (m, base frame) of the requested pose.
-    pub fn wrist_centre(&self) -> Vector3<f64> {
-        self.wrist_centre
-    }
-
-    /// Smallest distance (m) by which the wrist centre misses the reachable shell
-    /// over the shoulder branches: 0 when solutions exist, +∞ for a non-finite pose.
-    pub fn reach_excess(&self) -> f64 {
-        self.reach_excess
-    }
-}
+/// All closed-form solutions of one pose (up to 8 joint vectors, no allocation) and its
+/// wrist centre ([`Solutions::wrist_centre`]).
+pub type OpwSolutions = Solutions<Vector3<f64>>;
 
 /// Rotation about z by `t`.
 pub(super) fn rz(t: f64) -> Matrix3<f64> {
@@ -305,14 +257,14 @@ impl OpwParameters {
     }
 
     fn solve(&self, pose: &Isometry3<f64>, hint: Option<&[f64; 6]>) -> OpwSolutions {
-        let mut out = OpwSolutions::empty();
+        let mut out = OpwSolutions::empty(Vector3::zeros());
         if !pose_is_finite(pose) {
             return out;
         }
         let raw = pose * self.tool.inverse();
         let r = raw.rotation.to_rotation_matrix().into_inner();
         let centre = raw.translation.vector - r.column(2) * self.c4;
-        out.wrist_centre = centre;
+        out.extra = centre;
         let (cx, cy, cz) = (centre.x, centre.y, centre.z);
 
         // Shoulder: the arm plane must pass at distance b from axis 1.

@@ -8,6 +8,7 @@ use std::f64::consts::PI;
 use nalgebra::Isometry3;
 
 use super::opw::OpwParameters;
+use super::solutions::Solutions;
 use super::ur::UrKinematics;
 use super::{pose_is_finite, IkError};
 
@@ -34,36 +35,8 @@ pub trait ClosedFormKinematics {
 }
 
 /// The branches of one pose ([`ClosedFormKinematics::branches`]): up to 8 joint vectors
-/// and the reach excess, no allocation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ClosedFormBranches {
-    solutions: [[f64; 6]; 8],
-    count: usize,
-    reach_excess: f64,
-}
-
-impl ClosedFormBranches {
-    /// The first 8 of `solutions` and the reach excess (m; 0 when there are solutions).
-    pub fn new(solutions: &[[f64; 6]], reach_excess: f64) -> Self {
-        let mut out = Self {
-            solutions: [[0.0; 6]; 8],
-            count: solutions.len().min(8),
-            reach_excess,
-        };
-        out.solutions[..out.count].copy_from_slice(&solutions[..out.count]);
-        out
-    }
-
-    /// The branches.
-    pub fn as_slice(&self) -> &[[f64; 6]] {
-        &self.solutions[..self.count]
-    }
-
-    /// Distance (m) by which the pose misses the workspace (+∞ for a non-finite pose).
-    pub fn reach_excess(&self) -> f64 {
-        self.reach_excess
-    }
-}
+/// and the reach excess, no allocation ([`Solutions::new`]).
+pub type ClosedFormBranches = Solutions;
 
 impl ClosedFormKinematics for OpwParameters {
     fn validate(&self) -> Result<(), IkError> {

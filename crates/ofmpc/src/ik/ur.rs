@@ -33,6 +33,7 @@
 use nalgebra::{Isometry3, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, Vector6};
 
 use super::opw::wrap_angle;
+use super::solutions::Solutions;
 use super::solver::ClosedFormSolver;
 use super::{pose_is_finite, rotation_log};
 
@@ -81,38 +82,7 @@ pub struct UrKinematics {
 }
 
 /// All closed-form solutions of one pose: up to 8 joint vectors, no allocation.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct UrSolutions {
-    solutions: [[f64; 6]; 8],
-    count: usize,
-    reach_excess: f64,
-}
-
-impl UrSolutions {
-    /// The solutions (0 to 8), each joint wrapped to (−π, π].
-    pub fn as_slice(&self) -> &[[f64; 6]] {
-        &self.solutions[..self.count]
-    }
-    /// Number of solutions.
-    pub fn len(&self) -> usize {
-        self.count
-    }
-    /// True when the pose is out of reach (or not finite).
-    pub fn is_empty(&self) -> bool {
-        self.count == 0
-    }
-    /// Distance (m) by which the pose misses the workspace (0 when solutions exist,
-    /// +∞ for a non-finite pose).
-    pub fn reach_excess(&self) -> f64 {
-        self.reach_excess
-    }
-    fn push(&mut self, q: [f64; 6]) {
-        if let Some(slot) = self.solutions.get_mut(self.count) {
-            *slot = q;
-            self.count += 1;
-        }
-    }
-}
+pub type UrSolutions = Solutions;
 
 /// Rotation by `angle` about the unit `axis` (Rodrigues).
 fn rot(axis: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
@@ -325,11 +295,7 @@ impl UrKinematics {
     /// Like [`UrKinematics::inverse`], with q6 (and q1 at the shoulder singularity, the
     /// wrist point on axis 1) taken from `hint` where the pose leaves it free.
     pub fn inverse_near(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> UrSolutions {
-        let mut out = UrSolutions {
-            solutions: [[0.0; 6]; 8],
-            count: 0,
-            reach_excess: f64::INFINITY,
-        };
+        let mut out = UrSolutions::empty(());
         if !pose_is_finite(pose) || !hint.iter().all(|x| x.is_finite()) {
             return out;
         }

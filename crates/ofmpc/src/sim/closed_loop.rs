@@ -338,7 +338,7 @@ impl<'a> ClosedLoop<'a> {
             .horizons
             .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, h.every, h.max));
         let lost = LossSchedule::new(&conditions.faults, ts);
-        let sensor = Sensor::new(n, plant.settings().delay_samples, lost);
+        let sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
         let supervisor =
             Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
         let actuator = Actuator::for_robot(plant.robot());
@@ -446,6 +446,12 @@ impl<'a> ClosedLoop<'a> {
     /// on the path's first point.
     fn start(&mut self) -> Result<(), Ended> {
         let failed = |t: f64, cause: RunFailure| RunOutcome::Failed { t, cause };
+        // The plant runs at the reference's period, and its faults (path
+        // times) begin with the path, after the pre-roll.
+        self.plant
+            .set_period(self.reference.ts())
+            .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
+        self.plant.start_path_after(self.events.pre_roll);
         self.plant
             .measure(&mut self.x)
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
@@ -483,7 +489,6 @@ impl<'a> ClosedLoop<'a> {
     /// "stopped"); without it they end the run.
     fn pre_roll_sample(&mut self, j: usize, t: f64) -> Result<bool, Ended> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
-        let ts = self.reference.ts();
         let n = self.reference.dof();
         if j > 0 {
             self.plant
@@ -504,14 +509,14 @@ impl<'a> ClosedLoop<'a> {
             .and_then(|xs| controller.step(model, xs, w0, preview, tau));
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
-            return match self.supervisor.begin_stop(t, reason, &self.x, model, ts) {
+            return match self.supervisor.begin_stop(t, reason, &self.x, model) {
                 true => Ok(true),
                 false => Err(failed(RunFailure::Controller(e))),
             };
         }
         self.estimator.record_torque(&self.tau);
         self.plant
-            .step(&self.tau, ts)
+            .advance(&self.tau)
             .map_err(|e| failed(RunFailure::Plant(e)))?;
         let threshold = self.settings.divergence_threshold_rad;
         let q = self.plant.q();
@@ -522,10 +527,7 @@ impl<'a> ClosedLoop<'a> {
             let error_rad = w0[joint] - q[joint];
             if !error_rad.is_nan() {
                 let reason = StopReason::Diverged { joint, error_rad };
-                if self
-                    .supervisor
-                    .begin_stop(t, reason, &self.x, self.model, ts)
-                {
+                if self.supervisor.begin_stop(t, reason, &self.x, self.model) {
                     return Ok(true);
                 }
             }
@@ -601,8 +603,8 @@ impl<'a> ClosedLoop<'a> {
         let w = reference.q(k);
         // A missing or invalid reading: the controller runs on the model's
         // prediction.
-        let repaired = self.sensor.repair(self.model, &mut self.x, ts);
-        let inspection = self.supervisor.inspect(&mut self.x, w, ts);
+        let repaired = self.sensor.repair(self.model, &mut self.x);
+        let inspection = self.supervisor.inspect(&mut self.x, w);
         rec.fault(repaired || inspection.rejected);
         let flange = self.plant.flange_position();
         self.reference
@@ -611,31 +613,27 @@ impl<'a> ClosedLoop<'a> {
         let mut stop_began = None;
         if let Some(reason) = inspection.trigger {
             let from = self.estimator.last(&self.x);
-            if self.supervisor.begin_stop(t, reason, from, self.model, ts) {
+            if self.supervisor.begin_stop(t, reason, from, self.model) {
                 stop_began = Some(k);
             }
         }
-        let status = self.control(k, w, ts);
+        let status = self.control(k, w);
         self.sensor.record_torque(&self.tau);
         rec.loading(self.actuator.account(&self.tau));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             // Brake from here on (this sample holds the last torque).
-            if !self
-                .supervisor
-                .begin_stop(t, reason, &self.x, self.model, ts)
-            {
+            if !self.supervisor.begin_stop(t, reason, &self.x, self.model) {
                 return Err(failed(RunFailure::Controller(e)));
             }
             stop_began = Some(k);
         }
         self.supervisor.record_torque(&self.tau);
         self.plant
-            .step(&self.tau, ts)
+            .advance(&self.tau)
             .map_err(|e| failed(RunFailure::Plant(e)))?;
-        self.supervisor
-            .watch(self.plant.q(), self.plant.qd(), t, ts);
+        self.supervisor.watch(self.plant.q(), self.plant.qd(), t);
         rec.push(&Sample {
             t,
             q: &self.x_true[..n],
@@ -653,10 +651,7 @@ impl<'a> ClosedLoop<'a> {
         }
         if let Some((joint, error_rad)) = self.supervisor.judge(w, q) {
             let reason = StopReason::Diverged { joint, error_rad };
-            if !self
-                .supervisor
-                .begin_stop(t, reason, &self.x, self.model, ts)
-            {
+            if !self.supervisor.begin_stop(t, reason, &self.x, self.model) {
                 return Err(RunOutcome::Diverged {
                     t,
                     joint,
@@ -672,12 +667,12 @@ impl<'a> ClosedLoop<'a> {
 
     /// The torque of this sample into `self.tau`: the estimator's state
     /// through the controller, or the supervisor's stop law during a stop.
-    fn control(&mut self, k: usize, w: &[f64], ts: f64) -> Result<(), StepError> {
+    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepError> {
         let model = &mut *self.model;
         let xs = self.estimator.estimate(model, &self.x)?;
         if self.supervisor.stopping().is_some() {
             self.supervisor
-                .stop_torque(model, &self.x, xs, ts, &mut self.tau)?;
+                .stop_torque(model, &self.x, xs, &mut self.tau)?;
         } else {
             self.controller
                 .step(model, xs, w, &self.preview, &mut self.tau)?;

@@ -197,7 +197,12 @@ impl Experiment {
             Some(_) => None,
             None => Some(*payload),
         })?;
-        let mut plant = Plant::new(plant_robot, self.plant.clone(), self.reference.q(0))?;
+        let mut plant = Plant::with_period(
+            plant_robot,
+            self.plant.clone(),
+            self.reference.q(0),
+            self.reference.ts(),
+        )?;
         let parts = mpc.parts_mut();
         let result = ClosedLoop::with_conditions(
             parts.controller,

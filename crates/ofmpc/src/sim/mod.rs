@@ -20,7 +20,7 @@ pub use actuator::{Actuator, Loading};
 pub use estimator::Estimator;
 pub use horizon::{HorizonRecorder, HorizonSampling, PredictedHorizons};
 pub use recorder::{Recorder, Sample};
-pub use schedule::{at_or_after, sample_at, LossSchedule, TIME_MATCH_TOLERANCE};
+pub use schedule::{at_or_after, sample_at, FaultSchedule, LossSchedule, TIME_MATCH_TOLERANCE};
 pub use sensor::Sensor;
 
 pub use closed_loop::{

@@ -1,6 +1,7 @@
 //! The simulated robot: the full nonlinear model, with the payload the
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
+use super::schedule::FaultSchedule;
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Robot};
@@ -40,7 +41,10 @@ pub struct PlantSettings {
     pub faults: Vec<Fault>,
 }
 
-/// An injected fault of one joint, from time `t` on. In TOML:
+/// An injected fault of one joint, from path time `t` on (`t = 0`: the
+/// path's first sample, after any pre-roll at rest), matched to samples as
+/// every timed event of a run ([`super::FaultSchedule::for_plant`],
+/// [`super::sample_at`]). In TOML:
 /// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
@@ -81,7 +85,7 @@ pub enum Fault {
 
 impl Fault {
     /// Start time, 0-based joint and duration (0 for a glitch).
-    fn span(&self) -> (f64, usize, f64) {
+    pub(super) fn span(&self) -> (f64, usize, f64) {
         match *self {
             Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
             Fault::EncoderDropout {
@@ -96,11 +100,6 @@ impl Fault {
                 ..
             } => (t, joint.wrapping_sub(1), duration_s),
         }
-    }
-
-    fn active(&self, now: f64) -> bool {
-        let (t, _, d) = self.span();
-        now >= t - 1e-9 && now < t + d - 1e-9
     }
 }
 
@@ -449,8 +448,15 @@ pub struct Plant {
     /// Measured positions of the previous sample (encoder velocity).
     prev_qm: Vec<f64>,
     measured_once: bool,
-    /// The last control period passed to [`Plant::step`] (s).
-    last_ts: f64,
+    /// The control period (s) and its RK4 substeps ([`Plant::with_period`]).
+    ts: f64,
+    substeps: usize,
+    /// The faults' samples ([`FaultSchedule::for_plant`]), counted from the
+    /// path's first sample: `origin` periods after the plant was built
+    /// ([`Plant::start_path_after`]); `steps` periods have been simulated.
+    schedule: FaultSchedule,
+    steps: usize,
+    origin: usize,
     /// Per fault: an encoder glitch already happened.
     fired: Vec<bool>,
     /// The last measurement before the delay line (for frozen encoders).
@@ -458,11 +464,32 @@ pub struct Plant {
 }
 
 impl Plant {
-    /// A plant at rest at `q0`.
+    /// A plant at rest at `q0`, whose control period is one substep until
+    /// [`Self::set_period`] (or the deprecated [`Self::step`]) sets another.
+    #[deprecated(
+        note = "use Plant::with_period(robot, settings, q0, ts): the plant holds the control period, and its faults are matched to the samples of that period once"
+    )]
     pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, PlantError> {
+        let ts = settings.substep;
+        Self::with_period(robot, settings, q0, ts)
+    }
+
+    /// A plant at rest at `q0`, advanced by the control period `ts` (s) at
+    /// each [`Self::advance`]: `ts` must be a whole number of the settings'
+    /// substeps ([`PlantSettings::validate_for`]). The faults of the
+    /// settings are matched to samples of `ts` here, once
+    /// ([`FaultSchedule::for_plant`]); the path starts at once
+    /// ([`Self::start_path_after`]).
+    pub fn with_period(
+        robot: Robot,
+        settings: PlantSettings,
+        q0: &[f64],
+        ts: f64,
+    ) -> Result<Self, PlantError> {
         let n = robot.dof();
         robot.check_vector("q0", q0)?;
-        settings.validate(n)?;
+        let substeps = settings.validate_for(n, ts)?;
+        let schedule = FaultSchedule::for_plant(&settings.faults, ts);
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
         let ring_len = (settings.delay_samples + 1) * 2 * n;
@@ -488,7 +515,11 @@ impl Plant {
             ring_next: 0,
             prev_qm: z.clone(),
             measured_once: false,
-            last_ts: 0.0,
+            ts,
+            substeps,
+            schedule,
+            steps: 0,
+            origin: 0,
             fired: vec![false; n_faults],
             last_meas: vec![0.0; 2 * n],
         })
@@ -501,6 +532,45 @@ impl Plant {
     /// The plant's settings.
     pub fn settings(&self) -> &PlantSettings {
         &self.settings
+    }
+
+    /// The control period (s): how far [`Self::advance`] goes.
+    pub fn period(&self) -> f64 {
+        self.ts
+    }
+
+    /// Sets the control period to `ts` (s), a whole number of the settings'
+    /// substeps, and matches the faults to its samples again; nothing when
+    /// `ts` is the period already. Allocation-free. An error leaves the
+    /// period as it was.
+    pub fn set_period(&mut self, ts: f64) -> Result<(), PlantError> {
+        if ts.to_bits() == self.ts.to_bits() {
+            return Ok(());
+        }
+        self.substeps = substeps(ts, self.settings.substep)?;
+        self.ts = ts;
+        self.schedule.reschedule(&self.settings.faults, ts);
+        Ok(())
+    }
+
+    /// The faults' samples, counted from the path's first sample.
+    pub fn fault_schedule(&self) -> &FaultSchedule {
+        &self.schedule
+    }
+
+    /// The path — sample 0 of the faults' schedule, whose times are path
+    /// times — begins after `samples` more periods: a loop that holds the
+    /// robot at rest before the path (the adaptive controllers'
+    /// identification, [`super::RunEvents::pre_roll`]) says so before its
+    /// first sample, and no fault happens in those periods. Without it the
+    /// path begins with the plant's first period.
+    pub fn start_path_after(&mut self, samples: usize) {
+        self.origin = self.steps.saturating_add(samples);
+    }
+
+    /// The path sample of the current period, `None` before the path.
+    fn path_sample(&self) -> Option<usize> {
+        self.steps.checked_sub(self.origin)
     }
 
     /// Time constant of the smoothed Coulomb friction at rest, the shortest
@@ -589,8 +659,8 @@ impl Plant {
             let mut v = self.qd[i];
             if self.settings.velocity_from_encoder {
                 // At the first sample the robot is at rest (it starts so).
-                v = if self.measured_once && self.last_ts > 0.0 {
-                    (q - self.prev_qm[i]) / self.last_ts
+                v = if self.measured_once && self.steps > 0 {
+                    (q - self.prev_qm[i]) / self.ts
                 } else {
                     0.0
                 };
@@ -599,23 +669,27 @@ impl Plant {
             }
             x[n + i] = v;
         }
-        let now = self.t;
-        for (f, fired) in self.settings.faults.iter().zip(self.fired.iter_mut()) {
-            match *f {
-                Fault::EncoderGlitch {
-                    t,
-                    joint,
-                    offset_rad,
-                } if !*fired && now >= t - 1e-9 => {
-                    *fired = true;
-                    x[joint - 1] += offset_rad;
+        if let Some(k) = self.path_sample() {
+            let faults = self.settings.faults.iter().zip(self.fired.iter_mut());
+            for (index, (f, fired)) in faults.enumerate() {
+                let (from, to) = self.schedule.range(index).unwrap_or((usize::MAX, 0));
+                match *f {
+                    // Once, at the first measurement of its sample or after.
+                    Fault::EncoderGlitch {
+                        joint, offset_rad, ..
+                    } if !*fired && k >= from => {
+                        *fired = true;
+                        x[joint - 1] += offset_rad;
+                    }
+                    Fault::EncoderDropout { joint, .. }
+                        if self.measured_once && k >= from && k < to =>
+                    {
+                        let i = joint - 1;
+                        x[i] = self.last_meas[i];
+                        x[n + i] = self.last_meas[n + i];
+                    }
+                    _ => {}
                 }
-                Fault::EncoderDropout { joint, .. } if self.measured_once && f.active(now) => {
-                    let i = joint - 1;
-                    x[i] = self.last_meas[i];
-                    x[n + i] = self.last_meas[n + i];
-                }
-                _ => {}
             }
         }
         self.last_meas.copy_from_slice(&x[..2 * n]);
@@ -640,12 +714,22 @@ impl Plant {
         Ok(())
     }
 
-    /// Advances the plant by `ts` seconds under the constant torque `tau`
-    /// (zero-order hold), by RK4 substeps. Returns an error (and leaves the
-    /// state as it was) when the state or torque stops being finite.
-    /// `ts` must be a whole number of the settings' substeps
-    /// ([`PlantSettings::validate_for`]).
+    /// [`Self::set_period`]`(ts)` and [`Self::advance`]`(tau)`: the period
+    /// given at every call.
+    #[deprecated(
+        note = "build the plant with Plant::with_period(robot, settings, q0, ts) and call Plant::advance(tau)"
+    )]
     pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), PlantError> {
+        self.robot.check_vector("tau", tau)?;
+        self.set_period(ts)?;
+        self.advance(tau)
+    }
+
+    /// Advances the plant by one control period ([`Self::period`]) under the
+    /// constant torque `tau` (zero-order hold), by RK4 substeps. Returns an
+    /// error (and leaves the state as it was) when the state or torque stops
+    /// being finite.
+    pub fn advance(&mut self, tau: &[f64]) -> Result<(), PlantError> {
         let n = self.q.len();
         self.robot.check_vector("tau", tau)?;
         for i in 0..n {
@@ -656,17 +740,19 @@ impl Plant {
                 tau[i]
             };
         }
-        for f in &self.settings.faults {
-            if let Fault::TorqueDrop {
-                joint, fraction, ..
-            } = *f
-            {
-                if f.active(self.t) {
-                    self.tau[joint - 1] *= fraction;
+        if let Some(k) = self.path_sample() {
+            for (index, f) in self.settings.faults.iter().enumerate() {
+                if let Fault::TorqueDrop {
+                    joint, fraction, ..
+                } = *f
+                {
+                    if self.schedule.active(index, k) {
+                        self.tau[joint - 1] *= fraction;
+                    }
                 }
             }
         }
-        let steps = substeps(ts, self.settings.substep)?;
+        let (steps, ts) = (self.substeps, self.ts);
         let h = ts / steps as f64;
         self.backup[..n].copy_from_slice(&self.q);
         self.backup[n..].copy_from_slice(&self.qd);
@@ -677,7 +763,7 @@ impl Plant {
             return r;
         }
         self.t += ts;
-        self.last_ts = ts;
+        self.steps += 1;
         Ok(())
     }
 
@@ -747,13 +833,13 @@ mod tests {
         let expect = (0..6)
             .map(|i| h[(i, i)] * 1e-3 / 1.0)
             .fold(f64::INFINITY, f64::min);
-        let mut p = Plant::new(robot.clone(), settings.clone(), &q0).unwrap();
+        let mut p = Plant::with_period(robot.clone(), settings.clone(), &q0, 0.01).unwrap();
         let tau_c = p.coulomb_time_constant().unwrap().unwrap();
         assert!(
             (tau_c - expect).abs() <= 1e-12 * expect,
             "{tau_c} vs {expect}"
         );
-        let none = Plant::new(robot.clone(), PlantSettings::default(), &q0)
+        let none = Plant::with_period(robot.clone(), PlantSettings::default(), &q0, 0.01)
             .unwrap()
             .coulomb_time_constant()
             .unwrap();
@@ -769,11 +855,11 @@ mod tests {
                 substep,
                 ..settings.clone()
             };
-            let mut p = Plant::new(robot.clone(), s, &q0).unwrap();
+            let mut p = Plant::with_period(robot.clone(), s, &q0, 0.01).unwrap();
             let mut tau = g.clone();
             tau[5] += 0.9;
             for _ in 0..5 {
-                p.step(&tau, 0.01).unwrap();
+                p.advance(&tau).unwrap();
             }
             p.qd()[5]
         };
@@ -800,9 +886,9 @@ mod tests {
             .iter()
             .copied()
             .collect();
-        let mut p = Plant::new(robot, PlantSettings::default(), &q0).unwrap();
+        let mut p = Plant::with_period(robot, PlantSettings::default(), &q0, 0.01).unwrap();
         for _ in 0..100 {
-            p.step(&g, 0.01).unwrap();
+            p.advance(&g).unwrap();
         }
         let drift = p
             .q()
@@ -821,18 +907,19 @@ mod tests {
             kinetic_energy(p.robot(), &mut ws, p.q(), p.qd()).unwrap()
                 + potential_energy(p.robot(), &mut ws, p.q()).unwrap()
         };
-        let mut free = Plant::new(Robot::irb140(), PlantSettings::default(), &q0).unwrap();
+        let mut free =
+            Plant::with_period(Robot::irb140(), PlantSettings::default(), &q0, 0.01).unwrap();
         let settings = PlantSettings {
             viscous_friction: vec![2.0],
             coulomb_friction: vec![1.0],
             ..Default::default()
         };
-        let mut damped = Plant::new(Robot::irb140(), settings, &q0).unwrap();
+        let mut damped = Plant::with_period(Robot::irb140(), settings, &q0, 0.01).unwrap();
         let e0 = energy(&free);
         let zero = [0.0; 6];
         for _ in 0..100 {
-            free.step(&zero, 0.01).unwrap();
-            damped.step(&zero, 0.01).unwrap();
+            free.advance(&zero).unwrap();
+            damped.advance(&zero).unwrap();
         }
         let (e_free, e_damped) = (energy(&free), energy(&damped));
         assert!(
@@ -854,8 +941,8 @@ mod tests {
             position_noise: 1e-3,
             ..Default::default()
         };
-        let mut p = Plant::new(Robot::irb140(), s, &q0).unwrap();
-        p.step(&[1e4, -1e4, 0.0, 0.0, 0.0, 100.0], 0.01).unwrap();
+        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
+        p.advance(&[1e4, -1e4, 0.0, 0.0, 0.0, 100.0]).unwrap();
         assert_eq!(p.applied_torque()[0], 290.0);
         assert_eq!(p.applied_torque()[1], -500.0);
         assert_eq!(p.applied_torque()[5], 16.0);
@@ -865,7 +952,7 @@ mod tests {
         for v in &x[..6] {
             assert!(((v / res).round() * res - v).abs() < 1e-12, "quantized");
         }
-        assert!(p.step(&[f64::NAN; 6], 0.01).is_err());
+        assert!(p.advance(&[f64::NAN; 6]).is_err());
         // A measurement buffer of another length is an error, not a panic.
         let mut short = [0.0; 11];
         assert!(matches!(
@@ -891,7 +978,7 @@ mod tests {
             velocity_from_encoder: true,
             ..Default::default()
         };
-        let mut p = Plant::new(Robot::irb140(), s, &q0).unwrap();
+        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
         let mut truth: Vec<Vec<f64>> = Vec::new();
         let mut x = [0.0; 12];
         for k in 0..6usize {
@@ -910,7 +997,7 @@ mod tests {
                 };
                 assert!((x[6 + i] - v).abs() < 1e-12, "k = {k}, joint {i}");
             }
-            p.step(&[0.0; 6], 0.01).unwrap();
+            p.advance(&[0.0; 6]).unwrap();
         }
         assert!(PlantSettings {
             delay_samples: MAX_DELAY_SAMPLES + 1,
@@ -918,5 +1005,34 @@ mod tests {
         }
         .validate(6)
         .is_err());
+    }
+
+    /// The deprecated `new` + `step(tau, ts)` is `with_period` + `advance`:
+    /// the same states bit for bit, the faults matched to the same samples.
+    #[test]
+    #[allow(deprecated)]
+    fn the_deprecated_step_is_advance_at_its_period() {
+        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
+        let s = PlantSettings {
+            faults: vec![Fault::TorqueDrop {
+                t: 0.05,
+                joint: 2,
+                fraction: 0.0,
+                duration_s: 0.03,
+            }],
+            ..Default::default()
+        };
+        let mut old = Plant::new(Robot::irb140(), s.clone(), &q0).unwrap();
+        let mut new = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        for _ in 0..20 {
+            old.step(&[1.0; 6], 0.01).unwrap();
+            new.advance(&[1.0; 6]).unwrap();
+            assert_eq!(bits(old.applied_torque()), bits(new.applied_torque()));
+        }
+        assert_eq!(bits(old.q()), bits(new.q()));
+        assert_eq!(bits(old.qd()), bits(new.qd()));
+        assert_eq!(old.fault_schedule(), new.fault_schedule());
+        assert_eq!(new.fault_schedule().range(0), Some((5, 8)));
     }
 }

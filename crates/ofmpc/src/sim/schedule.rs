@@ -1,13 +1,15 @@
 //! Events of a run at path times, matched to control samples by one rule.
 //!
 //! A scenario gives times in seconds; the loop runs on sample indices
-//! `k` (`t_k = k·Ts`). Every timed event of the loop — a lost measurement,
-//! the payload pick-up — is converted once, when the loop is set up, by
+//! `k` (`t_k = k·Ts`, `k = 0` the path's first sample). Every timed event of
+//! the loop — a lost measurement, a fault of the plant ([`FaultSchedule`]),
+//! the payload pick-up — is converted once, when its stage is built, by
 //! [`sample_at`]: the event belongs to the first sample at or after its time,
 //! with a tolerance of `10⁻⁹·Ts` for times that are whole multiples of `Ts`
 //! up to rounding (`0.1 + 0.2` s at `Ts = 0.1` s is sample 3).
 
 use super::conditions::MeasurementFaults;
+use super::plant::Fault;
 
 /// Relative tolerance (of `Ts`) when a time is matched to a sample.
 pub const TIME_MATCH_TOLERANCE: f64 = 1e-9;
@@ -46,24 +48,38 @@ pub fn sample_at(t: f64, ts: f64) -> usize {
     k
 }
 
-/// The samples whose measurement is lost, as half-open index ranges
-/// `[from, to)`: a NaN at `t` is the one sample [`sample_at`]`(t)`, a
-/// dropout `[a, b)` is the samples `[sample_at(a), sample_at(b))`.
-/// Built before the loop (allocates); [`Self::lost`] allocates nothing.
+/// The one schedule of a run's faults: each fault, given at a path time
+/// (and a duration), as the half-open range of samples `[from, to)` it
+/// covers, matched by [`sample_at`] once, when the stage that applies it is
+/// built. Both kinds of fault use it: the measurement faults of a scenario's
+/// `[faults]` ([`Self::new`], the [`super::Sensor`]'s lost samples) and the
+/// plant's own faults of `[plant] faults` ([`Self::for_plant`], applied by
+/// the [`super::Plant`]), so that a fault at `t` hits the same path sample
+/// whichever stage applies it, with or without a pre-roll before the path.
+///
+/// Built before the loop (allocates); the queries allocate nothing.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct LossSchedule {
+pub struct FaultSchedule {
     ranges: Vec<(usize, usize)>,
 }
 
-impl LossSchedule {
-    /// The schedule of `faults` at the control period `ts` (the faults are
-    /// checked by [`super::RunConditions::validate`]).
+/// The measurement faults' [`FaultSchedule`] (its former name, kept).
+pub type LossSchedule = FaultSchedule;
+
+/// The samples a fault at `t` covers when it lasts one sample:
+/// `[sample_at(t), sample_at(t + ts))` (`t_k < t + ts − ε`).
+fn one_sample(t: f64, ts: f64) -> (usize, usize) {
+    (sample_at(t, ts), sample_at(t + ts, ts))
+}
+
+impl FaultSchedule {
+    /// The schedule of the measurement faults `faults` at the control period
+    /// `ts` (the faults are checked by [`super::RunConditions::validate`]):
+    /// a NaN at `t` is the one sample [`sample_at`]`(t)`, a dropout `[a, b)`
+    /// is the samples `[sample_at(a), sample_at(b))`. [`Self::lost`] tells
+    /// whether a sample is lost.
     pub fn new(faults: &MeasurementFaults, ts: f64) -> Self {
-        let nan = faults.nan_at_s.iter().map(|&t| {
-            let from = sample_at(t, ts);
-            // `t_k < t + ts − ε`: the end is matched from `t + ts`.
-            (from, sample_at(t + ts, ts))
-        });
+        let nan = faults.nan_at_s.iter().map(|&t| one_sample(t, ts));
         let dropout = faults
             .dropout_s
             .iter()
@@ -75,14 +91,51 @@ impl LossSchedule {
         }
     }
 
-    /// No loss was asked for.
+    /// The schedule of the plant's faults at the control period `ts`, one
+    /// range per fault in their order (checked by
+    /// [`super::PlantSettings::validate`]): an encoder glitch at `t` is the
+    /// one sample [`sample_at`]`(t)` (as a NaN of [`Self::new`]), a fault
+    /// lasting `d` covers `[sample_at(t), sample_at(t + d))` (as a dropout).
+    pub fn for_plant(faults: &[Fault], ts: f64) -> Self {
+        let mut s = Self {
+            ranges: vec![(0, 0); faults.len()],
+        };
+        s.reschedule(faults, ts);
+        s
+    }
+
+    /// [`Self::for_plant`] again at another period, in place (the same
+    /// faults: allocates nothing).
+    pub(crate) fn reschedule(&mut self, faults: &[Fault], ts: f64) {
+        for (r, f) in self.ranges.iter_mut().zip(faults) {
+            let (t, _, d) = f.span();
+            *r = match f {
+                Fault::EncoderGlitch { .. } => one_sample(t, ts),
+                _ => (sample_at(t, ts), sample_at(t + d, ts)),
+            };
+        }
+    }
+
+    /// No fault is scheduled.
     pub fn is_empty(&self) -> bool {
         self.ranges.is_empty()
     }
 
-    /// Whether the measurement of sample `k` is lost.
+    /// Whether any fault covers sample `k`: for the measurement faults
+    /// ([`Self::new`]), whether the measurement of sample `k` is lost.
     pub fn lost(&self, k: usize) -> bool {
         self.ranges.iter().any(|&(a, b)| k >= a && k < b)
+    }
+
+    /// The samples `[from, to)` of fault `index` (in the order the faults
+    /// were given); `None` past the last fault.
+    pub fn range(&self, index: usize) -> Option<(usize, usize)> {
+        self.ranges.get(index).copied()
+    }
+
+    /// Whether fault `index` covers sample `k`.
+    pub fn active(&self, index: usize, k: usize) -> bool {
+        self.range(index).is_some_and(|(a, b)| k >= a && k < b)
     }
 }
 
@@ -130,6 +183,58 @@ mod tests {
                     faults.lost_at(k as f64 * ts, ts),
                     "k = {k}, ts = {ts}"
                 );
+            }
+        }
+    }
+
+    /// The plant's faults are scheduled by the measurement faults' rule: a
+    /// glitch as a NaN at its time, a fault with a duration as a dropout
+    /// over it (brute force: the per-sample comparison of
+    /// [`MeasurementFaults::lost_at`]).
+    #[test]
+    fn plant_faults_follow_the_measurement_faults_rule() {
+        for &ts in &[1e-3, 0.01, 0.1] {
+            for &(t, d) in &[
+                (0.0, 0.0),
+                (0.3, 0.05),
+                (1.0 / 3.0, 0.1),
+                (2.0, 0.5),
+                (1.203, 0.0),
+            ] {
+                let faults = [
+                    Fault::EncoderGlitch {
+                        t,
+                        joint: 1,
+                        offset_rad: 0.01,
+                    },
+                    Fault::EncoderDropout {
+                        t,
+                        joint: 2,
+                        duration_s: d,
+                    },
+                    Fault::TorqueDrop {
+                        t,
+                        joint: 3,
+                        fraction: 0.5,
+                        duration_s: d,
+                    },
+                ];
+                let s = FaultSchedule::for_plant(&faults, ts);
+                let nan = MeasurementFaults {
+                    nan_at_s: vec![t],
+                    dropout_s: Vec::new(),
+                };
+                let dropout = MeasurementFaults {
+                    nan_at_s: Vec::new(),
+                    dropout_s: vec![[t, t + d]],
+                };
+                for k in 0..3000 {
+                    let tk = k as f64 * ts;
+                    assert_eq!(s.active(0, k), nan.lost_at(tk, ts), "glitch k = {k}");
+                    assert_eq!(s.active(1, k), dropout.lost_at(tk, ts), "k = {k}");
+                    assert_eq!(s.active(2, k), dropout.lost_at(tk, ts), "k = {k}");
+                }
+                assert!(!s.active(3, 0));
             }
         }
     }

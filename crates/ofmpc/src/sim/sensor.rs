@@ -22,14 +22,15 @@ pub struct Sensor {
 }
 
 impl Sensor {
-    /// A sensor for `n` joints whose readings are `delay_samples` old (the
-    /// guard's prediction uses the torque of that sample), losing the
-    /// samples of `lost`. Starts at rest at zero; call [`Self::reset`] with
-    /// the first reading.
-    pub fn new(n: usize, delay_samples: usize, lost: LossSchedule) -> Self {
+    /// A sensor for `n` joints read once per control period `ts` (s), whose
+    /// readings are `delay_samples` old (the guard's prediction uses the
+    /// torque of that sample), losing the samples of `lost` (scheduled at
+    /// `ts`). Starts at rest at zero; call [`Self::reset`] with the first
+    /// reading.
+    pub fn new(n: usize, delay_samples: usize, lost: LossSchedule, ts: f64) -> Self {
         let track = !lost.is_empty();
         Self {
-            guard: MeasurementGuard::new(&vec![0.0; 2 * n], delay_samples, track),
+            guard: MeasurementGuard::new(&vec![0.0; 2 * n], delay_samples, track, ts),
             lost,
         }
     }
@@ -66,8 +67,8 @@ impl Sensor {
 
     /// Replaces the non-finite entries of `x` by the model's prediction
     /// ([`MeasurementGuard::check`]); returns whether it did (a fault).
-    pub fn repair(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64], ts: f64) -> bool {
-        self.guard.check(model, x, ts)
+    pub fn repair(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64]) -> bool {
+        self.guard.check(model, x)
     }
 
     /// The torque commanded at the current sample (n values), for the

@@ -177,6 +177,8 @@ impl fmt::Display for StopReason {
 #[derive(Debug, Clone)]
 pub struct Plausibility {
     n: usize,
+    /// The control period (s).
+    ts: f64,
     vmax: Vec<f64>,
     q_a: Vec<f64>,
     v_a: Vec<f64>,
@@ -193,11 +195,12 @@ pub struct Plausibility {
 impl Plausibility {
     /// A check for joints with these speed limits (`vmax`, n values; an
     /// infinite limit turns the check off for that joint), starting from
-    /// the accepted state `x0` (2n).
-    pub fn new(vmax: &[f64], x0: &[f64]) -> Self {
+    /// the accepted state `x0` (2n), one reading per control period `ts` (s).
+    pub fn new(vmax: &[f64], x0: &[f64], ts: f64) -> Self {
         let n = vmax.len();
         Self {
             n,
+            ts,
             vmax: vmax.to_vec(),
             q_a: x0[..n].to_vec(),
             v_a: x0[n..2 * n].to_vec(),
@@ -228,8 +231,8 @@ impl Plausibility {
 
     /// Checks `x` (2n), replaces rejected values by their predictions, and
     /// says when the measurement cannot be trusted any more.
-    pub fn check(&mut self, x: &mut [f64], ts: f64) -> Option<StopReason> {
-        let n = self.n;
+    pub fn check(&mut self, x: &mut [f64]) -> Option<StopReason> {
+        let (n, ts) = (self.n, self.ts);
         let mut reason = None;
         for i in 0..n {
             let (raw_q, raw_v) = (x[i], x[n + i]);
@@ -314,6 +317,8 @@ impl Plausibility {
 #[derive(Debug, Clone)]
 pub struct MeasurementGuard {
     n: usize,
+    /// The control period (s).
+    ts: f64,
     delay: usize,
     lin: LinearLikeModel,
     /// The last state handed on (2n).
@@ -337,11 +342,13 @@ const DISTURBANCE_GAIN: f64 = 0.3;
 impl MeasurementGuard {
     /// A guard for a robot at rest at `x0` (2n: the prior for a first
     /// measurement that is already invalid), measurements `delay` samples
-    /// old; `track`: measurements can be lost (learn the disturbance).
-    pub fn new(x0: &[f64], delay: usize, track: bool) -> Self {
+    /// old, one per control period `ts` (s); `track`: measurements can be
+    /// lost (learn the disturbance).
+    pub fn new(x0: &[f64], delay: usize, track: bool, ts: f64) -> Self {
         let n = x0.len() / 2;
         Self {
             n,
+            ts,
             delay,
             lin: LinearLikeModel::new(n),
             x_prev: x0.to_vec(),
@@ -367,8 +374,8 @@ impl MeasurementGuard {
 
     /// Replaces the non-finite entries of `x` (2n) by the prediction (both
     /// position and velocity of such a joint); returns whether it did.
-    pub fn check(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64], ts: f64) -> bool {
-        let n = self.n;
+    pub fn check(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64]) -> bool {
+        let (n, ts) = (self.n, self.ts);
         let bad = |i: usize, x: &[f64]| !(x[i].is_finite() && x[n + i].is_finite());
         let invalid = (0..n).any(|i| bad(i, x));
         if !invalid && !self.track {
@@ -451,6 +458,8 @@ fn model_accel(
 #[derive(Debug, Clone)]
 pub struct SafeStop {
     n: usize,
+    /// The control period (s).
+    ts: f64,
     tau_max: Vec<f64>,
     model: LinearLikeModel,
     q: Vec<f64>,
@@ -469,11 +478,13 @@ pub struct SafeStop {
 }
 
 impl SafeStop {
-    /// A stop law for drives with these torque limits (n of them).
-    pub fn new(tau_max: &[f64]) -> Self {
+    /// A stop law for drives with these torque limits (n of them), one
+    /// torque per control period `ts` (s).
+    pub fn new(tau_max: &[f64], ts: f64) -> Self {
         let n = tau_max.len();
         Self {
             n,
+            ts,
             tau_max: tau_max.to_vec(),
             model: LinearLikeModel::new(n),
             q: vec![0.0; n],
@@ -499,9 +510,8 @@ impl SafeStop {
         x: &[f64],
         frozen: Option<(usize, &[f64], &[f64])>,
         model: &mut dyn JointSpaceDynamics,
-        ts: f64,
     ) {
-        let n = self.n;
+        let (n, ts) = (self.n, self.ts);
         self.q.copy_from_slice(&x[..n]);
         self.v.copy_from_slice(&x[n..2 * n]);
         self.a.fill(0.0);
@@ -539,10 +549,9 @@ impl SafeStop {
         model: &mut dyn JointSpaceDynamics,
         raw: &[f64],
         x: &[f64],
-        ts: f64,
         tau: &mut [f64],
     ) -> Result<(), StepError> {
-        let n = self.n;
+        let (n, ts) = (self.n, self.ts);
         if self.dead_reckoned.iter().any(|d| *d) {
             // The acceleration the last torque gave, by the model.
             model_accel(
@@ -667,6 +676,9 @@ pub struct Inspection {
 pub struct Supervisor {
     settings: SupervisorSettings,
     n: usize,
+    /// The control period (s); NaN when unknown (the deprecated
+    /// [`Supervisor::new`]).
+    ts: f64,
     check: Option<Plausibility>,
     law: Option<SafeStop>,
     stop: Option<Stopping>,
@@ -691,23 +703,26 @@ impl Supervisor {
     /// (`2M` samples, `M = round(`[`GROWTH_WINDOW_S`]`/ts)`; a `ts` that is
     /// not finite and positive gives `M = 1`). The one constructor that
     /// judges every [`DivergenceRule`] in full.
+    /// Its plausibility check, stop law and time of rest use `ts` too: the
+    /// period is given here, once.
     pub fn with_period(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
-        let mut s = Self::without_period(robot, settings);
+        let mut s = Self::build(robot, settings, ts);
         s.size_history(ts);
         s
     }
 
     /// A supervisor without the control period: its growth rule judges only
     /// the position limits and the ceiling ([`Self::with_period`] judges the
-    /// growth too).
+    /// growth too), and it neither checks plausibility nor stops (both need
+    /// the period) until [`Self::sized_for`] gives it.
     #[deprecated(
         note = "use Supervisor::with_period(robot, settings, ts): without the control period the growth rule judges only the limits and the ceiling"
     )]
     pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
-        Self::without_period(robot, settings)
+        Self::build(robot, settings, f64::NAN)
     }
 
-    fn without_period(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
+    fn build(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
         let n = robot.dof();
         let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
         let tau_max: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
@@ -715,11 +730,12 @@ impl Supervisor {
         Self {
             settings,
             n,
+            ts,
             check: settings
                 .plausibility_check
-                .then(|| Plausibility::new(&vmax, &zero)),
+                .then(|| Plausibility::new(&vmax, &zero, ts)),
             law: (settings.safe_stop || settings.max_joint_error_rad.is_some())
-                .then(|| SafeStop::new(&tau_max)),
+                .then(|| SafeStop::new(&tau_max, ts)),
             stop: None,
             lower: robot.lower_limits(),
             upper: robot.upper_limits(),
@@ -731,11 +747,25 @@ impl Supervisor {
         }
     }
 
-    /// Sizes the growth rule's history for the control period `ts` (s).
+    /// Gives the control period `ts` (s): sizes the growth rule's history,
+    /// and the plausibility check and the stop law run at it.
     #[deprecated(note = "use Supervisor::with_period(robot, settings, ts)")]
     pub fn sized_for(mut self, ts: f64) -> Self {
+        self.ts = ts;
+        if let Some(c) = self.check.as_mut() {
+            c.ts = ts;
+        }
+        if let Some(l) = self.law.as_mut() {
+            l.ts = ts;
+        }
         self.size_history(ts);
         self
+    }
+
+    /// The control period (s); NaN when it was not given (the deprecated
+    /// [`Self::new`]).
+    pub fn period(&self) -> f64 {
+        self.ts
     }
 
     fn size_history(&mut self, ts: f64) {
@@ -772,13 +802,14 @@ impl Supervisor {
     /// `w` (n): the plausibility check (not during a stop: the stop law
     /// judges the encoders itself), then the safety limit on the joint
     /// error. Rejected values of `x` are replaced by their predictions.
-    pub fn inspect(&mut self, x: &mut [f64], w: &[f64], ts: f64) -> Inspection {
+    pub fn inspect(&mut self, x: &mut [f64], w: &[f64]) -> Inspection {
         let n = self.n;
         let mut rejected = false;
         let mut trigger = None;
-        if let Some(c) = self.check.as_mut().filter(|_| self.stop.is_none()) {
+        let known = self.ts.is_finite();
+        if let Some(c) = self.check.as_mut().filter(|_| self.stop.is_none() && known) {
             let before = c.rejections;
-            trigger = c.check(x, ts);
+            trigger = c.check(x);
             rejected = c.rejections > before;
         }
         if let (None, None, Some(limit)) = (&self.stop, &trigger, self.settings.max_joint_error_rad)
@@ -802,9 +833,10 @@ impl Supervisor {
         self.stop.as_ref()
     }
 
-    /// Whether a stop can be made (the settings ask for the stop law).
+    /// Whether a stop can be made (the settings ask for the stop law, and
+    /// the period is known).
     pub fn can_stop(&self) -> bool {
-        self.law.is_some()
+        self.law.is_some() && self.ts.is_finite()
     }
 
     /// Begins a safe stop at `t` for `reason` from the state `from` (2n);
@@ -817,10 +849,9 @@ impl Supervisor {
         reason: StopReason,
         from: &[f64],
         model: &mut dyn JointSpaceDynamics,
-        ts: f64,
     ) -> bool {
         let n = self.n;
-        let (None, Some(law)) = (&self.stop, self.law.as_mut()) else {
+        let (None, Some(law), true) = (&self.stop, self.law.as_mut(), self.ts.is_finite()) else {
             return false;
         };
         let frozen = match reason {
@@ -829,7 +860,7 @@ impl Supervisor {
             }
             _ => None,
         };
-        law.begin(from, frozen, model, ts);
+        law.begin(from, frozen, model);
         self.stop = Some(Stopping {
             t,
             reason,
@@ -847,11 +878,10 @@ impl Supervisor {
         model: &mut dyn JointSpaceDynamics,
         raw: &[f64],
         x: &[f64],
-        ts: f64,
         tau: &mut [f64],
     ) -> Result<(), StepError> {
         match self.law.as_mut() {
-            Some(law) => law.step(model, raw, x, ts, tau),
+            Some(law) => law.step(model, raw, x, tau),
             None => Err(StepError::Internal("stop torque without a stop law")),
         }
     }
@@ -864,12 +894,12 @@ impl Supervisor {
         self.tau_hist[last..].copy_from_slice(tau);
     }
 
-    /// Watches the robot (true `q`, `q̇`) after the period `[t, t + ts)`
+    /// Watches the robot (true `q`, `q̇`) after the period `[t, t + Ts)`
     /// during a stop: when it comes to rest, whether it stays in its limits.
-    pub fn watch(&mut self, q: &[f64], qd: &[f64], t: f64, ts: f64) {
+    pub fn watch(&mut self, q: &[f64], qd: &[f64], t: f64) {
         if let Some(s) = self.stop.as_mut() {
             if qd.iter().any(|v| v.abs() >= REST_SPEED) {
-                s.moving_until = t + ts;
+                s.moving_until = t + self.ts;
             }
             if (0..self.n).any(|i| q[i] < self.lower[i] || q[i] > self.upper[i]) {
                 s.within_limits = false;
