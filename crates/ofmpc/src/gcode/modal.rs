@@ -1,6 +1,7 @@
 //! The modal codes CAM output uses beyond the basic ones (LinuxCNC's G-code reference):
 //! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43 H (tool
-//! table)/G43.1/G49 tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
+//! table)/G43.1/G49 tool length (the points are the tip's; a change of length moves the
+//! current point along the tool axis; the planner extends the TCP), G90.1 absolute arc centres, G93/G95
 //! feed modes, polar `@ ^`, the canned cycles G73 G74 G81 G82 G83 G84 G85 G86 G89 with G98/G99
 //! and L in G17, G18 and G19,
 //! and G64 Q (collinear moves within Q merged, LinuxCNC's naive-CAM detector).
@@ -62,7 +63,8 @@ impl Interpreter {
     /// zero on a G53 line.
     pub(super) fn work(&self) -> [f64; 3] {
         if self.ext.machine {
-            return [0.0; 3];
+            let t = self.tip_offset();
+            return [t.x, t.y, t.z];
         }
         let o = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
         [0, 1, 2].map(|a| o[a] + self.ext.g92[a])
@@ -71,7 +73,22 @@ impl Interpreter {
     /// Where the tool is, for commands that need it before any motion: the position, else
     /// the tool position before the program, else machine zero.
     pub(super) fn here(&self) -> Vector3<f64> {
-        self.pos.or(self.initial).unwrap_or_else(Vector3::zeros)
+        self.pos
+            .or(self.initial_tip())
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// The tip's position before the program: the options' start (the controlled point,
+    /// with no tool length) plus the tool length in force along the tool axis.
+    pub(super) fn initial_tip(&self) -> Option<Vector3<f64>> {
+        self.initial.map(|p| p + self.tool_length * self.tool_axis)
+    }
+
+    /// The offset (m) from a controlled point (machine coordinates: G53, G28/G30 stored
+    /// positions) to the tip: the tool length along the tool axis (LinuxCNC's find_ends
+    /// and find_relative subtract the tool offset from machine coordinates).
+    pub(super) fn tip_offset(&self) -> Vector3<f64> {
+        self.tool_length * self.tool_axis
     }
 
     /// G92 (920), G92.1, G92.2, G92.3, G52 (520).
@@ -126,11 +143,11 @@ impl Interpreter {
     ) -> Result<(), GcodeError> {
         let k = usize::from(code >= 300);
         if code % 10 == 1 {
-            self.ext.home[k] = Some(self.here());
+            self.ext.home[k] = Some(self.here() - self.tip_offset());
             return Ok(());
         }
         if self.pos.is_none() {
-            match self.initial {
+            match self.initial_tip() {
                 Some(p0) => self.begin_at(p0, line),
                 None => {
                     return Err(err(
@@ -147,7 +164,8 @@ impl Interpreter {
         let pos = self.here();
         let stored = self.ext.home[k]
             .or(self.initial)
-            .unwrap_or_else(Vector3::zeros);
+            .unwrap_or_else(Vector3::zeros)
+            + self.tip_offset();
         let given: Vec<usize> = ['X', 'Y', 'Z']
             .iter()
             .enumerate()
@@ -177,7 +195,7 @@ impl Interpreter {
         code: u16,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
-        self.tool_length = match (code, args.get('Z')) {
+        let length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
             (430, _) => {
                 let (n, at) = match args.get('H') {
@@ -228,6 +246,16 @@ impl Interpreter {
             }
             _ => 0.0,
         };
+        // No axis moves, so the tip's current point moves with the length (LinuxCNC's
+        // convert_tool_length_offset: current_z += old − new, the tool along −Z).
+        let delta = length - self.tool_length;
+        if delta != 0.0 {
+            if let Some(p) = self.pos.as_mut() {
+                *p += delta * self.tool_axis;
+            }
+            self.ext.merged.clear();
+        }
+        self.tool_length = length;
         Ok(())
     }
 
@@ -261,6 +289,7 @@ impl Interpreter {
                 feed,
                 mode: self.mode,
             },
+            tool_length: self.tool_length,
         });
     }
 
@@ -292,7 +321,10 @@ impl Interpreter {
         else {
             return false;
         };
-        if *f0 != feed || *m0 != mode {
+        if *f0 != feed
+            || *m0 != mode
+            || self.moves.last().map(|m| m.tool_length) != Some(self.tool_length)
+        {
             return false;
         }
         let s = match self.moves.last() {
@@ -408,7 +440,7 @@ impl Interpreter {
         }
         self.check_tapping_spindle(line, w_col, line_text, n)?;
         let repeats = cycle_repeats(line, args)?;
-        let Some(mut p) = self.pos.or(self.initial) else {
+        let Some(mut p) = self.pos.or(self.initial_tip()) else {
             return fail(
                 StartPoint,
                 format!("{code} before the start point is known"),
@@ -560,6 +592,7 @@ impl Interpreter {
             self.moves.push(Move {
                 line,
                 kind: MoveKind::Dwell { seconds },
+                tool_length: self.tool_length,
             });
         }
     }
