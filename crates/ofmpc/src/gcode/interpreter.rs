@@ -925,7 +925,7 @@ impl Interpreter {
         };
         let segment = match mode {
             Motion::Rapid | Motion::Linear | Motion::Cycle(_) => {
-                if (target - pos).norm() <= MIN_MOVE_LENGTH {
+                if (target - pos).norm() <= MIN_MOVE_LENGTH && self.ext.machine_at.is_none() {
                     self.warn(line, col, "zero-length move skipped");
                     return Ok(());
                 }
@@ -934,6 +934,10 @@ impl Interpreter {
             }
             Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
+        if let Some(m) = self.ext.machine_at {
+            // After G74/G84 in G18/G19 the tool is elsewhere: a straight move to the arc.
+            self.push_line(line, m, pos, true);
+        }
         let feed = self.move_feed(false, segment.length());
         self.ext.merged.clear();
         self.pos = Some(segment.end());

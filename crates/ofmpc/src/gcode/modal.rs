@@ -56,6 +56,11 @@ pub(super) struct Extra {
     /// Tool selected by T and the tool in the spindle (M6, M61 Q).
     pub(super) tool_selected: f64,
     pub(super) tool_current: f64,
+    /// Where the tool is when it is not at the current point `pos` (after G74/G84 in
+    /// G18/G19, see `tap_point`): the next move starts there.
+    pub(super) machine_at: Option<Vector3<f64>>,
+    /// The warning on G74/G84 in G18/G19 was given.
+    pub(super) warned_tap: bool,
 }
 
 impl Interpreter {
@@ -273,6 +278,7 @@ impl Interpreter {
     /// Appends a straight move from `a` to `b` (skipped if zero-length); G64 Q merges it
     /// with the last one where the points stay within Q of one line.
     pub(super) fn push_line(&mut self, line: usize, a: Vector3<f64>, b: Vector3<f64>, rapid: bool) {
+        let a = self.ext.machine_at.take().unwrap_or(a);
         self.pos = Some(b);
         if (b - a).norm() <= MIN_MOVE_LENGTH {
             return;
@@ -496,8 +502,10 @@ impl Interpreter {
             self.drill(line, n, &hole, q * scale, dwell);
             let mut end = xy;
             end[d] = clear;
-            let here = self.here();
-            self.push_line(line, here, end, true);
+            if self.ext.machine_at.is_none() {
+                let here = self.here();
+                self.push_line(line, here, end, true);
+            }
             p = end;
         }
         Ok(())
@@ -566,13 +574,22 @@ impl Interpreter {
                 // LinuxCNC's convert_cycle_g74_g84: feed in, stop and reverse the spindle,
                 // dwell, feed out to the clear plane, stop and restore the spindle.
                 let (reverse, forward) = if n == 84 { ("M4", "M3") } else { ("M3", "M4") };
-                self.push_line(line, top, at(bottom), false);
+                let (down, up) = (
+                    self.tap_point(line, n, at(bottom)),
+                    self.tap_point(line, n, at(hole.clear)),
+                );
+                self.push_line(line, top, down, false);
                 self.spindle_event(line, "M5");
                 self.spindle_event(line, reverse);
                 self.push_dwell(line, dwell);
-                self.push_line(line, at(bottom), at(hole.clear), false);
+                self.push_line(line, down, up, false);
                 self.spindle_event(line, "M5");
                 self.spindle_event(line, forward);
+                if up != at(hole.clear) {
+                    // The interpreter's point is the hole's clear point; the tool is at `up`.
+                    self.pos = Some(at(hole.clear));
+                    self.ext.machine_at = Some(up);
+                }
             }
             _ => {
                 self.push_line(line, top, at(bottom), false);
@@ -615,6 +632,40 @@ struct Hole {
     axis: usize,
     bottom: f64,
     clear: f64,
+}
+
+impl Interpreter {
+    /// The point G74/G84 feeds to for the hole point `c` (machine coordinates): `c` in G17;
+    /// in G18 and G19 the point LinuxCNC's interpreter outputs, whose
+    /// `convert_cycle_g74_g84` passes the plane's already permuted coordinates to
+    /// `cycle_feed`, which permutes them again (interp_cycles.cc): with `c = (x, y, z)` in
+    /// program coordinates, G18 feeds to `(y, z, x)` and G19 to `(z, x, y)`. Warns once.
+    fn tap_point(&mut self, line: usize, n: u8, c: Vector3<f64>) -> Vector3<f64> {
+        let w = Vector3::from(self.work());
+        let p = c - w;
+        let q = match self.plane {
+            Plane::XY => return c,
+            Plane::ZX => Vector3::new(p.y, p.z, p.x),
+            Plane::YZ => Vector3::new(p.z, p.x, p.y),
+        };
+        if !self.ext.warned_tap {
+            self.ext.warned_tap = true;
+            let (x, y, z) = if self.plane == Plane::ZX {
+                ("the bottom", "the hole's Z", "the hole's X")
+            } else {
+                ("the hole's Z", "the bottom", "the hole's Y")
+            };
+            self.warn(
+                line,
+                1,
+                format!(
+                    "G{n} in {}: the tap point follows LinuxCNC's interpreter, which feeds to X = {x}, Y = {y}, Z = {z} (its axes permuted twice), not into the hole",
+                    self.plane.gcode()
+                ),
+            );
+        }
+        q + w
+    }
 }
 
 /// The L word of a canned cycle (repeats; default 1).
