@@ -294,7 +294,10 @@ fn tapping_in_g18_and_g19_goes_where_linuxcnc_sends_it() {
         }
     }
     // In G17 the tap goes into the hole, without a warning.
-    assert_eq!(tap_warnings(&ok("M3 S1\nG0 X0 Y0 Z10\nG84 X1 Y1 R2 Z-3 F60\n")), 0);
+    assert_eq!(
+        tap_warnings(&ok("M3 S1\nG0 X0 Y0 Z10\nG84 X1 Y1 R2 Z-3 F60\n")),
+        0
+    );
 }
 
 #[test]

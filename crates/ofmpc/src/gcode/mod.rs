@@ -56,6 +56,7 @@
 mod arcs;
 mod codes;
 mod expr;
+mod fanuc;
 mod flow;
 mod frames;
 mod interpreter;
