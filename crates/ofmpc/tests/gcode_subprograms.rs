@@ -19,6 +19,18 @@ fn m98_calls_the_numbered_subprogram_l_times() {
 }
 
 #[test]
+fn incremental_cycles_repeated_by_m98_keep_the_initial_level() {
+    // LinuxCNC (convert_cycle_xy): in G91, R is relative to the initial level of the first
+    // cycle line (cycle_il), which later cycle lines keep: R stays at 0.25 + 0.25.
+    let p = ok("G21 G90 G0 X0 Y0 Z0.25\nM98 P1 L3\nM30\nO1\nG91 G99 G81 X1 Z-1 R0.25 F60\nM99\n");
+    let mut want = vec![[0.0, 0.0, 0.5]];
+    for x in [1.0, 2.0, 3.0] {
+        want.extend([[x, 0.0, 0.5], [x, 0.0, -0.5], [x, 0.0, 0.5]]);
+    }
+    assert_ends(&p, &want);
+}
+
+#[test]
 fn parameters_1_to_30_are_global_in_numbered_subprograms() {
     // M98 passes and restores nothing: the subprogram's #1 stays (an `o… call` restores it).
     let p = ok(

@@ -459,10 +459,12 @@ impl Interpreter {
         let scale = self.scale();
         let work = self.work();
         let z0 = *self.ext.cycle_z0.get_or_insert(p[d]);
+        // G91: R is relative to the initial level (LinuxCNC's cycle_il, kept from the first
+        // cycle line until a motion that is not a cycle), not to the current point.
         let (r_m, bottom) = if self.absolute {
             (r * scale + work[d], z * scale + work[d])
         } else {
-            (p[d] + r * scale, p[d] + r * scale + z * scale)
+            (z0 + r * scale, z0 + r * scale + z * scale)
         };
         let clear = if self.ext.retract_initial {
             z0.max(r_m)
