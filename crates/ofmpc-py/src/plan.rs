@@ -230,7 +230,9 @@ pub fn read_program(
         };
         let program =
             ofmpc::gcode::parse(&text, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
-        serde_json::to_string(&ofmpc_scenario::program_json(&program, start))
-            .map_err(|e| to_py(e.to_string()))
+        serde_json::to_string(&ofmpc_scenario::program_json_with_tool_axis(
+            &program, start, tool_axis,
+        ))
+        .map_err(|e| to_py(e.to_string()))
     })
 }

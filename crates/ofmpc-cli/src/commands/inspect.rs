@@ -166,7 +166,7 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
     };
     let program = ofmpc::gcode::parse(&text, &options)
         .map_err(|e| anyhow::Error::new(e).context(name.clone()))?;
-    let out = ofmpc_scenario::program_json(&program, start);
+    let out = ofmpc_scenario::program_json_with_tool_axis(&program, start, tool_axis);
     console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }
