@@ -148,3 +148,25 @@ fn a_change_of_length_moves_the_current_point_as_linuxcnc() {
     };
     assert!(parse("G0 X0 Y0 Z0\n", &bad).is_err());
 }
+
+#[test]
+fn g43_after_the_start_point_moves_the_tip_along_the_tcp_axis() {
+    // The start point is set without a tool length; G43 then puts the tip 20 mm further
+    // along the tool axis (the IRB 140 at q = 0: base +x) without moving a joint.
+    let robot = Robot::irb140();
+    let options = PlanOptions {
+        parse: ParseOptions {
+            tool_table: Some(ToolTable::parse("T1 P1 Z+20\n").unwrap()),
+            ..ParseOptions::default()
+        },
+        ..PlanOptions::default()
+    };
+    let text = "G0 X500 Y0 Z600\nG43 H1\nG1 X510 F600\nG4 P0.05\nM30\n";
+    let planned = plan(text, &robot, &options).unwrap_or_else(|e| panic!("{e}"));
+    let tip = |m: usize| match &planned.program.moves[m].kind {
+        MoveKind::Path { segment, .. } => segment.end(),
+        MoveKind::Dwell { .. } => unreachable!(),
+    };
+    assert!((tip(0) - Vector3::new(0.51, 0.0, 0.6)).norm() < 1e-12);
+    assert_tip_reaches_program(&robot, &planned, Vector3::x());
+}

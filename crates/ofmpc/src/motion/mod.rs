@@ -236,11 +236,17 @@ pub const MAX_TIMING_ATTEMPTS: usize = 6;
 /// Parses `text` and plans it: see [`plan_program`].
 ///
 /// A program whose first motion omits axes starts from the tool position of the robot's
-/// start pose ([`Robot::start_q`]) unless `options.parse.start` gives another.
+/// start pose ([`Robot::start_q`]) unless `options.parse.start` gives another. A tool length
+/// (`G43`) lies along the TCP's z axis ([`tool_axis`]) unless `options.parse.tool_axis`
+/// gives another direction.
 pub fn plan(text: &str, robot: &Robot, options: &PlanOptions) -> Result<Plan, PlanError> {
     let mut read = options.parse.clone();
     if read.start.is_none() {
         read.start = start_position(robot);
+    }
+    // A tool length (G43) lies along the TCP's z axis (the module `tool`).
+    if read.tool_axis.is_none() {
+        read.tool_axis = tool_axis(robot, options.orientation);
     }
     let program = parse(text, &read).map_err(PlanError::Program)?;
     plan_program(program, robot, options)
