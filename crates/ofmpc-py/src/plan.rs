@@ -217,15 +217,22 @@ pub fn read_program(
                 .ok_or_else(|| to_py("the robot's start pose has no tool position".to_string()))?,
             None => nalgebra::Vector3::zeros(),
         };
+        // A G43 tool length lies along the robot's TCP z axis (LinuxCNC's −Z without one).
+        let tool_axis = robot
+            .as_ref()
+            .and_then(|r| ofmpc::motion::tool_axis(r, Orientation::AtZero));
         let options = ParseOptions {
             origin: origin_mm.map(|(x, y, z)| [x * 1e-3, y * 1e-3, z * 1e-3]),
             start: Some(start),
+            tool_axis,
             tool_table,
             ..ParseOptions::default()
         };
         let program =
             ofmpc::gcode::parse(&text, &options).map_err(|e| to_py(format!("{name}: {e}")))?;
-        serde_json::to_string(&ofmpc_scenario::program_json(&program, start))
-            .map_err(|e| to_py(e.to_string()))
+        serde_json::to_string(&ofmpc_scenario::program_json_with_tool_axis(
+            &program, start, tool_axis,
+        ))
+        .map_err(|e| to_py(e.to_string()))
     })
 }

@@ -35,7 +35,7 @@ pub use file::{
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
-pub use program_json::program_json;
+pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
     is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
     Scenario,

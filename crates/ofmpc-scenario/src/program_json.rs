@@ -17,8 +17,21 @@ fn mm(v: Vector3<f64>) -> [f64; 3] {
 /// differs, the first move is a rapid from there to it (as a CNC's first `G00`), so that the
 /// moves compare one for one with another interpreter's.
 pub fn program_json(p: &Program, from: Vector3<f64>) -> Value {
+    program_json_with_tool_axis(p, from, None)
+}
+
+/// [`program_json`] for a program read with [`ofmpc::gcode::ParseOptions::tool_axis`]
+/// `tool_axis` (`None`: −Z, LinuxCNC's): before the first motion the tip is the tool length
+/// then in force along that axis beyond `from`, and the first move is a rapid only when the
+/// start point differs from there (a `G43` moves no axis).
+pub fn program_json_with_tool_axis(
+    p: &Program,
+    from: Vector3<f64>,
+    tool_axis: Option<Vector3<f64>>,
+) -> Value {
     let mut moves = Vec::with_capacity(p.moves.len() + 1);
-    if (p.start - from).norm() > 0.0 {
+    let tip = from + p.start_tool_length * tool_axis.unwrap_or(-Vector3::z());
+    if (p.start - tip).norm() > 0.0 {
         moves.push(json!({"line": p.start_line, "kind": "rapid", "end": mm(p.start)}));
     }
     for m in &p.moves {

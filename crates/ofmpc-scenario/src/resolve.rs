@@ -328,6 +328,8 @@ impl Scenario {
         let end_s = planned.reference.duration() + f.simulation.hold_s;
         warnings.extend(events_after_the_end(f, end_s));
         let (trajectory, reference) = (planned.trajectory, planned.reference);
+        // The program's tool length (G43) extends the TCP the run records and follows.
+        let robot = robot.with_tool_length(planned.tool_length).unwrap_or(robot);
         let experiment = Experiment {
             robot,
             reference,

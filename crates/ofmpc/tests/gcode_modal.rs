@@ -242,6 +242,65 @@ fn tapping_feeds_in_reverses_the_spindle_and_feeds_out_to_the_clear_plane() {
 }
 
 #[test]
+fn tapping_in_g18_and_g19_goes_where_linuxcnc_sends_it() {
+    // LinuxCNC's convert_cycle_g74_g84 hands the plane's permuted coordinates to
+    // cycle_feed, which permutes them again: in G18 the tap feeds to X = bottom,
+    // Y = hole Z, Z = hole X; in G19 to X = hole Z, Y = bottom, Z = hole Y. The interpreter's
+    // point stays the hole's (the next move's target), the next move starts at the tool.
+    let tap_warnings = |p: &Program| {
+        p.warnings
+            .iter()
+            .filter(|w| w.message.contains("follows LinuxCNC's interpreter"))
+            .count()
+    };
+    let g18 = ok("G18 G21 M3 S100 F100\nG0 X0 Y20 Z0\nG84 X5 Z7 Y-10 R10\nG80\nG0 X0\n");
+    assert_ends(
+        &g18,
+        &[
+            [5.0, 20.0, 7.0],
+            [5.0, 10.0, 7.0],
+            [-10.0, 7.0, 5.0],
+            [10.0, 7.0, 5.0],
+            [0.0, 10.0, 7.0],
+        ],
+    );
+    assert_eq!(tap_warnings(&g18), 1);
+    let g19 = ok("G19 G21 M4 S100 F100\nG0 X20 Y0 Z0\nG74 Y5 Z7 X-10 R10\nY6\n");
+    assert_ends(
+        &g19,
+        &[
+            [20.0, 5.0, 7.0],
+            [10.0, 5.0, 7.0],
+            [7.0, -10.0, 5.0],
+            [7.0, 10.0, 5.0],
+            [10.0, 6.0, 7.0],
+            [7.0, -10.0, 6.0],
+            [7.0, 10.0, 6.0],
+        ],
+    );
+    assert_eq!(tap_warnings(&g19), 1, "one warning a program");
+    // The path stays connected: every move starts where the last one ended.
+    for p in [&g18, &g19] {
+        let segs: Vec<_> = p
+            .moves
+            .iter()
+            .filter_map(|m| match &m.kind {
+                MoveKind::Path { segment, .. } => Some(segment),
+                MoveKind::Dwell { .. } => None,
+            })
+            .collect();
+        for w in segs.windows(2) {
+            assert!((w[0].end() - w[1].start()).norm() < 1e-15);
+        }
+    }
+    // In G17 the tap goes into the hole, without a warning.
+    assert_eq!(
+        tap_warnings(&ok("M3 S1\nG0 X0 Y0 Z10\nG84 X1 Y1 R2 Z-3 F60\n")),
+        0
+    );
+}
+
+#[test]
 fn g64_q_merges_collinear_moves_within_q() {
     let p =
         ok("G0 X0 Y0 Z0\nG64 P0.1 Q0.01\nG1 X1 Y0.001 F600\nG1 X2 Y0\nG1 X3 Y0.005\nG1 X3 Y1\n");

@@ -571,11 +571,12 @@ fn word_errors() {
         &["word Q is not supported", "supported letters"],
     );
     check(
+        // M98 is read since issue #20's third round: a call of a missing subprogram.
         &fail_after_start("M98 P100\n"),
         2,
         1,
         Unsupported,
-        &["subprograms", "write the moves out"],
+        &["no subprogram O100", "O100 on its own line … M99"],
     );
     check(
         &fail_after_start("G1 X1 X2\n"),

@@ -137,12 +137,12 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let start = match &a.robot {
+    let (start, tool_axis) = match &a.robot {
         None => {
             if a.start_q.is_some() {
                 anyhow::bail!("--start-q needs --robot (the pose is a robot's)");
             }
-            nalgebra::Vector3::zeros()
+            (nalgebra::Vector3::zeros(), None)
         }
         Some(r) => {
             let chain = crate::cli::ChainArgs {
@@ -150,19 +150,23 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
                 ..Default::default()
             };
             let robot = super::robot::load_model_with(r, a.drives.as_deref(), &chain)?;
-            ofmpc::motion::start_position(&robot)
-                .ok_or_else(|| anyhow::anyhow!("the robot's start pose has no tool position"))?
+            let start = ofmpc::motion::start_position(&robot)
+                .ok_or_else(|| anyhow::anyhow!("the robot's start pose has no tool position"))?;
+            // A G43 tool length lies along the TCP's z axis (as `trajectory` plans it).
+            let axis = ofmpc::motion::tool_axis(&robot, ofmpc::motion::Orientation::AtZero);
+            (start, axis)
         }
     };
     let options = ofmpc::gcode::ParseOptions {
         origin,
         start: Some(start),
+        tool_axis,
         tool_table: super::read_tool_table(a.tool_table.as_deref())?,
         ..Default::default()
     };
     let program = ofmpc::gcode::parse(&text, &options)
         .map_err(|e| anyhow::Error::new(e).context(name.clone()))?;
-    let out = ofmpc_scenario::program_json(&program, start);
+    let out = ofmpc_scenario::program_json_with_tool_axis(&program, start, tool_axis);
     console::println(&serde_json::to_string_pretty(&out)?)?;
     Ok(())
 }

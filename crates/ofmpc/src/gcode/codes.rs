@@ -241,8 +241,16 @@ pub(super) fn classify_m(w: &Word<'_>, line: usize) -> Result<MCode, GcodeError>
             w.col,
             GcodeErrorKind::Unsupported,
             w.text,
-            "subprograms and program repeats (M98/M99/M47) are not supported",
-            "write the moves out in full",
+            if v == 47.0 {
+                "M47 (repeat the program from its first line) is not supported"
+            } else {
+                "M98/M99 with a computed number are not read (M98 P<n> L<k> and M99 are)"
+            },
+            if v == 47.0 {
+                "write the moves out in full, or repeat them with M98 P<n> L<k> or o… repeat"
+            } else {
+                "write M98 or M99 as plain numbers"
+            },
         ));
     }
     let what = match v as i64 {

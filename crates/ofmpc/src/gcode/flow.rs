@@ -16,7 +16,7 @@ use std::collections::HashMap;
 pub const DEFAULT_MAX_STEPS: usize = 10_000_000;
 
 /// Deepest nesting of subroutine calls.
-const MAX_CALL_DEPTH: usize = 100;
+pub(super) const MAX_CALL_DEPTH: usize = 100;
 
 const NONE: usize = usize::MAX;
 
@@ -28,7 +28,7 @@ pub(super) struct SourceLine<'a> {
 }
 
 /// The links between the O-word statements of a file (indices into the lines).
-struct Links {
+pub(super) struct Links {
     /// `if`/`elseif`: the next branch; `endwhile`/`endrepeat`/closing `while` of a `do`: the
     /// loop's start; `break`/`continue`: the loop's start.
     next: Vec<usize>,
@@ -37,7 +37,7 @@ struct Links {
     /// The `while` that closes a `do`.
     do_while: Vec<bool>,
     /// Subroutines by label.
-    subs: HashMap<String, usize>,
+    pub(super) subs: HashMap<String, usize>,
 }
 
 fn o_stmt<'s, 'a>(l: &'s SourceLine<'a>) -> Option<&'s OStmt<'a>> {
@@ -263,22 +263,27 @@ fn close_loop(stack: &mut Vec<Open>, k: &mut Links, i: usize) {
 }
 
 /// A subroutine call in progress.
-struct Frame {
-    return_to: usize,
-    saved: [f64; 30],
-    repeats: usize,
+pub(super) struct Frame {
+    pub(super) return_to: usize,
+    pub(super) saved: [f64; 30],
+    pub(super) repeats: usize,
+    /// A numbered subprogram called by M98 ([`super::fanuc`]): its `O<n>` line and the
+    /// runs left (this one included); `None`: an O-word subroutine.
+    pub(super) numbered: Option<(usize, u64)>,
 }
 
 /// Walks the lines: executes blocks, follows O-words, stops at the end of the program.
 pub(super) struct Runner<'s, 'a> {
-    lines: &'s [SourceLine<'a>],
-    links: Links,
+    pub(super) lines: &'s [SourceLine<'a>],
+    pub(super) links: Links,
     pub(super) params: Params,
-    frames: Vec<Frame>,
+    pub(super) frames: Vec<Frame>,
     /// Active `repeat` loops: the statement and the iterations left.
-    repeats: Vec<(usize, f64)>,
+    pub(super) repeats: Vec<(usize, f64)>,
     /// The last loop that jumped back (named by the step-limit error).
-    last_loop: usize,
+    pub(super) last_loop: usize,
+    /// Numbered subprograms `O<n>` (M98/M99) by number.
+    pub(super) numbered: HashMap<u64, Vec<usize>>,
     warned_delete: bool,
     /// The program reads parameters (has a `#`): the predefined ones are kept up to date.
     uses_parameters: bool,
@@ -293,6 +298,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             frames: Vec::new(),
             repeats: Vec::new(),
             last_loop: NONE,
+            numbered: super::fanuc::numbered_programs(lines),
             warned_delete: false,
             uses_parameters: lines.iter().any(|l| l.raw.contains('#')),
         })
@@ -352,6 +358,10 @@ impl<'s, 'a> Runner<'s, 'a> {
             }
             if !b.is_empty() {
                 it.seen_content = true;
+                if let Some(next) = self.fanuc(it, pc, b)? {
+                    pc = next;
+                    continue;
+                }
                 self.block(it, l, b)?;
             }
             pc += 1;
@@ -384,7 +394,7 @@ impl<'s, 'a> Runner<'s, 'a> {
         )
     }
 
-    fn eval(
+    pub(super) fn eval(
         &self,
         l: &SourceLine<'_>,
         col: usize,
@@ -548,7 +558,15 @@ impl<'s, 'a> Runner<'s, 'a> {
                 GcodeErrorKind::Unsupported,
                 o.text,
                 format!("o{label} call{computed}: no subroutine o{label} sub in this file"),
-                "subroutines in other files are not read: define it in this file with o… sub … o… endsub",
+                if label
+                    .parse()
+                    .ok()
+                    .is_some_and(|n: u64| self.numbered.contains_key(&n))
+                {
+                    format!("O{label} … M99 is a numbered subprogram: call it with M98 P{label}")
+                } else {
+                    "subroutines in other files are not read: define it in this file with o… sub … o… endsub".to_string()
+                },
             ));
         };
         if self.frames.len() >= MAX_CALL_DEPTH {
@@ -573,6 +591,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             return_to: pc + 1,
             saved,
             repeats: self.repeats.len(),
+            numbered: None,
         });
         self.params.predefined[P_CALL_LEVEL] = self.frames.len() as f64;
         self.last_loop = sub;
@@ -585,6 +604,16 @@ impl<'s, 'a> Runner<'s, 'a> {
             Some(e) => Some(self.eval(l, o.col, o.text, e)?),
             None => None,
         };
+        if self.frames.last().is_some_and(|f| f.numbered.is_some()) {
+            return Err(err(
+                l.no,
+                o.col,
+                GcodeErrorKind::Syntax,
+                o.text,
+                format!("o{} {} inside a numbered subprogram called by M98", o.label, o.kind.name()),
+                "end a numbered subprogram O<n> with M99 (LinuxCNC refuses endsub and return there)",
+            ));
+        }
         let Some(f) = self.frames.pop() else {
             // endsub reached without a call: LinuxCNC ends the program there.
             it.ended = true;
@@ -661,6 +690,15 @@ impl<'s, 'a> Runner<'s, 'a> {
                 Err(n) => self.params.set_named(n, v),
             }
         }
+        self.messages(it, l, b);
+        if !words.is_empty() {
+            it.line(l.no, l.raw, &words)?;
+        }
+        Ok(())
+    }
+
+    /// Records the message comments (`MSG`, `PRINT`, `DEBUG`) of block `b`.
+    pub(super) fn messages(&self, it: &mut Interpreter, l: &SourceLine<'_>, b: &Block<'_>) {
         for c in &b.comments {
             let text = match c.kind {
                 MessageKind::Msg => c.text.trim().to_string(),
@@ -676,10 +714,6 @@ impl<'s, 'a> Runner<'s, 'a> {
                 text: escape(&text),
             });
         }
-        if !words.is_empty() {
-            it.line(l.no, l.raw, &words)?;
-        }
-        Ok(())
     }
 
     /// `text` with `#n` and `#<name>` replaced by their values, as LinuxCNC's `(PRINT,…)`

@@ -46,6 +46,10 @@ pub(super) struct Interpreter {
     pub(super) initial: Option<Vector3<f64>>,
     /// Tool length offset (m) along the tool axis.
     pub(super) tool_length: f64,
+    /// Tool length offset (m) when the start point was set.
+    pub(super) start_tool_length: f64,
+    /// Unit direction from the controlled point to the tip ([`ParseOptions::tool_axis`]).
+    pub(super) tool_axis: Vector3<f64>,
     /// State of the codes of [`super::modal`].
     pub(super) ext: Extra,
     /// The tool table of the options (G43 H).
@@ -70,6 +74,20 @@ impl Interpreter {
             }
             offsets[0] = o;
         }
+        let tool_axis = options.tool_axis.unwrap_or(-Vector3::z());
+        if !(tool_axis.iter().all(|x| x.is_finite()) && (tool_axis.norm() - 1.0).abs() < 1e-9) {
+            return Err(err(
+                0,
+                0,
+                GcodeErrorKind::InvalidOption,
+                "",
+                format!(
+                    "the tool axis must be a finite unit vector, got [{}, {}, {}]",
+                    tool_axis.x, tool_axis.y, tool_axis.z
+                ),
+                "give the direction from the controlled point to the tool tip, of length 1",
+            ));
+        }
         Ok(Interpreter {
             inch: false,
             absolute: true,
@@ -93,6 +111,8 @@ impl Interpreter {
             messages: Vec::new(),
             initial: options.start,
             tool_length: 0.0,
+            start_tool_length: 0.0,
+            tool_axis,
             ext: Extra {
                 feed_mode: 94,
                 ..Extra::default()
@@ -133,7 +153,7 @@ impl Interpreter {
     }
 
     pub(super) fn finish(mut self) -> Result<Program, GcodeError> {
-        if let (None, Some(p0)) = (self.pos, self.initial) {
+        if let (None, Some(p0)) = (self.pos, self.initial_tip()) {
             // No motion, but the tool position is known: an empty path from there.
             self.begin_at(p0, 0);
         }
@@ -155,6 +175,7 @@ impl Interpreter {
             events: self.events,
             messages: self.messages,
             tool_length: self.tool_length,
+            start_tool_length: self.start_tool_length,
         })
     }
 
@@ -687,7 +708,7 @@ impl Interpreter {
             ));
         }
         if w.value > 0.0 {
-            if let (None, Some(p0)) = (self.pos, self.initial) {
+            if let (None, Some(p0)) = (self.pos, self.initial_tip()) {
                 self.begin_at(p0, line);
             }
             if self.pos.is_none() {
@@ -703,6 +724,7 @@ impl Interpreter {
             self.moves.push(Move {
                 line,
                 kind: MoveKind::Dwell { seconds: w.value },
+                tool_length: self.tool_length,
             });
         }
         Ok(())
@@ -827,7 +849,7 @@ impl Interpreter {
             return Ok(());
         }
         let scale = self.scale();
-        let here = self.pos.or(self.initial).unwrap_or_else(Vector3::zeros);
+        let here = self.here();
         let g92 = self.ext.g92;
         for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
             if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
@@ -886,7 +908,7 @@ impl Interpreter {
             let full = matches!(mode, Motion::Rapid | Motion::Linear)
                 && self.absolute
                 && ['X', 'Y', 'Z'].iter().all(|&c| args.get(c).is_some());
-            if let (Some(p0), false) = (self.initial, full) {
+            if let (Some(p0), false) = (self.initial_tip(), full) {
                 // The tool is where the options say (the robot's start pose): move from there.
                 self.begin_at(p0, line);
                 return self.motion(line, col, line_text, mode, args);
@@ -903,7 +925,7 @@ impl Interpreter {
         };
         let segment = match mode {
             Motion::Rapid | Motion::Linear | Motion::Cycle(_) => {
-                if (target - pos).norm() <= MIN_MOVE_LENGTH {
+                if (target - pos).norm() <= MIN_MOVE_LENGTH && self.ext.machine_at.is_none() {
                     self.warn(line, col, "zero-length move skipped");
                     return Ok(());
                 }
@@ -912,6 +934,10 @@ impl Interpreter {
             }
             Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
+        if let Some(m) = self.ext.machine_at {
+            // After G74/G84 in G18/G19 the tool is elsewhere: a straight move to the arc.
+            self.push_line(line, m, pos, true);
+        }
         let feed = self.move_feed(false, segment.length());
         self.ext.merged.clear();
         self.pos = Some(segment.end());
@@ -922,6 +948,7 @@ impl Interpreter {
                 feed,
                 mode: self.mode,
             },
+            tool_length: self.tool_length,
         });
         Ok(())
     }
@@ -931,6 +958,7 @@ impl Interpreter {
         self.pos = Some(p);
         self.start = p;
         self.start_line = line;
+        self.start_tool_length = self.tool_length;
     }
 
     /// The first motion: sets the start point, which must be given in absolute
@@ -985,6 +1013,7 @@ impl Interpreter {
         self.pos = Some(p);
         self.start = p;
         self.start_line = line;
+        self.start_tool_length = self.tool_length;
         Ok(())
     }
 

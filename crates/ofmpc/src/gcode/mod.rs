@@ -21,7 +21,8 @@
 //! | `G54 … G59` | select a work offset (default `G54`); base-frame point = program point + offset |
 //! | `G90` / `G91` | absolute (default) / incremental coordinates |
 //! | `G91.1` | arc centres relative to the start point (the default and only mode) |
-//! | `G40` `G49` `G80` `G94` | cancel / default modes: accepted, no effect |
+//! | `G40` `G80` `G94` | cancel / default modes: accepted, no effect |
+//! | `G43 H…` `G43.1 Z…` `G49` | tool length offset: the points are the tip's; a change of length moves the current point along [`ParseOptions::tool_axis`] (LinuxCNC); the planner extends the TCP ([`crate::motion::plan_program`]) |
 //! | `G61` `G61.1` | exact stop: every move runs rest to rest (the paper's septic law) |
 //! | `G64 P…` / `G64` | blending: corners are rounded within `P` (program units) or the planner's default tolerance, the path does not stop at corners it can blend; see [`crate::motion`] |
 //! | `F` | feed (mm/min or in/min, in the units active at each move): under `G61` the peak path speed of `G01 G02 G03` moves, under `G64` their cruise speed |
@@ -55,6 +56,7 @@
 mod arcs;
 mod codes;
 mod expr;
+mod fanuc;
 mod flow;
 mod frames;
 mod interpreter;
@@ -102,6 +104,13 @@ pub struct ParseOptions {
     /// The tool table `G43 H<n>` takes tool n's length from; `None`: `G43 H<n>` (n > 0)
     /// is refused.
     pub tool_table: Option<ToolTable>,
+    /// Unit direction (base frame) from the controlled point to the tool tip: a tool of
+    /// length `L` has its tip `L` along it. A change of the tool length by `ΔL` (`G43`,
+    /// `G43.1`, `G49`) moves no axis, so the tip's current point moves by `ΔL` along this
+    /// direction (LinuxCNC's `convert_tool_length_offset`: `current_z += old − new` with
+    /// the tool along machine −Z). `None`: −Z, LinuxCNC's tool axis; the planner passes the
+    /// robot's TCP z axis ([`crate::motion::plan`]).
+    pub tool_axis: Option<Vector3<f64>>,
 }
 
 impl ParseOptions {
@@ -132,6 +141,9 @@ pub struct Program {
     /// Tool length offset in force at the end of the program (m, along the tool axis, from
     /// `G43 H…` / `G43.1 Z…`; 0 after `G49`): for the TCP.
     pub tool_length: f64,
+    /// Tool length offset (m) in force when the start point was set: [`Program::start`] is
+    /// the tip of a tool this long.
+    pub start_tool_length: f64,
 }
 
 /// An M code or an S/T word of a program: recorded in order, never a reason to reject.
@@ -195,6 +207,9 @@ pub struct Move {
     pub line: usize,
     /// What the move does.
     pub kind: MoveKind,
+    /// Tool length offset (m, along the tool axis) in force during the move: its points are
+    /// those of the tip of a tool this long (`G43 H…`, `G43.1 Z…`; 0 without, or after `G49`).
+    pub tool_length: f64,
 }
 
 /// The kinds of move.

@@ -1,6 +1,7 @@
 //! The modal codes CAM output uses beyond the basic ones (LinuxCNC's G-code reference):
 //! G92/G92.1/G92.2/G92.3 and G52 offsets, G53, G28/G30 (+.1) stored positions, G43 H (tool
-//! table)/G43.1/G49 tool length (kept for the TCP, not added to the points), G90.1 absolute arc centres, G93/G95
+//! table)/G43.1/G49 tool length (the points are the tip's; a change of length moves the
+//! current point along the tool axis; the planner extends the TCP), G90.1 absolute arc centres, G93/G95
 //! feed modes, polar `@ ^`, the canned cycles G73 G74 G81 G82 G83 G84 G85 G86 G89 with G98/G99
 //! and L in G17, G18 and G19,
 //! and G64 Q (collinear moves within Q merged, LinuxCNC's naive-CAM detector).
@@ -55,6 +56,11 @@ pub(super) struct Extra {
     /// Tool selected by T and the tool in the spindle (M6, M61 Q).
     pub(super) tool_selected: f64,
     pub(super) tool_current: f64,
+    /// Where the tool is when it is not at the current point `pos` (after G74/G84 in
+    /// G18/G19, see `tap_point`): the next move starts there.
+    pub(super) machine_at: Option<Vector3<f64>>,
+    /// The warning on G74/G84 in G18/G19 was given.
+    pub(super) warned_tap: bool,
 }
 
 impl Interpreter {
@@ -62,7 +68,8 @@ impl Interpreter {
     /// zero on a G53 line.
     pub(super) fn work(&self) -> [f64; 3] {
         if self.ext.machine {
-            return [0.0; 3];
+            let t = self.tip_offset();
+            return [t.x, t.y, t.z];
         }
         let o = self.offsets.get(self.wcs).copied().unwrap_or([0.0; 3]);
         [0, 1, 2].map(|a| o[a] + self.ext.g92[a])
@@ -71,7 +78,22 @@ impl Interpreter {
     /// Where the tool is, for commands that need it before any motion: the position, else
     /// the tool position before the program, else machine zero.
     pub(super) fn here(&self) -> Vector3<f64> {
-        self.pos.or(self.initial).unwrap_or_else(Vector3::zeros)
+        self.pos
+            .or(self.initial_tip())
+            .unwrap_or_else(Vector3::zeros)
+    }
+
+    /// The tip's position before the program: the options' start (the controlled point,
+    /// with no tool length) plus the tool length in force along the tool axis.
+    pub(super) fn initial_tip(&self) -> Option<Vector3<f64>> {
+        self.initial.map(|p| p + self.tool_length * self.tool_axis)
+    }
+
+    /// The offset (m) from a controlled point (machine coordinates: G53, G28/G30 stored
+    /// positions) to the tip: the tool length along the tool axis (LinuxCNC's find_ends
+    /// and find_relative subtract the tool offset from machine coordinates).
+    pub(super) fn tip_offset(&self) -> Vector3<f64> {
+        self.tool_length * self.tool_axis
     }
 
     /// G92 (920), G92.1, G92.2, G92.3, G52 (520).
@@ -126,11 +148,11 @@ impl Interpreter {
     ) -> Result<(), GcodeError> {
         let k = usize::from(code >= 300);
         if code % 10 == 1 {
-            self.ext.home[k] = Some(self.here());
+            self.ext.home[k] = Some(self.here() - self.tip_offset());
             return Ok(());
         }
         if self.pos.is_none() {
-            match self.initial {
+            match self.initial_tip() {
                 Some(p0) => self.begin_at(p0, line),
                 None => {
                     return Err(err(
@@ -147,7 +169,8 @@ impl Interpreter {
         let pos = self.here();
         let stored = self.ext.home[k]
             .or(self.initial)
-            .unwrap_or_else(Vector3::zeros);
+            .unwrap_or_else(Vector3::zeros)
+            + self.tip_offset();
         let given: Vec<usize> = ['X', 'Y', 'Z']
             .iter()
             .enumerate()
@@ -177,7 +200,7 @@ impl Interpreter {
         code: u16,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
-        self.tool_length = match (code, args.get('Z')) {
+        let length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
             (430, _) => {
                 let (n, at) = match args.get('H') {
@@ -228,6 +251,16 @@ impl Interpreter {
             }
             _ => 0.0,
         };
+        // No axis moves, so the tip's current point moves with the length (LinuxCNC's
+        // convert_tool_length_offset: current_z += old − new, the tool along −Z).
+        let delta = length - self.tool_length;
+        if delta != 0.0 {
+            if let Some(p) = self.pos.as_mut() {
+                *p += delta * self.tool_axis;
+            }
+            self.ext.merged.clear();
+        }
+        self.tool_length = length;
         Ok(())
     }
 
@@ -245,6 +278,7 @@ impl Interpreter {
     /// Appends a straight move from `a` to `b` (skipped if zero-length); G64 Q merges it
     /// with the last one where the points stay within Q of one line.
     pub(super) fn push_line(&mut self, line: usize, a: Vector3<f64>, b: Vector3<f64>, rapid: bool) {
+        let a = self.ext.machine_at.take().unwrap_or(a);
         self.pos = Some(b);
         if (b - a).norm() <= MIN_MOVE_LENGTH {
             return;
@@ -261,6 +295,7 @@ impl Interpreter {
                 feed,
                 mode: self.mode,
             },
+            tool_length: self.tool_length,
         });
     }
 
@@ -292,7 +327,10 @@ impl Interpreter {
         else {
             return false;
         };
-        if *f0 != feed || *m0 != mode {
+        if *f0 != feed
+            || *m0 != mode
+            || self.moves.last().map(|m| m.tool_length) != Some(self.tool_length)
+        {
             return false;
         }
         let s = match self.moves.last() {
@@ -408,7 +446,7 @@ impl Interpreter {
         }
         self.check_tapping_spindle(line, w_col, line_text, n)?;
         let repeats = cycle_repeats(line, args)?;
-        let Some(mut p) = self.pos.or(self.initial) else {
+        let Some(mut p) = self.pos.or(self.initial_tip()) else {
             return fail(
                 StartPoint,
                 format!("{code} before the start point is known"),
@@ -421,10 +459,12 @@ impl Interpreter {
         let scale = self.scale();
         let work = self.work();
         let z0 = *self.ext.cycle_z0.get_or_insert(p[d]);
+        // G91: R is relative to the initial level (LinuxCNC's cycle_il, kept from the first
+        // cycle line until a motion that is not a cycle), not to the current point.
         let (r_m, bottom) = if self.absolute {
             (r * scale + work[d], z * scale + work[d])
         } else {
-            (p[d] + r * scale, p[d] + r * scale + z * scale)
+            (z0 + r * scale, z0 + r * scale + z * scale)
         };
         let clear = if self.ext.retract_initial {
             z0.max(r_m)
@@ -464,8 +504,10 @@ impl Interpreter {
             self.drill(line, n, &hole, q * scale, dwell);
             let mut end = xy;
             end[d] = clear;
-            let here = self.here();
-            self.push_line(line, here, end, true);
+            if self.ext.machine_at.is_none() {
+                let here = self.here();
+                self.push_line(line, here, end, true);
+            }
             p = end;
         }
         Ok(())
@@ -534,13 +576,22 @@ impl Interpreter {
                 // LinuxCNC's convert_cycle_g74_g84: feed in, stop and reverse the spindle,
                 // dwell, feed out to the clear plane, stop and restore the spindle.
                 let (reverse, forward) = if n == 84 { ("M4", "M3") } else { ("M3", "M4") };
-                self.push_line(line, top, at(bottom), false);
+                let (down, up) = (
+                    self.tap_point(line, n, at(bottom)),
+                    self.tap_point(line, n, at(hole.clear)),
+                );
+                self.push_line(line, top, down, false);
                 self.spindle_event(line, "M5");
                 self.spindle_event(line, reverse);
                 self.push_dwell(line, dwell);
-                self.push_line(line, at(bottom), at(hole.clear), false);
+                self.push_line(line, down, up, false);
                 self.spindle_event(line, "M5");
                 self.spindle_event(line, forward);
+                if up != at(hole.clear) {
+                    // The interpreter's point is the hole's clear point; the tool is at `up`.
+                    self.pos = Some(at(hole.clear));
+                    self.ext.machine_at = Some(up);
+                }
             }
             _ => {
                 self.push_line(line, top, at(bottom), false);
@@ -560,6 +611,7 @@ impl Interpreter {
             self.moves.push(Move {
                 line,
                 kind: MoveKind::Dwell { seconds },
+                tool_length: self.tool_length,
             });
         }
     }
@@ -582,6 +634,40 @@ struct Hole {
     axis: usize,
     bottom: f64,
     clear: f64,
+}
+
+impl Interpreter {
+    /// The point G74/G84 feeds to for the hole point `c` (machine coordinates): `c` in G17;
+    /// in G18 and G19 the point LinuxCNC's interpreter outputs, whose
+    /// `convert_cycle_g74_g84` passes the plane's already permuted coordinates to
+    /// `cycle_feed`, which permutes them again (interp_cycles.cc): with `c = (x, y, z)` in
+    /// program coordinates, G18 feeds to `(y, z, x)` and G19 to `(z, x, y)`. Warns once.
+    fn tap_point(&mut self, line: usize, n: u8, c: Vector3<f64>) -> Vector3<f64> {
+        let w = Vector3::from(self.work());
+        let p = c - w;
+        let q = match self.plane {
+            Plane::XY => return c,
+            Plane::ZX => Vector3::new(p.y, p.z, p.x),
+            Plane::YZ => Vector3::new(p.z, p.x, p.y),
+        };
+        if !self.ext.warned_tap {
+            self.ext.warned_tap = true;
+            let (x, y, z) = if self.plane == Plane::ZX {
+                ("the bottom", "the hole's Z", "the hole's X")
+            } else {
+                ("the hole's Z", "the bottom", "the hole's Y")
+            };
+            self.warn(
+                line,
+                1,
+                format!(
+                    "G{n} in {}: the tap point follows LinuxCNC's interpreter, which feeds to X = {x}, Y = {y}, Z = {z} (its axes permuted twice), not into the hole",
+                    self.plane.gcode()
+                ),
+            );
+        }
+        q + w
+    }
 }
 
 /// The L word of a canned cycle (repeats; default 1).

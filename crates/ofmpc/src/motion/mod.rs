@@ -39,12 +39,14 @@ pub mod g2blend;
 pub mod reference;
 pub mod segment;
 pub mod timelaw;
+mod tool;
 pub mod topp;
 pub mod trajectory;
 
 pub use blend::PathMode;
 pub use exact::JointLimitedMove;
 pub use reference::{JointReference, Orientation, ReferenceError, MAX_PLAN_VALUES};
+pub use tool::tool_axis;
 pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
 use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
@@ -109,6 +111,10 @@ pub struct Plan {
     pub reference: JointReference,
     /// Diagnostics.
     pub diagnostics: PlanDiagnostics,
+    /// Tool length (m) by which the plan extended the robot's TCP along its z axis (the
+    /// program's `G43` length at its first path move; 0 without): the reference moves the
+    /// TCP of [`Robot::with_tool_length`]`(tool_length)` along [`Plan::trajectory`].
+    pub tool_length: f64,
 }
 
 /// What makes a plan too large to sample.
@@ -231,11 +237,17 @@ pub const MAX_TIMING_ATTEMPTS: usize = 6;
 /// Parses `text` and plans it: see [`plan_program`].
 ///
 /// A program whose first motion omits axes starts from the tool position of the robot's
-/// start pose ([`Robot::start_q`]) unless `options.parse.start` gives another.
+/// start pose ([`Robot::start_q`]) unless `options.parse.start` gives another. A tool length
+/// (`G43`) lies along the TCP's z axis ([`tool_axis`]) unless `options.parse.tool_axis`
+/// gives another direction.
 pub fn plan(text: &str, robot: &Robot, options: &PlanOptions) -> Result<Plan, PlanError> {
     let mut read = options.parse.clone();
     if read.start.is_none() {
         read.start = start_position(robot);
+    }
+    // A tool length (G43) lies along the TCP's z axis (the module `tool`).
+    if read.tool_axis.is_none() {
+        read.tool_axis = tool_axis(robot, options.orientation);
     }
     let program = parse(text, &read).map_err(PlanError::Program)?;
     plan_program(program, robot, options)
@@ -260,6 +272,12 @@ pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
 /// ([`crate::motion::exact`]); the moves so slowed are listed in
 /// [`PlanDiagnostics::joint_limited`]. Before it allocates the reference the planner checks its
 /// size against [`MAX_PLAN_VALUES`].
+///
+/// The program's points are the tool tip's: the robot's TCP is extended by the tool length
+/// of the program's first path move, and moves under another length are planned for that
+/// point ([`Plan::tool_length`]; the module `tool`). A program that changes its tool length
+/// between moves should be read with [`crate::gcode::ParseOptions::tool_axis`] set to
+/// [`tool_axis`] (as [`plan`] does).
 pub fn plan_program(
     program: Program,
     robot: &Robot,
@@ -269,6 +287,15 @@ pub fn plan_program(
     if !(ts.is_finite() && ts > 0.0) {
         return Err(PlanError::SamplePeriod(ts));
     }
+    let tool_length = tool::reference_length(&program);
+    let tooled = tool::tooled_robot(robot, tool_length, &program)?;
+    let robot = tooled.as_ref().unwrap_or(robot);
+    let moved = tool_axis(robot, options.orientation)
+        .and_then(|a| tool::controlled_program(&program, tool_length, a));
+    let (program, as_read) = match moved {
+        Some(m) => (m, Some(program)),
+        None => (program, None),
+    };
     let n = robot.dof();
     let has_runs = has_blended_runs(&program, options);
     let limits = RobotLimits::of(robot);
@@ -306,10 +333,11 @@ pub fn plan_program(
                 joint_limited: trajectory.joint_limited().to_vec(),
             };
             return Ok(Plan {
-                program,
+                program: as_read.unwrap_or(program),
                 trajectory,
                 reference,
                 diagnostics,
+                tool_length,
             });
         }
         for (s, w) in scale.iter_mut().zip(worst) {

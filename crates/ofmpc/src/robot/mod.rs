@@ -386,6 +386,24 @@ impl Robot {
         Ok(())
     }
 
+    /// The robot with its TCP moved `length` (m) along the TCP's own z axis (the tool axis):
+    /// the tip of a tool of that length held at the TCP, as G-code's tool length offset
+    /// (`G43 H…`) means it (LinuxCNC: the programmed point is the tip, the controlled point
+    /// lies the tool length back along the tool axis). `TCP' = TCP · Trans(0, 0, length)`;
+    /// the orientation is unchanged.
+    pub fn with_tool_length(&self, length: f64) -> Result<Robot, ModelError> {
+        let mut r = self.clone();
+        if length == 0.0 {
+            return Ok(r);
+        }
+        let along = Transform {
+            rot: Matrix3::identity(),
+            pos: Vector3::new(0.0, 0.0, length),
+        };
+        r.set_tcp(self.tcp.compose(&along))?;
+        Ok(r)
+    }
+
     /// The flange with the TCP: pose of the TCP in the last body's frame.
     pub(crate) fn tool_offset(&self) -> Transform {
         self.flange.compose(&self.tcp)
