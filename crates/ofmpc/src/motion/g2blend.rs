@@ -34,9 +34,9 @@ const TABLE: usize = 64;
 /// intervals the speed `|p'(u)|` of a blend is smooth, and the error is below 1e-11 of the
 /// length on line corners from 10° to 170° (test below).
 const GAUSS: [(f64, f64); 3] = [
-    (0.0, 0.888_888_888_888_888_9),
-    (-0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
-    (0.774_596_669_241_483_4, 0.555_555_555_555_555_6),
+    (0.0, 8.0 / 9.0),
+    (-0.774_596_669_241_483_4, 5.0 / 9.0),
+    (0.774_596_669_241_483_4, 5.0 / 9.0),
 ];
 
 /// A quintic G2 blend parameterised by arc length (see the module documentation).
