@@ -265,6 +265,8 @@ pub struct SettingNames {
     pub ts: &'static str,
     /// Work offset of programs that set none.
     pub origin: &'static str,
+    /// The robot's start pose.
+    pub start_q: &'static str,
 }
 
 /// The scenario file's names of the planning settings.
@@ -275,6 +277,7 @@ pub const SCENARIO_KEYS: SettingNames = SettingNames {
     tolerance: "[timing] tolerance_mm",
     ts: "[mpc] ts",
     origin: "[program] origin_mm",
+    start_q: "[robot] start_q",
 };
 
 /// A planning error in the front end's words: the library's message, followed by the
@@ -300,6 +303,7 @@ pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
         PlanError::Reference(r) => match &r.failure {
             ReferenceFailure::Ik(_) | ReferenceFailure::BranchLimit { .. } => Some(names.origin),
             ReferenceFailure::JointSpeed { .. } => Some(names.speed),
+            ReferenceFailure::StartSingular { .. } => Some(names.start_q),
             ReferenceFailure::SamplePeriod(_) => Some(names.ts),
             _ => None,
         },

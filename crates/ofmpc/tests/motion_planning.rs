@@ -405,3 +405,39 @@ fn joint_acceleration_limits_hold_on_every_sample() {
         p.diagnostics
     );
 }
+
+/// A program whose first move leaves the IRB 140's start pose q = 0 (the wrist straight, a
+/// singularity) sideways needs joint 4 to turn a quarter turn at once: the error blames the
+/// start pose, not the path speed; with the wrist bent (q5 = 0.5 rad) the same program plans.
+#[test]
+fn a_jump_leaving_a_singular_start_pose_blames_the_start_pose() {
+    use ofmpc::motion::reference::ReferenceFailure;
+    use ofmpc::motion::PlanError;
+    let text = "G17\nG1 X0 Y20 F200\nG2 X20 Y0 I0 J-20.0\n";
+    let options = PlanOptions {
+        parse: ParseOptions {
+            origin: Some([0.505, -0.010, 0.600]),
+            ..Default::default()
+        },
+        ts: 0.01,
+        ..PlanOptions::default()
+    };
+    let robot = Robot::irb140();
+    match plan(text, &robot, &options) {
+        Err(PlanError::Reference(r)) => {
+            assert!(
+                matches!(r.failure, ReferenceFailure::StartSingular { joint: 4, .. }),
+                "{r}"
+            );
+            let (d, s) = (r.to_string(), [515.0, 0.0, 712.0]);
+            assert!(d.contains("start pose is at a singularity"), "{d}");
+            let at = r.position;
+            assert!((0..3).all(|k| (at[k] * 1e3 - s[k]).abs() < 1.0), "{at:?}");
+        }
+        other => panic!("expected the singular start pose to be named, got {other:?}"),
+    }
+    let mut bent = Robot::irb140();
+    bent.set_start_q(&[0.0, 0.0, 0.0, 0.0, 0.5, 0.0]).unwrap();
+    let fine = plan(text, &bent, &options).expect("plans from a bent wrist");
+    assert!(fine.diagnostics.duration > 0.0);
+}

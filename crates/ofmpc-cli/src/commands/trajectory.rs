@@ -21,6 +21,7 @@ const FLAGS: SettingNames = SettingNames {
     tolerance: "--tolerance",
     ts: "--ts",
     origin: "--origin X,Y,Z (mm)",
+    start_q: "--start-q",
 };
 
 /// The files `trajectory --out DIR/NAME.csv` writes: the CSV and, beside it,

@@ -71,6 +71,27 @@ pub enum ReferenceFailure {
         /// Its limit (rad/s).
         limit: f64,
     },
+    /// A joint would move faster than its speed limit while the tool is still at its start
+    /// point (within [`LEAVING_START`]) and the run started at the robot's start pose: the
+    /// start pose is at (or next to) a singularity, where following the path at a constant
+    /// orientation needs the joints to jump (q = 0 of the IRB 140: the wrist straight, joints
+    /// 4 and 6 on one axis).
+    #[error(
+        "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s, as the \
+         tool leaves its start point: the robot's start pose is at a singularity (for a 6-axis arm, \
+         usually the wrist straight, joint 5 at 0), where the path needs the joints to jump; start from a \
+         pose away from it, e.g. with the wrist bent (joint 5 at 0.5 rad)"
+    )]
+    StartSingular {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// Speed needed (rad/s).
+        speed: f64,
+        /// Its limit (rad/s).
+        limit: f64,
+    },
     /// The sample period is not positive and finite.
     #[error("the sample period must be positive and finite, got {0} s")]
     SamplePeriod(f64),
@@ -299,6 +320,10 @@ impl JointMap {
     }
 }
 
+/// Distance (m) from the path's start point within which a jump of the joints is blamed on a
+/// singular start pose ([`ReferenceFailure::StartSingular`]).
+pub const LEAVING_START: f64 = 1e-3;
+
 /// How close (m, rad) the path's first tool pose must be to the start pose's for the run to
 /// start at the start pose itself ([`build_reference`]), and how far (rad) the inverse
 /// kinematics' solution must then be from the start pose to be replaced by it.
@@ -369,6 +394,8 @@ pub fn build_reference(
     let mut jac = nalgebra::DMatrix::zeros(6, n);
     let mut exact_qd = Vec::with_capacity(if n == 6 { steps * n } else { 0 });
     let mut exact_ok = true;
+    // Whether the run starts at the robot's start pose (see [`ReferenceFailure::StartSingular`]).
+    let mut from_start_pose = false;
     for k in 0..steps {
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
@@ -381,6 +408,10 @@ pub fn build_reference(
             if let Some(start) = map.keep_start_pose(&p) {
                 sol.copy_from_slice(start);
             }
+            from_start_pose = sol
+                .iter()
+                .zip(robot.start_q())
+                .all(|(a, b)| (a - b).abs() <= START_POSE_TOLERANCE);
         }
         if k > 0 {
             // Blended runs are timed at the joint speed limits, which the mean speed over a
@@ -390,12 +421,23 @@ pub fn build_reference(
             for (i, j) in robot.joints().iter().enumerate() {
                 let speed = (sol[i] - prev[i]).abs() / ts;
                 if speed > j.limits.velocity * slack {
+                    let leaving_start = from_start_pose && (p - start).norm() <= LEAVING_START;
                     let failure = map.branch_limit(&p, &prev).unwrap_or_else(|| {
-                        ReferenceFailure::JointSpeed {
-                            joint: i + 1,
-                            name: j.name.clone(),
-                            speed,
-                            limit: j.limits.velocity,
+                        let (joint, name, limit) = (i + 1, j.name.clone(), j.limits.velocity);
+                        if leaving_start {
+                            ReferenceFailure::StartSingular {
+                                joint,
+                                name,
+                                speed,
+                                limit,
+                            }
+                        } else {
+                            ReferenceFailure::JointSpeed {
+                                joint,
+                                name,
+                                speed,
+                                limit,
+                            }
                         }
                     });
                     return Err(fail(sample.line, t, p, failure));
