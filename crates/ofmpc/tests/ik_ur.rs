@@ -6,8 +6,11 @@
 //! branch it returns reproduces the pose (8 on most poses); the numeric solvers' answers
 //! (multi-start, and damped least squares from random seeds) are among them; and a tool centre point is solved directly.
 
+#[path = "common/ik.rs"]
+mod ik_common;
 #[path = "common/rng.rs"]
 mod rng;
+use ik_common::{distance, limits, random_q, same_angle};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use ofmpc::dynamics::RobotDynamics;
@@ -16,7 +19,6 @@ use ofmpc::ik::{
 };
 use ofmpc::robot::{IkMethod, Robot};
 use ofmpc::spatial::Transform;
-use std::f64::consts::PI;
 use std::path::Path;
 
 const ARMS: [&str; 3] = ["ur3", "ur5", "ur10"];
@@ -27,43 +29,6 @@ fn load(name: &str) -> Robot {
         .join("tests/data/robots/ur")
         .join(format!("{name}_robot.urdf"));
     Robot::from_urdf_file(&path).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
-
-/// Position (m) and orientation (rad) distance, from the rotation matrices.
-fn distance(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
-    let dp = (a.translation.vector - b.translation.vector).norm();
-    let m = (a.rotation.inverse() * b.rotation).to_rotation_matrix();
-    let m = m.matrix();
-    let s = 0.5
-        * nalgebra::Vector3::new(
-            m[(2, 1)] - m[(1, 2)],
-            m[(0, 2)] - m[(2, 0)],
-            m[(1, 0)] - m[(0, 1)],
-        )
-        .norm();
-    (dp, s.atan2(0.5 * (m.trace() - 1.0)))
-}
-
-fn random_q(robot: &Robot, rng: &mut rng::SplitMix64) -> [f64; 6] {
-    let j = robot.joints();
-    std::array::from_fn(|i| rng.uniform(j[i].limits.lower.max(-PI), j[i].limits.upper.min(PI)))
-}
-
-fn limits(robot: &Robot) -> ([f64; 6], [f64; 6]) {
-    let (lo, up) = (robot.lower_limits(), robot.upper_limits());
-    (
-        std::array::from_fn(|i| lo[i]),
-        std::array::from_fn(|i| up[i]),
-    )
-}
-
-/// Same joint angle up to a multiple of 2π. The numeric solvers stop at a pose error of
-/// about 1e-10; near a singularity (elbow stretched, wrist straight) that leaves joint
-/// errors of 1e-6 rad, so the comparison allows 1e-4 rad (distinct branches differ by far
-/// more away from singularities).
-fn same_angle(a: f64, b: f64) -> bool {
-    let d = (a - b).rem_euclid(2.0 * PI);
-    d.min(2.0 * PI - d) < 1e-4
 }
 
 #[test]
