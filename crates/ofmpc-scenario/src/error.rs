@@ -301,7 +301,9 @@ pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
             _ => names.tolerance,
         }),
         PlanError::Reference(r) => match &r.failure {
-            ReferenceFailure::Ik(_) | ReferenceFailure::BranchLimit { .. } => Some(names.origin),
+            ReferenceFailure::Ik(_)
+            | ReferenceFailure::BranchLimit { .. }
+            | ReferenceFailure::SingularPass { .. } => Some(names.origin),
             ReferenceFailure::JointSpeed { .. } => Some(names.speed),
             ReferenceFailure::StartSingular { .. } => Some(names.start_q),
             ReferenceFailure::SamplePeriod(_) => Some(names.ts),

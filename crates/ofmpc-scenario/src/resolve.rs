@@ -490,7 +490,9 @@ fn plan_warnings(program_name: &str, planned: &ofmpc::motion::Plan) -> Vec<Strin
         .joint_limited
         .iter()
         .map(|w| w.to_string());
+    let turn = planned.diagnostics.start_turn.iter().map(|t| t.to_string());
     program
+        .chain(turn)
         .chain(slowed)
         .map(|w| format!("{program_name}: {w}"))
         .collect()

@@ -407,13 +407,18 @@ fn joint_acceleration_limits_hold_on_every_sample() {
 }
 
 /// A program whose first move leaves the IRB 140's start pose q = 0 (the wrist straight, a
-/// singularity) sideways needs joint 4 to turn a quarter turn at once: the error blames the
-/// start pose, not the path speed; with the wrist bent (q5 = 0.5 rad) the same program plans.
+/// singularity) sideways needs joint 4 to turn a quarter turn at once: the plan turns the
+/// wrist in place first (joints 4 and 6, the tool holding still, within the joints' limits)
+/// and then follows the path without a jump; with the wrist bent (q5 = 0.5 rad) the same
+/// program plans without a turn. A path that later passes next to the singularity is refused
+/// for that cause.
 #[test]
-fn a_jump_leaving_a_singular_start_pose_blames_the_start_pose() {
+fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
+    use ofmpc::dynamics::{forward_kinematics, Workspace};
     use ofmpc::motion::reference::ReferenceFailure;
-    use ofmpc::motion::PlanError;
-    let text = "G17\nG1 X0 Y20 F200\nG2 X20 Y0 I0 J-20.0\n";
+    // The IRB 140's q = 0 is a wrist singularity (joints 4 and 6 on one axis): leaving it
+    // along this path at a constant orientation needs joint 4 to jump by about 90°.
+    let text = "G17\nG1 X0 Y20 F200\nG1 X-20 Y40\n";
     let options = PlanOptions {
         parse: ParseOptions {
             origin: Some([0.505, -0.010, 0.600]),
@@ -423,21 +428,104 @@ fn a_jump_leaving_a_singular_start_pose_blames_the_start_pose() {
         ..PlanOptions::default()
     };
     let robot = Robot::irb140();
-    match plan(text, &robot, &options) {
-        Err(PlanError::Reference(r)) => {
-            assert!(
-                matches!(r.failure, ReferenceFailure::StartSingular { joint: 4, .. }),
-                "{r}"
-            );
-            let (d, s) = (r.to_string(), [515.0, 0.0, 712.0]);
-            assert!(d.contains("start pose is at a singularity"), "{d}");
-            let at = r.position;
-            assert!((0..3).all(|k| (at[k] * 1e3 - s[k]).abs() < 1.0), "{at:?}");
-        }
-        other => panic!("expected the singular start pose to be named, got {other:?}"),
+    let planned = plan(text, &robot, &options).expect("plans with a turn at the start");
+    let turn = planned
+        .diagnostics
+        .start_turn
+        .clone()
+        .expect("a start turn");
+    let r = &planned.reference;
+    let n = robot.dof();
+    let ts = options.ts;
+    // It starts at the robot's start pose and turns joints 4 and 6 only, by opposite angles
+    // (q4 + q6 is the wrist's rotation about the common axis).
+    assert_eq!(r.q(0), robot.start_q());
+    assert_eq!(turn.from, robot.start_q());
+    for i in [0, 1, 2, 4] {
+        assert!(
+            (turn.to[i] - turn.from[i]).abs() < 1e-6,
+            "joint {} moved: {:?}",
+            i + 1,
+            turn.to
+        );
     }
+    assert!(turn.to[3].abs() > 0.5, "joint 4 turns: {:?}", turn.to);
+    assert!((turn.to[3] + turn.to[5]).abs() < 1e-9, "{:?}", turn.to);
+    assert!(turn.to_string().contains("joint 4 (joint_4) by"), "{turn}");
+    // The tool holds still during the turn (forward kinematics of every sample), the joints
+    // keep their speed and acceleration limits, and the path then starts: the trajectory is
+    // the turn longer than without it.
+    let mut ws = Workspace::new(&robot);
+    let p0 = forward_kinematics(&robot, &mut ws, robot.start_q())
+        .unwrap()
+        .pos;
+    let turn_samples = (turn.duration / ts).round() as usize;
+    assert!(turn_samples >= 2);
+    for k in 0..=turn_samples {
+        let p = forward_kinematics(&robot, &mut ws, r.q(k)).unwrap().pos;
+        assert!(
+            (p - p0).norm() < 1e-9,
+            "sample {k}: tool moved by {:e} m",
+            (p - p0).norm()
+        );
+        let rot_err = (planned.trajectory.sample(k as f64 * ts).position - p0).norm();
+        assert!(
+            rot_err < 1e-12,
+            "the Cartesian path holds its start during the turn"
+        );
+    }
+    for k in 1..r.len() {
+        for (i, j) in robot.joints().iter().enumerate() {
+            let v = (r.q(k)[i] - r.q(k - 1)[i]).abs() / ts;
+            assert!(
+                v <= j.limits.velocity * (1.0 + 1e-9),
+                "sample {k} joint {}: {v} rad/s",
+                i + 1
+            );
+        }
+    }
+    for k in 1..turn_samples {
+        for (i, j) in robot.joints().iter().enumerate() {
+            let a = (r.q(k + 1)[i] - 2.0 * r.q(k)[i] + r.q(k - 1)[i]).abs() / (ts * ts);
+            assert!(
+                a <= j.limits.acceleration * 1.001,
+                "sample {k} joint {}: {a} rad/s²",
+                i + 1
+            );
+        }
+    }
+    let _ = n;
+    // An arc back past the singularity (0.1 mm from the wrist straight) is refused for that
+    // cause, not for the path speed.
+    let back = format!("{text}G2 X20 Y0 I0 J-40\n");
+    match plan(&back, &robot, &options) {
+        Err(ofmpc::motion::PlanError::Reference(e)) => assert!(
+            matches!(e.failure, ReferenceFailure::SingularPass { joint: 4, .. }),
+            "{e}"
+        ),
+        other => panic!("expected the singularity to be named, got {other:?}"),
+    }
+    // From a bent wrist (not singular) the same path plans without a turn, and the turned
+    // plan is that much longer.
     let mut bent = Robot::irb140();
     bent.set_start_q(&[0.0, 0.0, 0.0, 0.0, 0.5, 0.0]).unwrap();
     let fine = plan(text, &bent, &options).expect("plans from a bent wrist");
+    assert!(fine.diagnostics.start_turn.is_none());
     assert!(fine.diagnostics.duration > 0.0);
+}
+
+/// The turn's error message remains for what a turn cannot cure.
+#[test]
+fn the_singular_start_message_names_the_start_pose() {
+    use ofmpc::motion::reference::ReferenceFailure;
+    let f = ReferenceFailure::StartSingular {
+        joint: 4,
+        name: "joint_4".into(),
+        speed: 157.0,
+        limit: 6.0,
+    };
+    assert!(
+        f.to_string().contains("start pose is at a singularity"),
+        "{f}"
+    );
 }

@@ -119,6 +119,9 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     for w in &planned.program.warnings {
         console::warn(&format!("{name}: {w}"));
     }
+    if let Some(turn) = &planned.diagnostics.start_turn {
+        console::warn(&format!("{name}: {turn}"));
+    }
     for w in &planned.diagnostics.joint_limited {
         console::warn(&format!("{name}: {w}"));
     }

@@ -20,8 +20,9 @@ use crate::motion::JointQuantity;
 /// Samples of `τ` per move at which the joint speed and acceleration are evaluated.
 const TAU_SAMPLES: usize = 512;
 
-/// Largest joint step (rad) between neighbouring grid points that is still one branch of the
-/// inverse kinematics; a larger one is a configuration jump, left to the reference's check.
+/// Largest joint step (rad) between neighbouring fine points ([`fine_peaks`]) that is still
+/// one branch of the inverse kinematics; a larger one is a configuration jump, left to the
+/// reference's check.
 const BRANCH_JUMP: f64 = 0.5;
 
 /// A `G61` move slowed down by a joint limit.
@@ -48,7 +49,9 @@ impl std::fmt::Display for JointLimitedMove {
 }
 
 /// Joint positions at `m + 1` equally spaced points of `segment`, row-major; `None` if the
-/// inverse kinematics fails or jumps branch (the reference builder reports it).
+/// inverse kinematics fails (the reference builder reports it). A large step between two
+/// points (a joint turning fast near a singularity, or a jump of branch) is resolved by
+/// [`fine_peaks`].
 fn joint_grid(segment: &Segment, m: usize, jc: &mut JointConstraints<'_>) -> Option<Vec<f64>> {
     let nj = jc.velocity.len();
     let len = segment.length();
@@ -58,9 +61,6 @@ fn joint_grid(segment: &Segment, m: usize, jc: &mut JointConstraints<'_>) -> Opt
             .map
             .solve(&segment.point(len * i as f64 / m as f64))
             .ok()?;
-        if i > 0 && (0..nj).any(|j| (sol[j] - q[(i - 1) * nj + j]).abs() > BRANCH_JUMP) {
-            return None;
-        }
         q.extend_from_slice(sol);
     }
     Some(q)
@@ -83,6 +83,99 @@ fn derivatives(q: &[f64], m: usize, nj: usize, h: f64) -> (Vec<f64>, Vec<f64>) {
         }
     }
     (d1, d2)
+}
+
+/// A joint step (rad) between neighbouring grid points above which the interval is sampled
+/// again finely ([`fine_peaks`]): near a singularity a joint turns within a fraction of the
+/// grid spacing, and the grid's differences miss its peak speed.
+const STEEP_STEP: f64 = 0.01;
+
+/// Largest joint step (rad) between the fine points of a steep interval.
+const FINE_STEP: f64 = 1e-3;
+
+/// The grid intervals (`i` from point `i` to `i + 1`) in which a joint steps by more than
+/// [`STEEP_STEP`].
+fn steep_intervals(q: &[f64], m: usize, nj: usize) -> impl Iterator<Item = usize> + '_ {
+    (0..m)
+        .filter(move |&i| (0..nj).any(|j| (q[(i + 1) * nj + j] - q[i * nj + j]).abs() > STEEP_STEP))
+}
+
+/// `τ ∈ [0, 1]` at which the normalized law reaches `x ∈ [0, 1]` of the length (bisection:
+/// `σ` increases).
+fn tau_at(law: &TimeLaw, x: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    for _ in 0..48 {
+        let mid = 0.5 * (lo + hi);
+        if law.profile.eval(mid).s < x {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The durations the speed and acceleration limits need on grid interval `i` of `segment`,
+/// with the joint path sampled finely there (joint steps of at most [`FINE_STEP`], central
+/// differences) and the law evaluated where it passes each fine point; `None` if the inverse
+/// kinematics fails or jumps branch.
+fn fine_peaks(
+    segment: &Segment,
+    law: &TimeLaw,
+    q: &[f64],
+    i: usize,
+    m: usize,
+    jc: &mut JointConstraints<'_>,
+) -> Option<((f64, usize), (f64, usize))> {
+    let nj = jc.velocity.len();
+    let len = segment.length();
+    let step = (0..nj)
+        .map(|j| (q[(i + 1) * nj + j] - q[i * nj + j]).abs())
+        .fold(0.0, f64::max);
+    let k = ((step / FINE_STEP).ceil() as usize).clamp(2, 1024);
+    let h = len / (m * k) as f64;
+    let s0 = len * i as f64 / m as f64;
+    // Points s0 + l h for l = −1 ..= k + 1, solved from grid point i along the path.
+    jc.map.set_state(&q[i * nj..(i + 1) * nj]);
+    let mut fine: Vec<f64> = Vec::with_capacity((k + 3) * nj);
+    for l in -1..=(k as i64 + 1) {
+        let s = (s0 + l as f64 * h).clamp(0.0, len);
+        let sol = jc.map.solve(&segment.point(s)).ok()?;
+        if let Some(last) = fine.len().checked_sub(nj).map(|a| &fine[a..]) {
+            if (0..nj).any(|j| (sol[j] - last[j]).abs() > BRANCH_JUMP) {
+                return None;
+            }
+        }
+        fine.extend_from_slice(sol);
+    }
+    let (mut t_v, mut t_a) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    for l in 1..=k + 1 {
+        let s = s0 + (l as f64 - 1.0) * h;
+        if !(0.0..=len).contains(&s) || l == 1 && i == 0 || l == k + 1 && i + 1 == m {
+            continue; // the ends of the segment: the grid's one-sided differences cover them
+        }
+        let p = law.profile.eval(tau_at(law, s / len));
+        for j in 0..nj {
+            let (y0, y1, y2) = (
+                fine[(l - 1) * nj + j],
+                fine[l * nj + j],
+                fine[(l + 1) * nj + j],
+            );
+            let dq = (y2 - y0) / (2.0 * h);
+            let ddq = (y0 - 2.0 * y1 + y2) / (h * h);
+            let tv = (dq * len * p.ds).abs() / jc.velocity[j];
+            let ta = ((dq * len * p.dds + ddq * len * len * p.ds * p.ds).abs()
+                / jc.acceleration[j])
+                .sqrt();
+            if tv > t_v.0 {
+                t_v = (tv, j);
+            }
+            if ta > t_a.0 {
+                t_a = (ta, j);
+            }
+        }
+    }
+    Some((t_v, t_a))
 }
 
 /// The duration of `law` on `segment` stretched so that every joint keeps its speed and
@@ -120,6 +213,21 @@ pub(crate) fn joint_limited_duration(
             if ta > t_a.0 {
                 t_a = (ta, j);
             }
+        }
+    }
+    let steep: Vec<usize> = steep_intervals(&q, m, nj).collect();
+    let fine: Option<Vec<_>> = steep
+        .into_iter()
+        .map(|i| fine_peaks(segment, law, &q, i, m, jc))
+        .collect();
+    // The next move is solved from this one's end.
+    jc.map.set_state(&q[m * nj..]);
+    for (tv, ta) in fine? {
+        if tv.0 > t_v.0 {
+            t_v = tv;
+        }
+        if ta.0 > t_a.0 {
+            t_a = ta;
         }
     }
     let (t, j, quantity) = if t_v.0 >= t_a.0 {

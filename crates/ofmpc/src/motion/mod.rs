@@ -45,13 +45,16 @@ pub mod trajectory;
 
 pub use blend::PathMode;
 pub use exact::JointLimitedMove;
-pub use reference::{JointReference, Orientation, ReferenceError, MAX_PLAN_VALUES};
+pub use reference::{JointReference, Orientation, ReferenceError, StartTurn, MAX_PLAN_VALUES};
 pub use tool::tool_axis;
 pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
 use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
 use crate::robot::Robot;
-use reference::{build_reference, sample_count, values_per_sample, JointMap, ReferenceFailure};
+use reference::{
+    build_reference, build_turning_reference, sample_count, values_per_sample, JointMap,
+    ReferenceFailure,
+};
 use topp::JointConstraints;
 use trajectory::LongCause;
 
@@ -98,6 +101,9 @@ pub struct PlanDiagnostics {
     pub peak_accel_ratio: f64,
     /// The exact-stop (`G61`) moves a joint limit slowed down, with the cause.
     pub joint_limited: Vec<JointLimitedMove>,
+    /// The turn of the joints in place before the first move, from a start pose that is
+    /// singular for the path ([`StartTurn`]); `None` when the path starts without one.
+    pub start_turn: Option<StartTurn>,
 }
 
 /// A planned program: the parsed program, the timed Cartesian path, the joint reference.
@@ -253,6 +259,52 @@ pub fn plan(text: &str, robot: &Robot, options: &PlanOptions) -> Result<Plan, Pl
     plan_program(program, robot, options)
 }
 
+/// The joint reference of `trajectory`; where the robot's start pose is singular for it
+/// ([`ReferenceFailure::StartSingular`]) and a turn of the joints in place cures that
+/// ([`StartTurn`]), the trajectory delayed by the turn and the reference that turns first.
+fn reference_turning_if_singular(
+    robot: &Robot,
+    trajectory: CartesianTrajectory,
+    orientation: Orientation,
+    ts: f64,
+) -> Sampled {
+    let error = match build_reference(robot, &trajectory, orientation, ts) {
+        Ok(reference) => return Sampled::Reference(trajectory, reference, None),
+        Err(error) => error,
+    };
+    let Some(turn) = StartTurn::curing(robot, &trajectory, orientation, ts, &error) else {
+        return Sampled::failed(&trajectory, error);
+    };
+    let delayed = trajectory.delayed(turn.duration);
+    match build_turning_reference(robot, &delayed, orientation, ts, Some(&turn)) {
+        Ok(reference) => Sampled::Reference(delayed, reference, Some(turn)),
+        Err(error) => Sampled::failed(&delayed, error),
+    }
+}
+
+/// What sampling a timed path in joint space gave.
+#[allow(clippy::large_enum_variant)]
+enum Sampled {
+    /// The trajectory (delayed by the start turn, if any), its reference and the turn.
+    Reference(CartesianTrajectory, JointReference, Option<StartTurn>),
+    /// A joint exceeds its speed limit inside a blended run by this ratio.
+    RunTooFast(f64, PlanError),
+    /// Another failure.
+    Failed(PlanError),
+}
+
+impl Sampled {
+    /// The failure `error` of `trajectory`'s reference.
+    fn failed(trajectory: &CartesianTrajectory, error: ReferenceError) -> Self {
+        match error.failure {
+            ReferenceFailure::JointSpeed { speed, limit, .. } if trajectory.in_run(error.time) => {
+                Self::RunTooFast(speed / limit, PlanError::Reference(error))
+            }
+            _ => Self::Failed(PlanError::Reference(error)),
+        }
+    }
+}
+
 /// The flange position (m, base frame) at the robot's start pose; `None` if it has none.
 pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
     let mut ws = crate::dynamics::Workspace::new(robot);
@@ -306,8 +358,17 @@ pub fn plan_program(
         attempts += 1;
         let trajectory = limits.time(&program, options, map.as_mut(), scale)?;
         check_sample_count(&trajectory, &program, options, n)?;
-        let reference = build_reference(robot, &trajectory, options.orientation, ts)
-            .map_err(PlanError::Reference)?;
+        let (trajectory, reference, start_turn) =
+            match reference_turning_if_singular(robot, trajectory, options.orientation, ts) {
+                Sampled::Reference(t, r, turn) => (t, r, turn),
+                // A blended run's timing grid can miss a joint's peak speed near a
+                // singularity, which the reference's samples show: timed again slower.
+                Sampled::RunTooFast(ratio, _) if attempts < MAX_TIMING_ATTEMPTS => {
+                    scale[0] *= 0.995 / ratio;
+                    continue;
+                }
+                Sampled::RunTooFast(_, e) | Sampled::Failed(e) => return Err(e),
+            };
         // Worst joint speed and acceleration over the runs' samples, relative to the limits.
         let worst = if has_runs {
             limits.worst_in_runs(&trajectory, &reference, ts, n)
@@ -331,6 +392,7 @@ pub fn plan_program(
                 peak_speed_ratio: worst[0].0,
                 peak_accel_ratio: worst[1].0,
                 joint_limited: trajectory.joint_limited().to_vec(),
+                start_turn,
             };
             return Ok(Plan {
                 program: as_read.unwrap_or(program),

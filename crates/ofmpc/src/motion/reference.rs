@@ -55,6 +55,29 @@ pub enum ReferenceFailure {
         /// Upper limit (rad).
         upper: f64,
     },
+    /// Following the path continuously would take a joint outside its range because the path
+    /// passes next to a singularity of the arm (its Jacobian's smallest singular value below
+    /// [`SINGULAR_PASS_RATIO`] of its largest), where the branch turns that joint by a large
+    /// angle within a short distance.
+    #[error(
+        "the path passes next to a singularity of the arm (for a 6-axis arm, usually the wrist straight, joint 5 \
+         near 0), where joint {joint} ({name}) would have to turn to {:.1}°, outside its range [{:.1}°, {:.1}°], \
+         to follow it; move the part with a work offset (G10 L2 P1 X.. Y.. Z..) so that the path keeps away from \
+         the singularity, or change the orientation",
+        value.to_degrees(), lower.to_degrees(), upper.to_degrees()
+    )]
+    SingularPass {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// Value the joint would need (rad).
+        value: f64,
+        /// Lower limit (rad).
+        lower: f64,
+        /// Upper limit (rad).
+        upper: f64,
+    },
     /// A joint would move faster than its speed limit.
     #[error(
         "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s; lower \
@@ -277,7 +300,8 @@ impl JointMap {
     /// When the analytic solution jumps to another configuration, whether the continuous
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
-    fn branch_limit(&self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
+    fn branch_limit(&mut self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
+        let singular = self.singular_ratio(prev) < SINGULAR_PASS_RATIO;
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
         let hint: [f64; 6] = std::array::from_fn(|i| prev.get(i).copied().unwrap_or(0.0));
         let q = match &self.ik {
@@ -292,16 +316,40 @@ impl JointMap {
             Ik::Numeric(_) => return None,
         };
         self.robot.joints().iter().enumerate().find_map(|(i, j)| {
-            (q[i] < j.limits.lower || q[i] > j.limits.upper).then(|| {
+            let (joint, name, value) = (i + 1, j.name.clone(), q[i]);
+            let (lower, upper) = (j.limits.lower, j.limits.upper);
+            (value < lower || value > upper).then_some(if singular {
+                ReferenceFailure::SingularPass {
+                    joint,
+                    name,
+                    value,
+                    lower,
+                    upper,
+                }
+            } else {
                 ReferenceFailure::BranchLimit {
-                    joint: i + 1,
-                    name: j.name.clone(),
-                    value: q[i],
-                    lower: j.limits.lower,
-                    upper: j.limits.upper,
+                    joint,
+                    name,
+                    value,
+                    lower,
+                    upper,
                 }
             })
         })
+    }
+
+    /// The ratio of the smallest to the largest singular value of the flange Jacobian at `q`
+    /// (0 at a singularity).
+    fn singular_ratio(&mut self, q: &[f64]) -> f64 {
+        let mut jac = nalgebra::DMatrix::zeros(6, q.len());
+        self.fk.flange_jacobian(q, &mut jac);
+        let sv = jac.singular_values();
+        let max = sv.max();
+        if max > 0.0 {
+            sv.min() / max
+        } else {
+            0.0
+        }
     }
 
     /// Exact joint velocity `J(q)⁻¹ [v; 0]` at the current solution (six joints, regular
@@ -319,6 +367,11 @@ impl JointMap {
         }
     }
 }
+
+/// The ratio of the flange Jacobian's smallest to largest singular value below which a
+/// joint limit met by the continuous branch is blamed on a singularity
+/// ([`ReferenceFailure::SingularPass`]).
+pub const SINGULAR_PASS_RATIO: f64 = 1e-3;
 
 /// Distance (m) from the path's start point within which a jump of the joints is blamed on a
 /// singular start pose ([`ReferenceFailure::StartSingular`]).
@@ -353,6 +406,19 @@ pub fn build_reference(
     trajectory: &CartesianTrajectory,
     orientation: Orientation,
     ts: f64,
+) -> Result<JointReference, ReferenceError> {
+    build_turning_reference(robot, trajectory, orientation, ts, None)
+}
+
+/// [`build_reference`], with the joints following `turn` over its duration (the trajectory
+/// holds its start point meanwhile: [`CartesianTrajectory::delayed`]) and the path solved
+/// from its end pose after it.
+pub(crate) fn build_turning_reference(
+    robot: &Robot,
+    trajectory: &CartesianTrajectory,
+    orientation: Orientation,
+    ts: f64,
+    turn: Option<&StartTurn>,
 ) -> Result<JointReference, ReferenceError> {
     let n = robot.dof();
     let start = trajectory.start();
@@ -400,6 +466,20 @@ pub fn build_reference(
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
         let p = sample.position;
+        if let Some(turn) = turn.filter(|turn| t <= turn.duration) {
+            // The joints turn in place; the path starts from the turn's end.
+            let (q_t, qd_t) = turn.state(t);
+            from_start_pose = true;
+            map.set_state(&q_t);
+            if n == 6 && exact_ok {
+                exact_qd.extend_from_slice(&qd_t);
+            }
+            q.extend_from_slice(&q_t);
+            position.push([p.x, p.y, p.z]);
+            lines.push(sample.line);
+            prev.copy_from_slice(&q_t);
+            continue;
+        }
         let mut sol = map
             .solve(&p)
             .map_err(|e| fail(sample.line, t, p, e))?
@@ -418,31 +498,9 @@ pub fn build_reference(
             // step may exceed by rounding: 1 % slack there (a jump to another arm
             // configuration is far larger; the planner checks the exact speeds itself).
             let slack = if trajectory.in_run(t) { 1.01 } else { 1.0 };
-            for (i, j) in robot.joints().iter().enumerate() {
-                let speed = (sol[i] - prev[i]).abs() / ts;
-                if speed > j.limits.velocity * slack {
-                    let leaving_start = from_start_pose && (p - start).norm() <= LEAVING_START;
-                    let failure = map.branch_limit(&p, &prev).unwrap_or_else(|| {
-                        let (joint, name, limit) = (i + 1, j.name.clone(), j.limits.velocity);
-                        if leaving_start {
-                            ReferenceFailure::StartSingular {
-                                joint,
-                                name,
-                                speed,
-                                limit,
-                            }
-                        } else {
-                            ReferenceFailure::JointSpeed {
-                                joint,
-                                name,
-                                speed,
-                                limit,
-                            }
-                        }
-                    });
-                    return Err(fail(sample.line, t, p, failure));
-                }
-            }
+            let leaving_start = from_start_pose && (p - start).norm() <= LEAVING_START;
+            step_within_speed_limits(&mut map, &p, &prev, &sol, ts, slack, leaving_start)
+                .map_err(|failure| fail(sample.line, t, p, failure))?;
         }
         // Exact joint velocity where the Jacobian is square and regular:
         // J(q) q̇ = [ṗ; ω] with ω = 0 (constant orientation).
@@ -464,6 +522,182 @@ pub fn build_reference(
         r.qd = exact_qd;
     }
     Ok(r)
+}
+
+/// A turn of the joints in place before the path starts, the tool holding still: from a
+/// singular start pose ([`ReferenceFailure::StartSingular`], e.g. the IRB 140's q = 0 with
+/// joints 4 and 6 on one axis) to the configuration of the same tool pose on the branch the
+/// path leaves by, so that the joints need no jump when the tool starts to move.
+///
+/// The joints move on the straight line from [`StartTurn::from`] to [`StartTurn::to`] with
+/// the quintic rest-to-rest law `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵`, `τ = t / T` (peak speed
+/// `15/8 · Δ/T`, peak acceleration `10/√3 · Δ/T²`; Biagiotti & Melchiorri, *Trajectory
+/// Planning for Automatic Machines and Robots*, 2008, §2.1.5), `T` the shortest duration
+/// that keeps every joint within its speed and acceleration limits, rounded up to a whole
+/// number of samples. Every point of the line is checked to keep the start's tool pose.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StartTurn {
+    /// The robot's start pose (rad).
+    pub from: Vec<f64>,
+    /// The same tool pose on the branch the path leaves by (rad).
+    pub to: Vec<f64>,
+    /// Duration `T` (s); the program's path starts after it.
+    pub duration: f64,
+    /// The joints' names.
+    pub names: Vec<String>,
+}
+
+/// How far (m, rad) the tool may move during a [`StartTurn`]: it must hold still.
+pub const START_TURN_TOLERANCE: f64 = 1e-9;
+
+impl StartTurn {
+    /// Joint positions and velocities at time `t ∈ [0, T]` of the turn.
+    pub fn state(&self, t: f64) -> (Vec<f64>, Vec<f64>) {
+        let tau = (t / self.duration).clamp(0.0, 1.0);
+        let s = tau * tau * tau * (10.0 + tau * (-15.0 + 6.0 * tau));
+        let ds = 30.0 * tau * tau * (1.0 - tau) * (1.0 - tau) / self.duration;
+        let q = self
+            .from
+            .iter()
+            .zip(&self.to)
+            .map(|(a, b)| a + (b - a) * s)
+            .collect();
+        let qd = self
+            .from
+            .iter()
+            .zip(&self.to)
+            .map(|(a, b)| (b - a) * ds)
+            .collect();
+        (q, qd)
+    }
+
+    /// The turn that cures a [`ReferenceFailure::StartSingular`] `error` of the reference of
+    /// `trajectory`: `None` for another failure, or when the branch the path leaves by has no
+    /// configuration of the start's tool pose joined to the start pose by a straight line of
+    /// that tool pose (within [`START_TURN_TOLERANCE`]).
+    pub(crate) fn curing(
+        robot: &Robot,
+        trajectory: &CartesianTrajectory,
+        orientation: Orientation,
+        ts: f64,
+        error: &ReferenceError,
+    ) -> Option<Self> {
+        if !matches!(error.failure, ReferenceFailure::StartSingular { .. }) {
+            return None;
+        }
+        let mut map = JointMap::new(robot, orientation).ok()?;
+        let from = robot.start_q().to_vec();
+        // The branch the path leaves by: the solution where the joints jumped, nearest to
+        // the start pose; then the start's tool pose on that branch (at a wrist singularity
+        // the closed forms keep the free joint at its hint).
+        let leaving = map
+            .solve(&trajectory.sample(error.time).position)
+            .ok()?
+            .to_vec();
+        map.set_state(&leaving);
+        let to = map.solve(&trajectory.start()).ok()?.to_vec();
+        let still = map.fk.flange_pose(&from);
+        let holds = (0..=32).all(|i| {
+            let s = f64::from(i) / 32.0;
+            let q: Vec<f64> = from.iter().zip(&to).map(|(a, b)| a + (b - a) * s).collect();
+            let pose = map.fk.flange_pose(&q);
+            (pose.translation.vector - still.translation.vector).norm() <= START_TURN_TOLERANCE
+                && pose.rotation.angle_to(&still.rotation) <= START_TURN_TOLERANCE
+        });
+        let within = robot
+            .joints()
+            .iter()
+            .zip(&to)
+            .all(|(j, v)| *v >= j.limits.lower && *v <= j.limits.upper);
+        if !(holds && within) {
+            return None;
+        }
+        let duration = robot
+            .joints()
+            .iter()
+            .zip(from.iter().zip(&to))
+            .map(|(j, (a, b))| {
+                let d = (b - a).abs();
+                let by_speed = 15.0 / 8.0 * d / j.limits.velocity;
+                let by_accel = (10.0 / 3f64.sqrt() * d / j.limits.acceleration).sqrt();
+                by_speed.max(by_accel)
+            })
+            .fold(0.0, f64::max);
+        if !(duration.is_finite() && duration > 0.0) {
+            return None;
+        }
+        let duration = (duration / ts - 1e-9).ceil() * ts;
+        let names = robot.joints().iter().map(|j| j.name.clone()).collect();
+        Some(Self {
+            from,
+            to,
+            duration,
+            names,
+        })
+    }
+}
+
+impl std::fmt::Display for StartTurn {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "the robot's start pose is singular for this path: before the first move, the joints turn in place \
+             for {:.3} s, the tool holding still (",
+            self.duration
+        )?;
+        let mut first = true;
+        for (i, (a, b)) in self.from.iter().zip(&self.to).enumerate() {
+            if (b - a).abs() > START_POSE_TOLERANCE {
+                let name = self.names.get(i).map_or("", String::as_str);
+                let sep = if first { "" } else { ", " };
+                write!(
+                    f,
+                    "{sep}joint {} ({name}) by {:.1}°",
+                    i + 1,
+                    (b - a).to_degrees()
+                )?;
+                first = false;
+            }
+        }
+        write!(f, "); start from a non-singular pose to avoid it")
+    }
+}
+
+/// Checks the step from `prev` to `sol` (at flange position `p`) against every joint's speed
+/// limit times `slack`; the failure names its cause: a joint limit the continuous branch
+/// meets ([`JointMap::branch_limit`]), a singular start pose (`leaving_start`), or the speed.
+fn step_within_speed_limits(
+    map: &mut JointMap,
+    p: &Vector3<f64>,
+    prev: &[f64],
+    sol: &[f64],
+    ts: f64,
+    slack: f64,
+    leaving_start: bool,
+) -> Result<(), ReferenceFailure> {
+    let too_fast = map.robot.joints().iter().enumerate().find_map(|(i, j)| {
+        let speed = (sol[i] - prev[i]).abs() / ts;
+        (speed > j.limits.velocity * slack)
+            .then(|| (i + 1, j.name.clone(), speed, j.limits.velocity))
+    });
+    let Some((joint, name, speed, limit)) = too_fast else {
+        return Ok(());
+    };
+    Err(map.branch_limit(p, prev).unwrap_or(if leaving_start {
+        ReferenceFailure::StartSingular {
+            joint,
+            name,
+            speed,
+            limit,
+        }
+    } else {
+        ReferenceFailure::JointSpeed {
+            joint,
+            name,
+            speed,
+            limit,
+        }
+    }))
 }
 
 /// A joint reference sampled at `ts`. Vectors are stored row-major (`k·n + i`).

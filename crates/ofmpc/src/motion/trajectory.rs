@@ -541,6 +541,30 @@ impl CartesianTrajectory {
         }
     }
 
+    /// The same trajectory after holding its start point for `hold` seconds (a leading
+    /// dwell; every piece `hold` later): the time a [`crate::motion::reference::StartTurn`]
+    /// takes.
+    pub(crate) fn delayed(mut self, hold: f64) -> Self {
+        for s in &mut self.segments {
+            s.start_time += hold;
+            s.end_time += hold;
+        }
+        let line = self.segments.first().map_or(self.start_line, |s| s.line);
+        self.segments.insert(
+            0,
+            TimedSegment {
+                kind: TimedKind::Dwell {
+                    position: self.start,
+                },
+                start_time: 0.0,
+                end_time: hold,
+                line,
+            },
+        );
+        self.duration += hold;
+        self
+    }
+
     /// Total duration (s).
     pub fn duration(&self) -> f64 {
         self.duration
