@@ -529,3 +529,40 @@ fn the_singular_start_message_names_the_start_pose() {
         "{f}"
     );
 }
+
+/// A program that leaves the robot's reach is refused for that, even where a joint's speed
+/// fails first on the way out (UGS's 1000 mm square on the IRB 140: joint 2 at 4.04 rad/s
+/// near the edge of the workspace before the corner that no configuration reaches).
+#[test]
+fn a_path_out_of_reach_is_refused_for_its_reach_not_for_a_joint_speed_before_it() {
+    use ofmpc::motion::reference::ReferenceFailure;
+    use ofmpc::motion::PlanError;
+    let text = "G21 G90\nG0 X0 Y0 Z0\nG1 X0 Y0 F10000\nG1 X1000\nG1 Y1000\nG1 X0\nG1 Y0\n";
+    let options = PlanOptions {
+        parse: ParseOptions {
+            origin: Some([0.0, -0.5, 0.35]),
+            ..Default::default()
+        },
+        ts: 0.01,
+        ..PlanOptions::default()
+    };
+    let robot = Robot::irb140();
+    match plan(text, &robot, &options) {
+        Err(PlanError::Reference(e)) => {
+            assert!(matches!(e.failure, ReferenceFailure::Ik(_)), "{e}");
+            assert_eq!(e.line, 4, "{e}");
+            // The wrist centre (the flange c4 back along the tool axis, base +x) is farther
+            // from the shoulder than the arm reaches (c2 + √(c3² + a2²)).
+            let o = ofmpc::ik::OpwParameters::irb140();
+            let p = e.position;
+            let w = [p[0] - o.c4, p[1], p[2]];
+            let from_shoulder = (w[0].hypot(w[1]) - o.a1).hypot(w[2] - o.c1);
+            let reach = o.c2 + o.c3.hypot(o.a2);
+            assert!(
+                from_shoulder > reach,
+                "{e}: {from_shoulder} m from the shoulder"
+            );
+        }
+        other => panic!("expected the reach to be named, got {other:?}"),
+    }
+}

@@ -52,8 +52,8 @@ pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
 use crate::robot::Robot;
 use reference::{
-    build_reference, build_turning_reference, sample_count, values_per_sample, JointMap,
-    ReferenceFailure,
+    build_reference, build_turning_reference, first_unreachable, sample_count, values_per_sample,
+    JointMap, ReferenceFailure,
 };
 use topp::JointConstraints;
 use trajectory::LongCause;
@@ -273,12 +273,12 @@ fn reference_turning_if_singular(
         Err(error) => error,
     };
     let Some(turn) = StartTurn::curing(robot, &trajectory, orientation, ts, &error) else {
-        return Sampled::failed(&trajectory, error);
+        return Sampled::failed(robot, &trajectory, orientation, ts, error);
     };
     let delayed = trajectory.delayed(turn.duration);
     match build_turning_reference(robot, &delayed, orientation, ts, Some(&turn)) {
         Ok(reference) => Sampled::Reference(delayed, reference, Some(turn)),
-        Err(error) => Sampled::failed(&delayed, error),
+        Err(error) => Sampled::failed(robot, &delayed, orientation, ts, error),
     }
 }
 
@@ -294,8 +294,28 @@ enum Sampled {
 }
 
 impl Sampled {
-    /// The failure `error` of `trajectory`'s reference.
-    fn failed(trajectory: &CartesianTrajectory, error: ReferenceError) -> Self {
+    /// The failure `error` of `trajectory`'s reference. A joint's speed or range that fails
+    /// where a later point of the path is out of the robot's reach is reported as that point
+    /// ([`first_unreachable`]): the program does not fit, whatever its timing.
+    fn failed(
+        robot: &Robot,
+        trajectory: &CartesianTrajectory,
+        orientation: Orientation,
+        ts: f64,
+        error: ReferenceError,
+    ) -> Self {
+        let joints_failed = matches!(
+            error.failure,
+            ReferenceFailure::JointSpeed { .. }
+                | ReferenceFailure::StartSingular { .. }
+                | ReferenceFailure::BranchLimit { .. }
+                | ReferenceFailure::SingularPass { .. }
+        );
+        if joints_failed {
+            if let Some(out_of_reach) = first_unreachable(robot, trajectory, orientation, ts) {
+                return Self::Failed(PlanError::Reference(out_of_reach));
+            }
+        }
         match error.failure {
             ReferenceFailure::JointSpeed { speed, limit, .. } if trajectory.in_run(error.time) => {
                 Self::RunTooFast(speed / limit, PlanError::Reference(error))

@@ -663,6 +663,44 @@ impl std::fmt::Display for StartTurn {
     }
 }
 
+/// The first sample of `trajectory` (every `ts`, checked where the tool moved by 1 mm since
+/// the last check) whose pose no arm configuration within the joint limits reaches: the
+/// closed-form inverse kinematics (OPW, UR) solved afresh from the start pose. `None` when
+/// every checked sample is in reach, or for a robot without a closed form (a numeric solver
+/// failing from one start proves nothing).
+pub(crate) fn first_unreachable(
+    robot: &Robot,
+    trajectory: &CartesianTrajectory,
+    orientation: Orientation,
+    ts: f64,
+) -> Option<ReferenceError> {
+    let mut map = JointMap::new(robot, orientation).ok()?;
+    if matches!(map.ik, Ik::Numeric(_)) {
+        return None;
+    }
+    let steps = sample_count(trajectory.duration(), ts);
+    let mut last: Option<Vector3<f64>> = None;
+    (0..steps as usize).find_map(|k| {
+        let t = (k as f64 * ts).min(trajectory.duration());
+        let sample = trajectory.sample(t);
+        let p = sample.position;
+        if last.is_some_and(|l| (p - l).norm() < 1e-3) {
+            return None;
+        }
+        last = Some(p);
+        map.reset();
+        match map.solve(&p) {
+            Err(failure @ ReferenceFailure::Ik(_)) => Some(ReferenceError {
+                line: sample.line,
+                time: t,
+                position: [p.x, p.y, p.z],
+                failure,
+            }),
+            _ => None,
+        }
+    })
+}
+
 /// Checks the step from `prev` to `sol` (at flange position `p`) against every joint's speed
 /// limit times `slack`; the failure names its cause: a joint limit the continuous branch
 /// meets ([`JointMap::branch_limit`]), a singular start pose (`leaving_start`), or the speed.
