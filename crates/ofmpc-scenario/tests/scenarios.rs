@@ -86,7 +86,7 @@ fn baselines_and_controller_shorthands() {
     assert!(toml::from_str::<ScenarioFile>("controllers = [\"pidd\"]").is_err());
     // The bandwidths reach the controllers' settings; a bad one names its key.
     let s = Scenario::resolve(&f).unwrap();
-    assert_eq!(s.experiment.mpc.baselines, f.baselines);
+    assert_eq!(s.experiment.baselines, f.baselines);
     let mut bad = f.clone();
     bad.baselines.dob_observer_bandwidth = Weight::Scalar(0.0);
     let e = match Scenario::resolve(&bad) {
