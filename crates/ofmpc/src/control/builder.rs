@@ -3,8 +3,9 @@
 //! [`ControllerBuilder`] gathers everything a controller needs — the kind,
 //! the robot (from which the controller's own model is built), the tuning
 //! ([`MpcSettings`]; a baseline's bandwidths, [`BaselineSettings`]), the
-//! drives ([`DriveModel`]), the state observer and the payload estimator — and [`ControllerBuilder::build`] checks that they fit
-//! together before anything runs: a setting that would silently do nothing
+//! drives ([`DriveModel`]), the state observer and the payload estimator —
+//! and [`ControllerBuilder::build`] checks that they fit together before
+//! anything runs: a setting that would silently do nothing
 //! (torque limits with no finite limit, friction compensation with no
 //! friction estimate, …) is a [`BuildError`], never a quiet fallback.
 //!
