@@ -6,7 +6,8 @@ use crate::errors::to_py;
 use crate::robot::PyRobot;
 use numpy::PyArray1;
 use ofmpc::control::{
-    new_controller, Controller, ControllerKind, MpcSettings, Solver, StepInfo, Weight,
+    new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
+    Solver, StepInfo, Weight,
 };
 use ofmpc::dynamics::RobotDynamics;
 use pyo3::prelude::*;
@@ -88,6 +89,7 @@ impl PyController {
             horizon,
             ..MpcSettings::default()
         };
+        let mut baselines = BaselineSettings::default();
         if let Some(w) = weights {
             for (key, value) in w.iter() {
                 let key: String = key.extract()?;
@@ -110,9 +112,9 @@ impl PyController {
                     "q_du" => settings.q_du = wt,
                     "q_u" => settings.q_u = wt,
                     // The baselines' bandwidths (rad/s): pid, ctc/ctc-adaptive, dob-mpc.
-                    "pid_bandwidth" => settings.baselines.pid_bandwidth = wt,
-                    "ctc_bandwidth" => settings.baselines.ctc_bandwidth = wt,
-                    "dob_observer_bandwidth" => settings.baselines.dob_observer_bandwidth = wt,
+                    "pid_bandwidth" => baselines.pid_bandwidth = wt,
+                    "ctc_bandwidth" => baselines.ctc_bandwidth = wt,
+                    "dob_observer_bandwidth" => baselines.dob_observer_bandwidth = wt,
                     _ => {
                         return Err(to_py(format!(
                             "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u, \
@@ -124,7 +126,8 @@ impl PyController {
             }
         }
         let n = robot.robot().dof();
-        let controller = new_controller(kind, n, &settings).map_err(to_py)?;
+        let controller =
+            new_controller_with_baselines(kind, n, &settings, &baselines).map_err(to_py)?;
         Ok(Self {
             kind: controller.kind(),
             dof: controller.dof(),

@@ -8,7 +8,7 @@ use crate::resolve::Scenario;
 use ofmpc::analysis::{
     alpha_interval, inertia_ratio_range, max_payload, spectral_radius, StabilityOptions,
 };
-use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -41,12 +41,11 @@ pub fn margin(scenario: &Scenario, kind: ControllerKind) -> Result<Margin, Scena
     let robot = model_robot(scenario)?;
     let q0 = exp.reference.q(0);
     let opts = StabilityOptions::default();
-    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, q0, &opts).map_err(|source| {
-        ScenarioError::Stability {
+    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, &exp.baselines, q0, &opts)
+        .map_err(|source| ScenarioError::Stability {
             kind,
             source: Box::new(source),
-        }
-    })?;
+        })?;
     let poses = program_poses(scenario);
     let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
     Ok(Margin {
@@ -73,10 +72,11 @@ pub struct RadiusCurve {
 }
 
 /// The spectral radius against α ∈ [0.3, 1.7] (step 0.025) of each controller near rest
-/// at `q0` with `mpc`, on the model `robot`.
+/// at `q0` with `mpc` (a baseline with its bandwidth of `baselines`), on the model `robot`.
 pub fn radius_curves(
     robot: &Robot,
     mpc: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     kinds: &[ControllerKind],
 ) -> Result<Vec<RadiusCurve>, ScenarioError> {
@@ -87,7 +87,7 @@ pub fn radius_curves(
         .map(|&kind| {
             let radius = alpha
                 .iter()
-                .map(|&a| spectral_radius(robot, kind.base(), mpc, q0, a, &opts))
+                .map(|&a| spectral_radius(robot, kind.base(), mpc, baselines, q0, a, &opts))
                 .collect::<Result<Vec<f64>, _>>()?;
             Ok(RadiusCurve {
                 kind,
@@ -335,7 +335,7 @@ fn mpc_candidates(
             let s = candidate_settings(c, n);
             let mut iv = (0.0f64, f64::INFINITY);
             for &k in kinds {
-                match alpha_interval(&exp.robot, k, &s, &q0, &opts) {
+                match alpha_interval(&exp.robot, k, &s, &exp.baselines, &q0, &opts) {
                     Ok((lo, hi)) => iv = (iv.0.max(lo), iv.1.min(hi)),
                     Err(_) => return None,
                 }
@@ -449,12 +449,11 @@ fn adaptive_fallback(
     let opts = StabilityOptions::default();
     let mut margin = f64::INFINITY;
     for k in &adaptive {
-        let (lo, hi) = alpha_interval(&exp.robot, k.base(), &d, q0, &opts).map_err(|source| {
-            ScenarioError::Stability {
+        let (lo, hi) = alpha_interval(&exp.robot, k.base(), &d, &exp.baselines, q0, &opts)
+            .map_err(|source| ScenarioError::Stability {
                 kind: *k,
                 source: Box::new(source),
-            }
-        })?;
+            })?;
         margin = margin.min((1.0 / lo).ln().min(hi.ln()));
     }
     c.margin = margin;

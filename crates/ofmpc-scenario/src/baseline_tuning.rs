@@ -68,7 +68,7 @@ fn with_bandwidth(b: &BaselineSettings, kind: ControllerKind, w: f64) -> Baselin
 
 fn simulate(exp: &Experiment, kind: ControllerKind, w: f64, masses: &[f64]) -> BandwidthCandidate {
     let mut e = exp.clone();
-    e.mpc.baselines = with_bandwidth(&exp.mpc.baselines, kind, w);
+    e.baselines = with_bandwidth(&exp.baselines, kind, w);
     let (ok, worst) = crate::analysis::runs_hold(&e, &[kind], masses.iter());
     BandwidthCandidate {
         bandwidth: w,

@@ -3,8 +3,9 @@
 //! library's own settings types, deserialized as they are (`[mpc]` =
 //! [`MpcSettings`], `[simulation]` = [`LoopSettings`], `[plant]` =
 //! [`PlantSettings`], `[faults]` = [`MeasurementFaults`], `[safety]` =
-//! [`ofmpc::sim::SafetySettings`]; with `[payload]`'s pick-up time the last
-//! two are the run's [`RunConditions`], [`ScenarioFile::run_conditions`]). Overrides ([`Override`], `key=value` with a dotted key)
+//! [`ofmpc::sim::SafetySettings`], `[baselines]` = [`BaselineSettings`]; with
+//! `[payload]`'s pick-up time `[faults]` and `[safety]` are the run's
+//! [`RunConditions`], [`ScenarioFile::run_conditions`]). Overrides ([`Override`], `key=value` with a dotted key)
 //! are applied to the document before it is deserialized, so they meet the
 //! same checks and messages as the key written in the file.
 
@@ -193,7 +194,8 @@ pub struct ScenarioFile {
     pub safety: SafetySection,
     /// `[baselines]`: the baseline controllers' bandwidths (rad/s; a number
     /// or one per joint): `pid_bandwidth`, `ctc_bandwidth`,
-    /// `dob_observer_bandwidth`. Written with the results only when set.
+    /// `dob_observer_bandwidth`; the run's [`ofmpc::sim::Experiment::baselines`]
+    /// as read. Written with the results only when set.
     #[serde(skip_serializing_if = "is_default_baselines")]
     pub baselines: BaselineSettings,
 }

@@ -330,13 +330,20 @@ impl Scenario {
         let (trajectory, reference) = (planned.trajectory, planned.reference);
         // The program's tool length (G43) extends the TCP the run records and follows.
         let robot = robot.with_tool_length(planned.tool_length).unwrap_or(robot);
+        // `[baselines]` is the library's `BaselineSettings` as read, checked for the robot's joints.
+        f.baselines
+            .validate_for_dof(n)
+            .map_err(|error| ScenarioError::Baselines {
+                error: Box::new(error),
+            })?;
         let experiment = Experiment {
             robot,
             reference,
-            mpc: mpc_with_baselines(f, n)?,
+            mpc: f.mpc.clone(),
             plant: f.plant.clone(),
             loop_settings,
             conditions,
+            baselines: f.baselines.clone(),
         };
         experiment
             .validate()
@@ -463,22 +470,6 @@ fn events_after_the_end(f: &ScenarioFile, end_s: f64) -> Vec<String> {
         }
     }
     w
-}
-
-/// `[mpc]` with the bandwidths of `[baselines]`, checked for `n` joints.
-fn mpc_with_baselines(
-    f: &ScenarioFile,
-    n: usize,
-) -> Result<ofmpc::control::MpcSettings, ScenarioError> {
-    f.baselines
-        .validate_for_dof(n)
-        .map_err(|error| ScenarioError::Baselines {
-            error: Box::new(error),
-        })?;
-    Ok(ofmpc::control::MpcSettings {
-        baselines: f.baselines.clone(),
-        ..f.mpc.clone()
-    })
 }
 
 /// The plan's warnings to show, each prefixed with the program's name: the program's own and

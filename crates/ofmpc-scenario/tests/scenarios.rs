@@ -84,9 +84,10 @@ fn baselines_and_controller_shorthands() {
     let all: ScenarioFile = toml::from_str("controllers = [\"all\"]").unwrap();
     assert_eq!(all.controllers, ControllerKind::EVERY.to_vec());
     assert!(toml::from_str::<ScenarioFile>("controllers = [\"pidd\"]").is_err());
-    // The bandwidths reach the controllers' settings; a bad one names its key.
+    // The bandwidths reach the experiment (the run's controllers build with them); a bad one
+    // names its key.
     let s = Scenario::resolve(&f).unwrap();
-    assert_eq!(s.experiment.mpc.baselines, f.baselines);
+    assert_eq!(s.experiment.baselines, f.baselines);
     let mut bad = f.clone();
     bad.baselines.dob_observer_bandwidth = Weight::Scalar(0.0);
     let e = match Scenario::resolve(&bad) {
@@ -226,4 +227,70 @@ impl Drop for Dir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
     }
+}
+
+/// Issue #23 item 3: `[baselines]` is the library's `BaselineSettings` as read, and the run's
+/// controller builds with it. A scenario's `pid_bandwidth = 30` runs the PID whose torques
+/// equal, bit for bit, those of the library's own `PidController::new` with 30 rad/s in a
+/// closed loop of its own (the same plant and reference), and differ from the default 60 rad/s.
+#[test]
+fn baselines_section_tunes_the_run_controller() {
+    use ofmpc::control::{BaselineSettings, ControllerKind, PidController, Weight};
+    use ofmpc::dynamics::RobotDynamics;
+    use ofmpc::robot::Payload;
+    use ofmpc::sim::{ClosedLoop, Plant};
+    let text = "controllers = [\"pid\"]\n[payload]\nmasses_kg = [0.5]\n\
+                [simulation]\nhold_s = 0.3\nsteady_window_s = 0.2\n[baselines]\npid_bandwidth = 30\n";
+    let f: ScenarioFile = toml::from_str(text).unwrap();
+    let s = Scenario::resolve(&f).unwrap();
+    let exp = &s.experiment;
+    let payload = Payload::point_mass(0.5);
+    let torques = |e: &ofmpc::sim::Experiment| {
+        let (run, _) = e
+            .run(ControllerKind::Pid, &payload, &mut |_, _| {})
+            .unwrap();
+        run.record
+            .tau
+            .iter()
+            .map(|t| t.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let scenario = torques(exp);
+
+    let tuned = BaselineSettings {
+        pid_bandwidth: Weight::Scalar(30.0),
+        ..Default::default()
+    };
+    assert_eq!(exp.baselines, tuned);
+    let n = exp.robot.dof();
+    let mut pid = PidController::new(n, &exp.mpc, &tuned).unwrap();
+    let mut model = RobotDynamics::new(exp.robot.clone());
+    let mut plant_robot = exp.robot.clone();
+    plant_robot.set_payload(Some(payload)).unwrap();
+    let (q0, ts) = (exp.reference.q(0), exp.reference.ts());
+    let mut plant = Plant::with_period(plant_robot, exp.plant.clone(), q0, ts).unwrap();
+    let own = ClosedLoop::new(
+        &mut pid,
+        &mut model,
+        &mut plant,
+        &exp.reference,
+        &exp.loop_settings,
+        None,
+    )
+    .run(&mut |_, _| {});
+    let own: Vec<u64> = own.record.tau.iter().map(|t| t.to_bits()).collect();
+    assert!(!own.is_empty());
+    assert_eq!(
+        scenario, own,
+        "the scenario's pid is the library's at 30 rad/s"
+    );
+
+    let mut default = f.clone();
+    default.baselines = BaselineSettings::default();
+    let default = Scenario::resolve(&default).unwrap();
+    assert_ne!(
+        scenario,
+        torques(&default.experiment),
+        "pid_bandwidth changed nothing"
+    );
 }

@@ -33,6 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pick_up_at_s: pick_up,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     for kind in ControllerKind::WITH_ADAPTIVE {
         let (r, m) = exp.run(kind, &Payload::point_mass(payload), &mut |_, _| {})?;

@@ -22,6 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mpc: MpcSettings::default(),
         plant: Default::default(),
         loop_settings: Default::default(),
+        baselines: Default::default(),
     };
     for kind in [
         ControllerKind::Usual,

@@ -1,6 +1,6 @@
 //! `cargo run --release -p ofmpc --example stability_quick`
 use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
-use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, PlanOptions};
 use ofmpc::robot::Robot;
@@ -20,17 +20,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     .reference;
     let q0 = reference.q(0).to_vec();
     let opts = StabilityOptions::default();
+    let baselines = BaselineSettings::default();
     let poses: Vec<&[f64]> = (0..reference.len())
         .step_by(20)
         .map(|k| reference.q(k))
         .collect();
     for kind in ControllerKind::ALL {
         for a in [0.5, 0.8, 1.0, 1.1] {
-            let r = spectral_radius(&robot, kind, &MpcSettings::default(), &q0, a, &opts)?;
+            let r = spectral_radius(
+                &robot,
+                kind,
+                &MpcSettings::default(),
+                &baselines,
+                &q0,
+                a,
+                &opts,
+            )?;
             println!("{kind} α={a} ρ={r:.6}");
         }
         let t = std::time::Instant::now();
-        let iv = alpha_interval(&robot, kind, &MpcSettings::default(), &q0, &opts)?;
+        let iv = alpha_interval(
+            &robot,
+            kind,
+            &MpcSettings::default(),
+            &baselines,
+            &q0,
+            &opts,
+        )?;
         let m = max_payload(&robot, iv, &poses, 100.0)?;
         println!(
             "{kind}: {iv:?} max payload {m:.3} kg ({:.2} s)",

@@ -9,7 +9,7 @@
 //! [`sim::ClosedLoop`]) → metrics.
 //!
 //! What most users need is re-exported here at the crate root: [`Robot`], [`Payload`],
-//! [`plan`] and [`PlanOptions`], [`ControllerKind`] and [`MpcSettings`], [`ControllerBuilder`]
+//! [`plan`] and [`PlanOptions`], [`ControllerKind`], [`MpcSettings`] and [`BaselineSettings`], [`ControllerBuilder`]
 //! (a controller that works as configured, or a typed refusal) and its [`Mpc`],
 //! [`Experiment`] (one run, judged), [`ClosedLoop`] and its settings.
 //!
@@ -35,6 +35,7 @@
 //!     plant: Default::default(),
 //!     loop_settings: Default::default(), // 2 s hold after the path
 //!     conditions: Default::default(),    // no pick-up, safety limit or fault
+//!     baselines: Default::default(),     // the baselines' bandwidths (pid, ctc, dob-mpc)
 //! };
 //! let (_run, metrics) = experiment.run(ControllerKind::Second, &Payload::point_mass(0.25), &mut |_, _| {})?;
 //! assert!(metrics.steady_joint_error_max_rad.iter().all(|e| *e < 1e-9)); // offset-free
@@ -51,8 +52,8 @@
 pub use nalgebra;
 
 pub use control::{
-    new_controller, Controller, ControllerBuilder, ControllerKind, Mpc, MpcSettings, StepError,
-    StepInput, StepOutput,
+    new_controller, BaselineSettings, Controller, ControllerBuilder, ControllerKind, Mpc,
+    MpcSettings, StepError, StepInput, StepOutput,
 };
 pub use motion::{plan, JointReference, PlanOptions};
 pub use robot::{Payload, Robot};

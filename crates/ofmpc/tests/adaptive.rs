@@ -197,6 +197,7 @@ mod never_panics {
                 plant: PlantSettings { coulomb_friction: vec![friction], position_noise: noise, torque_limits: true, ..Default::default() },
                 loop_settings: LoopSettings { hold_s: 0.8, identification_s: identification, ..Default::default() },
                 conditions: RunConditions { pick_up_at_s: pick_up, ..Default::default() },
+                baselines: Default::default(),
             };
             let kind = if second { ControllerKind::SecondAdaptive } else { ControllerKind::FirstAdaptive };
             let (r, m) = exp.run(kind, &Payload::point_mass(payload), &mut |_, _| {}).unwrap();
@@ -220,8 +221,11 @@ fn controller_names_round_trip() {
     let err = "third".parse::<ControllerKind>().unwrap_err().to_string();
     assert!(err.contains("second-adaptive"), "{err}");
     // The usual MPC has no adaptive variant.
-    assert!(
-        ofmpc::control::AdaptiveMpc::new(ControllerKind::Usual, 6, &MpcSettings::default())
-            .is_err()
-    );
+    assert!(ofmpc::control::AdaptiveMpc::new(
+        ControllerKind::Usual,
+        6,
+        &MpcSettings::default(),
+        &ofmpc::control::BaselineSettings::default()
+    )
+    .is_err());
 }

@@ -137,6 +137,7 @@ fn experiment(arm: &Arm) -> Experiment {
         mpc: MpcSettings::default(),
         plant: Default::default(),
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     }
 }
 

@@ -6,8 +6,9 @@ mod common;
 
 use common::paper_reference;
 use ofmpc::control::{
-    new_controller, BuildError, ControllerBuilder, ControllerKind, DriveModel, FrictionUse,
-    MpcSettings, ObserverSettings, Solver, StepError, StepInput,
+    new_controller, new_controller_with_baselines, BaselineSettings, BuildError, ControllerBuilder,
+    ControllerKind, DriveModel, FrictionUse, MpcSettings, ObserverSettings, SettingsError, Solver,
+    StepError, StepInput, Weight,
 };
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::ident::RlsSettings;
@@ -406,4 +407,111 @@ fn reset_restores_the_adaptive_model_and_the_output_reports_the_step() {
         .unwrap_err();
     assert!(matches!(err, StepError::WrongLength { what: "x", .. }));
     assert_eq!(mpc.output().tau, last);
+}
+
+/// The torques of `built` and `library` stepped side by side over the paper
+/// path's first 300 samples (deterministic measurements near the reference),
+/// asserted equal bit for bit; returns them.
+fn torques_side_by_side(
+    built: &mut ofmpc::control::Mpc,
+    library: &mut dyn ofmpc::control::Controller,
+) -> Vec<f64> {
+    let robot = Robot::irb140();
+    let reference = paper_reference(&robot);
+    let n = robot.dof();
+    let nh = library.horizon();
+    let mut model = RobotDynamics::new(robot.clone());
+    let (mut x, mut preview, mut tau) = (vec![0.0; 2 * n], vec![0.0; nh * n], vec![0.0; n]);
+    measured(&reference, 0, &mut x);
+    built.reset(&x).unwrap();
+    library.reset(&x).unwrap();
+    let mut taus = Vec::new();
+    for k in 0..300 {
+        measured(&reference, k, &mut x);
+        reference.preview(k, nh, &mut preview);
+        let w = reference.q(k);
+        library.step(&mut model, &x, w, &preview, &mut tau).unwrap();
+        let out = built
+            .step(&StepInput {
+                x: &x,
+                w_k: w,
+                preview: &preview,
+            })
+            .unwrap();
+        let bits = |v: &[f64]| v.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&out.tau), bits(&tau), "{}, k = {k}", built.kind());
+        taus.extend_from_slice(&tau);
+    }
+    taus
+}
+
+/// Issue #23 item 3: the baselines' bandwidths are their own settings type,
+/// given to the builder. Refused for every kind that is not a baseline (it
+/// reads none), checked for the robot's joints (all three bandwidths); a
+/// baseline built with a bandwidth steps bit for bit as the library's own
+/// constructor with it, and unlike the default bandwidth; without
+/// `baselines()` the builder uses the defaults (`new_controller`'s).
+#[test]
+fn baselines_are_refused_for_the_paper_kinds_checked_and_used() {
+    let robot = Robot::irb140();
+    let n = robot.dof();
+    let s = MpcSettings::default();
+    for kind in ControllerKind::EVERY
+        .into_iter()
+        .filter(|k| !k.is_baseline())
+    {
+        let err = ControllerBuilder::new(kind, &robot)
+            .baselines(BaselineSettings::default())
+            .build()
+            .unwrap_err();
+        assert_eq!(err, BuildError::BaselinesWithoutBaseline(kind));
+        assert!(err.to_string().contains(kind.name()), "{err}");
+    }
+    let short = BaselineSettings {
+        ctc_bandwidth: Weight::Diagonal(vec![100.0; n - 1]),
+        ..Default::default()
+    };
+    let zero = BaselineSettings {
+        dob_observer_bandwidth: Weight::Scalar(0.0),
+        ..Default::default()
+    };
+    // The bandwidths of every baseline, 2/3 of the defaults (all stable on the IRB 140).
+    let slower = BaselineSettings {
+        pid_bandwidth: Weight::Scalar(40.0),
+        ctc_bandwidth: Weight::Diagonal(vec![100.0, 100.0, 100.0, 120.0, 120.0, 120.0]),
+        dob_observer_bandwidth: Weight::Scalar(66.0),
+    };
+    for kind in ControllerKind::BASELINES {
+        let built = |b: &BaselineSettings| {
+            ControllerBuilder::new(kind, &robot)
+                .baselines(b.clone())
+                .build()
+        };
+        assert_eq!(
+            built(&short).unwrap_err(),
+            BuildError::Settings(SettingsError::WeightLength {
+                name: "ctc_bandwidth",
+                expected: n,
+                got: n - 1,
+            }),
+            "{kind}"
+        );
+        assert!(
+            matches!(
+                built(&zero),
+                Err(BuildError::Settings(SettingsError::BadBandwidth {
+                    name: "dob_observer_bandwidth",
+                    ..
+                }))
+            ),
+            "{kind}"
+        );
+        let mut with = built(&slower).unwrap();
+        let mut library = new_controller_with_baselines(kind, n, &s, &slower).unwrap();
+        let slow = torques_side_by_side(&mut with, library.as_mut());
+        let mut plain = ControllerBuilder::new(kind, &robot).build().unwrap();
+        let mut default = new_controller(kind, n, &s).unwrap();
+        let fast = torques_side_by_side(&mut plain, default.as_mut());
+        assert_ne!(slow, fast, "{kind}: the bandwidth changed nothing");
+    }
 }

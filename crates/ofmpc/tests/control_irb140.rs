@@ -20,6 +20,7 @@ fn hold(kind: ControllerKind, payload_kg: f64) -> Vec<f64> {
             hold_s: 4.0,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     let (r, m) = exp
         .run(kind, &Payload::point_mass(payload_kg), &mut |_, _| {})
@@ -65,6 +66,7 @@ fn divergence_beyond_the_tunings_margin_is_flagged() {
             hold_s: 3.0,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     let (r, m) = exp
         .run(
@@ -113,6 +115,7 @@ fn drive_inertia_decides_whether_a_quarter_kilogram_breaks_the_second_algorithm(
                 hold_s: 2.0,
                 ..Default::default()
             },
+            baselines: Default::default(),
         };
         exp.run(
             ControllerKind::Second,

@@ -25,6 +25,7 @@ fn experiment(robot: Robot, rule: DivergenceRule) -> Experiment {
             divergence: rule,
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

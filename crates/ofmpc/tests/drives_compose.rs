@@ -55,6 +55,7 @@ fn all_effects_together_on_the_paper_path() {
             safe_stop: true,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     for kind in ControllerKind::ALL {
         let (r, m) = exp
@@ -133,6 +134,7 @@ proptest! {
                 ..Default::default()
             },
             loop_settings: LoopSettings { hold_s: 0.8, plausibility_check: supervise, safe_stop: supervise, ..Default::default() },
+            baselines: Default::default(),
         };
         let (r, m) = exp
             .run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {})
@@ -186,6 +188,7 @@ fn friction_stick_slip_passes_the_plausibility_check() {
                     safe_stop: check,
                     ..Default::default()
                 },
+                baselines: Default::default(),
             };
             exp.run(
                 ControllerKind::Second,
@@ -246,6 +249,7 @@ fn all_effects_with_the_friction_aware_observer_complete() {
             safe_stop: true,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     let payload = Payload::point_mass(0.25);
     let (r, _) = exp(false)

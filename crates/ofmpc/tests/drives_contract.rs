@@ -27,6 +27,7 @@ fn experiment(
         mpc,
         plant,
         loop_settings: Default::default(),
+        baselines: Default::default(),
     }
 }
 

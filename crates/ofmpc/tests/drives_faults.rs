@@ -33,6 +33,7 @@ fn run(kind: ControllerKind, faults: Vec<Fault>, supervised: bool) -> (RunResult
             safe_stop: supervised,
             ..Default::default()
         },
+        baselines: Default::default(),
     };
     exp.run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
         .unwrap()

@@ -54,6 +54,7 @@ fn run_n(
             ..Default::default()
         },
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     };
     let (r, m) = exp
         .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})

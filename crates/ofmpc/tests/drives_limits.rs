@@ -50,6 +50,7 @@ fn limited_experiment(limit: f64, nh: usize, solver: ofmpc::control::Solver) -> 
             ..Default::default()
         },
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     }
 }
 
@@ -73,6 +74,7 @@ fn run(
             ..Default::default()
         },
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     };
     exp.run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
         .unwrap()

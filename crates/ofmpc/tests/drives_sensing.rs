@@ -28,6 +28,7 @@ fn run(kind: ControllerKind, observer: bool) -> (RunResult, RunMetrics) {
             ..Default::default()
         },
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     };
     exp.run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
         .unwrap()

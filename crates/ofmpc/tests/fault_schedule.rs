@@ -68,6 +68,7 @@ fn experiment() -> Experiment {
             },
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

@@ -36,6 +36,7 @@ fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
             horizons,
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

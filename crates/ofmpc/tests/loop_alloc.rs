@@ -58,6 +58,7 @@ fn experiment(hold_s: f64) -> Experiment {
             }),
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

@@ -56,6 +56,7 @@ proptest! {
             mpc,
             plant: PlantSettings { coulomb_friction: vec![friction], position_noise: noise, torque_limits: true, ..Default::default() },
             loop_settings: LoopSettings { hold_s: 0.6, ..Default::default() },
+            baselines: Default::default(),
         };
         match exp.run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {}) {
             Ok((r, m)) => {

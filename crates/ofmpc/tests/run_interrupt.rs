@@ -24,6 +24,7 @@ fn paper() -> Experiment {
             steady_window_s: 0.1,
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

@@ -7,7 +7,7 @@ use ofmpc::analysis::{
     alpha_interval, alpha_interval_by_perturbation, inertia_ratio_range, max_payload,
     simulated_growth, spectral_radius, LinearizedLoop, StabilityError, StabilityOptions,
 };
-use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 
 const Q0: [f64; 6] = [0.0, 0.4, 0.1, 0.0, 0.9, 0.0];
@@ -16,14 +16,15 @@ const Q0: [f64; 6] = [0.0, 0.4, 0.1, 0.0, 0.9, 0.0];
 fn interval_agrees_with_simulation_at_each_boundary() {
     let robot = Robot::irb140();
     let s = MpcSettings::default();
+    let b = BaselineSettings::default();
     let opts = StabilityOptions::default();
     for kind in [ControllerKind::First, ControllerKind::Second] {
-        let (lo, hi) = alpha_interval(&robot, kind, &s, &Q0, &opts).unwrap();
+        let (lo, hi) = alpha_interval(&robot, kind, &s, &b, &Q0, &opts).unwrap();
         for (edge, inward) in [(lo, 1.0), (hi, -1.0)] {
             let inside = edge + inward * 0.02;
             let outside = edge - inward * 0.02;
-            let g_in = simulated_growth(&robot, kind, &s, &Q0, inside, 1e-5, 1000).unwrap();
-            let g_out = simulated_growth(&robot, kind, &s, &Q0, outside, 1e-5, 1000).unwrap();
+            let g_in = simulated_growth(&robot, kind, &s, &b, &Q0, inside, 1e-5, 1000).unwrap();
+            let g_out = simulated_growth(&robot, kind, &s, &b, &Q0, outside, 1e-5, 1000).unwrap();
             assert!(g_in < 0.5, "{kind} α = {inside} (inside): growth {g_in}");
             assert!(
                 g_out > 2.0,
@@ -37,6 +38,7 @@ fn interval_agrees_with_simulation_at_each_boundary() {
 fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
     let robot = Robot::irb140();
     let s = MpcSettings::default();
+    let b = BaselineSettings::default();
     let opts = StabilityOptions::default();
     let known = [
         (ControllerKind::First, (0.53, 1.12), 4.6),
@@ -54,7 +56,7 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
         .map(|k| reference.q(k))
         .collect();
     for (kind, (lo, hi), payload) in known {
-        let iv = alpha_interval(&robot, kind, &s, &Q0, &opts).unwrap();
+        let iv = alpha_interval(&robot, kind, &s, &b, &Q0, &opts).unwrap();
         assert!(
             (iv.0 - lo).abs() < 0.01 && (iv.1 - hi).abs() < 0.01,
             "{kind}: {iv:?}"
@@ -66,7 +68,7 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
         assert!((a - iv.0).abs() < 1e-3, "{kind}: α {a} at {m} kg");
     }
     // The usual MPC tolerates far more (about 0.01..2).
-    let (lo, hi) = alpha_interval(&robot, ControllerKind::Usual, &s, &Q0, &opts).unwrap();
+    let (lo, hi) = alpha_interval(&robot, ControllerKind::Usual, &s, &b, &Q0, &opts).unwrap();
     assert!(lo <= 0.011 && (hi - 2.0).abs() < 0.02, "usual: {lo}..{hi}");
 }
 
@@ -74,10 +76,12 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
 fn adaptive_variants_and_bad_options_are_errors() {
     let robot = Robot::irb140();
     let s = MpcSettings::default();
+    let b = BaselineSettings::default();
     let e = alpha_interval(
         &robot,
         ControllerKind::SecondAdaptive,
         &s,
+        &b,
         &Q0,
         &StabilityOptions::default(),
     );
@@ -87,7 +91,7 @@ fn adaptive_variants_and_bad_options_are_errors() {
         ..Default::default()
     };
     assert!(matches!(
-        alpha_interval(&robot, ControllerKind::First, &s, &Q0, &bad),
+        alpha_interval(&robot, ControllerKind::First, &s, &b, &Q0, &bad),
         Err(StabilityError::Option {
             what: "alpha_max",
             ..
@@ -98,6 +102,7 @@ fn adaptive_variants_and_bad_options_are_errors() {
             &robot,
             ControllerKind::First,
             &s,
+            &b,
             &Q0[..3],
             &StabilityOptions::default()
         ),
@@ -129,17 +134,18 @@ fn loop_linearized_once_matches_the_perturbation_runs() {
         q_du: Weight::Diagonal(vec![1e-3, 1e-3, 1e-3, 1e-2, 1e-2, 1e-2]),
         ..MpcSettings::default()
     };
+    let b = BaselineSettings::default();
     for s in [MpcSettings::default(), per_joint] {
         for kind in [
             ControllerKind::Usual,
             ControllerKind::First,
             ControllerKind::Second,
         ] {
-            let lin = LinearizedLoop::new(&robot, kind, &s, &Q0, &opts).unwrap();
-            let lin6 = LinearizedLoop::new(&robot, kind, &s, &Q0, &larger).unwrap();
+            let lin = LinearizedLoop::new(&robot, kind, &s, &b, &Q0, &opts).unwrap();
+            let lin6 = LinearizedLoop::new(&robot, kind, &s, &b, &Q0, &larger).unwrap();
             for a in [0.05, 0.5, 0.8, 1.0, 1.1, 1.3, 2.5] {
                 let fast = lin.spectral_radius(a).unwrap();
-                let slow = spectral_radius(&robot, kind, &s, &Q0, a, &opts).unwrap();
+                let slow = spectral_radius(&robot, kind, &s, &b, &Q0, a, &opts).unwrap();
                 assert!(
                     (fast - slow).abs() <= 2e-5 * slow.max(1.0),
                     "{kind} α = {a}: {fast} against {slow}"
@@ -151,7 +157,7 @@ fn loop_linearized_once_matches_the_perturbation_runs() {
                 );
             }
             let iv = lin.alpha_interval().unwrap();
-            let slow = alpha_interval_by_perturbation(&robot, kind, &s, &Q0, &opts).unwrap();
+            let slow = alpha_interval_by_perturbation(&robot, kind, &s, &b, &Q0, &opts).unwrap();
             assert_eq!(iv, slow, "{kind}");
         }
     }

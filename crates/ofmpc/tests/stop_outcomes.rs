@@ -25,6 +25,7 @@ fn paper(plant: PlantSettings, mpc: MpcSettings) -> Experiment {
             safe_stop: true,
             ..Default::default()
         },
+        baselines: Default::default(),
     }
 }
 

@@ -213,6 +213,7 @@ const RADIUS_CAP: f64 = 3.0;
 fn payload_curves(
     model: &ofmpc::robot::Robot,
     mpc: &MpcSettings,
+    baselines: &ofmpc::control::BaselineSettings,
     q0: &[f64],
     poses: &[&[f64]],
     kinds: &[ControllerKind],
@@ -230,8 +231,8 @@ fn payload_curves(
             ranges
                 .par_iter()
                 .map(|&(lo, hi)| {
-                    let a = spectral_radius(model, k.base(), mpc, q0, lo, &opts)?;
-                    let b = spectral_radius(model, k.base(), mpc, q0, hi, &opts)?;
+                    let a = spectral_radius(model, k.base(), mpc, baselines, q0, lo, &opts)?;
+                    let b = spectral_radius(model, k.base(), mpc, baselines, q0, hi, &opts)?;
                     Ok(a.max(b))
                 })
                 .collect::<anyhow::Result<Vec<f64>>>()
@@ -340,11 +341,18 @@ pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
     progress("the spectral radius against α (the figure)");
     let exp = &scenario.experiment;
     let robot = model_robot(&scenario)?;
-    let curves = radius_curves(&robot, &exp.mpc, exp.reference.q(0), &kinds)?;
+    let curves = radius_curves(&robot, &exp.mpc, &exp.baselines, exp.reference.q(0), &kinds)?;
     progress("the spectral radius against the payload (the figure's kg axis)");
     let poses = ofmpc_scenario::analysis::program_poses(&scenario);
-    let by_payload = payload_curves(&robot, &exp.mpc, exp.reference.q(0), &poses, &kinds)
-        .context("the spectral radius against the payload")?;
+    let by_payload = payload_curves(
+        &robot,
+        &exp.mpc,
+        &exp.baselines,
+        exp.reference.q(0),
+        &poses,
+        &kinds,
+    )
+    .context("the spectral radius against the payload")?;
     let fig = radius_figure(&curves, &by_payload);
     let r = render_both(&fig).context("rendering the stability figure")?;
     dir.write(STABILITY[0], &r.png)?;

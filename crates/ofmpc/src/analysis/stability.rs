@@ -31,9 +31,17 @@
 //! eigenvalues: the loop stays stable while every generalized eigenvalue of
 //! `(H_model, H_plant)` lies in the interval of scalar `α`
 //! ([`inertia_ratio_range`], [`max_payload`]).
+//!
+//! Every function that builds the controller takes its tuning as the
+//! controller does ([`crate::control::new_controller_with_baselines`]): the
+//! [`MpcSettings`] and the [`BaselineSettings`], of which a baseline kind
+//! reads its bandwidth and the predictive kinds nothing. The augmented state
+//! above is that of the paper's controllers; a baseline's memory (its
+//! integral, its observer's estimate) is not in it.
 
 use crate::control::{
-    new_controller, Controller, ControllerKind, MpcSettings, SettingsError, StepError,
+    new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
+    SettingsError, StepError,
 };
 use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
 use crate::linalg::{random, rk4_second_order_step, RK4_WORK_PER_DOF};
@@ -200,6 +208,7 @@ pub fn closed_loop_matrix(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     alpha: f64,
     options: &StabilityOptions,
@@ -230,7 +239,7 @@ pub fn closed_loop_matrix(
     let mut tau = vec![0.0; n];
     let preview0: Vec<f64> = q0.repeat(nh);
     for _ in 0..runs {
-        let mut ctrl = new_controller(kind, n, settings)?;
+        let mut ctrl = new_controller_with_baselines(kind, n, settings, baselines)?;
         let x_minus: Vec<f64> = x0.iter().map(|v| v + eps * rng.next()).collect();
         ctrl.reset(&x_minus)?;
         let mut x: Vec<f64> = x0.iter().map(|v| v + eps * rng.next()).collect();
@@ -302,11 +311,12 @@ pub fn spectral_radius(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     alpha: f64,
     options: &StabilityOptions,
 ) -> Result<f64, StabilityError> {
-    let m = closed_loop_matrix(robot, kind, settings, q0, alpha, options)?;
+    let m = closed_loop_matrix(robot, kind, settings, baselines, q0, alpha, options)?;
     Ok(m.complex_eigenvalues()
         .iter()
         .map(|l| l.norm())
@@ -356,6 +366,7 @@ pub struct LinearizedLoop {
     robot: Robot,
     kind: ControllerKind,
     settings: MpcSettings,
+    baselines: BaselineSettings,
     q0: Vec<f64>,
 }
 
@@ -366,13 +377,15 @@ impl LinearizedLoop {
         robot: &Robot,
         kind: ControllerKind,
         settings: &MpcSettings,
+        baselines: &BaselineSettings,
         q0: &[f64],
         options: &StabilityOptions,
     ) -> Result<Self, StabilityError> {
         check_input(robot, kind, q0, options)?;
         let n = robot.dof();
         let (_, with_ebar) = memory(kind);
-        let (gains, tau0) = controller_gains(robot, kind, settings, q0, options.perturbation)?;
+        let (gains, tau0) =
+            controller_gains(robot, kind, settings, baselines, q0, options.perturbation)?;
         let jac = plant_jacobian(robot, q0, &tau0)?;
         Ok(Self {
             n,
@@ -385,6 +398,7 @@ impl LinearizedLoop {
             robot: robot.clone(),
             kind,
             settings: settings.clone(),
+            baselines: baselines.clone(),
             q0: q0.to_vec(),
         })
     }
@@ -492,6 +506,7 @@ impl LinearizedLoop {
                     &self.robot,
                     self.kind,
                     &self.settings,
+                    &self.baselines,
                     &self.q0,
                     a,
                     &self.options,
@@ -513,6 +528,7 @@ fn controller_gains(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     eps: f64,
 ) -> Result<(DMatrix<f64>, Vec<f64>), StabilityError> {
@@ -521,7 +537,7 @@ fn controller_gains(
     let m = 5 * n + if with_ebar { n } else { 0 };
     let mut pass = GainPass {
         model: RobotDynamics::new(robot.clone()),
-        ctrl: new_controller(kind, n, settings)?,
+        ctrl: new_controller_with_baselines(kind, n, settings, baselines)?,
         x0: [q0, &vec![0.0; n]].concat(),
         q0: q0.to_vec(),
         preview0: q0.repeat(settings.horizon),
@@ -706,10 +722,11 @@ pub fn alpha_interval(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     options: &StabilityOptions,
 ) -> Result<(f64, f64), StabilityError> {
-    LinearizedLoop::new(robot, kind, settings, q0, options)?.alpha_interval()
+    LinearizedLoop::new(robot, kind, settings, baselines, q0, options)?.alpha_interval()
 }
 
 /// [`alpha_interval`] with `ρ` of [`spectral_radius`] (the controller's
@@ -719,11 +736,12 @@ pub fn alpha_interval_by_perturbation(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     options: &StabilityOptions,
 ) -> Result<(f64, f64), StabilityError> {
     bisect_interval(
-        |a| spectral_radius(robot, kind, settings, q0, a, options),
+        |a| spectral_radius(robot, kind, settings, baselines, q0, a, options),
         options,
     )
 }
@@ -807,10 +825,12 @@ pub fn max_payload(
 /// one. Below 1 (and shrinking with `steps`) when the loop is stable. The
 /// check of [`alpha_interval`] by simulation, independent of the
 /// linearization.
+#[allow(clippy::too_many_arguments)]
 pub fn simulated_growth(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
+    baselines: &BaselineSettings,
     q0: &[f64],
     alpha: f64,
     deviation: f64,
@@ -826,7 +846,7 @@ pub fn simulated_growth(
         c: DMatrix::zeros(n, n),
         g: DVector::zeros(n),
     };
-    let mut ctrl = new_controller(kind, n, settings)?;
+    let mut ctrl = new_controller_with_baselines(kind, n, settings, baselines)?;
     let mut x: Vec<f64> = [q0, &vec![0.0; n]].concat();
     ctrl.reset(&x)?;
     let mut rng = Lcg(7);

@@ -20,8 +20,8 @@
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 
 use super::{
-    Controller, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc, SettingsError,
-    StepError, StepInfo,
+    BaselineSettings, Controller, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc,
+    SettingsError, StepError, StepInfo,
 };
 use crate::dynamics::JointSpaceDynamics;
 use crate::ident::{payload_of, PayloadEstimator, PayloadParams, RlsSettings};
@@ -60,12 +60,16 @@ impl AdaptiveMpc {
     /// [`ControllerKind::SecondAdaptive`] or [`ControllerKind::CtcAdaptive`]
     /// (the plain kinds are taken as their adaptive variant; the usual MPC,
     /// the PID and the disturbance-observer MPC have none and are refused).
+    /// `baselines` gives `ctc-adaptive` its bandwidth
+    /// ([`BaselineSettings::ctc_bandwidth`]); the predictive kinds do not
+    /// read it.
     pub fn new(
         kind: ControllerKind,
         n: usize,
         settings: &MpcSettings,
+        baselines: &BaselineSettings,
     ) -> Result<Self, SettingsError> {
-        Self::with_estimator(kind, n, settings, RlsSettings::default())
+        Self::with_estimator(kind, n, settings, baselines, RlsSettings::default())
     }
 
     /// As [`Self::new`] with the estimator's tuning.
@@ -73,6 +77,7 @@ impl AdaptiveMpc {
         kind: ControllerKind,
         n: usize,
         settings: &MpcSettings,
+        baselines: &BaselineSettings,
         rls: RlsSettings,
     ) -> Result<Self, SettingsError> {
         let (kind, inner): (ControllerKind, Box<dyn Controller + Send>) = match kind {
@@ -86,7 +91,7 @@ impl AdaptiveMpc {
             ),
             ControllerKind::Ctc | ControllerKind::CtcAdaptive => (
                 ControllerKind::CtcAdaptive,
-                Box::new(CtcController::new(n, settings)?),
+                Box::new(CtcController::new(n, settings, baselines)?),
             ),
             ControllerKind::Usual | ControllerKind::Pid | ControllerKind::DobMpc => {
                 return Err(SettingsError::NoAdaptiveVariant)

@@ -2,9 +2,10 @@
 //!
 //! [`ControllerBuilder`] gathers everything a controller needs — the kind,
 //! the robot (from which the controller's own model is built), the tuning
-//! ([`MpcSettings`]), the drives ([`DriveModel`]), the state observer and the
-//! payload estimator — and [`ControllerBuilder::build`] checks that they fit
-//! together before anything runs: a setting that would silently do nothing
+//! ([`MpcSettings`]; a baseline's bandwidths, [`BaselineSettings`]), the
+//! drives ([`DriveModel`]), the state observer and the payload estimator —
+//! and [`ControllerBuilder::build`] checks that they fit together before
+//! anything runs: a setting that would silently do nothing
 //! (torque limits with no finite limit, friction compensation with no
 //! friction estimate, …) is a [`BuildError`], never a quiet fallback.
 //!
@@ -55,8 +56,8 @@ use std::time::{Duration, Instant};
 
 use super::core::{check_finite, check_len};
 use super::{
-    new_controller, AdaptiveMpc, Controller, ControllerKind, DriveModel, MpcSettings, QpStatus,
-    SettingsError, StateObserver, StepError,
+    new_controller_with_baselines, AdaptiveMpc, BaselineSettings, Controller, ControllerKind,
+    DriveModel, MpcSettings, QpStatus, SettingsError, StateObserver, StepError,
 };
 use crate::dynamics::RobotDynamics;
 use crate::ident::RlsSettings;
@@ -154,6 +155,10 @@ pub enum BuildError {
         "the {0} controller identifies no payload: use an adaptive kind to run a payload estimator"
     )]
     EstimatorWithoutIdentification(ControllerKind),
+    /// A baseline's bandwidths ([`BaselineSettings`]) were given for a kind
+    /// that is not a baseline ([`ControllerKind::BASELINES`]): it reads none.
+    #[error("the {0} controller is not a baseline and reads no baseline bandwidth: give the bandwidths only to pid, ctc, ctc-adaptive or dob-mpc")]
+    BaselinesWithoutBaseline(ControllerKind),
     /// An adaptive kind was given a model payload (assumed by the tuning or
     /// carried by the robot): the identification replaces it from the first
     /// sample on.
@@ -179,7 +184,8 @@ pub enum BuildError {
 /// .drives(..).build()?`. Unset parts: the paper's tuning
 /// ([`MpcSettings::default`]), the robot's drives ([`DriveModel::from_robot`],
 /// when a setting uses them), [`ObserverSettings::default`] (without delay
-/// compensation), [`RlsSettings::default`] (adaptive kinds).
+/// compensation), [`RlsSettings::default`] (adaptive kinds),
+/// [`BaselineSettings::default`] (baselines).
 #[derive(Debug, Clone)]
 pub struct ControllerBuilder<'r> {
     kind: ControllerKind,
@@ -188,6 +194,7 @@ pub struct ControllerBuilder<'r> {
     drives: Option<DriveModel>,
     observer: Option<ObserverSettings>,
     estimator: Option<RlsSettings>,
+    baselines: Option<BaselineSettings>,
     accept_ineffective: bool,
 }
 
@@ -202,6 +209,7 @@ impl<'r> ControllerBuilder<'r> {
             drives: None,
             observer: None,
             estimator: None,
+            baselines: None,
             accept_ineffective: false,
         }
     }
@@ -233,6 +241,16 @@ impl<'r> ControllerBuilder<'r> {
         self
     }
 
+    /// The bandwidths of a baseline ([`ControllerKind::BASELINES`]; default
+    /// [`BaselineSettings::default`]), checked at [`Self::build`] for the
+    /// robot's joints ([`BaselineSettings::validate_for_dof`], all three);
+    /// refused for the other kinds
+    /// ([`BuildError::BaselinesWithoutBaseline`]).
+    pub fn baselines(mut self, baselines: BaselineSettings) -> Self {
+        self.baselines = Some(baselines);
+        self
+    }
+
     /// Accepts the settings of the tuning that would have no effect instead
     /// of refusing them, and builds the controller with them as they are (a
     /// scenario run warns about them and runs): a constraint horizon without
@@ -259,10 +277,12 @@ impl<'r> ControllerBuilder<'r> {
             drives,
             observer,
             estimator,
+            baselines,
             accept_ineffective: lenient,
         } = self;
         let n = robot.dof();
         s.validate_for_dof(n)?;
+        let baselines = baselines_for(kind, baselines, n)?;
         if let Some(nc) = s
             .constraint_horizon
             .filter(|_| !(s.torque_limits || lenient))
@@ -308,27 +328,15 @@ impl<'r> ControllerBuilder<'r> {
             None => None,
         };
         if let Some(d) = &drives {
-            d.validate(n)?;
-            if s.torque_limits && d.max_torque_nm.iter().all(|t| t.is_infinite()) {
-                return Err(BuildError::NoTorqueLimits);
-            }
-            let no_friction = d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0);
-            for (on, what) in [
-                (s.friction_compensation, FrictionUse::Compensation),
-                (s.observer_friction, FrictionUse::Observer),
-            ] {
-                if on && no_friction && !lenient {
-                    return Err(BuildError::NoFrictionEstimates(what));
-                }
-            }
+            check_drives(d, &s, n, lenient)?;
         }
         let mut model_robot = robot.clone();
         if let Some(mass) = assumed {
             model_robot.set_payload(Some(Payload::point_mass(mass)))?;
         }
         let mut controller: Box<dyn Controller + Send> = match estimator {
-            Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, &s, rls)?),
-            None => new_controller(kind, n, &s)?,
+            Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, &s, &baselines, rls)?),
+            None => new_controller_with_baselines(kind, n, &s, &baselines)?,
         };
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
@@ -364,6 +372,48 @@ impl<'r> ControllerBuilder<'r> {
             },
         })
     }
+}
+
+/// The baselines' bandwidths a build uses: the ones given, checked for `n`
+/// joints and refused for a kind that is not a baseline; else the defaults.
+fn baselines_for(
+    kind: ControllerKind,
+    given: Option<BaselineSettings>,
+    n: usize,
+) -> Result<BaselineSettings, BuildError> {
+    match given {
+        Some(_) if !kind.is_baseline() => Err(BuildError::BaselinesWithoutBaseline(kind)),
+        Some(b) => {
+            b.validate_for_dof(n)?;
+            Ok(b)
+        }
+        None => Ok(BaselineSettings::default()),
+    }
+}
+
+/// The drives' checks of [`ControllerBuilder::build`]: they fit `n` joints,
+/// torque limits have a finite limit to bind, friction use has an estimate
+/// (unless `lenient`).
+fn check_drives(
+    d: &DriveModel,
+    s: &MpcSettings,
+    n: usize,
+    lenient: bool,
+) -> Result<(), BuildError> {
+    d.validate(n)?;
+    if s.torque_limits && d.max_torque_nm.iter().all(|t| t.is_infinite()) {
+        return Err(BuildError::NoTorqueLimits);
+    }
+    let no_friction = d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0);
+    for (on, what) in [
+        (s.friction_compensation, FrictionUse::Compensation),
+        (s.observer_friction, FrictionUse::Observer),
+    ] {
+        if on && no_friction && !lenient {
+            return Err(BuildError::NoFrictionEstimates(what));
+        }
+    }
+    Ok(())
 }
 
 /// One sample's measurement and reference, borrowed (no copy).

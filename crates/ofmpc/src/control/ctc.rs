@@ -18,7 +18,7 @@
 
 use super::baseline::{JointLawCore, Law};
 use super::core::impl_controller;
-use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::ControllerKind;
 
 /// The computed-torque baseline. Allocation-free [`Controller::step`](super::Controller::step).
@@ -30,9 +30,13 @@ pub struct CtcController {
 impl_controller!(CtcController, ControllerKind::Ctc, JointLawCore);
 
 impl CtcController {
-    /// A controller for `n` joints with `settings.baselines.ctc_bandwidth`.
-    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
-        let wn = bandwidths("ctc_bandwidth", &settings.baselines.ctc_bandwidth, n)?;
+    /// A controller for `n` joints with `baselines.ctc_bandwidth`.
+    pub fn new(
+        n: usize,
+        settings: &MpcSettings,
+        baselines: &BaselineSettings,
+    ) -> Result<Self, SettingsError> {
+        let wn = bandwidths("ctc_bandwidth", &baselines.ctc_bandwidth, n)?;
         Ok(Self {
             core: JointLawCore::new(Law::Ctc, n, settings, &wn)?,
         })

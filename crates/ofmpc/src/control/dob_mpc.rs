@@ -35,7 +35,7 @@
 use super::core::{check_finite, check_len, check_result};
 use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
-use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::usual::UsualMpc;
 use super::{Controller, ControllerKind, StepError, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
@@ -66,11 +66,15 @@ pub struct DobMpc {
 
 impl DobMpc {
     /// A controller for `n` joints: the usual MPC of `settings` and the
-    /// observer of `settings.baselines.dob_observer_bandwidth`.
-    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
+    /// observer of `baselines.dob_observer_bandwidth`.
+    pub fn new(
+        n: usize,
+        settings: &MpcSettings,
+        baselines: &BaselineSettings,
+    ) -> Result<Self, SettingsError> {
         let wo = bandwidths(
             "dob_observer_bandwidth",
-            &settings.baselines.dob_observer_bandwidth,
+            &baselines.dob_observer_bandwidth,
             n,
         )?;
         let inner_settings = MpcSettings {

@@ -229,11 +229,26 @@ pub trait Controller {
 }
 
 /// Builds the controller `kind` for `n` joints after
-/// [`MpcSettings::validate_for_dof`].
+/// [`MpcSettings::validate_for_dof`], a baseline with the default bandwidths
+/// ([`BaselineSettings::default`]): [`new_controller_with_baselines`] with
+/// those.
 pub fn new_controller(
     kind: ControllerKind,
     n: usize,
     settings: &MpcSettings,
+) -> Result<Box<dyn Controller + Send>, SettingsError> {
+    new_controller_with_baselines(kind, n, settings, &BaselineSettings::default())
+}
+
+/// Builds the controller `kind` for `n` joints: a predictive controller of
+/// the paper from `settings`, a baseline ([`ControllerKind::BASELINES`])
+/// from `settings` and its bandwidth of `baselines` (the predictive kinds
+/// do not read `baselines`; a baseline checks only its own bandwidth).
+pub fn new_controller_with_baselines(
+    kind: ControllerKind,
+    n: usize,
+    settings: &MpcSettings,
+    baselines: &BaselineSettings,
 ) -> Result<Box<dyn Controller + Send>, SettingsError> {
     Ok(match kind {
         ControllerKind::Usual => Box::new(UsualMpc::new(n, settings)?),
@@ -241,9 +256,9 @@ pub fn new_controller(
         ControllerKind::Second => Box::new(SecondMpc::new(n, settings)?),
         ControllerKind::FirstAdaptive
         | ControllerKind::SecondAdaptive
-        | ControllerKind::CtcAdaptive => Box::new(AdaptiveMpc::new(kind, n, settings)?),
-        ControllerKind::Pid => Box::new(PidController::new(n, settings)?),
-        ControllerKind::Ctc => Box::new(CtcController::new(n, settings)?),
-        ControllerKind::DobMpc => Box::new(DobMpc::new(n, settings)?),
+        | ControllerKind::CtcAdaptive => Box::new(AdaptiveMpc::new(kind, n, settings, baselines)?),
+        ControllerKind::Pid => Box::new(PidController::new(n, settings, baselines)?),
+        ControllerKind::Ctc => Box::new(CtcController::new(n, settings, baselines)?),
+        ControllerKind::DobMpc => Box::new(DobMpc::new(n, settings, baselines)?),
     })
 }

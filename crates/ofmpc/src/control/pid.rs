@@ -19,7 +19,7 @@
 
 use super::baseline::{JointLawCore, Law};
 use super::core::impl_controller;
-use super::settings::{bandwidths, MpcSettings, SettingsError};
+use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::ControllerKind;
 
 /// The PID baseline. Allocation-free [`Controller::step`](super::Controller::step).
@@ -31,10 +31,14 @@ pub struct PidController {
 impl_controller!(PidController, ControllerKind::Pid, JointLawCore);
 
 impl PidController {
-    /// A controller for `n` joints with `settings.baselines.pid_bandwidth`
-    /// (and `ts`, `horizon` for the preview it reads).
-    pub fn new(n: usize, settings: &MpcSettings) -> Result<Self, SettingsError> {
-        let wn = bandwidths("pid_bandwidth", &settings.baselines.pid_bandwidth, n)?;
+    /// A controller for `n` joints with `baselines.pid_bandwidth` (and
+    /// `settings.ts`, `settings.horizon` for the preview it reads).
+    pub fn new(
+        n: usize,
+        settings: &MpcSettings,
+        baselines: &BaselineSettings,
+    ) -> Result<Self, SettingsError> {
+        let wn = bandwidths("pid_bandwidth", &baselines.pid_bandwidth, n)?;
         Ok(Self {
             core: JointLawCore::new(Law::Pid, n, settings, &wn)?,
         })

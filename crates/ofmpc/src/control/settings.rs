@@ -174,6 +174,13 @@ pub const DEFAULT_DOB_OBSERVER_BANDWIDTH: f64 = 100.0;
 /// joint or one per joint. The PID and computed-torque error dynamics get a
 /// discrete triple pole at `e^(−ωn·Ts)` ([`super::baseline`]); the disturbance
 /// observer of the MPC baseline a pole at `e^(−ω_o·Ts)`.
+///
+/// Its own settings type, given beside the [`MpcSettings`] where a baseline
+/// is built ([`super::PidController::new`], [`super::CtcController::new`],
+/// [`super::DobMpc::new`], [`super::AdaptiveMpc::new`],
+/// [`super::new_controller_with_baselines`],
+/// [`super::ControllerBuilder::baselines`]); the predictive controllers of
+/// the paper do not read it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BaselineSettings {
@@ -234,8 +241,9 @@ pub fn bandwidths(name: &'static str, w: &Weight, n: usize) -> Result<Vec<f64>, 
     Ok(out)
 }
 
-/// Settings shared by every controller (the baselines read their part,
-/// [`BaselineSettings`]). Defaults are the paper's tuning
+/// Settings shared by every controller (a baseline also takes its
+/// bandwidth from [`BaselineSettings`], given beside these where it is
+/// built). Defaults are the paper's tuning
 /// (Section IV): `Ts = 0.01 s`, `N = 10`, `Q_yw = I`, `Q_Δy = 0.5 I`,
 /// `Q_Δu = 1e-5 I`, and for the usual controller (43) `Q_u = 1e-4 I`.
 ///
@@ -313,10 +321,6 @@ pub struct MpcSettings {
     /// make it worse (the observer then predicts a stick where the joint
     /// slides): see the README's drives section.
     pub observer_friction: bool,
-    /// The baselines' bandwidths ([`BaselineSettings`]). Not part of the
-    /// `[mpc]` table: a scenario gives them as `[baselines]`.
-    #[serde(skip)]
-    pub baselines: BaselineSettings,
 }
 
 impl Default for MpcSettings {
@@ -336,7 +340,6 @@ impl Default for MpcSettings {
             delay_compensation: false,
             state_observer: false,
             observer_friction: false,
-            baselines: BaselineSettings::default(),
         }
     }
 }

@@ -10,7 +10,8 @@ use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{
-    BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings, ObserverSettings,
+    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings,
+    ObserverSettings,
 };
 
 /// Poles of the state observer's error dynamics (per sample). Measured on
@@ -39,6 +40,11 @@ pub struct Experiment {
     /// The payload's pick-up time, the safety limit, the measurement faults
     /// and the horizons to record ([`RunConditions::NONE`]: none).
     pub conditions: RunConditions,
+    /// The baselines' bandwidths ([`BaselineSettings::default`]: the
+    /// reference tuning): a baseline kind ([`ControllerKind::BASELINES`])
+    /// builds with them ([`ControllerBuilder::baselines`], which checks them
+    /// for the robot's joints); the predictive kinds do not read them.
+    pub baselines: BaselineSettings,
 }
 
 /// Name of a run's folder: `<controller>_m<payload>`, e.g. `second_m0.25`.
@@ -169,6 +175,9 @@ impl Experiment {
         let mut builder = ControllerBuilder::new(kind, &self.robot)
             .settings(self.mpc.clone())
             .accept_ineffective_settings();
+        if kind.is_baseline() {
+            builder = builder.baselines(self.baselines.clone());
+        }
         if observed {
             builder = builder.observer(ObserverSettings {
                 pole: OBSERVER_POLE,

@@ -28,6 +28,7 @@ pub fn experiment(robot: Robot, program: &str, origin: Option<[f64; 3]>) -> Expe
         mpc: MpcSettings::default(),
         plant: Default::default(),
         loop_settings: LoopSettings::default(),
+        baselines: Default::default(),
     }
 }
 
