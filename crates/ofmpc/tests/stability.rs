@@ -86,6 +86,29 @@ fn adaptive_variants_and_bad_options_are_errors() {
         &StabilityOptions::default(),
     );
     assert!(matches!(e, Err(StabilityError::Adaptive(_))));
+    // The baselines' memory (integral, observer) is not in the analysis' state: before this
+    // refusal it gave the pid ρ = 2.13 at α = 1, unstable with an exact model, while its
+    // closed-loop runs hold (tests/baselines.rs).
+    for k in ControllerKind::BASELINES
+        .into_iter()
+        .filter(|k| !k.is_adaptive())
+    {
+        let o = StabilityOptions::default();
+        let e = alpha_interval(&robot, k, &s, &b, &Q0, &o);
+        assert!(
+            matches!(e, Err(StabilityError::Baseline(kind)) if kind == k),
+            "{k}: {e:?}"
+        );
+        let e = spectral_radius(&robot, k, &s, &b, &Q0, 1.0, &o);
+        assert!(matches!(e, Err(StabilityError::Baseline(_))), "{k}: {e:?}");
+        assert!(
+            matches!(
+                LinearizedLoop::new(&robot, k, &s, &b, &Q0, &o),
+                Err(StabilityError::Baseline(_))
+            ),
+            "{k}"
+        );
+    }
     let bad = StabilityOptions {
         alpha_max: 0.5,
         ..Default::default()

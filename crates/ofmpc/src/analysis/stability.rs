@@ -37,7 +37,8 @@
 //! [`MpcSettings`] and the [`BaselineSettings`], of which a baseline kind
 //! reads its bandwidth and the predictive kinds nothing. The augmented state
 //! above is that of the paper's controllers; a baseline's memory (its
-//! integral, its observer's estimate) is not in it.
+//! integral, its observer's estimate) is not in it, and the analysis refuses
+//! the baselines ([`StabilityError::Baseline`]).
 
 use crate::control::{
     new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
@@ -98,6 +99,11 @@ pub enum StabilityError {
     /// The adaptive variants identify the payload: analyse their base algorithm.
     #[error("{kind} identifies the payload online: analyse the algorithm it runs ({base})", kind = .0, base = .0.base())]
     Adaptive(ControllerKind),
+    /// A baseline's memory (its integral, its observer's estimate) is not in the augmented
+    /// state of the analysis, which models the paper's predictive controllers: its spectral
+    /// radius would be that of another loop.
+    #[error("the stability analysis models the paper's predictive controllers; {0} is a baseline whose own state (integral, observer) it does not model: compare it in closed-loop simulation")]
+    Baseline(ControllerKind),
     /// The loop is not stable even with an exact model (α = 1).
     #[error("the closed loop is not stable near rest even with an exact model (spectral radius {radius} at α = 1): change the tuning")]
     UnstableAtExactModel {
@@ -290,8 +296,9 @@ pub fn closed_loop_matrix(
 }
 
 /// The checks both linearizations make of their input: valid options, a
-/// non-adaptive controller (its model changes while it runs) and a finite `q0`
-/// of the robot's size.
+/// non-adaptive controller (its model changes while it runs), a predictive
+/// one (a baseline's memory is not modelled) and a finite `q0` of the robot's
+/// size.
 fn check_input(
     robot: &Robot,
     kind: ControllerKind,
@@ -301,6 +308,9 @@ fn check_input(
     options.validate()?;
     if kind.is_adaptive() {
         return Err(StabilityError::Adaptive(kind));
+    }
+    if kind.is_baseline() {
+        return Err(StabilityError::Baseline(kind));
     }
     robot.check_vector("q0", q0)?;
     Ok(())

@@ -63,7 +63,8 @@ pub enum ReferenceFailure {
         "the path passes next to a singularity of the arm (for a 6-axis arm, usually the wrist straight, joint 5 \
          near 0), where joint {joint} ({name}) would have to turn to {:.1}°, outside its range [{:.1}°, {:.1}°], \
          to follow it; move the part with a work offset (G10 L2 P1 X.. Y.. Z..) so that the path keeps away from \
-         the singularity, or change the orientation",
+         the singularity, or change the orientation (by default the start pose's: start from a pose with the \
+         wrist bent)",
         value.to_degrees(), lower.to_degrees(), upper.to_degrees()
     )]
     SingularPass {
