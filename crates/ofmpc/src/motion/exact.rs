@@ -13,7 +13,7 @@
 //! A move whose fastest law already keeps the limits is left exactly as it is.
 
 use crate::geometry::Segment;
-use crate::motion::timelaw::TimeLaw;
+use crate::motion::timelaw::{ProfileValue, TimeLaw};
 use crate::motion::topp::JointConstraints;
 use crate::motion::JointQuantity;
 
@@ -126,7 +126,7 @@ fn fine_peaks(
     i: usize,
     m: usize,
     jc: &mut JointConstraints<'_>,
-) -> Option<((f64, usize), (f64, usize))> {
+) -> Option<Peaks> {
     let nj = jc.velocity.len();
     let len = segment.length();
     let step = (0..nj)
@@ -148,7 +148,7 @@ fn fine_peaks(
         }
         fine.extend_from_slice(sol);
     }
-    let (mut t_v, mut t_a) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    let mut peaks = Peaks::default();
     for l in 1..=k + 1 {
         let s = s0 + (l as f64 - 1.0) * h;
         if !(0.0..=len).contains(&s) || l == 1 && i == 0 || l == k + 1 && i + 1 == m {
@@ -163,19 +163,52 @@ fn fine_peaks(
             );
             let dq = (y2 - y0) / (2.0 * h);
             let ddq = (y0 - 2.0 * y1 + y2) / (h * h);
-            let tv = (dq * len * p.ds).abs() / jc.velocity[j];
-            let ta = ((dq * len * p.dds + ddq * len * len * p.ds * p.ds).abs()
-                / jc.acceleration[j])
-                .sqrt();
-            if tv > t_v.0 {
-                t_v = (tv, j);
-            }
-            if ta > t_a.0 {
-                t_a = (ta, j);
-            }
+            peaks.add(j, dq, ddq, &p, len, jc);
         }
     }
-    Some((t_v, t_a))
+    Some(peaks)
+}
+
+/// The largest durations the joints' speed and acceleration limits need, with the joint
+/// (0-based) that needs each.
+#[derive(Debug, Clone, Copy, Default)]
+struct Peaks {
+    speed: (f64, usize),
+    accel: (f64, usize),
+}
+
+impl Peaks {
+    /// Joint `j` with `q' = dq`, `q'' = ddq` (per metre of path) where the law is at `p` on a
+    /// move of length `len`: `T_v = |q' L σ'| / v`, `T_a = √(|q' L σ'' + q'' L² σ'²| / A)`.
+    fn add(
+        &mut self,
+        j: usize,
+        dq: f64,
+        ddq: f64,
+        p: &ProfileValue,
+        len: f64,
+        jc: &JointConstraints<'_>,
+    ) {
+        let tv = (dq * len * p.ds).abs() / jc.velocity[j];
+        let ta =
+            ((dq * len * p.dds + ddq * len * len * p.ds * p.ds).abs() / jc.acceleration[j]).sqrt();
+        if tv > self.speed.0 {
+            self.speed = (tv, j);
+        }
+        if ta > self.accel.0 {
+            self.accel = (ta, j);
+        }
+    }
+
+    /// The larger of each.
+    fn merge(&mut self, other: Peaks) {
+        if other.speed.0 > self.speed.0 {
+            self.speed = other.speed;
+        }
+        if other.accel.0 > self.accel.0 {
+            self.accel = other.accel;
+        }
+    }
 }
 
 /// The duration of `law` on `segment` stretched so that every joint keeps its speed and
@@ -194,7 +227,7 @@ pub(crate) fn joint_limited_duration(
     let m = ((len / 5e-4).ceil() as usize).clamp(32, 512);
     let q = joint_grid(segment, m, jc)?;
     let (d1, d2) = derivatives(&q, m, nj, len / m as f64);
-    let (mut t_v, mut t_a) = ((0.0f64, 0usize), (0.0f64, 0usize));
+    let mut peaks = Peaks::default();
     for k in 0..=TAU_SAMPLES {
         let p = law.profile.eval(k as f64 / TAU_SAMPLES as f64);
         let x = (p.s * m as f64).clamp(0.0, m as f64);
@@ -202,17 +235,7 @@ pub(crate) fn joint_limited_duration(
         let w = x - i as f64;
         for j in 0..nj {
             let lerp = |d: &[f64]| d[i * nj + j] * (1.0 - w) + d[(i + 1) * nj + j] * w;
-            let (dq, ddq) = (lerp(&d1), lerp(&d2));
-            let tv = (dq * len * p.ds).abs() / jc.velocity[j];
-            let ta = ((dq * len * p.dds + ddq * len * len * p.ds * p.ds).abs()
-                / jc.acceleration[j])
-                .sqrt();
-            if tv > t_v.0 {
-                t_v = (tv, j);
-            }
-            if ta > t_a.0 {
-                t_a = (ta, j);
-            }
+            peaks.add(j, lerp(&d1), lerp(&d2), &p, len, jc);
         }
     }
     let steep: Vec<usize> = steep_intervals(&q, m, nj).collect();
@@ -222,14 +245,10 @@ pub(crate) fn joint_limited_duration(
         .collect();
     // The next move is solved from this one's end.
     jc.map.set_state(&q[m * nj..]);
-    for (tv, ta) in fine? {
-        if tv.0 > t_v.0 {
-            t_v = tv;
-        }
-        if ta.0 > t_a.0 {
-            t_a = ta;
-        }
+    for f in fine? {
+        peaks.merge(f);
     }
+    let (t_v, t_a) = (peaks.speed, peaks.accel);
     let (t, j, quantity) = if t_v.0 >= t_a.0 {
         (t_v.0, t_v.1, JointQuantity::Speed)
     } else {
