@@ -604,3 +604,35 @@ fn a_g61_move_next_to_the_wrist_singularity_is_slowed_for_the_peak_between_grid_
         "joint 4 peaks at {peak} rad/s, limit {limit}"
     );
 }
+
+/// A blended (`G64`) run that passes 2 mm from the wrist singularity: the timing grid's
+/// joint derivatives miss part of joint 4's peak, the sampled reference shows it, and the run
+/// is timed again with the joint speed limits scaled down until every sample keeps them (it
+/// was refused at the first sample over the limit).
+#[test]
+fn a_blended_run_whose_samples_exceed_a_joint_speed_is_timed_again_slower() {
+    let text = "G21 G90 G64 P0.01\nG1 X505 Y10 Z714 F3000\nG1 X505 Y-10 Z714\nG1 X520 Y-10 Z714\n";
+    let options = PlanOptions {
+        parse: ParseOptions {
+            origin: Some([0.0, 0.0, 0.0]),
+            ..Default::default()
+        },
+        ts: 0.01,
+        ..PlanOptions::default()
+    };
+    let robot = Robot::irb140();
+    let planned = plan(text, &robot, &options).expect("plans, timed again");
+    let d = &planned.diagnostics;
+    assert!(d.attempts > 1 && d.limit_scale[0] < 1.0, "{d:?}");
+    let r = &planned.reference;
+    for k in 1..r.len() {
+        for (i, j) in robot.joints().iter().enumerate() {
+            let v = (r.q(k)[i] - r.q(k - 1)[i]).abs() / options.ts;
+            assert!(
+                v <= j.limits.velocity * 1.01,
+                "sample {k}, joint {}: {v} rad/s",
+                i + 1
+            );
+        }
+    }
+}
