@@ -14,6 +14,9 @@
 #[path = "common/rng.rs"]
 mod rng;
 
+#[path = "common/ik.rs"]
+mod ik;
+
 use nalgebra::{Isometry3, UnitQuaternion};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::ik::{ForwardKinematics, NumericIk, NumericIkSettings, RobustIk, RobustIkSettings};
@@ -43,23 +46,6 @@ fn load(file: &str, tip: Option<&str>) -> Robot {
         tcp: None,
     };
     Robot::from_urdf_file_with(&path, &options).unwrap_or_else(|e| panic!("{file}: {e}"))
-}
-
-/// Position (m) and orientation (rad) distance between two poses, computed from the
-/// rotation matrices (angle = acos((tr R − 1)/2), through atan2 for accuracy).
-fn distance(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
-    let dp = (a.translation.vector - b.translation.vector).norm();
-    let r = (a.rotation.inverse() * b.rotation).to_rotation_matrix();
-    let m = r.matrix();
-    let s = 0.5
-        * nalgebra::Vector3::new(
-            m[(2, 1)] - m[(1, 2)],
-            m[(0, 2)] - m[(2, 0)],
-            m[(1, 0)] - m[(0, 1)],
-        )
-        .norm();
-    let c = 0.5 * (m.trace() - 1.0);
-    (dp, s.atan2(c))
 }
 
 /// Random joint vectors within the limits (an unbounded joint over [−π, π]).
@@ -93,7 +79,7 @@ fn success(robot: &Robot, seed: u64) -> (usize, usize) {
                 .iter()
                 .zip(lo.iter().zip(&up))
                 .all(|(v, (l, u))| *v >= *l && *v <= *u);
-            let (dp, dr) = distance(&target, &fk.flange_pose(x));
+            let (dp, dr) = ik::distance(&target, &fk.flange_pose(x));
             inside && dp <= 1e-9 && dr <= 1e-9
         };
         let mut x = robot.start_q().to_vec();
@@ -152,7 +138,7 @@ fn the_chain_ends_at_the_tip_and_a_named_end_effector_beats_a_finger() {
     let mut fk = RobotDynamics::new(ur);
     let with_tcp = fk.flange_pose(&q);
     let expected = flange * tcp;
-    let (dp, dr) = distance(&expected, &with_tcp);
+    let (dp, dr) = ik::distance(&expected, &with_tcp);
     assert!(dp < 1e-15 && dr < 1e-14, "{dp} {dr}");
 }
 
@@ -276,7 +262,7 @@ fn the_reference_starts_at_the_start_pose() {
         let planned = plan(program, &robot, &options).unwrap_or_else(|e| panic!("{file}: {e}"));
         let q0 = planned.reference.q(0);
         assert_ne!(q0, &q[..], "{file}");
-        let (_, dr) = distance(&fk.flange_pose(q0), &fk.flange_pose(&q));
+        let (_, dr) = ik::distance(&fk.flange_pose(q0), &fk.flange_pose(&q));
         assert!((dr - 0.1).abs() < 1e-9, "{file}: {dr}");
     }
 }

@@ -42,6 +42,18 @@ fn assert_joint_limits(p: &Plan, robot: &Robot) -> (f64, f64) {
     (worst_v, worst_a)
 }
 
+/// The default plan options with the program placed at `origin` (m), Ts = 0.01 s.
+fn at_origin(origin: [f64; 3]) -> PlanOptions {
+    PlanOptions {
+        parse: ParseOptions {
+            origin: Some(origin),
+            ..Default::default()
+        },
+        ts: 0.01,
+        ..PlanOptions::default()
+    }
+}
+
 fn dist_to_segment(p: Vector3<f64>, a: Vector3<f64>, b: Vector3<f64>) -> f64 {
     let u = b - a;
     let t = ((p - a).dot(&u) / u.norm_squared()).clamp(0.0, 1.0);
@@ -419,14 +431,7 @@ fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
     // The IRB 140's q = 0 is a wrist singularity (joints 4 and 6 on one axis): leaving it
     // along this path at a constant orientation needs joint 4 to jump by about 90°.
     let text = "G17\nG1 X0 Y20 F200\nG1 X-20 Y40\n";
-    let options = PlanOptions {
-        parse: ParseOptions {
-            origin: Some([0.505, -0.010, 0.600]),
-            ..Default::default()
-        },
-        ts: 0.01,
-        ..PlanOptions::default()
-    };
+    let options = at_origin([0.505, -0.010, 0.600]);
     let robot = Robot::irb140();
     let planned = plan(text, &robot, &options).expect("plans with a turn at the start");
     let turn = planned
@@ -435,7 +440,6 @@ fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
         .clone()
         .expect("a start turn");
     let r = &planned.reference;
-    let n = robot.dof();
     let ts = options.ts;
     // It starts at the robot's start pose and turns joints 4 and 6 only, by opposite angles
     // (q4 + q6 is the wrist's rotation about the common axis).
@@ -468,9 +472,9 @@ fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
             "sample {k}: tool moved by {:e} m",
             (p - p0).norm()
         );
-        let rot_err = (planned.trajectory.sample(k as f64 * ts).position - p0).norm();
+        let held = (planned.trajectory.sample(k as f64 * ts).position - p0).norm();
         assert!(
-            rot_err < 1e-12,
+            held < 1e-12,
             "the Cartesian path holds its start during the turn"
         );
     }
@@ -494,7 +498,6 @@ fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
             );
         }
     }
-    let _ = n;
     // An arc back past the singularity (0.1 mm from the wrist straight) is refused for that
     // cause, not for the path speed.
     let back = format!("{text}G2 X20 Y0 I0 J-40\n");
@@ -538,14 +541,7 @@ fn a_path_out_of_reach_is_refused_for_its_reach_not_for_a_joint_speed_before_it(
     use ofmpc::motion::reference::ReferenceFailure;
     use ofmpc::motion::PlanError;
     let text = "G21 G90\nG0 X0 Y0 Z0\nG1 X0 Y0 F10000\nG1 X1000\nG1 Y1000\nG1 X0\nG1 Y0\n";
-    let options = PlanOptions {
-        parse: ParseOptions {
-            origin: Some([0.0, -0.5, 0.35]),
-            ..Default::default()
-        },
-        ts: 0.01,
-        ..PlanOptions::default()
-    };
+    let options = at_origin([0.0, -0.5, 0.35]);
     let robot = Robot::irb140();
     match plan(text, &robot, &options) {
         Err(PlanError::Reference(e)) => {
@@ -576,14 +572,7 @@ fn a_path_out_of_reach_is_refused_for_its_reach_not_for_a_joint_speed_before_it(
 fn a_g61_move_next_to_the_wrist_singularity_is_slowed_for_the_peak_between_grid_points() {
     use ofmpc::motion::JointQuantity;
     let text = "G21 G90 G61\nG1 X505 Y10 Z712.5 F2000\nG1 X505 Y-10 Z712.5\n";
-    let options = PlanOptions {
-        parse: ParseOptions {
-            origin: Some([0.0, 0.0, 0.0]),
-            ..Default::default()
-        },
-        ts: 0.01,
-        ..PlanOptions::default()
-    };
+    let options = at_origin([0.0, 0.0, 0.0]);
     let robot = Robot::irb140();
     let planned = plan(text, &robot, &options).expect("plans, slowed down");
     let limited = &planned.diagnostics.joint_limited;
@@ -612,14 +601,7 @@ fn a_g61_move_next_to_the_wrist_singularity_is_slowed_for_the_peak_between_grid_
 #[test]
 fn a_blended_run_whose_samples_exceed_a_joint_speed_is_timed_again_slower() {
     let text = "G21 G90 G64 P0.01\nG1 X505 Y10 Z714 F3000\nG1 X505 Y-10 Z714\nG1 X520 Y-10 Z714\n";
-    let options = PlanOptions {
-        parse: ParseOptions {
-            origin: Some([0.0, 0.0, 0.0]),
-            ..Default::default()
-        },
-        ts: 0.01,
-        ..PlanOptions::default()
-    };
+    let options = at_origin([0.0, 0.0, 0.0]);
     let robot = Robot::irb140();
     let planned = plan(text, &robot, &options).expect("plans, timed again");
     let d = &planned.diagnostics;

@@ -238,9 +238,7 @@ pub(crate) fn joint_limited_duration(
             peaks.add(j, lerp(&d1), lerp(&d2), &p, len, jc);
         }
     }
-    let steep: Vec<usize> = steep_intervals(&q, m, nj).collect();
-    let fine: Option<Vec<_>> = steep
-        .into_iter()
+    let fine: Option<Vec<Peaks>> = steep_intervals(&q, m, nj)
         .map(|i| fine_peaks(segment, law, &q, i, m, jc))
         .collect();
     // The next move is solved from this one's end.
