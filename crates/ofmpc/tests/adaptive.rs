@@ -49,7 +49,8 @@ fn assert_adaptive_target(m: &RunMetrics, mass: f64, rms_mm: Option<f64>) {
 fn paper_path_at_2_and_6_kg() {
     let exp = experiment(Robot::irb140(), PAPER_TABLE1, None);
     for mass in [2.0, 6.0] {
-        // The paper's second algorithm diverges there (NOTES.md) ...
+        // The paper's second algorithm diverges there (docs/guide/paper-notes.md,
+        // "The experiment") ...
         let plain = run(&exp, ControllerKind::Second, mass);
         assert_eq!(plain.status, RunStatus::Diverged, "second at {mass} kg");
         assert!(plain.payload_estimate_kg.is_none());

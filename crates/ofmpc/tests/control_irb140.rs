@@ -50,8 +50,9 @@ fn holding_a_pose_with_an_unknown_payload() {
     }
 }
 
-/// Beyond the paper tuning's margin (NOTES.md: second algorithm ≈ 1.5 kg) the
-/// run diverges; it must be stopped and flagged, with null steady metrics.
+/// Beyond the paper tuning's margin (docs/guide/paper-notes.md, "The experiment":
+/// second algorithm ≈ 1.5 kg) the run diverges; it must be stopped and flagged,
+/// with null steady metrics.
 #[test]
 fn divergence_beyond_the_tunings_margin_is_flagged() {
     let q = vec![0.3, 0.4, -0.2, 0.5, 0.8, -0.3];
@@ -97,9 +98,9 @@ fn divergence_beyond_the_tunings_margin_is_flagged() {
     assert!(r.record.len() < 300);
 }
 
-/// NOTES.md: without the drives' armature the IRB 140's wrist is so light that
-/// 0.25 kg already breaks the second algorithm with the paper's tuning; with
-/// the armature it holds.
+/// docs/guide/paper-notes.md, "The experiment": without the drives' armature
+/// the IRB 140's wrist is so light that 0.25 kg already breaks the second
+/// algorithm with the paper's tuning; with the armature it holds.
 #[test]
 fn drive_inertia_decides_whether_a_quarter_kilogram_breaks_the_second_algorithm() {
     let run = |robot: Robot| {

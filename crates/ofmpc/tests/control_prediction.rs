@@ -97,7 +97,7 @@ fn incremental_and_positional_predictions_match_rollouts() {
                 fill_f_i(ny, nh, &mut fi).unwrap();
                 let y_p = &fi * &yk + &m.f2 * &dx + &m.g2 * &du;
                 assert!(rel(&y_p, &yhat, scale(&yhat)) < 1e-12, "Ŷ nx={nx} N={nh}");
-                // Eq. (28) with the minus sign of NOTES.md
+                // Eq. (28) with the minus sign of docs/guide/paper-notes.md ("Symbols")
                 let mut fii = DMatrix::zeros(nh * ny, ny);
                 fill_f_ii(ny, nh, &mut fii).unwrap();
                 let mut ws = vec![0.0; nh * ny];
@@ -157,7 +157,8 @@ fn structured_zoh_predictions_equal_general_ones() {
 
 #[test]
 fn paper_block_formulas_hold() {
-    // Spot-check the closed forms of NOTES.md on a small random model.
+    // Spot-check the closed forms of docs/guide/paper-notes.md ("Symbols") on a
+    // small random model.
     let mut rng = Rng(3);
     let (nx, nu, ny, nh) = (3, 2, 2, 5);
     let a = rng.matrix(nx, nx) * 0.5;

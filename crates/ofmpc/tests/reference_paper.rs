@@ -24,7 +24,7 @@ fn ik_along_the_paper_path_is_exact_within_limits_and_speed() {
         max_p = max_p.max((f.pos - nalgebra::Vector3::from(p)).norm());
         max_r = max_r.max((f.rot - rot0).abs().max());
         for (i, j) in robot.joints().iter().enumerate() {
-            // Every joint well inside its limits (NOTES.md: at least 10°).
+            // Every joint well inside its limits (docs/guide/paper-notes.md, "The test path": at least 10°).
             let margin = (q[i] - j.limits.lower).min(j.limits.upper - q[i]);
             assert!(
                 margin > 10f64.to_radians() - 1e-6,

@@ -1,7 +1,7 @@
 //! Stability near rest against an inertia mismatch: the interval computed
 //! from the linearized real controller step agrees with nonlinear
 //! closed-loop simulations just inside and just outside each boundary, and
-//! with the paper tuning's known intervals (NOTES.md).
+//! with the paper tuning's known intervals (docs/guide/paper-notes.md, "The experiment").
 
 use ofmpc::analysis::{
     alpha_interval, alpha_interval_by_perturbation, inertia_ratio_range, max_payload,
@@ -44,7 +44,7 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
         (ControllerKind::First, (0.53, 1.12), 4.6),
         (ControllerKind::Second, (0.78, 1.09), 1.5),
     ];
-    // The payloads are along the paper's path (NOTES.md).
+    // The payloads are along the paper's path (docs/guide/paper-notes.md, "The test path").
     use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
     use ofmpc::motion::reference::{build_reference, Orientation};
     use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};

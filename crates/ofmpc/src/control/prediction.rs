@@ -1,7 +1,7 @@
 //! Equations of predictions, Eq. (20)–(29), and the positional ones of the
 //! usual controller (43).
 //!
-//! Blocks (j = 1..N block row, l = 1..N block column; see NOTES.md):
+//! Blocks (j = 1..N block row, l = 1..N block column; see docs/guide/paper-notes.md, "Symbols"):
 //!
 //! ```text
 //! F1[j] = C A^j                      G1[j,l] = C A^{j-l} B                      (l ≤ j)

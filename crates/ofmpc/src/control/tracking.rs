@@ -4,7 +4,7 @@
 //! Both incremental algorithms weight the same predicted motion twice:
 //! `Q_YW (G2 ΔU …)` or `Q_YW ((G2 + G3) ΔU …)` and `Q_ΔY (G1 ΔU …)`
 //! (Eq. (37), (39)). The `G` are running sums of `G1` over block rows
-//! (NOTES.md, prediction.rs):
+//! (docs/guide/paper-notes.md, "Symbols"; prediction.rs):
 //!
 //! ```text
 //! G2[j, l]      = Σ_{m ≤ j} G1[m, l]                 (S = S1, s(j, m) = 1)

@@ -13,7 +13,7 @@
 //!   and Christoffel symbols for rigid-body systems", JCND 2021). Then
 //!   `C q̇` is the Coriolis and centrifugal torque and `Ḣ − 2C` is
 //!   skew-symmetric: C is the Christoffel-symbol matrix of the paper's
-//!   `½ Ḣ + S` (NOTES.md, "Model decomposition").
+//!   `½ Ḣ + S` (docs/guide/paper-notes.md, "The model").
 
 use super::kinematics::fk_unchecked;
 use super::{check, check_ws, finite_result, Workspace};

@@ -310,8 +310,9 @@ impl LinearPlant {
     }
 }
 
-/// Prediction matrices by the block formulas of NOTES.md with explicit
-/// matrix powers of `(Ad, Bd)` and `C = [I, 0]` (full G matrices).
+/// Prediction matrices by the block formulas of docs/guide/paper-notes.md
+/// ("Symbols") with explicit matrix powers of `(Ad, Bd)` and `C = [I, 0]`
+/// (full G matrices).
 pub struct Brute {
     pub f1: DMatrix<f64>,
     pub f2: DMatrix<f64>,
@@ -321,7 +322,8 @@ pub struct Brute {
     pub g3: DMatrix<f64>,
 }
 
-/// Block formulas of NOTES.md with explicit matrix powers.
+/// Block formulas of docs/guide/paper-notes.md ("Symbols") with explicit
+/// matrix powers.
 pub fn brute(ad: &DMatrix<f64>, bd: &DMatrix<f64>, n: usize, nh: usize) -> Brute {
     let nx = 2 * n;
     let mut c = DMatrix::<f64>::zeros(n, nx);
