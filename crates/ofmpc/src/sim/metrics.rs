@@ -133,7 +133,9 @@ pub fn deadline_misses(step_us: &[f64], ts: f64) -> usize {
 pub struct RunMetrics {
     /// Run name (its folder): `<controller>_m<payload>`.
     pub name: String,
-    /// "usual", "first" or "second".
+    /// The controller kind's name (`ControllerKind::name`): `"usual"`,
+    /// `"first"`, `"second"`, `"first-adaptive"`, `"second-adaptive"`,
+    /// `"pid"`, `"ctc"`, `"ctc-adaptive"` or `"dob-mpc"`.
     pub controller: String,
     /// Payload the controller does not know (kg).
     pub payload_kg: f64,
@@ -168,7 +170,8 @@ pub struct RunMetrics {
     pub diverged: bool,
     /// Time of the divergence (s), `None` when it did not diverge.
     pub diverged_at_s: Option<f64>,
-    /// `"ok"`, `"diverged"` or `"failed"`.
+    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"` or `"failed_stop"`
+    /// ([`RunStatus`]).
     pub status: RunStatus,
     /// How the run ended, in words (the outcome's `Display`).
     pub reason: String,
