@@ -346,11 +346,22 @@ fn the_anchor_rule_is_githubs() {
     );
 }
 
+/// The key tracer's output is what the documentation check above relies on: TOML key spellings
+/// only, and every dotted key below a section it also found (`a.b` below `a`, `a[].b` below `a`).
 #[test]
-fn print_scenario_keys() {
-    // `cargo test --test docs print_scenario_keys -- --nocapture` lists them.
-    for k in scenario_keys() {
-        println!("KEY {k}");
+fn traced_scenario_keys_are_well_formed_and_nested() {
+    let keys = scenario_keys();
+    assert!(keys.len() > 20, "{keys:?}");
+    for k in &keys {
+        assert!(
+            k.chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || "_.[]-".contains(c)),
+            "{k:?} is not a TOML key path"
+        );
+        if let Some((parent, _)) = k.rsplit_once('.') {
+            let parent = parent.strip_suffix("[]").unwrap_or(parent);
+            assert!(keys.contains(parent), "{k:?} without its section {parent:?}");
+        }
     }
 }
 

@@ -1,7 +1,8 @@
 //! The HTML report in a real browser: headless Chromium loads the page, the inline check script
 //! confirms every figure rendered, and a screenshot shows the page is not blank.
 //!
-//! Skipped (with a note on stderr) when no Chromium is installed; CI installs it.
+//! These tests fail when no Chromium is installed (a skipped browser check would pass while
+//! checking nothing): install it with `apt-get install chromium`; `.ci/run` does.
 
 use ofmpc_cli::output;
 
@@ -16,6 +17,15 @@ use output::plot::{self, color, COLOR_FIRST, COLOR_USUAL};
 use output::report::{Image, Report, Table};
 
 /// Chromium binary: `/usr/bin/chromium`, else the first of the usual names on PATH.
+/// Panics, saying how to install it, when there is none.
+fn chromium_binary() -> PathBuf {
+    find_chromium().expect(
+        "Chromium not found (looked for /usr/bin/chromium, chromium, chromium-browser, \
+         google-chrome, google-chrome-stable on PATH): the browser tests need it; \
+         install it with `apt-get install chromium`",
+    )
+}
+
 fn find_chromium() -> Option<PathBuf> {
     let fixed = Path::new("/usr/bin/chromium");
     if fixed.is_file() {
@@ -141,10 +151,7 @@ fn report_renders_all_figures_in_chromium() {
     }
     assert!(!html.contains("<test>"), "title not escaped");
 
-    let Some(bin) = find_chromium() else {
-        eprintln!("note: Chromium not found; skipping the browser part of report_chromium");
-        return;
-    };
+    let bin = chromium_binary();
     let tmp = tempfile::tempdir().unwrap();
     let page = tmp.path().join("report.html");
     report.write(&page).unwrap();
@@ -221,10 +228,7 @@ fn report_renders_all_figures_in_chromium() {
 fn check_script_detects_a_broken_figure() {
     // Negative control: a PNG with a valid signature but garbage data cannot be decoded, so the
     // page must report fewer rendered figures than it has.
-    let Some(bin) = find_chromium() else {
-        eprintln!("note: Chromium not found; skipping check_script_detects_a_broken_figure");
-        return;
-    };
+    let bin = chromium_binary();
     let good = plot::render_png(&edge_case_figure()).unwrap();
     let mut r = Report::new("broken");
     // And text that cannot fit: one unbreakable word far wider than the window.
@@ -287,10 +291,7 @@ fn timeseries(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 /// `timeseries.csv` and — by the page's own forward kinematics — its flange position.
 #[test]
 fn replay_follows_the_timeseries_in_chromium() {
-    let Some(bin) = find_chromium() else {
-        eprintln!("note: Chromium not found; skipping replay_follows_the_timeseries_in_chromium");
-        return;
-    };
+    let bin = chromium_binary();
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
     std::fs::write(
@@ -552,12 +553,7 @@ fn mesh_robot_renders_in_chromium() {
     }
     assert!(!html.contains("Not drawn:"));
 
-    let Some(bin) = find_chromium() else {
-        eprintln!(
-            "note: Chromium not found; skipping the browser part of mesh_robot_renders_in_chromium"
-        );
-        return;
-    };
+    let bin = chromium_binary();
     let mut url = page.clone().into_os_string();
     url.push("#replay-check");
     let dom = chromium(

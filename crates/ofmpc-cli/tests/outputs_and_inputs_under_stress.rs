@@ -1,5 +1,8 @@
-//! The `ofmpc` binary against the third round of hostile cases (issue #22): each test checks the
-//! exit status, the message and the file system before and after.
+//! The `ofmpc` binary's output folder and inputs under stress: staged outputs that never replace
+//! their own inputs, closed pipes, the output lock across PID namespaces, inherited signal
+//! dispositions, and inputs read with a size limit and a named encoding, with messages that name
+//! the key or the line. Each test checks the exit status, the message and the file system before
+//! and after.
 
 mod bin;
 mod signals;
@@ -46,7 +49,7 @@ fn fails_in(cwd: &Path, args: &[&str]) -> String {
 /// A G-code program: one short move.
 const PROGRAM: &str = "G21 G90\nG0 X500 Y0 Z600\nG1 X510 F3000\nM30\n";
 
-/// Item 2: `tune --out` never replaces its own program, and a figure that cannot be written
+/// `tune --out` never replaces its own program, and a figure that cannot be written
 /// changes nothing (the scenario file is not replaced first); `analyze` likewise.
 #[test]
 fn tune_and_analyze_use_the_staged_checked_output() {
@@ -124,7 +127,7 @@ fn closed_pipe() -> Stdio {
     Stdio::from(w)
 }
 
-/// Item 4: `analyze stability | true` and `tune | true` end quietly with status 0, their files
+/// `analyze stability | true` and `tune | true` end quietly with status 0, their files
 /// written.
 #[test]
 fn analyze_and_tune_into_a_closed_pipe_stop_quietly() {
@@ -194,7 +197,7 @@ fn dead_pid() -> u32 {
     pid
 }
 
-/// Item 3: the lock is the kernel's (`flock` on the open lock file), not the pid: a holder whose
+/// The lock is the kernel's (`flock` on the open lock file), not the pid: a holder whose
 /// pid this process cannot see (another PID namespace, here simulated by a pid that has exited
 /// while its file stays locked) keeps the folder, and nothing of it is touched.
 #[test]
@@ -224,17 +227,36 @@ fn a_held_lock_is_respected_whatever_its_pid() {
     assert!(!lock.exists() && !stage.exists());
 }
 
-/// Item 3 with a real second PID namespace (`unshare --pid`, when this machine allows it): the
-/// run inside it fails at once, naming the host run, and the host run ends well.
+/// The lock with a real second PID namespace (`unshare --pid`): the run inside it fails at once,
+/// naming the host run, and the host run ends well.
+///
+/// `unshare` (util-linux) is on every Linux system, so a missing binary fails the test (install
+/// util-linux). A kernel or container that refuses a new PID namespace is a genuine limit of the
+/// machine, not of the code: the test then says so on stderr and passes, unless `CI` is set,
+/// where it fails; [`a_held_lock_is_respected_whatever_its_pid`] covers the rule either way.
 #[test]
 fn a_run_in_another_pid_namespace_does_not_take_the_lock() {
     let probe = Command::new("unshare")
         .args(["--pid", "--fork", "--mount-proc", "true"])
         .stderr(Stdio::null())
         .status();
-    if !probe.is_ok_and(|s| s.success()) {
-        eprintln!("unshare --pid is not allowed here: skipped");
-        return;
+    match probe {
+        Err(e) if cfg!(target_os = "linux") => {
+            panic!("`unshare` could not be started ({e}): install util-linux")
+        }
+        Err(_) => {
+            eprintln!("NOT RUN: no `unshare` on this system (Linux only)");
+            return;
+        }
+        Ok(s) if !s.success() => {
+            assert!(
+                std::env::var_os("CI").is_none(),
+                "`unshare --pid` is refused on this CI machine ({s}): the test cannot run"
+            );
+            eprintln!("NOT RUN: `unshare --pid` is refused here ({s}); set CI to make this fail");
+            return;
+        }
+        Ok(_) => {}
     }
     let tmp = tempfile::tempdir().unwrap();
     let d = tmp.path();
@@ -283,7 +305,7 @@ fn a_run_in_another_pid_namespace_does_not_take_the_lock() {
     assert!(!out.join(".ofmpc-lock").exists());
 }
 
-/// Item 5: a SIGHUP inherited as ignored (`nohup`, here `trap '' HUP`) stays ignored: the run
+/// A SIGHUP inherited as ignored (`nohup`, here `trap '' HUP`) stays ignored: the run
 /// goes on and writes its results; without it, SIGHUP still ends the run cleanly (129).
 #[test]
 fn an_ignored_sighup_stays_ignored() {
@@ -321,7 +343,7 @@ fn an_ignored_sighup_stays_ignored() {
     }
 }
 
-/// Item 8: `[mpc] torque_limits = true` on a robot with no finite peak torque (a URDF without
+/// `[mpc] torque_limits = true` on a robot with no finite peak torque (a URDF without
 /// effort limits on continuous joints) is refused before anything runs, naming the key; it never runs unconstrained.
 #[test]
 fn torque_limits_without_limits_are_refused() {
@@ -357,7 +379,7 @@ fn torque_limits_without_limits_are_refused() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Items 11 and 12: a section written as an array is an error naming it (never read by
+/// A section written as an array is an error naming it (never read by
 /// position); a file named like the built-in robot, in the scenario's folder and the working
 /// directory, does not shadow it (a path still names a file).
 #[test]
@@ -392,7 +414,7 @@ fn sections_as_arrays_and_files_named_like_built_in_robots() {
     assert!(e.contains("irb140"), "{e}");
 }
 
-/// Item 13: masses that differ (1 and 1.0000000000001) are not "listed more than once": they
+/// Masses that differ (1 and 1.0000000000001) are not "listed more than once": they
 /// would share a run folder, so the scenario is refused naming both; a true repeat still warns.
 #[test]
 fn different_masses_with_one_label_are_refused() {
@@ -413,7 +435,7 @@ fn different_masses_with_one_label_are_refused() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Item 17: fixed-length options say what they need, not the robot's joint count.
+/// Fixed-length options say what they need, not the robot's joint count.
 #[test]
 fn fixed_length_options_name_what_they_need() {
     let tmp = tempfile::tempdir().unwrap();
@@ -431,7 +453,7 @@ fn fixed_length_options_name_what_they_need() {
     assert!(std::fs::read_dir(tmp.path()).unwrap().next().is_none());
 }
 
-/// Item 17: a dangling symbolic link as the output folder is one clear error, no "results go
+/// A dangling symbolic link as the output folder is one clear error, no "results go
 /// there" note first, and nothing is created.
 #[test]
 fn a_dangling_link_as_out_is_one_clear_error() {
@@ -448,7 +470,7 @@ fn a_dangling_link_as_out_is_one_clear_error() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Items 15 and 17: a program is read with a limit (`/dev/zero` is refused at 64 MiB, not
+/// A program is read with a limit (`/dev/zero` is refused at 64 MiB, not
 /// read forever), and a Latin-1 file is named with the byte, line and column and the encoding
 /// to use; nothing is written.
 #[test]
@@ -480,7 +502,7 @@ fn inputs_are_read_with_a_limit_and_their_encoding_named() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Item 15: URDF and drives files are read with a limit too (64 MiB and 4 MiB, said with the
+/// URDF and drives files are read with a limit too (64 MiB and 4 MiB, said with the
 /// file's size), `/dev/zero` is refused, and a Latin-1 URDF names the byte; nothing is written.
 #[test]
 fn robot_files_are_read_with_a_limit_and_their_encoding_named() {
@@ -541,7 +563,7 @@ fn robot_files_are_read_with_a_limit_and_their_encoding_named() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Item 17: a model payload the robot cannot carry names its key (was "second_m0.25:
+/// A model payload the robot cannot carry names its key (was "second_m0.25:
 /// [payload]: invalid payload"); nothing is written.
 #[test]
 fn a_model_payload_too_heavy_names_its_key() {
@@ -568,7 +590,7 @@ fn a_model_payload_too_heavy_names_its_key() {
     assert_eq!(snapshot(d), before);
 }
 
-/// Item 17: a URDF error says the line and the element ("custom: invalid float literal" and
+/// A URDF error says the line and the element ("custom: invalid float literal" and
 /// "missing field `ixy`" had no position); a payload the robot cannot carry is said once (the
 /// chain `a: b` no longer repeats a cause the message holds); a `<dynamics>` warning quotes
 /// only what the file says (no `friction="0"` the file does not have).

@@ -1,4 +1,4 @@
-//! The `ofmpc` binary against a hostile environment (issue #9): closed pipes, repeated runs,
+//! The `ofmpc` binary against a hostile environment: closed pipes, repeated runs,
 //! devices and links where files go, inputs in the output folder, conflicts at the final move,
 //! signals, concurrent runs, relative paths, earlier results, bad option values. Each test checks
 //! the exit status, the message and the file system before and after.

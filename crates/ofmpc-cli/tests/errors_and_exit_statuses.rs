@@ -1,4 +1,4 @@
-//! Issue 9, CLI level: the library's typed errors and run outcomes reach the
+//! The library's typed errors and run outcomes reach the CLI's
 //! user as the scenario's words, with exit statuses that scripts can rely on
 //! (0 ok or diverged, 1 some run failed, 2 nothing was run).
 
@@ -14,7 +14,7 @@ fn scenario(dir: &Path, body: &str) -> String {
     p.display().to_string()
 }
 
-/// Items 2 and 4: a hold of 1e6 s and a substep of 1e-300 are rejected
+/// A hold of 1e6 s and a substep of 1e-300 are rejected
 /// before anything is allocated or integrated, naming the key, the count and
 /// the limit.
 #[test]
@@ -50,7 +50,7 @@ fn absurd_sample_counts_and_substeps_are_rejected_up_front() {
     assert!(!out.exists());
 }
 
-/// Item 7: a non-finite result is an error, not `null` with exit 0.
+/// A non-finite result is an error, not `null` with exit 0.
 #[test]
 fn inspect_dynamics_refuses_overflowing_results() {
     let o = ofmpc(&[
@@ -67,7 +67,7 @@ fn inspect_dynamics_refuses_overflowing_results() {
     assert!(o.stdout.is_empty());
 }
 
-/// Item 17: an absurd payload is blamed on the payload, a tiny one gets a
+/// An absurd payload is blamed on the payload, a tiny one gets a
 /// bounded folder name.
 #[test]
 fn payload_messages_and_names() {
@@ -92,7 +92,7 @@ fn payload_messages_and_names() {
     assert!(out.join("first_m1e-300").join("timeseries.csv").is_file());
 }
 
-/// Item 8: a run that fails numerically is "failed" with a reason, its
+/// A run that fails numerically is "failed" with a reason, its
 /// missing metrics are null (never 0), the others keep their results, and the
 /// exit status is 1; a diverged run is a result (status 0).
 #[test]
