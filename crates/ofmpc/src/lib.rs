@@ -69,6 +69,8 @@ pub mod geometry;
 pub mod ident;
 pub mod ik;
 mod linalg;
+#[doc(hidden)]
+pub use linalg::random;
 pub mod motion;
 pub mod robot;
 pub mod sim;

@@ -3,7 +3,8 @@
 //! step) performs no heap allocation (counted per thread) and never panics,
 //! also on failed steps and with a model that has no rigid-body behind it.
 
-mod alloc_counter;
+mod common;
+use common::alloc_counter;
 
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepError};

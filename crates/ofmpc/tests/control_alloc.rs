@@ -1,7 +1,7 @@
 //! Real-time property: after construction and reset, `Controller::step`
 //! performs no heap allocation (counted by a global allocator, per thread).
 
-mod alloc_counter;
+use common::alloc_counter;
 
 mod common;
 

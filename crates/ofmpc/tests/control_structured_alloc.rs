@@ -3,7 +3,7 @@
 //! allocator, per thread), with the structured solver at long horizons and
 //! the dense QR named explicitly.
 
-mod alloc_counter;
+use common::alloc_counter;
 
 mod common;
 

@@ -1,10 +1,9 @@
 //! Properties of the rigid-body algorithms on random states of the IRB 140 and
 //! of random serial chains (revolute and prismatic joints, fixed frames).
 
-mod robot_common;
-use robot_common as common;
+mod common;
 
-use common::{robots, Rng};
+use common::robots::{robots, Rng};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 use ofmpc::dynamics::*;
 use ofmpc::robot::{Payload, Robot};
@@ -228,7 +227,7 @@ fn irb140_flange_poses_match_the_parameter_table() {
     let robot = Robot::irb140();
     assert_eq!(robot.flange_name(), "flange");
     let mut ws = Workspace::new(&robot);
-    for (q, p, r) in common::parameter_poses() {
+    for (q, p, r) in common::robots::parameter_poses() {
         let f = forward_kinematics(&robot, &mut ws, &q).unwrap();
         let rot = Matrix3::from_row_slice(&r);
         assert!(

@@ -3,7 +3,8 @@
 use ofmpc::dynamics::*;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Plant, PlantSettings};
-mod alloc_counter;
+mod common;
+use common::alloc_counter;
 
 #[global_allocator]
 static A: alloc_counter::Counting = alloc_counter::Counting;

@@ -2,7 +2,8 @@
 //! dynamics, the projection keeps parameters physical, the RLS recovers a
 //! payload from noise-free data.
 
-mod robot_common;
+mod common;
+use common::robots as robot_common;
 
 use nalgebra::{Matrix3, Vector3};
 use ofmpc::dynamics::{rnea, RobotDynamics, Workspace};

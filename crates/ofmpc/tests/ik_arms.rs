@@ -11,11 +11,10 @@
 //! rate of the robust solver and of the previous one (a single damped-least-squares run
 //! seeded at q = 0), which this issue measured failing on up to 16 of 20 poses.
 
-#[path = "common/rng.rs"]
-mod rng;
+mod common;
+use common::rng;
 
-#[path = "common/ik.rs"]
-mod ik;
+use common::ik;
 
 use nalgebra::{Isometry3, UnitQuaternion};
 use ofmpc::dynamics::RobotDynamics;

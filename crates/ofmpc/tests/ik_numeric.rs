@@ -1,8 +1,9 @@
 //! Numeric (damped least squares) IK on an independent IRB 140 chain built from the
 //! URDF joint origins and axes; allocation checks for the whole ik module.
 
-mod alloc_counter;
-mod ik_common;
+mod common;
+use common::alloc_counter;
+use common::ik_model as ik_common;
 use std::f64::consts::PI;
 
 use ik_common::*;

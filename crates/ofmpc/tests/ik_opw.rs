@@ -2,8 +2,9 @@
 // The test poses are PARAMETERS.md's 9-decimal values (e.g. 0.707106781).
 #![allow(clippy::approx_constant)]
 
-mod ik_common;
-mod robot_common;
+mod common;
+use common::ik_model as ik_common;
+use common::robots as robot_common;
 
 use std::f64::consts::PI;
 

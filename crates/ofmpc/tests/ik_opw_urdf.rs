@@ -11,10 +11,9 @@
 //!
 //! `cargo test --workspace --test ik_opw_urdf -- --nocapture` prints the worst errors.
 
-#[path = "common/ik.rs"]
-mod ik_common;
-#[path = "common/rng.rs"]
-mod rng;
+mod common;
+use common::ik as ik_common;
+use common::rng;
 use ik_common::{distance, limits, random_q, same_angle};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};

@@ -1,7 +1,8 @@
 //! IkSolver: choice of the closest solution within limits, continuity through the
 //! wrist singularity, errors.
 
-mod ik_common;
+mod common;
+use common::ik_model as ik_common;
 
 use std::f64::consts::PI;
 

@@ -6,10 +6,9 @@
 //! branch it returns reproduces the pose (8 on most poses); the numeric solvers' answers
 //! (multi-start, and damped least squares from random seeds) are among them; and a tool centre point is solved directly.
 
-#[path = "common/ik.rs"]
-mod ik_common;
-#[path = "common/rng.rs"]
-mod rng;
+mod common;
+use common::ik as ik_common;
+use common::rng;
 use ik_common::{distance, limits, random_q, same_angle};
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};

@@ -7,7 +7,7 @@
 
 mod common;
 
-mod alloc_counter;
+use common::alloc_counter;
 
 use alloc_counter::allocations_during;
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StateObserver};

@@ -8,6 +8,7 @@
 //! again (the torture test with this file's own random numbers).
 
 use ofmpc::motion::{plan, PathMode, Plan, PlanOptions, TimingOptions};
+use ofmpc::random::uniform;
 use ofmpc::robot::Robot;
 use std::fmt::Write;
 
@@ -41,14 +42,6 @@ fn zigzag() -> String {
         }
     }
     out
-}
-
-/// `[0, 1)` from an MMIX LCG.
-fn uniform(state: &mut u64) -> f64 {
-    *state = state
-        .wrapping_mul(6_364_136_223_846_793_005)
-        .wrapping_add(1_442_695_040_888_963_407);
-    (*state >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// 200 random lines (40 %), arcs (50 %) and rapids (10 %) in a 40 mm box, random feeds.

@@ -1,7 +1,6 @@
 //! Bad robot descriptions get clear errors, never panics.
 
-mod robot_common;
-use robot_common as common;
+mod common;
 
 use ofmpc::dynamics::{crba, rnea, Workspace};
 use ofmpc::robot::{Drives, ModelError, Payload, Robot};
@@ -159,8 +158,8 @@ fn bad_drives_and_payloads_are_errors() {
 
 #[test]
 fn random_garbage_urdf_never_panics() {
-    let mut rng = common::Rng(11);
-    let base = common::random_urdf(&mut rng, 4, true);
+    let mut rng = common::robots::Rng(11);
+    let base = common::robots::random_urdf(&mut rng, 4, true);
     let bytes = base.as_bytes();
     for _ in 0..300 {
         let mut b = bytes.to_vec();

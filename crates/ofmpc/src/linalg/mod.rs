@@ -10,7 +10,7 @@
 //! change of order here, changes the published numbers.
 
 mod cholesky;
-pub(crate) mod random;
+pub mod random;
 mod rk4;
 
 pub(crate) use cholesky::{

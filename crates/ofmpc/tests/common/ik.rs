@@ -1,5 +1,5 @@
-//! Helpers of the inverse-kinematics tests (included with `#[path]` beside
-//! `common/rng.rs` as `mod rng`).
+//! Helpers of the inverse-kinematics tests: pose distances and random joint vectors
+//! (with [`super::rng`]).
 #![allow(dead_code)]
 
 use nalgebra::Isometry3;
@@ -24,7 +24,7 @@ pub fn distance(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
 }
 
 /// A random pose of a 6-joint arm within its limits (clipped to ±π).
-pub fn random_q(robot: &Robot, rng: &mut crate::rng::SplitMix64) -> [f64; 6] {
+pub fn random_q(robot: &Robot, rng: &mut super::rng::SplitMix64) -> [f64; 6] {
     let j = robot.joints();
     std::array::from_fn(|i| rng.uniform(j[i].limits.lower.max(-PI), j[i].limits.upper.min(PI)))
 }

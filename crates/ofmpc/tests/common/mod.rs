@@ -4,9 +4,13 @@
 use nalgebra::{DMatrix, DVector};
 use ofmpc::dynamics::JointSpaceDynamics;
 
+pub mod alloc_counter;
 pub mod experiment;
 pub mod gcode;
+pub mod ik;
+pub mod ik_model;
 pub mod rng;
+pub mod robots;
 
 /// Deterministic pseudo-random numbers (`next()` in [-1, 1)): the tests' one LCG.
 pub use rng::Lcg as Rng;

@@ -1,24 +1,13 @@
-//! The tests' deterministic pseudo-random generators: the one copy of them, shared by
-//! `tests/common` (as `common::Rng`), `tests/robot_common` (as `robot_common::Rng`) and
-//! `tests/ik_common` (as `ik_common::Rng`); the last two include this file with `#[path]`.
-//!
-//! Two algorithms, kept apart because the tests' data (and so what they assert) depend on
-//! the exact sequences:
-//!
-//! - [`Lcg`], Knuth's MMIX linear congruential generator
-//!   `s ← 6364136223846793005·s + 1442695040888963407 (mod 2⁶⁴)`, output after the step;
-//! - [`SplitMix64`] (Steele, Lea, Flood 2014): `s ← s + 0x9E3779B97F4A7C15`, output
-//!   `z ^ (z >> 31)` after two xor-shift-multiply rounds of `z = s`.
-//!
-//! Both turn 64 bits into a float in `[0, 1)` with [`unit`]: `⌊x / 2¹¹⌋ / 2⁵³`.
+//! The tests' deterministic pseudo-random generators, re-exported as `common::Rng` (the LCG),
+//! `common::robots::Rng` (the LCG) and `common::ik_model::Rng` (SplitMix64): thin stateful
+//! handles on the library's one copy of the generators, `ofmpc::random` (its module doc gives
+//! both algorithms), so the sequences are the library's.
 #![allow(dead_code)]
 
 use nalgebra::{DMatrix, DVector};
 
-/// `[0, 1)` from the top 53 bits of `x`: `⌊x / 2¹¹⌋ / 2⁵³`.
-pub fn unit(x: u64) -> f64 {
-    (x >> 11) as f64 / (1u64 << 53) as f64
-}
+pub use ofmpc::random::unit;
+use ofmpc::random::{lcg_next, splitmix64_next};
 
 /// Knuth's MMIX LCG (see the module doc); the field is the state (the seed).
 pub struct Lcg(pub u64);
@@ -26,11 +15,7 @@ pub struct Lcg(pub u64);
 impl Lcg {
     /// Next state `s ← 6364136223846793005·s + 1442695040888963407`.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        self.0
+        lcg_next(&mut self.0)
     }
     /// Uniform in `[0, 1)`.
     pub fn uniform(&mut self) -> f64 {
@@ -68,11 +53,7 @@ impl SplitMix64 {
     }
     /// Next 64 random bits.
     pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        splitmix64_next(&mut self.0)
     }
     /// Uniform in `[a, b)`: `a + (b − a) u`.
     pub fn uniform(&mut self, a: f64, b: f64) -> f64 {

@@ -126,11 +126,7 @@ pub fn poe(q: &[f64; 6]) -> Matrix4<f64> {
     t * m
 }
 
-// A test crate that uses both `robot_common` and `ik_common` (ik_opw) compiles the file
-// twice, as two modules: harmless, they hold no state.
-#[allow(clippy::duplicate_mod)]
-#[path = "../common/rng.rs"]
-pub mod rng;
+pub use super::rng;
 
 /// SplitMix64 (the tests' one copy): a small deterministic generator for reproducible
 /// random tests.

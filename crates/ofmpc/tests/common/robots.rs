@@ -3,11 +3,7 @@
 
 use ofmpc::robot::Robot;
 
-// A test crate that uses both `robot_common` and `ik_common` (ik_opw) compiles the file
-// twice, as two modules: harmless, they hold no state.
-#[allow(clippy::duplicate_mod)]
-#[path = "../common/rng.rs"]
-pub mod rng;
+pub use super::rng;
 
 /// A small deterministic generator (the tests' one LCG), so tests are reproducible.
 pub use rng::Lcg as Rng;
