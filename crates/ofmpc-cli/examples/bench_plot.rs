@@ -33,12 +33,30 @@ fn median_us(root: &Path, id: &str, nh: u32) -> Result<Option<f64>> {
     Ok(Some(ns / 1e3))
 }
 
+/// One curve: benchmark id, colour index, dashed (the dense solver), (N, median µs) points.
+type Curve = (String, usize, bool, Vec<(f64, f64)>);
+
 fn main() -> Result<()> {
     let out = std::env::args()
         .nth(1)
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from("docs/step-time-vs-horizon.png"));
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/criterion/step_irb140");
+    let curves = table_and_curves(&root)?;
+    anyhow::ensure!(
+        !curves.is_empty(),
+        "no results under {}: run the benchmark first",
+        root.display()
+    );
+    ensure_font().map_err(|e| anyhow::anyhow!("{e}"))?;
+    plot(&out, &curves)?;
+    println!("wrote {}", out.display());
+    Ok(())
+}
+
+/// Prints the Markdown table of median step times (controller × solver × horizon) and returns
+/// the curves that have results.
+fn table_and_curves(root: &Path) -> Result<Vec<Curve>> {
     let mut curves = Vec::new();
     println!(
         "| controller | solver | {} |",
@@ -51,7 +69,7 @@ fn main() -> Result<()> {
             let mut pts = Vec::new();
             let mut cells = Vec::new();
             for nh in HORIZONS {
-                match median_us(&root, &id, nh)? {
+                match median_us(root, &id, nh)? {
                     Some(us) => {
                         pts.push((nh as f64, us));
                         cells.push(if us >= 1000.0 {
@@ -69,62 +87,58 @@ fn main() -> Result<()> {
             }
         }
     }
-    anyhow::ensure!(
-        !curves.is_empty(),
-        "no results under {}: run the benchmark first",
-        root.display()
-    );
-    ensure_font().map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok(curves)
+}
+
+/// Draws the curves on log-log axes into the PNG `out`.
+fn plot(out: &Path, curves: &[Curve]) -> Result<()> {
     let (ymin, ymax) = curves
         .iter()
         .flat_map(|c| c.3.iter().map(|p| p.1))
         .fold((f64::INFINITY, 0.0f64), |(a, b), y| (a.min(y), b.max(y)));
-    {
-        let root_area = BitMapBackend::new(&out, (800, 560)).into_drawing_area();
-        root_area.fill(&WHITE)?;
-        let mut chart = ChartBuilder::on(&root_area)
-            .caption(
-                "One control step, IRB 140: time against horizon N",
-                ("sans-serif", 20),
-            )
-            .margin(12)
-            .x_label_area_size(44)
-            .y_label_area_size(70)
-            .build_cartesian_2d(
-                (4.0f64..250.0).log_scale(),
-                (ymin / 1.5..ymax * 1.5).log_scale(),
-            )?;
+    let root_area = BitMapBackend::new(out, (800, 560)).into_drawing_area();
+    root_area.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root_area)
+        .caption(
+            "One control step, IRB 140: time against horizon N",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(44)
+        .y_label_area_size(70)
+        .build_cartesian_2d(
+            (4.0f64..250.0).log_scale(),
+            (ymin / 1.5..ymax * 1.5).log_scale(),
+        )?;
+    chart
+        .configure_mesh()
+        .x_desc("horizon N")
+        .y_desc("median step time (µs)")
+        .x_label_formatter(&|x| {
+            let n = x.round();
+            if (x - n).abs() < 1e-6 && HORIZONS.contains(&(n as u32)) {
+                format!("{n:.0}")
+            } else {
+                String::new()
+            }
+        })
+        .y_label_formatter(&|y| format!("{y:.0}"))
+        .draw()?;
+    for (id, ci, dashed, pts) in curves {
+        let c = color(*ci + 1);
+        let style = ShapeStyle::from(&c).stroke_width(if *dashed { 1 } else { 3 });
         chart
-            .configure_mesh()
-            .x_desc("horizon N")
-            .y_desc("median step time (µs)")
-            .x_label_formatter(&|x| {
-                let n = x.round();
-                if (x - n).abs() < 1e-6 && HORIZONS.contains(&(n as u32)) {
-                    format!("{n:.0}")
-                } else {
-                    String::new()
-                }
-            })
-            .y_label_formatter(&|y| format!("{y:.0}"))
-            .draw()?;
-        for (id, ci, dashed, pts) in &curves {
-            let c = color(*ci + 1);
-            let style = ShapeStyle::from(&c).stroke_width(if *dashed { 1 } else { 3 });
-            chart
-                .draw_series(LineSeries::new(pts.iter().copied(), style))?
-                .label(id.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
-            chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()?;
-        root_area.present()?;
+            .draw_series(LineSeries::new(pts.iter().copied(), style))?
+            .label(id.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?;
     }
-    println!("wrote {}", out.display());
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()?;
+    root_area.present()?;
     Ok(())
 }

@@ -92,25 +92,7 @@ fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
                 kg(loaded.iter().map(|m| m.payload_kg).fold(0.0, f64::max))
             ));
         } else {
-            let first = loaded
-                .iter()
-                .filter(|m| m.steady_cartesian_error_mm >= OFFSET_FREE_MM)
-                .min_by(|a, b| a.payload_kg.total_cmp(&b.payload_kg))
-                .copied()
-                .unwrap_or(worst);
-            let mut s = format!(
-                "{c} keeps a steady offset of {} at {}",
-                mm(first.steady_cartesian_error_mm),
-                kg(first.payload_kg)
-            );
-            if worst.payload_kg != first.payload_kg {
-                s.push_str(&format!(
-                    " ({} at {})",
-                    mm(worst.steady_cartesian_error_mm),
-                    kg(worst.payload_kg)
-                ));
-            }
-            offset.push(s);
+            offset.push(offset_phrase(c, &loaded, worst));
         }
     }
     let mut v = Vec::new();
@@ -129,6 +111,30 @@ fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
         ));
     }
     v
+}
+
+/// "`c` keeps a steady offset of … at <the lightest payload with an offset>", with the
+/// `worst` run's offset after it when that is another payload.
+fn offset_phrase(c: &str, loaded: &[&RunMetrics], worst: &RunMetrics) -> String {
+    let first = loaded
+        .iter()
+        .filter(|m| m.steady_cartesian_error_mm >= OFFSET_FREE_MM)
+        .min_by(|a, b| a.payload_kg.total_cmp(&b.payload_kg))
+        .copied()
+        .unwrap_or(worst);
+    let mut s = format!(
+        "{c} keeps a steady offset of {} at {}",
+        mm(first.steady_cartesian_error_mm),
+        kg(first.payload_kg)
+    );
+    if worst.payload_kg != first.payload_kg {
+        s.push_str(&format!(
+            " ({} at {})",
+            mm(worst.steady_cartesian_error_mm),
+            kg(worst.payload_kg)
+        ));
+    }
+    s
 }
 
 /// The controller with the smallest RMS Cartesian error at each payload (ok runs only).

@@ -360,7 +360,10 @@ fn traced_scenario_keys_are_well_formed_and_nested() {
         );
         if let Some((parent, _)) = k.rsplit_once('.') {
             let parent = parent.strip_suffix("[]").unwrap_or(parent);
-            assert!(keys.contains(parent), "{k:?} without its section {parent:?}");
+            assert!(
+                keys.contains(parent),
+                "{k:?} without its section {parent:?}"
+            );
         }
     }
 }

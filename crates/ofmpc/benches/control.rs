@@ -17,9 +17,6 @@ use ofmpc::robot::Robot;
 use std::hint::black_box;
 use std::time::Duration;
 
-#[path = "../tests/common/rng.rs"]
-mod rng;
-
 /// One whole step (model terms, f0, ZOH, the least-squares problem and its
 /// solve) for every controller, both solvers, N = 5 … 200. Benchmark ids:
 /// `step_irb140/<controller>-<solver>/<N>`. `OFMPC_BENCH_KINDS=second`
@@ -98,8 +95,8 @@ fn solve(c: &mut Criterion) {
             lsq_flops(p, &vec![m; p]) as f64 / 1e6,
             lsq_flops(p, &profile) as f64 / 1e6
         );
-        let mut lcg = rng::Lcg(1);
-        let mut rnd = move || lcg.uniform() - 0.5;
+        let mut seed = 1u64;
+        let mut rnd = move || ofmpc::random::uniform(&mut seed) - 0.5;
         let a: Vec<f64> = (0..m * p).map(|_| rnd()).collect();
         let b: Vec<f64> = (0..m).map(|_| rnd()).collect();
         // The incremental algorithms' layout after the tracking rows'
@@ -170,8 +167,17 @@ fn parts(c: &mut Criterion) {
 /// unconstrained step's torques (+0.1 N·m), so that the QP runs on every
 /// iteration (the controller is reset each time: identical steps), against
 /// the same step without limits. Ids `step_limits_irb140/<kind>-{qp,free}`.
+/// The IRB 140's drives with peak torques 10 % (+ 0.1 N·m) below the unconstrained step's
+/// torques `tau`, so that the torque limits bind.
+fn binding_limits(tau: &[f64]) -> ofmpc::control::DriveModel {
+    let mut drives = ofmpc::control::DriveModel::from_robot(&Robot::irb140());
+    for (l, t) in drives.max_torque_nm.iter_mut().zip(tau) {
+        *l = 0.9 * t.abs() + 0.1;
+    }
+    drives
+}
+
 fn limits(c: &mut Criterion) {
-    use ofmpc::control::DriveModel;
     let n = 6;
     let mut group = c.benchmark_group("step_limits_irb140");
     group.warm_up_time(Duration::from_millis(300));
@@ -199,10 +205,7 @@ fn limits(c: &mut Criterion) {
         let mut tau = vec![0.0; n];
         free.reset(&x).unwrap();
         free.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
-        let mut drives = DriveModel::from_robot(&Robot::irb140());
-        for (l, t) in drives.max_torque_nm.iter_mut().zip(&tau) {
-            *l = 0.9 * t.abs() + 0.1;
-        }
+        let drives = binding_limits(&tau);
         let s = MpcSettings {
             torque_limits: true,
             ..MpcSettings::default()

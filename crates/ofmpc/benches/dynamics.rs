@@ -1,6 +1,7 @@
 //! Rigid-body algorithms on the IRB 140: `cargo bench --bench dynamics`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::measurement::WallTime;
+use criterion::{black_box, criterion_group, criterion_main, BenchmarkGroup, Criterion};
 use ofmpc::dynamics::*;
 use ofmpc::robot::Robot;
 
@@ -56,27 +57,47 @@ fn bench(c: &mut Criterion) {
             .map(|a| a[0])
         })
     });
-    // The simulated robot: one control period (10 ms) of RK4 in 1 ms substeps.
-    let mut plant = ofmpc::sim::Plant::with_period(robot.clone(), Default::default(), &q, 0.01)
+    bench_plant(&mut g, &robot, &q, &qd, &tau);
+    bench_h_by_rnea(&mut g, &robot, &mut ws, &q);
+    g.finish();
+}
+
+/// The simulated robot: one control period (10 ms) of RK4 in 1 ms substeps.
+fn bench_plant(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    robot: &Robot,
+    q: &[f64; 6],
+    qd: &[f64; 6],
+    tau: &[f64; 6],
+) {
+    let mut plant = ofmpc::sim::Plant::with_period(robot.clone(), Default::default(), q, 0.01)
         .unwrap_or_else(|e| panic!("{e}"));
     g.bench_function("plant step (10 ms, 10 RK4 substeps)", |b| {
         b.iter(|| {
-            let _ = plant.set_state(&q, &qd);
-            plant.advance(black_box(&tau)).map(|_| plant.q()[0])
+            let _ = plant.set_state(q, qd);
+            plant.advance(black_box(tau)).map(|_| plant.q()[0])
         })
     });
-    // Baseline in the same run: H column by column from n inverse dynamics
-    // calls with unit accelerations (what CRBA saves).
+}
+
+/// Baseline in the same run: H column by column from n inverse dynamics calls with unit
+/// accelerations (what CRBA saves).
+fn bench_h_by_rnea(
+    g: &mut BenchmarkGroup<'_, WallTime>,
+    robot: &Robot,
+    ws: &mut Workspace,
+    q: &[f64; 6],
+) {
     let zero = [0.0; 6];
     let mut h = nalgebra::DMatrix::zeros(6, 6);
     g.bench_function("baseline: H by 6 RNEA calls", |b| {
         b.iter(|| {
-            let g0 = rnea(&robot, &mut ws, black_box(&q), &zero, &zero).map(|t| t.clone_owned());
+            let g0 = rnea(robot, ws, black_box(q), &zero, &zero).map(|t| t.clone_owned());
             let g0 = g0.unwrap_or_else(|_| nalgebra::DVector::zeros(6));
             for j in 0..6 {
                 let mut e = [0.0; 6];
                 e[j] = 1.0;
-                if let Ok(t) = rnea(&robot, &mut ws, &q, &zero, &e) {
+                if let Ok(t) = rnea(robot, ws, q, &zero, &e) {
                     for i in 0..6 {
                         h[(i, j)] = t[i] - g0[i];
                     }
@@ -85,7 +106,6 @@ fn bench(c: &mut Criterion) {
             h[(0, 0)]
         })
     });
-    g.finish();
 }
 
 criterion_group!(benches, bench);

@@ -588,23 +588,27 @@ pub struct StagedDir {
     done: bool,
 }
 
+/// An error when `target` exists and is not a folder (a file, a device, a link to one).
+fn refuse_non_folder(target: &Path) -> io::Result<()> {
+    match fs::metadata(target) {
+        Ok(m) if !m.is_dir() => Err(io::Error::new(
+            io::ErrorKind::AlreadyExists,
+            format!(
+                "the output folder {} is {}, not a folder: choose another output path",
+                target.display(),
+                describe(m.file_type())
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 impl StagedDir {
     /// Prepares `target` (created with its parents if missing), takes its lock, removes stale
     /// stages of dead runs and creates an empty staging folder. `target` must be a folder (a
     /// symbolic link to one is followed: the caller says so).
     pub fn new(target: &Path) -> io::Result<Self> {
-        if let Ok(m) = fs::metadata(target) {
-            if !m.is_dir() {
-                return Err(io::Error::new(
-                    io::ErrorKind::AlreadyExists,
-                    format!(
-                        "the output folder {} is {}, not a folder: choose another output path",
-                        target.display(),
-                        describe(m.file_type())
-                    ),
-                ));
-            }
-        }
+        refuse_non_folder(target)?;
         let mut reg = super::cleanup::lock();
         let mut cleanup_ids = Vec::new();
         // Every folder this creates, outermost first; registered so that they go on a signal.

@@ -68,48 +68,57 @@ pub fn m4(x: &[f64], ys: &[&[f64]], buckets: usize) -> Vec<usize> {
     let mut keep = vec![false; n];
     keep[0] = true;
     keep[n - 1] = true;
+    let bucket_of: Vec<usize> = (0..n).map(bucket).collect();
     for y in ys {
-        // Per bucket: first, last, argmin, argmax.
-        let mut b_cur = usize::MAX;
-        let (mut lo_i, mut hi_i, mut last) = (0, 0, 0);
-        for i in 0..n {
-            let b = bucket(i);
-            if b != b_cur {
-                if b_cur != usize::MAX {
-                    keep[lo_i] = true;
-                    keep[hi_i] = true;
-                    keep[last] = true;
-                }
-                b_cur = b;
-                keep[i] = true;
-                lo_i = i;
-                hi_i = i;
-            }
-            // A gap stays a gap: its first and last missing sample and the finite samples
-            // beside them are kept.
-            if !y[i].is_finite() {
-                let prev_ok = i > 0 && y[i - 1].is_finite();
-                let next_ok = i + 1 < n && y[i + 1].is_finite();
-                if prev_ok || next_ok {
-                    keep[i] = true;
-                    keep[i.saturating_sub(1)] = true;
-                    keep[(i + 1).min(n - 1)] = true;
-                }
-                continue;
-            }
-            if !y[lo_i].is_finite() || y[i] < y[lo_i] {
-                lo_i = i;
-            }
-            if !y[hi_i].is_finite() || y[i] > y[hi_i] {
-                hi_i = i;
-            }
-            last = i;
-        }
-        keep[lo_i] = true;
-        keep[hi_i] = true;
-        keep[last] = true;
+        keep_extremes(y, &bucket_of, &mut keep);
     }
     (0..n).filter(|&i| keep[i]).collect()
+}
+
+/// Marks in `keep` the samples of series `y` that M4 keeps: per bucket (`bucket_of[i]` is
+/// sample `i`'s) its first, last, lowest and highest finite sample, and the edges of every
+/// gap (non-finite samples).
+fn keep_extremes(y: &[f64], bucket_of: &[usize], keep: &mut [bool]) {
+    let n = bucket_of.len();
+    // Per bucket: first, last, argmin, argmax.
+    let mut b_cur = usize::MAX;
+    let (mut lo_i, mut hi_i, mut last) = (0, 0, 0);
+    for i in 0..n {
+        let b = bucket_of[i];
+        if b != b_cur {
+            if b_cur != usize::MAX {
+                keep[lo_i] = true;
+                keep[hi_i] = true;
+                keep[last] = true;
+            }
+            b_cur = b;
+            keep[i] = true;
+            lo_i = i;
+            hi_i = i;
+        }
+        // A gap stays a gap: its first and last missing sample and the finite samples
+        // beside them are kept.
+        if !y[i].is_finite() {
+            let prev_ok = i > 0 && y[i - 1].is_finite();
+            let next_ok = i + 1 < n && y[i + 1].is_finite();
+            if prev_ok || next_ok {
+                keep[i] = true;
+                keep[i.saturating_sub(1)] = true;
+                keep[(i + 1).min(n - 1)] = true;
+            }
+            continue;
+        }
+        if !y[lo_i].is_finite() || y[i] < y[lo_i] {
+            lo_i = i;
+        }
+        if !y[hi_i].is_finite() || y[i] > y[hi_i] {
+            hi_i = i;
+        }
+        last = i;
+    }
+    keep[lo_i] = true;
+    keep[hi_i] = true;
+    keep[last] = true;
 }
 
 /// `#rrggbb` of a palette index.

@@ -202,6 +202,30 @@ fn winners(metrics: &[RunMetrics], keep: &dyn Fn(&str) -> bool) -> String {
         .join("; ")
 }
 
+/// The most robust choice: of the controllers offset-free at every payload (`complete`), the
+/// one with the least worst RMS error over the payloads, as a sentence (empty when none).
+fn robust_choice(metrics: &[RunMetrics], complete: &[&str], payloads: &[f64]) -> String {
+    let worst = |name: &str| {
+        metrics
+            .iter()
+            .filter(|m| m.controller == name)
+            .map(|m| m.cartesian_error_rms_mm)
+            .fold(0.0, f64::max)
+    };
+    let Some(robust) = complete.iter().min_by(|a, b| worst(a).total_cmp(&worst(b))) else {
+        return String::new();
+    };
+    format!(
+        "Over the whole range {} kg the controller with the least worst-case RMS among those \
+         offset-free at every payload is {robust} ({} mm): choose it when the payload is not known. ",
+        match (payloads.first(), payloads.last()) {
+            (Some(a), Some(b)) => format!("{}–{}", num(*a), num(*b)),
+            _ => String::new(),
+        },
+        num(worst(robust))
+    )
+}
+
 /// Which controller to choose for which payload range, from the metrics: per
 /// payload the completed run with the least RMS error, grouped into ranges
 /// of the same winner, and which controllers did not complete somewhere.
@@ -246,25 +270,7 @@ pub(crate) fn recommendation(metrics: &[RunMetrics], controllers: &[ControllerKi
         })
         .collect();
     if !complete.is_empty() {
-        // The most robust choice: the complete controller with the least worst RMS.
-        let worst = |name: &str| {
-            metrics
-                .iter()
-                .filter(|m| m.controller == name)
-                .map(|m| m.cartesian_error_rms_mm)
-                .fold(0.0, f64::max)
-        };
-        if let Some(robust) = complete.iter().min_by(|a, b| worst(a).total_cmp(&worst(b))) {
-            text.push_str(&format!(
-                "Over the whole range {} kg the controller with the least worst-case RMS among those \
-                 offset-free at every payload is {robust} ({} mm): choose it when the payload is not known. ",
-                match (payloads.first(), payloads.last()) {
-                    (Some(a), Some(b)) => format!("{}–{}", num(*a), num(*b)),
-                    _ => String::new(),
-                },
-                num(worst(robust))
-            ));
-        }
+        text.push_str(&robust_choice(metrics, &complete, &payloads));
         text.push_str(&format!(
             "Offset-free at every payload: {}. ",
             complete.join(", ")

@@ -527,44 +527,51 @@ pub fn validate(fig: &Figure) -> Result<(), PlotError> {
         });
     }
     for p in &fig.panels {
-        if let Some(a) = &p.three_d {
-            if !p.series.is_empty() || p.log_y {
-                return Err(PlotError::Mixed3d {
-                    figure: fig.title.clone(),
-                    panel: p.title.clone(),
-                });
-            }
-            if !(a.view.yaw_deg.is_finite() && a.view.pitch_deg.is_finite()) {
-                return Err(PlotError::BadView {
-                    figure: fig.title.clone(),
-                    panel: p.title.clone(),
-                    yaw_deg: a.view.yaw_deg,
-                    pitch_deg: a.view.pitch_deg,
-                });
-            }
-            for s in &a.series {
-                if s.x.len() != s.y.len() || s.x.len() != s.z.len() {
-                    return Err(PlotError::LengthMismatch3d {
-                        figure: fig.title.clone(),
-                        panel: p.title.clone(),
-                        series: s.label.clone(),
-                        x_len: s.x.len(),
-                        y_len: s.y.len(),
-                        z_len: s.z.len(),
-                    });
-                }
-            }
+        validate_panel(fig, p)?;
+    }
+    Ok(())
+}
+
+/// One panel of [`validate`]: a 3-D panel holds no 2-D series and no log axis and has a
+/// finite view, and every series has as many values per coordinate.
+fn validate_panel(fig: &Figure, p: &Panel) -> Result<(), PlotError> {
+    if let Some(a) = &p.three_d {
+        if !p.series.is_empty() || p.log_y {
+            return Err(PlotError::Mixed3d {
+                figure: fig.title.clone(),
+                panel: p.title.clone(),
+            });
         }
-        for s in &p.series {
-            if s.x.len() != s.y.len() {
-                return Err(PlotError::LengthMismatch {
+        if !(a.view.yaw_deg.is_finite() && a.view.pitch_deg.is_finite()) {
+            return Err(PlotError::BadView {
+                figure: fig.title.clone(),
+                panel: p.title.clone(),
+                yaw_deg: a.view.yaw_deg,
+                pitch_deg: a.view.pitch_deg,
+            });
+        }
+        for s in &a.series {
+            if s.x.len() != s.y.len() || s.x.len() != s.z.len() {
+                return Err(PlotError::LengthMismatch3d {
                     figure: fig.title.clone(),
                     panel: p.title.clone(),
                     series: s.label.clone(),
                     x_len: s.x.len(),
                     y_len: s.y.len(),
+                    z_len: s.z.len(),
                 });
             }
+        }
+    }
+    for s in &p.series {
+        if s.x.len() != s.y.len() {
+            return Err(PlotError::LengthMismatch {
+                figure: fig.title.clone(),
+                panel: p.title.clone(),
+                series: s.label.clone(),
+                x_len: s.x.len(),
+                y_len: s.y.len(),
+            });
         }
     }
     Ok(())
@@ -1301,23 +1308,16 @@ fn equal_aspect_axes<DB: DrawingBackend>(
     }
 }
 
-/// Draws a 2-D panel into `area` (inside the panel's margins and caption).
-fn draw_panel_2d<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
+/// The legend of a 2-D panel: each labelled series with its style and colour, "(no data)"
+/// after the label of one without a valid point.
+fn legend_entries(
     panel: &Panel,
-    fig: &Figure,
-    mode: LineMode,
-) -> Result<(), PlotError> {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
-    let runs: Vec<Vec<Vec<(f64, f64)>>> = panel
+    runs: &[Vec<Vec<(f64, f64)>>],
+) -> Vec<(String, SeriesStyle, RGBColor)> {
+    panel
         .series
         .iter()
-        .map(|s| split_runs(s, panel.log_y))
-        .collect();
-    let entries: Vec<(String, SeriesStyle, RGBColor)> = panel
-        .series
-        .iter()
-        .zip(&runs)
+        .zip(runs)
         .filter(|(s, _)| !s.label.is_empty())
         .map(|(s, r)| {
             let label = if r.iter().any(|r| !r.is_empty()) {
@@ -1327,13 +1327,19 @@ fn draw_panel_2d<DB: DrawingBackend>(
             };
             (label, s.style, color(s.color))
         })
-        .collect();
-    let area = &legend_strip(area, &entries, fig)?;
-    let points = || runs.iter().flatten().flatten();
-    let x_data = min_max(points().map(|p| p.0));
-    let y_data = min_max(points().map(|p| p.1));
-    // (x axis, linear y axis or None for log, y label area width)
-    let (x_axis, y_axis, y_label_px) = if panel.log_y {
+        .collect()
+}
+
+/// The axes of a 2-D panel for the data's ranges: the x axis, the linear y axis (`None` for
+/// a logarithmic one) and the width of the y label area (px).
+fn panel_axes_2d<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+    x_data: Option<(f64, f64)>,
+    y_data: Option<(f64, f64)>,
+    fig: &Figure,
+) -> Result<(LinearAxis, Option<LinearAxis>, u32), PlotError> {
+    Ok(if panel.log_y {
         let y_range = log_range(y_data);
         // Labels are decades (and 2x/5x multiples) between the ends; the ends bound the width.
         let labels = [format_general(y_range.0), format_general(y_range.1)];
@@ -1349,7 +1355,26 @@ fn draw_panel_2d<DB: DrawingBackend>(
         let y = LinearAxis::new(y_data, 0.05, N_LABELS);
         let px = y_label_area(area, &y);
         (LinearAxis::new(x_data, 0.0, N_LABELS), Some(y), px)
-    };
+    })
+}
+
+/// Draws a 2-D panel into `area` (inside the panel's margins and caption).
+fn draw_panel_2d<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    panel: &Panel,
+    fig: &Figure,
+    mode: LineMode,
+) -> Result<(), PlotError> {
+    let runs: Vec<Vec<Vec<(f64, f64)>>> = panel
+        .series
+        .iter()
+        .map(|s| split_runs(s, panel.log_y))
+        .collect();
+    let area = &legend_strip(area, &legend_entries(panel, &runs), fig)?;
+    let points = || runs.iter().flatten().flatten();
+    let x_data = min_max(points().map(|p| p.0));
+    let y_data = min_max(points().map(|p| p.1));
+    let (x_axis, y_axis, y_label_px) = panel_axes_2d(area, panel, x_data, y_data, fig)?;
     // Points in axis units (the log axis is not divided).
     let (sx, sy) = (
         x_axis.scale(),
@@ -1372,10 +1397,25 @@ fn draw_panel_2d<DB: DrawingBackend>(
     builder
         .x_label_area_size(X_LABEL_AREA)
         .y_label_area_size(y_label_px);
+    let axes = (&x_axis, y_axis.as_ref(), y_data);
+    draw_chart_2d(&mut builder, axes, panel, &prepared, fig, mode)
+}
+
+/// Builds the panel's chart on `builder` with its axes (x, linear y or `None` for a logarithmic
+/// one over `y_data`), draws the mesh and labels, then the series.
+fn draw_chart_2d<DB: DrawingBackend>(
+    builder: &mut ChartBuilder<'_, '_, DB>,
+    (x_axis, y_axis, y_data): (&LinearAxis, Option<&LinearAxis>, Option<(f64, f64)>),
+    panel: &Panel,
+    prepared: &[Prepared],
+    fig: &Figure,
+    mode: LineMode,
+) -> Result<(), PlotError> {
+    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| draw_error(fig, e);
     let x_formatter = |v: &f64| x_axis.format.format(*v);
     let x_range = x_axis.range.0..x_axis.range.1;
 
-    match &y_axis {
+    match y_axis {
         None => {
             let y_range = log_range(y_data);
             let mut chart = builder
@@ -1396,7 +1436,7 @@ fn draw_panel_2d<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig, mode)
+            draw_series(&mut chart, prepared, fig, mode)
         }
         Some(y_axis) => {
             let mut chart = builder
@@ -1417,7 +1457,7 @@ fn draw_panel_2d<DB: DrawingBackend>(
                 .light_line_style(RGBColor(242, 242, 242))
                 .draw()
                 .map_err(err)?;
-            draw_series(&mut chart, &prepared, fig, mode)
+            draw_series(&mut chart, prepared, fig, mode)
         }
     }
 }
@@ -2158,12 +2198,7 @@ mod tests {
         // exist (its loop terminates), lie on the axis, and print distinctly and accurately.
         use plotters::coord::combinators::LogCoord;
         let mut state = 99u64;
-        let mut rnd = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = move || ofmpc::random::uniform(&mut state);
         for _ in 0..3000 {
             let a = (rnd() * 2.0 - 1.0).signum() * 10f64.powf(rnd() * 500.0 - 250.0);
             let b = if rnd() < 0.5 {
@@ -2249,12 +2284,7 @@ mod tests {
     fn m4_keeps_extremes_and_ends_of_every_column() {
         // Pseudo-random data (LCG) over 37 columns of varying width.
         let mut state = 12345u64;
-        let mut rnd = || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = || ofmpc::random::uniform(&mut state);
         let n = 2000;
         let cols: Vec<i32> = (0..n).map(|i| (i * 37 / n) as i32).collect();
         let ys: Vec<f64> = (0..n).map(|_| rnd() * 2.0 - 1.0).collect();

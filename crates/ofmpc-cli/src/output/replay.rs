@@ -111,14 +111,9 @@ pub fn replay_json(robot: &Robot, runs: &[ReplayRun<'_>]) -> String {
     replay_json_with(robot, runs, None)
 }
 
-/// The replay's data as JSON, with the robot's meshes when `visuals` has any
-/// ([`super::mesh`]): `robot.meshes` (per body, [`super::mesh::embed::meshes_json`]) and
-/// `robot.capsules` (per body 0..=n: drawn as a capsule).
-pub fn replay_json_with(
-    robot: &Robot,
-    runs: &[ReplayRun<'_>],
-    visuals: Option<&super::mesh::visuals::Visuals>,
-) -> String {
+/// The robot for the replay: its joints (placement, axis, kind), its flange and, when its
+/// visuals have meshes, the meshes and which bodies are drawn as capsules.
+fn robot_json(robot: &Robot, visuals: Option<&super::mesh::visuals::Visuals>) -> Value {
     let joints: Vec<Value> = robot
         .joints()
         .iter()
@@ -131,6 +126,23 @@ pub fn replay_json_with(
             })
         })
         .collect();
+    let mut robot_json =
+        json!({"name": robot.name(), "joints": joints, "flange": transform(robot.flange_offset())});
+    if let Some(v) = visuals.filter(|v| !v.meshes.is_empty()) {
+        robot_json["meshes"] = super::mesh::embed::meshes_json(v);
+        robot_json["capsules"] = json!(v.capsule);
+    }
+    robot_json
+}
+
+/// The replay's data as JSON, with the robot's meshes when `visuals` has any
+/// ([`super::mesh`]): `robot.meshes` (per body, [`super::mesh::embed::meshes_json`]) and
+/// `robot.capsules` (per body 0..=n: drawn as a capsule).
+pub fn replay_json_with(
+    robot: &Robot,
+    runs: &[ReplayRun<'_>],
+    visuals: Option<&super::mesh::visuals::Visuals>,
+) -> String {
     let mut reference = Value::Null;
     let mut out_runs = Vec::new();
     for run in runs {
@@ -171,14 +183,8 @@ pub fn replay_json_with(
             "horizon": horizons_json(rec),
         }));
     }
-    let mut robot_json =
-        json!({"name": robot.name(), "joints": joints, "flange": transform(robot.flange_offset())});
-    if let Some(v) = visuals.filter(|v| !v.meshes.is_empty()) {
-        robot_json["meshes"] = super::mesh::embed::meshes_json(v);
-        robot_json["capsules"] = json!(v.capsule);
-    }
     json!({
-        "robot": robot_json,
+        "robot": robot_json(robot, visuals),
         "reference": reference,
         "runs": out_runs,
         "horizon_note": "Magenta: what the controller predicted over its horizon at the latest recorded sample (none for pid, ctc, ctc-adaptive).",

@@ -585,15 +585,22 @@ fn controller_gains(
             }
         }
     }
-    // Ξ [K; T]ᵀ = [U T], least squares by SVD.
-    let svd = xi.svd(true, true);
-    let gt = svd
-        .solve(&out, 1e-12)
+    Ok((least_squares_gains(xi, &out)?.transpose(), pass.tau0))
+}
+
+/// `[K; T]ᵀ` from `Ξ [K; T]ᵀ = [U T]`, least squares by SVD; an error when it is not finite.
+fn least_squares_gains(
+    xi: DMatrix<f64>,
+    out: &DMatrix<f64>,
+) -> Result<DMatrix<f64>, StabilityError> {
+    let gt = xi
+        .svd(true, true)
+        .solve(out, 1e-12)
         .map_err(|_| StabilityError::NonFinite { alpha: 1.0 })?;
     if !gt.iter().all(|v| v.is_finite()) {
         return Err(StabilityError::NonFinite { alpha: 1.0 });
     }
-    Ok((gt.transpose(), pass.tau0))
+    Ok(gt)
 }
 
 /// The random draws of one run of [`controller_gains`] (in `[−1, 1)`, scaled

@@ -55,22 +55,25 @@ fn element(e: &BytesStart<'_>) -> Element {
     }
 }
 
+/// A malformed-document error for `name` at byte `pos` of `text`, said as its line.
+fn malformed_at(text: &str, name: &str, pos: u64, what: String) -> MeshError {
+    let pos = (pos as usize).min(text.len());
+    let line = text.as_bytes()[..pos]
+        .iter()
+        .filter(|&&c| c == b'\n')
+        .count()
+        + 1;
+    MeshError::Malformed {
+        path: name.to_string(),
+        what: format!("line {line}: {what}"),
+    }
+}
+
 /// The document's root element (an iterative build: no recursion on deep nesting).
 fn document(text: &str, name: &str) -> Result<Element, MeshError> {
     let mut reader = quick_xml::Reader::from_str(text);
     let mut stack = vec![Element::default()];
-    let bad = |pos: u64, what: String| {
-        let pos = (pos as usize).min(text.len());
-        let line = text.as_bytes()[..pos]
-            .iter()
-            .filter(|&&c| c == b'\n')
-            .count()
-            + 1;
-        MeshError::Malformed {
-            path: name.to_string(),
-            what: format!("line {line}: {what}"),
-        }
-    };
+    let bad = |pos: u64, what: String| malformed_at(text, name, pos, what);
     loop {
         let ev = reader.read_event().map_err(|e| {
             bad(

@@ -40,6 +40,28 @@ pub struct Visuals {
 /// Default colours of meshes without a material: two greys, alternating along the chain.
 const GREYS: [[f64; 3]; 2] = [[0.80, 0.81, 0.84], [0.62, 0.64, 0.68]];
 
+/// The URDF document at `urdf`, read with the library's size limit; the error in words.
+fn read_urdf(urdf: &Path) -> Result<urdf_rs::Robot, String> {
+    read_limited(urdf, ofmpc::robot::MAX_URDF_BYTES)
+        .map_err(|e| e.to_string())
+        .and_then(|b| String::from_utf8(b).map_err(|e| e.to_string()))
+        .and_then(|t| urdf_rs::read_from_string(&t).map_err(|e| e.to_string()))
+}
+
+impl Visuals {
+    /// Adds `mesh` to the body's mesh of that colour (a new one for a new colour).
+    fn add(&mut self, body: usize, color: [f64; 3], mesh: TriMesh) {
+        match self
+            .meshes
+            .iter_mut()
+            .find(|m| m.body == body && m.color == color)
+        {
+            Some(m) => m.mesh.append(&mesh),
+            None => self.meshes.push(BodyMesh { body, color, mesh }),
+        }
+    }
+}
+
 /// The visuals of the URDF file `urdf` from which `robot` was read (`ros_package_path`: the
 /// `ROS_PACKAGE_PATH` variable). The URDF not readable again: no meshes, one warning.
 pub fn load(urdf: &Path, robot: &Robot, ros_package_path: Option<&str>) -> Visuals {
@@ -48,11 +70,7 @@ pub fn load(urdf: &Path, robot: &Robot, ros_package_path: Option<&str>) -> Visua
         capsule: vec![true; n + 1],
         ..Visuals::default()
     };
-    let parsed = read_limited(urdf, ofmpc::robot::MAX_URDF_BYTES)
-        .map_err(|e| e.to_string())
-        .and_then(|b| String::from_utf8(b).map_err(|e| e.to_string()))
-        .and_then(|t| urdf_rs::read_from_string(&t).map_err(|e| e.to_string()));
-    let doc = match parsed {
+    let doc = match read_urdf(urdf) {
         Ok(d) => d,
         Err(e) => {
             out.warnings.push(format!("{}: {e}", urdf.display()));
@@ -94,14 +112,7 @@ pub fn load(urdf: &Path, robot: &Robot, ros_package_path: Option<&str>) -> Visua
             let color =
                 material_color(v.material.as_ref(), &doc.materials).unwrap_or(GREYS[body % 2]);
             has_mesh[body] = true;
-            match out
-                .meshes
-                .iter_mut()
-                .find(|m| m.body == body && m.color == color)
-            {
-                Some(m) => m.mesh.append(&mesh),
-                None => out.meshes.push(BodyMesh { body, color, mesh }),
-            }
+            out.add(body, color, mesh);
         }
     }
     out.capsule = (0..=n).map(|b| !has_mesh[b] || failed[b]).collect();
