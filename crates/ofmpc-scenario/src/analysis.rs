@@ -5,9 +5,7 @@
 use crate::error::ScenarioError;
 use crate::file::ScenarioFile;
 use crate::resolve::Scenario;
-use ofmpc::analysis::{
-    alpha_interval, inertia_ratio_range, max_payload, spectral_radius, StabilityOptions,
-};
+use ofmpc::analysis::{inertia_ratio_range, max_payload, StabilityOptions, StabilityProblem};
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
 use rayon::prelude::*;
@@ -41,11 +39,19 @@ pub fn margin(scenario: &Scenario, kind: ControllerKind) -> Result<Margin, Scena
     let robot = model_robot(scenario)?;
     let q0 = exp.reference.q(0);
     let opts = StabilityOptions::default();
-    let (lo, hi) = alpha_interval(&robot, kind.base(), &exp.mpc, &exp.baselines, q0, &opts)
-        .map_err(|source| ScenarioError::Stability {
-            kind,
-            source: Box::new(source),
-        })?;
+    let (lo, hi) = StabilityProblem {
+        robot: &robot,
+        kind: kind.base(),
+        settings: &exp.mpc,
+        baselines: &exp.baselines,
+        q0,
+        options: &opts,
+    }
+    .alpha_interval()
+    .map_err(|source| ScenarioError::Stability {
+        kind,
+        source: Box::new(source),
+    })?;
     let poses = program_poses(scenario);
     let m = max_payload(&robot, (lo, hi), &poses, PAYLOAD_SEARCH_LIMIT_KG)?;
     Ok(Margin {
@@ -87,7 +93,17 @@ pub fn radius_curves(
         .map(|&kind| {
             let radius = alpha
                 .iter()
-                .map(|&a| spectral_radius(robot, kind.base(), mpc, baselines, q0, a, &opts))
+                .map(|&a| {
+                    StabilityProblem {
+                        robot,
+                        kind: kind.base(),
+                        settings: mpc,
+                        baselines,
+                        q0,
+                        options: &opts,
+                    }
+                    .spectral_radius(a)
+                })
                 .collect::<Result<Vec<f64>, _>>()?;
             Ok(RadiusCurve {
                 kind,
@@ -335,7 +351,15 @@ fn mpc_candidates(
             let s = candidate_settings(c, n);
             let mut iv = (0.0f64, f64::INFINITY);
             for &k in kinds {
-                match alpha_interval(&exp.robot, k, &s, &exp.baselines, &q0, &opts) {
+                let problem = StabilityProblem {
+                    robot: &exp.robot,
+                    kind: k,
+                    settings: &s,
+                    baselines: &exp.baselines,
+                    q0: &q0,
+                    options: &opts,
+                };
+                match problem.alpha_interval() {
                     Ok((lo, hi)) => iv = (iv.0.max(lo), iv.1.min(hi)),
                     Err(_) => return None,
                 }
@@ -449,11 +473,19 @@ fn adaptive_fallback(
     let opts = StabilityOptions::default();
     let mut margin = f64::INFINITY;
     for k in &adaptive {
-        let (lo, hi) = alpha_interval(&exp.robot, k.base(), &d, &exp.baselines, q0, &opts)
-            .map_err(|source| ScenarioError::Stability {
-                kind: *k,
-                source: Box::new(source),
-            })?;
+        let (lo, hi) = StabilityProblem {
+            robot: &exp.robot,
+            kind: k.base(),
+            settings: &d,
+            baselines: &exp.baselines,
+            q0,
+            options: &opts,
+        }
+        .alpha_interval()
+        .map_err(|source| ScenarioError::Stability {
+            kind: *k,
+            source: Box::new(source),
+        })?;
         margin = margin.min((1.0 / lo).ln().min(hi.ln()));
     }
     c.margin = margin;

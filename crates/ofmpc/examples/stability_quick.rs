@@ -1,5 +1,5 @@
 //! `cargo run --release -p ofmpc --example stability_quick`
-use ofmpc::analysis::{alpha_interval, max_payload, spectral_radius, StabilityOptions};
+use ofmpc::analysis::{max_payload, StabilityOptions, StabilityProblem};
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, PlanOptions};
@@ -27,26 +27,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .collect();
     for kind in ControllerKind::ALL {
         for a in [0.5, 0.8, 1.0, 1.1] {
-            let r = spectral_radius(
-                &robot,
+            let r = StabilityProblem {
+                robot: &robot,
                 kind,
-                &MpcSettings::default(),
-                &baselines,
-                &q0,
-                a,
-                &opts,
-            )?;
+                settings: &MpcSettings::default(),
+                baselines: &baselines,
+                q0: &q0,
+                options: &opts,
+            }
+            .spectral_radius(a)?;
             println!("{kind} α={a} ρ={r:.6}");
         }
         let t = std::time::Instant::now();
-        let iv = alpha_interval(
-            &robot,
+        let iv = StabilityProblem {
+            robot: &robot,
             kind,
-            &MpcSettings::default(),
-            &baselines,
-            &q0,
-            &opts,
-        )?;
+            settings: &MpcSettings::default(),
+            baselines: &baselines,
+            q0: &q0,
+            options: &opts,
+        }
+        .alpha_interval()?;
         let m = max_payload(&robot, iv, &poses, 100.0)?;
         println!(
             "{kind}: {iv:?} max payload {m:.3} kg ({:.2} s)",

@@ -1,11 +1,11 @@
 //! Stability near rest against an inertia mismatch: the interval computed
 //! from the linearized real controller step agrees with nonlinear
 //! closed-loop simulations just inside and just outside each boundary, and
-//! with the paper tuning's known intervals (docs/guide/paper-notes.md, "The experiment").
+//! with the paper tuning's known intervals (docs/guide/paper-notes.md,
+//! "The experiment").
 
 use ofmpc::analysis::{
-    alpha_interval, alpha_interval_by_perturbation, inertia_ratio_range, max_payload,
-    simulated_growth, spectral_radius, LinearizedLoop, StabilityError, StabilityOptions,
+    inertia_ratio_range, max_payload, StabilityError, StabilityOptions, StabilityProblem,
 };
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Payload, Robot};
@@ -19,12 +19,39 @@ fn interval_agrees_with_simulation_at_each_boundary() {
     let b = BaselineSettings::default();
     let opts = StabilityOptions::default();
     for kind in [ControllerKind::First, ControllerKind::Second] {
-        let (lo, hi) = alpha_interval(&robot, kind, &s, &b, &Q0, &opts).unwrap();
+        let (lo, hi) = StabilityProblem {
+            robot: &robot,
+            kind,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0,
+            options: &opts,
+        }
+        .alpha_interval()
+        .unwrap();
         for (edge, inward) in [(lo, 1.0), (hi, -1.0)] {
             let inside = edge + inward * 0.02;
             let outside = edge - inward * 0.02;
-            let g_in = simulated_growth(&robot, kind, &s, &b, &Q0, inside, 1e-5, 1000).unwrap();
-            let g_out = simulated_growth(&robot, kind, &s, &b, &Q0, outside, 1e-5, 1000).unwrap();
+            let g_in = StabilityProblem {
+                robot: &robot,
+                kind,
+                settings: &s,
+                baselines: &b,
+                q0: &Q0,
+                options: &StabilityOptions::default(),
+            }
+            .simulated_growth(inside, 1e-5, 1000)
+            .unwrap();
+            let g_out = StabilityProblem {
+                robot: &robot,
+                kind,
+                settings: &s,
+                baselines: &b,
+                q0: &Q0,
+                options: &StabilityOptions::default(),
+            }
+            .simulated_growth(outside, 1e-5, 1000)
+            .unwrap();
             assert!(g_in < 0.5, "{kind} α = {inside} (inside): growth {g_in}");
             assert!(
                 g_out > 2.0,
@@ -56,7 +83,16 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
         .map(|k| reference.q(k))
         .collect();
     for (kind, (lo, hi), payload) in known {
-        let iv = alpha_interval(&robot, kind, &s, &b, &Q0, &opts).unwrap();
+        let iv = StabilityProblem {
+            robot: &robot,
+            kind,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0,
+            options: &opts,
+        }
+        .alpha_interval()
+        .unwrap();
         assert!(
             (iv.0 - lo).abs() < 0.01 && (iv.1 - hi).abs() < 0.01,
             "{kind}: {iv:?}"
@@ -68,7 +104,16 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
         assert!((a - iv.0).abs() < 1e-3, "{kind}: α {a} at {m} kg");
     }
     // The usual MPC tolerates far more (about 0.01..2).
-    let (lo, hi) = alpha_interval(&robot, ControllerKind::Usual, &s, &b, &Q0, &opts).unwrap();
+    let (lo, hi) = StabilityProblem {
+        robot: &robot,
+        kind: ControllerKind::Usual,
+        settings: &s,
+        baselines: &b,
+        q0: &Q0,
+        options: &opts,
+    }
+    .alpha_interval()
+    .unwrap();
     assert!(lo <= 0.011 && (hi - 2.0).abs() < 0.02, "usual: {lo}..{hi}");
 }
 
@@ -77,14 +122,15 @@ fn adaptive_variants_and_bad_options_are_errors() {
     let robot = Robot::irb140();
     let s = MpcSettings::default();
     let b = BaselineSettings::default();
-    let e = alpha_interval(
-        &robot,
-        ControllerKind::SecondAdaptive,
-        &s,
-        &b,
-        &Q0,
-        &StabilityOptions::default(),
-    );
+    let e = StabilityProblem {
+        robot: &robot,
+        kind: ControllerKind::SecondAdaptive,
+        settings: &s,
+        baselines: &b,
+        q0: &Q0,
+        options: &StabilityOptions::default(),
+    }
+    .alpha_interval();
     assert!(matches!(e, Err(StabilityError::Adaptive(_))));
     // The baselines' memory (integral, observer) is not in the analysis' state: before this
     // refusal it gave the pid ρ = 2.13 at α = 1, unstable with an exact model, while its
@@ -94,16 +140,40 @@ fn adaptive_variants_and_bad_options_are_errors() {
         .filter(|k| !k.is_adaptive())
     {
         let o = StabilityOptions::default();
-        let e = alpha_interval(&robot, k, &s, &b, &Q0, &o);
+        let e = StabilityProblem {
+            robot: &robot,
+            kind: k,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0,
+            options: &o,
+        }
+        .alpha_interval();
         assert!(
             matches!(e, Err(StabilityError::Baseline(kind)) if kind == k),
             "{k}: {e:?}"
         );
-        let e = spectral_radius(&robot, k, &s, &b, &Q0, 1.0, &o);
+        let e = StabilityProblem {
+            robot: &robot,
+            kind: k,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0,
+            options: &o,
+        }
+        .spectral_radius(1.0);
         assert!(matches!(e, Err(StabilityError::Baseline(_))), "{k}: {e:?}");
         assert!(
             matches!(
-                LinearizedLoop::new(&robot, k, &s, &b, &Q0, &o),
+                StabilityProblem {
+                    robot: &robot,
+                    kind: k,
+                    settings: &s,
+                    baselines: &b,
+                    q0: &Q0,
+                    options: &o
+                }
+                .linearized(),
                 Err(StabilityError::Baseline(_))
             ),
             "{k}"
@@ -114,26 +184,35 @@ fn adaptive_variants_and_bad_options_are_errors() {
         ..Default::default()
     };
     assert!(matches!(
-        alpha_interval(&robot, ControllerKind::First, &s, &b, &Q0, &bad),
+        StabilityProblem {
+            robot: &robot,
+            kind: ControllerKind::First,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0,
+            options: &bad
+        }
+        .alpha_interval(),
         Err(StabilityError::Option {
             what: "alpha_max",
             ..
         })
     ));
     assert!(matches!(
-        alpha_interval(
-            &robot,
-            ControllerKind::First,
-            &s,
-            &b,
-            &Q0[..3],
-            &StabilityOptions::default()
-        ),
+        StabilityProblem {
+            robot: &robot,
+            kind: ControllerKind::First,
+            settings: &s,
+            baselines: &b,
+            q0: &Q0[..3],
+            options: &StabilityOptions::default()
+        }
+        .alpha_interval(),
         Err(StabilityError::Model(_))
     ));
 }
 
-/// The loop linearized once ([`LinearizedLoop`]: the controller's gains from
+/// The loop linearized once ([`StabilityProblem::linearized`]: the controller's gains from
 /// one controller's steps by central differences, the plant's Jacobian, RK4
 /// of the linearization per α) has the spectral radius of the per-α
 /// perturbation runs of the actual controller and plant ([`spectral_radius`],
@@ -164,11 +243,38 @@ fn loop_linearized_once_matches_the_perturbation_runs() {
             ControllerKind::First,
             ControllerKind::Second,
         ] {
-            let lin = LinearizedLoop::new(&robot, kind, &s, &b, &Q0, &opts).unwrap();
-            let lin6 = LinearizedLoop::new(&robot, kind, &s, &b, &Q0, &larger).unwrap();
+            let lin = StabilityProblem {
+                robot: &robot,
+                kind,
+                settings: &s,
+                baselines: &b,
+                q0: &Q0,
+                options: &opts,
+            }
+            .linearized()
+            .unwrap();
+            let lin6 = StabilityProblem {
+                robot: &robot,
+                kind,
+                settings: &s,
+                baselines: &b,
+                q0: &Q0,
+                options: &larger,
+            }
+            .linearized()
+            .unwrap();
             for a in [0.05, 0.5, 0.8, 1.0, 1.1, 1.3, 2.5] {
                 let fast = lin.spectral_radius(a).unwrap();
-                let slow = spectral_radius(&robot, kind, &s, &b, &Q0, a, &opts).unwrap();
+                let slow = StabilityProblem {
+                    robot: &robot,
+                    kind,
+                    settings: &s,
+                    baselines: &b,
+                    q0: &Q0,
+                    options: &opts,
+                }
+                .spectral_radius(a)
+                .unwrap();
                 assert!(
                     (fast - slow).abs() <= 2e-5 * slow.max(1.0),
                     "{kind} α = {a}: {fast} against {slow}"
@@ -180,7 +286,16 @@ fn loop_linearized_once_matches_the_perturbation_runs() {
                 );
             }
             let iv = lin.alpha_interval().unwrap();
-            let slow = alpha_interval_by_perturbation(&robot, kind, &s, &b, &Q0, &opts).unwrap();
+            let slow = StabilityProblem {
+                robot: &robot,
+                kind,
+                settings: &s,
+                baselines: &b,
+                q0: &Q0,
+                options: &opts,
+            }
+            .alpha_interval_by_perturbation()
+            .unwrap();
             assert_eq!(iv, slow, "{kind}");
         }
     }

@@ -218,7 +218,7 @@ fn payload_curves(
     poses: &[&[f64]],
     kinds: &[ControllerKind],
 ) -> anyhow::Result<Vec<Vec<f64>>> {
-    use ofmpc::analysis::{inertia_ratio_range, spectral_radius, StabilityOptions};
+    use ofmpc::analysis::{inertia_ratio_range, StabilityOptions, StabilityProblem};
     use rayon::prelude::*;
     let opts = StabilityOptions::default();
     let ranges = PAYLOAD_AXIS_KG
@@ -231,8 +231,16 @@ fn payload_curves(
             ranges
                 .par_iter()
                 .map(|&(lo, hi)| {
-                    let a = spectral_radius(model, k.base(), mpc, baselines, q0, lo, &opts)?;
-                    let b = spectral_radius(model, k.base(), mpc, baselines, q0, hi, &opts)?;
+                    let problem = StabilityProblem {
+                        robot: model,
+                        kind: k.base(),
+                        settings: mpc,
+                        baselines,
+                        q0,
+                        options: &opts,
+                    };
+                    let a = problem.spectral_radius(lo)?;
+                    let b = problem.spectral_radius(hi)?;
                     Ok(a.max(b))
                 })
                 .collect::<anyhow::Result<Vec<f64>>>()

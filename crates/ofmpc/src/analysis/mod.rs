@@ -4,7 +4,6 @@
 pub mod stability;
 
 pub use stability::{
-    alpha_interval, alpha_interval_by_perturbation, closed_loop_matrix, inertia_ratio_range,
-    max_payload, simulated_growth, spectral_radius, LinearizedLoop, StabilityError,
-    StabilityOptions,
+    inertia_ratio_range, max_payload, LinearizedLoop, StabilityError, StabilityOptions,
+    StabilityProblem,
 };

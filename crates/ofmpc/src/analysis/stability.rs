@@ -199,6 +199,109 @@ fn memory(kind: ControllerKind) -> (bool, bool) {
     }
 }
 
+/// One stability question: the loop of controller `kind` with `settings` (and the baselines'
+/// `baselines`) on the model `robot`, near rest at `q0`, analysed with `options`. Its methods
+/// are the analyses of this module; [`inertia_ratio_range`] and [`max_payload`] translate their
+/// inertia-ratio intervals into payloads.
+#[derive(Debug, Clone, Copy)]
+pub struct StabilityProblem<'a> {
+    /// The controller's model (its payload, if any, is what the controller assumes).
+    pub robot: &'a Robot,
+    /// The controller (the paper's three; not adaptive, not a baseline).
+    pub kind: ControllerKind,
+    /// The controller's settings.
+    pub settings: &'a MpcSettings,
+    /// The baselines' settings (what building a controller takes).
+    pub baselines: &'a BaselineSettings,
+    /// The rest pose (one value per joint).
+    pub q0: &'a [f64],
+    /// Perturbation size, bisection bounds, plant substeps.
+    pub options: &'a StabilityOptions,
+}
+
+impl StabilityProblem<'_> {
+    /// The matrix `M` of the closed loop's one-sample map near rest at `q0`
+    /// (see the module doc), for the plant with inertia ratio `alpha`.
+    pub fn closed_loop_matrix(&self, alpha: f64) -> Result<DMatrix<f64>, StabilityError> {
+        let p = self;
+        closed_loop_matrix(
+            p.robot,
+            p.kind,
+            p.settings,
+            p.baselines,
+            p.q0,
+            alpha,
+            p.options,
+        )
+    }
+
+    /// `ρ(M)`: the largest eigenvalue modulus of [`StabilityProblem::closed_loop_matrix`].
+    pub fn spectral_radius(&self, alpha: f64) -> Result<f64, StabilityError> {
+        let p = self;
+        spectral_radius(
+            p.robot,
+            p.kind,
+            p.settings,
+            p.baselines,
+            p.q0,
+            alpha,
+            p.options,
+        )
+    }
+
+    /// The loop linearized once ([`LinearizedLoop`]; the errors of
+    /// [`StabilityProblem::closed_loop_matrix`]).
+    pub fn linearized(&self) -> Result<LinearizedLoop, StabilityError> {
+        let p = self;
+        LinearizedLoop::new(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)
+    }
+
+    /// The interval `[lo, hi] ∋ 1` of `α` over which the loop near rest at `q0`
+    /// is stable (`ρ < 1`), by bisection from `α = 1` towards
+    /// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
+    /// bound still stable there is reported as that end). Assumes one interval.
+    /// `ρ(α)` is that of the loop linearized once ([`LinearizedLoop`]).
+    pub fn alpha_interval(&self) -> Result<(f64, f64), StabilityError> {
+        let p = self;
+        alpha_interval(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)
+    }
+
+    /// [`StabilityProblem::alpha_interval`] with `ρ` of [`StabilityProblem::spectral_radius`] (the controller's
+    /// perturbation runs repeated at every `α`): the slower reference the
+    /// linearized loop is checked against.
+    pub fn alpha_interval_by_perturbation(&self) -> Result<(f64, f64), StabilityError> {
+        let p = self;
+        alpha_interval_by_perturbation(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)
+    }
+
+    /// A closed-loop simulation near rest at `q0` with the plant's inertia
+    /// scaled by `1/α` (the analysis plant), from a deviation of size
+    /// `deviation` of the initial state: returns the largest joint deviation
+    /// from `q0` over the last tenth of `steps` samples divided by the initial
+    /// one. Below 1 (and shrinking with `steps`) when the loop is stable. The
+    /// check of [`StabilityProblem::alpha_interval`] by simulation, independent of the
+    /// linearization.
+    /// (`options` are not used: the simulation integrates 10 substeps per sample.)
+    pub fn simulated_growth(
+        &self,
+        alpha: f64,
+        deviation: f64,
+        steps: usize,
+    ) -> Result<f64, StabilityError> {
+        let p = self;
+        simulated_growth(
+            p.robot,
+            p.kind,
+            p.settings,
+            p.baselines,
+            p.q0,
+            alpha,
+            deviation,
+            steps,
+        )
+    }
+}
+
 /// A small deterministic generator for the perturbations ([`crate::linalg::random`]).
 struct Lcg(u64);
 impl Lcg {
@@ -210,7 +313,7 @@ impl Lcg {
 
 /// The matrix `M` of the closed loop's one-sample map near rest at `q0`
 /// (see the module doc), for the plant with inertia ratio `alpha`.
-pub fn closed_loop_matrix(
+fn closed_loop_matrix(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
@@ -316,8 +419,8 @@ fn check_input(
     Ok(())
 }
 
-/// `ρ(M)`: the largest eigenvalue modulus of [`closed_loop_matrix`].
-pub fn spectral_radius(
+/// `ρ(M)`: the largest eigenvalue modulus of [`StabilityProblem::closed_loop_matrix`].
+fn spectral_radius(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
@@ -338,16 +441,16 @@ pub fn spectral_radius(
 const SCHUR_SWEEPS_PER_DIM: usize = 100;
 
 /// The closed loop near rest at `q0`, linearized once and reused for every
-/// inertia ratio `α`: [`closed_loop_matrix`] repeats the controller's
+/// inertia ratio `α`: [`StabilityProblem::closed_loop_matrix`] repeats the controller's
 /// perturbation runs for each `α`, although only the plant depends on it.
 ///
 /// * The controller's one-sample map is linear near rest in
 ///   `ξ_k = [δx_k; δx_{k−1}; u_{k−1}; ē_{k−1}]` (`ē` for the second
-///   algorithm only; [`closed_loop_matrix`]'s module doc lists the memory):
+///   algorithm only; [`StabilityProblem::closed_loop_matrix`]'s module doc lists the memory):
 ///   `u_k = K ξ_k`, `δτ_k = T ξ_k`. `K`, `T` come from the **actual
 ///   controller step** ([`crate::control::Controller::step`]) by least
 ///   squares over steps from small random inputs (one controller, reset
-///   between runs; exact for the linear part as in [`closed_loop_matrix`]).
+///   between runs; exact for the linear part as in [`StabilityProblem::closed_loop_matrix`]).
 /// * The plant `q̈ = α H⁻¹(τ − C q̇ − g)` linearized at the equilibrium
 ///   `(q₀, 0, τ₀ = g(q₀))`: `δq̈ = α (J_q δq + J_q̇ δq̇ + J_τ δτ)` (the bracket
 ///   vanishes at rest, so `∂H⁻¹` drops out; `J` by central differences of the
@@ -359,7 +462,7 @@ const SCHUR_SWEEPS_PER_DIM: usize = 100;
 ///   `ξ` is redundant (`x_k = Φ x_{k−1} + Γ τ_{k−1}` on every trajectory of
 ///   the loop), but the defect `x_k − Φ x_{k−1} − Γ τ_{k−1}` is zero after
 ///   one sample whatever it was, so the extra eigenvalues are 0 and the
-///   spectral radius is that of [`closed_loop_matrix`]'s `M`.
+///   spectral radius is that of [`StabilityProblem::closed_loop_matrix`]'s `M`.
 #[derive(Debug, Clone)]
 pub struct LinearizedLoop {
     n: usize,
@@ -371,7 +474,7 @@ pub struct LinearizedLoop {
     /// `[J_q J_q̇ J_τ]` of the plant's acceleration at `α = 1` (n × 3n).
     jac: DMatrix<f64>,
     options: StabilityOptions,
-    /// What [`spectral_radius`] needs where the linearization's eigenvalues
+    /// What [`StabilityProblem::spectral_radius`] needs where the linearization's eigenvalues
     /// do not converge.
     robot: Robot,
     kind: ControllerKind,
@@ -382,8 +485,8 @@ pub struct LinearizedLoop {
 
 impl LinearizedLoop {
     /// Linearizes the loop of `kind` with `settings` near rest at `q0` on the
-    /// model `robot` (the errors of [`closed_loop_matrix`]).
-    pub fn new(
+    /// model `robot` (the errors of [`StabilityProblem::closed_loop_matrix`]).
+    fn new(
         robot: &Robot,
         kind: ControllerKind,
         settings: &MpcSettings,
@@ -505,9 +608,9 @@ impl LinearizedLoop {
         nalgebra::linalg::Schur::try_new(shifted, f64::EPSILON, sweeps).map(|s| radius(s, 1.0))
     }
 
-    /// The interval of `α` with `ρ < 1` ([`alpha_interval`]'s bisection);
+    /// The interval of `α` with `ρ < 1` ([`StabilityProblem::alpha_interval`]'s bisection);
     /// where the eigenvalues of the linearization do not converge, `ρ` of
-    /// the perturbation runs at that `α` ([`spectral_radius`]).
+    /// the perturbation runs at that `α` ([`StabilityProblem::spectral_radius`]).
     pub fn alpha_interval(&self) -> Result<(f64, f64), StabilityError> {
         bisect_interval(
             |a| match self.spectral_radius(a) {
@@ -701,7 +804,7 @@ fn plant_jacobian(robot: &Robot, q0: &[f64], tau0: &[f64]) -> Result<DMatrix<f64
     Ok(jac)
 }
 
-/// The bisection of [`alpha_interval`] on the spectral radius `rho(α)`.
+/// The bisection of [`StabilityProblem::alpha_interval`] on the spectral radius `rho(α)`.
 fn bisect_interval(
     mut rho: impl FnMut(f64) -> Result<f64, StabilityError>,
     options: &StabilityOptions,
@@ -730,12 +833,8 @@ fn bisect_interval(
     Ok((lo, hi))
 }
 
-/// The interval `[lo, hi] ∋ 1` of `α` over which the loop near rest at `q0`
-/// is stable (`ρ < 1`), by bisection from `α = 1` towards
-/// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
-/// bound still stable there is reported as that end). Assumes one interval.
-/// `ρ(α)` is that of the loop linearized once ([`LinearizedLoop`]).
-pub fn alpha_interval(
+/// [`StabilityProblem::alpha_interval`] with the problem's parts.
+fn alpha_interval(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
@@ -746,10 +845,10 @@ pub fn alpha_interval(
     LinearizedLoop::new(robot, kind, settings, baselines, q0, options)?.alpha_interval()
 }
 
-/// [`alpha_interval`] with `ρ` of [`spectral_radius`] (the controller's
+/// [`StabilityProblem::alpha_interval`] with `ρ` of [`StabilityProblem::spectral_radius`] (the controller's
 /// perturbation runs repeated at every `α`): the slower reference the
 /// linearized loop is checked against.
-pub fn alpha_interval_by_perturbation(
+fn alpha_interval_by_perturbation(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
@@ -840,10 +939,10 @@ pub fn max_payload(
 /// `deviation` of the initial state: returns the largest joint deviation
 /// from `q0` over the last tenth of `steps` samples divided by the initial
 /// one. Below 1 (and shrinking with `steps`) when the loop is stable. The
-/// check of [`alpha_interval`] by simulation, independent of the
+/// check of [`StabilityProblem::alpha_interval`] by simulation, independent of the
 /// linearization.
 #[allow(clippy::too_many_arguments)]
-pub fn simulated_growth(
+fn simulated_growth(
     robot: &Robot,
     kind: ControllerKind,
     settings: &MpcSettings,
