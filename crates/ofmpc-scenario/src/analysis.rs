@@ -303,6 +303,58 @@ pub fn robust_tuning(
     })
 }
 
+/// The grid of weight pairs (`TUNING_Q_DY` × `TUNING_Q_DU`) for each wrist scale, as
+/// candidates not yet analysed.
+fn weight_grid(scales: &[f64]) -> Vec<Candidate> {
+    scales
+        .iter()
+        .flat_map(|&w| {
+            TUNING_Q_DY.iter().flat_map(move |&d| {
+                TUNING_Q_DU.iter().map(move |&u| Candidate {
+                    q_dy: d,
+                    q_du: u,
+                    wrist_scale: w,
+                    model_payload_kg: 0.0,
+                    margin: f64::NAN,
+                    rms_mm: f64::NAN,
+                    offset_free: false,
+                    pruned: false,
+                })
+            })
+        })
+        .collect()
+}
+
+/// The intersection over the controllers `kinds` of their stable `α` intervals with
+/// `settings` near rest at `q0`; `None` when one fails or the intersection's span hi/lo
+/// falls to `span` or below (early rejection: no model payload fits the range).
+fn common_interval(
+    exp: &ofmpc::sim::Experiment,
+    kinds: &[ControllerKind],
+    settings: &MpcSettings,
+    q0: &[f64],
+    options: &StabilityOptions,
+    span: f64,
+) -> Option<(f64, f64)> {
+    let mut iv = (0.0f64, f64::INFINITY);
+    for &kind in kinds {
+        let problem = StabilityProblem {
+            robot: &exp.robot,
+            kind,
+            settings,
+            baselines: &exp.baselines,
+            q0,
+            options,
+        };
+        let (lo, hi) = problem.alpha_interval().ok()?;
+        iv = (iv.0.max(lo), iv.1.min(hi));
+        if iv.1 / iv.0 <= span {
+            return None;
+        }
+    }
+    Some(iv)
+}
+
 /// Steps 1–3 of [`robust_tuning`] for the MPC controllers `kinds` with the
 /// wrist scales `scales` ([`Candidate::wrist_scale`]): every weight pair of
 /// the grid with its best model payload, the stable ones simulated.
@@ -327,49 +379,11 @@ fn mpc_candidates(
     let span = (ranges.iter())
         .map(|(amin, amax)| amax / amin)
         .fold(f64::INFINITY, f64::min);
-    let grid: Vec<Candidate> = scales
-        .iter()
-        .flat_map(|&w| {
-            TUNING_Q_DY.iter().flat_map(move |&d| {
-                TUNING_Q_DU.iter().map(move |&u| Candidate {
-                    q_dy: d,
-                    q_du: u,
-                    wrist_scale: w,
-                    model_payload_kg: 0.0,
-                    margin: f64::NAN,
-                    rms_mm: f64::NAN,
-                    offset_free: false,
-                    pruned: false,
-                })
-            })
-        })
-        .collect();
+    let grid = weight_grid(scales);
     // 1. Intervals per weight pair (the intersection over the controllers).
     let intervals: Vec<Option<(f64, f64)>> = grid
         .par_iter()
-        .map(|c| {
-            let s = candidate_settings(c, n);
-            let mut iv = (0.0f64, f64::INFINITY);
-            for &k in kinds {
-                let problem = StabilityProblem {
-                    robot: &exp.robot,
-                    kind: k,
-                    settings: &s,
-                    baselines: &exp.baselines,
-                    q0: &q0,
-                    options: &opts,
-                };
-                match problem.alpha_interval() {
-                    Ok((lo, hi)) => iv = (iv.0.max(lo), iv.1.min(hi)),
-                    Err(_) => return None,
-                }
-                if iv.1 / iv.0 <= span {
-                    // Early rejection: no model payload fits the range.
-                    return None;
-                }
-            }
-            Some(iv)
-        })
+        .map(|c| common_interval(exp, kinds, &candidate_settings(c, n), &q0, &opts, span))
         .collect();
     // 2. The model payload with the largest margin per pair.
     let mut candidates = Vec::new();
