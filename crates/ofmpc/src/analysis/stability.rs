@@ -266,9 +266,10 @@ impl StabilityProblem<'_> {
         alpha_interval(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)
     }
 
-    /// [`StabilityProblem::alpha_interval`] with `ρ` of [`StabilityProblem::spectral_radius`] (the controller's
-    /// perturbation runs repeated at every `α`): the slower reference the
-    /// linearized loop is checked against.
+    /// [`StabilityProblem::alpha_interval`] with `ρ` of
+    /// [`StabilityProblem::spectral_radius`] (the controller's perturbation runs
+    /// repeated at every `α`): the slower reference the linearized loop is
+    /// checked against.
     pub fn alpha_interval_by_perturbation(&self) -> Result<(f64, f64), StabilityError> {
         let p = self;
         alpha_interval_by_perturbation(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)
@@ -279,9 +280,9 @@ impl StabilityProblem<'_> {
     /// `deviation` of the initial state: returns the largest joint deviation
     /// from `q0` over the last tenth of `steps` samples divided by the initial
     /// one. Below 1 (and shrinking with `steps`) when the loop is stable. The
-    /// check of [`StabilityProblem::alpha_interval`] by simulation, independent of the
-    /// linearization.
-    /// (`options` are not used: the simulation integrates 10 substeps per sample.)
+    /// check of [`StabilityProblem::alpha_interval`] by simulation, independent
+    /// of the linearization (`options` are not used: the simulation integrates
+    /// 10 substeps per sample).
     pub fn simulated_growth(
         &self,
         alpha: f64,
