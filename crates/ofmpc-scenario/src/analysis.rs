@@ -209,7 +209,7 @@ pub fn candidate_settings(c: &Candidate, n: usize) -> MpcSettings {
 ///
 /// 1. For each weight pair `(Q_Δy, Q_Δu)` of a grid (`Q_yw = I`, `Q_u` as
 ///    given) and each controller, the α interval near rest at the program's
-///    first point ([`ofmpc::analysis::alpha_interval`]).
+///    first point ([`ofmpc::analysis::StabilityProblem::alpha_interval`]).
 /// 2. For each pair, the payload the model should assume: on a grid over the
 ///    range, the one whose inertia ratios along the program, for the lightest
 ///    and the heaviest payload, stay inside every controller's interval with
