@@ -1,15 +1,15 @@
 //! The closed loop: measure, control, apply the torque over one period.
 
 use super::actuator::Actuator;
-use super::conditions::{MeasurementFaults, RunConditions, SafetySettings};
+use super::conditions::{RunConditions, SafetySettings};
 use super::estimator::Estimator;
+use super::faults::{sample_at, LossSchedule, MeasurementFaults};
 use super::horizon::HorizonRecorder;
-use super::metrics::Record;
-use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
+use super::outcome::{RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
-use super::recorder::{Recorder, Sample};
-use super::schedule::{sample_at, LossSchedule};
+use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
+use super::settings_error::LoopSettingsError;
 use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;

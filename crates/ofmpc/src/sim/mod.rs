@@ -7,39 +7,46 @@ mod closed_loop;
 mod conditions;
 mod estimator;
 mod experiment;
+mod faults;
+mod format;
 mod horizon;
 mod metrics;
 mod outcome;
 mod plant;
 mod recorder;
-mod schedule;
+mod repair;
 mod sensor;
+mod settings_error;
 mod supervisor;
 
 pub use actuator::{Actuator, Loading};
 pub use estimator::Estimator;
+pub use faults::{
+    at_or_after, sample_at, Fault, FaultSchedule, LossSchedule, MeasurementFaults,
+    TIME_MATCH_TOLERANCE,
+};
 pub use horizon::{HorizonRecorder, HorizonSampling, PredictedHorizons};
-pub use recorder::{Recorder, Sample};
-pub use schedule::{at_or_after, sample_at, FaultSchedule, LossSchedule, TIME_MATCH_TOLERANCE};
+pub use recorder::{Record, Recorder, Sample};
+pub use repair::MeasurementGuard;
 pub use sensor::Sensor;
+pub use settings_error::LoopSettingsError;
 
 pub use closed_loop::{
     record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,
     LoopSettings, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
 };
-pub use conditions::{MeasurementFaults, RunConditions, SafetySettings};
+pub use conditions::{RunConditions, SafetySettings};
 pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
-pub use metrics::{compute as compute_metrics, quantile, Record, RunMetrics, StepTime};
+pub use metrics::{compute as compute_metrics, quantile, RunMetrics, StepTime};
 pub use outcome::{
-    ExperimentError, LoopSettingsError, RunFailure, RunOutcome, RunStatus, FAILED_STOP_SPEED,
-    MAX_RECORD_VALUES, MAX_SUBSTEPS,
+    ExperimentError, RunFailure, RunOutcome, RunStatus, FAILED_STOP_SPEED, MAX_RECORD_VALUES,
 };
 pub use plant::{
-    Fault, FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
-    MAX_DELAY_SAMPLES,
+    FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
+    MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
 };
 pub use supervisor::{
-    DivergenceRule, Inspection, MeasurementGuard, Plausibility, SafeStop, StopReason, Stopping,
-    Supervisor, SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, GROWTH_CEILING_RAD, GROWTH_FACTOR,
+    DivergenceRule, Inspection, Plausibility, SafeStop, StopReason, Stopping, Supervisor,
+    SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, GROWTH_CEILING_RAD, GROWTH_FACTOR,
     GROWTH_WINDOW_S, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
 };

@@ -1,7 +1,7 @@
 //! The simulated robot: the full nonlinear model, with the payload the
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
-use super::schedule::FaultSchedule;
+use super::faults::{Fault, FaultSchedule};
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Robot};
@@ -41,67 +41,8 @@ pub struct PlantSettings {
     pub faults: Vec<Fault>,
 }
 
-/// An injected fault of one joint, from path time `t` on (`t = 0`: the
-/// path's first sample, after any pre-roll at rest), matched to samples as
-/// every timed event of a run ([`super::FaultSchedule::for_plant`],
-/// [`super::sample_at`]). In TOML:
-/// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-#[non_exhaustive]
-pub enum Fault {
-    /// The measured position is off by `offset_rad` on one sample (the
-    /// first measurement at or after `t`).
-    EncoderGlitch {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Offset (rad).
-        offset_rad: f64,
-    },
-    /// The joint's measurement (position and velocity) is frozen at its last
-    /// value for `duration_s`.
-    EncoderDropout {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Duration (s).
-        duration_s: f64,
-    },
-    /// The drive delivers `fraction` of the commanded torque for `duration_s`.
-    TorqueDrop {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Delivered fraction, in [0, 1].
-        fraction: f64,
-        /// Duration (s).
-        duration_s: f64,
-    },
-}
-
-impl Fault {
-    /// Start time, 0-based joint and duration (0 for a glitch).
-    pub(super) fn span(&self) -> (f64, usize, f64) {
-        match *self {
-            Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
-            Fault::EncoderDropout {
-                t,
-                joint,
-                duration_s,
-            }
-            | Fault::TorqueDrop {
-                t,
-                joint,
-                duration_s,
-                ..
-            } => (t, joint.wrapping_sub(1), duration_s),
-        }
-    }
-}
+/// The largest number of integration substeps per control period.
+pub const MAX_SUBSTEPS: usize = 100_000;
 
 /// Largest accepted measurement delay (control periods).
 pub const MAX_DELAY_SAMPLES: usize = 1000;
@@ -377,7 +318,7 @@ impl PlantSettings {
 fn substeps(ts: f64, substep: f64) -> Result<usize, PlantSettingsError> {
     let ratio = ts / substep;
     let k = ratio.round();
-    let max = super::MAX_SUBSTEPS;
+    let max = MAX_SUBSTEPS;
     if !(ts.is_finite() && ts > 0.0 && k >= 1.0 && k <= max as f64) || (ratio - k).abs() > 1e-9 * k
     {
         return Err(PlantSettingsError::SubstepRatio {

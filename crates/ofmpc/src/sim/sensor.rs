@@ -7,9 +7,9 @@
 //! invalid reading with the model's prediction ([`MeasurementGuard`]), so
 //! that everything after it sees finite numbers.
 
+use super::faults::LossSchedule;
 use super::plant::{Plant, PlantError};
-use super::schedule::LossSchedule;
-use super::supervisor::MeasurementGuard;
+use super::repair::MeasurementGuard;
 use crate::dynamics::JointSpaceDynamics;
 
 /// Reads the plant, loses the scheduled samples, repairs invalid readings.
