@@ -405,16 +405,6 @@ pub struct Plant {
 }
 
 impl Plant {
-    /// A plant at rest at `q0`, whose control period is one substep until
-    /// [`Self::set_period`] (or the deprecated [`Self::step`]) sets another.
-    #[deprecated(
-        note = "use Plant::with_period(robot, settings, q0, ts): the plant holds the control period, and its faults are matched to the samples of that period once"
-    )]
-    pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, PlantError> {
-        let ts = settings.substep;
-        Self::with_period(robot, settings, q0, ts)
-    }
-
     /// A plant at rest at `q0`, advanced by the control period `ts` (s) at
     /// each [`Self::advance`]: `ts` must be a whole number of the settings'
     /// substeps ([`PlantSettings::validate_for`]). The faults of the
@@ -653,17 +643,6 @@ impl Plant {
         }
         self.measured_once = true;
         Ok(())
-    }
-
-    /// [`Self::set_period`]`(ts)` and [`Self::advance`]`(tau)`: the period
-    /// given at every call.
-    #[deprecated(
-        note = "build the plant with Plant::with_period(robot, settings, q0, ts) and call Plant::advance(tau)"
-    )]
-    pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), PlantError> {
-        self.robot.check_vector("tau", tau)?;
-        self.set_period(ts)?;
-        self.advance(tau)
     }
 
     /// Advances the plant by one control period ([`Self::period`]) under the
@@ -948,11 +927,12 @@ mod tests {
         .is_err());
     }
 
-    /// The deprecated `new` + `step(tau, ts)` is `with_period` + `advance`:
-    /// the same states bit for bit, the faults matched to the same samples.
+    /// The faults are matched to the samples of the period the plant is
+    /// built with, and again (in place) when the period changes: a torque
+    /// drop at 0.05 s for 0.03 s covers samples [5, 8) at 10 ms, [10, 16) at
+    /// 5 ms, and the plant advanced under it applies no torque there.
     #[test]
-    #[allow(deprecated)]
-    fn the_deprecated_step_is_advance_at_its_period() {
+    fn the_faults_are_scheduled_at_the_plants_period() {
         let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
         let s = PlantSettings {
             faults: vec![Fault::TorqueDrop {
@@ -963,17 +943,18 @@ mod tests {
             }],
             ..Default::default()
         };
-        let mut old = Plant::new(Robot::irb140(), s.clone(), &q0).unwrap();
-        let mut new = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        for _ in 0..20 {
-            old.step(&[1.0; 6], 0.01).unwrap();
-            new.advance(&[1.0; 6]).unwrap();
-            assert_eq!(bits(old.applied_torque()), bits(new.applied_torque()));
+        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
+        assert_eq!(p.fault_schedule().range(0), Some((5, 8)));
+        for k in 0..10 {
+            p.advance(&[1.0; 6]).unwrap();
+            let dropped = (5..8).contains(&k);
+            assert_eq!(
+                p.applied_torque()[1],
+                if dropped { 0.0 } else { 1.0 },
+                "k = {k}"
+            );
         }
-        assert_eq!(bits(old.q()), bits(new.q()));
-        assert_eq!(bits(old.qd()), bits(new.qd()));
-        assert_eq!(old.fault_schedule(), new.fault_schedule());
-        assert_eq!(new.fault_schedule().range(0), Some((5, 8)));
+        p.set_period(0.005).unwrap();
+        assert_eq!(p.fault_schedule().range(0), Some((10, 16)));
     }
 }

@@ -532,8 +532,7 @@ pub struct Inspection {
 pub struct Supervisor {
     settings: SupervisorSettings,
     n: usize,
-    /// The control period (s); NaN when unknown (the deprecated
-    /// [`Supervisor::new`]).
+    /// The control period (s).
     ts: f64,
     check: Option<Plausibility>,
     law: Option<SafeStop>,
@@ -567,17 +566,6 @@ impl Supervisor {
         s
     }
 
-    /// A supervisor without the control period: its growth rule judges only
-    /// the position limits and the ceiling ([`Self::with_period`] judges the
-    /// growth too), and it neither checks plausibility nor stops (both need
-    /// the period) until [`Self::sized_for`] gives it.
-    #[deprecated(
-        note = "use Supervisor::with_period(robot, settings, ts): without the control period the growth rule judges only the limits and the ceiling"
-    )]
-    pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
-        Self::build(robot, settings, f64::NAN)
-    }
-
     fn build(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
         let n = robot.dof();
         let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
@@ -603,23 +591,7 @@ impl Supervisor {
         }
     }
 
-    /// Gives the control period `ts` (s): sizes the growth rule's history,
-    /// and the plausibility check and the stop law run at it.
-    #[deprecated(note = "use Supervisor::with_period(robot, settings, ts)")]
-    pub fn sized_for(mut self, ts: f64) -> Self {
-        self.ts = ts;
-        if let Some(c) = self.check.as_mut() {
-            c.ts = ts;
-        }
-        if let Some(l) = self.law.as_mut() {
-            l.ts = ts;
-        }
-        self.size_history(ts);
-        self
-    }
-
-    /// The control period (s); NaN when it was not given (the deprecated
-    /// [`Self::new`]).
+    /// The control period (s).
     pub fn period(&self) -> f64 {
         self.ts
     }
@@ -992,8 +964,7 @@ mod tests {
 
     /// `with_period` sizes the growth rule: an error beyond the floor that
     /// quadruples against the look-back is a divergence, one that stays is
-    /// an offset; without the period (the deprecated constructor) only the
-    /// limits and the ceiling judge.
+    /// an offset.
     #[test]
     fn the_period_given_at_construction_sizes_the_growth_rule() {
         let robot = Robot::irb140();
@@ -1022,8 +993,5 @@ mod tests {
         let mut sized = Supervisor::with_period(&robot, settings, ts);
         assert_eq!(sized.errors.len(), 2 * m);
         assert_eq!(run(&mut sized), Some((1, -0.1)));
-        #[allow(deprecated)]
-        let mut without = Supervisor::new(&robot, settings);
-        assert_eq!(run(&mut without), None);
     }
 }
