@@ -89,12 +89,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         safe_stop: true,
         ..LoopSettings::default()
     };
-    let mut sensor = Sensor::new(
-        n,
-        plant.settings().delay_samples,
-        LossSchedule::default(),
-        TS,
-    );
+    let mut sensor = Sensor::new(plant.settings(), n, TS, LossSchedule::default())?;
     let mut supervisor = Supervisor::with_period(
         plant.robot(),
         loop_settings.supervisor(&Default::default()),
@@ -102,7 +97,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let actuator = Actuator::for_robot(plant.robot());
     let mut max_torque_ratio = 0.0f64;
-    plant.measure(&mut x)?;
+    sensor.measure(&plant.state(), &mut x)?;
     controller.reset(&x)?;
     sensor.reset(&x);
     supervisor.reset(&x);
@@ -116,7 +111,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let woke = Instant::now();
         lateness_us[k] = woke.saturating_duration_since(release).as_secs_f64() * 1e6;
         let t = k as f64 * TS;
-        sensor.read(&mut plant, k, true, &mut x)?; // in a real system: read the encoders
+        sensor.read(&plant.state(), k, true, &mut x)?; // in a real system: read the encoders
         sensor.repair(&mut model, &mut x); // an invalid value: the model's prediction
         let w = reference.q(k);
         let inspection = supervisor.inspect(&mut x, w);

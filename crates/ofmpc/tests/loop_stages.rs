@@ -134,7 +134,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
     let lost = LossSchedule::new(&conditions.faults, ts);
-    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
+    let mut sensor = Sensor::new(plant.settings(), n, ts, lost).unwrap();
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
@@ -143,7 +143,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
     let mut preview = vec![0.0; controller.horizon() * n];
     let mut x_true = vec![0.0; 2 * n];
-    plant.measure(&mut x).unwrap();
+    sensor.measure(&plant.state(), &mut x).unwrap();
     estimator.reset(&x);
     controller.reset(&x).unwrap();
     sensor.reset(&x);
@@ -151,7 +151,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let allocations = allocations_during(|| {
         for k in 0..total {
             let t = k as f64 * ts;
-            sensor.read(&mut plant, k, k > 0, &mut x).unwrap();
+            sensor.read(&plant.state(), k, k > 0, &mut x).unwrap();
             x_true[..n].copy_from_slice(plant.q());
             x_true[n..].copy_from_slice(plant.qd());
             rec.reading(&x);

@@ -338,7 +338,8 @@ impl<'a> ClosedLoop<'a> {
             .horizons
             .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, h.every, h.max));
         let lost = LossSchedule::new(&conditions.faults, ts);
-        let sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
+        // The plant checked its settings when it was built.
+        let sensor = Sensor::checked(plant.settings(), plant.robot().dof(), ts, lost);
         let supervisor =
             Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
         let actuator = Actuator::for_robot(plant.robot());
@@ -452,8 +453,8 @@ impl<'a> ClosedLoop<'a> {
             .set_period(self.reference.ts())
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         self.plant.start_path_after(self.events.pre_roll);
-        self.plant
-            .measure(&mut self.x)
+        self.sensor
+            .measure(&self.plant.state(), &mut self.x)
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         self.estimator.reset(&self.x);
         self.controller
@@ -472,8 +473,8 @@ impl<'a> ClosedLoop<'a> {
             }
         }
         if pre_roll > 0 {
-            self.plant
-                .measure(&mut self.x)
+            self.sensor
+                .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         }
         self.sensor.reset(&self.x);
@@ -491,8 +492,8 @@ impl<'a> ClosedLoop<'a> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         let n = self.reference.dof();
         if j > 0 {
-            self.plant
-                .measure(&mut self.x)
+            self.sensor
+                .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(RunFailure::Plant(e)))?;
         }
         let reference = self.reference;
@@ -588,7 +589,7 @@ impl<'a> ClosedLoop<'a> {
         let n = self.reference.dof();
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         self.sensor
-            .read(self.plant, k, k > 0, &mut self.x)
+            .read(&self.plant.state(), k, k > 0, &mut self.x)
             .map_err(|e| failed(RunFailure::Plant(e)))?;
         if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
             self.pick_up = None;

@@ -17,6 +17,7 @@ mod recorder;
 mod repair;
 mod sensor;
 mod settings_error;
+mod state;
 mod supervisor;
 
 pub use actuator::{Actuator, Loading};
@@ -30,6 +31,7 @@ pub use recorder::{Record, Recorder, Sample};
 pub use repair::MeasurementGuard;
 pub use sensor::Sensor;
 pub use settings_error::LoopSettingsError;
+pub use state::JointState;
 
 pub use closed_loop::{
     record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,

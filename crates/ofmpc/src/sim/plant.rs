@@ -2,6 +2,7 @@
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
 use super::faults::{Fault, FaultSchedule};
+use super::state::JointState;
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Robot};
@@ -339,33 +340,6 @@ fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
     }
 }
 
-/// A small deterministic Gaussian generator (xorshift + Box–Muller), so that
-/// noisy runs are reproducible from their seed.
-#[derive(Debug, Clone)]
-struct Gauss {
-    s: u64,
-    spare: Option<f64>,
-}
-
-impl Gauss {
-    fn uniform(&mut self) -> f64 {
-        self.s ^= self.s << 13;
-        self.s ^= self.s >> 7;
-        self.s ^= self.s << 17;
-        ((self.s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn next(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let (s, c) = (2.0 * std::f64::consts::PI * u2).sin_cos();
-        self.spare = Some(r * s);
-        r * c
-    }
-}
-
 /// The plant: state, model and effects. No allocation after construction.
 #[derive(Debug, Clone)]
 pub struct Plant {
@@ -382,13 +356,6 @@ pub struct Plant {
     net: Vec<f64>,
     rk4: Vec<f64>,
     backup: Vec<f64>,
-    rng: Gauss,
-    /// Delay line of measurements, `(D + 1) × 2n`, and its next slot.
-    ring: Vec<f64>,
-    ring_next: usize,
-    /// Measured positions of the previous sample (encoder velocity).
-    prev_qm: Vec<f64>,
-    measured_once: bool,
     /// The control period (s) and its RK4 substeps ([`Plant::with_period`]).
     ts: f64,
     substeps: usize,
@@ -398,10 +365,6 @@ pub struct Plant {
     schedule: FaultSchedule,
     steps: usize,
     origin: usize,
-    /// Per fault: an encoder glitch already happened.
-    fired: Vec<bool>,
-    /// The last measurement before the delay line (for frozen encoders).
-    last_meas: Vec<f64>,
 }
 
 impl Plant {
@@ -423,15 +386,9 @@ impl Plant {
         let schedule = FaultSchedule::for_plant(&settings.faults, ts);
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
-        let ring_len = (settings.delay_samples + 1) * 2 * n;
-        let n_faults = settings.faults.len();
         Ok(Self {
             viscous: per_joint(&settings.viscous_friction, n),
             coulomb: per_joint(&settings.coulomb_friction, n),
-            rng: Gauss {
-                s: settings.seed.max(1).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
-                spare: None,
-            },
             robot,
             ws,
             settings,
@@ -442,17 +399,11 @@ impl Plant {
             net: z.clone(),
             rk4: vec![0.0; RK4_WORK_PER_DOF * n],
             backup: vec![0.0; 2 * n],
-            ring: vec![0.0; ring_len],
-            ring_next: 0,
-            prev_qm: z.clone(),
-            measured_once: false,
             ts,
             substeps,
             schedule,
             steps: 0,
             origin: 0,
-            fired: vec![false; n_faults],
-            last_meas: vec![0.0; 2 * n],
         })
     }
 
@@ -560,89 +511,16 @@ impl Plant {
         &self.tau
     }
 
-    /// The measured state `x = [q, q̇]` (noise and encoder quantization
-    /// applied; the velocity a backward difference of the measured positions
-    /// with `velocity_from_encoder`; `delay_samples` periods old) written into
-    /// `x` (2n). Call it once per control period: each call is one sample of
-    /// the sensors. Allocation-free; `x` of another length is an error.
-    pub fn measure(&mut self, x: &mut [f64]) -> Result<(), PlantError> {
-        let n = self.q.len();
-        if x.len() != 2 * n {
-            return Err(PlantError::MeasurementLength {
-                expected: 2 * n,
-                got: x.len(),
-            });
+    /// The true state for the sensor ([`JointState`]): the joint
+    /// positions and velocities, the periods simulated, and the path sample
+    /// of the current period (`None` before the path).
+    pub fn state(&self) -> JointState<'_> {
+        JointState {
+            q: &self.q,
+            qd: &self.qd,
+            sample: self.steps,
+            path_sample: self.path_sample(),
         }
-        let res = if self.settings.encoder_counts > 0 {
-            2.0 * std::f64::consts::PI / self.settings.encoder_counts as f64
-        } else {
-            0.0
-        };
-        for i in 0..n {
-            let mut q = self.q[i];
-            if self.settings.position_noise > 0.0 {
-                q += self.settings.position_noise * self.rng.next();
-            }
-            if res > 0.0 {
-                q = (q / res).round() * res;
-            }
-            x[i] = q;
-            let mut v = self.qd[i];
-            if self.settings.velocity_from_encoder {
-                // At the first sample the robot is at rest (it starts so).
-                v = if self.measured_once && self.steps > 0 {
-                    (q - self.prev_qm[i]) / self.ts
-                } else {
-                    0.0
-                };
-            } else if self.settings.velocity_noise > 0.0 {
-                v += self.settings.velocity_noise * self.rng.next();
-            }
-            x[n + i] = v;
-        }
-        if let Some(k) = self.path_sample() {
-            let faults = self.settings.faults.iter().zip(self.fired.iter_mut());
-            for (index, (f, fired)) in faults.enumerate() {
-                let (from, to) = self.schedule.range(index).unwrap_or((usize::MAX, 0));
-                match *f {
-                    // Once, at the first measurement of its sample or after.
-                    Fault::EncoderGlitch {
-                        joint, offset_rad, ..
-                    } if !*fired && k >= from => {
-                        *fired = true;
-                        x[joint - 1] += offset_rad;
-                    }
-                    Fault::EncoderDropout { joint, .. }
-                        if self.measured_once && k >= from && k < to =>
-                    {
-                        let i = joint - 1;
-                        x[i] = self.last_meas[i];
-                        x[n + i] = self.last_meas[n + i];
-                    }
-                    _ => {}
-                }
-            }
-        }
-        self.last_meas.copy_from_slice(&x[..2 * n]);
-        self.prev_qm.copy_from_slice(&x[..n]);
-        let d = self.settings.delay_samples;
-        if d > 0 {
-            let w = 2 * n;
-            if !self.measured_once {
-                for slot in self.ring.chunks_exact_mut(w) {
-                    slot.copy_from_slice(&x[..w]);
-                }
-            }
-            let slots = d + 1;
-            let at = self.ring_next;
-            self.ring[at * w..(at + 1) * w].copy_from_slice(&x[..w]);
-            self.ring_next = (at + 1) % slots;
-            // The oldest slot is the one written next.
-            let old = self.ring_next;
-            x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
-        }
-        self.measured_once = true;
-        Ok(())
     }
 
     /// Advances the plant by one control period ([`Self::period`]) under the
@@ -853,12 +731,10 @@ mod tests {
     }
 
     #[test]
-    fn torque_saturation_and_measurement_effects() {
+    fn torque_saturation() {
         let q0 = [0.0; 6];
         let s = PlantSettings {
             torque_limits: true,
-            encoder_counts: 1000,
-            position_noise: 1e-3,
             ..Default::default()
         };
         let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
@@ -866,61 +742,9 @@ mod tests {
         assert_eq!(p.applied_torque()[0], 290.0);
         assert_eq!(p.applied_torque()[1], -500.0);
         assert_eq!(p.applied_torque()[5], 16.0);
-        let mut x = [0.0; 12];
-        p.measure(&mut x).unwrap();
-        let res = 2.0 * std::f64::consts::PI / 1000.0;
-        for v in &x[..6] {
-            assert!(((v / res).round() * res - v).abs() < 1e-12, "quantized");
-        }
         assert!(p.advance(&[f64::NAN; 6]).is_err());
-        // A measurement buffer of another length is an error, not a panic.
-        let mut short = [0.0; 11];
-        assert!(matches!(
-            p.measure(&mut short),
-            Err(PlantError::MeasurementLength {
-                expected: 12,
-                got: 11
-            })
-        ));
         assert!(PlantSettings {
             viscous_friction: vec![1.0, 2.0],
-            ..Default::default()
-        }
-        .validate(6)
-        .is_err());
-    }
-
-    #[test]
-    fn delayed_measurement_and_encoder_velocity() {
-        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
-        let s = PlantSettings {
-            delay_samples: 2,
-            velocity_from_encoder: true,
-            ..Default::default()
-        };
-        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
-        let mut truth: Vec<Vec<f64>> = Vec::new();
-        let mut x = [0.0; 12];
-        for k in 0..6usize {
-            truth.push(p.q().to_vec());
-            p.measure(&mut x).unwrap();
-            // The position seen is that of max(k − 2, 0).
-            let want = &truth[k.saturating_sub(2)];
-            assert_eq!(&x[..6], &want[..], "k = {k}");
-            // The velocity is the backward difference of those positions.
-            let prev = &truth[k.saturating_sub(3)];
-            for i in 0..6 {
-                let v = if k >= 3 {
-                    (want[i] - prev[i]) / 0.01
-                } else {
-                    0.0
-                };
-                assert!((x[6 + i] - v).abs() < 1e-12, "k = {k}, joint {i}");
-            }
-            p.advance(&[0.0; 6]).unwrap();
-        }
-        assert!(PlantSettings {
-            delay_samples: MAX_DELAY_SAMPLES + 1,
             ..Default::default()
         }
         .validate(6)
