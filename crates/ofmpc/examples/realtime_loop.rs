@@ -95,7 +95,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         loop_settings.supervisor(&Default::default()),
         TS,
     );
-    let actuator = Actuator::for_robot(plant.robot());
+    let mut actuator = Actuator::for_plant(plant.robot(), plant.settings(), TS)?;
     let mut max_torque_ratio = 0.0f64;
     sensor.measure(&plant.state(), &mut x)?;
     controller.reset(&x)?;
@@ -137,7 +137,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         sensor.record_torque(&tau);
         supervisor.record_torque(&tau);
         // In a real system: write τ to the drives. Here the plant integrates it over Ts.
-        if plant.advance(&tau).is_err() {
+        let applied = actuator.apply(&tau, plant.state().path_sample);
+        if applied.and_then(|a| plant.advance(a)).is_err() {
             break;
         }
         for i in 0..n {

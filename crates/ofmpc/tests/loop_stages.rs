@@ -138,7 +138,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
-    let actuator = Actuator::for_robot(plant.robot());
+    let mut actuator = Actuator::for_plant(plant.robot(), plant.settings(), ts).unwrap();
     let mut rec = Recorder::new(n, total, true, false);
     let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
     let mut preview = vec![0.0; controller.horizon() * n];
@@ -169,7 +169,8 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             sensor.record_torque(&tau);
             rec.loading(actuator.account(&tau));
             supervisor.record_torque(&tau);
-            plant.advance(&tau).unwrap();
+            let applied = actuator.apply(&tau, plant.state().path_sample).unwrap();
+            plant.advance(applied).unwrap();
             rec.push(&Sample {
                 t,
                 q: &x_true[..n],

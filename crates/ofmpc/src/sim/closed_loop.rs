@@ -6,7 +6,7 @@ use super::estimator::Estimator;
 use super::faults::{sample_at, LossSchedule, MeasurementFaults};
 use super::horizon::HorizonRecorder;
 use super::outcome::{RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::{Plant, PlantSettings};
+use super::plant::{Plant, PlantError, PlantSettings};
 use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
 use super::settings_error::LoopSettingsError;
@@ -342,7 +342,8 @@ impl<'a> ClosedLoop<'a> {
         let sensor = Sensor::checked(plant.settings(), plant.robot().dof(), ts, lost);
         let supervisor =
             Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
-        let actuator = Actuator::for_robot(plant.robot());
+        // The plant checked its settings when it was built.
+        let actuator = Actuator::checked(plant.robot(), plant.settings(), ts);
         Self {
             controller,
             model,
@@ -516,9 +517,7 @@ impl<'a> ClosedLoop<'a> {
             };
         }
         self.estimator.record_torque(&self.tau);
-        self.plant
-            .advance(&self.tau)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         let threshold = self.settings.divergence_threshold_rad;
         let q = self.plant.q();
         if let Some(joint) = (0..n).find(|&i| {
@@ -631,9 +630,7 @@ impl<'a> ClosedLoop<'a> {
             stop_began = Some(k);
         }
         self.supervisor.record_torque(&self.tau);
-        self.plant
-            .advance(&self.tau)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         self.supervisor.watch(self.plant.q(), self.plant.qd(), t);
         rec.push(&Sample {
             t,
@@ -664,6 +661,15 @@ impl<'a> ClosedLoop<'a> {
             stop_began = Some(k + 1);
         }
         Ok(stop_began)
+    }
+
+    /// The command `self.tau` through the drives ([`Actuator::apply`]) onto
+    /// the plant over one period.
+    fn actuate(&mut self) -> Result<(), PlantError> {
+        let applied = self
+            .actuator
+            .apply(&self.tau, self.plant.state().path_sample)?;
+        self.plant.advance(applied)
     }
 
     /// The torque of this sample into `self.tau`: the estimator's state
