@@ -18,6 +18,7 @@ mod repair;
 mod sensor;
 mod settings_error;
 mod state;
+mod supervised;
 mod supervisor;
 
 pub use actuator::{Actuator, Loading};
@@ -32,6 +33,9 @@ pub use repair::MeasurementGuard;
 pub use sensor::Sensor;
 pub use settings_error::LoopSettingsError;
 pub use state::JointState;
+pub use supervised::{
+    SupervisedController, SupervisedError, SupervisedInput, SupervisedOutput, SupervisedStatus,
+};
 
 pub use closed_loop::{
     record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,
