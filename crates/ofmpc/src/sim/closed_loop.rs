@@ -643,9 +643,24 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
+        match self.judge(k, w)? {
+            true => Ok(Some(k + 1)),
+            false => Ok(stop_began),
+        }
+    }
+
+    /// Judges sample `k`'s true state against its reference `w`: a
+    /// non-finite error ends the run; a divergence begins a safe stop
+    /// (`Ok(true)`, counted from the next sample) or ends the run.
+    fn judge(&mut self, k: usize, w: &[f64]) -> Result<bool, Ended> {
+        let n = self.reference.dof();
+        let t = k as f64 * self.reference.ts();
         let q = &self.x_true[..n];
         if let Some(joint) = (0..n).find(|&i| (w[i] - q[i]).is_nan()) {
-            return Err(failed(RunFailure::NonFiniteError { joint }));
+            return Err(RunOutcome::Failed {
+                t,
+                cause: RunFailure::NonFiniteError { joint },
+            });
         }
         if let Some((joint, error_rad)) = self.supervisor.judge(w, q) {
             let reason = StopReason::Diverged { joint, error_rad };
@@ -658,9 +673,9 @@ impl<'a> ClosedLoop<'a> {
                     rule: self.settings.divergence,
                 });
             }
-            stop_began = Some(k + 1);
+            return Ok(true);
         }
-        Ok(stop_began)
+        Ok(false)
     }
 
     /// The command `self.tau` through the drives ([`Actuator::apply`]) onto

@@ -10,7 +10,7 @@ use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{
-    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings,
+    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, Mpc, MpcSettings,
     ObserverSettings,
 };
 
@@ -171,25 +171,7 @@ impl Experiment {
         cancel: &AtomicBool,
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
-        let observed = self.mpc.state_observer || self.mpc.delay_compensation;
-        let mut builder = ControllerBuilder::new(kind, &self.robot)
-            .settings(self.mpc.clone())
-            .accept_ineffective_settings();
-        if kind.is_baseline() {
-            builder = builder.baselines(self.baselines.clone());
-        }
-        if observed {
-            builder = builder.observer(ObserverSettings {
-                pole: OBSERVER_POLE,
-                measurement_delay: self.plant.delay_samples,
-            });
-        }
-        let mut mpc = builder.build().map_err(|e| match e {
-            // As the settings' and the model's own errors.
-            BuildError::Settings(e) => ExperimentError::Mpc(e),
-            BuildError::Model(e) => ExperimentError::Model(e),
-            e => ExperimentError::Build(e),
-        })?;
+        let mut mpc = self.controller(kind)?;
         let mut plant_robot = self.robot.clone();
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
@@ -242,6 +224,31 @@ impl Experiment {
             &result.outcome,
         );
         Ok((result, metrics))
+    }
+
+    /// The controller `kind` of this experiment, built: the experiment's
+    /// tuning, its baselines' gains, and an observer when the settings ask
+    /// for one (with the plant's measurement delay).
+    fn controller(&self, kind: ControllerKind) -> Result<Mpc, ExperimentError> {
+        let observed = self.mpc.state_observer || self.mpc.delay_compensation;
+        let mut builder = ControllerBuilder::new(kind, &self.robot)
+            .settings(self.mpc.clone())
+            .accept_ineffective_settings();
+        if kind.is_baseline() {
+            builder = builder.baselines(self.baselines.clone());
+        }
+        if observed {
+            builder = builder.observer(ObserverSettings {
+                pole: OBSERVER_POLE,
+                measurement_delay: self.plant.delay_samples,
+            });
+        }
+        builder.build().map_err(|e| match e {
+            // As the settings' and the model's own errors.
+            BuildError::Settings(e) => ExperimentError::Mpc(e),
+            BuildError::Model(e) => ExperimentError::Model(e),
+            e => ExperimentError::Build(e),
+        })
     }
 }
 

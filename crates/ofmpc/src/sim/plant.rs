@@ -256,37 +256,7 @@ impl PlantSettings {
             }
         }
         for (index, f) in self.faults.iter().enumerate() {
-            let (t, j, d) = f.span();
-            let bad = |what, value: f64, requirement| {
-                Err(PlantSettingsError::Fault {
-                    index,
-                    what,
-                    value,
-                    requirement,
-                })
-            };
-            if j >= n {
-                return bad(
-                    "joint",
-                    j.wrapping_add(1) as f64,
-                    "a joint number from 1 to n",
-                );
-            }
-            if !(t.is_finite() && t >= 0.0) {
-                return bad("t", t, "a finite time >= 0 s");
-            }
-            if !(d.is_finite() && d >= 0.0) {
-                return bad("duration_s", d, "a finite duration >= 0 s");
-            }
-            match *f {
-                Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
-                    return bad("offset_rad", offset_rad, "a finite angle");
-                }
-                Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
-                    return bad("fraction", fraction, "between 0 and 1");
-                }
-                _ => {}
-            }
+            check_fault(index, f, n)?;
         }
         if self.delay_samples > MAX_DELAY_SAMPLES {
             return Err(PlantSettingsError::Delay(self.delay_samples));
@@ -313,6 +283,44 @@ impl PlantSettings {
         self.validate(n)?;
         substeps(ts, self.substep)
     }
+}
+
+/// Checks fault `index` of the plant's settings for `n` joints: a joint
+/// from 1 to n, a finite start time and duration `≥ 0`, a finite glitch
+/// offset, a torque-drop fraction in [0, 1].
+fn check_fault(index: usize, f: &Fault, n: usize) -> Result<(), PlantSettingsError> {
+    let (t, j, d) = f.span();
+    let bad = |what, value: f64, requirement| {
+        Err(PlantSettingsError::Fault {
+            index,
+            what,
+            value,
+            requirement,
+        })
+    };
+    if j >= n {
+        return bad(
+            "joint",
+            j.wrapping_add(1) as f64,
+            "a joint number from 1 to n",
+        );
+    }
+    if !(t.is_finite() && t >= 0.0) {
+        return bad("t", t, "a finite time >= 0 s");
+    }
+    if !(d.is_finite() && d >= 0.0) {
+        return bad("duration_s", d, "a finite duration >= 0 s");
+    }
+    match *f {
+        Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
+            return bad("offset_rad", offset_rad, "a finite angle");
+        }
+        Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
+            return bad("fraction", fraction, "between 0 and 1");
+        }
+        _ => {}
+    }
+    Ok(())
 }
 
 /// `ts / substep` as a whole number of substeps, within bounds.

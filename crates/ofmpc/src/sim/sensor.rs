@@ -182,7 +182,23 @@ impl Sensor {
                 got: x.len(),
             });
         }
-        let res = self.resolution;
+        self.encode(state, x);
+        if let Some(k) = state.path_sample {
+            self.encoder_faults(k, x);
+        }
+        self.last_meas.copy_from_slice(&x[..2 * n]);
+        self.prev_qm.copy_from_slice(&x[..n]);
+        self.delay(x);
+        self.measured_once = true;
+        Ok(())
+    }
+
+    /// The encoders' reading of `state` into `x` (2n): noise, quantization
+    /// to the resolution, and the velocity (a backward difference of the
+    /// measured positions with `velocity_from_encoder`, else the true one
+    /// with its noise).
+    fn encode(&mut self, state: &JointState, x: &mut [f64]) {
+        let (n, res) = (self.n, self.resolution);
         for i in 0..n {
             let mut q = state.q[i];
             if self.settings.position_noise > 0.0 {
@@ -205,49 +221,54 @@ impl Sensor {
             }
             x[n + i] = v;
         }
-        if let Some(k) = state.path_sample {
-            let faults = self.settings.faults.iter().zip(self.fired.iter_mut());
-            for (index, (f, fired)) in faults.enumerate() {
-                let (from, to) = self.schedule.range(index).unwrap_or((usize::MAX, 0));
-                match *f {
-                    // Once, at the first measurement of its sample or after.
-                    Fault::EncoderGlitch {
-                        joint, offset_rad, ..
-                    } if !*fired && k >= from => {
-                        *fired = true;
-                        x[joint - 1] += offset_rad;
-                    }
-                    Fault::EncoderDropout { joint, .. }
-                        if self.measured_once && k >= from && k < to =>
-                    {
-                        let i = joint - 1;
-                        x[i] = self.last_meas[i];
-                        x[n + i] = self.last_meas[n + i];
-                    }
-                    _ => {}
+    }
+
+    /// The encoder faults covering path sample `k`, on the reading `x`: a
+    /// glitch's offset once, a dropout's frozen last reading.
+    fn encoder_faults(&mut self, k: usize, x: &mut [f64]) {
+        let n = self.n;
+        let faults = self.settings.faults.iter().zip(self.fired.iter_mut());
+        for (index, (f, fired)) in faults.enumerate() {
+            let (from, to) = self.schedule.range(index).unwrap_or((usize::MAX, 0));
+            match *f {
+                // Once, at the first measurement of its sample or after.
+                Fault::EncoderGlitch {
+                    joint, offset_rad, ..
+                } if !*fired && k >= from => {
+                    *fired = true;
+                    x[joint - 1] += offset_rad;
                 }
+                Fault::EncoderDropout { joint, .. }
+                    if self.measured_once && k >= from && k < to =>
+                {
+                    let i = joint - 1;
+                    x[i] = self.last_meas[i];
+                    x[n + i] = self.last_meas[n + i];
+                }
+                _ => {}
             }
         }
-        self.last_meas.copy_from_slice(&x[..2 * n]);
-        self.prev_qm.copy_from_slice(&x[..n]);
+    }
+
+    /// The delay line: `x` (2n) in, the reading `delay_samples` periods old
+    /// out (the first reading fills the line: the robot starts at rest).
+    fn delay(&mut self, x: &mut [f64]) {
         let d = self.settings.delay_samples;
-        if d > 0 {
-            let w = 2 * n;
-            if !self.measured_once {
-                for slot in self.ring.chunks_exact_mut(w) {
-                    slot.copy_from_slice(&x[..w]);
-                }
-            }
-            let slots = d + 1;
-            let at = self.ring_next;
-            self.ring[at * w..(at + 1) * w].copy_from_slice(&x[..w]);
-            self.ring_next = (at + 1) % slots;
-            // The oldest slot is the one written next.
-            let old = self.ring_next;
-            x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
+        if d == 0 {
+            return;
         }
-        self.measured_once = true;
-        Ok(())
+        let w = 2 * self.n;
+        if !self.measured_once {
+            for slot in self.ring.chunks_exact_mut(w) {
+                slot.copy_from_slice(&x[..w]);
+            }
+        }
+        let at = self.ring_next;
+        self.ring[at * w..(at + 1) * w].copy_from_slice(&x[..w]);
+        self.ring_next = (at + 1) % (d + 1);
+        // The oldest slot is the one written next.
+        let old = self.ring_next;
+        x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
     }
 
     /// Replaces the non-finite entries of `x` by the model's prediction
