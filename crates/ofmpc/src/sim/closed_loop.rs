@@ -252,12 +252,14 @@ pub fn run_closed_loop_with(
 }
 
 /// The closed loop, composed of its stages: per sample
-/// [`Sensor`] (reading, lost samples, repair) → [`Supervisor`]
-/// (plausibility, safety limit) → [`Estimator`] (observer) → controller, or
-/// the supervisor's stop law during a safe stop → [`Actuator`] (loading) →
-/// [`Plant`] → [`Recorder`]; then the supervisor judges the run
+/// [`Sensor`] (the encoders on the plant's [`Plant::state`], lost samples,
+/// repair) → [`Supervisor`] (plausibility, safety limit) → [`Estimator`]
+/// (observer) → controller, or the supervisor's stop law during a safe stop
+/// → [`Actuator`] (saturation, torque drops, loading) → [`Plant`] (rigid
+/// body and payload) → [`Recorder`]; then the supervisor judges the run
 /// (divergence). Each stage is a public type a user's own loop can use one
-/// by one (`examples/realtime_loop.rs`).
+/// by one; the controller with its guard is one object for such a loop,
+/// [`super::SupervisedController`] (`examples/realtime_loop.rs`).
 ///
 /// During the pre-roll ([`RunEvents::pre_roll`]) the reference and its
 /// preview are the path's first point; a divergence or failure there is
@@ -587,17 +589,7 @@ impl<'a> ClosedLoop<'a> {
         let t = k as f64 * ts;
         let n = self.reference.dof();
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
-        self.sensor
-            .read(&self.plant.state(), k, k > 0, &mut self.x)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
-        if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
-            self.pick_up = None;
-            self.plant
-                .set_payload(Some(payload))
-                .map_err(|e| failed(RunFailure::Plant(e.into())))?;
-        }
-        self.x_true[..n].copy_from_slice(self.plant.q());
-        self.x_true[n..].copy_from_slice(self.plant.qd());
+        self.read(k).map_err(|e| failed(RunFailure::Plant(e)))?;
         rec.reading(&self.x);
         let reference = self.reference;
         let w = reference.q(k);
@@ -647,6 +639,22 @@ impl<'a> ClosedLoop<'a> {
             true => Ok(Some(k + 1)),
             false => Ok(stop_began),
         }
+    }
+
+    /// The reading of sample `k` into `self.x` and the true state into
+    /// `self.x_true`, after the payload is picked up when this is its
+    /// sample.
+    fn read(&mut self, k: usize) -> Result<(), PlantError> {
+        let n = self.reference.dof();
+        self.sensor
+            .read(&self.plant.state(), k, k > 0, &mut self.x)?;
+        if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
+            self.pick_up = None;
+            self.plant.set_payload(Some(payload))?;
+        }
+        self.x_true[..n].copy_from_slice(self.plant.q());
+        self.x_true[n..].copy_from_slice(self.plant.qd());
+        Ok(())
     }
 
     /// Judges sample `k`'s true state against its reference `w`: a

@@ -172,7 +172,6 @@ impl Experiment {
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
         let mut mpc = self.controller(kind)?;
-        let mut plant_robot = self.robot.clone();
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
         let events = RunEvents {
@@ -183,17 +182,7 @@ impl Experiment {
             },
             pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
-        // Before a pick-up the plant carries nothing.
-        plant_robot.set_payload(match events.pick_up {
-            Some(_) => None,
-            None => Some(*payload),
-        })?;
-        let mut plant = Plant::with_period(
-            plant_robot,
-            self.plant.clone(),
-            self.reference.q(0),
-            self.reference.ts(),
-        )?;
+        let mut plant = self.plant_for(payload, events.pick_up.is_some())?;
         let parts = mpc.parts_mut();
         let result = ClosedLoop::with_conditions(
             parts.controller,
@@ -224,6 +213,23 @@ impl Experiment {
             &result.outcome,
         );
         Ok((result, metrics))
+    }
+
+    /// The plant of a run with `payload`, at rest on the path's first point;
+    /// with `picked_up_later` it carries nothing until the pick-up.
+    fn plant_for(
+        &self,
+        payload: &Payload,
+        picked_up_later: bool,
+    ) -> Result<Plant, ExperimentError> {
+        let mut plant_robot = self.robot.clone();
+        plant_robot.set_payload((!picked_up_later).then_some(*payload))?;
+        Ok(Plant::with_period(
+            plant_robot,
+            self.plant.clone(),
+            self.reference.q(0),
+            self.reference.ts(),
+        )?)
     }
 
     /// The controller `kind` of this experiment, built: the experiment's

@@ -1,6 +1,16 @@
 //! Closed-loop simulation: the plant (nonlinear robot with an unknown payload),
 //! the loop that runs a controller against it, the run's typed outcome and its
 //! metrics.
+//!
+//! The loop is cut along physical roles, one file each: the [`Plant`]
+//! (rigid-body and payload physics, friction inside its integration), the
+//! [`Actuator`] (commanded → applied torque: saturation, torque drops), the
+//! [`Sensor`] (true → measured state, from a plain [`JointState`]: encoders,
+//! noise, delay, encoder faults, lost samples, repair), the [`Supervisor`]
+//! (plausibility, safety limit, divergence, safe stop) and, for a real loop,
+//! the controller behind that guard as one object, the
+//! [`SupervisedController`]. The faults of a run have one home (`faults.rs`:
+//! [`Fault`], [`MeasurementFaults`], [`FaultSchedule`]).
 
 mod actuator;
 mod closed_loop;

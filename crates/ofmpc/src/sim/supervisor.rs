@@ -407,35 +407,8 @@ impl SafeStop {
         x: &[f64],
         tau: &mut [f64],
     ) -> Result<(), StepError> {
-        let (n, ts) = (self.n, self.ts);
-        if self.dead_reckoned.iter().any(|d| *d) {
-            // The acceleration the last torque gave, by the model.
-            model_accel(
-                &mut self.model,
-                model,
-                &self.q,
-                &self.v,
-                &self.tau_prev,
-                &mut self.w,
-            )?;
-        }
-        for i in 0..n {
-            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
-                // The encoder is back: hold where the joint really is.
-                self.dead_reckoned[i] = false;
-                if !self.hold.is_empty() {
-                    self.hold[i] = x[i] + x[n + i] * BRAKE_TIME;
-                }
-            }
-            self.last_raw[i] = raw[i];
-            if self.dead_reckoned[i] {
-                self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
-                self.v[i] += self.w[i] * ts;
-            } else {
-                self.q[i] = x[i];
-                self.v[i] = x[n + i];
-            }
-        }
+        self.track(model, raw, x)?;
+        let n = self.n;
         // Brake towards where the braking started plus its run-out, then
         // hold there: a = −ω²(q − q_stop) − 2ω q̇ (critically damped).
         if self.hold.is_empty() {
@@ -473,6 +446,48 @@ impl SafeStop {
             };
         }
         self.tau_prev.copy_from_slice(tau);
+        Ok(())
+    }
+
+    /// The state the stop law acts on, from the raw reading `raw` and the
+    /// state `x` (2n each): `x`, except for a joint whose encoder froze,
+    /// dead-reckoned through the model under the last torque until its
+    /// reading changes again (then the hold moves to where it really is).
+    fn track(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        raw: &[f64],
+        x: &[f64],
+    ) -> Result<(), StepError> {
+        let (n, ts) = (self.n, self.ts);
+        if self.dead_reckoned.iter().any(|d| *d) {
+            // The acceleration the last torque gave, by the model.
+            model_accel(
+                &mut self.model,
+                model,
+                &self.q,
+                &self.v,
+                &self.tau_prev,
+                &mut self.w,
+            )?;
+        }
+        for i in 0..n {
+            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
+                // The encoder is back: hold where the joint really is.
+                self.dead_reckoned[i] = false;
+                if !self.hold.is_empty() {
+                    self.hold[i] = x[i] + x[n + i] * BRAKE_TIME;
+                }
+            }
+            self.last_raw[i] = raw[i];
+            if self.dead_reckoned[i] {
+                self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
+                self.v[i] += self.w[i] * ts;
+            } else {
+                self.q[i] = x[i];
+                self.v[i] = x[n + i];
+            }
+        }
         Ok(())
     }
 }
