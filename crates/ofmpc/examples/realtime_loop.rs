@@ -7,7 +7,7 @@
 //! the simulated plant, on a robot the drives' readings), the
 //! [`SupervisedController`] (the built controller behind its guard: repair of
 //! invalid values, plausibility check, safe stop when the controller fails), an
-//! [`Actuator`] (the drives: saturation, loading) and the plant.
+//! actuator (the drives: saturation, loading) and the plant.
 //!
 //! ```sh
 //! cargo run --release -p ofmpc --example realtime_loop               # second algorithm, 4 s
@@ -29,8 +29,8 @@ use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, JointReference, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    quantile, Actuator, LoopSettings, LossSchedule, Plant, PlantSettings, Sensor,
-    SupervisedController, SupervisedInput, SupervisedStatus,
+    quantile, LoopSettings, LossSchedule, Plant, PlantSettings, Sensor, SupervisedController,
+    SupervisedInput, SupervisedStatus,
 };
 
 /// Counts the allocations of the calling thread (a thread-local counter: other
@@ -74,7 +74,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (reference, mut guarded, mut plant) = set_up(kind)?;
     let (n, horizon) = (reference.dof(), guarded.controller().horizon());
     let mut sensor = Sensor::new(plant.settings(), n, TS, LossSchedule::default())?;
-    let mut actuator = Actuator::for_plant(plant.robot(), plant.settings(), TS)?;
+    let mut actuator = plant.settings().actuator(plant.robot(), TS);
     let mut stats = Stats::new(kind, seconds, (seconds / TS).round() as usize);
     let (mut x, mut preview) = (vec![0.0; 2 * n], vec![0.0; horizon * n]);
     sensor.measure(&plant.state(), &mut x)?;
@@ -101,7 +101,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         stats.observe(w, &x, out.status, actuator.account(&out.tau).max_ratio);
         // In a real system: write τ to the drives. Here the plant integrates it over Ts.
         let applied = actuator.apply(&out.tau, plant.state().path_sample);
-        if applied.and_then(|a| plant.advance(a)).is_err() {
+        if applied
+            .map_err(Into::into)
+            .and_then(|a| plant.advance(a))
+            .is_err()
+        {
             break;
         }
         release = wait_until(release + Duration::from_secs_f64(TS), &mut stats.misses);

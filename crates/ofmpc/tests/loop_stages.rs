@@ -14,7 +14,7 @@ use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StateObserver}
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    Actuator, ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
+    ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
     PlantSettings, Record, Recorder, RunConditions, Sample, Sensor, Supervisor,
 };
 
@@ -138,7 +138,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
-    let mut actuator = Actuator::for_plant(plant.robot(), plant.settings(), ts).unwrap();
+    let mut actuator = plant.settings().actuator(plant.robot(), ts);
     let mut rec = Recorder::new(n, total, true, false);
     let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
     let mut preview = vec![0.0; controller.horizon() * n];

@@ -3,7 +3,7 @@
 //!
 //! [`Actuator::apply`] turns the controller's command into the torque the
 //! drives deliver over the period: clamped to the drives' rated torques when
-//! the plant's settings ask for it ([`PlantSettings::torque_limits`]), then
+//! the plant's settings ask for it (`[plant] torque_limits`), then
 //! scaled by a torque-drop fault of a scenario's `[plant] faults` over its
 //! path samples. It also meters how loaded the drives are by the command
 //! ([`Loading`]).
@@ -15,7 +15,6 @@
 //! torque constant over the period (zero-order hold), as the drives do.
 
 use super::faults::{Fault, FaultSchedule};
-use super::plant::{PlantError, PlantSettings, PlantSettingsError};
 use crate::robot::{ModelError, Robot};
 
 /// The drives between the controller and the plant. Sized at construction;
@@ -63,24 +62,17 @@ impl Actuator {
         Self::new(&tau_max)
     }
 
-    /// The drives of `robot` with the torque limits and torque-drop faults of
-    /// the plant's `settings` (checked here), run at the control period `ts`
-    /// (s): the faults are matched to its samples once.
-    pub fn for_plant(
-        robot: &Robot,
-        settings: &PlantSettings,
-        ts: f64,
-    ) -> Result<Self, PlantSettingsError> {
-        settings.validate(robot.dof())?;
-        Ok(Self::checked(robot, settings, ts))
-    }
-
-    /// [`Self::for_plant`] with settings already checked.
-    pub(crate) fn checked(robot: &Robot, settings: &PlantSettings, ts: f64) -> Self {
+    /// The drives of `robot`, clamping the command to their rated torques
+    /// when `torque_limits`, with the torque drops among `faults` (a
+    /// scenario's `[plant] faults`; the other kinds act elsewhere, a drop on
+    /// a joint the robot lacks is ignored), run at the control period `ts`
+    /// (s): the faults are matched to its samples once. The plant's settings
+    /// give both ([`PlantSettings::actuator`](super::PlantSettings::actuator)).
+    pub fn with_faults(robot: &Robot, torque_limits: bool, faults: &[Fault], ts: f64) -> Self {
         let mut a = Self::for_robot(robot);
-        a.saturate = settings.torque_limits;
-        a.faults = settings.faults.clone();
-        a.schedule = FaultSchedule::for_plant(&settings.faults, ts);
+        a.saturate = torque_limits;
+        a.faults = faults.to_vec();
+        a.schedule = FaultSchedule::for_plant(faults, ts);
         a
     }
 
@@ -106,12 +98,12 @@ impl Actuator {
     /// `commanded` (n): `clamp(τ_c, −τ_max, τ_max)` with torque limits, times
     /// the delivered fraction of a torque drop covering the sample. Also
     /// [`Self::applied`]. A command of another length or not finite is an
-    /// error (the plant's: nothing is applied).
+    /// error (the plant's check of a torque: nothing is applied).
     pub fn apply(
         &mut self,
         commanded: &[f64],
         path_sample: Option<usize>,
-    ) -> Result<&[f64], PlantError> {
+    ) -> Result<&[f64], ModelError> {
         check_torque(commanded, self.applied.len())?;
         for ((a, t), lim) in self.applied.iter_mut().zip(commanded).zip(&self.tau_max) {
             *a = if self.saturate && lim.is_finite() {
@@ -126,8 +118,9 @@ impl Actuator {
                     joint, fraction, ..
                 } = *f
                 {
-                    if self.schedule.active(index, k) {
-                        self.applied[joint - 1] *= fraction;
+                    let joint = self.applied.get_mut(joint.wrapping_sub(1));
+                    if let Some(a) = joint.filter(|_| self.schedule.active(index, k)) {
+                        *a *= fraction;
                     }
                 }
             }
@@ -164,7 +157,7 @@ fn check_torque(tau: &[f64], n: usize) -> Result<(), ModelError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::Plant;
+    use crate::sim::{Plant, PlantSettings};
 
     /// With torque limits the command is clamped to the drives' rated
     /// torques (IRB 140: 290, 500, …, 16 N·m), and the plant integrates what
@@ -176,7 +169,7 @@ mod tests {
             torque_limits: true,
             ..Default::default()
         };
-        let mut a = Actuator::for_plant(&robot, &s, 0.01).unwrap();
+        let mut a = s.actuator(&robot, 0.01);
         let mut p = Plant::with_period(robot, s, &[0.0; 6], 0.01).unwrap();
         let applied = a.apply(&[1e4, -1e4, 0.0, 0.0, 0.0, 100.0], None).unwrap();
         assert_eq!(applied[0], 290.0);
@@ -205,7 +198,7 @@ mod tests {
             }],
             ..Default::default()
         };
-        let mut a = Actuator::for_plant(&robot, &s, 0.01).unwrap();
+        let mut a = s.actuator(&robot, 0.01);
         for k in 0..10 {
             let dropped = (5..8).contains(&k);
             let applied = a.apply(&[2.0; 6], Some(k)).unwrap();

@@ -345,7 +345,7 @@ impl<'a> ClosedLoop<'a> {
         let supervisor =
             Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
         // The plant checked its settings when it was built.
-        let actuator = Actuator::checked(plant.robot(), plant.settings(), ts);
+        let actuator = plant.settings().actuator(plant.robot(), ts);
         Self {
             controller,
             model,

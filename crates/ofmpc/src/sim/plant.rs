@@ -1,6 +1,7 @@
 //! The simulated robot: the full nonlinear model, with the payload the
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
+use super::actuator::Actuator;
 use super::faults::{Fault, FaultSchedule};
 use super::state::JointState;
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
@@ -229,6 +230,13 @@ impl PlantSettings {
                     Fault::EncoderGlitch { .. } | Fault::EncoderDropout { .. }
                 )
             })
+    }
+
+    /// The drives between the controller and this plant: the robot's rated
+    /// torques, the clamp of `torque_limits` and the torque drops of
+    /// `faults`, at the control period `ts` ([`Actuator::with_faults`]).
+    pub fn actuator(&self, robot: &Robot, ts: f64) -> Actuator {
+        Actuator::with_faults(robot, self.torque_limits, &self.faults, ts)
     }
 
     /// Checks the settings against a robot with `n` joints.
