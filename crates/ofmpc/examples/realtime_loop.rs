@@ -3,10 +3,11 @@
 //! it (counted on this thread by the allocator below), against the library's plant
 //! at 1 kHz. Prints the step-time percentiles and the deadline misses.
 //!
-//! The loop is built from the library's stages as `ofmpc::sim::ClosedLoop` composes
-//! them: a [`Sensor`] (reading, repair of invalid values), a [`Supervisor`]
-//! (plausibility check, safe stop when the controller fails), the controller, an
-//! [`Actuator`] (the drives' loading) and the plant.
+//! The loop is built from the library's stages: a [`Sensor`] (the encoders: here of
+//! the simulated plant, on a robot the drives' readings), the
+//! [`SupervisedController`] (the built controller behind its guard: repair of
+//! invalid values, plausibility check, safe stop when the controller fails), an
+//! actuator (the drives: saturation, loading) and the plant.
 //!
 //! ```sh
 //! cargo run --release -p ofmpc --example realtime_loop               # second algorithm, 4 s
@@ -23,14 +24,13 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::time::{Duration, Instant};
 
-use ofmpc::control::{new_controller, Controller, ControllerKind, MpcSettings};
-use ofmpc::dynamics::RobotDynamics;
+use ofmpc::control::{ControllerBuilder, ControllerKind, MpcSettings};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, JointReference, PlanOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    quantile, Actuator, LoopSettings, LossSchedule, Plant, PlantSettings, Sensor, StopReason,
-    Supervisor,
+    quantile, LoopSettings, LossSchedule, Plant, PlantSettings, Sensor, SupervisedController,
+    SupervisedInput, SupervisedStatus,
 };
 
 /// Counts the allocations of the calling thread (a thread-local counter: other
@@ -71,115 +71,69 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seconds: f64 = args.next().map(|s| s.parse()).transpose()?.unwrap_or(4.0);
 
     // ---- Set-up: everything that allocates happens here, once.
-    let (reference, mut controller, mut model, mut plant) = set_up(kind)?;
-    let n = reference.dof();
-    let total = (seconds / TS).round() as usize;
-    let horizon = controller.horizon();
-    let mut x = vec![0.0; 2 * n];
-    let mut tau = vec![0.0; n];
-    let mut preview = vec![0.0; horizon * n];
-    let mut step_us = vec![0.0; total];
-    let mut lateness_us = vec![0.0; total];
-    let mut misses = 0usize;
-    let mut failure: Option<(usize, ofmpc::control::StepError)> = None;
-    let mut worst_error = 0.0f64;
-    // The stages around the controller, sized here.
-    let loop_settings = LoopSettings {
-        plausibility_check: true,
-        safe_stop: true,
-        ..LoopSettings::default()
-    };
-    let mut sensor = Sensor::new(
-        n,
-        plant.settings().delay_samples,
-        LossSchedule::default(),
-        TS,
-    );
-    let mut supervisor = Supervisor::with_period(
-        plant.robot(),
-        loop_settings.supervisor(&Default::default()),
-        TS,
-    );
-    let actuator = Actuator::for_robot(plant.robot());
-    let mut max_torque_ratio = 0.0f64;
-    plant.measure(&mut x)?;
-    controller.reset(&x)?;
-    sensor.reset(&x);
-    supervisor.reset(&x);
-    let period = Duration::from_secs_f64(TS);
+    let (reference, mut guarded, mut plant) = set_up(kind)?;
+    let (n, horizon) = (reference.dof(), guarded.controller().horizon());
+    let mut sensor = Sensor::new(plant.settings(), n, TS, LossSchedule::default())?;
+    let mut actuator = plant.settings().actuator(plant.robot(), TS);
+    let mut stats = Stats::new(kind, seconds, (seconds / TS).round() as usize);
+    let (mut x, mut preview) = (vec![0.0; 2 * n], vec![0.0; horizon * n]);
+    sensor.measure(&plant.state(), &mut x)?;
+    guarded.reset(&x)?;
 
     // ---- The loop: measure, control, actuate, wait for the next absolute deadline.
     let before = allocations();
     let start = Instant::now();
     let mut release = start; // release time of sample k: start + k·Ts (no drift)
-    for k in 0..total {
-        let woke = Instant::now();
-        lateness_us[k] = woke.saturating_duration_since(release).as_secs_f64() * 1e6;
-        let t = k as f64 * TS;
-        sensor.read(&mut plant, k, true, &mut x)?; // in a real system: read the encoders
-        sensor.repair(&mut model, &mut x); // an invalid value: the model's prediction
+    for k in 0..stats.total {
+        stats.lateness_us[k] = release.elapsed().as_secs_f64() * 1e6;
+        sensor.read(&plant.state(), k, true, &mut x)?; // in a real system: read the encoders
         let w = reference.q(k);
-        let inspection = supervisor.inspect(&mut x, w);
-        if let Some(reason) = inspection.trigger {
-            supervisor.begin_stop(t, reason, &x, &mut model);
-        }
         reference.preview(k, horizon, &mut preview);
         let t0 = Instant::now();
-        let status = if supervisor.stopping().is_some() {
-            supervisor.stop_torque(&mut model, &x, &x, &mut tau)
-        } else {
-            controller
-                .step(&mut model, &x, w, &preview, &mut tau)
-                .map(|_| ())
+        let input = SupervisedInput {
+            t: k as f64 * TS,
+            x: &x,
+            w_k: w,
+            preview: &preview,
         };
-        step_us[k] = t0.elapsed().as_secs_f64() * 1e6;
-        if let Err(e) = status {
-            // Brake and hold; the torque of this sample is the last one.
-            failure = failure.or(Some((k, e)));
-            supervisor.begin_stop(t, StopReason::ControllerFailed(e), &x, &mut model);
-        }
-        max_torque_ratio = max_torque_ratio.max(actuator.account(&tau).max_ratio);
-        sensor.record_torque(&tau);
-        supervisor.record_torque(&tau);
+        let out = guarded.step(&input)?; // a failed step brakes and holds (safe stop)
+        stats.step_us[k] = t0.elapsed().as_secs_f64() * 1e6;
+        stats.observe(w, &x, out.status, actuator.account(&out.tau).max_ratio);
         // In a real system: write τ to the drives. Here the plant integrates it over Ts.
-        if plant.advance(&tau).is_err() {
+        let applied = actuator.apply(&out.tau, plant.state().path_sample);
+        if applied
+            .map_err(Into::into)
+            .and_then(|a| plant.advance(a))
+            .is_err()
+        {
             break;
         }
-        for i in 0..n {
-            worst_error = worst_error.max((w[i] - x[i]).abs());
-        }
-        let deadline = release + period;
-        let now = Instant::now();
-        if now > deadline {
-            misses += 1; // this sample's work ran past the next release
-        } else {
-            std::thread::sleep(deadline - now);
-        }
-        release = deadline;
+        release = wait_until(release + Duration::from_secs_f64(TS), &mut stats.misses);
     }
-    let elapsed = start.elapsed().as_secs_f64();
-    let in_loop = allocations() - before;
+    stats.elapsed = start.elapsed().as_secs_f64();
+    stats.in_loop = allocations() - before;
 
     // ---- Report (allocates: after the loop).
-    report(&Stats {
-        kind,
-        seconds,
-        total,
-        elapsed,
-        step_us,
-        lateness_us,
-        misses,
-        worst_error,
-        max_torque_ratio,
-        in_loop,
-    });
-    if let Some((k, e)) = failure {
-        return Err(format!("the controller failed at sample {k} (safe stop): {e}").into());
+    report(&stats);
+    if let Some(reason) = guarded.stop_reason() {
+        return Err(format!("safe stop: {reason}").into());
     }
-    if in_loop != 0 {
-        return Err(format!("{in_loop} allocations inside the real-time loop").into());
+    if stats.in_loop != 0 {
+        return Err(format!("{} allocations inside the real-time loop", stats.in_loop).into());
     }
     Ok(())
+}
+
+/// Sleeps until `deadline` (counting a miss when the work ran past it);
+/// the next release time.
+fn wait_until(deadline: Instant, misses: &mut usize) -> Instant {
+    let now = Instant::now();
+    if now > deadline {
+        *misses += 1; // this sample's work ran past the next release
+    } else {
+        std::thread::sleep(deadline - now);
+    }
+    deadline
 }
 
 /// What one run of the loop measured.
@@ -193,7 +147,38 @@ struct Stats {
     misses: usize,
     worst_error: f64,
     max_torque_ratio: f64,
+    /// Samples whose reading was repaired.
+    repaired: usize,
     in_loop: u64,
+}
+
+impl Stats {
+    /// Room for `total` samples (allocates: before the loop).
+    fn new(kind: ControllerKind, seconds: f64, total: usize) -> Self {
+        Self {
+            kind,
+            seconds,
+            total,
+            elapsed: 0.0,
+            step_us: vec![0.0; total],
+            lateness_us: vec![0.0; total],
+            misses: 0,
+            worst_error: 0.0,
+            max_torque_ratio: 0.0,
+            repaired: 0,
+            in_loop: 0,
+        }
+    }
+
+    /// One sample: the joint error of the reading `x` against `w`, what the
+    /// guard did, and the drives' loading.
+    fn observe(&mut self, w: &[f64], x: &[f64], status: SupervisedStatus, loading: f64) {
+        for (wi, qi) in w.iter().zip(x) {
+            self.worst_error = self.worst_error.max((wi - qi).abs());
+        }
+        self.repaired += usize::from(status == SupervisedStatus::RepairedMeasurement);
+        self.max_torque_ratio = self.max_torque_ratio.max(loading);
+    }
 }
 
 /// Prints the step-time and lateness percentiles and the deadline misses.
@@ -208,6 +193,7 @@ fn report(stats: &Stats) {
         misses,
         worst_error,
         max_torque_ratio,
+        repaired,
         in_loop,
     } = *stats;
     let pct = |v: &[f64], p: f64| quantile(v, p);
@@ -232,45 +218,39 @@ fn report(stats: &Stats) {
     );
     println!(
         "deadline misses: {misses} of {total} ({:.2} %); largest joint error {worst_error:.2e} rad; \
-         largest torque / rated {max_torque_ratio:.2}; allocations in the loop: {in_loop}",
+         largest torque / rated {max_torque_ratio:.2}; repaired readings: {repaired}; \
+         allocations in the loop: {in_loop}",
         100.0 * misses as f64 / total.max(1) as f64
     );
 }
 
-/// The paper's path at 1 kHz, the controller `kind` with its model (no
-/// payload), and the plant carrying a 0.25 kg payload the controller does
-/// not know.
-#[allow(clippy::type_complexity)]
+/// The paper's path at 1 kHz, the controller `kind` (its model without the
+/// payload) behind its guard, and the plant carrying a 0.25 kg payload the
+/// controller does not know.
 fn set_up(
     kind: ControllerKind,
-) -> Result<
-    (
-        JointReference,
-        Box<dyn Controller + Send>,
-        RobotDynamics,
-        Plant,
-    ),
-    Box<dyn std::error::Error>,
-> {
+) -> Result<(JointReference, SupervisedController, Plant), Box<dyn std::error::Error>> {
     let robot = Robot::irb140();
     // The library's one planning entry point (parse, time, IK).
-    let ts = TS;
-    let reference = plan(
-        PAPER_TABLE1,
-        &robot,
-        &PlanOptions {
-            ts,
-            ..PlanOptions::default()
-        },
-    )?
-    .reference;
+    let options = PlanOptions {
+        ts: TS,
+        ..PlanOptions::default()
+    };
+    let reference = plan(PAPER_TABLE1, &robot, &options)?.reference;
     let settings = MpcSettings {
         ts: TS,
         ..MpcSettings::default() // horizon 10 (10 ms ahead), the paper's weights
     };
-    let n = robot.dof();
-    let controller = new_controller(kind, n, &settings)?;
-    let model = RobotDynamics::new(robot.clone()); // the controller's model: no payload
+    let mpc = ControllerBuilder::new(kind, &robot)
+        .settings(settings)
+        .build()?;
+    let guard = LoopSettings {
+        plausibility_check: true,
+        safe_stop: true,
+        ..LoopSettings::default()
+    }
+    .supervisor(&Default::default());
+    let guarded = SupervisedController::new(mpc, &robot, guard, 0)?;
     let mut plant_robot = robot;
     plant_robot.set_payload(Some(Payload::point_mass(0.25)))?; // unknown to the controller
     let plant_settings = PlantSettings {
@@ -278,5 +258,5 @@ fn set_up(
         ..PlantSettings::default()
     };
     let plant = Plant::with_period(plant_robot, plant_settings, reference.q(0), TS)?;
-    Ok((reference, controller, model, plant))
+    Ok((reference, guarded, plant))
 }

@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepError};
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{Plant, PlantSettings};
+use ofmpc::sim::{LossSchedule, Plant, PlantSettings, Sensor};
 
 #[global_allocator]
 static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
@@ -55,15 +55,16 @@ fn adaptive_steps_allocate_nothing() {
         let mut model = RobotDynamics::new(robot.clone());
         let mut plant =
             Plant::with_period(loaded.clone(), PlantSettings::default(), &q0, settings.ts).unwrap();
+        let mut sensor = Sensor::ideal(6, settings.ts, LossSchedule::default());
         let mut x = vec![0.0; 12];
-        plant.measure(&mut x).unwrap();
+        sensor.measure(&plant.state(), &mut x).unwrap();
         ctrl.reset(&x).unwrap();
         let preview = q0.repeat(settings.horizon);
         let mut tau = vec![0.0; 6];
         let bad_x = vec![f64::NAN; 12];
         let before = allocations();
         for _ in 0..150 {
-            plant.measure(&mut x).unwrap();
+            sensor.measure(&plant.state(), &mut x).unwrap();
             ctrl.step(&mut model, &x, &q0, &preview, &mut tau).unwrap();
             plant.advance(&tau).unwrap();
             assert!(ctrl

@@ -14,7 +14,8 @@ use ofmpc::motion::reference::{build_reference, Orientation};
 use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    Experiment, HorizonSampling, LoopSettings, Plant, PlantSettings, Record, RunConditions,
+    Experiment, HorizonSampling, LoopSettings, LossSchedule, Plant, PlantSettings, Record,
+    RunConditions, Sensor,
 };
 
 fn experiment(horizons: Option<HorizonSampling>) -> Experiment {
@@ -190,15 +191,16 @@ fn predicted_outputs_equal_the_prediction_built_again() {
             .unwrap();
         let mut plant =
             Plant::with_period(plant_robot, PlantSettings::default(), reference.q(0), ts).unwrap();
+        let mut sensor = Sensor::ideal(n, ts, LossSchedule::default());
         let (mut x, mut x_prev, mut tau) = (vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; n]);
         let (mut preview, mut own) = (vec![0.0; nh * n], vec![0.0; nh * n]);
-        plant.measure(&mut x).unwrap();
+        sensor.measure(&plant.state(), &mut x).unwrap();
         controller.reset(&x).unwrap();
         x_prev.copy_from_slice(&x);
         let mut worst = 0.0f64;
         for k in 0..150 {
             if k > 0 {
-                plant.measure(&mut x).unwrap();
+                sensor.measure(&plant.state(), &mut x).unwrap();
             }
             reference.preview(k, nh, &mut preview);
             controller

@@ -135,7 +135,7 @@ fn rls_projection_keeps_the_estimate_physical() {
 fn estimator_recovers_a_payload_from_exact_motion_data() {
     // Exact data from inverse dynamics along a smooth excitation: constant
     // torque over each period is emulated by integrating the loaded robot.
-    use ofmpc::sim::{Plant, PlantSettings};
+    use ofmpc::sim::{LossSchedule, Plant, PlantSettings, Sensor};
     let robot = ofmpc::robot::Robot::irb140();
     let n = robot.dof();
     let truth = Payload {
@@ -148,12 +148,13 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
     let q0 = [0.1, 0.3, -0.2, 0.2, 0.8, 0.1];
     let ts = 0.01;
     let mut plant = Plant::with_period(loaded.clone(), PlantSettings::default(), &q0, ts).unwrap();
+    let mut sensor = Sensor::ideal(n, ts, LossSchedule::default());
     let mut model = RobotDynamics::new(robot.clone());
     let mut est = PayloadEstimator::new(n, RlsSettings::default(), PayloadParams::zeros()).unwrap();
     let mut ws = Workspace::new(&loaded);
     let mut x_prev = vec![0.0; 2 * n];
     let mut x = vec![0.0; 2 * n];
-    plant.measure(&mut x_prev).unwrap();
+    sensor.measure(&plant.state(), &mut x_prev).unwrap();
     for k in 0..400 {
         // Computed torque on the true model along sinusoids + a PD term.
         let t = k as f64 * ts;
@@ -170,7 +171,7 @@ fn estimator_recovers_a_payload_from_exact_motion_data() {
             .unwrap()
             .clone();
         plant.advance(tau.as_slice()).unwrap();
-        plant.measure(&mut x).unwrap();
+        sensor.measure(&plant.state(), &mut x).unwrap();
         assert!(est.update(&mut model, &x_prev, &x, tau.as_slice(), ts));
         // The controller's model follows the estimate.
         model

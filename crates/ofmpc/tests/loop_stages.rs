@@ -14,7 +14,7 @@ use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StateObserver}
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    Actuator, ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
+    ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
     PlantSettings, Record, Recorder, RunConditions, Sample, Sensor, Supervisor,
 };
 
@@ -134,16 +134,16 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
     let lost = LossSchedule::new(&conditions.faults, ts);
-    let mut sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
+    let mut sensor = Sensor::new(plant.settings(), n, ts, lost).unwrap();
     let mut supervisor =
         Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
     let mut estimator = Estimator::new(n, Some(&mut obs));
-    let actuator = Actuator::for_robot(plant.robot());
+    let mut actuator = plant.settings().actuator(plant.robot(), ts);
     let mut rec = Recorder::new(n, total, true, false);
     let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
     let mut preview = vec![0.0; controller.horizon() * n];
     let mut x_true = vec![0.0; 2 * n];
-    plant.measure(&mut x).unwrap();
+    sensor.measure(&plant.state(), &mut x).unwrap();
     estimator.reset(&x);
     controller.reset(&x).unwrap();
     sensor.reset(&x);
@@ -151,7 +151,7 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let allocations = allocations_during(|| {
         for k in 0..total {
             let t = k as f64 * ts;
-            sensor.read(&mut plant, k, k > 0, &mut x).unwrap();
+            sensor.read(&plant.state(), k, k > 0, &mut x).unwrap();
             x_true[..n].copy_from_slice(plant.q());
             x_true[n..].copy_from_slice(plant.qd());
             rec.reading(&x);
@@ -169,7 +169,8 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             sensor.record_torque(&tau);
             rec.loading(actuator.account(&tau));
             supervisor.record_torque(&tau);
-            plant.advance(&tau).unwrap();
+            let applied = actuator.apply(&tau, plant.state().path_sample).unwrap();
+            plant.advance(applied).unwrap();
             rec.push(&Sample {
                 t,
                 q: &x_true[..n],

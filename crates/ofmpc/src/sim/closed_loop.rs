@@ -1,15 +1,15 @@
 //! The closed loop: measure, control, apply the torque over one period.
 
 use super::actuator::Actuator;
-use super::conditions::{MeasurementFaults, RunConditions, SafetySettings};
+use super::conditions::{RunConditions, SafetySettings};
 use super::estimator::Estimator;
+use super::faults::{sample_at, LossSchedule, MeasurementFaults};
 use super::horizon::HorizonRecorder;
-use super::metrics::Record;
-use super::outcome::{LoopSettingsError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::{Plant, PlantSettings};
-use super::recorder::{Recorder, Sample};
-use super::schedule::{sample_at, LossSchedule};
+use super::outcome::{RunFailure, RunOutcome, MAX_RECORD_VALUES};
+use super::plant::{Plant, PlantError, PlantSettings};
+use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
+use super::settings_error::LoopSettingsError;
 use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
 use crate::control::{Controller, StateObserver, StepError};
 use crate::dynamics::JointSpaceDynamics;
@@ -252,12 +252,14 @@ pub fn run_closed_loop_with(
 }
 
 /// The closed loop, composed of its stages: per sample
-/// [`Sensor`] (reading, lost samples, repair) → [`Supervisor`]
-/// (plausibility, safety limit) → [`Estimator`] (observer) → controller, or
-/// the supervisor's stop law during a safe stop → [`Actuator`] (loading) →
-/// [`Plant`] → [`Recorder`]; then the supervisor judges the run
+/// [`Sensor`] (the encoders on the plant's [`Plant::state`], lost samples,
+/// repair) → [`Supervisor`] (plausibility, safety limit) → [`Estimator`]
+/// (observer) → controller, or the supervisor's stop law during a safe stop
+/// → [`Actuator`] (saturation, torque drops, loading) → [`Plant`] (rigid
+/// body and payload) → [`Recorder`]; then the supervisor judges the run
 /// (divergence). Each stage is a public type a user's own loop can use one
-/// by one (`examples/realtime_loop.rs`).
+/// by one; the controller with its guard is one object for such a loop,
+/// [`super::SupervisedController`] (`examples/realtime_loop.rs`).
 ///
 /// During the pre-roll ([`RunEvents::pre_roll`]) the reference and its
 /// preview are the path's first point; a divergence or failure there is
@@ -338,10 +340,12 @@ impl<'a> ClosedLoop<'a> {
             .horizons
             .and_then(|h| HorizonRecorder::new(controller.kind(), n, horizon, h.every, h.max));
         let lost = LossSchedule::new(&conditions.faults, ts);
-        let sensor = Sensor::new(n, plant.settings().delay_samples, lost, ts);
+        // The plant checked its settings when it was built.
+        let sensor = Sensor::checked(plant.settings(), plant.robot().dof(), ts, lost);
         let supervisor =
             Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
-        let actuator = Actuator::for_robot(plant.robot());
+        // The plant checked its settings when it was built.
+        let actuator = plant.settings().actuator(plant.robot(), ts);
         Self {
             controller,
             model,
@@ -452,8 +456,8 @@ impl<'a> ClosedLoop<'a> {
             .set_period(self.reference.ts())
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         self.plant.start_path_after(self.events.pre_roll);
-        self.plant
-            .measure(&mut self.x)
+        self.sensor
+            .measure(&self.plant.state(), &mut self.x)
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         self.estimator.reset(&self.x);
         self.controller
@@ -472,8 +476,8 @@ impl<'a> ClosedLoop<'a> {
             }
         }
         if pre_roll > 0 {
-            self.plant
-                .measure(&mut self.x)
+            self.sensor
+                .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         }
         self.sensor.reset(&self.x);
@@ -491,8 +495,8 @@ impl<'a> ClosedLoop<'a> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         let n = self.reference.dof();
         if j > 0 {
-            self.plant
-                .measure(&mut self.x)
+            self.sensor
+                .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(RunFailure::Plant(e)))?;
         }
         let reference = self.reference;
@@ -515,9 +519,7 @@ impl<'a> ClosedLoop<'a> {
             };
         }
         self.estimator.record_torque(&self.tau);
-        self.plant
-            .advance(&self.tau)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         let threshold = self.settings.divergence_threshold_rad;
         let q = self.plant.q();
         if let Some(joint) = (0..n).find(|&i| {
@@ -587,17 +589,7 @@ impl<'a> ClosedLoop<'a> {
         let t = k as f64 * ts;
         let n = self.reference.dof();
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
-        self.sensor
-            .read(self.plant, k, k > 0, &mut self.x)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
-        if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
-            self.pick_up = None;
-            self.plant
-                .set_payload(Some(payload))
-                .map_err(|e| failed(RunFailure::Plant(e.into())))?;
-        }
-        self.x_true[..n].copy_from_slice(self.plant.q());
-        self.x_true[n..].copy_from_slice(self.plant.qd());
+        self.read(k).map_err(|e| failed(RunFailure::Plant(e)))?;
         rec.reading(&self.x);
         let reference = self.reference;
         let w = reference.q(k);
@@ -630,9 +622,7 @@ impl<'a> ClosedLoop<'a> {
             stop_began = Some(k);
         }
         self.supervisor.record_torque(&self.tau);
-        self.plant
-            .advance(&self.tau)
-            .map_err(|e| failed(RunFailure::Plant(e)))?;
+        self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         self.supervisor.watch(self.plant.q(), self.plant.qd(), t);
         rec.push(&Sample {
             t,
@@ -645,9 +635,40 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
+        match self.judge(k, w)? {
+            true => Ok(Some(k + 1)),
+            false => Ok(stop_began),
+        }
+    }
+
+    /// The reading of sample `k` into `self.x` and the true state into
+    /// `self.x_true`, after the payload is picked up when this is its
+    /// sample.
+    fn read(&mut self, k: usize) -> Result<(), PlantError> {
+        let n = self.reference.dof();
+        self.sensor
+            .read(&self.plant.state(), k, k > 0, &mut self.x)?;
+        if let Some((_, payload)) = self.pick_up.filter(|(at, _)| k >= *at) {
+            self.pick_up = None;
+            self.plant.set_payload(Some(payload))?;
+        }
+        self.x_true[..n].copy_from_slice(self.plant.q());
+        self.x_true[n..].copy_from_slice(self.plant.qd());
+        Ok(())
+    }
+
+    /// Judges sample `k`'s true state against its reference `w`: a
+    /// non-finite error ends the run; a divergence begins a safe stop
+    /// (`Ok(true)`, counted from the next sample) or ends the run.
+    fn judge(&mut self, k: usize, w: &[f64]) -> Result<bool, Ended> {
+        let n = self.reference.dof();
+        let t = k as f64 * self.reference.ts();
         let q = &self.x_true[..n];
         if let Some(joint) = (0..n).find(|&i| (w[i] - q[i]).is_nan()) {
-            return Err(failed(RunFailure::NonFiniteError { joint }));
+            return Err(RunOutcome::Failed {
+                t,
+                cause: RunFailure::NonFiniteError { joint },
+            });
         }
         if let Some((joint, error_rad)) = self.supervisor.judge(w, q) {
             let reason = StopReason::Diverged { joint, error_rad };
@@ -660,9 +681,18 @@ impl<'a> ClosedLoop<'a> {
                     rule: self.settings.divergence,
                 });
             }
-            stop_began = Some(k + 1);
+            return Ok(true);
         }
-        Ok(stop_began)
+        Ok(false)
+    }
+
+    /// The command `self.tau` through the drives ([`Actuator::apply`]) onto
+    /// the plant over one period.
+    fn actuate(&mut self) -> Result<(), PlantError> {
+        let applied = self
+            .actuator
+            .apply(&self.tau, self.plant.state().path_sample)?;
+        self.plant.advance(applied)
     }
 
     /// The torque of this sample into `self.tau`: the estimator's state

@@ -5,9 +5,9 @@
 //! horizons to record. Gathered in [`RunConditions`] and given to the loop
 //! when it is built ([`super::ClosedLoop::with_conditions`]).
 
+use super::faults::MeasurementFaults;
 use super::horizon::HorizonSampling;
-use super::outcome::LoopSettingsError;
-use super::schedule::at_or_after;
+use super::settings_error::LoopSettingsError;
 use serde::{Deserialize, Serialize};
 
 /// The events, checks and faults of a run that are not loop settings: each
@@ -72,53 +72,4 @@ pub struct SafetySettings {
     /// Joint error limit (rad); off when absent.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_joint_error_rad: Option<f64>,
-}
-
-/// Faults of the measurement channel, at path times: at the sample at (or
-/// first after) each `nan_at_s` the measurement is NaN; in each
-/// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
-/// loop then hands the controller a model prediction
-/// (the supervisor module) and counts the fault.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MeasurementFaults {
-    /// Times of single invalid (NaN) measurements (s).
-    pub nan_at_s: Vec<f64>,
-    /// Intervals without measurements, `[from, to)` (s).
-    pub dropout_s: Vec<[f64; 2]>,
-}
-
-impl MeasurementFaults {
-    /// No fault.
-    pub fn is_empty(&self) -> bool {
-        self.nan_at_s.is_empty() && self.dropout_s.is_empty()
-    }
-
-    /// Whether the measurement of the sample at `t` (period `ts`) is lost.
-    pub fn lost_at(&self, t: f64, ts: f64) -> bool {
-        let within = |from: f64, to: f64| at_or_after(t, from, ts) && !at_or_after(t, to, ts);
-        self.nan_at_s.iter().any(|&f| within(f, f + ts))
-            || self.dropout_s.iter().any(|&[from, to]| within(from, to))
-    }
-
-    /// Checks the times: finite, `≥ 0`, dropouts `from < to`.
-    pub fn validate(&self) -> Result<(), LoopSettingsError> {
-        if let Some((index, &value)) = self
-            .nan_at_s
-            .iter()
-            .enumerate()
-            .find(|(_, t)| !(t.is_finite() && **t >= 0.0))
-        {
-            return Err(LoopSettingsError::FaultTime { index, value });
-        }
-        if let Some((index, &[from, to])) = self
-            .dropout_s
-            .iter()
-            .enumerate()
-            .find(|(_, [a, b])| !(a.is_finite() && b.is_finite() && *a >= 0.0 && a < b))
-        {
-            return Err(LoopSettingsError::DropoutInterval { index, from, to });
-        }
-        Ok(())
-    }
 }

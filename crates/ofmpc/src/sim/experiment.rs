@@ -10,7 +10,7 @@ use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{
-    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, MpcSettings,
+    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, Mpc, MpcSettings,
     ObserverSettings,
 };
 
@@ -171,26 +171,7 @@ impl Experiment {
         cancel: &AtomicBool,
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
-        let observed = self.mpc.state_observer || self.mpc.delay_compensation;
-        let mut builder = ControllerBuilder::new(kind, &self.robot)
-            .settings(self.mpc.clone())
-            .accept_ineffective_settings();
-        if kind.is_baseline() {
-            builder = builder.baselines(self.baselines.clone());
-        }
-        if observed {
-            builder = builder.observer(ObserverSettings {
-                pole: OBSERVER_POLE,
-                measurement_delay: self.plant.delay_samples,
-            });
-        }
-        let mut mpc = builder.build().map_err(|e| match e {
-            // As the settings' and the model's own errors.
-            BuildError::Settings(e) => ExperimentError::Mpc(e),
-            BuildError::Model(e) => ExperimentError::Model(e),
-            e => ExperimentError::Build(e),
-        })?;
-        let mut plant_robot = self.robot.clone();
+        let mut mpc = self.controller(kind)?;
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
         let events = RunEvents {
@@ -201,17 +182,7 @@ impl Experiment {
             },
             pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
-        // Before a pick-up the plant carries nothing.
-        plant_robot.set_payload(match events.pick_up {
-            Some(_) => None,
-            None => Some(*payload),
-        })?;
-        let mut plant = Plant::with_period(
-            plant_robot,
-            self.plant.clone(),
-            self.reference.q(0),
-            self.reference.ts(),
-        )?;
+        let mut plant = self.plant_for(payload, events.pick_up.is_some())?;
         let parts = mpc.parts_mut();
         let result = ClosedLoop::with_conditions(
             parts.controller,
@@ -242,6 +213,48 @@ impl Experiment {
             &result.outcome,
         );
         Ok((result, metrics))
+    }
+
+    /// The plant of a run with `payload`, at rest on the path's first point;
+    /// with `picked_up_later` it carries nothing until the pick-up.
+    fn plant_for(
+        &self,
+        payload: &Payload,
+        picked_up_later: bool,
+    ) -> Result<Plant, ExperimentError> {
+        let mut plant_robot = self.robot.clone();
+        plant_robot.set_payload((!picked_up_later).then_some(*payload))?;
+        Ok(Plant::with_period(
+            plant_robot,
+            self.plant.clone(),
+            self.reference.q(0),
+            self.reference.ts(),
+        )?)
+    }
+
+    /// The controller `kind` of this experiment, built: the experiment's
+    /// tuning, its baselines' gains, and an observer when the settings ask
+    /// for one (with the plant's measurement delay).
+    fn controller(&self, kind: ControllerKind) -> Result<Mpc, ExperimentError> {
+        let observed = self.mpc.state_observer || self.mpc.delay_compensation;
+        let mut builder = ControllerBuilder::new(kind, &self.robot)
+            .settings(self.mpc.clone())
+            .accept_ineffective_settings();
+        if kind.is_baseline() {
+            builder = builder.baselines(self.baselines.clone());
+        }
+        if observed {
+            builder = builder.observer(ObserverSettings {
+                pole: OBSERVER_POLE,
+                measurement_delay: self.plant.delay_samples,
+            });
+        }
+        builder.build().map_err(|e| match e {
+            // As the settings' and the model's own errors.
+            BuildError::Settings(e) => ExperimentError::Mpc(e),
+            BuildError::Model(e) => ExperimentError::Model(e),
+            e => ExperimentError::Build(e),
+        })
     }
 }
 

@@ -1,7 +1,9 @@
 //! How a closed-loop run ended, and why a run could not start: typed, with
 //! the offending values, so that callers (the CLI, bindings) word them.
 
+use super::format::angle_text;
 use super::plant::{PlantError, PlantSettingsError};
+use super::settings_error::LoopSettingsError;
 use super::supervisor::{DivergenceRule, StopReason, GROWTH_FACTOR, GROWTH_WINDOW_S};
 use crate::control::{SettingsError, StepError};
 use crate::robot::ModelError;
@@ -12,19 +14,6 @@ use std::fmt;
 /// record: 100 million `f64`, 800 MB. A run that would need more is rejected
 /// before anything is allocated ([`ExperimentError::TooManySamples`]).
 pub const MAX_RECORD_VALUES: usize = 100_000_000;
-
-/// An angle (rad) for a message: 4 decimals from 1 mrad up (as always written), else 3
-/// significant digits in exponent form, so that a small error never reads "0.0000 rad".
-pub(crate) fn angle_text(rad: f64) -> String {
-    if rad == 0.0 || !rad.is_finite() || rad.abs() >= 1e-3 {
-        format!("{rad:.4}")
-    } else {
-        format!("{rad:.2e}")
-    }
-}
-
-/// The largest number of integration substeps per control period.
-pub const MAX_SUBSTEPS: usize = 100_000;
 
 /// The five ways a run ends, as written in `metrics.json` (`"ok"`,
 /// `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"`).
@@ -244,62 +233,6 @@ impl fmt::Display for RunOutcome {
     }
 }
 
-/// Why the hold, divergence threshold or steady window cannot be used.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum LoopSettingsError {
-    /// The hold after the path is negative or not finite.
-    #[error("the hold after the path is {0} s: it must be a finite time ≥ 0 s")]
-    HoldTime(f64),
-    /// The divergence threshold is not a positive number.
-    #[error("the divergence threshold is {0} rad: it must be a finite angle > 0")]
-    DivergenceThreshold(f64),
-    /// The steady window is not positive or longer than the hold.
-    #[error(
-        "the steady window is {value} s: it must be > 0 and not longer than the hold ({hold_s} s)"
-    )]
-    SteadyWindow {
-        /// The window (s).
-        value: f64,
-        /// The hold (s).
-        hold_s: f64,
-    },
-    /// The identification phase is negative, not finite or too long.
-    #[error("the identification phase is {value} s: it must be a time from 0 to {max} s")]
-    IdentificationTime {
-        /// The phase (s).
-        value: f64,
-        /// The longest allowed (s).
-        max: f64,
-    },
-    /// The pick-up time is negative or not finite.
-    #[error("the payload pick-up time is {0} s: it must be a finite time ≥ 0 s")]
-    PickUpTime(f64),
-    /// A time of an invalid (NaN) measurement is negative or not finite.
-    #[error("invalid-measurement time {index} is {value} s: it must be a finite time ≥ 0 s")]
-    FaultTime {
-        /// 0-based position in the list.
-        index: usize,
-        /// The time (s).
-        value: f64,
-    },
-    /// A measurement dropout interval is not `0 ≤ from < to`, finite.
-    #[error(
-        "dropout interval {index} is [{from}, {to}] s: it must be finite with 0 ≤ start < end"
-    )]
-    DropoutInterval {
-        /// 0-based position in the list.
-        index: usize,
-        /// Start (s).
-        from: f64,
-        /// End (s).
-        to: f64,
-    },
-    /// The safety limit on the joint error is not a positive angle.
-    #[error("the joint error limit of the safe stop is {0} rad: it must be a finite angle > 0")]
-    MaxJointError(f64),
-}
-
 /// Why an experiment cannot be run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -364,18 +297,5 @@ pub enum ExperimentError {
 impl From<PlantSettingsError> for ExperimentError {
     fn from(e: PlantSettingsError) -> Self {
         ExperimentError::Plant(PlantError::Settings(e))
-    }
-}
-
-#[cfg(test)]
-mod angle_tests {
-    use super::angle_text;
-
-    #[test]
-    fn small_angles_keep_their_digits() {
-        assert_eq!(angle_text(0.12345), "0.1235");
-        assert_eq!(angle_text(-0.002), "-0.0020");
-        assert_eq!(angle_text(3.2e-5), "3.20e-5");
-        assert_eq!(angle_text(0.0), "0.0000");
     }
 }

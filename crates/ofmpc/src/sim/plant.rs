@@ -1,7 +1,9 @@
 //! The simulated robot: the full nonlinear model, with the payload the
 //! controller does not know, integrated by RK4 under zero-order-hold torque.
 
-use super::schedule::FaultSchedule;
+use super::actuator::Actuator;
+use super::faults::{Fault, FaultSchedule};
+use super::state::JointState;
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
 use crate::robot::{ModelError, Robot};
@@ -41,67 +43,8 @@ pub struct PlantSettings {
     pub faults: Vec<Fault>,
 }
 
-/// An injected fault of one joint, from path time `t` on (`t = 0`: the
-/// path's first sample, after any pre-roll at rest), matched to samples as
-/// every timed event of a run ([`super::FaultSchedule::for_plant`],
-/// [`super::sample_at`]). In TOML:
-/// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-#[non_exhaustive]
-pub enum Fault {
-    /// The measured position is off by `offset_rad` on one sample (the
-    /// first measurement at or after `t`).
-    EncoderGlitch {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Offset (rad).
-        offset_rad: f64,
-    },
-    /// The joint's measurement (position and velocity) is frozen at its last
-    /// value for `duration_s`.
-    EncoderDropout {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Duration (s).
-        duration_s: f64,
-    },
-    /// The drive delivers `fraction` of the commanded torque for `duration_s`.
-    TorqueDrop {
-        /// Time (s).
-        t: f64,
-        /// Joint, 1-based.
-        joint: usize,
-        /// Delivered fraction, in [0, 1].
-        fraction: f64,
-        /// Duration (s).
-        duration_s: f64,
-    },
-}
-
-impl Fault {
-    /// Start time, 0-based joint and duration (0 for a glitch).
-    pub(super) fn span(&self) -> (f64, usize, f64) {
-        match *self {
-            Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
-            Fault::EncoderDropout {
-                t,
-                joint,
-                duration_s,
-            }
-            | Fault::TorqueDrop {
-                t,
-                joint,
-                duration_s,
-                ..
-            } => (t, joint.wrapping_sub(1), duration_s),
-        }
-    }
-}
+/// The largest number of integration substeps per control period.
+pub const MAX_SUBSTEPS: usize = 100_000;
 
 /// Largest accepted measurement delay (control periods).
 pub const MAX_DELAY_SAMPLES: usize = 1000;
@@ -289,6 +232,13 @@ impl PlantSettings {
             })
     }
 
+    /// The drives between the controller and this plant: the robot's rated
+    /// torques, the clamp of `torque_limits` and the torque drops of
+    /// `faults`, at the control period `ts` ([`Actuator::with_faults`]).
+    pub fn actuator(&self, robot: &Robot, ts: f64) -> Actuator {
+        Actuator::with_faults(robot, self.torque_limits, &self.faults, ts)
+    }
+
     /// Checks the settings against a robot with `n` joints.
     pub fn validate(&self, n: usize) -> Result<(), PlantSettingsError> {
         if !(self.substep.is_finite() && self.substep > 0.0) {
@@ -314,37 +264,7 @@ impl PlantSettings {
             }
         }
         for (index, f) in self.faults.iter().enumerate() {
-            let (t, j, d) = f.span();
-            let bad = |what, value: f64, requirement| {
-                Err(PlantSettingsError::Fault {
-                    index,
-                    what,
-                    value,
-                    requirement,
-                })
-            };
-            if j >= n {
-                return bad(
-                    "joint",
-                    j.wrapping_add(1) as f64,
-                    "a joint number from 1 to n",
-                );
-            }
-            if !(t.is_finite() && t >= 0.0) {
-                return bad("t", t, "a finite time >= 0 s");
-            }
-            if !(d.is_finite() && d >= 0.0) {
-                return bad("duration_s", d, "a finite duration >= 0 s");
-            }
-            match *f {
-                Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
-                    return bad("offset_rad", offset_rad, "a finite angle");
-                }
-                Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
-                    return bad("fraction", fraction, "between 0 and 1");
-                }
-                _ => {}
-            }
+            check_fault(index, f, n)?;
         }
         if self.delay_samples > MAX_DELAY_SAMPLES {
             return Err(PlantSettingsError::Delay(self.delay_samples));
@@ -373,11 +293,49 @@ impl PlantSettings {
     }
 }
 
+/// Checks fault `index` of the plant's settings for `n` joints: a joint
+/// from 1 to n, a finite start time and duration `≥ 0`, a finite glitch
+/// offset, a torque-drop fraction in [0, 1].
+fn check_fault(index: usize, f: &Fault, n: usize) -> Result<(), PlantSettingsError> {
+    let (t, j, d) = f.span();
+    let bad = |what, value: f64, requirement| {
+        Err(PlantSettingsError::Fault {
+            index,
+            what,
+            value,
+            requirement,
+        })
+    };
+    if j >= n {
+        return bad(
+            "joint",
+            j.wrapping_add(1) as f64,
+            "a joint number from 1 to n",
+        );
+    }
+    if !(t.is_finite() && t >= 0.0) {
+        return bad("t", t, "a finite time >= 0 s");
+    }
+    if !(d.is_finite() && d >= 0.0) {
+        return bad("duration_s", d, "a finite duration >= 0 s");
+    }
+    match *f {
+        Fault::EncoderGlitch { offset_rad, .. } if !offset_rad.is_finite() => {
+            return bad("offset_rad", offset_rad, "a finite angle");
+        }
+        Fault::TorqueDrop { fraction, .. } if !(0.0..=1.0).contains(&fraction) => {
+            return bad("fraction", fraction, "between 0 and 1");
+        }
+        _ => {}
+    }
+    Ok(())
+}
+
 /// `ts / substep` as a whole number of substeps, within bounds.
 fn substeps(ts: f64, substep: f64) -> Result<usize, PlantSettingsError> {
     let ratio = ts / substep;
     let k = ratio.round();
-    let max = super::MAX_SUBSTEPS;
+    let max = MAX_SUBSTEPS;
     if !(ts.is_finite() && ts > 0.0 && k >= 1.0 && k <= max as f64) || (ratio - k).abs() > 1e-9 * k
     {
         return Err(PlantSettingsError::SubstepRatio {
@@ -398,33 +356,6 @@ fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
     }
 }
 
-/// A small deterministic Gaussian generator (xorshift + Box–Muller), so that
-/// noisy runs are reproducible from their seed.
-#[derive(Debug, Clone)]
-struct Gauss {
-    s: u64,
-    spare: Option<f64>,
-}
-
-impl Gauss {
-    fn uniform(&mut self) -> f64 {
-        self.s ^= self.s << 13;
-        self.s ^= self.s >> 7;
-        self.s ^= self.s << 17;
-        ((self.s >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    fn next(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let (s, c) = (2.0 * std::f64::consts::PI * u2).sin_cos();
-        self.spare = Some(r * s);
-        r * c
-    }
-}
-
 /// The plant: state, model and effects. No allocation after construction.
 #[derive(Debug, Clone)]
 pub struct Plant {
@@ -441,13 +372,6 @@ pub struct Plant {
     net: Vec<f64>,
     rk4: Vec<f64>,
     backup: Vec<f64>,
-    rng: Gauss,
-    /// Delay line of measurements, `(D + 1) × 2n`, and its next slot.
-    ring: Vec<f64>,
-    ring_next: usize,
-    /// Measured positions of the previous sample (encoder velocity).
-    prev_qm: Vec<f64>,
-    measured_once: bool,
     /// The control period (s) and its RK4 substeps ([`Plant::with_period`]).
     ts: f64,
     substeps: usize,
@@ -457,23 +381,9 @@ pub struct Plant {
     schedule: FaultSchedule,
     steps: usize,
     origin: usize,
-    /// Per fault: an encoder glitch already happened.
-    fired: Vec<bool>,
-    /// The last measurement before the delay line (for frozen encoders).
-    last_meas: Vec<f64>,
 }
 
 impl Plant {
-    /// A plant at rest at `q0`, whose control period is one substep until
-    /// [`Self::set_period`] (or the deprecated [`Self::step`]) sets another.
-    #[deprecated(
-        note = "use Plant::with_period(robot, settings, q0, ts): the plant holds the control period, and its faults are matched to the samples of that period once"
-    )]
-    pub fn new(robot: Robot, settings: PlantSettings, q0: &[f64]) -> Result<Self, PlantError> {
-        let ts = settings.substep;
-        Self::with_period(robot, settings, q0, ts)
-    }
-
     /// A plant at rest at `q0`, advanced by the control period `ts` (s) at
     /// each [`Self::advance`]: `ts` must be a whole number of the settings'
     /// substeps ([`PlantSettings::validate_for`]). The faults of the
@@ -492,15 +402,9 @@ impl Plant {
         let schedule = FaultSchedule::for_plant(&settings.faults, ts);
         let ws = Workspace::new(&robot);
         let z = vec![0.0; n];
-        let ring_len = (settings.delay_samples + 1) * 2 * n;
-        let n_faults = settings.faults.len();
         Ok(Self {
             viscous: per_joint(&settings.viscous_friction, n),
             coulomb: per_joint(&settings.coulomb_friction, n),
-            rng: Gauss {
-                s: settings.seed.max(1).wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1,
-                spare: None,
-            },
             robot,
             ws,
             settings,
@@ -511,17 +415,11 @@ impl Plant {
             net: z.clone(),
             rk4: vec![0.0; RK4_WORK_PER_DOF * n],
             backup: vec![0.0; 2 * n],
-            ring: vec![0.0; ring_len],
-            ring_next: 0,
-            prev_qm: z.clone(),
-            measured_once: false,
             ts,
             substeps,
             schedule,
             steps: 0,
             origin: 0,
-            fired: vec![false; n_faults],
-            last_meas: vec![0.0; 2 * n],
         })
     }
 
@@ -629,129 +527,27 @@ impl Plant {
         &self.tau
     }
 
-    /// The measured state `x = [q, q̇]` (noise and encoder quantization
-    /// applied; the velocity a backward difference of the measured positions
-    /// with `velocity_from_encoder`; `delay_samples` periods old) written into
-    /// `x` (2n). Call it once per control period: each call is one sample of
-    /// the sensors. Allocation-free; `x` of another length is an error.
-    pub fn measure(&mut self, x: &mut [f64]) -> Result<(), PlantError> {
-        let n = self.q.len();
-        if x.len() != 2 * n {
-            return Err(PlantError::MeasurementLength {
-                expected: 2 * n,
-                got: x.len(),
-            });
+    /// The true state for the sensor ([`JointState`]): the joint
+    /// positions and velocities, the periods simulated, and the path sample
+    /// of the current period (`None` before the path).
+    pub fn state(&self) -> JointState<'_> {
+        JointState {
+            q: &self.q,
+            qd: &self.qd,
+            sample: self.steps,
+            path_sample: self.path_sample(),
         }
-        let res = if self.settings.encoder_counts > 0 {
-            2.0 * std::f64::consts::PI / self.settings.encoder_counts as f64
-        } else {
-            0.0
-        };
-        for i in 0..n {
-            let mut q = self.q[i];
-            if self.settings.position_noise > 0.0 {
-                q += self.settings.position_noise * self.rng.next();
-            }
-            if res > 0.0 {
-                q = (q / res).round() * res;
-            }
-            x[i] = q;
-            let mut v = self.qd[i];
-            if self.settings.velocity_from_encoder {
-                // At the first sample the robot is at rest (it starts so).
-                v = if self.measured_once && self.steps > 0 {
-                    (q - self.prev_qm[i]) / self.ts
-                } else {
-                    0.0
-                };
-            } else if self.settings.velocity_noise > 0.0 {
-                v += self.settings.velocity_noise * self.rng.next();
-            }
-            x[n + i] = v;
-        }
-        if let Some(k) = self.path_sample() {
-            let faults = self.settings.faults.iter().zip(self.fired.iter_mut());
-            for (index, (f, fired)) in faults.enumerate() {
-                let (from, to) = self.schedule.range(index).unwrap_or((usize::MAX, 0));
-                match *f {
-                    // Once, at the first measurement of its sample or after.
-                    Fault::EncoderGlitch {
-                        joint, offset_rad, ..
-                    } if !*fired && k >= from => {
-                        *fired = true;
-                        x[joint - 1] += offset_rad;
-                    }
-                    Fault::EncoderDropout { joint, .. }
-                        if self.measured_once && k >= from && k < to =>
-                    {
-                        let i = joint - 1;
-                        x[i] = self.last_meas[i];
-                        x[n + i] = self.last_meas[n + i];
-                    }
-                    _ => {}
-                }
-            }
-        }
-        self.last_meas.copy_from_slice(&x[..2 * n]);
-        self.prev_qm.copy_from_slice(&x[..n]);
-        let d = self.settings.delay_samples;
-        if d > 0 {
-            let w = 2 * n;
-            if !self.measured_once {
-                for slot in self.ring.chunks_exact_mut(w) {
-                    slot.copy_from_slice(&x[..w]);
-                }
-            }
-            let slots = d + 1;
-            let at = self.ring_next;
-            self.ring[at * w..(at + 1) * w].copy_from_slice(&x[..w]);
-            self.ring_next = (at + 1) % slots;
-            // The oldest slot is the one written next.
-            let old = self.ring_next;
-            x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
-        }
-        self.measured_once = true;
-        Ok(())
-    }
-
-    /// [`Self::set_period`]`(ts)` and [`Self::advance`]`(tau)`: the period
-    /// given at every call.
-    #[deprecated(
-        note = "build the plant with Plant::with_period(robot, settings, q0, ts) and call Plant::advance(tau)"
-    )]
-    pub fn step(&mut self, tau: &[f64], ts: f64) -> Result<(), PlantError> {
-        self.robot.check_vector("tau", tau)?;
-        self.set_period(ts)?;
-        self.advance(tau)
     }
 
     /// Advances the plant by one control period ([`Self::period`]) under the
-    /// constant torque `tau` (zero-order hold), by RK4 substeps. Returns an
+    /// constant torque `tau` (zero-order hold: the torque the drives apply,
+    /// [`super::Actuator::apply`]), by RK4 substeps. Returns an
     /// error (and leaves the state as it was) when the state or torque stops
     /// being finite.
     pub fn advance(&mut self, tau: &[f64]) -> Result<(), PlantError> {
         let n = self.q.len();
         self.robot.check_vector("tau", tau)?;
-        for i in 0..n {
-            let lim = self.robot.joints()[i].limits.effort;
-            self.tau[i] = if self.settings.torque_limits && lim.is_finite() {
-                tau[i].clamp(-lim, lim)
-            } else {
-                tau[i]
-            };
-        }
-        if let Some(k) = self.path_sample() {
-            for (index, f) in self.settings.faults.iter().enumerate() {
-                if let Fault::TorqueDrop {
-                    joint, fraction, ..
-                } = *f
-                {
-                    if self.schedule.active(index, k) {
-                        self.tau[joint - 1] *= fraction;
-                    }
-                }
-            }
-        }
+        self.tau.copy_from_slice(tau);
         let (steps, ts) = (self.substeps, self.ts);
         let h = ts / steps as f64;
         self.backup[..n].copy_from_slice(&self.q);
@@ -933,35 +729,10 @@ mod tests {
     }
 
     #[test]
-    fn torque_saturation_and_measurement_effects() {
-        let q0 = [0.0; 6];
-        let s = PlantSettings {
-            torque_limits: true,
-            encoder_counts: 1000,
-            position_noise: 1e-3,
-            ..Default::default()
-        };
-        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
-        p.advance(&[1e4, -1e4, 0.0, 0.0, 0.0, 100.0]).unwrap();
-        assert_eq!(p.applied_torque()[0], 290.0);
-        assert_eq!(p.applied_torque()[1], -500.0);
-        assert_eq!(p.applied_torque()[5], 16.0);
-        let mut x = [0.0; 12];
-        p.measure(&mut x).unwrap();
-        let res = 2.0 * std::f64::consts::PI / 1000.0;
-        for v in &x[..6] {
-            assert!(((v / res).round() * res - v).abs() < 1e-12, "quantized");
-        }
+    fn a_non_finite_torque_is_an_error() {
+        let mut p =
+            Plant::with_period(Robot::irb140(), PlantSettings::default(), &[0.0; 6], 0.01).unwrap();
         assert!(p.advance(&[f64::NAN; 6]).is_err());
-        // A measurement buffer of another length is an error, not a panic.
-        let mut short = [0.0; 11];
-        assert!(matches!(
-            p.measure(&mut short),
-            Err(PlantError::MeasurementLength {
-                expected: 12,
-                got: 11
-            })
-        ));
         assert!(PlantSettings {
             viscous_friction: vec![1.0, 2.0],
             ..Default::default()
@@ -970,48 +741,12 @@ mod tests {
         .is_err());
     }
 
+    /// The faults are matched to the samples of the period the plant is
+    /// built with, and again (in place) when the period changes: a torque
+    /// drop at 0.05 s for 0.03 s covers samples [5, 8) at 10 ms, [10, 16) at
+    /// 5 ms.
     #[test]
-    fn delayed_measurement_and_encoder_velocity() {
-        let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
-        let s = PlantSettings {
-            delay_samples: 2,
-            velocity_from_encoder: true,
-            ..Default::default()
-        };
-        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
-        let mut truth: Vec<Vec<f64>> = Vec::new();
-        let mut x = [0.0; 12];
-        for k in 0..6usize {
-            truth.push(p.q().to_vec());
-            p.measure(&mut x).unwrap();
-            // The position seen is that of max(k − 2, 0).
-            let want = &truth[k.saturating_sub(2)];
-            assert_eq!(&x[..6], &want[..], "k = {k}");
-            // The velocity is the backward difference of those positions.
-            let prev = &truth[k.saturating_sub(3)];
-            for i in 0..6 {
-                let v = if k >= 3 {
-                    (want[i] - prev[i]) / 0.01
-                } else {
-                    0.0
-                };
-                assert!((x[6 + i] - v).abs() < 1e-12, "k = {k}, joint {i}");
-            }
-            p.advance(&[0.0; 6]).unwrap();
-        }
-        assert!(PlantSettings {
-            delay_samples: MAX_DELAY_SAMPLES + 1,
-            ..Default::default()
-        }
-        .validate(6)
-        .is_err());
-    }
-
-    /// The deprecated `new` + `step(tau, ts)` is `with_period` + `advance`:
-    /// the same states bit for bit, the faults matched to the same samples.
-    #[test]
-    #[allow(deprecated)]
-    fn the_deprecated_step_is_advance_at_its_period() {
+    fn the_faults_are_scheduled_at_the_plants_period() {
         let q0 = [0.0, 0.3, 0.2, 0.0, 0.4, 0.0];
         let s = PlantSettings {
             faults: vec![Fault::TorqueDrop {
@@ -1022,17 +757,9 @@ mod tests {
             }],
             ..Default::default()
         };
-        let mut old = Plant::new(Robot::irb140(), s.clone(), &q0).unwrap();
-        let mut new = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
-        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-        for _ in 0..20 {
-            old.step(&[1.0; 6], 0.01).unwrap();
-            new.advance(&[1.0; 6]).unwrap();
-            assert_eq!(bits(old.applied_torque()), bits(new.applied_torque()));
-        }
-        assert_eq!(bits(old.q()), bits(new.q()));
-        assert_eq!(bits(old.qd()), bits(new.qd()));
-        assert_eq!(old.fault_schedule(), new.fault_schedule());
-        assert_eq!(new.fault_schedule().range(0), Some((5, 8)));
+        let mut p = Plant::with_period(Robot::irb140(), s, &q0, 0.01).unwrap();
+        assert_eq!(p.fault_schedule().range(0), Some((5, 8)));
+        p.set_period(0.005).unwrap();
+        assert_eq!(p.fault_schedule().range(0), Some((10, 16)));
     }
 }

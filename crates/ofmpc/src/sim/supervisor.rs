@@ -29,6 +29,8 @@
 //! encoder is frozen is dead-reckoned through the model from its last good
 //! measurement under the torques applied since.
 
+use super::format::angle_text;
+use super::repair::model_accel;
 use crate::control::{LinearLikeModel, StepError};
 use crate::dynamics::JointSpaceDynamics;
 use std::fmt;
@@ -141,7 +143,7 @@ impl fmt::Display for StopReason {
                 f,
                 "the error of joint {} reached {} rad (divergence)",
                 joint + 1,
-                super::outcome::angle_text(*error_rad)
+                angle_text(*error_rad)
             ),
             StopReason::JointErrorLimit {
                 joint,
@@ -151,7 +153,7 @@ impl fmt::Display for StopReason {
                 f,
                 "the error of joint {} reached {} rad, beyond the safety limit of {limit_rad} rad",
                 joint + 1,
-                super::outcome::angle_text(*error_rad)
+                angle_text(*error_rad)
             ),
             StopReason::ControllerFailed(e) => write!(f, "the controller step failed: {e}"),
             StopReason::ImplausibleMeasurement {
@@ -306,152 +308,6 @@ impl Plausibility {
     }
 }
 
-/// Stands in for a missing or invalid (non-finite) measurement: the state
-/// the controller was last given, advanced one period through the
-/// controller's model under the torque that produced the current
-/// measurement (`delay` samples older with a delayed measurement), plus the
-/// acceleration the model has been missing lately (a filtered disturbance,
-/// learnt on the valid samples: an unknown payload biases the model). The
-/// controller then runs on this prediction; every such sample counts as a
-/// fault. Sized once ([`MeasurementGuard::new`]); allocation-free after.
-#[derive(Debug, Clone)]
-pub struct MeasurementGuard {
-    n: usize,
-    /// The control period (s).
-    ts: f64,
-    delay: usize,
-    lin: LinearLikeModel,
-    /// The last state handed on (2n).
-    x_prev: Vec<f64>,
-    /// Torques of the last `delay + 1` samples (ring) and how many were recorded.
-    tau_hist: Vec<f64>,
-    recorded: usize,
-    a: Vec<f64>,
-    /// Acceleration the model misses (filtered), rad/s².
-    dist: Vec<f64>,
-    /// Learn `dist` on every valid sample (one model evaluation per sample):
-    /// only when measurements can be lost.
-    track: bool,
-    /// Samples whose measurement was replaced.
-    pub faults: usize,
-}
-
-/// Gain of the disturbance filter of [`MeasurementGuard`] per sample.
-const DISTURBANCE_GAIN: f64 = 0.3;
-
-impl MeasurementGuard {
-    /// A guard for a robot at rest at `x0` (2n: the prior for a first
-    /// measurement that is already invalid), measurements `delay` samples
-    /// old, one per control period `ts` (s); `track`: measurements can be
-    /// lost (learn the disturbance).
-    pub fn new(x0: &[f64], delay: usize, track: bool, ts: f64) -> Self {
-        let n = x0.len() / 2;
-        Self {
-            n,
-            ts,
-            delay,
-            lin: LinearLikeModel::new(n),
-            x_prev: x0.to_vec(),
-            tau_hist: vec![0.0; (delay + 1) * n],
-            recorded: 0,
-            a: vec![0.0; n],
-            dist: vec![0.0; n],
-            track,
-            faults: 0,
-        }
-    }
-
-    /// Starts over at rest at `x0` (2n), nothing recorded, no fault
-    /// counted; allocates nothing.
-    pub fn reset(&mut self, x0: &[f64]) {
-        self.x_prev.copy_from_slice(x0);
-        self.tau_hist.fill(0.0);
-        self.recorded = 0;
-        self.a.fill(0.0);
-        self.dist.fill(0.0);
-        self.faults = 0;
-    }
-
-    /// Replaces the non-finite entries of `x` (2n) by the prediction (both
-    /// position and velocity of such a joint); returns whether it did.
-    pub fn check(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64]) -> bool {
-        let (n, ts) = (self.n, self.ts);
-        let bad = |i: usize, x: &[f64]| !(x[i].is_finite() && x[n + i].is_finite());
-        let invalid = (0..n).any(|i| bad(i, x));
-        if !invalid && !self.track {
-            self.x_prev.copy_from_slice(x);
-            return false;
-        }
-        // The model's acceleration from the last state under the torque
-        // applied at sample k − 1 − delay (none yet: no prediction).
-        let slots = self.delay + 1;
-        let predicted = self.recorded > self.delay && {
-            let slot = (self.recorded - 1 - self.delay) % slots;
-            let (q, v) = self.x_prev.split_at(n);
-            let tau = &self.tau_hist[slot * n..(slot + 1) * n];
-            model_accel(&mut self.lin, model, q, v, tau, &mut self.a).is_ok()
-                && self.a.iter().all(|a| a.is_finite())
-        };
-        if !invalid {
-            if predicted {
-                for i in 0..n {
-                    let seen = (x[n + i] - self.x_prev[n + i]) / ts;
-                    let d = seen - self.a[i];
-                    if d.is_finite() {
-                        self.dist[i] += DISTURBANCE_GAIN * (d - self.dist[i]);
-                    }
-                }
-            }
-            self.x_prev.copy_from_slice(x);
-            return false;
-        }
-        self.faults += 1;
-        for i in 0..n {
-            if bad(i, x) {
-                let a = if predicted {
-                    self.a[i] + self.dist[i]
-                } else {
-                    0.0
-                };
-                let (q, v) = (self.x_prev[i], self.x_prev[n + i]);
-                x[i] = q + v * ts + 0.5 * a * ts * ts;
-                x[n + i] = v + a * ts;
-            }
-        }
-        self.x_prev.copy_from_slice(x);
-        true
-    }
-
-    /// The torque commanded at the current sample (n values).
-    pub fn record_torque(&mut self, tau: &[f64]) {
-        let n = self.n;
-        let slot = self.recorded % (self.delay + 1);
-        self.tau_hist[slot * n..(slot + 1) * n].copy_from_slice(tau);
-        self.recorded += 1;
-    }
-}
-
-/// `a = f0 q̇ + H⁻¹(τ − g)` of the model at `(q, q̇)` (Eq. (6)–(7)).
-fn model_accel(
-    lin: &mut LinearLikeModel,
-    model: &mut dyn JointSpaceDynamics,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    a: &mut [f64],
-) -> Result<(), StepError> {
-    let n = q.len();
-    lin.update(model, q, v)?;
-    lin.input_from_torque(tau, a)?;
-    let f0 = lin.f0().as_slice();
-    for c in 0..n {
-        for r in 0..n {
-            a[r] += f0[c * n + r] * v[c];
-        }
-    }
-    Ok(())
-}
-
 /// The safe stop's state (module docs). Sized once before the loop
 /// ([`SafeStop::new`]); [`SafeStop::begin`] and [`SafeStop::step`] allocate
 /// nothing.
@@ -551,35 +407,8 @@ impl SafeStop {
         x: &[f64],
         tau: &mut [f64],
     ) -> Result<(), StepError> {
-        let (n, ts) = (self.n, self.ts);
-        if self.dead_reckoned.iter().any(|d| *d) {
-            // The acceleration the last torque gave, by the model.
-            model_accel(
-                &mut self.model,
-                model,
-                &self.q,
-                &self.v,
-                &self.tau_prev,
-                &mut self.w,
-            )?;
-        }
-        for i in 0..n {
-            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
-                // The encoder is back: hold where the joint really is.
-                self.dead_reckoned[i] = false;
-                if !self.hold.is_empty() {
-                    self.hold[i] = x[i] + x[n + i] * BRAKE_TIME;
-                }
-            }
-            self.last_raw[i] = raw[i];
-            if self.dead_reckoned[i] {
-                self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
-                self.v[i] += self.w[i] * ts;
-            } else {
-                self.q[i] = x[i];
-                self.v[i] = x[n + i];
-            }
-        }
+        self.track(model, raw, x)?;
+        let n = self.n;
         // Brake towards where the braking started plus its run-out, then
         // hold there: a = −ω²(q − q_stop) − 2ω q̇ (critically damped).
         if self.hold.is_empty() {
@@ -617,6 +446,48 @@ impl SafeStop {
             };
         }
         self.tau_prev.copy_from_slice(tau);
+        Ok(())
+    }
+
+    /// The state the stop law acts on, from the raw reading `raw` and the
+    /// state `x` (2n each): `x`, except for a joint whose encoder froze,
+    /// dead-reckoned through the model under the last torque until its
+    /// reading changes again (then the hold moves to where it really is).
+    fn track(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        raw: &[f64],
+        x: &[f64],
+    ) -> Result<(), StepError> {
+        let (n, ts) = (self.n, self.ts);
+        if self.dead_reckoned.iter().any(|d| *d) {
+            // The acceleration the last torque gave, by the model.
+            model_accel(
+                &mut self.model,
+                model,
+                &self.q,
+                &self.v,
+                &self.tau_prev,
+                &mut self.w,
+            )?;
+        }
+        for i in 0..n {
+            if self.dead_reckoned[i] && raw[i].to_bits() != self.last_raw[i].to_bits() {
+                // The encoder is back: hold where the joint really is.
+                self.dead_reckoned[i] = false;
+                if !self.hold.is_empty() {
+                    self.hold[i] = x[i] + x[n + i] * BRAKE_TIME;
+                }
+            }
+            self.last_raw[i] = raw[i];
+            if self.dead_reckoned[i] {
+                self.q[i] += self.v[i] * ts + 0.5 * self.w[i] * ts * ts;
+                self.v[i] += self.w[i] * ts;
+            } else {
+                self.q[i] = x[i];
+                self.v[i] = x[n + i];
+            }
+        }
         Ok(())
     }
 }
@@ -676,8 +547,7 @@ pub struct Inspection {
 pub struct Supervisor {
     settings: SupervisorSettings,
     n: usize,
-    /// The control period (s); NaN when unknown (the deprecated
-    /// [`Supervisor::new`]).
+    /// The control period (s).
     ts: f64,
     check: Option<Plausibility>,
     law: Option<SafeStop>,
@@ -711,17 +581,6 @@ impl Supervisor {
         s
     }
 
-    /// A supervisor without the control period: its growth rule judges only
-    /// the position limits and the ceiling ([`Self::with_period`] judges the
-    /// growth too), and it neither checks plausibility nor stops (both need
-    /// the period) until [`Self::sized_for`] gives it.
-    #[deprecated(
-        note = "use Supervisor::with_period(robot, settings, ts): without the control period the growth rule judges only the limits and the ceiling"
-    )]
-    pub fn new(robot: &crate::robot::Robot, settings: SupervisorSettings) -> Self {
-        Self::build(robot, settings, f64::NAN)
-    }
-
     fn build(robot: &crate::robot::Robot, settings: SupervisorSettings, ts: f64) -> Self {
         let n = robot.dof();
         let vmax: Vec<f64> = robot.joints().iter().map(|j| j.limits.velocity).collect();
@@ -747,23 +606,7 @@ impl Supervisor {
         }
     }
 
-    /// Gives the control period `ts` (s): sizes the growth rule's history,
-    /// and the plausibility check and the stop law run at it.
-    #[deprecated(note = "use Supervisor::with_period(robot, settings, ts)")]
-    pub fn sized_for(mut self, ts: f64) -> Self {
-        self.ts = ts;
-        if let Some(c) = self.check.as_mut() {
-            c.ts = ts;
-        }
-        if let Some(l) = self.law.as_mut() {
-            l.ts = ts;
-        }
-        self.size_history(ts);
-        self
-    }
-
-    /// The control period (s); NaN when it was not given (the deprecated
-    /// [`Self::new`]).
+    /// The control period (s).
     pub fn period(&self) -> f64 {
         self.ts
     }
@@ -1136,8 +979,7 @@ mod tests {
 
     /// `with_period` sizes the growth rule: an error beyond the floor that
     /// quadruples against the look-back is a divergence, one that stays is
-    /// an offset; without the period (the deprecated constructor) only the
-    /// limits and the ceiling judge.
+    /// an offset.
     #[test]
     fn the_period_given_at_construction_sizes_the_growth_rule() {
         let robot = Robot::irb140();
@@ -1166,8 +1008,5 @@ mod tests {
         let mut sized = Supervisor::with_period(&robot, settings, ts);
         assert_eq!(sized.errors.len(), 2 * m);
         assert_eq!(run(&mut sized), Some((1, -0.1)));
-        #[allow(deprecated)]
-        let mut without = Supervisor::new(&robot, settings);
-        assert_eq!(run(&mut without), None);
     }
 }

@@ -1,4 +1,9 @@
-//! Events of a run at path times, matched to control samples by one rule.
+//! The one home of a run's faults: the plant's own ([`Fault`], a scenario's
+//! `[plant] faults`: encoder glitch and dropout, torque drop), the
+//! measurement channel's ([`MeasurementFaults`], `[faults]`: lost samples),
+//! and their schedule ([`FaultSchedule`]).
+//!
+//! Events of a run at path times are matched to control samples by one rule.
 //!
 //! A scenario gives times in seconds; the loop runs on sample indices
 //! `k` (`t_k = k·Ts`, `k = 0` the path's first sample). Every timed event of
@@ -8,8 +13,8 @@
 //! with a tolerance of `10⁻⁹·Ts` for times that are whole multiples of `Ts`
 //! up to rounding (`0.1 + 0.2` s at `Ts = 0.1` s is sample 3).
 
-use super::conditions::MeasurementFaults;
-use super::plant::Fault;
+use super::settings_error::LoopSettingsError;
+use serde::{Deserialize, Serialize};
 
 /// Relative tolerance (of `Ts`) when a time is matched to a sample.
 pub const TIME_MATCH_TOLERANCE: f64 = 1e-9;
@@ -136,6 +141,117 @@ impl FaultSchedule {
     /// Whether fault `index` covers sample `k`.
     pub fn active(&self, index: usize, k: usize) -> bool {
         self.range(index).is_some_and(|(a, b)| k >= a && k < b)
+    }
+}
+
+/// An injected fault of one joint, from path time `t` on (`t = 0`: the
+/// path's first sample, after any pre-roll at rest), matched to samples as
+/// every timed event of a run ([`super::FaultSchedule::for_plant`],
+/// [`super::sample_at`]). In TOML:
+/// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+#[non_exhaustive]
+pub enum Fault {
+    /// The measured position is off by `offset_rad` on one sample (the
+    /// first measurement at or after `t`).
+    EncoderGlitch {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Offset (rad).
+        offset_rad: f64,
+    },
+    /// The joint's measurement (position and velocity) is frozen at its last
+    /// value for `duration_s`.
+    EncoderDropout {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Duration (s).
+        duration_s: f64,
+    },
+    /// The drive delivers `fraction` of the commanded torque for `duration_s`.
+    TorqueDrop {
+        /// Time (s).
+        t: f64,
+        /// Joint, 1-based.
+        joint: usize,
+        /// Delivered fraction, in [0, 1].
+        fraction: f64,
+        /// Duration (s).
+        duration_s: f64,
+    },
+}
+
+impl Fault {
+    /// Start time, 0-based joint and duration (0 for a glitch).
+    pub(super) fn span(&self) -> (f64, usize, f64) {
+        match *self {
+            Fault::EncoderGlitch { t, joint, .. } => (t, joint.wrapping_sub(1), 0.0),
+            Fault::EncoderDropout {
+                t,
+                joint,
+                duration_s,
+            }
+            | Fault::TorqueDrop {
+                t,
+                joint,
+                duration_s,
+                ..
+            } => (t, joint.wrapping_sub(1), duration_s),
+        }
+    }
+}
+
+/// Faults of the measurement channel, at path times: at the sample at (or
+/// first after) each `nan_at_s` the measurement is NaN; in each
+/// `dropout_s = [from, to)` no measurement arrives (it reads as NaN). The
+/// loop then hands the controller a model prediction
+/// (the supervisor module) and counts the fault.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MeasurementFaults {
+    /// Times of single invalid (NaN) measurements (s).
+    pub nan_at_s: Vec<f64>,
+    /// Intervals without measurements, `[from, to)` (s).
+    pub dropout_s: Vec<[f64; 2]>,
+}
+
+impl MeasurementFaults {
+    /// No fault.
+    pub fn is_empty(&self) -> bool {
+        self.nan_at_s.is_empty() && self.dropout_s.is_empty()
+    }
+
+    /// Whether the measurement of the sample at `t` (period `ts`) is lost.
+    pub fn lost_at(&self, t: f64, ts: f64) -> bool {
+        let within = |from: f64, to: f64| at_or_after(t, from, ts) && !at_or_after(t, to, ts);
+        self.nan_at_s.iter().any(|&f| within(f, f + ts))
+            || self.dropout_s.iter().any(|&[from, to]| within(from, to))
+    }
+
+    /// Checks the times: finite, `≥ 0`, dropouts `from < to`.
+    pub fn validate(&self) -> Result<(), LoopSettingsError> {
+        if let Some((index, &value)) = self
+            .nan_at_s
+            .iter()
+            .enumerate()
+            .find(|(_, t)| !(t.is_finite() && **t >= 0.0))
+        {
+            return Err(LoopSettingsError::FaultTime { index, value });
+        }
+        if let Some((index, &[from, to])) = self
+            .dropout_s
+            .iter()
+            .enumerate()
+            .find(|(_, [a, b])| !(a.is_finite() && b.is_finite() && *a >= 0.0 && a < b))
+        {
+            return Err(LoopSettingsError::DropoutInterval { index, from, to });
+        }
+        Ok(())
     }
 }
 
