@@ -33,7 +33,7 @@ fn steps(c: &mut Criterion) {
     group.sample_size(20);
     let kinds: Vec<ControllerKind> = match std::env::var("OFMPC_BENCH_KINDS") {
         Ok(list) => list.split(',').filter_map(|k| k.parse().ok()).collect(),
-        Err(_) => ControllerKind::ALL.to_vec(),
+        Err(_) => ControllerKind::PAPER.to_vec(),
     };
     let max_n: usize = std::env::var("OFMPC_BENCH_MAX_N")
         .ok()
@@ -247,7 +247,7 @@ fn baselines(c: &mut Criterion) {
     group.measurement_time(Duration::from_secs(1));
     group.sample_size(20);
     let s = MpcSettings::default();
-    let kinds = ControllerKind::ALL
+    let kinds = ControllerKind::PAPER
         .into_iter()
         .chain([ControllerKind::SecondAdaptive])
         .chain(ControllerKind::BASELINES);

@@ -23,7 +23,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::time::{Duration, Instant};
 
-use ofmpc::control::{new_controller, Controller, ControllerKind, MpcSettings};
+use ofmpc::control::{new_controller, Algorithm, ControllerKind, MpcSettings};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, JointReference, PlanOptions};
@@ -81,7 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut step_us = vec![0.0; total];
     let mut lateness_us = vec![0.0; total];
     let mut misses = 0usize;
-    let mut failure: Option<(usize, ofmpc::control::StepError)> = None;
+    let mut failure: Option<(usize, ofmpc::control::StepFailure)> = None;
     let mut worst_error = 0.0f64;
     // The stages around the controller, sized here.
     let loop_settings = LoopSettings {
@@ -246,7 +246,7 @@ fn set_up(
 ) -> Result<
     (
         JointReference,
-        Box<dyn Controller + Send>,
+        Box<dyn Algorithm + Send>,
         RobotDynamics,
         Plant,
     ),

@@ -6,7 +6,7 @@
 mod alloc_counter;
 
 use nalgebra::{DMatrix, DVector};
-use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepError};
+use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepFailure};
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Plant, PlantSettings};
@@ -85,7 +85,7 @@ fn adaptive_steps_allocate_nothing() {
         let mut opaque = Opaque(RobotDynamics::new(robot.clone()));
         assert_eq!(
             ctrl.step(&mut opaque, &x, &q0, &preview, &mut tau),
-            Err(StepError::NoRigidBodyModel)
+            Err(StepFailure::NoRigidBodyModel)
         );
     }
 }

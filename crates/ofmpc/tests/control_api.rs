@@ -6,7 +6,7 @@ mod common;
 use common::CoupledModel;
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{
-    new_controller, Controller, ControllerKind, MpcSettings, SettingsError, StepError, TermsError,
+    new_controller, Algorithm, ControllerKind, MpcSettings, SettingsError, StepFailure, TermsError,
     Weight, ZohError,
 };
 use ofmpc::dynamics::JointSpaceDynamics;
@@ -90,9 +90,9 @@ fn settings_parse_from_toml_with_scalars_diagonals_and_defaults() {
         kind: Vec<ControllerKind>,
     }
     let k: K = toml::from_str("kind = [\"usual\", \"first\", \"second\"]").unwrap();
-    assert_eq!(k.kind, ControllerKind::ALL);
+    assert_eq!(k.kind, ControllerKind::PAPER);
     assert!(toml::from_str::<K>("kind = [\"Usual\"]").is_err());
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         assert_eq!(kind.to_string().parse::<ControllerKind>().unwrap(), kind);
     }
     assert!("third"
@@ -181,7 +181,7 @@ fn invalid_settings_are_rejected_with_the_field_named() {
     for (s, field) in cases {
         let e = s.validate().unwrap_err();
         assert!(e.to_string().contains(field), "{field}: {e}");
-        for kind in ControllerKind::ALL {
+        for kind in ControllerKind::PAPER {
             assert!(new_controller(kind, 2, &s).is_err());
         }
     }
@@ -201,7 +201,7 @@ fn invalid_settings_are_rejected_with_the_field_named() {
 #[test]
 fn controllers_are_object_safe_and_send() {
     let s = MpcSettings::default();
-    let boxed: Vec<Box<dyn Controller + Send>> = ControllerKind::ALL
+    let boxed: Vec<Box<dyn Algorithm + Send>> = ControllerKind::PAPER
         .iter()
         .map(|&k| new_controller(k, 3, &s).unwrap())
         .collect();
@@ -213,7 +213,7 @@ fn controllers_are_object_safe_and_send() {
     });
     let got = handle.join().unwrap();
     assert_eq!(got.len(), 3);
-    for ((kind, dof, nh, snh), want) in got.into_iter().zip(ControllerKind::ALL) {
+    for ((kind, dof, nh, snh), want) in got.into_iter().zip(ControllerKind::PAPER) {
         assert_eq!((kind, dof, nh, snh), (want, 3, 10, 10));
     }
 }
@@ -223,7 +223,7 @@ fn controllers_are_object_safe_and_send() {
 fn failed_steps_report_errors_and_leave_the_state_untouched() {
     let n = 3;
     let s = MpcSettings::default();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut good = new_controller(kind, n, &s).unwrap();
         let mut twin = new_controller(kind, n, &s).unwrap();
         let mut model = Faulty {
@@ -253,7 +253,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 assert!(
                     matches!(
                         e,
-                        StepError::WrongLength {
+                        StepFailure::WrongLength {
                             what: "x",
                             expected: 6,
                             got: 5
@@ -265,7 +265,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     .step(&mut model, x, &wk[..2], &preview, &mut t)
                     .unwrap_err();
                 assert!(
-                    matches!(e, StepError::WrongLength { what: "w_k", .. }),
+                    matches!(e, StepFailure::WrongLength { what: "w_k", .. }),
                     "{e}"
                 );
                 let e = twin
@@ -274,7 +274,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 assert!(
                     matches!(
                         e,
-                        StepError::WrongLength {
+                        StepFailure::WrongLength {
                             what: "preview",
                             ..
                         }
@@ -285,7 +285,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     .step(&mut model, x, &wk, &preview, &mut [0.0; 2])
                     .unwrap_err();
                 assert!(
-                    matches!(e, StepError::WrongLength { what: "tau", .. }),
+                    matches!(e, StepFailure::WrongLength { what: "tau", .. }),
                     "{e}"
                 );
                 let mut bad_x = x.clone();
@@ -295,7 +295,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     .unwrap_err();
                 assert_eq!(
                     e,
-                    StepError::NonFiniteInput {
+                    StepFailure::NonFiniteInput {
                         what: "x",
                         index: 4
                     }
@@ -305,7 +305,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 let e = twin.step(&mut model, x, &wk, &bad_w, &mut t).unwrap_err();
                 assert_eq!(
                     e,
-                    StepError::NonFiniteInput {
+                    StepFailure::NonFiniteInput {
                         what: "preview",
                         index: 7
                     }
@@ -322,7 +322,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                         Fault::Indefinite => {
                             assert!(matches!(
                                 e,
-                                StepError::Model(TermsError::InertiaNotPositiveDefinite {
+                                StepFailure::Model(TermsError::InertiaNotPositiveDefinite {
                                     pivot: 1,
                                     ..
                                 })
@@ -330,11 +330,11 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                         }
                         Fault::NanGravity => assert!(matches!(
                             e,
-                            StepError::Model(TermsError::NonFiniteTerm { .. })
+                            StepFailure::Model(TermsError::NonFiniteTerm { .. })
                         )),
                         _ => assert!(matches!(
                             e,
-                            StepError::Discretization(ZohError::BadNorm { .. })
+                            StepFailure::Discretization(ZohError::BadNorm { .. })
                         )),
                     }
                     model.fault = Fault::None;
@@ -343,7 +343,7 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 let e = twin.step(&mut wrong, x, &wk, &preview, &mut t).unwrap_err();
                 assert!(matches!(
                     e,
-                    StepError::Model(TermsError::DofMismatch {
+                    StepFailure::Model(TermsError::DofMismatch {
                         expected: 3,
                         got: 2
                     })
@@ -361,11 +361,11 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
         // reset checks its input too
         assert!(matches!(
             good.reset(&x0[..4]),
-            Err(StepError::WrongLength { what: "x0", .. })
+            Err(StepFailure::WrongLength { what: "x0", .. })
         ));
         assert!(matches!(
             good.reset(&[f64::NAN; 6]),
-            Err(StepError::NonFiniteInput {
+            Err(StepFailure::NonFiniteInput {
                 what: "x0",
                 index: 0
             })
@@ -382,7 +382,7 @@ fn reset_restarts_from_scratch() {
         horizon: 4,
         ..MpcSettings::default()
     };
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut c = new_controller(kind, n, &s).unwrap();
         let mut model = CoupledModel::new(n, 2);
         let x0 = [0.1, 0.2, 0.0, 0.0];

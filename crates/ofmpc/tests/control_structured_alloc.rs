@@ -1,5 +1,5 @@
 //! Real-time property of both least-squares solvers: after construction and
-//! reset, `Controller::step` performs no heap allocation (counted by a global
+//! reset, `Algorithm::step` performs no heap allocation (counted by a global
 //! allocator, per thread), with the structured solver at long horizons and
 //! the dense QR named explicitly.
 
@@ -18,7 +18,7 @@ use alloc_counter::allocations;
 
 fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
     let n = model.dof();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut ctrl = new_controller(kind, n, settings).unwrap();
         let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
         ctrl.reset(&x0).unwrap();

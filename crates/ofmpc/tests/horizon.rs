@@ -156,7 +156,7 @@ fn predicted_again(
     out
 }
 
-/// `Controller::predicted_outputs` (the controller's own model of its step) equals the
+/// `Algorithm::predicted_outputs` (the controller's own model of its step) equals the
 /// prediction built again from scratch (the recorder's former computation) within 1e-12 rad,
 /// at every sample of a closed loop with a payload, for every controller with a horizon and
 /// both solvers; the baselines predict nothing.

@@ -18,9 +18,9 @@
 //! minimal state; regressing on the redundant one would leave directions the
 //! loop never visits undetermined and give spurious eigenvalues), is
 //! linearized by perturbation of the **actual controller step**
-//! ([`crate::control::Controller::step`]) and the plant: short closed-loop
+//! ([`crate::control::Algorithm::step`]) and the plant: short closed-loop
 //! runs from small random deviations (a random `x_{−1}` through
-//! [`crate::control::Controller::reset`], a random plant state, a random
+//! [`crate::control::Algorithm::reset`], a random plant state, a random
 //! first reference to excite `u` and `ē`) give pairs `(z_k, z_{k+1})` and the
 //! matrix `M` with `z_{k+1} = M z_k` by least squares (exact for the linear
 //! part: the deviations are 1e-7). The loop is stable near rest iff the
@@ -41,8 +41,8 @@
 //! the baselines ([`StabilityError::Baseline`]).
 
 use crate::control::{
-    new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
-    SettingsError, StepError,
+    new_controller_with_baselines, Algorithm, BaselineSettings, ControllerKind, MpcSettings,
+    SettingsError, StepFailure,
 };
 use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
 use crate::linalg::{random, rk4_second_order_step, RK4_WORK_PER_DOF};
@@ -86,7 +86,7 @@ pub enum StabilityError {
     Settings(#[from] SettingsError),
     /// A controller step failed during the perturbation runs.
     #[error("a controller step failed at the pose: {0}")]
-    Step(#[from] StepError),
+    Step(#[from] StepFailure),
     /// The pose or the payload is not valid for the robot.
     #[error(transparent)]
     Model(#[from] ModelError),
@@ -345,7 +345,7 @@ const SCHUR_SWEEPS_PER_DIM: usize = 100;
 ///   `ξ_k = [δx_k; δx_{k−1}; u_{k−1}; ē_{k−1}]` (`ē` for the second
 ///   algorithm only; [`closed_loop_matrix`]'s module doc lists the memory):
 ///   `u_k = K ξ_k`, `δτ_k = T ξ_k`. `K`, `T` come from the **actual
-///   controller step** ([`crate::control::Controller::step`]) by least
+///   controller step** ([`crate::control::Algorithm::step`]) by least
 ///   squares over steps from small random inputs (one controller, reset
 ///   between runs; exact for the linear part as in [`closed_loop_matrix`]).
 /// * The plant `q̈ = α H⁻¹(τ − C q̇ − g)` linearized at the equilibrium
@@ -610,7 +610,7 @@ struct RunDraws {
 /// The controller of [`controller_gains`] with its model and rest point.
 struct GainPass {
     model: RobotDynamics,
-    ctrl: Box<dyn Controller + Send>,
+    ctrl: Box<dyn Algorithm + Send>,
     x0: Vec<f64>,
     q0: Vec<f64>,
     preview0: Vec<f64>,
@@ -622,7 +622,7 @@ impl GainPass {
     /// Steps one run with the deviations `scale · draws` about rest: per
     /// recorded step, `ξ_k` and `[u_k; τ_k − τ₀]` (unscaled).
     #[allow(clippy::type_complexity)]
-    fn run(&mut self, d: &RunDraws, scale: f64) -> Result<Vec<(Vec<f64>, Vec<f64>)>, StepError> {
+    fn run(&mut self, d: &RunDraws, scale: f64) -> Result<Vec<(Vec<f64>, Vec<f64>)>, StepFailure> {
         let n = self.q0.len();
         let about = |base: &[f64], r: &[f64]| -> Vec<f64> {
             base.iter().zip(r).map(|(b, r)| b + scale * r).collect()

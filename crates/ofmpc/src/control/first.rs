@@ -11,10 +11,10 @@
 use super::core::{impl_controller, Core};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The first algorithm, Eq. (32)/(37). Allocation-free [`Controller::step`](super::Controller::step).
+/// The first algorithm, Eq. (32)/(37). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct FirstMpc {
     core: Core,
@@ -30,7 +30,7 @@ impl FirstMpc {
         })
     }
 
-    /// [`Controller::step`](super::Controller::step) of the first algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the first algorithm.
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -38,7 +38,7 @@ impl FirstMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
         if let Some(st) = c.backend.stage_mut() {

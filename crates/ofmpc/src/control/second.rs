@@ -14,10 +14,10 @@
 use super::core::{impl_controller, Core};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The second algorithm, Eq. (34)/(39). Allocation-free [`Controller::step`](super::Controller::step).
+/// The second algorithm, Eq. (34)/(39). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct SecondMpc {
     core: Core,
@@ -40,7 +40,7 @@ impl SecondMpc {
         &self.core.ebar
     }
 
-    /// [`Controller::step`](super::Controller::step) of the second algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the second algorithm.
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -48,7 +48,7 @@ impl SecondMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
         let (n, nh) = (c.n, c.nh);

@@ -6,10 +6,10 @@
 
 use super::core::{impl_controller, Core};
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The usual MPC of Eq. (43). Allocation-free [`Controller::step`](super::Controller::step).
+/// The usual MPC of Eq. (43). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct UsualMpc {
     core: Core,
@@ -25,7 +25,7 @@ impl UsualMpc {
         })
     }
 
-    /// [`Controller::step`](super::Controller::step) of the usual algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the usual algorithm.
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -33,7 +33,7 @@ impl UsualMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
         let c = &mut self.core;
         c.prepare(model, x, w_k, preview, tau.len())?;
         if let Some(st) = c.backend.stage_mut() {

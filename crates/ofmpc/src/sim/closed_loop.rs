@@ -11,7 +11,7 @@ use super::recorder::{Recorder, Sample};
 use super::schedule::{sample_at, LossSchedule};
 use super::sensor::Sensor;
 use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
-use crate::control::{Controller, StateObserver, StepError};
+use crate::control::{Algorithm, StateObserver, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
@@ -212,7 +212,7 @@ pub struct RunResult {
 /// the torque applied over `[t_k, t_k + Ts)`. `progress(k, total)` is called
 /// every 100 samples.
 pub fn run_closed_loop(
-    controller: &mut dyn Controller,
+    controller: &mut dyn Algorithm,
     model: &mut dyn JointSpaceDynamics,
     plant: &mut Plant,
     reference: &JointReference,
@@ -237,7 +237,7 @@ pub struct RunEvents {
 /// controller: [`ClosedLoop`] with [`ClosedLoop::events`].
 #[allow(clippy::too_many_arguments)]
 pub fn run_closed_loop_with(
-    controller: &mut dyn Controller,
+    controller: &mut dyn Algorithm,
     model: &mut dyn JointSpaceDynamics,
     plant: &mut Plant,
     reference: &JointReference,
@@ -271,7 +271,7 @@ pub fn run_closed_loop_with(
 /// Every buffer is sized by [`ClosedLoop::new`]; the samples allocate
 /// nothing (the record is sized for the run).
 pub struct ClosedLoop<'a> {
-    controller: &'a mut dyn Controller,
+    controller: &'a mut dyn Algorithm,
     model: &'a mut dyn JointSpaceDynamics,
     plant: &'a mut Plant,
     reference: &'a JointReference,
@@ -305,7 +305,7 @@ impl<'a> ClosedLoop<'a> {
     /// time, safety limit, fault or recorded horizon): [`Self::with_conditions`]
     /// with [`RunConditions::NONE`]. Sizes every stage.
     pub fn new(
-        controller: &'a mut dyn Controller,
+        controller: &'a mut dyn Algorithm,
         model: &'a mut dyn JointSpaceDynamics,
         plant: &'a mut Plant,
         reference: &'a JointReference,
@@ -323,7 +323,7 @@ impl<'a> ClosedLoop<'a> {
     /// [`LossSchedule`]) and the horizons to record. The pick-up time is an
     /// event of the run ([`Self::events`]). Sizes every stage.
     pub fn with_conditions(
-        controller: &'a mut dyn Controller,
+        controller: &'a mut dyn Algorithm,
         model: &'a mut dyn JointSpaceDynamics,
         plant: &'a mut Plant,
         reference: &'a JointReference,
@@ -667,7 +667,7 @@ impl<'a> ClosedLoop<'a> {
 
     /// The torque of this sample into `self.tau`: the estimator's state
     /// through the controller, or the supervisor's stop law during a stop.
-    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepError> {
+    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepFailure> {
         let model = &mut *self.model;
         let xs = self.estimator.estimate(model, &self.x)?;
         if self.supervisor.stopping().is_some() {

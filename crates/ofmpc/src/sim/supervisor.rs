@@ -29,7 +29,7 @@
 //! encoder is frozen is dead-reckoned through the model from its last good
 //! measurement under the torques applied since.
 
-use crate::control::{LinearLikeModel, StepError};
+use crate::control::{LinearLikeModel, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 use std::fmt;
 
@@ -117,7 +117,7 @@ pub enum StopReason {
         limit_rad: f64,
     },
     /// A controller step failed.
-    ControllerFailed(StepError),
+    ControllerFailed(StepFailure),
     /// A joint's measurement kept jumping beyond the plausible.
     ImplausibleMeasurement {
         /// 0-based joint.
@@ -439,7 +439,7 @@ fn model_accel(
     v: &[f64],
     tau: &[f64],
     a: &mut [f64],
-) -> Result<(), StepError> {
+) -> Result<(), StepFailure> {
     let n = q.len();
     lin.update(model, q, v)?;
     lin.input_from_torque(tau, a)?;
@@ -550,7 +550,7 @@ impl SafeStop {
         raw: &[f64],
         x: &[f64],
         tau: &mut [f64],
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         let (n, ts) = (self.n, self.ts);
         if self.dead_reckoned.iter().any(|d| *d) {
             // The acceleration the last torque gave, by the model.
@@ -879,10 +879,10 @@ impl Supervisor {
         raw: &[f64],
         x: &[f64],
         tau: &mut [f64],
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         match self.law.as_mut() {
             Some(law) => law.step(model, raw, x, tau),
-            None => Err(StepError::Internal("stop torque without a stop law")),
+            None => Err(StepFailure::Internal("stop torque without a stop law")),
         }
     }
 
