@@ -8,7 +8,7 @@ use common::paper_reference;
 use ofmpc::control::{
     new_controller, new_controller_with_baselines, BaselineSettings, BuildError, ControllerBuilder,
     ControllerKind, DriveModel, FrictionUse, MpcSettings, ObserverSettings, SettingsError, Solver,
-    StepFailure, StepInput, Weight,
+    StepError, StepFailure, StepInput, StepStatus, Weight,
 };
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::ident::RlsSettings;
@@ -405,8 +405,58 @@ fn reset_restores_the_adaptive_model_and_the_output_reports_the_step() {
             preview: &preview,
         })
         .unwrap_err();
-    assert!(matches!(err, StepFailure::WrongLength { what: "x", .. }));
+    assert!(matches!(err, StepError::WrongLength { what: "x", .. }));
     assert_eq!(mpc.output().tau, last);
+}
+
+/// A numerical failure is not an error but a status: the step holds the
+/// last torque (`StepStatus::HeldLastTorque`), leaves the controller's state
+/// as it was (a twin that never saw the failed sample steps identically
+/// afterwards), and stepping before a reset is refused.
+#[test]
+fn a_numerical_failure_holds_the_last_torque_as_a_status() {
+    let robot = Robot::irb140();
+    let build = || {
+        ControllerBuilder::new(ControllerKind::Second, &robot)
+            .build()
+            .unwrap()
+    };
+    let (mut c, mut twin) = (build(), build());
+    let n = 6;
+    let (x, w) = (vec![0.1; 2 * n], vec![0.2; n]);
+    let preview = vec![0.2; c.horizon() * n];
+    let input = StepInput {
+        x: &x,
+        w_k: &w,
+        preview: &preview,
+    };
+    assert_eq!(c.step(&input).unwrap_err(), StepError::NotReset);
+    c.reset(&x).unwrap();
+    twin.reset(&x).unwrap();
+    let held = c.step(&input).unwrap().clone();
+    assert_eq!(held.status, StepStatus::Solved);
+    assert_eq!(twin.step(&input).unwrap().tau, held.tau);
+    // Velocities so large that `f0·Ts` cannot be discretized.
+    let mut wild = x.clone();
+    wild[n..].fill(1e200);
+    let out = c
+        .step(&StepInput {
+            x: &wild,
+            ..input
+        })
+        .unwrap();
+    assert!(
+        matches!(
+            out.status,
+            StepStatus::HeldLastTorque(StepFailure::Discretization(_) | StepFailure::Model(_))
+        ),
+        "{:?}",
+        out.status
+    );
+    assert!(out.status.failure().is_some());
+    assert_eq!(out.tau, held.tau, "the last torque is held");
+    let after = c.step(&input).unwrap().tau.clone();
+    assert_eq!(after, twin.step(&input).unwrap().tau, "state untouched");
 }
 
 /// The torques of `built` and `library` stepped side by side over the paper
