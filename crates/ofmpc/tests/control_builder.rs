@@ -439,12 +439,7 @@ fn a_numerical_failure_holds_the_last_torque_as_a_status() {
     // Velocities so large that `f0·Ts` cannot be discretized.
     let mut wild = x.clone();
     wild[n..].fill(1e200);
-    let out = c
-        .step(&StepInput {
-            x: &wild,
-            ..input
-        })
-        .unwrap();
+    let out = c.step(&StepInput { x: &wild, ..input }).unwrap();
     assert!(
         matches!(
             out.status,

@@ -375,8 +375,8 @@ impl<'r> ControllerBuilder<'r> {
 }
 
 /// The controller's model of the robot: `robot` as given, with the payload
-/// the tuning assumes ([`MpcSettings::model_payload_kg`], a point mass, when
-/// > 0). The one home of the rule "model = robot + assumed payload"
+/// the tuning assumes (a point mass of [`MpcSettings::model_payload_kg`]
+/// when that is positive). The one home of the rule "model = robot + assumed payload"
 /// ([`ControllerBuilder::build`] uses it; so does a simulation that needs
 /// the same model).
 pub fn model_robot(robot: &Robot, settings: &MpcSettings) -> Result<Robot, ModelError> {
