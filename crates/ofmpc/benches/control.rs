@@ -72,8 +72,16 @@ fn steps(c: &mut Criterion) {
                 let id = format!("{}-{}", kind.name(), solver.name());
                 group.bench_with_input(BenchmarkId::new(id, nh), &nh, |b, _| {
                     b.iter(|| {
-                        ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                            .unwrap();
+                        ctrl.step(
+                            &mut model,
+                            &ofmpc::control::StepInput {
+                                x: black_box(&x),
+                                w_k: &wk,
+                                preview: &preview,
+                            },
+                            &mut tau,
+                        )
+                        .unwrap();
                         black_box(&tau);
                     })
                 });
@@ -198,7 +206,16 @@ fn limits(c: &mut Criterion) {
         let mut free = new_controller(kind, n, &free_settings).unwrap();
         let mut tau = vec![0.0; n];
         free.reset(&x).unwrap();
-        free.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        free.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         let mut drives = DriveModel::from_robot(&Robot::irb140());
         for (l, t) in drives.max_torque_nm.iter_mut().zip(&tau) {
             *l = 0.9 * t.abs() + 0.1;
@@ -210,7 +227,16 @@ fn limits(c: &mut Criterion) {
         let mut ctrl = new_controller(kind, n, &s).unwrap();
         ctrl.set_drive_model(&drives).unwrap();
         ctrl.reset(&x).unwrap();
-        ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        ctrl.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         assert!(
             ctrl.qp_status().is_some_and(|q| q.active),
             "{kind}: QP not active"
@@ -218,16 +244,32 @@ fn limits(c: &mut Criterion) {
         group.bench_function(format!("{}-qp", kind.name()), |b| {
             b.iter(|| {
                 ctrl.reset(&x).unwrap();
-                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                ctrl.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });
         group.bench_function(format!("{}-free", kind.name()), |b| {
             b.iter(|| {
                 free.reset(&x).unwrap();
-                free.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                free.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });
@@ -265,8 +307,16 @@ fn baselines(c: &mut Criterion) {
         let mut tau = vec![0.0; n];
         group.bench_function(kind.name(), |b| {
             b.iter(|| {
-                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                ctrl.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });

@@ -129,7 +129,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             supervisor.stop_torque(&mut model, &x, &x, &mut tau)
         } else {
             controller
-                .step(&mut model, &x, w, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: w,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
                 .map(|_| ())
         };
         step_us[k] = t0.elapsed().as_secs_f64() * 1e6;

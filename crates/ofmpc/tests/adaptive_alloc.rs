@@ -63,13 +63,38 @@ fn adaptive_steps_allocate_nothing() {
         let before = allocations();
         for _ in 0..150 {
             plant.measure(&mut x).unwrap();
-            ctrl.step(&mut model, &x, &q0, &preview, &mut tau).unwrap();
+            ctrl.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &q0,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             plant.advance(&tau).unwrap();
             assert!(ctrl
-                .step(&mut model, &bad_x, &q0, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &bad_x,
+                        w_k: &q0,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
                 .is_err());
             assert!(ctrl
-                .step(&mut model, &x[1..], &q0, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x[1..],
+                        w_k: &q0,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
                 .is_err());
         }
         let after = allocations();
@@ -84,7 +109,15 @@ fn adaptive_steps_allocate_nothing() {
         // No rigid-body model: a typed error, not a panic.
         let mut opaque = Opaque(RobotDynamics::new(robot.clone()));
         assert_eq!(
-            ctrl.step(&mut opaque, &x, &q0, &preview, &mut tau),
+            ctrl.step(
+                &mut opaque,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &q0,
+                    preview: &preview
+                },
+                &mut tau
+            ),
             Err(StepFailure::NoRigidBodyModel)
         );
     }

@@ -31,10 +31,39 @@ fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
             for (i, xi) in x.iter_mut().enumerate() {
                 *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
             }
-            ctrl.step(model, &x, &wk, &preview, &mut tau).unwrap();
+            ctrl.step(
+                model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             // Failed steps allocate nothing either.
-            assert!(ctrl.step(model, &bad_x, &wk, &preview, &mut tau).is_err());
-            assert!(ctrl.step(model, &x[1..], &wk, &preview, &mut tau).is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &bad_x,
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &x[1..],
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
         }
         let after = allocations();
         assert_eq!(
@@ -126,7 +155,16 @@ fn constrained_steps_allocate_nothing(settings: MpcSettings) {
             for (i, xi) in x.iter_mut().enumerate() {
                 *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
             }
-            ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+            ctrl.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             active += usize::from(ctrl.qp_status().is_some_and(|s| s.active));
             assert!(tau.iter().all(|t| t.abs() <= 0.5), "{kind}: {tau:?}");
         }

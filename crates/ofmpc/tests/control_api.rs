@@ -241,14 +241,30 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
         let mut t_good = vec![0.0; n];
         let mut t_twin = vec![0.0; n];
         for (k, x) in states.iter().enumerate() {
-            good.step(&mut model, x, &wk, &preview, &mut t_good)
-                .unwrap();
+            good.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t_good,
+            )
+            .unwrap();
             if k == 2 {
                 let sentinel = vec![7.0; n];
                 let mut t = sentinel.clone();
                 let short = &x[..5];
                 let e = twin
-                    .step(&mut model, short, &wk, &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x: short,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(
@@ -262,14 +278,30 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk[..2], &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk[..2],
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(e, StepFailure::WrongLength { what: "w_k", .. }),
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk, &preview[1..], &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview[1..],
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(
@@ -282,7 +314,15 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk, &preview, &mut [0.0; 2])
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut [0.0; 2],
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(e, StepFailure::WrongLength { what: "tau", .. }),
@@ -291,7 +331,15 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 let mut bad_x = x.clone();
                 bad_x[4] = f64::NAN;
                 let e = twin
-                    .step(&mut model, &bad_x, &wk, &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x: &bad_x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert_eq!(
                     e,
@@ -302,7 +350,17 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 );
                 let mut bad_w = preview.clone();
                 bad_w[7] = f64::INFINITY;
-                let e = twin.step(&mut model, x, &wk, &bad_w, &mut t).unwrap_err();
+                let e = twin
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &bad_w,
+                        },
+                        &mut t,
+                    )
+                    .unwrap_err();
                 assert_eq!(
                     e,
                     StepFailure::NonFiniteInput {
@@ -316,7 +374,17 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     (Fault::HugeCoriolis, "f0·Ts"),
                 ] {
                     model.fault = fault;
-                    let e = twin.step(&mut model, x, &wk, &preview, &mut t).unwrap_err();
+                    let e = twin
+                        .step(
+                            &mut model,
+                            &ofmpc::control::StepInput {
+                                x,
+                                w_k: &wk,
+                                preview: &preview,
+                            },
+                            &mut t,
+                        )
+                        .unwrap_err();
                     assert!(e.to_string().contains(want), "{kind}: {e}");
                     match fault {
                         Fault::Indefinite => {
@@ -340,7 +408,17 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     model.fault = Fault::None;
                 }
                 let mut wrong = CoupledModel::new(2, 1);
-                let e = twin.step(&mut wrong, x, &wk, &preview, &mut t).unwrap_err();
+                let e = twin
+                    .step(
+                        &mut wrong,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
+                    .unwrap_err();
                 assert!(matches!(
                     e,
                     StepFailure::Model(TermsError::DofMismatch {
@@ -350,8 +428,16 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                 ));
                 assert_eq!(t, sentinel, "tau must not be written on error");
             }
-            twin.step(&mut model, x, &wk, &preview, &mut t_twin)
-                .unwrap();
+            twin.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t_twin,
+            )
+            .unwrap();
             assert_eq!(
                 t_good, t_twin,
                 "{kind}: step {k} differs after failed calls"
@@ -389,14 +475,40 @@ fn reset_restarts_from_scratch() {
         let (wk, preview) = ([0.3, 0.1], vec![0.3, 0.1, 0.3, 0.1, 0.3, 0.1, 0.3, 0.1]);
         c.reset(&x0).unwrap();
         let mut first = [0.0; 2];
-        c.step(&mut model, &x0, &wk, &preview, &mut first).unwrap();
+        c.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x0,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut first,
+        )
+        .unwrap();
         let mut t = [0.0; 2];
         for _ in 0..5 {
-            c.step(&mut model, &[0.2, 0.1, 0.5, -0.3], &wk, &preview, &mut t)
-                .unwrap();
+            c.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &[0.2, 0.1, 0.5, -0.3],
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t,
+            )
+            .unwrap();
         }
         c.reset(&x0).unwrap();
-        c.step(&mut model, &x0, &wk, &preview, &mut t).unwrap();
+        c.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x0,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut t,
+        )
+        .unwrap();
         assert_eq!(t, first, "{kind}");
     }
 }

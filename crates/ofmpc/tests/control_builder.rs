@@ -268,11 +268,27 @@ fn old_path_refuses_to_step_without_its_drive_model() {
             let mut preview = vec![0.0; s.horizon * n];
             reference.preview(0, s.horizon, &mut preview);
             let mut tau = vec![0.0; n];
-            let r = c.step(&mut model, &x, reference.q(0), &preview, &mut tau);
+            let r = c.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: reference.q(0),
+                    preview: &preview,
+                },
+                &mut tau,
+            );
             assert_eq!(r, Err(StepFailure::NoDriveModel), "{kind}");
             c.set_drive_model(&DriveModel::from_robot(&robot)).unwrap();
-            c.step(&mut model, &x, reference.q(0), &preview, &mut tau)
-                .unwrap();
+            c.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: reference.q(0),
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
         }
     }
 }
@@ -314,7 +330,17 @@ fn same_as_old_path(kind: ControllerKind, settings: &MpcSettings, drives: Option
         measured(&reference, k, &mut x);
         reference.preview(k, nh, &mut preview);
         let w = reference.q(k);
-        let info = old.step(&mut model, &x, w, &preview, &mut tau).unwrap();
+        let info = old
+            .step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: w,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
         let out = mpc
             .step(&StepInput {
                 x: &x,
@@ -475,7 +501,17 @@ fn torques_side_by_side(
         measured(&reference, k, &mut x);
         reference.preview(k, nh, &mut preview);
         let w = reference.q(k);
-        library.step(&mut model, &x, w, &preview, &mut tau).unwrap();
+        library
+            .step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: w,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
         let out = built
             .step(&StepInput {
                 x: &x,

@@ -53,8 +53,16 @@ fn run(
             reference.at(k + j, s.ts, &mut preview[(j - 1) * n..j * n]);
         }
         errors.push((0..n).map(|i| wk[i] - x[i]).collect());
-        ctrl.step(model, x.as_slice(), &wk, &preview, &mut tau)
-            .unwrap();
+        ctrl.step(
+            model,
+            &ofmpc::control::StepInput {
+                x: x.as_slice(),
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         advance(&mut x, &tau);
     }
     errors

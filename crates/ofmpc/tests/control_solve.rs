@@ -116,9 +116,11 @@ fn steps_solve_the_papers_least_squares_systems() {
                 let info = ctrl
                     .step(
                         &mut model,
-                        x.as_slice(),
-                        wk.as_slice(),
-                        w.as_slice(),
+                        &ofmpc::control::StepInput {
+                            x: x.as_slice(),
+                            w_k: wk.as_slice(),
+                            preview: w.as_slice(),
+                        },
                         &mut tau,
                     )
                     .unwrap();

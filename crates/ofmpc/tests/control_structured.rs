@@ -81,7 +81,18 @@ fn compare_random(
         let mut taus = [vec![0.0; n], vec![0.0; n]];
         let mut infos = [None, None];
         for ((c, tau), info) in ctrls.iter_mut().zip(&mut taus).zip(&mut infos) {
-            *info = Some(c.step(model, &x, &wk, &preview, tau).unwrap());
+            *info = Some(
+                c.step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    tau,
+                )
+                .unwrap(),
+            );
         }
         let (d, st) = (infos[0].unwrap(), infos[1].unwrap());
         let du = rel(ctrls[1].increments(), ctrls[0].increments());
@@ -182,7 +193,16 @@ fn one_step_pair(
     for (c, o) in pair(kind, n, s).iter_mut().zip(&mut out) {
         c.reset(x_prev).unwrap();
         let mut tau = vec![0.0; n];
-        c.step(model, x, wk, preview, &mut tau).unwrap();
+        c.step(
+            model,
+            &ofmpc::control::StepInput {
+                x,
+                w_k: wk,
+                preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         *o = c.increments().to_vec();
     }
     out
@@ -305,14 +325,19 @@ impl Algorithm for Lockstep {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &ofmpc::control::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
-        let info = self.dense.step(model, x, w_k, preview, tau)?;
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
+        let info = self
+            .dense
+            .step(model, &ofmpc::control::StepInput { x, w_k, preview }, tau)?;
         self.structured
-            .step(model, x, w_k, preview, &mut self.tau2)
+            .step(
+                model,
+                &ofmpc::control::StepInput { x, w_k, preview },
+                &mut self.tau2,
+            )
             .expect("the structured solver fails where the dense one succeeds");
         let (a, b) = (self.structured.increments(), self.dense.increments());
         let nb = b.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -430,7 +455,16 @@ fn auto_solver_is_dense_for_short_and_structured_for_long_horizons() {
                 let mut c = new_controller(kind, n, &s).unwrap();
                 c.reset(&xp).unwrap();
                 let mut tau = vec![0.0; n];
-                c.step(&mut model, &x, &w, &p, &mut tau).unwrap();
+                c.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: &w,
+                        preview: &p,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 out.push(c.increments().to_vec());
             }
             assert_eq!(out[0], out[1], "{kind} N = {nh}");

@@ -202,7 +202,15 @@ fn predicted_outputs_equal_the_prediction_built_again() {
             }
             reference.preview(k, nh, &mut preview);
             controller
-                .step(&mut model, &x, reference.q(k), &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: reference.q(k),
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
                 .unwrap();
             assert!(controller.predicted_outputs(&mut own), "{kind}");
             let again = predicted_again(

@@ -253,7 +253,15 @@ pub fn closed_loop_matrix(
         // First step: a perturbed reference excites u and ē.
         let w: Vec<f64> = q0.iter().map(|v| v + eps * rng.next()).collect();
         let preview: Vec<f64> = preview0.iter().map(|v| v + eps * rng.next()).collect();
-        ctrl.step(&mut model, &x, &w, &preview, &mut tau)?;
+        ctrl.step(
+            &mut model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: &w,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         for i in 0..n {
             ebar[i] += w[i] - x[i];
         }
@@ -273,7 +281,15 @@ pub fn closed_loop_matrix(
         };
         let mut z = state(&x, ctrl.input(), &ebar);
         for _ in 0..pairs_per_run {
-            ctrl.step(&mut model, &x, q0, &preview0, &mut tau)?;
+            ctrl.step(
+                &mut model,
+                &crate::control::StepInput {
+                    x: &x,
+                    w_k: q0,
+                    preview: &preview0,
+                },
+                &mut tau,
+            )?;
             for i in 0..n {
                 ebar[i] += q0[i] - x[i];
             }
@@ -556,8 +572,15 @@ fn controller_gains(
     };
     let (x0, p0) = (pass.x0.clone(), pass.preview0.clone());
     pass.ctrl.reset(&x0)?;
-    pass.ctrl
-        .step(&mut pass.model, &x0, q0, &p0, &mut pass.tau0)?;
+    pass.ctrl.step(
+        &mut pass.model,
+        &crate::control::StepInput {
+            x: &x0,
+            w_k: q0,
+            preview: &p0,
+        },
+        &mut pass.tau0,
+    )?;
     let mut rng = Lcg(0x5eed);
     let runs = 8;
     let per_run = (2 * m).div_ceil(runs);
@@ -633,8 +656,15 @@ impl GainPass {
         let x = about(&self.x0, &d.x_first);
         let w = about(&self.q0, &d.w);
         let preview = about(&self.preview0, &d.preview);
-        self.ctrl
-            .step(&mut self.model, &x, &w, &preview, &mut tau)?;
+        self.ctrl.step(
+            &mut self.model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: &w,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         let mut ebar: Vec<f64> = (0..n).map(|i| w[i] - x[i]).collect();
         x_prev.copy_from_slice(&x);
         let mut rows = Vec::with_capacity(d.xs.len());
@@ -649,8 +679,15 @@ impl GainPass {
                         .take(if self.with_ebar { n } else { 0 }),
                 )
                 .collect();
-            self.ctrl
-                .step(&mut self.model, &x, &self.q0, &self.preview0, &mut tau)?;
+            self.ctrl.step(
+                &mut self.model,
+                &crate::control::StepInput {
+                    x: &x,
+                    w_k: &self.q0,
+                    preview: &self.preview0,
+                },
+                &mut tau,
+            )?;
             let out: Vec<f64> = (self.ctrl.input().iter().copied())
                 .chain(tau.iter().zip(&self.tau0).map(|(t, t0)| t - t0))
                 .collect();
@@ -868,7 +905,15 @@ pub fn simulated_growth(
     let mut tau = vec![0.0; n];
     let mut last = 0.0f64;
     for k in 0..steps {
-        ctrl.step(&mut model, &x, q0, &preview, &mut tau)?;
+        ctrl.step(
+            &mut model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: q0,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         plant
             .step(&mut x, &tau, settings.ts, 10)
             .ok_or(StabilityError::NonFinite { alpha })?;

@@ -157,11 +157,10 @@ impl Algorithm for AdaptiveMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &crate::control::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();
         let saved_pi = self.model_pi;
@@ -191,7 +190,10 @@ impl Algorithm for AdaptiveMpc {
                 }
             }
         }
-        match self.inner.step(model, x, w_k, preview, tau) {
+        match self
+            .inner
+            .step(model, &crate::control::StepInput { x, w_k, preview }, tau)
+        {
             Ok(info) => {
                 self.x_prev.copy_from_slice(x);
                 self.tau_prev.copy_from_slice(tau);

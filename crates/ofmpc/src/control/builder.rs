@@ -580,13 +580,14 @@ impl Controller {
             }
             None => input.x,
         };
-        let info = self.controller.step(
-            &mut self.model,
+        let input = StepInput {
             x,
-            input.w_k,
-            input.preview,
-            &mut self.output.tau,
-        )?;
+            w_k: input.w_k,
+            preview: input.preview,
+        };
+        let info = self
+            .controller
+            .step(&mut self.model, &input, &mut self.output.tau)?;
         if let Some(o) = self.observer.as_mut() {
             o.record_torque(&self.output.tau);
         }

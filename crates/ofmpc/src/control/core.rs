@@ -148,11 +148,10 @@ macro_rules! impl_controller {
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
-                x: &[f64],
-                w_k: &[f64],
-                preview: &[f64],
+                input: &$crate::control::StepInput<'_>,
                 tau: &mut [f64],
             ) -> Result<$crate::control::StepInfo, $crate::control::StepFailure> {
+                let (x, w_k, preview) = (input.x, input.w_k, input.preview);
                 self.$($step).+(model, x, w_k, preview, tau)
             }
         }

@@ -206,11 +206,10 @@ impl Algorithm for DobMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &crate::control::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let n = self.n;
         check_len("x", x.len(), 2 * n)?;
         check_len("tau", tau.len(), n)?;
@@ -219,9 +218,11 @@ impl Algorithm for DobMpc {
             return Err(StepFailure::NoDriveModel);
         }
         self.model.update(model, &x[..n], &x[n..])?;
-        let info = self
-            .inner
-            .step(model, x, w_k, preview, &mut self.tau_tilde)?;
+        let info = self.inner.step(
+            model,
+            &crate::control::StepInput { x, w_k, preview },
+            &mut self.tau_tilde,
+        )?;
         self.observe(x);
         self.torque()?;
         check_result(&self.u, &self.tau_new)?;

@@ -23,13 +23,21 @@
 //!
 //! Build a controller with [`ControllerBuilder`]: it checks that the kind,
 //! the tuning, the drives and the observer fit together ([`BuildError`])
-//! and returns an [`Controller`] that owns its model of the robot and steps with
-//! one [`StepInput`] into one [`StepOutput`]. [`new_controller`] and the
-//! [`Algorithm`] trait are the lower-level path it wraps.
+//! and returns a [`Controller`] — one object for every kind
+//! ([`ControllerKind::ALL`]: the paper's three, the adaptive variants, the
+//! baselines) — that owns its model of the robot, its drives, its observer
+//! and its output, and steps with one [`StepInput`] into one [`StepOutput`].
 //!
-//! All buffers are sized at construction; [`Algorithm::step`] allocates
-//! nothing, never panics and reports a failed sample as a [`StepFailure`],
-//! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
+//! All buffers are sized at construction; [`Controller::step`] allocates
+//! nothing and never panics. It refuses bad input ([`StepError`]: the
+//! controller is untouched); the numerical outcome of the sample is
+//! [`StepOutput::status`] ([`StepStatus`]): on a numerical failure the
+//! output holds the last torque and the controller's state (`x_{k−1}`,
+//! `u_{k−1}`, `ē_{k−1}`) is as before the call.
+//!
+//! [`Algorithm`], the per-kind step behind [`Controller`], and
+//! [`new_controller`] are the lower-level path it wraps, kept public only
+//! until the tests and benches step through [`Controller`] (issue 34).
 
 pub mod adaptive;
 pub mod baseline;
@@ -297,11 +305,11 @@ pub trait Algorithm {
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);
-    /// * `x`: measured state `x_k = [q_k; q̇_k]` (2n values);
-    /// * `w_k`: current reference `w_k` (n values; used by the second algorithm,
-    ///   checked by all);
-    /// * `preview`: `w_{k+1}, …, w_{k+N}` (N·n values, block `j−1` is `w_{k+j}`;
-    ///   past the end of a path repeat its last value);
+    /// * `input`: the measured state `x_k = [q_k; q̇_k]` (2n values), the
+    ///   current reference `w_k` (n values; used by the second algorithm,
+    ///   checked by all) and the preview `w_{k+1}, …, w_{k+N}` (N·n values,
+    ///   block `j−1` is `w_{k+j}`; past the end of a path repeat its last
+    ///   value), [`StepInput`];
     /// * `tau`: receives `τ_k = H u_k + g` (n values, Eq. (15)), written only
     ///   on success.
     ///
@@ -309,9 +317,7 @@ pub trait Algorithm {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure>;
     /// The payload mass its model carries, identified online (kg); `None`

@@ -503,10 +503,17 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        let status = self
-            .estimator
-            .estimate(model, &self.x)
-            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
+        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
+            controller.step(
+                model,
+                &crate::control::StepInput {
+                    x: xs,
+                    w_k: w0,
+                    preview,
+                },
+                tau,
+            )
+        });
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             return match self.supervisor.begin_stop(t, reason, &self.x, model) {
@@ -674,8 +681,15 @@ impl<'a> ClosedLoop<'a> {
             self.supervisor
                 .stop_torque(model, &self.x, xs, &mut self.tau)?;
         } else {
-            self.controller
-                .step(model, xs, w, &self.preview, &mut self.tau)?;
+            self.controller.step(
+                model,
+                &crate::control::StepInput {
+                    x: xs,
+                    w_k: w,
+                    preview: &self.preview,
+                },
+                &mut self.tau,
+            )?;
             if let Some(h) = &mut self.horizon {
                 h.observe(k, &mut *self.controller);
             }
