@@ -310,6 +310,67 @@ pub(crate) struct Core {
     predicted_work: Vec<f64>,
 }
 
+/// The per-algorithm part of one step of a paper controller: what it
+/// targets, given to [`Core::step_with`], the step every paper controller
+/// shares (model, prediction, least squares, torque, Eq. (6)–(15)).
+pub(crate) trait StepTargets {
+    /// Incremental algorithm (`u_k = u_{k−1} + Δu_k`, the reduced tracking
+    /// system of Eq. (37)/(39)) rather than the positional one (Eq. (43)).
+    const INCREMENTAL: bool;
+    /// After [`Core::prepare`], before either solver: the algorithm's own
+    /// quantities of this sample (the second's `ē_k`, Eq. (34)).
+    fn begin(&mut self, _c: &mut Core, _x: &[f64], _w_k: &[f64], _preview: &[f64]) {}
+    /// The stage-wise problem's initial state and targets.
+    fn stage_targets(
+        &mut self,
+        c: &mut Core,
+        x: &[f64],
+        preview: &[f64],
+    ) -> Result<(), StepFailure>;
+    /// The stacked problem's right-hand side `b` (after its matrix is built).
+    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure>;
+    /// After a successful step: commit the algorithm's state.
+    fn commit(&mut self, _c: &mut Core) {}
+}
+
+impl Core {
+    /// One step of a paper controller, the skeleton the three share:
+    /// [`Core::prepare`] (model, ZOH, predictions), the algorithm's
+    /// [`StepTargets`], then either the stage-wise solve or the stacked
+    /// least squares, then `τ_k = H u_k + g` ([`Core::finish`], Eq. (15)) and
+    /// the algorithm's commit. Written only on success.
+    pub(crate) fn step_with<T: StepTargets>(
+        &mut self,
+        targets: &mut T,
+        model: &mut dyn JointSpaceDynamics,
+        input: (&[f64], &[f64], &[f64]),
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = input;
+        self.prepare(model, x, w_k, preview, tau.len())?;
+        targets.begin(self, x, w_k, preview);
+        let info = if self.backend.stage_mut().is_some() {
+            targets.stage_targets(self, x, preview)?;
+            self.fill_stage_model()?;
+            self.solve_structured()?
+        } else {
+            if T::INCREMENTAL {
+                self.build_reduced_matrix();
+            } else {
+                self.build_matrix();
+            }
+            targets.dense_rhs(self, x, preview)?;
+            if T::INCREMENTAL {
+                self.reduce_rhs()?;
+            }
+            self.solve()?
+        };
+        let out = self.finish(x, T::INCREMENTAL, info, tau)?;
+        targets.commit(self);
+        Ok(out)
+    }
+}
+
 impl Core {
     /// Buffers for controller `kind` with `n` joints, after
     /// [`MpcSettings::validate_for_dof`]; the back-end from
