@@ -1,37 +1,35 @@
-//! `ofmpc.Controller`: one predictive controller of the paper, stepped from
-//! Python, over `ofmpc::control`.
+//! `ofmpc.Controller`: one controller, stepped from Python: a thin wrapper of
+//! the library's one stepping object, [`ofmpc::control::Controller`] (built by
+//! [`ControllerBuilder`]; it owns its model of the robot, its buffers and its
+//! output).
 
 use crate::arrays::{array1, fill_shaped};
 use crate::errors::to_py;
 use crate::robot::PyRobot;
 use numpy::PyArray1;
 use ofmpc::control::{
-    new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
-    Solver, StepInfo, Weight,
+    BaselineSettings, Controller, ControllerBuilder, ControllerKind, MpcSettings, Solver,
+    StepError, StepInput, StepStatus, Weight,
 };
-use ofmpc::dynamics::RobotDynamics;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::Mutex;
 
-/// A controller with its own model of the robot and buffers sized once.
+/// The library's controller and the arrays of one step's arguments.
 #[pyclass(name = "Controller", module = "ofmpc")]
 pub struct PyController {
     /// In a `Mutex` only to make the class `Sync` (a Python requirement):
     /// `step` and `reset` take `&mut self` and reach it by `get_mut`, without locking.
-    controller: Mutex<Box<dyn Controller + Send>>,
+    controller: Mutex<Controller>,
     kind: ControllerKind,
     dof: usize,
     horizon: usize,
     ts: f64,
-    model: RobotDynamics,
     x: Vec<f64>,
     w: Vec<f64>,
     preview: Vec<f64>,
-    tau: Vec<f64>,
-    info: Option<StepInfo>,
-    /// Whether `reset` started a run (a `step` before it is refused).
-    started: bool,
+    /// Cost, `max|R_ii|/min|R_ii|` and ZOH doublings of the last successful step.
+    info: Option<(f64, f64, u32)>,
 }
 
 /// The keyword arguments of `Controller()` that are weights.
@@ -126,21 +124,22 @@ impl PyController {
             }
         }
         let n = robot.robot().dof();
-        let controller =
-            new_controller_with_baselines(kind, n, &settings, &baselines).map_err(to_py)?;
+        let mut builder = ControllerBuilder::new(kind, robot.robot()).settings(settings);
+        if kind.is_baseline() {
+            builder = builder.baselines(baselines);
+        }
+        // A settings error keeps its own message (`BuildError::Settings` is transparent).
+        let controller = builder.build().map_err(to_py)?;
         Ok(Self {
             kind: controller.kind(),
             dof: controller.dof(),
             horizon: controller.horizon(),
             ts: controller.settings().ts,
             controller: Mutex::new(controller),
-            model: RobotDynamics::new(robot.robot().clone()),
             x: vec![0.0; 2 * n],
             w: vec![0.0; n],
             preview: vec![0.0; horizon * n],
-            tau: vec![0.0; n],
             info: None,
-            started: false,
         })
     }
 
@@ -176,11 +175,11 @@ impl PyController {
     #[getter]
     fn last_info<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.info
-            .map(|i| {
+            .map(|(cost, r_diag_ratio, zoh_squarings)| {
                 let d = PyDict::new(py);
-                d.set_item("cost", i.cost)?;
-                d.set_item("r_diag_ratio", i.r_diag_ratio)?;
-                d.set_item("zoh_squarings", i.zoh_squarings)?;
+                d.set_item("cost", cost)?;
+                d.set_item("r_diag_ratio", r_diag_ratio)?;
+                d.set_item("zoh_squarings", zoh_squarings)?;
                 Ok(d)
             })
             .transpose()
@@ -193,14 +192,11 @@ impl PyController {
         let n2 = 2 * self.dof;
         fill_shaped("x0", x0, &[("(2·dof,)", &[n2])], &mut self.x)?;
         self.info = None;
-        self.started = false;
         self.controller
             .get_mut()
             .unwrap_or_else(|e| e.into_inner())
             .reset(&self.x)
-            .map_err(to_py)?;
-        self.started = true;
-        Ok(())
+            .map_err(to_py)
     }
 
     /// One control step: measured state x (2n,), current reference w_k (n,),
@@ -225,25 +221,28 @@ impl PyController {
         )?;
         // The arguments first (an argument error names the argument whatever the state), then
         // the state: a controller never reset has no state to step from.
-        if !self.started {
-            return Err(to_py(
-                "step before reset: call reset(x0) with the measured state [q, q̇] first",
-            ));
-        }
         let controller = self.controller.get_mut().unwrap_or_else(|e| e.into_inner());
-        let (model, x, w, preview, tau) = (
-            &mut self.model,
-            &self.x,
-            &self.w,
-            &self.preview,
-            &mut self.tau,
-        );
+        let input = StepInput {
+            x: &self.x,
+            w_k: &self.w,
+            preview: &self.preview,
+        };
         // The GIL released: a large robot's step may take long (other Python threads run).
-        let info = py
-            .detach(|| controller.step(model, x, w, preview, tau))
-            .map_err(to_py)?;
-        self.info = Some(info);
-        Ok(array1(py, &self.tau))
+        let out = match py.detach(move || controller.step(&input)) {
+            Ok(out) => out,
+            Err(StepError::NotReset) => {
+                return Err(to_py(
+                    "step before reset: call reset(x0) with the measured state [q, q̇] first",
+                ))
+            }
+            Err(e) => return Err(to_py(e)),
+        };
+        // A numerical failure raises (the controller holds its last torque and state).
+        if let StepStatus::HeldLastTorque(failure) = out.status {
+            return Err(to_py(failure));
+        }
+        self.info = Some((out.cost, out.r_diag_ratio, out.zoh_squarings));
+        Ok(array1(py, &out.tau))
     }
 
     fn __repr__(&self) -> String {

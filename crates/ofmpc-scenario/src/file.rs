@@ -169,7 +169,7 @@ pub struct ScenarioFile {
     /// Which controllers to run: any of `"usual"`, `"first"`, `"second"`,
     /// `"first-adaptive"`, `"second-adaptive"`, and the baselines `"pid"`,
     /// `"ctc"`, `"ctc-adaptive"`, `"dob-mpc"`; `"all"` stands for every one
-    /// ([`ControllerKind::EVERY`]), `"baselines"` for the four baselines.
+    /// ([`ControllerKind::ALL`]), `"baselines"` for the four baselines.
     #[serde(deserialize_with = "controllers_with_shorthands")]
     pub controllers: Vec<ControllerKind>,
     /// `[robot]`
@@ -228,7 +228,7 @@ where
                 None => {
                     return Err(serde::de::Error::custom(format!(
                         "unknown controller {s:?}: expected one of {}, or \"all\", \"baselines\"",
-                        ControllerKind::EVERY
+                        ControllerKind::ALL
                             .iter()
                             .map(|k| format!("\"{k}\""))
                             .collect::<Vec<_>>()
@@ -245,9 +245,9 @@ where
 /// `"baselines"` the four baselines, `"paper"` the paper's three.
 pub fn expand_shorthand(s: &str) -> Option<&'static [ControllerKind]> {
     match s.trim().to_ascii_lowercase().as_str() {
-        "all" => Some(&ControllerKind::EVERY),
+        "all" => Some(&ControllerKind::ALL),
         "baselines" => Some(&ControllerKind::BASELINES),
-        "paper" => Some(&ControllerKind::ALL),
+        "paper" => Some(&ControllerKind::PAPER),
         _ => None,
     }
 }
@@ -267,7 +267,7 @@ impl Default for ScenarioFile {
     fn default() -> Self {
         Self {
             title: "Offset-free MPC of the ABB IRB 140 on the paper's path".into(),
-            controllers: ControllerKind::ALL.to_vec(),
+            controllers: ControllerKind::PAPER.to_vec(),
             robot: RobotSection::default(),
             payload: PayloadSection::default(),
             program: ProgramSection::default(),

@@ -82,7 +82,7 @@ fn baselines_and_controller_shorthands() {
     assert_eq!(f.controllers, want);
     assert_eq!(f.baselines.pid_bandwidth, Weight::Scalar(60.0));
     let all: ScenarioFile = toml::from_str("controllers = [\"all\"]").unwrap();
-    assert_eq!(all.controllers, ControllerKind::EVERY.to_vec());
+    assert_eq!(all.controllers, ControllerKind::ALL.to_vec());
     assert!(toml::from_str::<ScenarioFile>("controllers = [\"pidd\"]").is_err());
     // The bandwidths reach the experiment (the run's controllers build with them); a bad one
     // names its key.

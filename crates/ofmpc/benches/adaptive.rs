@@ -32,11 +32,28 @@ fn steps(c: &mut Criterion) {
         ctrl.reset(&x).unwrap();
         let mut tau = vec![0.0; n];
         // One step first, so that the adaptive variant has a previous sample.
-        ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        ctrl.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         group.bench_function(kind.name(), |b| {
             b.iter(|| {
-                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                ctrl.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });

@@ -30,7 +30,7 @@ fn steps(c: &mut Criterion) {
     group.sample_size(20);
     let kinds: Vec<ControllerKind> = match std::env::var("OFMPC_BENCH_KINDS") {
         Ok(list) => list.split(',').filter_map(|k| k.parse().ok()).collect(),
-        Err(_) => ControllerKind::ALL.to_vec(),
+        Err(_) => ControllerKind::PAPER.to_vec(),
     };
     let max_n: usize = std::env::var("OFMPC_BENCH_MAX_N")
         .ok()
@@ -69,8 +69,16 @@ fn steps(c: &mut Criterion) {
                 let id = format!("{}-{}", kind.name(), solver.name());
                 group.bench_with_input(BenchmarkId::new(id, nh), &nh, |b, _| {
                     b.iter(|| {
-                        ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                            .unwrap();
+                        ctrl.step(
+                            &mut model,
+                            &ofmpc::control::StepInput {
+                                x: black_box(&x),
+                                w_k: &wk,
+                                preview: &preview,
+                            },
+                            &mut tau,
+                        )
+                        .unwrap();
                         black_box(&tau);
                     })
                 });
@@ -204,7 +212,16 @@ fn limits(c: &mut Criterion) {
         let mut free = new_controller(kind, n, &free_settings).unwrap();
         let mut tau = vec![0.0; n];
         free.reset(&x).unwrap();
-        free.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        free.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         let drives = binding_limits(&tau);
         let s = MpcSettings {
             torque_limits: true,
@@ -213,7 +230,16 @@ fn limits(c: &mut Criterion) {
         let mut ctrl = new_controller(kind, n, &s).unwrap();
         ctrl.set_drive_model(&drives).unwrap();
         ctrl.reset(&x).unwrap();
-        ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+        ctrl.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         assert!(
             ctrl.qp_status().is_some_and(|q| q.active),
             "{kind}: QP not active"
@@ -221,16 +247,32 @@ fn limits(c: &mut Criterion) {
         group.bench_function(format!("{}-qp", kind.name()), |b| {
             b.iter(|| {
                 ctrl.reset(&x).unwrap();
-                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                ctrl.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });
         group.bench_function(format!("{}-free", kind.name()), |b| {
             b.iter(|| {
                 free.reset(&x).unwrap();
-                free.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                free.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });
@@ -250,7 +292,7 @@ fn baselines(c: &mut Criterion) {
     group.measurement_time(Duration::from_secs(1));
     group.sample_size(20);
     let s = MpcSettings::default();
-    let kinds = ControllerKind::ALL
+    let kinds = ControllerKind::PAPER
         .into_iter()
         .chain([ControllerKind::SecondAdaptive])
         .chain(ControllerKind::BASELINES);
@@ -268,8 +310,16 @@ fn baselines(c: &mut Criterion) {
         let mut tau = vec![0.0; n];
         group.bench_function(kind.name(), |b| {
             b.iter(|| {
-                ctrl.step(&mut model, black_box(&x), &wk, &preview, &mut tau)
-                    .unwrap();
+                ctrl.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: black_box(&x),
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 black_box(&tau);
             })
         });

@@ -25,7 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .step_by(20)
         .map(|k| reference.q(k))
         .collect();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         for a in [0.5, 0.8, 1.0, 1.1] {
             let r = StabilityProblem {
                 robot: &robot,

@@ -10,7 +10,7 @@
 //!
 //! What most users need is re-exported here at the crate root: [`Robot`], [`Payload`],
 //! [`plan`] and [`PlanOptions`], [`ControllerKind`], [`MpcSettings`] and [`BaselineSettings`], [`ControllerBuilder`]
-//! (a controller that works as configured, or a typed refusal) and its [`Mpc`],
+//! (a controller that works as configured, or a typed refusal) and its [`Controller`],
 //! [`Experiment`] (one run, judged), [`ClosedLoop`] and its settings.
 //!
 //! Equations are referenced as in the paper ("Predictive Control for Offset-Free
@@ -52,8 +52,8 @@
 pub use nalgebra;
 
 pub use control::{
-    new_controller, BaselineSettings, Controller, ControllerBuilder, ControllerKind, Mpc,
-    MpcSettings, StepError, StepInput, StepOutput,
+    new_controller, Algorithm, BaselineSettings, Controller, ControllerBuilder, ControllerKind,
+    MpcSettings, StepError, StepInput, StepOutput, StepStatus,
 };
 pub use motion::{plan, JointReference, PlanOptions};
 pub use robot::{Payload, Robot};

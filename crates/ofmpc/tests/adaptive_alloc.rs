@@ -7,7 +7,7 @@ mod common;
 use common::alloc_counter;
 
 use nalgebra::{DMatrix, DVector};
-use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepError};
+use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StepFailure};
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{LossSchedule, Plant, PlantSettings, Sensor};
@@ -65,13 +65,38 @@ fn adaptive_steps_allocate_nothing() {
         let before = allocations();
         for _ in 0..150 {
             sensor.measure(&plant.state(), &mut x).unwrap();
-            ctrl.step(&mut model, &x, &q0, &preview, &mut tau).unwrap();
+            ctrl.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &q0,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             plant.advance(&tau).unwrap();
             assert!(ctrl
-                .step(&mut model, &bad_x, &q0, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &bad_x,
+                        w_k: &q0,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
                 .is_err());
             assert!(ctrl
-                .step(&mut model, &x[1..], &q0, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x[1..],
+                        w_k: &q0,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
                 .is_err());
         }
         let after = allocations();
@@ -86,8 +111,16 @@ fn adaptive_steps_allocate_nothing() {
         // No rigid-body model: a typed error, not a panic.
         let mut opaque = Opaque(RobotDynamics::new(robot.clone()));
         assert_eq!(
-            ctrl.step(&mut opaque, &x, &q0, &preview, &mut tau),
-            Err(StepError::NoRigidBodyModel)
+            ctrl.step(
+                &mut opaque,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &q0,
+                    preview: &preview
+                },
+                &mut tau
+            ),
+            Err(StepFailure::NoRigidBodyModel)
         );
     }
 }

@@ -1,4 +1,4 @@
-//! Real-time property: after construction and reset, `Controller::step`
+//! Real-time property: after construction and reset, `Algorithm::step`
 //! performs no heap allocation (counted by a global allocator, per thread).
 
 use common::alloc_counter;
@@ -16,7 +16,7 @@ use alloc_counter::allocations;
 
 fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
     let n = model.dof();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut ctrl = new_controller(kind, n, settings).unwrap();
         let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
         ctrl.reset(&x0).unwrap();
@@ -31,10 +31,39 @@ fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
             for (i, xi) in x.iter_mut().enumerate() {
                 *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
             }
-            ctrl.step(model, &x, &wk, &preview, &mut tau).unwrap();
+            ctrl.step(
+                model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             // Failed steps allocate nothing either.
-            assert!(ctrl.step(model, &bad_x, &wk, &preview, &mut tau).is_err());
-            assert!(ctrl.step(model, &x[1..], &wk, &preview, &mut tau).is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &bad_x,
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &x[1..],
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
         }
         let after = allocations();
         assert_eq!(
@@ -113,7 +142,7 @@ fn constrained_steps_allocate_nothing(settings: MpcSettings) {
     let mut model = CoupledModel::new(6, 1);
     let n = 6;
     let drives = binding_drives(n);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut ctrl = new_controller(kind, n, &settings).unwrap();
         ctrl.set_drive_model(&drives).unwrap();
         let (x0, wk, preview) = moving_inputs(n, settings.horizon);
@@ -126,7 +155,16 @@ fn constrained_steps_allocate_nothing(settings: MpcSettings) {
             for (i, xi) in x.iter_mut().enumerate() {
                 *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
             }
-            ctrl.step(&mut model, &x, &wk, &preview, &mut tau).unwrap();
+            ctrl.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             active += usize::from(ctrl.qp_status().is_some_and(|s| s.active));
             assert!(tau.iter().all(|t| t.abs() <= 0.5), "{kind}: {tau:?}");
         }
@@ -157,7 +195,7 @@ fn observer_updates_allocate_nothing() {
     assert_eq!(allocations() - before, 0);
 }
 
-/// The built controller's step (`Mpc::step`: observer, model, solve,
+/// The built controller's step (`Controller::step`: observer, model, solve,
 /// torque-limit QP with friction compensation, output) allocates nothing,
 /// for every kind, failed steps included.
 #[test]
@@ -175,7 +213,7 @@ fn built_controller_steps_allocate_nothing() {
     };
     let drives = binding_drives(n);
     // Every kind: the paper's, the adaptive variants and the baselines.
-    for kind in ControllerKind::EVERY {
+    for kind in ControllerKind::ALL {
         for settings in [MpcSettings::default(), limited.clone()] {
             let limits = settings.torque_limits;
             let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());

@@ -6,7 +6,7 @@ mod common;
 use common::CoupledModel;
 use nalgebra::{DMatrix, DVector};
 use ofmpc::control::{
-    new_controller, Controller, ControllerKind, MpcSettings, SettingsError, StepError, TermsError,
+    new_controller, Algorithm, ControllerKind, MpcSettings, SettingsError, StepFailure, TermsError,
     Weight, ZohError,
 };
 use ofmpc::dynamics::JointSpaceDynamics;
@@ -90,9 +90,9 @@ fn settings_parse_from_toml_with_scalars_diagonals_and_defaults() {
         kind: Vec<ControllerKind>,
     }
     let k: K = toml::from_str("kind = [\"usual\", \"first\", \"second\"]").unwrap();
-    assert_eq!(k.kind, ControllerKind::ALL);
+    assert_eq!(k.kind, ControllerKind::PAPER);
     assert!(toml::from_str::<K>("kind = [\"Usual\"]").is_err());
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         assert_eq!(kind.to_string().parse::<ControllerKind>().unwrap(), kind);
     }
     assert!("third"
@@ -181,7 +181,7 @@ fn invalid_settings_are_rejected_with_the_field_named() {
     for (s, field) in cases {
         let e = s.validate().unwrap_err();
         assert!(e.to_string().contains(field), "{field}: {e}");
-        for kind in ControllerKind::ALL {
+        for kind in ControllerKind::PAPER {
             assert!(new_controller(kind, 2, &s).is_err());
         }
     }
@@ -201,7 +201,7 @@ fn invalid_settings_are_rejected_with_the_field_named() {
 #[test]
 fn controllers_are_object_safe_and_send() {
     let s = MpcSettings::default();
-    let boxed: Vec<Box<dyn Controller + Send>> = ControllerKind::ALL
+    let boxed: Vec<Box<dyn Algorithm + Send>> = ControllerKind::PAPER
         .iter()
         .map(|&k| new_controller(k, 3, &s).unwrap())
         .collect();
@@ -213,7 +213,7 @@ fn controllers_are_object_safe_and_send() {
     });
     let got = handle.join().unwrap();
     assert_eq!(got.len(), 3);
-    for ((kind, dof, nh, snh), want) in got.into_iter().zip(ControllerKind::ALL) {
+    for ((kind, dof, nh, snh), want) in got.into_iter().zip(ControllerKind::PAPER) {
         assert_eq!((kind, dof, nh, snh), (want, 3, 10, 10));
     }
 }
@@ -223,7 +223,7 @@ fn controllers_are_object_safe_and_send() {
 fn failed_steps_report_errors_and_leave_the_state_untouched() {
     let n = 3;
     let s = MpcSettings::default();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut good = new_controller(kind, n, &s).unwrap();
         let mut twin = new_controller(kind, n, &s).unwrap();
         let mut model = Faulty {
@@ -241,19 +241,35 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
         let mut t_good = vec![0.0; n];
         let mut t_twin = vec![0.0; n];
         for (k, x) in states.iter().enumerate() {
-            good.step(&mut model, x, &wk, &preview, &mut t_good)
-                .unwrap();
+            good.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t_good,
+            )
+            .unwrap();
             if k == 2 {
                 let sentinel = vec![7.0; n];
                 let mut t = sentinel.clone();
                 let short = &x[..5];
                 let e = twin
-                    .step(&mut model, short, &wk, &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x: short,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(
                         e,
-                        StepError::WrongLength {
+                        StepFailure::WrongLength {
                             what: "x",
                             expected: 6,
                             got: 5
@@ -262,19 +278,35 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk[..2], &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk[..2],
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
-                    matches!(e, StepError::WrongLength { what: "w_k", .. }),
+                    matches!(e, StepFailure::WrongLength { what: "w_k", .. }),
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk, &preview[1..], &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview[1..],
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert!(
                     matches!(
                         e,
-                        StepError::WrongLength {
+                        StepFailure::WrongLength {
                             what: "preview",
                             ..
                         }
@@ -282,30 +314,56 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     "{e}"
                 );
                 let e = twin
-                    .step(&mut model, x, &wk, &preview, &mut [0.0; 2])
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut [0.0; 2],
+                    )
                     .unwrap_err();
                 assert!(
-                    matches!(e, StepError::WrongLength { what: "tau", .. }),
+                    matches!(e, StepFailure::WrongLength { what: "tau", .. }),
                     "{e}"
                 );
                 let mut bad_x = x.clone();
                 bad_x[4] = f64::NAN;
                 let e = twin
-                    .step(&mut model, &bad_x, &wk, &preview, &mut t)
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x: &bad_x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
                     .unwrap_err();
                 assert_eq!(
                     e,
-                    StepError::NonFiniteInput {
+                    StepFailure::NonFiniteInput {
                         what: "x",
                         index: 4
                     }
                 );
                 let mut bad_w = preview.clone();
                 bad_w[7] = f64::INFINITY;
-                let e = twin.step(&mut model, x, &wk, &bad_w, &mut t).unwrap_err();
+                let e = twin
+                    .step(
+                        &mut model,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &bad_w,
+                        },
+                        &mut t,
+                    )
+                    .unwrap_err();
                 assert_eq!(
                     e,
-                    StepError::NonFiniteInput {
+                    StepFailure::NonFiniteInput {
                         what: "preview",
                         index: 7
                     }
@@ -316,13 +374,23 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                     (Fault::HugeCoriolis, "f0·Ts"),
                 ] {
                     model.fault = fault;
-                    let e = twin.step(&mut model, x, &wk, &preview, &mut t).unwrap_err();
+                    let e = twin
+                        .step(
+                            &mut model,
+                            &ofmpc::control::StepInput {
+                                x,
+                                w_k: &wk,
+                                preview: &preview,
+                            },
+                            &mut t,
+                        )
+                        .unwrap_err();
                     assert!(e.to_string().contains(want), "{kind}: {e}");
                     match fault {
                         Fault::Indefinite => {
                             assert!(matches!(
                                 e,
-                                StepError::Model(TermsError::InertiaNotPositiveDefinite {
+                                StepFailure::Model(TermsError::InertiaNotPositiveDefinite {
                                     pivot: 1,
                                     ..
                                 })
@@ -330,28 +398,46 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
                         }
                         Fault::NanGravity => assert!(matches!(
                             e,
-                            StepError::Model(TermsError::NonFiniteTerm { .. })
+                            StepFailure::Model(TermsError::NonFiniteTerm { .. })
                         )),
                         _ => assert!(matches!(
                             e,
-                            StepError::Discretization(ZohError::BadNorm { .. })
+                            StepFailure::Discretization(ZohError::BadNorm { .. })
                         )),
                     }
                     model.fault = Fault::None;
                 }
                 let mut wrong = CoupledModel::new(2, 1);
-                let e = twin.step(&mut wrong, x, &wk, &preview, &mut t).unwrap_err();
+                let e = twin
+                    .step(
+                        &mut wrong,
+                        &ofmpc::control::StepInput {
+                            x,
+                            w_k: &wk,
+                            preview: &preview,
+                        },
+                        &mut t,
+                    )
+                    .unwrap_err();
                 assert!(matches!(
                     e,
-                    StepError::Model(TermsError::DofMismatch {
+                    StepFailure::Model(TermsError::DofMismatch {
                         expected: 3,
                         got: 2
                     })
                 ));
                 assert_eq!(t, sentinel, "tau must not be written on error");
             }
-            twin.step(&mut model, x, &wk, &preview, &mut t_twin)
-                .unwrap();
+            twin.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t_twin,
+            )
+            .unwrap();
             assert_eq!(
                 t_good, t_twin,
                 "{kind}: step {k} differs after failed calls"
@@ -361,11 +447,11 @@ fn failed_steps_report_errors_and_leave_the_state_untouched() {
         // reset checks its input too
         assert!(matches!(
             good.reset(&x0[..4]),
-            Err(StepError::WrongLength { what: "x0", .. })
+            Err(StepFailure::WrongLength { what: "x0", .. })
         ));
         assert!(matches!(
             good.reset(&[f64::NAN; 6]),
-            Err(StepError::NonFiniteInput {
+            Err(StepFailure::NonFiniteInput {
                 what: "x0",
                 index: 0
             })
@@ -382,21 +468,47 @@ fn reset_restarts_from_scratch() {
         horizon: 4,
         ..MpcSettings::default()
     };
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut c = new_controller(kind, n, &s).unwrap();
         let mut model = CoupledModel::new(n, 2);
         let x0 = [0.1, 0.2, 0.0, 0.0];
         let (wk, preview) = ([0.3, 0.1], vec![0.3, 0.1, 0.3, 0.1, 0.3, 0.1, 0.3, 0.1]);
         c.reset(&x0).unwrap();
         let mut first = [0.0; 2];
-        c.step(&mut model, &x0, &wk, &preview, &mut first).unwrap();
+        c.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x0,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut first,
+        )
+        .unwrap();
         let mut t = [0.0; 2];
         for _ in 0..5 {
-            c.step(&mut model, &[0.2, 0.1, 0.5, -0.3], &wk, &preview, &mut t)
-                .unwrap();
+            c.step(
+                &mut model,
+                &ofmpc::control::StepInput {
+                    x: &[0.2, 0.1, 0.5, -0.3],
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut t,
+            )
+            .unwrap();
         }
         c.reset(&x0).unwrap();
-        c.step(&mut model, &x0, &wk, &preview, &mut t).unwrap();
+        c.step(
+            &mut model,
+            &ofmpc::control::StepInput {
+                x: &x0,
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut t,
+        )
+        .unwrap();
         assert_eq!(t, first, "{kind}");
     }
 }

@@ -53,8 +53,16 @@ fn run(
             reference.at(k + j, s.ts, &mut preview[(j - 1) * n..j * n]);
         }
         errors.push((0..n).map(|i| wk[i] - x[i]).collect());
-        ctrl.step(model, x.as_slice(), &wk, &preview, &mut tau)
-            .unwrap();
+        ctrl.step(
+            model,
+            &ofmpc::control::StepInput {
+                x: x.as_slice(),
+                w_k: &wk,
+                preview: &preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         advance(&mut x, &tau);
     }
     errors
@@ -166,7 +174,7 @@ fn exact_model_all_three_track_a_constant_reference() {
     let model = LinearModel::example2();
     let plant = LinearPlant::new(&model, DVector::zeros(2), s.ts);
     let r = Ramp::constant(&[0.3, -0.2]);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut m = model.clone();
         let e = run(
             kind,
@@ -189,7 +197,7 @@ fn usual_keeps_the_predicted_offset_incremental_ones_remove_it() {
     let case = mismatched(s.ts);
     let r = Ramp::constant(&[0.3, -0.2]);
     let want = usual_offset(&case.model, &s, &case.u_ss);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut m = case.model.clone();
         let e = run(
             kind,
@@ -273,7 +281,7 @@ fn nonlinear_arm_with_payload_offset_free_for_incremental_algorithms() {
     let r = Ramp::constant(&[0.4, 0.6]);
     let x0 = [0.2, 0.3, 0.0, 0.0];
     let mut offsets = Vec::new();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut plant = Plant::new(arm.with_payload(0.2, 0.4), DVector::zeros(2), 5);
         let mut m = arm.clone();
         let e = run(
@@ -294,7 +302,7 @@ fn nonlinear_arm_with_payload_offset_free_for_incremental_algorithms() {
     // The usual controller does not compensate the payload's gravity.
     assert!(offsets[0] > 1e-5, "usual offset {}", offsets[0]);
     // With the exact model all three converge to the reference.
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut plant = Plant::new(arm.clone(), DVector::zeros(2), 5);
         let mut m = arm.clone();
         let e = run(

@@ -70,7 +70,7 @@ fn paper_system(
 #[test]
 fn steps_solve_the_papers_least_squares_systems() {
     let n = 3;
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         for &nh in &[1usize, 2, 5, 10] {
             let settings = MpcSettings {
                 horizon: nh,
@@ -116,9 +116,11 @@ fn steps_solve_the_papers_least_squares_systems() {
                 let info = ctrl
                     .step(
                         &mut model,
-                        x.as_slice(),
-                        wk.as_slice(),
-                        w.as_slice(),
+                        &ofmpc::control::StepInput {
+                            x: x.as_slice(),
+                            w_k: wk.as_slice(),
+                            preview: w.as_slice(),
+                        },
                         &mut tau,
                     )
                     .unwrap();

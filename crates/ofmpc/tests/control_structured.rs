@@ -8,7 +8,7 @@ mod common;
 
 use common::{CoupledModel, Rng};
 use ofmpc::control::{
-    new_controller, Controller, ControllerKind, MpcSettings, Solver, StepError, StepInfo, Weight,
+    new_controller, Algorithm, ControllerKind, MpcSettings, Solver, StepFailure, StepInfo, Weight,
 };
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
@@ -24,7 +24,7 @@ fn rel(a: &[f64], b: &[f64]) -> f64 {
     (d / nb).sqrt()
 }
 
-fn pair(kind: ControllerKind, n: usize, s: &MpcSettings) -> [Box<dyn Controller + Send>; 2] {
+fn pair(kind: ControllerKind, n: usize, s: &MpcSettings) -> [Box<dyn Algorithm + Send>; 2] {
     let dense = MpcSettings {
         solver: Solver::DenseQr,
         ..s.clone()
@@ -81,7 +81,18 @@ fn compare_random(
         let mut taus = [vec![0.0; n], vec![0.0; n]];
         let mut infos = [None, None];
         for ((c, tau), info) in ctrls.iter_mut().zip(&mut taus).zip(&mut infos) {
-            *info = Some(c.step(model, &x, &wk, &preview, tau).unwrap());
+            *info = Some(
+                c.step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: &wk,
+                        preview: &preview,
+                    },
+                    tau,
+                )
+                .unwrap(),
+            );
         }
         let (d, st) = (infos[0].unwrap(), infos[1].unwrap());
         let du = rel(ctrls[1].increments(), ctrls[0].increments());
@@ -102,7 +113,7 @@ fn structured_equals_dense_qr_on_random_irb140_states() {
     let mut model = RobotDynamics::new(Robot::irb140());
     let center = [-0.27, 1.0, -0.5, -0.3, -0.7, 0.3];
     let mut rng = Rng(11);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         for nh in [1usize, 2, 5, 10, 30] {
             for (q_du, q_u) in [(1e-5, 1e-4), (1e-3, 1e-2)] {
                 let s = MpcSettings {
@@ -136,7 +147,7 @@ fn structured_equals_dense_qr_with_diagonal_weights() {
     let n = 4;
     let mut model = CoupledModel::new(n, 3);
     let mut rng = Rng(5);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let s = MpcSettings {
             horizon: 7,
             ts: 0.02,
@@ -182,7 +193,16 @@ fn one_step_pair(
     for (c, o) in pair(kind, n, s).iter_mut().zip(&mut out) {
         c.reset(x_prev).unwrap();
         let mut tau = vec![0.0; n];
-        c.step(model, x, wk, preview, &mut tau).unwrap();
+        c.step(
+            model,
+            &ofmpc::control::StepInput {
+                x,
+                w_k: wk,
+                preview,
+            },
+            &mut tau,
+        )
+        .unwrap();
         *o = c.increments().to_vec();
     }
     out
@@ -200,7 +220,7 @@ fn structured_equals_dense_qr_at_tiny_input_weight() {
     let mut model = RobotDynamics::new(Robot::irb140());
     let center = [0.2, 0.6, -0.3, 0.4, 0.9, -0.2];
     let mut rng = Rng(23);
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         for nh in [10usize, 20, 50] {
             let s = MpcSettings {
                 horizon: nh,
@@ -240,7 +260,7 @@ fn structured_solution_is_invariant_to_a_base_joint_offset() {
         q_u: Weight::Scalar(1e-8),
         ..MpcSettings::default()
     };
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let (xp, x, w, p) = random_sample(n, nh, &[0.2, 0.6, -0.3, 0.4, 0.9, -0.2], &mut rng);
         let base = one_step_pair(kind, &mut model, &s, (&xp, &x, &w, &p));
         let (mut moved_dense, mut moved_structured) = (0.0f64, 0.0f64);
@@ -271,15 +291,15 @@ fn structured_solution_is_invariant_to_a_base_joint_offset() {
 /// Runs the dense controller in closed loop and the structured one beside it
 /// on the same measurements, recording the worst relative difference of ΔU.
 struct Lockstep {
-    dense: Box<dyn Controller + Send>,
-    structured: Box<dyn Controller + Send>,
+    dense: Box<dyn Algorithm + Send>,
+    structured: Box<dyn Algorithm + Send>,
     tau2: Vec<f64>,
     /// Per step: `‖ΔU_dense‖` and `‖ΔU_structured − ΔU_dense‖`.
     norms: Vec<(f64, f64)>,
     steps: usize,
 }
 
-impl Controller for Lockstep {
+impl Algorithm for Lockstep {
     fn kind(&self) -> ControllerKind {
         self.dense.kind()
     }
@@ -292,7 +312,7 @@ impl Controller for Lockstep {
     fn settings(&self) -> &MpcSettings {
         self.dense.settings()
     }
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         self.structured.reset(x0)?;
         self.dense.reset(x0)
     }
@@ -305,14 +325,19 @@ impl Controller for Lockstep {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &ofmpc::control::StepInput<'_>,
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
-        let info = self.dense.step(model, x, w_k, preview, tau)?;
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
+        let info = self
+            .dense
+            .step(model, &ofmpc::control::StepInput { x, w_k, preview }, tau)?;
         self.structured
-            .step(model, x, w_k, preview, &mut self.tau2)
+            .step(
+                model,
+                &ofmpc::control::StepInput { x, w_k, preview },
+                &mut self.tau2,
+            )
             .expect("the structured solver fails where the dense one succeeds");
         let (a, b) = (self.structured.increments(), self.dense.increments());
         let nb = b.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -329,7 +354,7 @@ fn structured_equals_dense_qr_along_the_paper_path() {
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let s = MpcSettings::default();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, s.ts).unwrap();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let [dense, structured] = pair(kind, 6, &s);
         let mut lock = Lockstep {
             dense,
@@ -430,7 +455,16 @@ fn auto_solver_is_dense_for_short_and_structured_for_long_horizons() {
                 let mut c = new_controller(kind, n, &s).unwrap();
                 c.reset(&xp).unwrap();
                 let mut tau = vec![0.0; n];
-                c.step(&mut model, &x, &w, &p, &mut tau).unwrap();
+                c.step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: &w,
+                        preview: &p,
+                    },
+                    &mut tau,
+                )
+                .unwrap();
                 out.push(c.increments().to_vec());
             }
             assert_eq!(out[0], out[1], "{kind} N = {nh}");

@@ -1,5 +1,5 @@
 //! Real-time property of both least-squares solvers: after construction and
-//! reset, `Controller::step` performs no heap allocation (counted by a global
+//! reset, `Algorithm::step` performs no heap allocation (counted by a global
 //! allocator, per thread), with the structured solver at long horizons and
 //! the dense QR named explicitly.
 
@@ -18,7 +18,7 @@ use alloc_counter::allocations;
 
 fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
     let n = model.dof();
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let mut ctrl = new_controller(kind, n, settings).unwrap();
         let x0: Vec<f64> = (0..2 * n).map(|i| 0.05 * i as f64).collect();
         ctrl.reset(&x0).unwrap();
@@ -35,10 +35,39 @@ fn count_steps(model: &mut dyn JointSpaceDynamics, settings: &MpcSettings) {
             for (i, xi) in x.iter_mut().enumerate() {
                 *xi = x0[i] + 0.01 * k as f64 * if i % 2 == 0 { 1.0 } else { -3.0 };
             }
-            ctrl.step(model, &x, &wk, &preview, &mut tau).unwrap();
+            ctrl.step(
+                model,
+                &ofmpc::control::StepInput {
+                    x: &x,
+                    w_k: &wk,
+                    preview: &preview,
+                },
+                &mut tau,
+            )
+            .unwrap();
             // Failed steps allocate nothing either.
-            assert!(ctrl.step(model, &bad_x, &wk, &preview, &mut tau).is_err());
-            assert!(ctrl.step(model, &x[1..], &wk, &preview, &mut tau).is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &bad_x,
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
+            assert!(ctrl
+                .step(
+                    model,
+                    &ofmpc::control::StepInput {
+                        x: &x[1..],
+                        w_k: &wk,
+                        preview: &preview
+                    },
+                    &mut tau
+                )
+                .is_err());
         }
         let after = allocations();
         assert_eq!(

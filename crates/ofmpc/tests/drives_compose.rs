@@ -57,7 +57,7 @@ fn all_effects_together_on_the_paper_path() {
         },
         baselines: Default::default(),
     };
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let (r, m) = exp
             .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
             .unwrap();
@@ -137,7 +137,7 @@ proptest! {
             baselines: Default::default(),
         };
         let (r, m) = exp
-            .run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {})
+            .run(ControllerKind::PAPER[kind], &Payload::point_mass(payload), &mut |_, _| {})
             .unwrap();
         prop_assert_eq!(m.status, r.outcome.status());
         prop_assert_eq!(m.stopped_at_s, r.outcome.stopped_at());

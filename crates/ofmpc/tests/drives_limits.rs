@@ -84,7 +84,7 @@ fn run(
 fn limits_that_never_bind_change_nothing_bit_for_bit() {
     // With the stock limits (16 N·m on joint 6) the second algorithm's plan
     // over the horizon does touch them; with wide limits no plan does.
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let (free, _) = run(kind, Some(-1e4), false, false);
         let (limited, _) = run(kind, Some(-1e4), true, false);
         assert!(free.outcome.is_completed() && limited.outcome.is_completed());
@@ -101,7 +101,7 @@ fn limits_that_never_bind_change_nothing_bit_for_bit() {
 #[test]
 fn lowered_limit_is_respected_on_every_sample_and_the_run_stays_offset_free() {
     let limit = 24.0;
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         // The plant does not saturate: the record holds the commanded torque.
         let (r, m) = run(kind, Some(limit), true, false);
         assert!(r.outcome.is_completed(), "{kind}: {}", r.outcome);
@@ -177,7 +177,7 @@ fn a_limit_just_below_the_peak_costs_little_tracking() {
     // without limits for the usual and the first algorithm (measured 1.0×
     // and 1.02×); the second's (0.0010 mm without limits) grows to ≈ 5.6×,
     // still below 0.01 mm.
-    for kind in ControllerKind::ALL {
+    for kind in ControllerKind::PAPER {
         let (_, free) = run(kind, None, false, false);
         let (r, lim) = run(kind, Some(26.0), true, true);
         assert!(r.outcome.is_completed(), "{kind}: {}", r.outcome);

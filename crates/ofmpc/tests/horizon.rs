@@ -157,7 +157,7 @@ fn predicted_again(
     out
 }
 
-/// `Controller::predicted_outputs` (the controller's own model of its step) equals the
+/// `Algorithm::predicted_outputs` (the controller's own model of its step) equals the
 /// prediction built again from scratch (the recorder's former computation) within 1e-12 rad,
 /// at every sample of a closed loop with a payload, for every controller with a horizon and
 /// both solvers; the baselines predict nothing.
@@ -204,7 +204,15 @@ fn predicted_outputs_equal_the_prediction_built_again() {
             }
             reference.preview(k, nh, &mut preview);
             controller
-                .step(&mut model, &x, reference.q(k), &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: &x,
+                        w_k: reference.q(k),
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
                 .unwrap();
             assert!(controller.predicted_outputs(&mut own), "{kind}");
             let again = predicted_again(

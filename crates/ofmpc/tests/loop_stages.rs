@@ -163,7 +163,15 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             s.reference.preview(k, controller.horizon(), &mut preview);
             let xs = estimator.estimate(&mut model, &x).unwrap();
             controller
-                .step(&mut model, xs, w, &preview, &mut tau)
+                .step(
+                    &mut model,
+                    &ofmpc::control::StepInput {
+                        x: xs,
+                        w_k: w,
+                        preview: &preview,
+                    },
+                    &mut tau,
+                )
                 .unwrap();
             estimator.record_torque(&tau);
             sensor.record_torque(&tau);

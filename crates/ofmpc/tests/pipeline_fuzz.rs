@@ -58,7 +58,7 @@ proptest! {
             loop_settings: LoopSettings { hold_s: 0.6, ..Default::default() },
             baselines: Default::default(),
         };
-        match exp.run(ControllerKind::ALL[kind], &Payload::point_mass(payload), &mut |_, _| {}) {
+        match exp.run(ControllerKind::PAPER[kind], &Payload::point_mass(payload), &mut |_, _| {}) {
             Ok((r, m)) => {
                 prop_assert_eq!(m.diverged, r.outcome.status() == RunStatus::Diverged);
                 prop_assert_eq!(m.status, r.outcome.status());

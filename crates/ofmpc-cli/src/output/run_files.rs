@@ -16,7 +16,7 @@ use ofmpc_scenario::ScenarioFile;
 use std::path::{Path, PathBuf};
 
 /// Every controller a scenario can name (run folders are `<controller>_m<mass>/`).
-const KINDS: [ControllerKind; 9] = ControllerKind::EVERY;
+const KINDS: [ControllerKind; 9] = ControllerKind::ALL;
 
 /// The per-payload figures, by the prefix of their stem (`<prefix><mass label>`).
 pub(crate) mod per_payload {

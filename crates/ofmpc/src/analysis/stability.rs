@@ -18,9 +18,9 @@
 //! minimal state; regressing on the redundant one would leave directions the
 //! loop never visits undetermined and give spurious eigenvalues), is
 //! linearized by perturbation of the **actual controller step**
-//! ([`crate::control::Controller::step`]) and the plant: short closed-loop
+//! ([`crate::control::Algorithm::step`]) and the plant: short closed-loop
 //! runs from small random deviations (a random `x_{−1}` through
-//! [`crate::control::Controller::reset`], a random plant state, a random
+//! [`crate::control::Algorithm::reset`], a random plant state, a random
 //! first reference to excite `u` and `ē`) give pairs `(z_k, z_{k+1})` and the
 //! matrix `M` with `z_{k+1} = M z_k` by least squares (exact for the linear
 //! part: the deviations are 1e-7). The loop is stable near rest iff the
@@ -41,8 +41,8 @@
 //! the baselines ([`StabilityError::Baseline`]).
 
 use crate::control::{
-    new_controller_with_baselines, BaselineSettings, Controller, ControllerKind, MpcSettings,
-    SettingsError, StepError,
+    new_controller_with_baselines, Algorithm, BaselineSettings, ControllerKind, MpcSettings,
+    SettingsError, StepFailure,
 };
 use crate::dynamics::{JointSpaceDynamics, RobotDynamics};
 use crate::linalg::{random, rk4_second_order_step, RK4_WORK_PER_DOF};
@@ -86,7 +86,7 @@ pub enum StabilityError {
     Settings(#[from] SettingsError),
     /// A controller step failed during the perturbation runs.
     #[error("a controller step failed at the pose: {0}")]
-    Step(#[from] StepError),
+    Step(#[from] StepFailure),
     /// The pose or the payload is not valid for the robot.
     #[error(transparent)]
     Model(#[from] ModelError),
@@ -357,7 +357,15 @@ fn closed_loop_matrix(
         // First step: a perturbed reference excites u and ē.
         let w: Vec<f64> = q0.iter().map(|v| v + eps * rng.next()).collect();
         let preview: Vec<f64> = preview0.iter().map(|v| v + eps * rng.next()).collect();
-        ctrl.step(&mut model, &x, &w, &preview, &mut tau)?;
+        ctrl.step(
+            &mut model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: &w,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         for i in 0..n {
             ebar[i] += w[i] - x[i];
         }
@@ -377,7 +385,15 @@ fn closed_loop_matrix(
         };
         let mut z = state(&x, ctrl.input(), &ebar);
         for _ in 0..pairs_per_run {
-            ctrl.step(&mut model, &x, q0, &preview0, &mut tau)?;
+            ctrl.step(
+                &mut model,
+                &crate::control::StepInput {
+                    x: &x,
+                    w_k: q0,
+                    preview: &preview0,
+                },
+                &mut tau,
+            )?;
             for i in 0..n {
                 ebar[i] += q0[i] - x[i];
             }
@@ -449,7 +465,7 @@ const SCHUR_SWEEPS_PER_DIM: usize = 100;
 ///   `ξ_k = [δx_k; δx_{k−1}; u_{k−1}; ē_{k−1}]` (`ē` for the second
 ///   algorithm only; [`StabilityProblem::closed_loop_matrix`]'s module doc lists the memory):
 ///   `u_k = K ξ_k`, `δτ_k = T ξ_k`. `K`, `T` come from the **actual
-///   controller step** ([`crate::control::Controller::step`]) by least
+///   controller step** ([`crate::control::Algorithm::step`]) by least
 ///   squares over steps from small random inputs (one controller, reset
 ///   between runs; exact for the linear part as in [`StabilityProblem::closed_loop_matrix`]).
 /// * The plant `q̈ = α H⁻¹(τ − C q̇ − g)` linearized at the equilibrium
@@ -660,8 +676,15 @@ fn controller_gains(
     };
     let (x0, p0) = (pass.x0.clone(), pass.preview0.clone());
     pass.ctrl.reset(&x0)?;
-    pass.ctrl
-        .step(&mut pass.model, &x0, q0, &p0, &mut pass.tau0)?;
+    pass.ctrl.step(
+        &mut pass.model,
+        &crate::control::StepInput {
+            x: &x0,
+            w_k: q0,
+            preview: &p0,
+        },
+        &mut pass.tau0,
+    )?;
     let mut rng = Lcg(0x5eed);
     let runs = 8;
     let per_run = (2 * m).div_ceil(runs);
@@ -721,7 +744,7 @@ struct RunDraws {
 /// The controller of [`controller_gains`] with its model and rest point.
 struct GainPass {
     model: RobotDynamics,
-    ctrl: Box<dyn Controller + Send>,
+    ctrl: Box<dyn Algorithm + Send>,
     x0: Vec<f64>,
     q0: Vec<f64>,
     preview0: Vec<f64>,
@@ -733,7 +756,7 @@ impl GainPass {
     /// Steps one run with the deviations `scale · draws` about rest: per
     /// recorded step, `ξ_k` and `[u_k; τ_k − τ₀]` (unscaled).
     #[allow(clippy::type_complexity)]
-    fn run(&mut self, d: &RunDraws, scale: f64) -> Result<Vec<(Vec<f64>, Vec<f64>)>, StepError> {
+    fn run(&mut self, d: &RunDraws, scale: f64) -> Result<Vec<(Vec<f64>, Vec<f64>)>, StepFailure> {
         let n = self.q0.len();
         let about = |base: &[f64], r: &[f64]| -> Vec<f64> {
             base.iter().zip(r).map(|(b, r)| b + scale * r).collect()
@@ -744,8 +767,15 @@ impl GainPass {
         let x = about(&self.x0, &d.x_first);
         let w = about(&self.q0, &d.w);
         let preview = about(&self.preview0, &d.preview);
-        self.ctrl
-            .step(&mut self.model, &x, &w, &preview, &mut tau)?;
+        self.ctrl.step(
+            &mut self.model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: &w,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         let mut ebar: Vec<f64> = (0..n).map(|i| w[i] - x[i]).collect();
         x_prev.copy_from_slice(&x);
         let mut rows = Vec::with_capacity(d.xs.len());
@@ -760,8 +790,15 @@ impl GainPass {
                         .take(if self.with_ebar { n } else { 0 }),
                 )
                 .collect();
-            self.ctrl
-                .step(&mut self.model, &x, &self.q0, &self.preview0, &mut tau)?;
+            self.ctrl.step(
+                &mut self.model,
+                &crate::control::StepInput {
+                    x: &x,
+                    w_k: &self.q0,
+                    preview: &self.preview0,
+                },
+                &mut tau,
+            )?;
             let out: Vec<f64> = (self.ctrl.input().iter().copied())
                 .chain(tau.iter().zip(&self.tau0).map(|(t, t0)| t - t0))
                 .collect();
@@ -975,7 +1012,15 @@ fn simulated_growth(
     let mut tau = vec![0.0; n];
     let mut last = 0.0f64;
     for k in 0..steps {
-        ctrl.step(&mut model, &x, q0, &preview, &mut tau)?;
+        ctrl.step(
+            &mut model,
+            &crate::control::StepInput {
+                x: &x,
+                w_k: q0,
+                preview: &preview,
+            },
+            &mut tau,
+        )?;
         plant
             .step(&mut x, &tau, settings.ts, 10)
             .ok_or(StabilityError::NonFinite { alpha })?;

@@ -20,8 +20,8 @@
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 
 use super::{
-    BaselineSettings, Controller, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc,
-    SettingsError, StepError, StepInfo,
+    Algorithm, BaselineSettings, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc,
+    SettingsError, StepFailure, StepInfo,
 };
 use crate::dynamics::JointSpaceDynamics;
 use crate::ident::{payload_of, PayloadEstimator, PayloadParams, RlsSettings};
@@ -29,7 +29,7 @@ use crate::ident::{payload_of, PayloadEstimator, PayloadParams, RlsSettings};
 /// The first or second algorithm with online payload identification.
 pub struct AdaptiveMpc {
     kind: ControllerKind,
-    inner: Box<dyn Controller + Send>,
+    inner: Box<dyn Algorithm + Send>,
     estimator: PayloadEstimator,
     x_prev: Vec<f64>,
     tau_prev: Vec<f64>,
@@ -80,7 +80,7 @@ impl AdaptiveMpc {
         baselines: &BaselineSettings,
         rls: RlsSettings,
     ) -> Result<Self, SettingsError> {
-        let (kind, inner): (ControllerKind, Box<dyn Controller + Send>) = match kind {
+        let (kind, inner): (ControllerKind, Box<dyn Algorithm + Send>) = match kind {
             ControllerKind::First | ControllerKind::FirstAdaptive => (
                 ControllerKind::FirstAdaptive,
                 Box::new(FirstMpc::new(n, settings)?),
@@ -116,7 +116,7 @@ impl AdaptiveMpc {
     }
 }
 
-impl Controller for AdaptiveMpc {
+impl Algorithm for AdaptiveMpc {
     fn kind(&self) -> ControllerKind {
         self.kind
     }
@@ -129,7 +129,7 @@ impl Controller for AdaptiveMpc {
     fn settings(&self) -> &MpcSettings {
         self.inner.settings()
     }
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         self.inner.reset(x0)?;
         self.estimator.rls_mut().reset();
         self.has_prev = false;
@@ -157,18 +157,17 @@ impl Controller for AdaptiveMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &crate::control::StepInput<'_>,
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();
         let saved_pi = self.model_pi;
         let saved_payload;
         {
             let Some(rd) = model.robot_dynamics_mut() else {
-                return Err(StepError::NoRigidBodyModel);
+                return Err(StepFailure::NoRigidBodyModel);
             };
             saved_payload = rd.robot().payload().copied();
             if self.has_prev
@@ -187,11 +186,14 @@ impl Controller for AdaptiveMpc {
                 {
                     *self.estimator.rls_mut() = saved_rls;
                     self.model_pi = saved_pi;
-                    return Err(StepError::PayloadRefused);
+                    return Err(StepFailure::PayloadRefused);
                 }
             }
         }
-        match self.inner.step(model, x, w_k, preview, tau) {
+        match self
+            .inner
+            .step(model, &crate::control::StepInput { x, w_k, preview }, tau)
+        {
             Ok(info) => {
                 self.x_prev.copy_from_slice(x);
                 self.tau_prev.copy_from_slice(tau);
@@ -204,7 +206,7 @@ impl Controller for AdaptiveMpc {
                 // The payload it had before this step, which it accepted then.
                 if let Some(rd) = model.robot_dynamics_mut() {
                     if rd.robot_mut().set_payload(saved_payload).is_err() {
-                        return Err(StepError::PayloadRefused);
+                        return Err(StepFailure::PayloadRefused);
                     }
                 }
                 Err(e)

@@ -83,7 +83,7 @@ use super::core::{check_finite, check_len, check_result, check_step_input};
 use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
 use super::settings::{MpcSettings, SettingsError};
-use super::{StepError, StepInfo};
+use super::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
 pub use super::settings::{
@@ -356,7 +356,7 @@ impl JointLawCore {
 
     /// Integral, input and `w_{k−1}` cleared; the PID's scale is taken at
     /// `x0` at the next step.
-    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         check_len("x0", x0.len(), 2 * self.n)?;
         check_finite("x0", x0)?;
         self.x0.copy_from_slice(x0);
@@ -376,12 +376,12 @@ impl JointLawCore {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
         let n = self.n;
         check_step_input(n, self.settings.horizon, x, w_k, preview, tau.len())?;
         let limited = self.settings.torque_limits;
         if (limited || self.settings.friction_compensation) && self.drives.is_none() {
-            return Err(StepError::NoDriveModel);
+            return Err(StepFailure::NoDriveModel);
         }
         if self.law == Law::Pid && !self.scale_ready {
             self.model.update(model, &self.x0[..n], &self.x0[n..])?;
@@ -453,7 +453,7 @@ impl super::core::ControllerCore for JointLawCore {
     fn settings(&self) -> &MpcSettings {
         JointLawCore::settings(self)
     }
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         JointLawCore::reset(self, x0)
     }
     fn input(&self) -> &[f64] {

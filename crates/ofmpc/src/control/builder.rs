@@ -9,10 +9,10 @@
 //! (torque limits with no finite limit, friction compensation with no
 //! friction estimate, …) is a [`BuildError`], never a quiet fallback.
 //!
-//! The built [`Mpc`] owns its model of the robot (the nominal rigid-body
+//! The built [`Controller`] owns its model of the robot (the nominal rigid-body
 //! model, with the payload the tuning assumes; for the adaptive kinds the
 //! copy whose payload it identifies), its drives and its observer, and runs
-//! one sample per [`Mpc::step`]:
+//! one sample per [`Controller::step`]:
 //!
 //! ```text
 //! x̂_k = observer(x_k) (or x_k),   τ_k = H u_k + g (+ F̂(v_ref))   (Eq. (15))
@@ -56,8 +56,9 @@ use std::time::{Duration, Instant};
 
 use super::core::{check_finite, check_len};
 use super::{
-    new_controller_with_baselines, AdaptiveMpc, BaselineSettings, Controller, ControllerKind,
-    DriveModel, MpcSettings, QpStatus, SettingsError, StateObserver, StepError,
+    new_controller_with_baselines, AdaptiveMpc, Algorithm, BaselineSettings, ControllerKind,
+    DriveModel, MpcSettings, QpStatus, SettingsError, StateObserver, StepError, StepFailure,
+    StepInfo, StepStatus,
 };
 use crate::dynamics::RobotDynamics;
 use crate::ident::RlsSettings;
@@ -180,7 +181,7 @@ pub enum BuildError {
     },
 }
 
-/// Builds an [`Mpc`]: `ControllerBuilder::new(kind, &robot).settings(..)
+/// Builds an [`Controller`]: `ControllerBuilder::new(kind, &robot).settings(..)
 /// .drives(..).build()?`. Unset parts: the paper's tuning
 /// ([`MpcSettings::default`]), the robot's drives ([`DriveModel::from_robot`],
 /// when a setting uses them), [`ObserverSettings::default`] (without delay
@@ -268,8 +269,8 @@ impl<'r> ControllerBuilder<'r> {
     }
 
     /// Checks that everything fits together and builds the controller: the
-    /// buffers are sized here (this allocates; [`Mpc::step`] does not).
-    pub fn build(self) -> Result<Mpc, BuildError> {
+    /// buffers are sized here (this allocates; [`Controller::step`] does not).
+    pub fn build(self) -> Result<Controller, BuildError> {
         let Self {
             kind,
             robot,
@@ -330,11 +331,8 @@ impl<'r> ControllerBuilder<'r> {
         if let Some(d) = &drives {
             check_drives(d, &s, n, lenient)?;
         }
-        let mut model_robot = robot.clone();
-        if let Some(mass) = assumed {
-            model_robot.set_payload(Some(Payload::point_mass(mass)))?;
-        }
-        let mut controller: Box<dyn Controller + Send> = match estimator {
+        let model_robot = model_robot(robot, &s)?;
+        let mut controller: Box<dyn Algorithm + Send> = match estimator {
             Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, &s, &baselines, rls)?),
             None => new_controller_with_baselines(kind, n, &s, &baselines)?,
         };
@@ -353,7 +351,7 @@ impl<'r> ControllerBuilder<'r> {
             }
             obs
         });
-        Ok(Mpc {
+        Ok(Controller {
             kind,
             nominal_payload: model_robot.payload().copied(),
             model: RobotDynamics::new(model_robot),
@@ -369,9 +367,34 @@ impl<'r> ControllerBuilder<'r> {
                 qp_status: None,
                 payload_estimate: None,
                 solve_time: Duration::ZERO,
+                status: StepStatus::Solved,
             },
+            started: false,
         })
     }
+}
+
+/// The controller's model of the robot: `robot` as given, with the payload
+/// the tuning assumes (a point mass of [`MpcSettings::model_payload_kg`]
+/// when that is positive). The one home of the rule "model = robot + assumed payload"
+/// ([`ControllerBuilder::build`] uses it; so does a simulation that needs
+/// the same model).
+pub fn model_robot(robot: &Robot, settings: &MpcSettings) -> Result<Robot, ModelError> {
+    let mut r = robot.clone();
+    if settings.model_payload_kg > 0.0 {
+        r.set_payload(Some(Payload::point_mass(settings.model_payload_kg)))?;
+    }
+    Ok(r)
+}
+
+/// The torque-limit rule: with [`MpcSettings::torque_limits`] on, the
+/// drives need at least one finite peak torque, else the QP would never bind
+/// and the controller would run unconstrained ([`BuildError::NoTorqueLimits`]).
+pub fn check_torque_limits(settings: &MpcSettings, drives: &DriveModel) -> Result<(), BuildError> {
+    if settings.torque_limits && drives.max_torque_nm.iter().all(|t| t.is_infinite()) {
+        return Err(BuildError::NoTorqueLimits);
+    }
+    Ok(())
 }
 
 /// The baselines' bandwidths a build uses: the ones given, checked for `n`
@@ -401,9 +424,7 @@ fn check_drives(
     lenient: bool,
 ) -> Result<(), BuildError> {
     d.validate(n)?;
-    if s.torque_limits && d.max_torque_nm.iter().all(|t| t.is_infinite()) {
-        return Err(BuildError::NoTorqueLimits);
-    }
+    check_torque_limits(s, d)?;
     let no_friction = d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0);
     for (on, what) in [
         (s.friction_compensation, FrictionUse::Compensation),
@@ -429,7 +450,7 @@ pub struct StepInput<'a> {
     pub preview: &'a [f64],
 }
 
-/// What one successful [`Mpc::step`] computed. Sized at build: the step
+/// What one successful [`Controller::step`] computed. Sized at build: the step
 /// only overwrites it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepOutput {
@@ -449,13 +470,16 @@ pub struct StepOutput {
     pub payload_estimate: Option<f64>,
     /// Wall time of the step (observer, model, solve and torque).
     pub solve_time: Duration,
+    /// The numerical outcome of the step: solved, QP at its iteration cap,
+    /// or failed with the last torque held ([`StepStatus`]).
+    pub status: StepStatus,
 }
 
-/// The parts of an [`Mpc`] for a loop that interleaves its own law (a safe
+/// The parts of an [`Controller`] for a loop that interleaves its own law (a safe
 /// stop) with the controller: the controller, its model and its observer.
 pub struct MpcParts<'a> {
     /// The predictive controller; step it with [`MpcParts::model`].
-    pub controller: &'a mut (dyn Controller + Send),
+    pub controller: &'a mut (dyn Algorithm + Send),
     /// The controller's own model of the robot.
     pub model: &'a mut RobotDynamics,
     /// The state observer, when the settings run one.
@@ -465,22 +489,27 @@ pub struct MpcParts<'a> {
 /// A controller built by [`ControllerBuilder`]: it owns its model of the
 /// robot, its drives and its observer, and refuses nothing at run time that
 /// it could have refused at build.
-pub struct Mpc {
+pub struct Controller {
     kind: ControllerKind,
-    controller: Box<dyn Controller + Send>,
+    controller: Box<dyn Algorithm + Send>,
     model: RobotDynamics,
-    /// The model's payload at build, restored by [`Mpc::reset`] (the
+    /// The model's payload at build, restored by [`Controller::reset`] (the
     /// adaptive kinds change it).
     nominal_payload: Option<Payload>,
     drives: Option<DriveModel>,
     observer: Option<StateObserver>,
     x_est: Vec<f64>,
     output: StepOutput,
+    /// Reset at a measured state since build.
+    started: bool,
 }
 
-impl std::fmt::Debug for Mpc {
+/// The former name of [`Controller`].
+pub type Mpc = Controller; // TODO(merge): remove
+
+impl std::fmt::Debug for Controller {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Mpc")
+        f.debug_struct("Controller")
             .field("kind", &self.kind)
             .field("dof", &self.dof())
             .field("horizon", &self.horizon())
@@ -490,59 +519,111 @@ impl std::fmt::Debug for Mpc {
     }
 }
 
-impl Mpc {
+impl Controller {
     /// One control step: the observer's estimate (when it runs) of the
     /// measured state, then the algorithm's torque. Allocates nothing and
-    /// never panics; on error the controller's state is as before the call
-    /// (the observer's, when it runs, has taken the measurement: reset
-    /// before resuming) and the last output is kept.
+    /// never panics.
+    ///
+    /// `Err` only for bad input ([`StepError`]: wrong length, non-finite,
+    /// not reset): then nothing changed. Otherwise the numerical outcome is
+    /// [`StepOutput::status`]: on a numerical failure
+    /// ([`StepStatus::HeldLastTorque`]) the output keeps the last torque
+    /// and the controller's state is as before the call (the observer's,
+    /// when it runs, has taken the measurement).
     pub fn step(&mut self, input: &StepInput<'_>) -> Result<&StepOutput, StepError> {
         let start = Instant::now();
+        self.check_input(input)?;
+        match self.solve(input) {
+            Ok(info) => {
+                let out = &mut self.output;
+                out.cost = info.cost;
+                out.r_diag_ratio = info.r_diag_ratio;
+                out.zoh_squarings = info.zoh_squarings;
+                out.qp_status = self.controller.qp_status();
+                out.payload_estimate = self.controller.payload_estimate();
+                out.status = match out.qp_status {
+                    Some(qp) if qp.fallback => StepStatus::QpIterationCap {
+                        iterations: qp.iterations,
+                    },
+                    _ => StepStatus::Solved,
+                };
+            }
+            Err(failure) => self.output.status = StepStatus::HeldLastTorque(failure),
+        }
+        self.output.solve_time = start.elapsed();
+        Ok(&self.output)
+    }
+
+    /// The input checks of [`Self::step`]: reset first, every slice its
+    /// length and finite.
+    fn check_input(&self, input: &StepInput<'_>) -> Result<(), StepError> {
+        if !self.started {
+            return Err(StepError::NotReset);
+        }
+        let n = self.dof();
+        check_len("x", input.x.len(), 2 * n)?;
+        check_len("w_k", input.w_k.len(), n)?;
+        check_len("preview", input.preview.len(), self.horizon() * n)?;
+        check_finite("x", input.x)?;
+        check_finite("w_k", input.w_k)?;
+        check_finite("preview", input.preview)
+    }
+
+    /// Observer, algorithm, torque record: the torque into the output's
+    /// `tau` (only on success).
+    fn solve(&mut self, input: &StepInput<'_>) -> Result<StepInfo, StepFailure> {
         let x = match self.observer.as_mut() {
             Some(o) => {
-                check_len("x", input.x.len(), self.x_est.len())?;
-                check_finite("x", input.x)?;
                 self.x_est
                     .copy_from_slice(o.update(&mut self.model, input.x)?);
                 &self.x_est
             }
             None => input.x,
         };
-        let info = self.controller.step(
-            &mut self.model,
+        let input = StepInput {
             x,
-            input.w_k,
-            input.preview,
-            &mut self.output.tau,
-        )?;
+            w_k: input.w_k,
+            preview: input.preview,
+        };
+        let info = self
+            .controller
+            .step(&mut self.model, &input, &mut self.output.tau)?;
         if let Some(o) = self.observer.as_mut() {
             o.record_torque(&self.output.tau);
         }
-        let out = &mut self.output;
-        out.cost = info.cost;
-        out.r_diag_ratio = info.r_diag_ratio;
-        out.zoh_squarings = info.zoh_squarings;
-        out.qp_status = self.controller.qp_status();
-        out.payload_estimate = self.controller.payload_estimate();
-        out.solve_time = start.elapsed();
-        Ok(&self.output)
+        Ok(info)
     }
 
     /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`, the observer at rest at
-    /// `q0`, the model's payload back to the nominal one.
+    /// `q0`, the model's payload back to the nominal one. `Err` (and
+    /// nothing changed) for an `x0` of the wrong length or not finite.
     pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
-        self.controller.reset(x0)?;
+        check_len("x0", x0.len(), 2 * self.dof())?;
+        check_finite("x0", x0)?;
+        self.reset_algorithm(x0)
+            .map_err(|_| StepError::NonFiniteInput {
+                what: "x0",
+                index: 0,
+            })?;
         if let Some(o) = self.observer.as_mut() {
             o.reset(x0);
         }
+        self.x_est.copy_from_slice(x0);
+        self.started = true;
+        Ok(())
+    }
+
+    /// The algorithm's reset and the nominal payload (its failures are
+    /// ruled out by [`Self::reset`]'s checks).
+    fn reset_algorithm(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
+        self.controller.reset(x0)?;
         if self.kind.is_adaptive() {
             self.model
                 .robot_mut()
                 .set_payload(self.nominal_payload)
-                .map_err(|_| StepError::Internal("the nominal payload was refused"))?;
+                .map_err(|_| StepFailure::Internal("the nominal payload was refused"))?;
         }
-        self.x_est.copy_from_slice(x0);
         Ok(())
     }
 
@@ -572,7 +653,7 @@ impl Mpc {
     }
 
     /// The optimal sequence of the last successful step, N·n values
-    /// ([`Controller::increments`]).
+    /// ([`Algorithm::increments`]).
     pub fn increments(&self) -> &[f64] {
         self.controller.increments()
     }
@@ -607,7 +688,7 @@ impl Mpc {
 
     /// The controller, its model and its observer, for a loop that steps
     /// them itself around another law (as the simulator's safe stop does);
-    /// [`Mpc::step`] is that loop without the other law.
+    /// [`Controller::step`] is that loop without the other law.
     pub fn parts_mut(&mut self) -> MpcParts<'_> {
         MpcParts {
             controller: self.controller.as_mut(),

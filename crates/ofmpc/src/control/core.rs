@@ -45,10 +45,10 @@ use super::settings::{MpcSettings, SettingsError, Solver};
 use super::structured::{StageError, StageLq};
 use super::tracking::{dense_entries, TrackingRows};
 use super::zoh::Zoh;
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepError, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// What a controller's core gives [`Controller`](super::Controller): the
+/// What a controller's core gives [`Algorithm`](super::Algorithm): the
 /// accessors, `reset` and the drives, the same for every controller built on
 /// it ([`Core`] for the predictive controllers, the baselines'
 /// `JointLawCore`); [`impl_controller`] delegates to it.
@@ -59,19 +59,19 @@ pub(crate) trait ControllerCore {
     fn horizon(&self) -> usize;
     /// The tuning.
     fn settings(&self) -> &MpcSettings;
-    /// [`Controller::reset`](super::Controller::reset).
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError>;
+    /// [`Algorithm::reset`](super::Algorithm::reset).
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure>;
     /// The input `u` of the last successful step.
     fn input(&self) -> &[f64];
     /// The optimal sequence of the last successful step.
     fn increments(&self) -> &[f64];
-    /// [`Controller::set_drive_model`](super::Controller::set_drive_model).
+    /// [`Algorithm::set_drive_model`](super::Algorithm::set_drive_model).
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError>;
     /// What the torque-limit QP did (`None`: no QP).
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
-    /// [`Controller::predicted_outputs`](super::Controller::predicted_outputs)
+    /// [`Algorithm::predicted_outputs`](super::Algorithm::predicted_outputs)
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         let _ = out;
@@ -79,12 +79,12 @@ pub(crate) trait ControllerCore {
     }
 }
 
-/// Implements [`Controller`](super::Controller) for a controller struct with
+/// Implements [`Algorithm`](super::Algorithm) for a controller struct with
 /// a field `core` of the type `$core` (a [`ControllerCore`]): everything but
 /// the step delegates to the core. The step is the core's own
 /// (`core.step`, the joint laws) or the struct's method named last
 /// (`run_step`, the predictive controllers), with the signature of
-/// [`Controller::step`](super::Controller::step):
+/// [`Algorithm::step`](super::Algorithm::step):
 ///
 /// ```text
 /// impl_controller!(FirstMpc, ControllerKind::First, Core, run_step);
@@ -95,7 +95,7 @@ macro_rules! impl_controller {
         $crate::control::core::impl_controller!($ty, $kind, $core, core.step);
     };
     ($ty:ty, $kind:expr, $core:ty, $($step:ident).+) => {
-        impl $crate::control::Controller for $ty {
+        impl $crate::control::Algorithm for $ty {
             fn kind(&self) -> $crate::control::ControllerKind {
                 $kind
             }
@@ -112,7 +112,7 @@ macro_rules! impl_controller {
                 <$core as $crate::control::core::ControllerCore>::settings(&self.core)
             }
 
-            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepError> {
+            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepFailure> {
                 <$core as $crate::control::core::ControllerCore>::reset(&mut self.core, x0)
             }
 
@@ -148,11 +148,10 @@ macro_rules! impl_controller {
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
-                x: &[f64],
-                w_k: &[f64],
-                preview: &[f64],
+                input: &$crate::control::StepInput<'_>,
                 tau: &mut [f64],
-            ) -> Result<$crate::control::StepInfo, $crate::control::StepError> {
+            ) -> Result<$crate::control::StepInfo, $crate::control::StepFailure> {
+                let (x, w_k, preview) = (input.x, input.w_k, input.preview);
                 self.$($step).+(model, x, w_k, preview, tau)
             }
         }
@@ -170,7 +169,7 @@ impl ControllerCore for Core {
     fn settings(&self) -> &MpcSettings {
         Core::settings(self)
     }
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         Core::reset(self, x0)
     }
     fn input(&self) -> &[f64] {
@@ -235,20 +234,22 @@ pub(super) struct StructuredBackend {
 
 impl Backend {
     /// The dense solver's buffers, or an internal error for the structured one.
-    pub(super) fn dense_mut(&mut self) -> Result<&mut DenseBackend, StepError> {
+    pub(super) fn dense_mut(&mut self) -> Result<&mut DenseBackend, StepFailure> {
         match self {
             Backend::Dense(d) => Ok(d),
-            Backend::Structured(_) => Err(StepError::Internal("dense solve without its workspace")),
+            Backend::Structured(_) => {
+                Err(StepFailure::Internal("dense solve without its workspace"))
+            }
         }
     }
 
     /// The incremental algorithms' tracking rows (dense solver), or an
     /// internal error.
-    pub(super) fn tracking_mut(&mut self) -> Result<&mut TrackingRows, StepError> {
+    pub(super) fn tracking_mut(&mut self) -> Result<&mut TrackingRows, StepFailure> {
         self.dense_mut()?
             .tracking
             .as_mut()
-            .ok_or(StepError::Internal("dense solve without its workspace"))
+            .ok_or(StepFailure::Internal("dense solve without its workspace"))
     }
 
     /// The stage-wise problem when the structured solver is used.
@@ -307,6 +308,67 @@ pub(crate) struct Core {
     damping: Vec<f64>,
     /// Work of [`Core::predicted_outputs`].
     predicted_work: Vec<f64>,
+}
+
+/// The per-algorithm part of one step of a paper controller: what it
+/// targets, given to [`Core::step_with`], the step every paper controller
+/// shares (model, prediction, least squares, torque, Eq. (6)–(15)).
+pub(crate) trait StepTargets {
+    /// Incremental algorithm (`u_k = u_{k−1} + Δu_k`, the reduced tracking
+    /// system of Eq. (37)/(39)) rather than the positional one (Eq. (43)).
+    const INCREMENTAL: bool;
+    /// After [`Core::prepare`], before either solver: the algorithm's own
+    /// quantities of this sample (the second's `ē_k`, Eq. (34)).
+    fn begin(&mut self, _c: &mut Core, _x: &[f64], _w_k: &[f64], _preview: &[f64]) {}
+    /// The stage-wise problem's initial state and targets.
+    fn stage_targets(
+        &mut self,
+        c: &mut Core,
+        x: &[f64],
+        preview: &[f64],
+    ) -> Result<(), StepFailure>;
+    /// The stacked problem's right-hand side `b` (after its matrix is built).
+    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure>;
+    /// After a successful step: commit the algorithm's state.
+    fn commit(&mut self, _c: &mut Core) {}
+}
+
+impl Core {
+    /// One step of a paper controller, the skeleton the three share:
+    /// [`Core::prepare`] (model, ZOH, predictions), the algorithm's
+    /// [`StepTargets`], then either the stage-wise solve or the stacked
+    /// least squares, then `τ_k = H u_k + g` ([`Core::finish`], Eq. (15)) and
+    /// the algorithm's commit. Written only on success.
+    pub(crate) fn step_with<T: StepTargets>(
+        &mut self,
+        targets: &mut T,
+        model: &mut dyn JointSpaceDynamics,
+        input: (&[f64], &[f64], &[f64]),
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = input;
+        self.prepare(model, x, w_k, preview, tau.len())?;
+        targets.begin(self, x, w_k, preview);
+        let info = if self.backend.stage_mut().is_some() {
+            targets.stage_targets(self, x, preview)?;
+            self.fill_stage_model()?;
+            self.solve_structured()?
+        } else {
+            if T::INCREMENTAL {
+                self.build_reduced_matrix();
+            } else {
+                self.build_matrix();
+            }
+            targets.dense_rhs(self, x, preview)?;
+            if T::INCREMENTAL {
+                self.reduce_rhs()?;
+            }
+            self.solve()?
+        };
+        let out = self.finish(x, T::INCREMENTAL, info, tau)?;
+        targets.commit(self);
+        Ok(out)
+    }
 }
 
 impl Core {
@@ -488,7 +550,7 @@ impl Core {
     }
 
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
-    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         check_len("x0", x0.len(), 2 * self.n)?;
         check_finite("x0", x0)?;
         self.x_prev.copy_from_slice(x0);
@@ -501,11 +563,11 @@ impl Core {
     /// Refuses to step without the drive model the settings need: torque
     /// limits without their QP would run unconstrained, friction
     /// compensation without estimates would compensate nothing.
-    fn check_drives(&self) -> Result<(), StepError> {
+    fn check_drives(&self) -> Result<(), StepFailure> {
         if (self.settings.torque_limits && self.qp.is_none())
             || (self.settings.friction_compensation && self.drives.is_none())
         {
-            return Err(StepError::NoDriveModel);
+            return Err(StepFailure::NoDriveModel);
         }
         Ok(())
     }
@@ -518,7 +580,7 @@ impl Core {
         w_k: &[f64],
         preview: &[f64],
         tau_len: usize,
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         let n = self.n;
         check_step_input(n, self.nh, x, w_k, preview, tau_len)?;
         self.check_drives()?;
@@ -540,7 +602,7 @@ impl Core {
         if matches!(self.backend, Backend::Dense(_)) {
             self.pred
                 .update_f1_and_g1_from_zoh(&self.zoh)
-                .map_err(|_| StepError::Internal("prediction shapes"))?;
+                .map_err(|_| StepFailure::Internal("prediction shapes"))?;
         }
         for ((d, a), b) in self.dx.iter_mut().zip(x).zip(&self.x_prev) {
             *d = a - b;
@@ -619,7 +681,7 @@ impl Core {
     /// Transforms the incremental algorithms' tracking right-hand side
     /// ([`TrackingRows::b`], filled by the controller) and writes the
     /// reduced `b` (module docs); keeps `Σ ‖d_i‖²` for `J_min`.
-    pub fn reduce_rhs(&mut self) -> Result<(), StepError> {
+    pub fn reduce_rhs(&mut self) -> Result<(), StepFailure> {
         let n = self.n;
         let nh = self.nh;
         let Backend::Dense(DenseBackend {
@@ -628,7 +690,7 @@ impl Core {
             tracking_residual,
         }) = &mut self.backend
         else {
-            return Err(StepError::Internal("dense solve without its workspace"));
+            return Err(StepFailure::Internal("dense solve without its workspace"));
         };
         *tracking_residual = tr.transform_rhs();
         let b = lsq.rhs_mut();
@@ -647,7 +709,7 @@ impl Core {
 
     /// Solves the dense least-squares system and copies its solution (stored
     /// in reversed block order) into `du`.
-    pub fn solve(&mut self) -> Result<LsqInfo, StepError> {
+    pub fn solve(&mut self) -> Result<LsqInfo, StepFailure> {
         let n = self.n;
         let d = self.backend.dense_mut()?;
         let lsq = &mut d.lsq;
@@ -666,9 +728,9 @@ impl Core {
     /// Writes the per-sample part of the stage-wise model (the ZOH blocks of
     /// `A`, `B`) for controller `kind`; the caller fills `z_0`, targets and
     /// affine terms.
-    pub fn fill_stage_model(&mut self) -> Result<(), StepError> {
+    pub fn fill_stage_model(&mut self) -> Result<(), StepFailure> {
         let n = self.n;
-        let st = self.backend.stage_mut().ok_or(StepError::Internal(
+        let st = self.backend.stage_mut().ok_or(StepFailure::Internal(
             "structured solve without its workspace",
         ))?;
         let (phi1, phi2, e) = (
@@ -691,7 +753,7 @@ impl Core {
 
     /// Solves the stage-wise problem (after [`Core::fill_stage_model`] and the
     /// caller's `z_0`, targets, affine terms) and copies its solution to `du`.
-    pub fn solve_structured(&mut self) -> Result<LsqInfo, StepError> {
+    pub fn solve_structured(&mut self) -> Result<LsqInfo, StepFailure> {
         let (n, nh, g) = (self.n, self.nh, self.groups);
         let Backend::Structured(StructuredBackend {
             stage: st,
@@ -699,7 +761,7 @@ impl Core {
             head_ready,
         }) = &mut self.backend
         else {
-            return Err(StepError::Internal(
+            return Err(StepFailure::Internal(
                 "structured solve without its workspace",
             ));
         };
@@ -737,7 +799,7 @@ impl Core {
         incremental: bool,
         info: LsqInfo,
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
         let n = self.n;
         let first = &self.du[..n];
         for ((u, prev), d) in self.u_new.iter_mut().zip(&self.u_prev).zip(first) {
@@ -877,7 +939,7 @@ pub(crate) fn check_len(what: &'static str, got: usize, expected: usize) -> Resu
 
 /// A step's input for `n` joints and a horizon of `nh` samples: `x = [q; q̇]` (`2n`), the
 /// reference `w_k` (`n`), its preview (`nh·n`), all finite, and room for `τ` (`n`); else
-/// [`StepError::WrongLength`] or [`StepError::NonFiniteInput`] naming the argument. The one
+/// [`StepFailure::WrongLength`] or [`StepFailure::NonFiniteInput`] naming the argument. The one
 /// check of every controller's `step`.
 pub(crate) fn check_step_input(
     n: usize,
@@ -886,22 +948,22 @@ pub(crate) fn check_step_input(
     w_k: &[f64],
     preview: &[f64],
     tau_len: usize,
-) -> Result<(), StepError> {
+) -> Result<(), StepFailure> {
     check_len("x", x.len(), 2 * n)?;
     check_len("w_k", w_k.len(), n)?;
     check_len("preview", preview.len(), nh * n)?;
     check_len("tau", tau_len, n)?;
     check_finite("x", x)?;
     check_finite("w_k", w_k)?;
-    check_finite("preview", preview)
+    Ok(check_finite("preview", preview)?)
 }
 
 /// A step's result, the input `u` and the torque `τ` (same length), must be finite: else
-/// [`StepError::NonFiniteResult`] naming the first entry that is not (the step then changes
+/// [`StepFailure::NonFiniteResult`] naming the first entry that is not (the step then changes
 /// no state, so the caller may stop safely).
-pub(crate) fn check_result(u: &[f64], tau: &[f64]) -> Result<(), StepError> {
+pub(crate) fn check_result(u: &[f64], tau: &[f64]) -> Result<(), StepFailure> {
     match u.iter().chain(tau).position(|v| !v.is_finite()) {
-        Some(index) => Err(StepError::NonFiniteResult {
+        Some(index) => Err(StepFailure::NonFiniteResult {
             what: if index < u.len() { "u" } else { "tau" },
             index: index % u.len(),
         }),

@@ -21,7 +21,7 @@ use super::core::impl_controller;
 use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::ControllerKind;
 
-/// The computed-torque baseline. Allocation-free [`Controller::step`](super::Controller::step).
+/// The computed-torque baseline. Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct CtcController {
     core: JointLawCore,

@@ -37,10 +37,10 @@ use super::drive_model::DriveModel;
 use super::model::LinearLikeModel;
 use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::usual::UsualMpc;
-use super::{Controller, ControllerKind, StepError, StepInfo};
+use super::{Algorithm, ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The disturbance-observer MPC baseline. Allocation-free [`Controller::step`].
+/// The disturbance-observer MPC baseline. Allocation-free [`Algorithm::step`].
 #[derive(Debug, Clone)]
 pub struct DobMpc {
     inner: UsualMpc,
@@ -130,7 +130,7 @@ impl DobMpc {
     }
 
     /// `τ = τ̃ − H d̂`, clipped to the limits; `u` the input applied.
-    fn torque(&mut self) -> Result<(), StepError> {
+    fn torque(&mut self) -> Result<(), StepFailure> {
         let n = self.n;
         let h = self.model.h().as_slice();
         self.tau_new.copy_from_slice(&self.tau_tilde);
@@ -164,7 +164,7 @@ impl DobMpc {
     }
 }
 
-impl Controller for DobMpc {
+impl Algorithm for DobMpc {
     fn kind(&self) -> ControllerKind {
         ControllerKind::DobMpc
     }
@@ -177,7 +177,7 @@ impl Controller for DobMpc {
     fn settings(&self) -> &MpcSettings {
         &self.settings
     }
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         self.inner.reset(x0)?;
         self.d_hat.fill(0.0);
         self.u_prev.fill(0.0);
@@ -206,22 +206,23 @@ impl Controller for DobMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &crate::control::StepInput<'_>,
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let n = self.n;
         check_len("x", x.len(), 2 * n)?;
         check_len("tau", tau.len(), n)?;
         check_finite("x", x)?;
         if self.settings.torque_limits && self.drives.is_none() {
-            return Err(StepError::NoDriveModel);
+            return Err(StepFailure::NoDriveModel);
         }
         self.model.update(model, &x[..n], &x[n..])?;
-        let info = self
-            .inner
-            .step(model, x, w_k, preview, &mut self.tau_tilde)?;
+        let info = self.inner.step(
+            model,
+            &crate::control::StepInput { x, w_k, preview },
+            &mut self.tau_tilde,
+        )?;
         self.observe(x);
         self.torque()?;
         check_result(&self.u, &self.tau_new)?;

@@ -8,13 +8,13 @@
 //!
 //! It removes the steady error for constant references.
 
-use super::core::{impl_controller, Core};
+use super::core::{impl_controller, Core, StepTargets};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The first algorithm, Eq. (32)/(37). Allocation-free [`Controller::step`](super::Controller::step).
+/// The first algorithm, Eq. (32)/(37). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct FirstMpc {
     core: Core,
@@ -30,7 +30,8 @@ impl FirstMpc {
         })
     }
 
-    /// [`Controller::step`](super::Controller::step) of the first algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the first algorithm:
+    /// [`Core::step_with`] with its targets ([`FirstTargets`]).
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -38,26 +39,44 @@ impl FirstMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
-        let c = &mut self.core;
-        c.prepare(model, x, w_k, preview, tau.len())?;
-        if let Some(st) = c.backend.stage_mut() {
-            // Stage-wise: z = [y − y_k; Δq; Δq̇] (deviation from the measured
-            // output, as W − F_I y_k in Eq. (37)), z_0 = [0; Δx_k]; targets:
-            // w_{k+j} − y_k for the first block, 0 for Δq (Q_YW (ŷ − w), Q_ΔY Δŷ).
-            let n = c.n;
-            st.z0[..n].fill(0.0);
-            st.z0[n..].copy_from_slice(&c.dx);
-            for (r, w) in st.r.chunks_exact_mut(2 * n).zip(preview.chunks_exact(n)) {
-                for ((r, w), y) in r[..n].iter_mut().zip(w).zip(&x[..n]) {
-                    *r = w - y;
-                }
+    ) -> Result<StepInfo, StepFailure> {
+        self.core
+            .step_with(&mut FirstTargets, model, (x, w_k, preview), tau)
+    }
+}
+
+/// The first algorithm's targets, Eq. (32)/(37): the output tracks `W`
+/// relative to the measured `y_k`, the increments `Δq` are weighted.
+struct FirstTargets;
+
+impl StepTargets for FirstTargets {
+    const INCREMENTAL: bool = true;
+
+    fn stage_targets(
+        &mut self,
+        c: &mut Core,
+        x: &[f64],
+        preview: &[f64],
+    ) -> Result<(), StepFailure> {
+        // Stage-wise: z = [y − y_k; Δq; Δq̇] (deviation from the measured
+        // output, as W − F_I y_k in Eq. (37)), z_0 = [0; Δx_k]; targets:
+        // w_{k+j} − y_k for the first block, 0 for Δq (Q_YW (ŷ − w), Q_ΔY Δŷ).
+        let n = c.n;
+        let st = c
+            .backend
+            .stage_mut()
+            .ok_or(StepFailure::Internal("no stage-wise solver"))?;
+        st.z0[..n].fill(0.0);
+        st.z0[n..].copy_from_slice(&c.dx);
+        for (r, w) in st.r.chunks_exact_mut(2 * n).zip(preview.chunks_exact(n)) {
+            for ((r, w), y) in r[..n].iter_mut().zip(w).zip(&x[..n]) {
+                *r = w - y;
             }
-            c.fill_stage_model()?;
-            let info = c.solve_structured()?;
-            return c.finish(x, true, info, tau);
         }
-        c.build_reduced_matrix();
+        Ok(())
+    }
+
+    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
         let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
@@ -75,8 +94,6 @@ impl FirstMpc {
                 b_mid[o + i] = -c.w_mid[i] * c.v1[o + i];
             }
         }
-        c.reduce_rhs()?;
-        let info = c.solve()?;
-        c.finish(x, true, info, tau)
+        Ok(())
     }
 }

@@ -41,7 +41,7 @@ pub enum ControllerKind {
 
 impl ControllerKind {
     /// The paper's three, in its order of comparison.
-    pub const ALL: [ControllerKind; 3] = [
+    pub const PAPER: [ControllerKind; 3] = [
         ControllerKind::Usual,
         ControllerKind::First,
         ControllerKind::Second,
@@ -66,8 +66,9 @@ impl ControllerKind {
         ControllerKind::DobMpc,
     ];
 
-    /// Every kind: the paper's three, the adaptive variants, the baselines.
-    pub const EVERY: [ControllerKind; 9] = [
+    /// Every kind: the paper's three ([`Self::PAPER`]), the adaptive
+    /// variants, the baselines ([`Self::BASELINES`]).
+    pub const ALL: [ControllerKind; 9] = [
         ControllerKind::Usual,
         ControllerKind::First,
         ControllerKind::Second,
@@ -137,7 +138,7 @@ pub struct UnknownControllerKind(pub String);
 impl FromStr for ControllerKind {
     type Err = UnknownControllerKind;
     fn from_str(s: &str) -> Result<Self, Self::Err> {
-        ControllerKind::EVERY
+        ControllerKind::ALL
             .into_iter()
             .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
             .ok_or_else(|| UnknownControllerKind(s.to_string()))

@@ -3,7 +3,7 @@
 //! beside them the baselines a control engineer compares against
 //! ([`baseline`]): joint PID with gravity compensation ([`pid`]), computed
 //! torque ([`ctc`]), its adaptive variant ([`adaptive`]) and the
-//! disturbance-observer MPC ([`dob_mpc`]), behind the same [`Controller`]
+//! disturbance-observer MPC ([`dob_mpc`]), behind the same [`Algorithm`]
 //! trait and [`ControllerBuilder`].
 //!
 //! Per sample every controller
@@ -23,13 +23,21 @@
 //!
 //! Build a controller with [`ControllerBuilder`]: it checks that the kind,
 //! the tuning, the drives and the observer fit together ([`BuildError`])
-//! and returns an [`Mpc`] that owns its model of the robot and steps with
-//! one [`StepInput`] into one [`StepOutput`]. [`new_controller`] and the
-//! [`Controller`] trait are the lower-level path it wraps.
+//! and returns a [`Controller`] — one object for every kind
+//! ([`ControllerKind::ALL`]: the paper's three, the adaptive variants, the
+//! baselines) — that owns its model of the robot, its drives, its observer
+//! and its output, and steps with one [`StepInput`] into one [`StepOutput`].
 //!
 //! All buffers are sized at construction; [`Controller::step`] allocates
-//! nothing, never panics and reports a failed sample as a [`StepError`],
-//! leaving the controller's state (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) untouched.
+//! nothing and never panics. It refuses bad input ([`StepError`]: the
+//! controller is untouched); the numerical outcome of the sample is
+//! [`StepOutput::status`] ([`StepStatus`]): on a numerical failure the
+//! output holds the last torque and the controller's state (`x_{k−1}`,
+//! `u_{k−1}`, `ē_{k−1}`) is as before the call.
+//!
+//! [`Algorithm`], the per-kind step behind [`Controller`], and
+//! [`new_controller`] are the lower-level path it wraps, kept public only
+//! until the tests and benches step through [`Controller`] (issue 34).
 
 pub mod adaptive;
 pub mod baseline;
@@ -60,8 +68,8 @@ use crate::dynamics::JointSpaceDynamics;
 pub use adaptive::AdaptiveMpc;
 pub use baseline::{triple_pole_gains, triple_pole_inertia_ratio_range, triple_pole_is_stable};
 pub use builder::{
-    BuildError, ControllerBuilder, FrictionUse, Mpc, MpcParts, ObserverSettings, StepInput,
-    StepOutput, DEFAULT_OBSERVER_POLE,
+    check_torque_limits, model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, Mpc,
+    MpcParts, ObserverSettings, StepInput, StepOutput, DEFAULT_OBSERVER_POLE,
 };
 pub use constrained::{solve_box_qp, BoxQpWork, QpStatus};
 pub use ctc::CtcController;
@@ -94,10 +102,103 @@ pub struct StepInfo {
     pub zoh_squarings: u32,
 }
 
-/// Why a control step failed. The controller's state is as before the call;
-/// the caller may retry, hold the last torque, or stop.
+/// Bad input to [`Controller::step`] or [`Controller::reset`]: the call did
+/// nothing (the controller's state and last output are as before). The
+/// numerical outcome of a step is not an error: it is
+/// [`StepOutput::status`].
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum StepError {
+    /// A slice has the wrong length.
+    #[error(
+        "{what} has {got} values but {expected} are needed (x: 2n, w_k: n, preview: N·n, tau: n)"
+    )]
+    WrongLength {
+        /// Which argument.
+        what: &'static str,
+        /// Needed length.
+        expected: usize,
+        /// Given length.
+        got: usize,
+    },
+    /// An input holds NaN or ±∞.
+    #[error("{what}[{index}] is not finite: check the measurement and the reference")]
+    NonFiniteInput {
+        /// Which argument.
+        what: &'static str,
+        /// Index of the first bad value.
+        index: usize,
+    },
+    /// Stepped before the first [`Controller::reset`].
+    #[error("the controller was stepped before it was reset at a measured state")]
+    NotReset,
+}
+
+impl From<StepError> for StepFailure {
+    fn from(e: StepError) -> Self {
+        match e {
+            StepError::WrongLength {
+                what,
+                expected,
+                got,
+            } => StepFailure::WrongLength {
+                what,
+                expected,
+                got,
+            },
+            StepError::NonFiniteInput { what, index } => {
+                StepFailure::NonFiniteInput { what, index }
+            }
+            StepError::NotReset => StepFailure::Internal("stepped before reset"),
+        }
+    }
+}
+
+/// The numerical outcome of one [`Controller::step`], in
+/// [`StepOutput::status`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum StepStatus {
+    /// Solved: the torque is the algorithm's optimum (with torque limits,
+    /// the QP's optimum).
+    Solved,
+    /// The torque-limit QP stopped at its iteration cap (or a factorization
+    /// inside it failed): the applied input is feasible but not optimal
+    /// ([`QpStatus::fallback`]).
+    QpIterationCap {
+        /// Active-set iterations used.
+        iterations: u32,
+    },
+    /// The step failed numerically (the model at this state, the
+    /// discretization, a rank-deficient least-squares problem
+    /// ([`LsqError::RankDeficient`]), a non-finite result, …): the fallback
+    /// is to **hold the last torque** — [`StepOutput::tau`] keeps the previous
+    /// step's torque (zeros before the first success), every other field of
+    /// the output keeps its previous value, and the controller's state
+    /// (`x_{k−1}`, `u_{k−1}`, `ē_{k−1}`) is as before the call. The observer,
+    /// when it runs, has taken the measurement but not a torque. A loop
+    /// should apply the held torque this sample and begin a safe stop (or
+    /// end the run).
+    HeldLastTorque(StepFailure),
+}
+
+impl StepStatus {
+    /// The failure behind [`StepStatus::HeldLastTorque`], `None` when the
+    /// step produced a new torque.
+    pub fn failure(&self) -> Option<StepFailure> {
+        match self {
+            StepStatus::HeldLastTorque(f) => Some(*f),
+            _ => None,
+        }
+    }
+}
+
+/// Why a control algorithm's step failed (the internal algorithms' error;
+/// the built [`Controller`] reports it as [`StepStatus::HeldLastTorque`]).
+/// The algorithm's state is as before the call.
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StepFailure {
     /// A slice has the wrong length.
     #[error(
         "{what} has {got} values but {expected} are needed (x: 2n, w_k: n, preview: N·n, tau: n)"
@@ -140,7 +241,7 @@ pub enum StepError {
     #[error("an adaptive controller needs a rigid-body model of the robot to identify and update its payload")]
     NoRigidBodyModel,
     /// The settings ask for torque limits or friction compensation but the
-    /// controller was given no drive model ([`Controller::set_drive_model`]):
+    /// controller was given no drive model ([`Algorithm::set_drive_model`]):
     /// it would run unconstrained, or compensate nothing. Build it with
     /// [`ControllerBuilder`], which supplies the drives, or set them first.
     #[error("torque limits or friction compensation are on but the controller has no drive model: give it the drives' limits and friction estimates before stepping")]
@@ -155,8 +256,8 @@ pub enum StepError {
 }
 
 /// A predictive controller: measured state and reference preview in, torque
-/// out. Object safe: hold it as `Box<dyn Controller + Send>`.
-pub trait Controller {
+/// out. Object safe: hold it as `Box<dyn Algorithm + Send>`.
+pub trait Algorithm {
     /// Which algorithm this is.
     fn kind(&self) -> ControllerKind;
     /// Number of joints `n`.
@@ -167,9 +268,9 @@ pub trait Controller {
     fn settings(&self) -> &MpcSettings;
     /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
-    fn reset(&mut self, x0: &[f64]) -> Result<(), StepError>;
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure>;
     /// The input `u` of the last successful step (`u_{k−1}` of the next one),
-    /// `n` values; zero after [`Controller::reset`].
+    /// `n` values; zero after [`Algorithm::reset`].
     fn input(&self) -> &[f64];
     /// The whole optimal sequence of the last successful step, `N·n` values
     /// in natural order: block `j` is `Δu_{k+j}` (incremental algorithms) or
@@ -179,7 +280,7 @@ pub trait Controller {
     /// Gives the controller the drives' torque limits and friction estimates
     /// (used when the settings' torque limits or friction compensation are
     /// on; without them such a controller refuses to step,
-    /// [`StepError::NoDriveModel`]). Allocates (sizes the constrained
+    /// [`StepFailure::NoDriveModel`]). Allocates (sizes the constrained
     /// solver); call before a run. [`ControllerBuilder`] does it.
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
         let _ = drives;
@@ -192,7 +293,7 @@ pub trait Controller {
     /// The outputs (joint positions) the controller's model predicted at its
     /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
     /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal
-    /// sequence ([`Controller::increments`]) of that step
+    /// sequence ([`Algorithm::increments`]) of that step
     /// ([`prediction::predicted_outputs`]). `false` (and `out` unspecified)
     /// for a controller without a prediction horizon (the baselines `pid`,
     /// `ctc`, `ctc-adaptive`) or an `out` not N·n long. Allocates nothing
@@ -204,11 +305,11 @@ pub trait Controller {
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);
-    /// * `x`: measured state `x_k = [q_k; q̇_k]` (2n values);
-    /// * `w_k`: current reference `w_k` (n values; used by the second algorithm,
-    ///   checked by all);
-    /// * `preview`: `w_{k+1}, …, w_{k+N}` (N·n values, block `j−1` is `w_{k+j}`;
-    ///   past the end of a path repeat its last value);
+    /// * `input`: the measured state `x_k = [q_k; q̇_k]` (2n values), the
+    ///   current reference `w_k` (n values; used by the second algorithm,
+    ///   checked by all) and the preview `w_{k+1}, …, w_{k+N}` (N·n values,
+    ///   block `j−1` is `w_{k+j}`; past the end of a path repeat its last
+    ///   value), [`StepInput`];
     /// * `tau`: receives `τ_k = H u_k + g` (n values, Eq. (15)), written only
     ///   on success.
     ///
@@ -216,11 +317,9 @@ pub trait Controller {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        x: &[f64],
-        w_k: &[f64],
-        preview: &[f64],
+        input: &StepInput<'_>,
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError>;
+    ) -> Result<StepInfo, StepFailure>;
     /// The payload mass its model carries, identified online (kg); `None`
     /// for the controllers that do not identify it.
     fn payload_estimate(&self) -> Option<f64> {
@@ -236,7 +335,7 @@ pub fn new_controller(
     kind: ControllerKind,
     n: usize,
     settings: &MpcSettings,
-) -> Result<Box<dyn Controller + Send>, SettingsError> {
+) -> Result<Box<dyn Algorithm + Send>, SettingsError> {
     new_controller_with_baselines(kind, n, settings, &BaselineSettings::default())
 }
 
@@ -249,7 +348,7 @@ pub fn new_controller_with_baselines(
     n: usize,
     settings: &MpcSettings,
     baselines: &BaselineSettings,
-) -> Result<Box<dyn Controller + Send>, SettingsError> {
+) -> Result<Box<dyn Algorithm + Send>, SettingsError> {
     Ok(match kind {
         ControllerKind::Usual => Box::new(UsualMpc::new(n, settings)?),
         ControllerKind::First => Box::new(FirstMpc::new(n, settings)?),

@@ -17,7 +17,7 @@
 //! Allocation-free after construction.
 
 use super::model::LinearLikeModel;
-use super::StepError;
+use super::StepFailure;
 use crate::dynamics::JointSpaceDynamics;
 
 /// The observer of one controller (see the module docs).
@@ -167,7 +167,7 @@ impl StateObserver {
         model: &mut dyn JointSpaceDynamics,
         from_tmp: bool,
         tau_slot: usize,
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         let n = self.n;
         let (q, v) = if from_tmp {
             (&self.tmp_q, &self.tmp_v)
@@ -211,7 +211,7 @@ impl StateObserver {
         &mut self,
         model: &mut dyn JointSpaceDynamics,
         y: &[f64],
-    ) -> Result<&[f64], StepError> {
+    ) -> Result<&[f64], StepFailure> {
         let (n, ts, d) = (self.n, self.ts, self.delay);
         let slots = d + 1;
         if self.k > d {
@@ -244,7 +244,7 @@ impl StateObserver {
         self.out[..n].copy_from_slice(&self.tmp_q);
         self.out[n..].copy_from_slice(&self.tmp_v);
         if let Some(i) = self.out.iter().position(|v| !v.is_finite()) {
-            return Err(StepError::NonFiniteResult {
+            return Err(StepFailure::NonFiniteResult {
                 what: "observer state",
                 index: i % n,
             });

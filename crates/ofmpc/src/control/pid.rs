@@ -8,7 +8,7 @@
 //!
 //! with the nominal model's gravity at the measured `q_k`, its inertia's
 //! diagonal at the start pose `q_0` (the state of the last
-//! [`Controller::reset`](super::Controller::reset)), the reference velocity
+//! [`Algorithm::reset`](super::Algorithm::reset)), the reference velocity
 //! of [`super::baseline`] (module docs) and the gains of a discrete triple
 //! pole at `e^(−ωn·Ts)` ([`super::baseline`]), `ωn` =
 //! [`super::BaselineSettings::pid_bandwidth`] (default 60 rad/s). No
@@ -22,7 +22,7 @@ use super::core::impl_controller;
 use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 use super::ControllerKind;
 
-/// The PID baseline. Allocation-free [`Controller::step`](super::Controller::step).
+/// The PID baseline. Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct PidController {
     core: JointLawCore,

@@ -11,13 +11,13 @@
 //!
 //! It removes the steady error for constant and ramp references.
 
-use super::core::{impl_controller, Core};
+use super::core::{impl_controller, Core, StepTargets};
 use super::prediction::prefix_sums;
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The second algorithm, Eq. (34)/(39). Allocation-free [`Controller::step`](super::Controller::step).
+/// The second algorithm, Eq. (34)/(39). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct SecondMpc {
     core: Core,
@@ -40,7 +40,8 @@ impl SecondMpc {
         &self.core.ebar
     }
 
-    /// [`Controller::step`](super::Controller::step) of the second algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the second algorithm:
+    /// [`Core::step_with`] with its targets ([`SecondTargets`]).
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -48,11 +49,29 @@ impl SecondMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
-        let c = &mut self.core;
-        c.prepare(model, x, w_k, preview, tau.len())?;
-        let (n, nh) = (c.n, c.nh);
-        let rows = nh * n;
+    ) -> Result<StepInfo, StepFailure> {
+        self.core.step_with(
+            &mut SecondTargets { ws: &mut self.ws },
+            model,
+            (x, w_k, preview),
+            tau,
+        )
+    }
+}
+
+/// The second algorithm's targets, Eq. (34)/(39): the aggregated error
+/// `ē_k` joins the output's tracking (its running sum `W_s` in the stacked
+/// form).
+struct SecondTargets<'a> {
+    /// `W_s` of Eq. (39), a work buffer of n values.
+    ws: &'a mut [f64],
+}
+
+impl StepTargets for SecondTargets<'_> {
+    const INCREMENTAL: bool = true;
+
+    fn begin(&mut self, c: &mut Core, x: &[f64], w_k: &[f64], preview: &[f64]) {
+        let n = c.n;
         let y = &x[..n];
         // Eq. (34): e_k = w_k − y_k, ē_k = ē_{k−1} + e_k (committed on success).
         for (((e, prev), w), yi) in c.ebar_new.iter_mut().zip(&c.ebar).zip(w_k).zip(y) {
@@ -61,30 +80,43 @@ impl SecondMpc {
         if c.settings.friction_compensation {
             restart_in_hold(n, w_k, y, preview, &mut c.ebar_new);
         }
-        if let Some(st) = c.backend.stage_mut() {
-            // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
-            // w_{k+i}) − ē_k, so Q_YW s_j is the first row of Eq. (39):
-            // z_0 = [−ē_k; Δq_k; 0; Δq̇_k], c_j = [y_k − w_{k+j+1}; 0; 0; 0]
-            // (s⁺ = s + (y⁺ − y_k) + (y_k − w)), targets 0.
-            st.z0[..n]
-                .iter_mut()
-                .zip(&c.ebar_new)
-                .for_each(|(z, e)| *z = -e);
-            st.z0[n..2 * n].copy_from_slice(&c.dx[..n]);
-            st.z0[2 * n..3 * n].fill(0.0);
-            st.z0[3 * n..].copy_from_slice(&c.dx[n..]);
-            for (cj, w) in st.c.chunks_exact_mut(4 * n).zip(preview.chunks_exact(n)) {
-                for ((c, w), y) in cj[..n].iter_mut().zip(w).zip(y) {
-                    *c = y - w;
-                }
+    }
+
+    fn stage_targets(
+        &mut self,
+        c: &mut Core,
+        x: &[f64],
+        preview: &[f64],
+    ) -> Result<(), StepFailure> {
+        // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
+        // w_{k+i}) − ē_k, so Q_YW s_j is the first row of Eq. (39):
+        // z_0 = [−ē_k; Δq_k; 0; Δq̇_k], c_j = [y_k − w_{k+j+1}; 0; 0; 0]
+        // (s⁺ = s + (y⁺ − y_k) + (y_k − w)), targets 0.
+        let n = c.n;
+        let y = &x[..n];
+        let st = c
+            .backend
+            .stage_mut()
+            .ok_or(StepFailure::Internal("no stage-wise solver"))?;
+        st.z0[..n]
+            .iter_mut()
+            .zip(&c.ebar_new)
+            .for_each(|(z, e)| *z = -e);
+        st.z0[n..2 * n].copy_from_slice(&c.dx[..n]);
+        st.z0[2 * n..3 * n].fill(0.0);
+        st.z0[3 * n..].copy_from_slice(&c.dx[n..]);
+        for (cj, w) in st.c.chunks_exact_mut(4 * n).zip(preview.chunks_exact(n)) {
+            for ((c, w), y) in cj[..n].iter_mut().zip(w).zip(y) {
+                *c = y - w;
             }
-            c.fill_stage_model()?;
-            let info = c.solve_structured()?;
-            let out = c.finish(x, true, info, tau)?;
-            c.commit_ebar();
-            return Ok(out);
         }
-        c.build_reduced_matrix();
+        Ok(())
+    }
+
+    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
+        let (n, nh) = (c.n, c.nh);
+        let rows = nh * n;
+        let y = &x[..n];
         // v1 = F1 Δx, v2 = (F2 + F3) Δx.
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx, F3 Δx by block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i],
@@ -109,11 +141,11 @@ impl SecondMpc {
                 *s += w;
             }
         }
-        c.reduce_rhs()?;
-        let info = c.solve()?;
-        let out = c.finish(x, true, info, tau)?;
+        Ok(())
+    }
+
+    fn commit(&mut self, c: &mut Core) {
         c.commit_ebar();
-        Ok(out)
     }
 }
 

@@ -4,12 +4,12 @@
 //! `F = [CA; …; CA^N]`, `G[j,l] = C A^{j−l} B`. It has no integrator and keeps
 //! a steady offset under a model mismatch.
 
-use super::core::{impl_controller, Core};
+use super::core::{impl_controller, Core, StepTargets};
 use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepError, StepInfo};
+use super::{ControllerKind, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The usual MPC of Eq. (43). Allocation-free [`Controller::step`](super::Controller::step).
+/// The usual MPC of Eq. (43). Allocation-free [`Algorithm::step`](super::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct UsualMpc {
     core: Core,
@@ -25,7 +25,8 @@ impl UsualMpc {
         })
     }
 
-    /// [`Controller::step`](super::Controller::step) of the usual algorithm.
+    /// [`Algorithm::step`](super::Algorithm::step) of the usual algorithm:
+    /// [`Core::step_with`] with its targets ([`UsualTargets`]).
     fn run_step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
@@ -33,18 +34,36 @@ impl UsualMpc {
         w_k: &[f64],
         preview: &[f64],
         tau: &mut [f64],
-    ) -> Result<StepInfo, StepError> {
-        let c = &mut self.core;
-        c.prepare(model, x, w_k, preview, tau.len())?;
-        if let Some(st) = c.backend.stage_mut() {
-            // Stage-wise: z = [q; q̇], z_0 = x_k, target of q at stage j is w_{k+j}.
-            st.z0.copy_from_slice(x);
-            st.r.copy_from_slice(preview);
-            c.fill_stage_model()?;
-            let info = c.solve_structured()?;
-            return c.finish(x, false, info, tau);
-        }
-        c.build_matrix();
+    ) -> Result<StepInfo, StepFailure> {
+        self.core
+            .step_with(&mut UsualTargets, model, (x, w_k, preview), tau)
+    }
+}
+
+/// The usual algorithm's targets, Eq. (43): the positional outputs track
+/// `W` from the full state.
+struct UsualTargets;
+
+impl StepTargets for UsualTargets {
+    const INCREMENTAL: bool = false;
+
+    fn stage_targets(
+        &mut self,
+        c: &mut Core,
+        x: &[f64],
+        preview: &[f64],
+    ) -> Result<(), StepFailure> {
+        // Stage-wise: z = [q; q̇], z_0 = x_k, target of q at stage j is w_{k+j}.
+        let st = c
+            .backend
+            .stage_mut()
+            .ok_or(StepFailure::Internal("no stage-wise solver"))?;
+        st.z0.copy_from_slice(x);
+        st.r.copy_from_slice(preview);
+        Ok(())
+    }
+
+    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
         let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         // v1 = F x_k (positional prediction from the full state).
@@ -58,7 +77,6 @@ impl UsualMpc {
                 b[base + i] = c.w_top[i] * (preview[o + i] - c.v1[o + i]);
             }
         }
-        let info = c.solve()?;
-        c.finish(x, false, info, tau)
+        Ok(())
     }
 }

@@ -11,7 +11,7 @@ use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
 use super::settings_error::LoopSettingsError;
 use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
-use crate::control::{Controller, StateObserver, StepError};
+use crate::control::{Algorithm, StateObserver, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
@@ -212,7 +212,7 @@ pub struct RunResult {
 /// the torque applied over `[t_k, t_k + Ts)`. `progress(k, total)` is called
 /// every 100 samples.
 pub fn run_closed_loop(
-    controller: &mut dyn Controller,
+    controller: &mut dyn Algorithm,
     model: &mut dyn JointSpaceDynamics,
     plant: &mut Plant,
     reference: &JointReference,
@@ -237,7 +237,7 @@ pub struct RunEvents {
 /// controller: [`ClosedLoop`] with [`ClosedLoop::events`].
 #[allow(clippy::too_many_arguments)]
 pub fn run_closed_loop_with(
-    controller: &mut dyn Controller,
+    controller: &mut dyn Algorithm,
     model: &mut dyn JointSpaceDynamics,
     plant: &mut Plant,
     reference: &JointReference,
@@ -273,7 +273,7 @@ pub fn run_closed_loop_with(
 /// Every buffer is sized by [`ClosedLoop::new`]; the samples allocate
 /// nothing (the record is sized for the run).
 pub struct ClosedLoop<'a> {
-    controller: &'a mut dyn Controller,
+    controller: &'a mut dyn Algorithm,
     model: &'a mut dyn JointSpaceDynamics,
     plant: &'a mut Plant,
     reference: &'a JointReference,
@@ -307,7 +307,7 @@ impl<'a> ClosedLoop<'a> {
     /// time, safety limit, fault or recorded horizon): [`Self::with_conditions`]
     /// with [`RunConditions::NONE`]. Sizes every stage.
     pub fn new(
-        controller: &'a mut dyn Controller,
+        controller: &'a mut dyn Algorithm,
         model: &'a mut dyn JointSpaceDynamics,
         plant: &'a mut Plant,
         reference: &'a JointReference,
@@ -325,7 +325,7 @@ impl<'a> ClosedLoop<'a> {
     /// [`LossSchedule`]) and the horizons to record. The pick-up time is an
     /// event of the run ([`Self::events`]). Sizes every stage.
     pub fn with_conditions(
-        controller: &'a mut dyn Controller,
+        controller: &'a mut dyn Algorithm,
         model: &'a mut dyn JointSpaceDynamics,
         plant: &'a mut Plant,
         reference: &'a JointReference,
@@ -507,10 +507,17 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
-        let status = self
-            .estimator
-            .estimate(model, &self.x)
-            .and_then(|xs| controller.step(model, xs, w0, preview, tau));
+        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
+            controller.step(
+                model,
+                &crate::control::StepInput {
+                    x: xs,
+                    w_k: w0,
+                    preview,
+                },
+                tau,
+            )
+        });
         if let Err(e) = status {
             let reason = StopReason::ControllerFailed(e);
             return match self.supervisor.begin_stop(t, reason, &self.x, model) {
@@ -697,15 +704,22 @@ impl<'a> ClosedLoop<'a> {
 
     /// The torque of this sample into `self.tau`: the estimator's state
     /// through the controller, or the supervisor's stop law during a stop.
-    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepError> {
+    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepFailure> {
         let model = &mut *self.model;
         let xs = self.estimator.estimate(model, &self.x)?;
         if self.supervisor.stopping().is_some() {
             self.supervisor
                 .stop_torque(model, &self.x, xs, &mut self.tau)?;
         } else {
-            self.controller
-                .step(model, xs, w, &self.preview, &mut self.tau)?;
+            self.controller.step(
+                model,
+                &crate::control::StepInput {
+                    x: xs,
+                    w_k: w,
+                    preview: &self.preview,
+                },
+                &mut self.tau,
+            )?;
             if let Some(h) = &mut self.horizon {
                 h.observe(k, &mut *self.controller);
             }

@@ -1,6 +1,6 @@
 //! The estimator stage: the state the controller acts on.
 
-use crate::control::{StateObserver, StepError};
+use crate::control::{StateObserver, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 
 /// Hands the controller the state it acts on: the observer's estimate
@@ -42,7 +42,7 @@ impl<'a> Estimator<'a> {
         &'s mut self,
         model: &mut dyn JointSpaceDynamics,
         x: &'s [f64],
-    ) -> Result<&'s [f64], StepError> {
+    ) -> Result<&'s [f64], StepFailure> {
         match self.observer.as_deref_mut() {
             Some(o) => {
                 self.x_est.copy_from_slice(o.update(model, x)?);

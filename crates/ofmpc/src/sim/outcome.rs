@@ -5,7 +5,7 @@ use super::format::angle_text;
 use super::plant::{PlantError, PlantSettingsError};
 use super::settings_error::LoopSettingsError;
 use super::supervisor::{DivergenceRule, StopReason, GROWTH_FACTOR, GROWTH_WINDOW_S};
-use crate::control::{SettingsError, StepError};
+use crate::control::{SettingsError, StepFailure};
 use crate::robot::ModelError;
 use serde::Serialize;
 use std::fmt;
@@ -70,10 +70,10 @@ impl fmt::Display for RunStatus {
 pub enum RunFailure {
     /// The controller could not be initialized at the first measurement.
     #[error("the controller could not start from the first measurement: {0}")]
-    Reset(StepError),
+    Reset(StepFailure),
     /// A control step failed (model, discretization or solve).
     #[error("the controller step failed: {0}")]
-    Controller(StepError),
+    Controller(StepFailure),
     /// The plant's integration failed (its state stopped being finite).
     #[error("the plant's integration failed: {0}")]
     Plant(PlantError),

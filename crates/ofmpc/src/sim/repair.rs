@@ -3,7 +3,7 @@
 //! numbers ([`MeasurementGuard`]). The model's acceleration it predicts with
 //! ([`model_accel`]) is also the safe stop's dead reckoning.
 
-use crate::control::{LinearLikeModel, StepError};
+use crate::control::{LinearLikeModel, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 
 /// Stands in for a missing or invalid (non-finite) measurement: the state
@@ -139,7 +139,7 @@ pub(super) fn model_accel(
     v: &[f64],
     tau: &[f64],
     a: &mut [f64],
-) -> Result<(), StepError> {
+) -> Result<(), StepFailure> {
     let n = q.len();
     lin.update(model, q, v)?;
     lin.input_from_torque(tau, a)?;

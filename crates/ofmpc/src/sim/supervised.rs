@@ -15,7 +15,7 @@
 
 use super::repair::MeasurementGuard;
 use super::supervisor::{StopReason, Supervisor, SupervisorSettings, REST_SPEED};
-use crate::control::{Mpc, StepError, StepInput, StepOutput};
+use crate::control::{Mpc, StepFailure, StepInput, StepOutput};
 use crate::robot::Robot;
 
 /// One sample's raw reading and reference, borrowed.
@@ -85,7 +85,7 @@ pub enum SupervisedError {
     },
     /// The controller's step failed and there is no stop law to take over.
     #[error("the controller's step failed: {0}")]
-    Step(StepError),
+    Step(StepFailure),
 }
 
 /// The controller behind its guard (module docs). Sized at construction;
@@ -141,7 +141,9 @@ impl SupervisedController {
     /// the guard at rest there, no stop in progress.
     pub fn reset(&mut self, x0: &[f64]) -> Result<(), SupervisedError> {
         self.check_len(x0.len(), self.x.len())?;
-        self.mpc.reset(x0).map_err(SupervisedError::Step)?;
+        self.mpc
+            .reset(x0)
+            .map_err(|e| SupervisedError::Step(e.into()))?;
         self.repair.reset(x0);
         self.supervisor.reset(x0);
         self.output.tau.fill(0.0);
@@ -195,7 +197,7 @@ impl SupervisedController {
 
     /// The torque of this sample into the output: the controller's, or the
     /// stop law's on the observer's estimate during a stop.
-    fn control(&mut self, input: &SupervisedInput) -> Result<(), StepError> {
+    fn control(&mut self, input: &SupervisedInput) -> Result<(), StepFailure> {
         if self.supervisor.stopping().is_none() {
             let step = StepInput {
                 x: &self.x,
@@ -203,8 +205,13 @@ impl SupervisedController {
                 preview: input.preview,
             };
             let out = self.mpc.step(&step)?;
+            // A numerical failure holds the last torque (the output says so):
+            // the guard treats it as a failed step.
             self.output.tau.copy_from_slice(&out.tau);
-            return Ok(());
+            return match out.status.failure() {
+                Some(failure) => Err(failure),
+                None => Ok(()),
+            };
         }
         let parts = self.mpc.parts_mut();
         let model = parts.model;

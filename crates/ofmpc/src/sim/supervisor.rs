@@ -31,7 +31,7 @@
 
 use super::format::angle_text;
 use super::repair::model_accel;
-use crate::control::{LinearLikeModel, StepError};
+use crate::control::{LinearLikeModel, StepFailure};
 use crate::dynamics::JointSpaceDynamics;
 use std::fmt;
 
@@ -119,7 +119,7 @@ pub enum StopReason {
         limit_rad: f64,
     },
     /// A controller step failed.
-    ControllerFailed(StepError),
+    ControllerFailed(StepFailure),
     /// A joint's measurement kept jumping beyond the plausible.
     ImplausibleMeasurement {
         /// 0-based joint.
@@ -406,7 +406,7 @@ impl SafeStop {
         raw: &[f64],
         x: &[f64],
         tau: &mut [f64],
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         self.track(model, raw, x)?;
         let n = self.n;
         // Brake towards where the braking started plus its run-out, then
@@ -458,7 +458,7 @@ impl SafeStop {
         model: &mut dyn JointSpaceDynamics,
         raw: &[f64],
         x: &[f64],
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         let (n, ts) = (self.n, self.ts);
         if self.dead_reckoned.iter().any(|d| *d) {
             // The acceleration the last torque gave, by the model.
@@ -722,10 +722,10 @@ impl Supervisor {
         raw: &[f64],
         x: &[f64],
         tau: &mut [f64],
-    ) -> Result<(), StepError> {
+    ) -> Result<(), StepFailure> {
         match self.law.as_mut() {
             Some(law) => law.step(model, raw, x, tau),
-            None => Err(StepError::Internal("stop torque without a stop law")),
+            None => Err(StepFailure::Internal("stop torque without a stop law")),
         }
     }
 
