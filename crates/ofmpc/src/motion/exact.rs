@@ -15,7 +15,7 @@
 use crate::geometry::Segment;
 use crate::motion::timelaw::{ProfileValue, TimeLaw};
 use crate::motion::topp::JointConstraints;
-use crate::motion::JointQuantity;
+use super::limits::JointQuantity;
 
 /// Samples of `τ` per move at which the joint speed and acceleration are evaluated.
 const TAU_SAMPLES: usize = 512;

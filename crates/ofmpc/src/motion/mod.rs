@@ -39,22 +39,24 @@ pub mod g2blend;
 pub mod reference;
 pub mod segment;
 pub mod timelaw;
+mod error;
+mod limits;
 mod tool;
 pub mod topp;
 pub mod trajectory;
 
 pub use blend::PathMode;
+pub use error::{PlanError, SampleCause};
 pub use exact::JointLimitedMove;
+pub use limits::JointQuantity;
 pub use reference::{JointReference, Orientation, ReferenceError, StartTurn, MAX_PLAN_VALUES};
 pub use tool::tool_axis;
 pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
-use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
+use crate::gcode::{parse, MoveKind, ParseOptions, Program};
 use crate::robot::Robot;
-use reference::{
-    build_reference, build_turning_reference, first_unreachable, sample_count, values_per_sample,
-    JointMap, ReferenceFailure,
-};
+use limits::{values_per_sample, JointMap, ReferenceFailure};
+use reference::{build_reference, build_turning_reference, first_unreachable, sample_count};
 use topp::JointConstraints;
 use trajectory::LongCause;
 
@@ -121,119 +123,6 @@ pub struct Plan {
     /// program's `G43` length at its first path move; 0 without): the reference moves the
     /// TCP of [`Robot::with_tool_length`]`(tool_length)` along [`Plan::trajectory`].
     pub tool_length: f64,
-}
-
-/// What makes a plan too large to sample.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum SampleCause {
-    /// The feed (`F`) of a move on this program line is too small for its length.
-    Feed {
-        /// Program line.
-        line: usize,
-    },
-    /// The dwell (`G04`) on this program line is too long.
-    Dwell {
-        /// Program line.
-        line: usize,
-    },
-    /// The path speed limit ([`TimingOptions::max_speed`]) is too small.
-    PathSpeed {
-        /// The slowest move's program line.
-        line: usize,
-    },
-    /// The path acceleration limit is too small.
-    PathAcceleration {
-        /// The slowest move's program line.
-        line: usize,
-    },
-    /// The sample period is too small for the path's duration.
-    SamplePeriod,
-}
-
-impl std::fmt::Display for SampleCause {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SampleCause::Feed { line } => {
-                write!(f, "the feed of program line {line} is too small for its move")
-            }
-            SampleCause::Dwell { line } => write!(f, "the dwell of program line {line} is too long"),
-            SampleCause::PathSpeed { line } => write!(
-                f,
-                "the path speed limit is too small (the slowest move is on program line {line})"
-            ),
-            SampleCause::PathAcceleration { line } => write!(
-                f,
-                "the path acceleration limit is too small (the slowest move is on program line {line})"
-            ),
-            SampleCause::SamplePeriod => f.write_str("the sample period is too small"),
-        }
-    }
-}
-
-/// Which joint limit a plan could not keep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum JointQuantity {
-    /// Speed (rad/s).
-    Speed,
-    /// Acceleration (rad/s²).
-    Acceleration,
-}
-
-impl std::fmt::Display for JointQuantity {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            JointQuantity::Speed => "speed",
-            JointQuantity::Acceleration => "acceleration",
-        })
-    }
-}
-
-/// Why a program could not be planned.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum PlanError {
-    /// The program text is wrong.
-    #[error("{0}")]
-    Program(GcodeError),
-    /// The timing options or a move are invalid, or a blended run cannot be timed.
-    #[error("{0}")]
-    Timing(TrajectoryError),
-    /// The path cannot be followed in joint space.
-    #[error("{0}")]
-    Reference(ReferenceError),
-    /// The sample period is not positive and finite.
-    #[error("the sample period must be positive and finite, got {0} s")]
-    SamplePeriod(f64),
-    /// The joint reference would need more values than [`MAX_PLAN_VALUES`]; nothing was
-    /// allocated.
-    #[error("the joint reference would need {count:.3e} values (samples × columns), above the limit of {limit}: {cause}")]
-    TooManySamples {
-        /// What makes it large.
-        cause: SampleCause,
-        /// Values needed.
-        count: f64,
-        /// The limit.
-        limit: usize,
-    },
-    /// A blended run's reference still exceeds a joint limit after replanning with scaled
-    /// limits.
-    #[error("joint {joint} reaches {value:.3} at program line {line}, above its {quantity} limit {limit:.3}, after {attempts} timing attempts")]
-    JointLimit {
-        /// Joint number, 1-based.
-        joint: usize,
-        /// Which limit.
-        quantity: JointQuantity,
-        /// The value reached.
-        value: f64,
-        /// The limit.
-        limit: f64,
-        /// Program line.
-        line: usize,
-        /// Attempts made.
-        attempts: usize,
-    },
 }
 
 /// Largest number of timing attempts of [`plan_program`] (the first and the replans with

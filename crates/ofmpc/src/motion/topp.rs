@@ -44,7 +44,7 @@
 //! and both constrain it.
 
 use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
-use crate::motion::reference::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use super::limits::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
 use nalgebra::Vector3;
 
 /// Largest node spacing of the grid (m).
