@@ -15,38 +15,11 @@
 //! Calls count towards the step limit like every executed line.
 
 use super::expr::{P_CALL_LEVEL, P_VALUE, P_VALUE_RETURNED};
-use super::flow::{Frame, Runner, SourceLine, MAX_CALL_DEPTH};
+use super::flow::{Frame, Runner, MAX_CALL_DEPTH};
 use super::interpreter::Interpreter;
-use super::lexer::{Block, Lexed, Value};
-use super::{err, GcodeError, GcodeErrorKind};
+use super::lexer::{Block, Value};
+use super::program::{err, GcodeError, GcodeErrorKind};
 use std::collections::HashMap;
-
-/// The numbered subprograms of a file: number → line indices of its `O<n>` lines, in order.
-pub(super) fn numbered_programs(lines: &[SourceLine<'_>]) -> HashMap<u64, Vec<usize>> {
-    let mut out: HashMap<u64, Vec<usize>> = HashMap::new();
-    for (i, l) in lines.iter().enumerate() {
-        if let Some(n) = program_number(l) {
-            out.entry(n).or_default().push(i);
-        }
-    }
-    out
-}
-
-/// The number of a line that holds only `O<n>` (and comments).
-fn program_number(l: &SourceLine<'_>) -> Option<u64> {
-    let Ok(Lexed::Block(b)) = &l.lexed else {
-        return None;
-    };
-    match b.words.as_slice() {
-        [w] if w.letter == 'O' && !b.delete && b.o.is_none() && b.assigns.is_empty() => {
-            match w.value {
-                Value::Num(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e15 => Some(v as u64),
-                _ => None,
-            }
-        }
-        _ => None,
-    }
-}
 
 /// Which Fanuc code a block holds.
 enum Code {

@@ -7,8 +7,9 @@ use super::expr::{
     is_system_parameter, EvalError, Expr, Params, P_CALL_LEVEL, P_LINE, P_VALUE, P_VALUE_RETURNED,
 };
 use super::interpreter::Interpreter;
-use super::lexer::{escape, Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
-use super::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
+use super::lexer::{Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
+use super::program::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
+use super::text::escape;
 use std::collections::HashMap;
 
 /// Lines a program may execute beyond its own length before the reader stops it as an
@@ -298,7 +299,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             frames: Vec::new(),
             repeats: Vec::new(),
             last_loop: NONE,
-            numbered: super::fanuc::numbered_programs(lines),
+            numbered: numbered_programs(lines),
             warned_delete: false,
             uses_parameters: lines.iter().any(|l| l.raw.contains('#')),
         })
@@ -791,4 +792,31 @@ fn read_only(line: usize, col: usize, text: &str, name: &str) -> GcodeError {
 fn eval_error(line: usize, col: usize, text: &str, e: &EvalError) -> GcodeError {
     let (m, h) = e.describe();
     err(line, col, GcodeErrorKind::InvalidValue, text, m, h)
+}
+
+/// The numbered subprograms of a file (Fanuc `M98 P<n>` calls them, fanuc.rs): number → line indices of its `O<n>` lines, in order.
+fn numbered_programs(lines: &[SourceLine<'_>]) -> HashMap<u64, Vec<usize>> {
+    let mut out: HashMap<u64, Vec<usize>> = HashMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        if let Some(n) = program_number(l) {
+            out.entry(n).or_default().push(i);
+        }
+    }
+    out
+}
+
+/// The number of a line that holds only `O<n>` (and comments).
+fn program_number(l: &SourceLine<'_>) -> Option<u64> {
+    let Ok(Lexed::Block(b)) = &l.lexed else {
+        return None;
+    };
+    match b.words.as_slice() {
+        [w] if w.letter == 'O' && !b.delete && b.o.is_none() && b.assigns.is_empty() => {
+            match w.value {
+                Value::Num(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e15 => Some(v as u64),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
 }

@@ -6,13 +6,54 @@ use super::codes::{
     N_ARGS,
 };
 use super::lexer::Word;
-use super::modal::Extra;
-use super::{
+use super::program::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
     ProgramEvent, ProgramMessage, MIN_MOVE_LENGTH,
 };
 use crate::geometry::{ArcDirection, Plane, Segment};
 use nalgebra::Vector3;
+
+/// State of the codes `modal.rs` executes (G92/G52, G53, G28/G30 homes, arcs, canned-cycle
+/// retract, ...): part of the interpreter's state.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Extra {
+    /// G92/G52 offset (m) and the one G92.2 suspended.
+    pub(super) g92: [f64; 3],
+    pub(super) g92_saved: [f64; 3],
+    /// This line is G53 (machine coordinates).
+    pub(super) machine: bool,
+    /// Positions stored by G28.1 / G30.1 (m, machine).
+    pub(super) home: [Option<Vector3<f64>>; 2],
+    /// G90.1 in force.
+    pub(super) arc_absolute: bool,
+    /// G98 (retract to the initial Z) in force; default G99 (LinuxCNC's R_PLANE).
+    pub(super) retract_initial: bool,
+    /// 93, 94 or 95.
+    pub(super) feed_mode: u8,
+    /// Last spindle speed S (for G95).
+    pub(super) spindle: Option<f64>,
+    /// Sticky canned-cycle words R, Z, Q, P (program units / s) and the Z (m) where the
+    /// cycles began.
+    pub(super) cycle: [Option<f64>; 4],
+    pub(super) cycle_z0: Option<f64>,
+    /// G64 Q tolerance (m) and the points removed from the last move by merging.
+    pub(super) merge_q: Option<f64>,
+    pub(super) merged: Vec<Vector3<f64>>,
+    /// Spindle direction from M3 (1), M4 (-1), M5 (0); coolant from M7/M8/M9.
+    pub(super) spindle_dir: i8,
+    pub(super) mist: bool,
+    pub(super) flood: bool,
+    /// Rotation (degrees about Z) of the coordinate systems G54 … G59 (G10 L2 R).
+    pub(super) rotation: [f64; 6],
+    /// Tool selected by T and the tool in the spindle (M6, M61 Q).
+    pub(super) tool_selected: f64,
+    pub(super) tool_current: f64,
+    /// Where the tool is when it is not at the current point `pos` (after G74/G84 in
+    /// G18/G19, see `tap_point`): the next move starts there.
+    pub(super) machine_at: Option<Vector3<f64>>,
+    /// The warning on G74/G84 in G18/G19 was given.
+    pub(super) warned_tap: bool,
+}
 
 /// Modal state of the reader while it walks the program, and the moves produced so far.
 pub(super) struct Interpreter {
@@ -53,7 +94,7 @@ pub(super) struct Interpreter {
     /// State of the codes of [`super::modal`].
     pub(super) ext: Extra,
     /// The tool table of the options (G43 H).
-    pub(super) tools: Option<super::ToolTable>,
+    pub(super) tools: Option<super::tools::ToolTable>,
     /// The warning that the origin option applies to G54 only was given.
     warned_wcs: bool,
 }

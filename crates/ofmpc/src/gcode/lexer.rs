@@ -1,7 +1,8 @@
 //! Lexer: one line of text → words (letter, value, column, source text).
 
 use super::expr::{Expr, Func, Op};
-use super::{err, GcodeError, GcodeErrorKind, MAX_WORD_VALUE};
+use super::program::{err, GcodeError, GcodeErrorKind, MAX_WORD_VALUE};
+use super::text::{escape, is_invisible};
 use std::cell::Cell;
 
 /// One word of a line: an upper-case letter and its value.
@@ -913,26 +914,6 @@ impl<'a> LineChars<'a> {
             hint,
         )
     }
-}
-
-/// Is `c` a character that shows as nothing or as a blank (control characters, no-break and
-/// zero-width spaces, byte-order marks, directional marks)?
-pub(super) fn is_invisible(c: char) -> bool {
-    c.is_control()
-        || matches!(c, '\u{a0}' | '\u{ad}' | '\u{2000}'..='\u{200f}' | '\u{2028}'..='\u{202f}' | '\u{205f}'..='\u{206f}' | '\u{feff}')
-}
-
-/// `s` with invisible characters written as `\u{…}` escapes.
-pub(super) fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        if is_invisible(c) && c != ' ' {
-            out.push_str(&format!("\\u{{{:x}}}", c as u32));
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
 
 /// The message in a comment's `body` (`MSG,…`, `PRINT,…`, `DEBUG,…`, any case).

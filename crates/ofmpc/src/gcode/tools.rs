@@ -50,7 +50,7 @@ impl ToolTable {
                 return Err(ToolTableError {
                     line: i + 1,
                     column: 1,
-                    text: super::lexer::escape(content.trim()),
+                    text: super::text::escape(content.trim()),
                     message: "LinuxCNC's old tool table format (a TOOLNO POCKET LENGTH … header and columns) is not read".into(),
                     hint: "write one tool a line as T<tool> P<pocket> Z<length> D<diameter> (LinuxCNC's current format)".into(),
                 });
@@ -59,7 +59,7 @@ impl ToolTable {
                 let fail = |message: String, hint: &str| ToolTableError {
                     line: i + 1,
                     column: col,
-                    text: super::lexer::escape(word),
+                    text: super::text::escape(word),
                     message,
                     hint: hint.to_string(),
                 };
@@ -107,7 +107,7 @@ impl ToolTable {
                     return Err(ToolTableError {
                         line: i + 1,
                         column: 1,
-                        text: super::lexer::escape(content.trim()),
+                        text: super::text::escape(content.trim()),
                         message: "a tool line without T (the tool number)".into(),
                         hint: "start the line with T<tool>, e.g. T1 P1 Z12.5".into(),
                     })

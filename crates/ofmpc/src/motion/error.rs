@@ -98,4 +98,3 @@ pub enum PlanError {
         attempts: usize,
     },
 }
-

@@ -12,10 +12,10 @@
 //! (time scaling, e.g. Hollerbach 1984, "Dynamic scaling of manipulator trajectories").
 //! A move whose fastest law already keeps the limits is left exactly as it is.
 
+use super::limits::JointQuantity;
 use crate::geometry::Segment;
 use crate::motion::timelaw::{ProfileValue, TimeLaw};
 use crate::motion::topp::JointConstraints;
-use super::limits::JointQuantity;
 
 /// Samples of `τ` per move at which the joint speed and acceleration are evaluated.
 const TAU_SAMPLES: usize = 512;

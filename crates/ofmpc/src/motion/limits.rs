@@ -306,7 +306,11 @@ impl JointMap {
     /// When the analytic solution jumps to another configuration, whether the continuous
     /// branch (the solution nearest to `prev` with the limits lifted) leaves a joint's range:
     /// the real reason for the jump.
-    pub(crate) fn branch_limit(&mut self, p: &Vector3<f64>, prev: &[f64]) -> Option<ReferenceFailure> {
+    pub(crate) fn branch_limit(
+        &mut self,
+        p: &Vector3<f64>,
+        prev: &[f64],
+    ) -> Option<ReferenceFailure> {
         let singular = self.singular_ratio(prev) < SINGULAR_PASS_RATIO;
         let pose = Isometry3::from_parts(Translation3::from(*p), self.rotation);
         let hint: [f64; 6] = std::array::from_fn(|i| prev.get(i).copied().unwrap_or(0.0));
@@ -360,7 +364,11 @@ impl JointMap {
 
     /// Exact joint velocity `J(q)⁻¹ [v; 0]` at the current solution (six joints, regular
     /// Jacobian), else `None`.
-    pub(crate) fn velocity(&mut self, v: &Vector3<f64>, jac: &mut nalgebra::DMatrix<f64>) -> Option<Vec<f64>> {
+    pub(crate) fn velocity(
+        &mut self,
+        v: &Vector3<f64>,
+        jac: &mut nalgebra::DMatrix<f64>,
+    ) -> Option<Vec<f64>> {
         if self.prev.len() != 6 {
             return None;
         }
@@ -392,4 +400,3 @@ impl std::fmt::Display for JointQuantity {
         })
     }
 }
-

@@ -34,13 +34,13 @@
 //! ```
 
 pub mod blend;
+mod error;
 pub mod exact;
 pub mod g2blend;
+mod limits;
 pub mod reference;
 pub mod segment;
 pub mod timelaw;
-mod error;
-mod limits;
 mod tool;
 pub mod topp;
 pub mod trajectory;

@@ -11,9 +11,9 @@
 //! for the first sample, or when that fails, from the start pose
 //! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
-use crate::ik::ForwardKinematics;
 use super::limits::{Ik, JointMap};
 use super::trajectory::CartesianTrajectory;
+use crate::ik::ForwardKinematics;
 use crate::robot::Robot;
 use nalgebra::Vector3;
 
@@ -21,8 +21,6 @@ pub use super::limits::{
     values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
     MAX_PLAN_VALUES, SINGULAR_PASS_RATIO, START_POSE_TOLERANCE,
 };
-
-
 
 /// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …
 /// up to and including the end).

@@ -43,8 +43,8 @@
 //! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
 //! and both constrain it.
 
-use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
 use super::limits::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
 use nalgebra::Vector3;
 
 /// Largest node spacing of the grid (m).

@@ -12,11 +12,11 @@
 //! [`CartesianTrajectory::sample`] allocates nothing and is meant to be called every control
 //! step.
 
+use super::limits::{ReferenceError, MAX_PLAN_VALUES};
 use crate::gcode::{MoveKind, PathMode, Program};
 use crate::geometry::Segment;
 use crate::motion::blend::{blend_timed, RunMove};
 use crate::motion::exact::{joint_limited_duration, JointLimitedMove};
-use super::limits::{ReferenceError, MAX_PLAN_VALUES};
 use crate::motion::timelaw::{Profile, TimeLaw};
 use crate::motion::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
 use nalgebra::Vector3;
