@@ -343,7 +343,8 @@ impl Graph {
             if parts.is_empty() && last == "main.rs" && src.join("lib.rs").exists() {
                 continue;
             }
-            if !is_dir && !(parts.is_empty() && last == "main.rs") {
+            let crate_root = parts.is_empty() && last == "main.rs";
+            if !is_dir && !crate_root {
                 parts.push(last.trim_end_matches(".rs").to_string());
             }
             let rel_s = format!("crates/{name}/src/{}", rel.to_string_lossy());

@@ -30,10 +30,6 @@ use nalgebra::Vector3;
 /// ([`crate::geometry::corner`]); re-exported here where the blending uses them.
 pub use crate::geometry::corner::{CornerArc, REVERSAL_ANGLE, TANGENT_ANGLE};
 
-/// The path modes `G61` / `G64` are a program's modal state, read by [`crate::gcode`]; the
-/// blending here is what `G64` asks for.
-pub use crate::gcode::PathMode;
-
 /// Angle (rad) below which a join is passed without a stop when its tolerance is positive:
 /// 0.05°, a direction change of under 0.1 % of the speed (rounding of CAM output, LinuxCNC's
 /// naive-CAM joins); larger kinks between lines are blended, others stop.

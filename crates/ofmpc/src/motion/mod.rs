@@ -39,13 +39,11 @@ pub mod exact;
 pub mod g2blend;
 mod limits;
 pub mod reference;
-pub mod segment;
 pub mod timelaw;
 mod tool;
 pub mod topp;
 pub mod trajectory;
 
-pub use blend::PathMode;
 pub use error::{PlanError, SampleCause};
 pub use exact::JointLimitedMove;
 pub use limits::JointQuantity;
@@ -53,7 +51,7 @@ pub use reference::{JointReference, Orientation, ReferenceError, StartTurn, MAX_
 pub use tool::tool_axis;
 pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
-use crate::gcode::{parse, MoveKind, ParseOptions, Program};
+use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};
 use crate::robot::Robot;
 use limits::{values_per_sample, JointMap, ReferenceFailure};
 use reference::{build_reference, build_turning_reference, first_unreachable, sample_count};

@@ -12,7 +12,8 @@ mod read;
 mod urdf;
 mod urdf_locate;
 
-pub use drives::{DriveData, Drives, DrivesError};
+pub use drives::{DriveData, Drives};
+pub use error::DrivesError;
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use links::LinkFrame;
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
