@@ -15,8 +15,10 @@
 //! The walk over the tree is iterative and linear in the number of links
 //! (a chain of thousands of fixed frames neither recurses nor rescans).
 
+use super::error::{InertiaError, ModelError};
 use super::error::{UrdfError, UrdfWarning};
-use super::{check_inertia_tensor, InertiaError, Joint, JointKind, JointLimits, ModelError, Robot};
+use super::joint::{check_inertia_tensor, Joint, JointKind, JointLimits};
+use super::links::LinkFrame;
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
@@ -128,8 +130,50 @@ fn moving_joint(
     if !norm.is_finite() || norm < 1e-9 {
         return Err(UrdfError::BadAxis(j.name.clone()));
     }
+    let (lower, upper, velocity, effort) = joint_limits(j, kind_name, limited, warnings)?;
+    if let Some(d) = &j.dynamics {
+        if d.damping != 0.0 || d.friction != 0.0 {
+            warnings.push(UrdfWarning::IgnoredDynamics {
+                joint: j.name.clone(),
+                damping: d.damping,
+                friction: d.friction,
+            });
+        }
+    }
+    if j.safety_controller.is_some() {
+        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
+    }
+    Ok(Joint {
+        name: j.name.clone(),
+        link: j.child.link.clone(),
+        kind,
+        placement,
+        axis: axis / norm,
+        body: Inertia::zero(),
+        limits: JointLimits {
+            lower,
+            upper,
+            velocity,
+            effort,
+            acceleration: f64::INFINITY,
+        },
+        armature: 0.0,
+        coulomb_nm: 0.0,
+        viscous_nms: 0.0,
+    })
+}
+
+/// A joint's position range, speed and effort limits `(lower, upper, velocity, effort)`:
+/// a `limited` (revolute, prismatic) joint needs an ordered, non-empty range; a continuous
+/// one has none. A speed or effort of 0 means "not given" (unlimited).
+fn joint_limits(
+    j: &urdf_rs::Joint,
+    kind_name: &'static str,
+    limited: bool,
+    warnings: &mut Vec<UrdfWarning>,
+) -> Result<(f64, f64, f64, f64), UrdfError> {
     let l = &j.limit;
-    let (lower, upper, velocity, effort) = if limited {
+    if limited {
         if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
             return Err(UrdfError::LimitOrder {
                 joint: j.name.clone(),
@@ -166,7 +210,7 @@ fn moving_joint(
         };
         let velocity = given("velocity", l.velocity)?;
         let effort = given("effort", l.effort)?;
-        (l.lower, l.upper, velocity, effort)
+        Ok((l.lower, l.upper, velocity, effort))
     } else {
         // Continuous: no range; velocity and effort optional (0 = not given).
         let optional = |attribute: &'static str, v: f64| {
@@ -184,38 +228,8 @@ fn moving_joint(
         };
         let velocity = optional("velocity", l.velocity)?;
         let effort = optional("effort", l.effort)?;
-        (f64::NEG_INFINITY, f64::INFINITY, velocity, effort)
-    };
-    if let Some(d) = &j.dynamics {
-        if d.damping != 0.0 || d.friction != 0.0 {
-            warnings.push(UrdfWarning::IgnoredDynamics {
-                joint: j.name.clone(),
-                damping: d.damping,
-                friction: d.friction,
-            });
-        }
+        Ok((f64::NEG_INFINITY, f64::INFINITY, velocity, effort))
     }
-    if j.safety_controller.is_some() {
-        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
-    }
-    Ok(Joint {
-        name: j.name.clone(),
-        link: j.child.link.clone(),
-        kind,
-        placement,
-        axis: axis / norm,
-        body: Inertia::zero(),
-        limits: JointLimits {
-            lower,
-            upper,
-            velocity,
-            effort,
-            acceleration: f64::INFINITY,
-        },
-        armature: 0.0,
-        coulomb_nm: 0.0,
-        viscous_nms: 0.0,
-    })
 }
 
 /// Link names that mark the end of an arm, in order of preference, for the default flange:
@@ -224,9 +238,27 @@ fn moving_joint(
 const FLANGE_NAMES: [&str; 2] = ["tool0", "flange"];
 const FLANGE_NAME_PARTS: [&str; 5] = ["end_effector", "tool0", "flange", "ee_link", "tcp"];
 
-/// Parses a URDF text into a [`Robot`]: the chain from the root to `tip` (a link name),
+/// A kinematic chain read from a URDF: what the robot is assembled from.
+pub(super) struct Chain {
+    /// The robot's name (`robot` when the URDF has none).
+    pub(super) name: String,
+    /// The moving joints, base to tip.
+    pub(super) joints: Vec<Joint>,
+    /// The flange frame in the last body's frame.
+    pub(super) flange: Transform,
+    /// The flange link's name.
+    pub(super) flange_name: String,
+    /// What the description said that is not modelled.
+    pub(super) warnings: Vec<UrdfWarning>,
+    /// Moving links without `<inertial>` and their joints.
+    pub(super) missing_inertials: Vec<(String, String)>,
+    /// Every URDF link and the body it is attached to.
+    pub(super) link_frames: Vec<LinkFrame>,
+}
+
+/// Parses a URDF text into a [`Chain`]: the chain from the root to `tip` (a link name),
 /// or when `None` the one path of moving joints.
-pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> {
+pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> {
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
         // The deserializer gives no position: the element's line, found in the text.
@@ -307,22 +339,27 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
     } else {
         urdf.name.clone()
     };
-    let mut robot = Robot::assemble(name, joints, flange, flange_name);
-    robot.warnings = warnings;
-    robot.missing_inertials = missing;
-    robot.link_frames = urdf
+    let link_frames = urdf
         .links
         .iter()
         .filter_map(|l| {
             let (body, pose) = frames.get(l.name.as_str())?;
-            Some(super::LinkFrame {
+            Some(LinkFrame {
                 name: l.name.clone(),
                 body: *body,
                 pose: *pose,
             })
         })
         .collect();
-    Ok(robot)
+    Ok(Chain {
+        name,
+        joints,
+        flange,
+        flange_name,
+        warnings,
+        missing_inertials: missing,
+        link_frames,
+    })
 }
 
 /// The link tree of a URDF: link indices by name, the child joints of each link and the
