@@ -340,15 +340,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                 Ok(Lexed::Block(b)) => b,
             };
             if b.delete {
-                if !self.warned_delete {
-                    self.warned_delete = true;
-                    it.warn(
-                        l.no,
-                        1,
-                        "block delete: lines starting with `/` are skipped (LinuxCNC's default)",
-                    );
-                }
-                it.seen_content = true;
+                self.skip_deleted(it, l.no);
                 pc += 1;
                 continue;
             }
@@ -368,6 +360,19 @@ impl<'s, 'a> Runner<'s, 'a> {
             pc += 1;
         }
         Ok(pc)
+    }
+
+    /// A block-delete line (`/`): skipped, with a warning the first time.
+    fn skip_deleted(&mut self, it: &mut Interpreter, no: usize) {
+        if !self.warned_delete {
+            self.warned_delete = true;
+            it.warn(
+                no,
+                1,
+                "block delete: lines starting with `/` are skipped (LinuxCNC's default)",
+            );
+        }
+        it.seen_content = true;
     }
 
     fn step_limit(&self, pc: usize, max_steps: usize) -> GcodeError {
@@ -460,6 +465,20 @@ impl<'s, 'a> Runner<'s, 'a> {
                 self.last_loop = k.next[pc];
                 k.next[pc]
             }
+            OKind::Repeat | OKind::Endrepeat | OKind::Break | OKind::Continue => {
+                self.loop_word(pc, o)?
+            }
+            OKind::Call => self.call(pc, o)?,
+            OKind::Return | OKind::Endsub => self.ret(it, pc, o)?,
+        })
+    }
+
+    /// The `repeat` loop's statements and `break`/`continue` (of any loop) at `pc`; returns
+    /// the next line to run.
+    fn loop_word(&mut self, pc: usize, o: &OStmt<'_>) -> Result<usize, GcodeError> {
+        let l = &self.lines[pc];
+        let k = &self.links;
+        Ok(match o.kind {
             OKind::Repeat => {
                 let n = self.arg0(l, o)?.round();
                 if n >= 1.0 {
@@ -495,8 +514,8 @@ impl<'s, 'a> Runner<'s, 'a> {
                     _ => k.end[start],
                 }
             }
-            OKind::Call => self.call(pc, o)?,
-            OKind::Return | OKind::Endsub => self.ret(it, pc, o)?,
+            // Not one of those (o_word dispatches only them here): the next line.
+            _ => pc + 1,
         })
     }
 
@@ -640,6 +659,22 @@ impl<'s, 'a> Runner<'s, 'a> {
         l: &SourceLine<'a>,
         b: &Block<'a>,
     ) -> Result<(), GcodeError> {
+        let words = self.evaluated_words(l, b)?;
+        self.assign_parameters(l, b)?;
+        self.messages(it, l, b);
+        if !words.is_empty() {
+            it.line(l.no, l.raw, &words)?;
+        }
+        Ok(())
+    }
+
+    /// The words of block `b` with their expressions evaluated (before the block's
+    /// parameter assignments take effect).
+    fn evaluated_words(
+        &self,
+        l: &SourceLine<'a>,
+        b: &Block<'a>,
+    ) -> Result<Vec<Word<'a>>, GcodeError> {
         let mut words: Vec<Word<'a>> = Vec::with_capacity(b.words.len());
         for w in &b.words {
             let value = match &w.value {
@@ -666,6 +701,12 @@ impl<'s, 'a> Runner<'s, 'a> {
                 text: w.text,
             });
         }
+        Ok(words)
+    }
+
+    /// The parameter assignments of block `b`: every value is evaluated first, then all are
+    /// set (LinuxCNC's order).
+    fn assign_parameters(&mut self, l: &SourceLine<'a>, b: &Block<'a>) -> Result<(), GcodeError> {
         let mut sets = Vec::with_capacity(b.assigns.len());
         for a in &b.assigns {
             let v = self.eval(l, a.col, a.text, &a.value)?;
@@ -690,10 +731,6 @@ impl<'s, 'a> Runner<'s, 'a> {
                 Ok(i) => self.params.numbered[i] = v,
                 Err(n) => self.params.set_named(n, v),
             }
-        }
-        self.messages(it, l, b);
-        if !words.is_empty() {
-            it.line(l.no, l.raw, &words)?;
         }
         Ok(())
     }

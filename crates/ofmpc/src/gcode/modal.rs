@@ -161,53 +161,7 @@ impl Interpreter {
     ) -> Result<(), GcodeError> {
         let length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
-            (430, _) => {
-                let (n, at) = match args.get('H') {
-                    Some(h) => (h.value, h),
-                    None => (self.ext.tool_current, w),
-                };
-                let fail = |message: String, hint: &str| {
-                    Err(err(
-                        line,
-                        at.col,
-                        GcodeErrorKind::InvalidValue,
-                        at.text,
-                        message,
-                        hint,
-                    ))
-                };
-                if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
-                    return fail(
-                        format!("G43 H{n}: the tool number must be a whole number >= 0"),
-                        "write e.g. G43 H1",
-                    );
-                }
-                if n == 0.0 {
-                    0.0
-                } else {
-                    match &self.tools {
-                        None => {
-                            return Err(err(
-                                line,
-                                at.col,
-                                GcodeErrorKind::Missing,
-                                at.text,
-                                format!("G43 with tool {n}: no tool table was given, so its length is not known"),
-                                "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
-                            ))
-                        }
-                        Some(t) => match t.length(n as u32) {
-                            Some(z) => z,
-                            None => {
-                                return fail(
-                                    format!("G43 with tool {n}: the tool table has no tool {n}"),
-                                    "add the tool to the table (T<n> Z<length>) or use a tool it lists",
-                                )
-                            }
-                        },
-                    }
-                }
-            }
+            (430, _) => self.g43_length(line, w, args)?,
             _ => 0.0,
         };
         // No axis moves, so the tip's current point moves with the length (LinuxCNC's
@@ -221,6 +175,61 @@ impl Interpreter {
         }
         self.tool_length = length;
         Ok(())
+    }
+
+    /// G43's length: tool H<n>'s (without H the tool in the spindle) from the tool table;
+    /// H0: no length.
+    fn g43_length(
+        &self,
+        line: usize,
+        w: &Word<'_>,
+        args: &Args<'_, '_>,
+    ) -> Result<f64, GcodeError> {
+        let (n, at) = match args.get('H') {
+            Some(h) => (h.value, h),
+            None => (self.ext.tool_current, w),
+        };
+        let fail = |message: String, hint: &str| {
+            Err(err(
+                line,
+                at.col,
+                GcodeErrorKind::InvalidValue,
+                at.text,
+                message,
+                hint,
+            ))
+        };
+        if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
+            return fail(
+                format!("G43 H{n}: the tool number must be a whole number >= 0"),
+                "write e.g. G43 H1",
+            );
+        }
+        Ok(if n == 0.0 {
+            0.0
+        } else {
+            match &self.tools {
+                None => {
+                    return Err(err(
+                        line,
+                        at.col,
+                        GcodeErrorKind::Missing,
+                        at.text,
+                        format!("G43 with tool {n}: no tool table was given, so its length is not known"),
+                        "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
+                    ))
+                }
+                Some(t) => match t.length(n as u32) {
+                    Some(z) => z,
+                    None => {
+                        return fail(
+                            format!("G43 with tool {n}: the tool table has no tool {n}"),
+                            "add the tool to the table (T<n> Z<length>) or use a tool it lists",
+                        )
+                    }
+                },
+            }
+        })
     }
 
     /// The feed (m/s) of a move of `length` m in the active feed mode.
