@@ -38,7 +38,6 @@ fn no_folder_has_an_import_cycle() {
 }
 
 #[test]
-#[ignore = "enabled when motion/ is cut into path/, timing/, reference/"]
 fn no_stage_references_a_downstream_one() {
     let graphs = graphs();
     let mut bad = Vec::new();

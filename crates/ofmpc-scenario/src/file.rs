@@ -12,7 +12,7 @@
 use crate::error::ScenarioError;
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
 use ofmpc::gcode::PathMode;
-use ofmpc::motion::timelaw::Profile;
+use ofmpc::motion::Profile;
 use ofmpc::motion::TimingOptions;
 use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings, RunConditions};
 use serde::{Deserialize, Serialize};

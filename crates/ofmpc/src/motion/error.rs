@@ -2,7 +2,7 @@
 //! users (mod.rs, tool.rs).
 
 use super::limits::{JointQuantity, ReferenceError};
-use super::trajectory::TrajectoryError;
+use super::timing::trajectory::TrajectoryError;
 use crate::gcode::GcodeError;
 
 /// What makes a plan too large to sample.

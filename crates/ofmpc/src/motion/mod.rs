@@ -2,16 +2,17 @@
 //! the controllers follow. One entry point, [`plan`] (or [`plan_program`] for a parsed
 //! program), assembles the pipeline:
 //!
-//! 1. [`crate::gcode::parse`]: program text → [`Program`] (start point, [`segment`]s, feeds,
-//!    dwells, path modes `G61` / `G64 P…`);
-//! 2. [`blend`]: under `G64` the corners between consecutive lines are rounded within the
-//!    tolerance;
-//! 3. timing ([`trajectory`]): `G61` moves rest to rest with the paper's septic law
-//!    ([`timelaw`]), slowed down where a joint's speed or acceleration limit needs it
-//!    ([`exact`]); `G64` runs time-optimally under the feed, path acceleration and jerk
-//!    and every joint's speed and acceleration limit ([`topp`]);
-//! 4. [`reference`](mod@reference): inverse kinematics (analytic when the robot declares OPW parameters,
-//!    else numeric) sampled every `Ts`, checked against the joint limits.
+//! 1. [`crate::gcode::parse`]: program text → [`Program`] (start point, segments
+//!    ([`crate::geometry::Segment`]), feeds, dwells, path modes `G61` / `G64 P…`);
+//! 2. the path stage (`path/`, [`blend`]): under `G64` the corners between consecutive lines
+//!    are rounded within the tolerance;
+//! 3. the timing stage (`timing/`, [`CartesianTrajectory`]): `G61` moves rest to rest with
+//!    the paper's septic law ([`TimeLaw`]), slowed down where a joint's speed or acceleration
+//!    limit needs it ([`JointLimitedMove`]); `G64` runs time-optimally under the feed, path
+//!    acceleration and jerk and every joint's speed and acceleration limit ([`Run`]);
+//! 4. the joint reference (`reference/`, [`JointReference`]): inverse kinematics (analytic
+//!    when the robot declares OPW parameters, else numeric) sampled every `Ts`, checked
+//!    against the joint limits.
 //!
 //! `G61` (exact stop) is the default of programs that select neither mode, so that the
 //! paper's Table I program runs exactly as published; `G64` without `P` rounds corners within
@@ -33,30 +34,38 @@
 //! # Ok::<(), ofmpc::motion::PlanError>(())
 //! ```
 
-pub mod blend;
 mod error;
-pub mod exact;
-pub mod g2blend;
 mod limits;
-pub mod reference;
-pub mod timelaw;
+mod path;
+mod reference;
+mod timing;
 mod tool;
-pub mod topp;
-pub mod trajectory;
 
 pub use error::{PlanError, SampleCause};
-pub use exact::JointLimitedMove;
-pub use limits::JointQuantity;
-pub use reference::{JointReference, Orientation, ReferenceError, StartTurn, MAX_PLAN_VALUES};
+pub use limits::{
+    values_per_sample, JointQuantity, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
+    MAX_PLAN_VALUES, SINGULAR_PASS_RATIO, START_POSE_TOLERANCE,
+};
+pub use path::blend::{
+    blend, blend_timed, Geometry, Piece, RunMove, NEAR_TANGENT_ANGLE, TURN_JERK_SHARE,
+};
+pub use path::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
+pub use reference::{build_reference, JointReference, StartTurn, START_TURN_TOLERANCE};
+pub use timing::exact::JointLimitedMove;
+pub use timing::timelaw::{PathState, Profile, ProfileValue, TimeLaw};
+pub use timing::topp::{Run, RunState, GRID_STEP, MAX_GRID_NODES, MIN_NODE_SPACING, RUN_STEP};
+pub use timing::trajectory::{
+    CartesianSample, CartesianTrajectory, TimedKind, TimedSegment, TimingLimit, TimingOptions,
+    TrajectoryError,
+};
 pub use tool::tool_axis;
-pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
 
 use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};
 use crate::robot::Robot;
-use limits::{values_per_sample, JointMap, ReferenceFailure};
-use reference::{build_reference, build_turning_reference, first_unreachable, sample_count};
-use topp::JointConstraints;
-use trajectory::LongCause;
+use limits::JointMap;
+use reference::{build_turning_reference, first_unreachable, sample_count};
+use timing::topp::JointConstraints;
+use timing::trajectory::LongCause;
 
 /// Everything [`plan`] needs besides the program and the robot. Every field has the
 /// library's default; the command line takes its defaults from here.
@@ -228,7 +237,7 @@ pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
 /// jerk filter mixes neighbouring accelerations) the runs are timed again with the limits
 /// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. A `G61` move whose fastest law would
 /// exceed a joint's speed or acceleration limit is slowed down uniformly until it keeps them
-/// ([`crate::motion::exact`]); the moves so slowed are listed in
+/// ([`JointLimitedMove`]); the moves so slowed are listed in
 /// [`PlanDiagnostics::joint_limited`]. Before it allocates the reference the planner checks its
 /// size against [`MAX_PLAN_VALUES`].
 ///
@@ -292,7 +301,7 @@ pub fn plan_program(
                 runs: trajectory
                     .segments()
                     .iter()
-                    .filter(|s| matches!(s.kind, trajectory::TimedKind::Run(_)))
+                    .filter(|s| matches!(s.kind, TimedKind::Run(_)))
                     .count(),
                 limit_scale: scale,
                 attempts,

@@ -12,14 +12,14 @@
 //! ([`Robot::start_q`]), the limits' centre and a low-discrepancy set ([`RobustIk`]).
 
 use super::limits::{Ik, JointMap};
-use super::trajectory::CartesianTrajectory;
+use super::timing::trajectory::CartesianTrajectory;
 use crate::ik::ForwardKinematics;
 use crate::robot::Robot;
 use nalgebra::Vector3;
 
-pub use super::limits::{
+use super::limits::{
     values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
-    MAX_PLAN_VALUES, SINGULAR_PASS_RATIO, START_POSE_TOLERANCE,
+    MAX_PLAN_VALUES, START_POSE_TOLERANCE,
 };
 
 /// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …

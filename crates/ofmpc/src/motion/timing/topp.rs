@@ -3,7 +3,7 @@
 //!
 //! # Method
 //!
-//! The run (a blended path from rest to rest, [`crate::motion::blend`]) is gridded in arc
+//! The run (a blended path from rest to rest, `path/blend.rs`) is gridded in arc
 //! length `s` (nodes at most [`GRID_STEP`] apart, at least two intervals per piece, every
 //! piece boundary a node). With the state `x = ṡ²` and the control `u = s̈` (constant between
 //! nodes, so `x_{i+1} = x_i + 2 Δs_i u_i`), each node has
@@ -43,8 +43,8 @@
 //! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
 //! and both constrain it.
 
-use super::limits::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
-use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
+use crate::motion::limits::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use crate::motion::path::blend::{Geometry, Piece, TURN_JERK_SHARE};
 use nalgebra::Vector3;
 
 /// Largest node spacing of the grid (m).
