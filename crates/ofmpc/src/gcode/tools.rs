@@ -111,8 +111,6 @@ impl ToolTable {
     }
 }
 
-/// The blank-separated words of `s` with their 1-based columns (in characters).
-
 /// The error at word `word` (column `column`) of line `line`.
 fn word_error(
     line: usize,
@@ -156,6 +154,7 @@ fn letter_value(line: usize, col: usize, word: &str) -> Result<(char, f64), Tool
     Ok((letter, value))
 }
 
+/// The blank-separated words of `s` with their 1-based columns (in characters).
 fn words(s: &str) -> impl Iterator<Item = (usize, &str)> {
     let mut col = 0;
     let mut out = Vec::new();
