@@ -14,7 +14,7 @@ pub const MAX_WORD_VALUE: f64 = 1e9;
 /// Moves shorter than this (m) are skipped with a warning.
 pub const MIN_MOVE_LENGTH: f64 = 1e-12;
 
-/// Options of [`parse`].
+/// Options of [`parse`](super::parse).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ParseOptions {
     /// Initial `G54` work offset (m, base frame), used when the program does not set the G54
@@ -27,7 +27,7 @@ pub struct ParseOptions {
     /// motion must give X, Y and Z (it sets the start point).
     pub start: Option<Vector3<f64>>,
     /// Lines the program may execute beyond its own length (loops, calls) before it is
-    /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`].
+    /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS).
     pub max_steps: Option<usize>,
     /// The tool table `G43 H<n>` takes tool n's length from; `None`: `G43 H<n>` (n > 0)
     /// is refused.
