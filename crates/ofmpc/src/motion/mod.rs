@@ -258,12 +258,7 @@ pub fn plan_program(
     let tool_length = tool::reference_length(&program);
     let tooled = tool::tooled_robot(robot, tool_length, &program)?;
     let robot = tooled.as_ref().unwrap_or(robot);
-    let moved = tool_axis(robot, options.orientation)
-        .and_then(|a| tool::controlled_program(&program, tool_length, a));
-    let (program, as_read) = match moved {
-        Some(m) => (m, Some(program)),
-        None => (program, None),
-    };
+    let (program, as_read) = at_tool_tip(program, robot, options.orientation, tool_length);
     let n = robot.dof();
     let has_runs = has_blended_runs(&program, options);
     let limits = RobotLimits::of(robot);
@@ -296,20 +291,7 @@ pub fn plan_program(
             if !ok {
                 return Err(limits.limit_error(worst, &reference, attempts));
             }
-            let diagnostics = PlanDiagnostics {
-                duration: trajectory.duration(),
-                runs: trajectory
-                    .segments()
-                    .iter()
-                    .filter(|s| matches!(s.kind, TimedKind::Run(_)))
-                    .count(),
-                limit_scale: scale,
-                attempts,
-                peak_speed_ratio: worst[0].0,
-                peak_accel_ratio: worst[1].0,
-                joint_limited: trajectory.joint_limited().to_vec(),
-                start_turn,
-            };
+            let diagnostics = PlanDiagnostics::of(&trajectory, scale, attempts, worst, start_turn);
             return Ok(Plan {
                 program: as_read.unwrap_or(program),
                 trajectory,
@@ -318,10 +300,60 @@ pub fn plan_program(
                 tool_length,
             });
         }
-        for (s, w) in scale.iter_mut().zip(worst) {
-            if w.0 > 1.0 {
-                *s *= 0.995 / w.0;
-            }
+        slow_down(&mut scale, worst);
+    }
+}
+
+/// Scales down the speed and acceleration limit factors `scale` whose worst ratio over the
+/// runs' samples exceeds 1, to just below the limit (0.995 of the ratio's inverse).
+fn slow_down(scale: &mut [f64; 2], worst: [(f64, usize, usize); 2]) {
+    for (s, w) in scale.iter_mut().zip(worst) {
+        if w.0 > 1.0 {
+            *s *= 0.995 / w.0;
+        }
+    }
+}
+
+/// The program with its moves under another tool length than `tool_length` planned for
+/// that length's tip, and the program as read; the program itself and `None` when no move
+/// needs it (the module `tool`).
+fn at_tool_tip(
+    program: Program,
+    robot: &Robot,
+    orientation: Orientation,
+    tool_length: f64,
+) -> (Program, Option<Program>) {
+    let moved = tool_axis(robot, orientation)
+        .and_then(|a| tool::controlled_program(&program, tool_length, a));
+    match moved {
+        Some(m) => (m, Some(program)),
+        None => (program, None),
+    }
+}
+
+impl PlanDiagnostics {
+    /// The diagnostics of a plan accepted after `attempts` timings with the joint limits
+    /// scaled by `scale`; `worst` is the worst speed and acceleration ratio over the runs.
+    fn of(
+        trajectory: &CartesianTrajectory,
+        scale: [f64; 2],
+        attempts: usize,
+        worst: [(f64, usize, usize); 2],
+        start_turn: Option<StartTurn>,
+    ) -> Self {
+        Self {
+            duration: trajectory.duration(),
+            runs: trajectory
+                .segments()
+                .iter()
+                .filter(|s| matches!(s.kind, TimedKind::Run(_)))
+                .count(),
+            limit_scale: scale,
+            attempts,
+            peak_speed_ratio: worst[0].0,
+            peak_accel_ratio: worst[1].0,
+            joint_limited: trajectory.joint_limited().to_vec(),
+            start_turn,
         }
     }
 }

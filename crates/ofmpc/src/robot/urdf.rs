@@ -130,19 +130,12 @@ fn moving_joint(
     if !norm.is_finite() || norm < 1e-9 {
         return Err(UrdfError::BadAxis(j.name.clone()));
     }
-    let (lower, upper, velocity, effort) = joint_limits(j, kind_name, limited, warnings)?;
-    if let Some(d) = &j.dynamics {
-        if d.damping != 0.0 || d.friction != 0.0 {
-            warnings.push(UrdfWarning::IgnoredDynamics {
-                joint: j.name.clone(),
-                damping: d.damping,
-                friction: d.friction,
-            });
-        }
-    }
-    if j.safety_controller.is_some() {
-        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
-    }
+    let (lower, upper, velocity, effort) = if limited {
+        limited_range(j, kind_name, warnings)?
+    } else {
+        continuous_limits(j)?
+    };
+    warn_ignored(j, warnings);
     Ok(Joint {
         name: j.name.clone(),
         link: j.child.link.clone(),
@@ -163,73 +156,90 @@ fn moving_joint(
     })
 }
 
-/// A joint's position range, speed and effort limits `(lower, upper, velocity, effort)`:
-/// a `limited` (revolute, prismatic) joint needs an ordered, non-empty range; a continuous
-/// one has none. A speed or effort of 0 means "not given" (unlimited).
-fn joint_limits(
+/// Warns of what a joint declares that the model ignores: damping and friction
+/// (`<dynamics>`), a `<safety_controller>`.
+fn warn_ignored(j: &urdf_rs::Joint, warnings: &mut Vec<UrdfWarning>) {
+    if let Some(d) = &j.dynamics {
+        if d.damping != 0.0 || d.friction != 0.0 {
+            warnings.push(UrdfWarning::IgnoredDynamics {
+                joint: j.name.clone(),
+                damping: d.damping,
+                friction: d.friction,
+            });
+        }
+    }
+    if j.safety_controller.is_some() {
+        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
+    }
+}
+
+/// The limits of a revolute or prismatic joint: an ordered, non-empty range, a positive
+/// speed and effort (0 = not given: unlimited, with a warning).
+fn limited_range(
     j: &urdf_rs::Joint,
     kind_name: &'static str,
-    limited: bool,
     warnings: &mut Vec<UrdfWarning>,
 ) -> Result<(f64, f64, f64, f64), UrdfError> {
     let l = &j.limit;
-    if limited {
-        if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
-            return Err(UrdfError::LimitOrder {
+    if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
+        return Err(UrdfError::LimitOrder {
+            joint: j.name.clone(),
+            lower: l.lower,
+            upper: l.upper,
+        });
+    }
+    if l.lower == l.upper {
+        return Err(UrdfError::EmptyRange {
+            joint: j.name.clone(),
+            kind: kind_name,
+            value: l.lower,
+        });
+    }
+    // ROS tools read 0 as "not given" (ROS-Industrial's descriptions write effort="0"):
+    // unlimited, with a warning; a negative or non-finite value is an error.
+    let mut given = |attribute: &'static str, value: f64| {
+        if value == 0.0 {
+            warnings.push(UrdfWarning::UnspecifiedLimit {
                 joint: j.name.clone(),
-                lower: l.lower,
-                upper: l.upper,
+                attribute,
             });
-        }
-        if l.lower == l.upper {
-            return Err(UrdfError::EmptyRange {
+            Ok(f64::INFINITY)
+        } else if value.is_finite() && value > 0.0 {
+            Ok(value)
+        } else {
+            Err(UrdfError::MissingLimit {
                 joint: j.name.clone(),
                 kind: kind_name,
-                value: l.lower,
-            });
+                attribute,
+                value,
+            })
         }
-        // ROS tools read 0 as "not given" (ROS-Industrial's descriptions write effort="0"):
-        // unlimited, with a warning; a negative or non-finite value is an error.
-        let mut given = |attribute: &'static str, value: f64| {
-            if value == 0.0 {
-                warnings.push(UrdfWarning::UnspecifiedLimit {
-                    joint: j.name.clone(),
-                    attribute,
-                });
-                Ok(f64::INFINITY)
-            } else if value.is_finite() && value > 0.0 {
-                Ok(value)
-            } else {
-                Err(UrdfError::MissingLimit {
-                    joint: j.name.clone(),
-                    kind: kind_name,
-                    attribute,
-                    value,
-                })
-            }
-        };
-        let velocity = given("velocity", l.velocity)?;
-        let effort = given("effort", l.effort)?;
-        Ok((l.lower, l.upper, velocity, effort))
-    } else {
-        // Continuous: no range; velocity and effort optional (0 = not given).
-        let optional = |attribute: &'static str, v: f64| {
-            if v.is_nan() || v < 0.0 {
-                Err(UrdfError::NegativeLimit {
-                    joint: j.name.clone(),
-                    attribute,
-                    value: v,
-                })
-            } else if v == 0.0 {
-                Ok(f64::INFINITY)
-            } else {
-                Ok(v)
-            }
-        };
-        let velocity = optional("velocity", l.velocity)?;
-        let effort = optional("effort", l.effort)?;
-        Ok((f64::NEG_INFINITY, f64::INFINITY, velocity, effort))
-    }
+    };
+    let velocity = given("velocity", l.velocity)?;
+    let effort = given("effort", l.effort)?;
+    Ok((l.lower, l.upper, velocity, effort))
+}
+
+/// The limits of a continuous joint: no range; speed and effort optional (0 = not given).
+fn continuous_limits(j: &urdf_rs::Joint) -> Result<(f64, f64, f64, f64), UrdfError> {
+    let l = &j.limit;
+    // Continuous: no range; velocity and effort optional (0 = not given).
+    let optional = |attribute: &'static str, v: f64| {
+        if v.is_nan() || v < 0.0 {
+            Err(UrdfError::NegativeLimit {
+                joint: j.name.clone(),
+                attribute,
+                value: v,
+            })
+        } else if v == 0.0 {
+            Ok(f64::INFINITY)
+        } else {
+            Ok(v)
+        }
+    };
+    let velocity = optional("velocity", l.velocity)?;
+    let effort = optional("effort", l.effort)?;
+    Ok((f64::NEG_INFINITY, f64::INFINITY, velocity, effort))
 }
 
 /// Link names that mark the end of an arm, in order of preference, for the default flange:
@@ -288,7 +298,38 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> 
     if joints.is_empty() {
         return Err(UrdfError::NoMovingJoint.into());
     }
-    let n = joints.len();
+    let missing = missing_inertials(&joints, &mut warnings);
+    let (flange_name, flange) = flange(tip, &frames, &joints, last_link);
+    let name = if urdf.name.is_empty() {
+        "robot".to_string()
+    } else {
+        urdf.name.clone()
+    };
+    let link_frames = urdf
+        .links
+        .iter()
+        .filter_map(|l| {
+            let (body, pose) = frames.get(l.name.as_str())?;
+            Some(LinkFrame {
+                name: l.name.clone(),
+                body: *body,
+                pose: *pose,
+            })
+        })
+        .collect();
+    Ok(Chain {
+        name,
+        joints,
+        flange,
+        flange_name,
+        warnings,
+        missing_inertials: missing,
+        link_frames,
+    })
+}
+
+/// The moving links without `<inertial>` and their joints, with a warning naming them.
+fn missing_inertials(joints: &[Joint], warnings: &mut Vec<UrdfWarning>) -> Vec<(String, String)> {
     let missing: Vec<(String, String)> = joints
         .iter()
         .filter(|j| j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0)
@@ -299,8 +340,22 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> 
             links: missing.iter().map(|(l, _)| l.clone()).collect(),
         });
     }
+    missing
+}
+
+/// The flange of a chain of `joints`: the `tip` link when it lies on the last body, else,
+/// with no tip given, a link on the last body named like a flange ([`FLANGE_NAMES`] first,
+/// then [`FLANGE_NAME_PARTS`]), else the last link on the last body; failing all, the last
+/// joint's link itself.
+fn flange(
+    tip: Option<&str>,
+    frames: &HashMap<&str, (Option<usize>, Transform)>,
+    joints: &[Joint],
+    last_link: Option<(String, Transform)>,
+) -> (String, Transform) {
+    let n = joints.len();
     let on_last = |name: &str| matches!(frames.get(name), Some((Some(b), _)) if *b == n - 1);
-    let (flange_name, flange) = match tip {
+    match tip {
         Some(t) => match frames.get(t) {
             Some((Some(b), pose)) if *b == n - 1 => (t.to_string(), *pose),
             _ => (joints[n - 1].link.clone(), Transform::identity()),
@@ -333,33 +388,7 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> 
                 },
             }
         }
-    };
-    let name = if urdf.name.is_empty() {
-        "robot".to_string()
-    } else {
-        urdf.name.clone()
-    };
-    let link_frames = urdf
-        .links
-        .iter()
-        .filter_map(|l| {
-            let (body, pose) = frames.get(l.name.as_str())?;
-            Some(LinkFrame {
-                name: l.name.clone(),
-                body: *body,
-                pose: *pose,
-            })
-        })
-        .collect();
-    Ok(Chain {
-        name,
-        joints,
-        flange,
-        flange_name,
-        warnings,
-        missing_inertials: missing,
-        link_frames,
-    })
+    }
 }
 
 /// The link tree of a URDF: link indices by name, the child joints of each link and the
