@@ -13,8 +13,8 @@
 //! same as the dense one with fewer flops. The controllers order rows and
 //! unknowns so that their block-triangular `𝒜` has such a profile.
 
-use super::dense::{all_finite, axpy, dot};
-use super::simd::{AlignedBuf, Avx2Fma};
+use crate::control::solvers::dense::{all_finite, axpy, dot};
+use crate::control::solvers::simd::{AlignedBuf, Avx2Fma};
 
 /// Widest panel of columns whose reflectors are applied together.
 const PANEL: usize = 8;
