@@ -292,6 +292,7 @@ mod tests {
     use super::householder::*;
     use super::*;
     use crate::control::solvers::dense::dot;
+    use crate::control::solvers::simd::Avx2Fma;
     use nalgebra::{DMatrix, DVector};
 
     use crate::linalg::random::symmetric as rng;
