@@ -6,7 +6,7 @@ use crate::errors::to_py;
 use crate::robot::PyRobot;
 use nalgebra::UnitQuaternion;
 use numpy::{PyArray1, PyArray2};
-use ofmpc::control::settings::MAX_HORIZON;
+use ofmpc::control::MAX_HORIZON;
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::Profile;
 use ofmpc::motion::{plan as motion_plan, JointReference, Orientation, PlanOptions, TimingOptions};

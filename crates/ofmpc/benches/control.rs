@@ -7,7 +7,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::{DMatrix, DVector};
-use ofmpc::control::lsq::lsq_flops;
+use ofmpc::control::lsq_flops;
 use ofmpc::control::{
     new_controller, ControllerKind, LinearLikeModel, LsqWorkspace, MpcSettings, Predictions,
     Solver, Zoh,

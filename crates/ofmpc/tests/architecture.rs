@@ -482,61 +482,133 @@ fn embedded_paper_program_equals_the_examples_copy() {
     assert_eq!(ofmpc::gcode::PAPER_TABLE1.as_bytes(), &embedded[..]);
 }
 
-/// The sibling files a file of `control/` references (`super::x`, `super::{x, …}`,
-/// `crate::control::x`), without its unit tests.
-fn control_sibling_references(file: &Path, siblings: &BTreeSet<String>) -> BTreeSet<String> {
+/// The files of `control/` that the file `file` (module path `module`
+/// inside `control`, e.g. `mpc::core`) references: paths after `super::`
+/// (resolved from the file's folder, `super::super::` one folder up) and
+/// after `crate::control::`, groups `{x, …}` included, each resolved to the
+/// longest module path of `modules`; without its unit tests.
+fn control_references(file: &Path, module: &str, modules: &BTreeSet<String>) -> BTreeSet<String> {
     let src = code_only(&fs::read_to_string(file).unwrap());
     let src = match src.find("#[cfg(test)]\nmod tests") {
         Some(i) => &src[..i],
         None => &src[..],
     };
+    let segments: Vec<&str> = module.split("::").collect();
     let mut found = BTreeSet::new();
     for prefix in ["super::", "crate::control::"] {
         let mut rest = src;
         while let Some(i) = rest.find(prefix) {
-            let after = &rest[i + prefix.len()..];
-            let names = match after.strip_prefix('{') {
-                Some(group) => group_names(group),
-                None => vec![ident_at(after).to_string()],
-            };
-            found.extend(names.into_iter().filter(|n| siblings.contains(n)));
+            let before = &rest[..i];
+            let mut after = &rest[i + prefix.len()..];
             rest = after;
+            if prefix == "super::" && before.ends_with("::") {
+                continue; // inside a chain read already
+            }
+            let mut base: Vec<String> = Vec::new();
+            if prefix == "super::" {
+                let mut up = 1;
+                while let Some(more) = after.strip_prefix("super::") {
+                    up += 1;
+                    after = more;
+                }
+                let keep = segments.len().saturating_sub(up);
+                base.extend(segments[..keep].iter().map(|s| s.to_string()));
+            }
+            let mut paths = Vec::new();
+            loop {
+                if let Some(group) = after.strip_prefix('{') {
+                    for name in group_names(group) {
+                        paths.push([base.clone(), vec![name]].concat());
+                    }
+                    break;
+                }
+                let id = ident_at(after);
+                if id.is_empty() {
+                    break;
+                }
+                base.push(id.to_string());
+                paths.push(base.clone());
+                match after[id.len()..].strip_prefix("::") {
+                    Some(more) => after = more,
+                    None => break,
+                }
+            }
+            let modules_named = paths
+                .iter()
+                .map(|p| p.join("::"))
+                .filter(|p| modules.contains(p) && p != module);
+            found.extend(modules_named);
         }
     }
     found
 }
 
-/// Inside `control`, no two files import each other (`mod.rs` declares its
-/// children and is left out): the settings, the drive model, the solvers and
-/// the controllers form a partial order.
+/// Every `.rs` file under `dir` but the `mod.rs` files, with its module path
+/// below `control` (`mpc::core`, `solvers::lsq::avx2`).
+fn control_files(dir: &Path, prefix: &str, out: &mut Vec<(String, PathBuf)>) {
+    for entry in fs::read_dir(dir).unwrap().flatten() {
+        let p = entry.path();
+        let stem = p.file_stem().unwrap().to_string_lossy().to_string();
+        let module = if prefix.is_empty() {
+            stem.clone()
+        } else {
+            format!("{prefix}::{stem}")
+        };
+        if p.is_dir() {
+            control_files(&p, &module, out);
+        } else if p.extension().is_some_and(|x| x == "rs") && stem != "mod" {
+            out.push((module, p));
+        }
+    }
+}
+
+/// Inside `control` and its folders, no two files import each other, directly
+/// or through a cycle (the `mod.rs` files declare their children and are left
+/// out): the settings, the drive model, the solvers and the controllers form
+/// a partial order.
 #[test]
 fn control_files_do_not_import_each_other() {
-    let dir = src_dir().join("control");
-    let files: Vec<PathBuf> = fs::read_dir(&dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .filter(|p| p.extension().is_some_and(|x| x == "rs") && !p.ends_with("mod.rs"))
-        .collect();
-    let name = |p: &Path| p.file_stem().unwrap().to_string_lossy().to_string();
-    let siblings: BTreeSet<String> = files.iter().map(|p| name(p)).collect();
-    assert!(siblings.contains("settings") && siblings.contains("core"));
-    let refs: Vec<(String, BTreeSet<String>)> = files
+    let mut files = Vec::new();
+    control_files(&src_dir().join("control"), "", &mut files);
+    let modules: BTreeSet<String> = files.iter().map(|(m, _)| m.clone()).collect();
+    assert!(modules.contains("settings") && modules.contains("mpc::core"));
+    let edges: BTreeMap<String, BTreeSet<String>> = files
         .iter()
-        .map(|p| (name(p), control_sibling_references(p, &siblings)))
+        .map(|(m, p)| (m.clone(), control_references(p, m, &modules)))
         .collect();
-    let mut both_ways = Vec::new();
-    for (a, to) in &refs {
-        for b in to {
-            let back = refs.iter().any(|(n, t)| n == b && t.contains(a));
-            if a < b && back {
-                both_ways.push(format!("control/{a}.rs <-> control/{b}.rs"));
+    // Depth-first search; a back edge closes a cycle.
+    fn visit(
+        at: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, bool>,
+        path: &mut Vec<String>,
+        cycles: &mut Vec<String>,
+    ) {
+        state.insert(at.to_string(), false);
+        path.push(at.to_string());
+        for to in &edges[at] {
+            match state.get(to) {
+                None => visit(to, edges, state, path, cycles),
+                Some(false) => {
+                    let from = path.iter().position(|m| m == to).unwrap();
+                    cycles.push(format!("{} -> {to}", path[from..].join(" -> ")));
+                }
+                Some(true) => {}
             }
+        }
+        path.pop();
+        state.insert(at.to_string(), true);
+    }
+    let mut state = BTreeMap::new();
+    let mut cycles = Vec::new();
+    for m in edges.keys() {
+        if !state.contains_key(m) {
+            visit(m, &edges, &mut state, &mut Vec::new(), &mut cycles);
         }
     }
     assert!(
-        both_ways.is_empty(),
-        "files that import each other: {both_ways:?}"
+        cycles.is_empty(),
+        "import cycles inside control: {cycles:?}"
     );
 }
 
@@ -556,7 +628,7 @@ fn the_control_reference_finder_reads_paths_groups_and_skips_tests() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let found = control_sibling_references(&path, &siblings);
+    let found = control_references(&path, "first", &siblings);
     let _ = fs::remove_file(&path);
     let want: BTreeSet<String> = ["core", "settings", "zoh", "model"]
         .iter()

@@ -10,7 +10,7 @@ mod common;
 
 use common::experiment::{experiment, run, steady};
 use nalgebra::{DMatrix, DVector};
-use ofmpc::control::baseline::DEFAULT_CTC_BANDWIDTH;
+use ofmpc::control::DEFAULT_CTC_BANDWIDTH;
 use ofmpc::control::{triple_pole_inertia_ratio_range, ControllerKind};
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::gcode::PAPER_TABLE1;

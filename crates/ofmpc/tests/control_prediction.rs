@@ -6,8 +6,8 @@ mod common;
 
 use common::{zoh_reference, Rng};
 use nalgebra::{DMatrix, DVector};
-use ofmpc::control::prediction::{fill_f_i, fill_f_ii, fill_w_s, Predictions};
 use ofmpc::control::Zoh;
+use ofmpc::control::{fill_f_i, fill_f_ii, fill_w_s, Predictions};
 
 fn rel(a: &DVector<f64>, b: &DVector<f64>, scale: f64) -> f64 {
     (a - b).norm() / scale.max(1e-300)

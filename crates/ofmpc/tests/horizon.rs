@@ -6,7 +6,7 @@
 //! for the positional (usual, dob-mpc) and the incremental (first, second) forms; the baselines
 //! without a horizon record none.
 
-use ofmpc::control::zoh::Zoh;
+use ofmpc::control::Zoh;
 use ofmpc::control::{new_controller, ControllerKind, LinearLikeModel, MpcSettings, Solver};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};

@@ -54,12 +54,15 @@
 
 use std::time::{Duration, Instant};
 
-use super::core::{check_finite, check_len};
-use super::{
-    new_controller_with_baselines, AdaptiveMpc, Algorithm, BaselineSettings, ControllerKind,
-    DriveModel, MpcSettings, QpStatus, SettingsError, StateObserver, StepError, StepFailure,
-    StepInfo, StepStatus,
-};
+use crate::control::algorithm::Algorithm;
+use crate::control::drive_model::DriveModel;
+use crate::control::factory::new_controller_with_baselines;
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::adaptive::AdaptiveMpc;
+use crate::control::mpc::core::{check_finite, check_len};
+use crate::control::observer::StateObserver;
+use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};
+use crate::control::step::{StepError, StepFailure, StepInfo, StepInput, StepOutput, StepStatus};
 use crate::dynamics::RobotDynamics;
 use crate::ident::RlsSettings;
 use crate::robot::{ModelError, Payload, Robot};
@@ -437,44 +440,6 @@ fn check_drives(
     Ok(())
 }
 
-/// One sample's measurement and reference, borrowed (no copy).
-#[derive(Debug, Clone, Copy)]
-pub struct StepInput<'a> {
-    /// Measured state `x_k = [q_k; q̇_k]` (2n values; with an observer only
-    /// the positions are used, possibly `D` samples old).
-    pub x: &'a [f64],
-    /// Current reference `w_k` (n values).
-    pub w_k: &'a [f64],
-    /// Preview `w_{k+1}, …, w_{k+N}` (N·n values, block `j−1` is `w_{k+j}`;
-    /// past the end of a path repeat its last value).
-    pub preview: &'a [f64],
-}
-
-/// What one successful [`Controller::step`] computed. Sized at build: the step
-/// only overwrites it.
-#[derive(Debug, Clone, PartialEq)]
-pub struct StepOutput {
-    /// The torque to apply, `τ_k = H u_k + g` (Eq. (15); plus the friction
-    /// feed-forward with friction compensation), n values.
-    pub tau: Box<[f64]>,
-    /// Minimum of the cost, `J_min = c2ᵀ c2` (Eq. (42)).
-    pub cost: f64,
-    /// `max|R_ii| / min|R_ii|` of the least-squares factor.
-    pub r_diag_ratio: f64,
-    /// Doublings used by the ZOH discretization (Eq. (13)).
-    pub zoh_squarings: u32,
-    /// What the torque-limit QP did (`None` without torque limits).
-    pub qp_status: Option<QpStatus>,
-    /// The payload mass the model carries, identified online (kg; `None`
-    /// for the kinds that do not identify it).
-    pub payload_estimate: Option<f64>,
-    /// Wall time of the step (observer, model, solve and torque).
-    pub solve_time: Duration,
-    /// The numerical outcome of the step: solved, QP at its iteration cap,
-    /// or failed with the last torque held ([`StepStatus`]).
-    pub status: StepStatus,
-}
-
 /// The parts of an [`Controller`] for a loop that interleaves its own law (a safe
 /// stop) with the controller: the controller, its model and its observer.
 pub struct MpcParts<'a> {
@@ -503,9 +468,6 @@ pub struct Controller {
     /// Reset at a measured state since build.
     started: bool,
 }
-
-/// The former name of [`Controller`].
-pub type Mpc = Controller; // TODO(merge): remove
 
 impl std::fmt::Debug for Controller {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -597,15 +559,12 @@ impl Controller {
     /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
     /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`, the observer at rest at
     /// `q0`, the model's payload back to the nominal one. `Err` (and
-    /// nothing changed) for an `x0` of the wrong length or not finite.
+    /// nothing changed) for an `x0` of the wrong length or not finite;
+    /// [`StepError::ResetRefused`] when the algorithm cannot start there.
     pub fn reset(&mut self, x0: &[f64]) -> Result<(), StepError> {
         check_len("x0", x0.len(), 2 * self.dof())?;
         check_finite("x0", x0)?;
-        self.reset_algorithm(x0)
-            .map_err(|_| StepError::NonFiniteInput {
-                what: "x0",
-                index: 0,
-            })?;
+        self.reset_algorithm(x0).map_err(StepError::ResetRefused)?;
         if let Some(o) = self.observer.as_mut() {
             o.reset(x0);
         }

@@ -2,8 +2,8 @@
 //! estimates per joint (from the drives file, [`crate::robot::Drives`]).
 
 /// Which quantity of a [`DriveModel`] (defined next to the [`SettingsError`] that names it).
-pub use super::settings::DriveQuantity;
-use super::settings::SettingsError;
+use crate::control::settings::DriveQuantity;
+use crate::control::settings::SettingsError;
 use crate::robot::Robot;
 
 /// The drives as a controller models them, one entry per joint.
@@ -20,7 +20,7 @@ pub struct DriveModel {
     pub coulomb_velocity_rad_s: f64,
 }
 
-pub use crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY;
+use crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY;
 
 impl DriveModel {
     /// The robot's effort limits and its drives' friction estimates.

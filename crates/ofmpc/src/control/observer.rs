@@ -16,8 +16,8 @@
 //! commanded since, so that the payload does not bias the prediction.
 //! Allocation-free after construction.
 
-use super::model::LinearLikeModel;
-use super::StepFailure;
+use crate::control::mpc::model::LinearLikeModel;
+use crate::control::step::StepFailure;
 use crate::dynamics::JointSpaceDynamics;
 
 /// The observer of one controller (see the module docs).

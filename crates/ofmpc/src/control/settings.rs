@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::kind::ControllerKind;
+use crate::control::kind::ControllerKind;
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
@@ -172,14 +172,14 @@ pub const DEFAULT_DOB_OBSERVER_BANDWIDTH: f64 = 100.0;
 
 /// Tuning of the baselines: one bandwidth each (rad/s), a number for every
 /// joint or one per joint. The PID and computed-torque error dynamics get a
-/// discrete triple pole at `e^(−ωn·Ts)` ([`super::baseline`]); the disturbance
+/// discrete triple pole at `e^(−ωn·Ts)` ([`crate::control::baselines::baseline`]); the disturbance
 /// observer of the MPC baseline a pole at `e^(−ω_o·Ts)`.
 ///
 /// Its own settings type, given beside the [`MpcSettings`] where a baseline
-/// is built ([`super::PidController::new`], [`super::CtcController::new`],
-/// [`super::DobMpc::new`], [`super::AdaptiveMpc::new`],
-/// [`super::new_controller_with_baselines`],
-/// [`super::ControllerBuilder::baselines`]); the predictive controllers of
+/// is built ([`crate::control::PidController::new`], [`crate::control::CtcController::new`],
+/// [`crate::control::DobMpc::new`], [`crate::control::AdaptiveMpc::new`],
+/// [`crate::control::new_controller_with_baselines`],
+/// [`crate::control::ControllerBuilder::baselines`]); the predictive controllers of
 /// the paper do not read it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -273,8 +273,8 @@ pub struct MpcSettings {
     /// Robust tuning over a payload range centres the model inside it.
     pub model_payload_kg: f64,
     /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
-    /// horizon as constraints of the optimization ([`super::constrained`]);
-    /// the limits come from the controller's [`super::DriveModel`]. Default off.
+    /// horizon as constraints of the optimization ([`crate::control::solvers::constrained`]);
+    /// the limits come from the controller's [`crate::control::DriveModel`]. Default off.
     /// With the dense solver the QP is built from the dense system's QR
     /// factor; with the structured one, on the steps whose plan passes a
     /// limit, from the condensed problem of the first `constraint_horizon`
@@ -295,7 +295,7 @@ pub struct MpcSettings {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constraint_horizon: Option<usize>,
     /// Use the drives' friction estimates (Coulomb, viscous) of the
-    /// [`super::DriveModel`]: the estimated friction at the reference's
+    /// [`crate::control::DriveModel`]: the estimated friction at the reference's
     /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). With it,
     /// the second algorithm restarts its aggregated error from the current
     /// error (`ē_k = w_k − y_k`) on a joint whose reference rests over the
@@ -306,13 +306,13 @@ pub struct MpcSettings {
     /// and the observer's disturbance estimate before optimizing (implies
     /// `state_observer`). Default off.
     pub delay_compensation: bool,
-    /// Estimate the state with a [`super::StateObserver`] (position,
+    /// Estimate the state with a [`crate::control::StateObserver`] (position,
     /// velocity, disturbance) from the measured positions instead of using
     /// the measured state directly. Default off; on whenever
     /// `delay_compensation` is.
     pub state_observer: bool,
     /// The state observer's model carries the drives' friction estimates
-    /// (Coulomb, viscous, of the [`super::DriveModel`]; the Coulomb part
+    /// (Coulomb, viscous, of the [`crate::control::DriveModel`]; the Coulomb part
     /// stick-aware: the torque that stops the joint within the step, bounded
     /// by `±F̂_c`) instead of leaving all of the friction to its disturbance
     /// estimate, which cannot follow a sign change of the friction within a
@@ -366,7 +366,7 @@ impl MpcSettings {
         if self.solver.for_horizon(self.horizon) == Solver::DenseQr {
             let p = self.horizon.saturating_mul(dof);
             let rows = p.saturating_mul(2);
-            let entries = super::tracking::dense_entries(dof, self.horizon, true);
+            let entries = crate::control::solvers::tracking::dense_entries(dof, self.horizon, true);
             if !matches!(entries, Some(e) if e <= MAX_SYSTEM_ENTRIES) {
                 return Err(SettingsError::TooLarge {
                     solver: Solver::DenseQr,
@@ -571,7 +571,7 @@ pub enum SettingsError {
     Estimator(#[from] crate::ident::RlsSettingsError),
 }
 
-/// Which quantity of a [`DriveModel`](super::DriveModel) (in a [`SettingsError`]).
+/// Which quantity of a [`DriveModel`](crate::control::DriveModel) (in a [`SettingsError`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 #[non_exhaustive]
 pub enum DriveQuantity {

@@ -8,20 +8,20 @@
 //!
 //! (Spong, Hutchinson & Vidyasagar, *Robot Modeling and Control*, §8.4,
 //! with an integral term): with an exact model every joint's error is the
-//! sampled double integrator of [`super::baseline`], whose gains place a
+//! sampled double integrator of [`crate::control::baselines::baseline`], whose gains place a
 //! triple pole at `e^(−ωn·Ts)`, `ωn` =
-//! [`super::BaselineSettings::ctc_bandwidth`] (default 150 rad/s);
-//! `v_ref`, `a_ref` from the samples ([`super::baseline`]). A payload the
+//! [`crate::control::BaselineSettings::ctc_bandwidth`] (default 150 rad/s);
+//! `v_ref`, `a_ref` from the samples ([`crate::control::baselines::baseline`]). A payload the
 //! model leaves out acts as an input disturbance that the integrator
 //! removes at rest. With torque limits the torque is clipped and the clipped
 //! joint's integral frozen (anti-windup).
 
-use super::baseline::{JointLawCore, Law};
-use super::core::impl_controller;
-use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
-use super::ControllerKind;
+use crate::control::baselines::baseline::{JointLawCore, Law};
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::impl_controller;
+use crate::control::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 
-/// The computed-torque baseline. Allocation-free [`Algorithm::step`](super::Algorithm::step).
+/// The computed-torque baseline. Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct CtcController {
     core: JointLawCore,

@@ -8,13 +8,14 @@
 //!
 //! It removes the steady error for constant references.
 
-use super::core::{impl_controller, Core, StepTargets};
-use super::prediction::prefix_sums;
-use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepFailure, StepInfo};
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::{impl_controller, Core, StepTargets};
+use crate::control::mpc::prediction::prefix_sums;
+use crate::control::settings::{MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The first algorithm, Eq. (32)/(37). Allocation-free [`Algorithm::step`](super::Algorithm::step).
+/// The first algorithm, Eq. (32)/(37). Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct FirstMpc {
     core: Core,
@@ -30,7 +31,7 @@ impl FirstMpc {
         })
     }
 
-    /// [`Algorithm::step`](super::Algorithm::step) of the first algorithm:
+    /// [`Algorithm::step`](crate::control::Algorithm::step) of the first algorithm:
     /// [`Core::step_with`] with its targets ([`FirstTargets`]).
     fn run_step(
         &mut self,

@@ -71,7 +71,7 @@ impl std::ops::DerefMut for AlignedBuf {
 
 #[cfg(test)]
 mod tests {
-    use super::AlignedBuf;
+    use crate::control::solvers::simd::AlignedBuf;
 
     #[test]
     fn aligned_buffers_start_on_a_cache_line_and_clone_aligned() {

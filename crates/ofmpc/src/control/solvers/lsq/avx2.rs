@@ -2,7 +2,7 @@
 //! scaling, panel factorization, Gram matrix and the blocked (compact WY)
 //! application of a panel's reflectors, with explicit 4-wide intrinsics.
 //!
-//! Entry points are safe functions that take an [`Avx2Fma`] token: one exists
+//! Their safe entry points ([`super::factor`]) take an `Avx2Fma` token: one exists
 //! only on a CPU that runs AVX2 and FMA, so no safe caller can reach AVX2 code
 //! elsewhere. The kernels below them are `#[target_feature]` functions whose
 //! remaining precondition (documented under `# Safety`) is the CPU support
@@ -13,79 +13,7 @@
 
 use std::arch::x86_64::*;
 
-use super::super::simd::Avx2Fma;
-use super::{back_substitute_generic, factor_generic, first_non_finite_generic};
-
-/// [`super::factor`] compiled for AVX2 + FMA: vectorized panels, blocked
-/// application of their reflectors.
-pub(super) fn factor(
-    token: Avx2Fma,
-    a: &mut [f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-    tau: &mut [f64],
-    vbuf: &mut [f64],
-) -> f64 {
-    // SAFETY: `token` proves the CPU supports AVX2 and FMA, the only
-    // precondition of `factor_unchecked`.
-    unsafe { factor_unchecked(token, a, m, p, row_end, tau, vbuf) }
-}
-
-/// # Safety
-/// The CPU must support AVX2 and FMA.
-#[target_feature(enable = "avx2,fma")]
-unsafe fn factor_unchecked(
-    token: Avx2Fma,
-    a: &mut [f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-    tau: &mut [f64],
-    vbuf: &mut [f64],
-) -> f64 {
-    factor_generic::<true>(Some(token), a, m, p, row_end, tau, vbuf)
-}
-
-/// [`super::first_non_finite`] compiled for AVX2 (wider vectors, same result).
-pub(super) fn first_non_finite(
-    token: Avx2Fma,
-    a: &[f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-) -> Option<(usize, usize)> {
-    let _proof = token;
-    // SAFETY: `token` proves the CPU supports AVX2 and FMA.
-    unsafe { first_non_finite_unchecked(a, m, p, row_end) }
-}
-
-/// # Safety
-/// The CPU must support AVX2 and FMA.
-#[target_feature(enable = "avx2,fma")]
-unsafe fn first_non_finite_unchecked(
-    a: &[f64],
-    m: usize,
-    p: usize,
-    row_end: &[usize],
-) -> Option<(usize, usize)> {
-    first_non_finite_generic(a, m, p, row_end)
-}
-
-/// [`super::back_substitute`] compiled for AVX2 (the same operations, no
-/// contraction: identical results).
-pub(super) fn back_substitute(token: Avx2Fma, a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
-    let _proof = token;
-    // SAFETY: `token` proves the CPU supports AVX2 and FMA.
-    unsafe { back_substitute_unchecked(a, m, p, x) }
-}
-
-/// # Safety
-/// The CPU must support AVX2 and FMA.
-#[target_feature(enable = "avx2,fma")]
-unsafe fn back_substitute_unchecked(a: &[f64], m: usize, p: usize, x: &mut [f64]) -> f64 {
-    back_substitute_generic(a, m, p, x)
-}
+use super::householder::{reflector, PANEL};
 
 /// Sum of the four lanes (value intrinsics only: safe where AVX2 is enabled).
 #[inline]
@@ -207,7 +135,7 @@ pub(crate) unsafe fn factor_panel(
         let v = &mut left[c * m + c..c * m + end];
         let (head, tail) = v.split_at_mut(1);
         // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
-        let t = match super::reflector(head[0], unsafe { dot(tail, tail) }) {
+        let t = match reflector(head[0], unsafe { dot(tail, tail) }) {
             None => 0.0,
             Some((beta, inv, t)) => {
                 // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
@@ -225,7 +153,7 @@ pub(crate) unsafe fn factor_panel(
         vcol[r] = 1.0;
         vcol[r + 1..].copy_from_slice(tail);
         if t != 0.0 && c + 1 < c1 {
-            let mut t1 = [[0.0f64; super::PANEL]; super::PANEL];
+            let mut t1 = [[0.0f64; PANEL]; PANEL];
             t1[0][0] = t;
             let vb = &vbuf[r * m + r..(r + 1) * m];
             // SAFETY: AVX2 and FMA are enabled (this function's target features); the callee asserts its index ranges
@@ -250,9 +178,9 @@ pub(crate) unsafe fn gram(
     c0: usize,
     c1: usize,
     end: usize,
-) -> [[f64; super::PANEL]; super::PANEL] {
-    assert!(c1 <= c0 + super::PANEL && c1 * m <= left.len() && end <= m && c1 <= end);
-    let mut g = [[0.0f64; super::PANEL]; super::PANEL];
+) -> [[f64; PANEL]; PANEL] {
+    assert!(c1 <= c0 + PANEL && c1 * m <= left.len() && end <= m && c1 <= end);
+    let mut g = [[0.0f64; PANEL]; PANEL];
     let v = left.as_ptr();
     for r in 1..c1 - c0 {
         let col = match r {
@@ -281,17 +209,12 @@ pub(crate) unsafe fn gram(
 /// `v_jᵀ v_R` for `j < R`, one pass over the rows below `c0 + R`.
 #[inline]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn gram_col<const R: usize>(
-    v: *const f64,
-    m: usize,
-    c0: usize,
-    end: usize,
-) -> [f64; super::PANEL] {
+unsafe fn gram_col<const R: usize>(v: *const f64, m: usize, c0: usize, end: usize) -> [f64; PANEL] {
     // SAFETY: the caller (`gram`) checked that columns c0..=c0+R, rows
     // below `end ≤ m`, lie inside the array `v` points to.
     let row0 = c0 + R;
     let vr = v.wrapping_add(row0 * m);
-    let mut s = [0.0f64; super::PANEL];
+    let mut s = [0.0f64; PANEL];
     for j in 0..R {
         // SAFETY: columns c0..=c0+R and rows below `end ≤ m` lie in the array (asserted by `gram`)
         unsafe {
@@ -337,7 +260,7 @@ unsafe fn gram_col<const R: usize>(
 /// `A ← (I − V Tᵀ Vᵀ) A` on rows `lo..end` of every column in `right`
 /// (each `m` long), for `k` reflectors held explicitly in `vb`: column
 /// `r` starts at `vb[r·ld]` and holds rows `lo..end` (zeros above the unit
-/// diagonal). `T` from [`super::t_from_gram`].
+/// diagonal). `T` from `t_from_gram`.
 ///
 /// # Safety
 /// The CPU must support AVX2 and FMA. (Index ranges are asserted.)
@@ -350,7 +273,7 @@ pub(crate) unsafe fn apply_block(
     lo: usize,
     end: usize,
     m: usize,
-    t: &[[f64; super::PANEL]; super::PANEL],
+    t: &[[f64; PANEL]; PANEL],
     right: &mut [f64],
 ) {
     match k {
@@ -381,13 +304,13 @@ unsafe fn apply_block_k<const K: usize, const IL: bool>(
     lo: usize,
     end: usize,
     m: usize,
-    t: &[[f64; super::PANEL]; super::PANEL],
+    t: &[[f64; PANEL]; PANEL],
     right: &mut [f64],
 ) {
     // Every V entry read lies in `vb` (column layout: column r < K,
     // offset < end − lo; interleaved: all chunks of the K columns), every
     // A entry (row < end ≤ m) in its column.
-    assert!(K <= super::PANEL && lo < end && end <= m);
+    assert!(K <= PANEL && lo < end && end <= m);
     let len = end - lo;
     if IL {
         assert!(len >= 4 && ld == 4 && len.div_ceil(4) * 4 * K <= vb.len());
@@ -424,13 +347,13 @@ pub(crate) unsafe fn apply_block_packed(
     lo: usize,
     end: usize,
     m: usize,
-    t: &[[f64; super::PANEL]; super::PANEL],
+    t: &[[f64; PANEL]; PANEL],
     right: &mut [f64],
     vpack: &mut [f64],
 ) {
     let len = end.saturating_sub(lo);
     let chunks = len.div_ceil(4);
-    if len < 4 || k == 0 || k > super::PANEL || chunks * 4 * k > vpack.len() {
+    if len < 4 || k == 0 || k > PANEL || chunks * 4 * k > vpack.len() {
         // SAFETY: AVX2 and FMA are enabled; the callee asserts its index ranges
         return unsafe { apply_block(vb, ld, k, lo, end, m, t, right) };
     }
@@ -468,7 +391,7 @@ unsafe fn pack_apply<const K: usize>(
     lo: usize,
     end: usize,
     m: usize,
-    t: &[[f64; super::PANEL]; super::PANEL],
+    t: &[[f64; PANEL]; PANEL],
     right: &mut [f64],
     vpack: &mut [f64],
 ) {
@@ -523,7 +446,7 @@ unsafe fn block<const K: usize, const Q: usize, const IL: bool>(
     ld: usize,
     lo: usize,
     end: usize,
-    t: &[[f64; super::PANEL]; super::PANEL],
+    t: &[[f64; PANEL]; PANEL],
     cols: [*mut f64; Q],
 ) {
     // SAFETY (all accesses): `apply_block_k` asserted that the V

@@ -22,7 +22,7 @@
 
 use nalgebra::DMatrix;
 
-use super::dense::{gemm, norm1};
+use crate::control::solvers::dense::{gemm, norm1};
 
 /// Largest 1-norm of the scaled `X = M/2^s` summed by the Taylor series.
 const THETA: f64 = 0.25;

@@ -4,10 +4,10 @@
 //! model pipeline (terms → `f0` → ZOH → predictions), the layout of the
 //! least-squares system and the final `u`, `τ` update.
 //!
-//! With the structured solver ([`super::Solver::Structured`]) the stacked
+//! With the structured solver ([`crate::control::Solver::Structured`]) the stacked
 //! system is never formed: each controller writes its stage-wise model
 //! (augmented state of [`stage_dims`], `A`, `B` from the ZOH blocks, `z_0`,
-//! targets and affine terms) and [`super::structured`] solves it; the
+//! targets and affine terms) and [`crate::control::solvers::structured`] solves it; the
 //! prediction matrices are then not needed either. The layout below is the
 //! dense solver's.
 //!
@@ -29,26 +29,29 @@
 //!
 //! The incremental algorithms' two tracking groups `[Q_YW S G1; Q_ΔY G1]`
 //! (`S G1 = G2` or `G2 + G3`) are first halved by a constant orthogonal
-//! transformation ([`super::tracking`]) into `n` rows per block row,
+//! transformation ([`crate::control::solvers::tracking`]) into `n` rows per block row,
 //! `(L G1)[j, l] = Σ_{l ≤ j' ≤ j} L[j, j'] G1[j' − l]` (output by output),
 //! which keeps the profile: level `t` holds those rows of block row
 //! `j = N+1−t`, then the `Q_ΔU` rows of unknown block `t`. Same minimizer,
 //! `J_min` and `R1` as the paper's system with half its rows.
 
-use super::constrained::{QpStatus, TorqueLimitQp};
-use super::dense::gemm;
-use super::drive_model::DriveModel;
-use super::lsq::{LsqError, LsqInfo, LsqWorkspace};
-use super::model::LinearLikeModel;
-use super::prediction::{predicted_outputs, predicted_outputs_work, PredictionError, Predictions};
-use super::settings::{MpcSettings, SettingsError, Solver};
-use super::structured::{StageError, StageLq};
-use super::tracking::{dense_entries, TrackingRows};
-use super::zoh::Zoh;
-use super::{ControllerKind, StepError, StepFailure, StepInfo};
+use crate::control::drive_model::DriveModel;
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::model::LinearLikeModel;
+use crate::control::mpc::prediction::{
+    predicted_outputs, predicted_outputs_work, PredictionError, Predictions,
+};
+use crate::control::mpc::zoh::Zoh;
+use crate::control::settings::{MpcSettings, SettingsError, Solver};
+use crate::control::solvers::constrained::{QpStatus, TorqueLimitQp};
+use crate::control::solvers::dense::gemm;
+use crate::control::solvers::lsq::{LsqError, LsqInfo, LsqWorkspace};
+use crate::control::solvers::structured::{StageError, StageLq};
+use crate::control::solvers::tracking::{dense_entries, TrackingRows};
+use crate::control::step::{StepError, StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// What a controller's core gives [`Algorithm`](super::Algorithm): the
+/// What a controller's core gives [`Algorithm`](crate::control::Algorithm): the
 /// accessors, `reset` and the drives, the same for every controller built on
 /// it ([`Core`] for the predictive controllers, the baselines'
 /// `JointLawCore`); [`impl_controller`] delegates to it.
@@ -59,19 +62,19 @@ pub(crate) trait ControllerCore {
     fn horizon(&self) -> usize;
     /// The tuning.
     fn settings(&self) -> &MpcSettings;
-    /// [`Algorithm::reset`](super::Algorithm::reset).
+    /// [`Algorithm::reset`](crate::control::Algorithm::reset).
     fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure>;
     /// The input `u` of the last successful step.
     fn input(&self) -> &[f64];
     /// The optimal sequence of the last successful step.
     fn increments(&self) -> &[f64];
-    /// [`Algorithm::set_drive_model`](super::Algorithm::set_drive_model).
+    /// [`Algorithm::set_drive_model`](crate::control::Algorithm::set_drive_model).
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError>;
     /// What the torque-limit QP did (`None`: no QP).
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
-    /// [`Algorithm::predicted_outputs`](super::Algorithm::predicted_outputs)
+    /// [`Algorithm::predicted_outputs`](crate::control::Algorithm::predicted_outputs)
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         let _ = out;
@@ -79,12 +82,12 @@ pub(crate) trait ControllerCore {
     }
 }
 
-/// Implements [`Algorithm`](super::Algorithm) for a controller struct with
+/// Implements [`Algorithm`](crate::control::Algorithm) for a controller struct with
 /// a field `core` of the type `$core` (a [`ControllerCore`]): everything but
 /// the step delegates to the core. The step is the core's own
 /// (`core.step`, the joint laws) or the struct's method named last
 /// (`run_step`, the predictive controllers), with the signature of
-/// [`Algorithm::step`](super::Algorithm::step):
+/// [`Algorithm::step`](crate::control::Algorithm::step):
 ///
 /// ```text
 /// impl_controller!(FirstMpc, ControllerKind::First, Core, run_step);
@@ -92,54 +95,54 @@ pub(crate) trait ControllerCore {
 /// ```
 macro_rules! impl_controller {
     ($ty:ty, $kind:expr, $core:ty) => {
-        $crate::control::core::impl_controller!($ty, $kind, $core, core.step);
+        $crate::control::mpc::core::impl_controller!($ty, $kind, $core, core.step);
     };
     ($ty:ty, $kind:expr, $core:ty, $($step:ident).+) => {
-        impl $crate::control::Algorithm for $ty {
-            fn kind(&self) -> $crate::control::ControllerKind {
+        impl $crate::control::algorithm::Algorithm for $ty {
+            fn kind(&self) -> $crate::control::kind::ControllerKind {
                 $kind
             }
 
             fn dof(&self) -> usize {
-                <$core as $crate::control::core::ControllerCore>::dof(&self.core)
+                <$core as $crate::control::mpc::core::ControllerCore>::dof(&self.core)
             }
 
             fn horizon(&self) -> usize {
-                <$core as $crate::control::core::ControllerCore>::horizon(&self.core)
+                <$core as $crate::control::mpc::core::ControllerCore>::horizon(&self.core)
             }
 
-            fn settings(&self) -> &$crate::control::MpcSettings {
-                <$core as $crate::control::core::ControllerCore>::settings(&self.core)
+            fn settings(&self) -> &$crate::control::settings::MpcSettings {
+                <$core as $crate::control::mpc::core::ControllerCore>::settings(&self.core)
             }
 
-            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::StepFailure> {
-                <$core as $crate::control::core::ControllerCore>::reset(&mut self.core, x0)
+            fn reset(&mut self, x0: &[f64]) -> Result<(), $crate::control::step::StepFailure> {
+                <$core as $crate::control::mpc::core::ControllerCore>::reset(&mut self.core, x0)
             }
 
             fn input(&self) -> &[f64] {
-                <$core as $crate::control::core::ControllerCore>::input(&self.core)
+                <$core as $crate::control::mpc::core::ControllerCore>::input(&self.core)
             }
 
             fn increments(&self) -> &[f64] {
-                <$core as $crate::control::core::ControllerCore>::increments(&self.core)
+                <$core as $crate::control::mpc::core::ControllerCore>::increments(&self.core)
             }
 
             fn set_drive_model(
                 &mut self,
-                drives: &$crate::control::DriveModel,
-            ) -> Result<(), $crate::control::SettingsError> {
-                <$core as $crate::control::core::ControllerCore>::set_drive_model(
+                drives: &$crate::control::drive_model::DriveModel,
+            ) -> Result<(), $crate::control::settings::SettingsError> {
+                <$core as $crate::control::mpc::core::ControllerCore>::set_drive_model(
                     &mut self.core,
                     drives,
                 )
             }
 
-            fn qp_status(&self) -> Option<$crate::control::QpStatus> {
-                <$core as $crate::control::core::ControllerCore>::qp_status(&self.core)
+            fn qp_status(&self) -> Option<$crate::control::solvers::constrained::QpStatus> {
+                <$core as $crate::control::mpc::core::ControllerCore>::qp_status(&self.core)
             }
 
             fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
-                <$core as $crate::control::core::ControllerCore>::predicted_outputs(
+                <$core as $crate::control::mpc::core::ControllerCore>::predicted_outputs(
                     &mut self.core,
                     out,
                 )
@@ -148,9 +151,9 @@ macro_rules! impl_controller {
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
-                input: &$crate::control::StepInput<'_>,
+                input: &$crate::control::step::StepInput<'_>,
                 tau: &mut [f64],
-            ) -> Result<$crate::control::StepInfo, $crate::control::StepFailure> {
+            ) -> Result<$crate::control::step::StepInfo, $crate::control::step::StepFailure> {
                 let (x, w_k, preview) = (input.x, input.w_k, input.preview);
                 self.$($step).+(model, x, w_k, preview, tau)
             }
@@ -190,7 +193,7 @@ impl ControllerCore for Core {
 }
 
 /// Largest accepted rows·cols of `𝒜` (64 Mi entries = 512 MiB).
-const MAX_ENTRIES: usize = super::settings::MAX_SYSTEM_ENTRIES;
+const MAX_ENTRIES: usize = crate::control::settings::MAX_SYSTEM_ENTRIES;
 
 /// The least-squares back-end of a controller, chosen once from
 /// [`Solver::for_controller`]: every solver-specific buffer lives in its
@@ -385,7 +388,7 @@ impl Core {
         let nh = settings.horizon;
         let groups = if incremental { 3 } else { 2 };
         let p = nh * n;
-        let diag = |w: &super::settings::Weight| {
+        let diag = |w: &crate::control::settings::Weight| {
             let mut v = vec![0.0; n];
             w.fill(&mut v);
             v
@@ -489,7 +492,7 @@ impl Core {
     /// `ŷ_{k+i}`): the step's own ZOH model (Eq. (13), at `x_k`) driven by its
     /// optimal sequence ([`Core::increments`]) from `x_k` (positional, Eq. (16))
     /// or from `Δx_k` and `y_k` (incremental, Eq. (20)–(29)),
-    /// [`super::prediction::predicted_outputs`]. Allocates nothing.
+    /// [`crate::control::mpc::prediction::predicted_outputs`]. Allocates nothing.
     pub fn predicted_outputs(&mut self, out: &mut [f64]) -> Result<(), PredictionError> {
         let n = self.n;
         let (z0, y_k) = if self.incremental {
@@ -772,7 +775,7 @@ impl Core {
         // The dense solver's rank test: |R_ii| > max(m, p)·ε·max|R_jj|, with
         // the columns numbered as in the dense system (Δu_{k+N−1} first).
         let tol = (g * nh * n) as f64 * f64::EPSILON * info.r_max;
-        super::lsq::rank_test(st.r_diagonal_dense_order(), tol)?;
+        crate::control::solvers::lsq::rank_test(st.r_diagonal_dense_order(), tol)?;
         self.du.copy_from_slice(st.solution());
         // Torque limits: a plan that passes one in the constrained head gets
         // the head condensed and factored for the QP (finish).

@@ -77,18 +77,14 @@
 //!
 //! Conditional integration: the integral of a joint whose torque the drives'
 //! limit clipped at this sample is not accumulated (as the incremental
-//! algorithms' aggregated error, [`super::MpcSettings::torque_limits`]).
+//! algorithms' aggregated error, [`crate::control::MpcSettings::torque_limits`]).
 
-use super::core::{check_finite, check_len, check_result, check_step_input};
-use super::drive_model::DriveModel;
-use super::model::LinearLikeModel;
-use super::settings::{MpcSettings, SettingsError};
-use super::{StepFailure, StepInfo};
+use crate::control::drive_model::DriveModel;
+use crate::control::mpc::core::{check_finite, check_len, check_result, check_step_input};
+use crate::control::mpc::model::LinearLikeModel;
+use crate::control::settings::{MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
-
-pub use super::settings::{
-    BaselineSettings, DEFAULT_CTC_BANDWIDTH, DEFAULT_DOB_OBSERVER_BANDWIDTH, DEFAULT_PID_BANDWIDTH,
-};
 
 /// `(kp, kd, ki)` that place the three poles of the sampled PID loop of a
 /// double integrator at `e^(−ωn·Ts)` (module docs).
@@ -275,9 +271,9 @@ pub(crate) fn clip(tau: &mut [f64], limits: Option<&[f64]>, clipped: &mut [bool]
 /// Which joint-space law a [`JointLawCore`] runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Law {
-    /// `τ = g(q) + D (kp e + kd ė + ki z)`, `D = diag H(q_0)` ([`super::pid`]).
+    /// `τ = g(q) + D (kp e + kd ė + ki z)`, `D = diag H(q_0)` ([`crate::control::baselines::pid`]).
     Pid,
-    /// `τ = H(q)(a_ref + kp e + kd ė + ki z) + C(q, q̇) q̇ + g(q)` ([`super::ctc`]).
+    /// `τ = H(q)(a_ref + kp e + kd ė + ki z) + C(q, q̇) q̇ + g(q)` ([`crate::control::baselines::ctc`]).
     Ctc,
 }
 
@@ -408,7 +404,7 @@ impl JointLawCore {
                 self.model.torque(&self.u, &mut self.tau_new)?;
                 let c = self.model.c().as_slice();
                 for (j, col) in c.chunks_exact(n).enumerate() {
-                    super::dense::axpy(x[n + j], col, &mut self.tau_new);
+                    crate::control::solvers::dense::axpy(x[n + j], col, &mut self.tau_new);
                 }
             }
         }
@@ -443,7 +439,7 @@ impl JointLawCore {
     }
 }
 
-impl super::core::ControllerCore for JointLawCore {
+impl crate::control::mpc::core::ControllerCore for JointLawCore {
     fn dof(&self) -> usize {
         JointLawCore::dof(self)
     }

@@ -4,12 +4,13 @@
 //! `F = [CA; …; CA^N]`, `G[j,l] = C A^{j−l} B`. It has no integrator and keeps
 //! a steady offset under a model mismatch.
 
-use super::core::{impl_controller, Core, StepTargets};
-use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepFailure, StepInfo};
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::{impl_controller, Core, StepTargets};
+use crate::control::settings::{MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The usual MPC of Eq. (43). Allocation-free [`Algorithm::step`](super::Algorithm::step).
+/// The usual MPC of Eq. (43). Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct UsualMpc {
     core: Core,
@@ -25,7 +26,7 @@ impl UsualMpc {
         })
     }
 
-    /// [`Algorithm::step`](super::Algorithm::step) of the usual algorithm:
+    /// [`Algorithm::step`](crate::control::Algorithm::step) of the usual algorithm:
     /// [`Core::step_with`] with its targets ([`UsualTargets`]).
     fn run_step(
         &mut self,

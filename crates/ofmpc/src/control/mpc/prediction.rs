@@ -21,8 +21,8 @@
 
 use nalgebra::DMatrix;
 
-use super::dense::gemm;
-use super::zoh::Zoh;
+use crate::control::mpc::zoh::Zoh;
+use crate::control::solvers::dense::gemm;
 
 /// Prediction matrices for a model with `nx` states, `nu` inputs, `ny` outputs
 /// and horizon `N`, in buffers sized once. Updating allocates nothing.
@@ -193,7 +193,7 @@ impl Predictions {
             }
             for m in 0..n {
                 let km = &f[(n + m) * rows..(n + m) * rows + rows - n];
-                super::dense::axpy(phi1[col * n + m], km, &mut gc[n..]);
+                crate::control::solvers::dense::axpy(phi1[col * n + m], km, &mut gc[n..]);
             }
         }
         Ok(())

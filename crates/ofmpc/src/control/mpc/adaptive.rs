@@ -1,7 +1,7 @@
 //! Adaptive variants of the incremental algorithms: the first or second
 //! algorithm whose robot model carries a payload identified online; and the
 //! same for the computed-torque baseline (`ctc-adaptive`, the classic
-//! adaptive robot controller: [`super::ctc`] on the identified model).
+//! adaptive robot controller: [`crate::control::baselines::ctc`] on the identified model).
 //!
 //! At every sample `k`, before the algorithm's own step, the payload
 //! estimator ([`crate::ident::PayloadEstimator`]) takes the period
@@ -19,10 +19,13 @@
 //! Assumes the torque the controller computes is the torque applied (no
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 
-use super::{
-    Algorithm, BaselineSettings, ControllerKind, CtcController, FirstMpc, MpcSettings, SecondMpc,
-    SettingsError, StepFailure, StepInfo,
-};
+use crate::control::algorithm::Algorithm;
+use crate::control::baselines::ctc::CtcController;
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::first::FirstMpc;
+use crate::control::mpc::second::SecondMpc;
+use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 use crate::ident::{payload_of, PayloadEstimator, PayloadParams, RlsSettings};
 
@@ -145,10 +148,13 @@ impl Algorithm for AdaptiveMpc {
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         self.inner.predicted_outputs(out)
     }
-    fn set_drive_model(&mut self, drives: &super::DriveModel) -> Result<(), SettingsError> {
+    fn set_drive_model(
+        &mut self,
+        drives: &crate::control::drive_model::DriveModel,
+    ) -> Result<(), SettingsError> {
         self.inner.set_drive_model(drives)
     }
-    fn qp_status(&self) -> Option<super::QpStatus> {
+    fn qp_status(&self) -> Option<crate::control::solvers::constrained::QpStatus> {
         self.inner.qp_status()
     }
     fn payload_estimate(&self) -> Option<f64> {
@@ -157,7 +163,7 @@ impl Algorithm for AdaptiveMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        input: &crate::control::StepInput<'_>,
+        input: &crate::control::step::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
         let (x, w_k, preview) = (input.x, input.w_k, input.preview);
@@ -190,10 +196,11 @@ impl Algorithm for AdaptiveMpc {
                 }
             }
         }
-        match self
-            .inner
-            .step(model, &crate::control::StepInput { x, w_k, preview }, tau)
-        {
+        match self.inner.step(
+            model,
+            &crate::control::step::StepInput { x, w_k, preview },
+            tau,
+        ) {
             Ok(info) => {
                 self.x_prev.copy_from_slice(x);
                 self.tau_prev.copy_from_slice(tau);

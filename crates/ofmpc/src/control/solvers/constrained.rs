@@ -39,9 +39,9 @@
 //! `z` makes a dense active-set method of ~200 lines sufficient and
 //! preallocated (`p = N·n = 60` unknowns for the IRB 140 at `N = 10`).
 
-use super::dense::dot;
-use super::lsq::LsqWorkspace;
-use super::model::LinearLikeModel;
+use crate::control::mpc::model::LinearLikeModel;
+use crate::control::solvers::dense::dot;
+use crate::control::solvers::lsq::LsqWorkspace;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
 
 /// Relative margin kept inside the limits so that rounding in `τ = H u + g`
@@ -516,7 +516,7 @@ fn append_to_factor(n: usize, ld: usize, l: &mut [f64], k: &mut [f64], pii: f64)
             *ki -= li * yj;
         }
     }
-    let d2 = pii - super::dense::dot(&k[..n], &k[..n]);
+    let d2 = pii - crate::control::solvers::dense::dot(&k[..n], &k[..n]);
     if !(d2 > 1e-12 * pii.abs() && d2.is_finite()) {
         return false;
     }

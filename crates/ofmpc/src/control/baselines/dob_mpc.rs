@@ -15,11 +15,11 @@
 //!
 //! so that the estimation error of a constant disturbance decays as `p^k`
 //! (the velocity block of the ZOH input matrix is `Ts·I` to first order),
-//! `ω_o` = [`super::BaselineSettings::dob_observer_bandwidth`] (default
+//! `ω_o` = [`crate::control::BaselineSettings::dob_observer_bandwidth`] (default
 //! 100 rad/s). The target calculation gives the steady input `U_s = −d̂`;
 //! the usual cost with `Q_U (U − U_s)` and the predictions `F x + G (U + d̂)`
 //! is the usual MPC's own problem in `Ũ = U + d̂`: the controller solves it
-//! ([`super::UsualMpc`], same `N`, `Ts`, weights and solver) and applies
+//! ([`crate::control::UsualMpc`], same `N`, `Ts`, weights and solver) and applies
 //!
 //! ```text
 //! u_k = ũ_k − d̂_k,   τ_k = H u_k + g = τ̃_k − H d̂_k   (Eq. (15)).
@@ -32,12 +32,14 @@
 //! QP would bound `τ̃`, not the applied torque) and the observer is given the
 //! input actually applied, so the disturbance estimate does not wind up.
 
-use super::core::{check_finite, check_len, check_result};
-use super::drive_model::DriveModel;
-use super::model::LinearLikeModel;
-use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
-use super::usual::UsualMpc;
-use super::{Algorithm, ControllerKind, StepFailure, StepInfo};
+use crate::control::algorithm::Algorithm;
+use crate::control::drive_model::DriveModel;
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::{check_finite, check_len, check_result};
+use crate::control::mpc::model::LinearLikeModel;
+use crate::control::mpc::usual::UsualMpc;
+use crate::control::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
 /// The disturbance-observer MPC baseline. Allocation-free [`Algorithm::step`].
@@ -117,7 +119,7 @@ impl DobMpc {
         let f0 = self.model.f0().as_slice();
         self.f0qd.fill(0.0);
         for (j, col) in f0.chunks_exact(n).enumerate() {
-            super::dense::axpy(x[n + j], col, &mut self.f0qd);
+            crate::control::solvers::dense::axpy(x[n + j], col, &mut self.f0qd);
         }
         for i in 0..n {
             self.d_new[i] = self.d_hat[i];
@@ -135,7 +137,7 @@ impl DobMpc {
         let h = self.model.h().as_slice();
         self.tau_new.copy_from_slice(&self.tau_tilde);
         for (j, col) in h.chunks_exact(n).enumerate() {
-            super::dense::axpy(-self.d_new[j], col, &mut self.tau_new);
+            crate::control::solvers::dense::axpy(-self.d_new[j], col, &mut self.tau_new);
         }
         for ((u, ut), d) in self.u.iter_mut().zip(self.inner.input()).zip(&self.d_new) {
             *u = ut - d;
@@ -206,7 +208,7 @@ impl Algorithm for DobMpc {
     fn step(
         &mut self,
         model: &mut dyn JointSpaceDynamics,
-        input: &crate::control::StepInput<'_>,
+        input: &crate::control::step::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
         let (x, w_k, preview) = (input.x, input.w_k, input.preview);
@@ -220,7 +222,7 @@ impl Algorithm for DobMpc {
         self.model.update(model, &x[..n], &x[n..])?;
         let info = self.inner.step(
             model,
-            &crate::control::StepInput { x, w_k, preview },
+            &crate::control::step::StepInput { x, w_k, preview },
             &mut self.tau_tilde,
         )?;
         self.observe(x);

@@ -13,7 +13,7 @@
 //! with an augmented state `z` (nz), the stage input `v_j` (nu: `Δu_{k+j}` or
 //! `u_{k+j}`), diagonal `R > 0` and `D ≥ 0`, and `S` selecting the first `nq`
 //! entries of `z` (each controller orders its state so that the weighted
-//! coordinates come first, see [`super::core`]).
+//! coordinates come first, see [`crate::control::mpc::core`]).
 //!
 //! # Square-root recursion (Householder, no normal equations)
 //!
@@ -58,7 +58,7 @@
 //! stages as one product with `M` each (`O((nu + nz + nq)·(nq + nz))` flops
 //! instead of `O((nu + nz)²·nz)`). Stage 0 is always factorized in full.
 
-use super::simd::{AlignedBuf, Avx2Fma};
+use crate::control::solvers::simd::{AlignedBuf, Avx2Fma};
 
 /// Largest change of `L` between consecutive stages, relative to `max|L|`,
 /// at which the recursion counts as converged: 1e-12, far below the

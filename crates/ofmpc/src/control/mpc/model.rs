@@ -182,7 +182,7 @@ impl LinearLikeModel {
         check_len("tau", tau.len(), n)?;
         tau.copy_from_slice(self.g.as_slice());
         for (&uj, hj) in u.iter().zip(self.h.as_slice().chunks_exact(n.max(1))) {
-            super::dense::axpy(uj, hj, tau);
+            crate::control::solvers::dense::axpy(uj, hj, tau);
         }
         Ok(())
     }

@@ -25,13 +25,13 @@
 //! `J_min` (with `Σ ‖d_i‖²`) and `R1` are those of the paper's system, and
 //! the condition number is untouched (no normal equations). `L_i` is *lower*
 //! triangular so that `L_i G1_i` keeps `G1`'s block lower-triangular profile
-//! ([`super::core`]'s permuted layout then has 2 row groups per level
+//! ([`crate::control::mpc::core`]'s permuted layout then has 2 row groups per level
 //! instead of 3: half the rows, about half the flops of the QR).
 
 use nalgebra::DMatrix;
 
 #[cfg(target_arch = "x86_64")]
-use super::simd::Avx2Fma;
+use crate::control::solvers::simd::Avx2Fma;
 
 /// The constant factors of the reduction for `n` outputs and horizon `N`,
 /// and the per-step work buffer of the right-hand side.
@@ -134,7 +134,7 @@ impl TrackingRows {
     }
 
     /// Takes the `G1` generator of this step (N·n × n column-major, block `d`
-    /// = `C A^d B`, [`super::prediction::Predictions::g1_gen`]).
+    /// = `C A^d B`, [`crate::control::mpc::prediction::Predictions::g1_gen`]).
     fn load_g1(&mut self, g1_gen: &[f64]) {
         let (n, rows) = (self.n, self.nh * self.n);
         for (d, blk) in self.gblk.chunks_exact_mut(n * n).enumerate() {
@@ -146,7 +146,7 @@ impl TrackingRows {
 
     /// Writes the reduced rows `L G1` and the `Q_ΔU` rows (diagonal `w_du`)
     /// into the m×p column-major `a` in the permuted layout of
-    /// [`super::core`]: level `t` (block row `j = N−1−t`, 0-based) holds `n`
+    /// [`crate::control::mpc::core`]: level `t` (block row `j = N−1−t`, 0-based) holds `n`
     /// rows of `L G1` then `n` rows of `Q_ΔU`; column block `t'` is unknown
     /// `Δu_{k+N−1−t'}`; only levels `t ≤ t'` (the profile) are written.
     pub(crate) fn write_rows(&mut self, g1_gen: &[f64], w_du: &[f64], a: &mut [f64], m: usize) {
@@ -301,7 +301,7 @@ fn block_sum<const NN: usize, const FMA: bool>(lr: &[f64], g: &[f64]) -> [f64; N
 /// The `f64` entries the dense solver holds for `n` joints and horizon `nh`:
 /// the system `[𝒜 | b]` (2·N·n rows) and, for the incremental algorithms,
 /// the tracking rows' constant factors ([`TrackingRows::entries`]); `None`
-/// on overflow. [`super::MpcSettings::validate_for_dof`] checks the same number.
+/// on overflow. [`crate::control::MpcSettings::validate_for_dof`] checks the same number.
 pub(crate) fn dense_entries(n: usize, nh: usize, incremental: bool) -> Option<usize> {
     let p = nh.checked_mul(n)?;
     let system = p.checked_mul(2)?.checked_mul(p + 1)?;

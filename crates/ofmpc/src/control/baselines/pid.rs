@@ -8,21 +8,21 @@
 //!
 //! with the nominal model's gravity at the measured `q_k`, its inertia's
 //! diagonal at the start pose `q_0` (the state of the last
-//! [`Algorithm::reset`](super::Algorithm::reset)), the reference velocity
-//! of [`super::baseline`] (module docs) and the gains of a discrete triple
-//! pole at `e^(−ωn·Ts)` ([`super::baseline`]), `ωn` =
-//! [`super::BaselineSettings::pid_bandwidth`] (default 60 rad/s). No
+//! [`Algorithm::reset`](crate::control::Algorithm::reset)), the reference velocity
+//! of [`crate::control::baselines::baseline`] (module docs) and the gains of a discrete triple
+//! pole at `e^(−ωn·Ts)` ([`crate::control::baselines::baseline`]), `ωn` =
+//! [`crate::control::BaselineSettings::pid_bandwidth`] (default 60 rad/s). No
 //! acceleration feed-forward and no coupling: the inertia the law leaves out
 //! (off-diagonal, pose-dependent, the payload's) is a disturbance its
 //! integrator removes at rest. With torque limits the torque is clipped
 //! and the clipped joint's integral frozen (anti-windup).
 
-use super::baseline::{JointLawCore, Law};
-use super::core::impl_controller;
-use super::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
-use super::ControllerKind;
+use crate::control::baselines::baseline::{JointLawCore, Law};
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::impl_controller;
+use crate::control::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
 
-/// The PID baseline. Allocation-free [`Algorithm::step`](super::Algorithm::step).
+/// The PID baseline. Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct PidController {
     core: JointLawCore,

@@ -11,13 +11,14 @@
 //!
 //! It removes the steady error for constant and ramp references.
 
-use super::core::{impl_controller, Core, StepTargets};
-use super::prediction::prefix_sums;
-use super::settings::{MpcSettings, SettingsError};
-use super::{ControllerKind, StepFailure, StepInfo};
+use crate::control::kind::ControllerKind;
+use crate::control::mpc::core::{impl_controller, Core, StepTargets};
+use crate::control::mpc::prediction::prefix_sums;
+use crate::control::settings::{MpcSettings, SettingsError};
+use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
-/// The second algorithm, Eq. (34)/(39). Allocation-free [`Algorithm::step`](super::Algorithm::step).
+/// The second algorithm, Eq. (34)/(39). Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
 pub struct SecondMpc {
     core: Core,
@@ -40,7 +41,7 @@ impl SecondMpc {
         &self.core.ebar
     }
 
-    /// [`Algorithm::step`](super::Algorithm::step) of the second algorithm:
+    /// [`Algorithm::step`](crate::control::Algorithm::step) of the second algorithm:
     /// [`Core::step_with`] with its targets ([`SecondTargets`]).
     fn run_step(
         &mut self,

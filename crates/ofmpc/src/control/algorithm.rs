@@ -1,0 +1,81 @@
+//! The per-kind step behind [`Controller`](crate::control::Controller): the
+//! internal trait every algorithm implements.
+
+use crate::control::drive_model::DriveModel;
+use crate::control::kind::ControllerKind;
+use crate::control::settings::{MpcSettings, SettingsError};
+use crate::control::solvers::constrained::QpStatus;
+use crate::control::step::{StepFailure, StepInfo, StepInput};
+use crate::dynamics::JointSpaceDynamics;
+
+/// A predictive controller: measured state and reference preview in, torque
+/// out. Object safe: hold it as `Box<dyn Algorithm + Send>`.
+pub trait Algorithm {
+    /// Which algorithm this is.
+    fn kind(&self) -> ControllerKind;
+    /// Number of joints `n`.
+    fn dof(&self) -> usize;
+    /// Prediction horizon `N`.
+    fn horizon(&self) -> usize;
+    /// The settings it was built with.
+    fn settings(&self) -> &MpcSettings;
+    /// Starts a run at the measured state `x0 = [q; q̇]` (2n values):
+    /// `x_{−1} = x0`, `u_{−1} = 0`, `ē_{−1} = 0`.
+    fn reset(&mut self, x0: &[f64]) -> Result<(), StepFailure>;
+    /// The input `u` of the last successful step (`u_{k−1}` of the next one),
+    /// `n` values; zero after [`Algorithm::reset`].
+    fn input(&self) -> &[f64];
+    /// The whole optimal sequence of the last successful step, `N·n` values
+    /// in natural order: block `j` is `Δu_{k+j}` (incremental algorithms) or
+    /// `u_{k+j}` (usual controller), `j = 0..N`; only block 0 is applied.
+    /// Zero before the first step.
+    fn increments(&self) -> &[f64];
+    /// Gives the controller the drives' torque limits and friction estimates
+    /// (used when the settings' torque limits or friction compensation are
+    /// on; without them such a controller refuses to step,
+    /// [`StepFailure::NoDriveModel`]). Allocates (sizes the constrained
+    /// solver); call before a run. [`ControllerBuilder`] does it.
+    fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
+        let _ = drives;
+        Err(SettingsError::DrivesUnsupported(self.kind().name()))
+    }
+    /// What the torque-limit QP did at the last step (`None` without limits).
+    fn qp_status(&self) -> Option<QpStatus> {
+        None
+    }
+    /// The outputs (joint positions) the controller's model predicted at its
+    /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
+    /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal
+    /// sequence ([`Algorithm::increments`]) of that step
+    /// ([`prediction::predicted_outputs`]). `false` (and `out` unspecified)
+    /// for a controller without a prediction horizon (the baselines `pid`,
+    /// `ctc`, `ctc-adaptive`) or an `out` not N·n long. Allocates nothing
+    /// (mutable for its work buffer only: the controller's state is unchanged).
+    fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
+        let _ = out;
+        false
+    }
+    /// One control step at sample `k`.
+    ///
+    /// * `model`: the controller's robot model (its `dof()` must be `n`);
+    /// * `input`: the measured state `x_k = [q_k; q̇_k]` (2n values), the
+    ///   current reference `w_k` (n values; used by the second algorithm,
+    ///   checked by all) and the preview `w_{k+1}, …, w_{k+N}` (N·n values,
+    ///   block `j−1` is `w_{k+j}`; past the end of a path repeat its last
+    ///   value), [`StepInput`];
+    /// * `tau`: receives `τ_k = H u_k + g` (n values, Eq. (15)), written only
+    ///   on success.
+    ///
+    /// Allocates nothing and never panics.
+    fn step(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        input: &StepInput<'_>,
+        tau: &mut [f64],
+    ) -> Result<StepInfo, StepFailure>;
+    /// The payload mass its model carries, identified online (kg); `None`
+    /// for the controllers that do not identify it.
+    fn payload_estimate(&self) -> Option<f64> {
+        None
+    }
+}

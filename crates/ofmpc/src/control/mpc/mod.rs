@@ -1,0 +1,17 @@
+//! The paper's predictive controllers (Section III): the robot model at the
+//! measured state ([`model`], Eq. (6)–(12)), its exact zero-order-hold
+//! discretization ([`zoh`], Eq. (13)), the prediction matrices
+//! ([`prediction`], Eq. (20)–(29)), the step skeleton they share ([`core`])
+//! and the three algorithms: the usual MPC ([`usual`], Eq. (43)), the first
+//! ([`first`], Eq. (32)/(37)) and second ([`second`], Eq. (34)/(39))
+//! offset-free incremental algorithms, with their adaptive variants
+//! ([`adaptive`]).
+
+pub(crate) mod adaptive;
+pub(crate) mod core;
+pub(crate) mod first;
+pub(crate) mod model;
+pub(crate) mod prediction;
+pub(crate) mod second;
+pub(crate) mod usual;
+pub(crate) mod zoh;
