@@ -51,14 +51,19 @@
 /// appear in signatures): use this re-export to get the same version.
 pub use nalgebra;
 
+/// The controllers' internal algorithms behind [`Controller`], for the workspace's own tests
+/// and benchmarks that compare the object with them: not part of the API.
+#[doc(hidden)]
+pub use control::{new_controller, Algorithm};
 pub use control::{
-    new_controller, Algorithm, BaselineSettings, Controller, ControllerBuilder, ControllerKind,
-    MpcSettings, StepError, StepInput, StepOutput, StepStatus,
+    BaselineSettings, BuildError, Controller, ControllerBuilder, ControllerKind, MpcSettings,
+    StepError, StepInput, StepOutput, StepStatus,
 };
-pub use motion::{plan, JointReference, PlanOptions};
+pub use motion::{plan, JointReference, PlanError, PlanOptions};
 pub use robot::{Payload, Robot};
 pub use sim::{
-    ClosedLoop, Experiment, LoopSettings, Plant, PlantSettings, RunMetrics, RunOutcome, RunResult,
+    ClosedLoop, Experiment, ExperimentError, LoopSettings, Plant, PlantSettings, RunMetrics,
+    RunOutcome, RunResult, SupervisedController,
 };
 
 pub mod analysis;

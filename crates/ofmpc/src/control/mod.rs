@@ -55,38 +55,47 @@ mod settings;
 mod solvers;
 mod step;
 
+#[doc(hidden)]
 pub use algorithm::Algorithm;
-pub use baselines::baseline::{
-    triple_pole_gains, triple_pole_inertia_ratio_range, triple_pole_is_stable,
-};
+#[doc(hidden)]
+pub use baselines::baseline::triple_pole_inertia_ratio_range;
 pub use baselines::ctc::CtcController;
 pub use baselines::dob_mpc::DobMpc;
 pub use baselines::pid::PidController;
+pub(crate) use builder::DEFAULT_OBSERVER_POLE;
 pub use builder::{
-    check_torque_limits, model_robot, BuildError, Controller, ControllerBuilder, FrictionUse,
-    MpcParts, ObserverSettings, DEFAULT_OBSERVER_POLE,
+    model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, ObserverSettings,
 };
 pub use drive_model::DriveModel;
+#[doc(hidden)]
 pub use factory::{new_controller, new_controller_with_baselines};
 pub use kind::{ControllerKind, UnknownControllerKind};
-pub use mpc::adaptive::{AdaptiveMpc, MODEL_RATE};
+#[doc(hidden)]
+pub use mpc::adaptive::AdaptiveMpc;
 pub use mpc::first::FirstMpc;
-pub use mpc::model::{LinearLikeModel, TermsError};
-pub use mpc::prediction::{
-    fill_f_i, fill_f_ii, fill_w_s, predicted_outputs, predicted_outputs_work, PredictionError,
-    Predictions,
-};
+#[doc(hidden)]
+pub use mpc::model::LinearLikeModel;
+pub use mpc::model::TermsError;
+#[doc(hidden)]
+pub use mpc::prediction::{fill_f_i, fill_f_ii, fill_w_s, predicted_outputs, Predictions};
 pub use mpc::second::SecondMpc;
 pub use mpc::usual::UsualMpc;
-pub use mpc::zoh::{Zoh, ZohError};
-pub use observer::{observer_gains, StateObserver};
+#[doc(hidden)]
+pub use mpc::zoh::Zoh;
+pub use mpc::zoh::ZohError;
+#[doc(hidden)]
+pub use observer::StateObserver;
 pub use settings::{
-    bandwidths, structured_from_horizon, BaselineSettings, DriveQuantity, MpcSettings,
-    SettingsError, Solver, Weight, DEFAULT_CTC_BANDWIDTH, DEFAULT_DOB_OBSERVER_BANDWIDTH,
-    DEFAULT_PID_BANDWIDTH, MAX_HORIZON, MAX_SYSTEM_ENTRIES, STRUCTURED_FROM_HORIZON,
+    bandwidths, BaselineSettings, DriveQuantity, MpcSettings, SettingsError, Solver, Weight,
 };
-pub use solvers::constrained::{solve_box_qp, BoxQpWork, QpStatus};
-pub use solvers::lsq::{lsq_flops, LsqError, LsqInfo, LsqShapeError, LsqWorkspace};
+#[doc(hidden)]
+pub use settings::{
+    structured_from_horizon, DEFAULT_CTC_BANDWIDTH, MAX_HORIZON, STRUCTURED_FROM_HORIZON,
+};
+pub use solvers::constrained::QpStatus;
+pub use solvers::lsq::LsqError;
+#[doc(hidden)]
+pub use solvers::lsq::{lsq_flops, LsqWorkspace};
 pub use step::{StepError, StepFailure, StepInfo, StepInput, StepOutput, StepStatus};
 
 /// The former name of [`Controller`], kept crate-private only until the

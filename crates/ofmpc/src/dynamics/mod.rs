@@ -14,7 +14,7 @@
 //! | forward dynamics (Cholesky of H) | `forward.rs` | q̈ |
 
 mod forward;
-pub mod friction;
+pub(crate) mod friction;
 mod kinematics;
 mod rnea;
 mod terms;

@@ -67,13 +67,13 @@ mod program;
 mod text;
 mod tools;
 
-pub use flow::DEFAULT_MAX_STEPS;
+pub(crate) use flow::DEFAULT_MAX_STEPS;
 use flow::{Runner, SourceLine};
 use interpreter::Interpreter;
 use lexer::lex_line;
 pub use program::{
-    arc_tolerance, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions,
-    PathMode, Program, ProgramEvent, ProgramMessage, MAX_WORD_VALUE, MIN_MOVE_LENGTH,
+    GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
+    ProgramEvent, ProgramMessage,
 };
 pub use tools::{ToolTable, ToolTableError};
 

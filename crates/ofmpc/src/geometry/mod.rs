@@ -6,10 +6,10 @@
 //!
 //! Pure geometry: no time, no G-code words, no robot. Units are SI (metres, radians).
 
-pub mod arc;
-pub mod corner;
-pub mod segment;
+pub(crate) mod arc;
+pub(crate) mod corner;
+pub(crate) mod segment;
 
-pub use arc::{center_from_radius, RadiusArcError};
-pub use corner::CornerArc;
-pub use segment::{ArcDirection, ArcError, Plane, Segment, CLOSED_ARC_TOLERANCE};
+pub(crate) use arc::{center_from_radius, RadiusArcError};
+pub(crate) use segment::ArcError;
+pub use segment::{ArcDirection, Plane, Segment};

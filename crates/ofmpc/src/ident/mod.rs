@@ -8,14 +8,13 @@
 //! * [`PayloadEstimator`]: the two together on closed-loop data — measured
 //!   `q`, `q̇` at two consecutive samples and the torque held in between.
 
-pub mod regressor;
-pub mod rls;
+pub(crate) mod regressor;
+pub(crate) mod rls;
 
-pub use regressor::{
-    inertia_of, joint_regressor, params_of, params_of_inertia, payload_of, pseudo_inertia,
-    PayloadParams, NUM_PARAMS,
-};
-pub use rls::{project_physical, PayloadRls, RlsSettings, RlsSettingsError};
+pub use regressor::PayloadParams;
+#[doc(hidden)]
+pub use regressor::{joint_regressor, params_of, payload_of, pseudo_inertia, NUM_PARAMS};
+pub use rls::{PayloadRls, RlsSettings, RlsSettingsError};
 
 use crate::dynamics::RobotDynamics;
 

@@ -41,21 +41,21 @@
 
 use nalgebra::{DMatrix, Isometry3, UnitQuaternion, Vector3};
 
-pub mod numeric;
-pub mod opw;
-pub mod opw_detect;
-pub mod robust;
+pub(crate) mod numeric;
+pub(crate) mod opw;
+pub(crate) mod opw_detect;
+pub(crate) mod robust;
 mod solutions;
-pub mod solver;
-pub mod ur;
+pub(crate) mod solver;
+pub(crate) mod ur;
 
-pub use numeric::{NumericIk, NumericIkReport, NumericIkSettings};
-pub use opw::{OpwParameters, OpwSolutions};
-pub use opw_detect::OPW_DETECT_TOLERANCE;
-pub use robust::{IkLimitHit, RobustIk, RobustIkReport, RobustIkSettings};
-pub use solutions::Solutions;
-pub use solver::{ClosedFormBranches, ClosedFormKinematics, ClosedFormSolver, IkSolver};
-pub use ur::{UrKinematics, UrSolutions, UrSolver};
+pub use numeric::{NumericIk, NumericIkSettings};
+pub use opw::OpwParameters;
+pub(crate) use robust::IkLimitHit;
+pub use robust::{RobustIk, RobustIkSettings};
+pub use solver::IkSolver;
+pub(crate) use ur::UrKinematics;
+pub use ur::UrSolver;
 
 /// What the numeric IK needs of a robot model: flange pose and geometric Jacobian.
 ///

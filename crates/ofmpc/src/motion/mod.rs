@@ -42,22 +42,22 @@ mod timing;
 mod tool;
 
 pub use error::{PlanError, SampleCause};
-pub use limits::{
-    values_per_sample, JointQuantity, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
-    MAX_PLAN_VALUES, SINGULAR_PASS_RATIO, START_POSE_TOLERANCE,
-};
-pub use path::blend::{
-    blend, blend_timed, Geometry, Piece, RunMove, NEAR_TANGENT_ANGLE, TURN_JERK_SHARE,
-};
-pub use path::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
-pub use reference::{build_reference, JointReference, StartTurn, START_TURN_TOLERANCE};
+pub(crate) use limits::values_per_sample;
+#[doc(hidden)]
+pub use limits::MAX_PLAN_VALUES;
+pub use limits::{JointQuantity, Orientation, ReferenceError, ReferenceFailure};
+#[doc(hidden)]
+pub use path::blend::{blend, Geometry};
+pub(crate) use reference::StartTurn;
+pub use reference::{build_reference, JointReference};
 pub use timing::exact::JointLimitedMove;
-pub use timing::timelaw::{PathState, Profile, ProfileValue, TimeLaw};
-pub use timing::topp::{Run, RunState, GRID_STEP, MAX_GRID_NODES, MIN_NODE_SPACING, RUN_STEP};
+pub use timing::timelaw::Profile;
+pub use timing::topp::Run;
+pub(crate) use timing::trajectory::TimedKind;
 pub use timing::trajectory::{
-    CartesianSample, CartesianTrajectory, TimedKind, TimedSegment, TimingLimit, TimingOptions,
-    TrajectoryError,
+    CartesianSample, CartesianTrajectory, TimingLimit, TimingOptions, TrajectoryError,
 };
+#[doc(hidden)]
 pub use tool::tool_axis;
 
 use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};

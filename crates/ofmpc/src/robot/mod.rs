@@ -18,8 +18,8 @@ pub use error::DrivesError;
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use joint::{Joint, JointKind, JointLimits};
 pub use links::LinkFrame;
-pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
-pub use urdf::TRIANGLE_TOLERANCE;
+#[doc(hidden)]
+pub use read::MAX_URDF_BYTES;
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};

@@ -31,15 +31,16 @@ mod state;
 mod supervised;
 mod supervisor;
 
-pub use actuator::{Actuator, Loading};
+pub use actuator::Actuator;
+#[doc(hidden)]
 pub use estimator::Estimator;
-pub use faults::{
-    at_or_after, sample_at, Fault, FaultSchedule, LossSchedule, MeasurementFaults,
-    TIME_MATCH_TOLERANCE,
-};
-pub use horizon::{HorizonRecorder, HorizonSampling, PredictedHorizons};
+#[doc(hidden)]
+pub use faults::sample_at;
+pub use faults::{Fault, LossSchedule, MeasurementFaults};
+#[doc(hidden)]
+pub use horizon::HorizonRecorder;
+pub use horizon::{HorizonSampling, PredictedHorizons};
 pub use recorder::{Record, Recorder, Sample};
-pub use repair::MeasurementGuard;
 pub use sensor::Sensor;
 pub use settings_error::LoopSettingsError;
 pub use state::JointState;
@@ -47,22 +48,20 @@ pub use supervised::{
     SupervisedController, SupervisedError, SupervisedInput, SupervisedOutput, SupervisedStatus,
 };
 
-pub use closed_loop::{
-    record_columns, records_measurement, run_closed_loop, run_closed_loop_with, ClosedLoop,
-    LoopSettings, RunEvents, RunResult, MAX_IDENTIFICATION_S, SAFE_STOP_RECORD_S,
-};
+#[doc(hidden)]
+pub use closed_loop::{records_measurement, run_closed_loop, run_closed_loop_with};
+pub use closed_loop::{ClosedLoop, LoopSettings, RunResult};
 pub use conditions::{RunConditions, SafetySettings};
-pub use experiment::{kind_name, mass_label, run_name, Experiment, OBSERVER_POLE};
-pub use metrics::{compute as compute_metrics, quantile, RunMetrics, StepTime};
-pub use outcome::{
-    ExperimentError, RunFailure, RunOutcome, RunStatus, FAILED_STOP_SPEED, MAX_RECORD_VALUES,
-};
-pub use plant::{
-    FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
-    MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
-};
-pub use supervisor::{
-    DivergenceRule, Inspection, Plausibility, SafeStop, StopReason, Stopping, Supervisor,
-    SupervisorSettings, BRAKE_TIME, FROZEN_SAMPLES, GROWTH_CEILING_RAD, GROWTH_FACTOR,
-    GROWTH_WINDOW_S, MAX_REJECTED, MOVING_STEP_RAD, REST_SPEED,
-};
+pub use experiment::Experiment;
+#[doc(hidden)]
+pub use experiment::{kind_name, mass_label, run_name, OBSERVER_POLE};
+#[doc(hidden)]
+pub use metrics::{compute as compute_metrics, quantile};
+pub use metrics::{RunMetrics, StepTime};
+pub use outcome::{ExperimentError, RunFailure, RunOutcome, RunStatus};
+#[doc(hidden)]
+pub use plant::MAX_SUBSTEPS;
+pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError};
+pub use supervisor::{DivergenceRule, StopReason, SupervisorSettings};
+#[doc(hidden)]
+pub use supervisor::{Stopping, Supervisor, MAX_REJECTED};

@@ -288,7 +288,8 @@ impl Sensor {
 mod tests {
     use super::*;
     use crate::robot::Robot;
-    use crate::sim::{Plant, MAX_DELAY_SAMPLES};
+    use super::super::plant::MAX_DELAY_SAMPLES;
+    use crate::sim::Plant;
 
     /// Quantized positions, from a plain state (no plant): each position a
     /// whole number of encoder counts, and a reading of another length an

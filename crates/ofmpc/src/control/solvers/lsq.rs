@@ -291,7 +291,6 @@ mod tests {
     use super::factor::*;
     use super::householder::*;
     use super::*;
-    use crate::control::solvers::dense::dot;
     use crate::control::solvers::simd::Avx2Fma;
     use nalgebra::{DMatrix, DVector};
 
