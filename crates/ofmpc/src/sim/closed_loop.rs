@@ -527,13 +527,10 @@ impl<'a> ClosedLoop<'a> {
         }
         self.estimator.record_torque(&self.tau);
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
-        let threshold = self.settings.divergence_threshold_rad;
-        let q = self.plant.q();
-        if let Some(joint) = (0..n).find(|&i| {
-            let e = w0[i] - q[i];
-            e.is_nan() || e.abs() > threshold
-        }) {
-            let error_rad = w0[joint] - q[joint];
+        // The one divergence rule ([`Supervisor::divergence`]): at rest on
+        // the first point, the threshold alone under either rule (no offset
+        // is expected there).
+        if let Some((joint, error_rad)) = self.supervisor.divergence(w0, self.plant.q()) {
             if !error_rad.is_nan() {
                 let reason = StopReason::Diverged { joint, error_rad };
                 if self.supervisor.begin_stop(t, reason, &self.x, self.model) {
@@ -543,10 +540,8 @@ impl<'a> ClosedLoop<'a> {
             return Err(RunOutcome::Diverged {
                 t,
                 joint,
-                error_rad: w0[joint] - q[joint],
-                threshold_rad: threshold,
-                // At rest on the first point: the threshold alone, under
-                // either rule (no offset is expected there).
+                error_rad,
+                threshold_rad: self.settings.divergence_threshold_rad,
                 rule: DivergenceRule::Threshold,
             });
         }

@@ -843,9 +843,10 @@ impl Supervisor {
     }
 
     /// The first joint whose error `w − q` (reference, true position) is
-    /// beyond the divergence threshold, with the error; `None` during a
-    /// stop. The threshold rule alone ([`Self::judge`] applies the
-    /// settings' rule).
+    /// beyond the divergence threshold or not a number, with the error;
+    /// `None` during a stop. The threshold rule alone ([`Self::judge`]
+    /// applies the settings' rule; the loop's pre-roll at rest, where no
+    /// offset is expected, this one under either rule).
     pub fn divergence(&self, w: &[f64], q: &[f64]) -> Option<(usize, f64)> {
         if self.stop.is_some() {
             return None;
@@ -853,7 +854,7 @@ impl Supervisor {
         let threshold = self.settings.divergence_threshold_rad;
         (0..self.n)
             .map(|i| (i, w[i] - q[i]))
-            .find(|(_, e)| e.abs() > threshold)
+            .find(|(_, e)| e.is_nan() || e.abs() > threshold)
     }
 }
 
