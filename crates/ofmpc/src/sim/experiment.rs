@@ -158,7 +158,7 @@ impl Experiment {
         cancel: &AtomicBool,
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
-        let mut mpc = self.controller(kind)?;
+        let mpc = self.controller(kind)?;
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
         let events = RunEvents {
@@ -170,19 +170,11 @@ impl Experiment {
             pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
         let mut plant = self.plant_for(payload, events.pick_up.is_some())?;
-        let parts = mpc.parts_mut();
-        let result = ClosedLoop::with_conditions(
-            parts.controller,
-            parts.model,
-            &mut plant,
-            &self.reference,
-            ls,
-            &self.conditions,
-            parts.observer,
-        )
-        .events(&events)
-        .cancel_on(cancel)
-        .run(progress);
+        let result =
+            ClosedLoop::with_conditions(mpc, &mut plant, &self.reference, ls, &self.conditions)
+                .events(&events)
+                .cancel_on(cancel)
+                .run(progress);
         if let RunOutcome::Failed {
             t,
             cause: RunFailure::Interrupted,

@@ -15,7 +15,6 @@
 mod actuator;
 mod closed_loop;
 mod conditions;
-mod estimator;
 mod experiment;
 mod faults;
 mod format;
@@ -32,7 +31,6 @@ mod supervised;
 mod supervisor;
 
 pub use actuator::{Actuator, Loading};
-pub use estimator::Estimator;
 pub use faults::{
     at_or_after, sample_at, Fault, FaultSchedule, LossSchedule, MeasurementFaults,
     TIME_MATCH_TOLERANCE,
