@@ -154,7 +154,7 @@ impl LoopSettings {
         Ok(())
     }
 
-    /// The [`Supervisor`]'s part of these settings, with the run's safety
+    /// The [`super::Supervisor`]'s part of these settings, with the run's safety
     /// function ([`RunConditions::safety`]).
     pub fn supervisor(&self, safety: &SafetySettings) -> SupervisorSettings {
         SupervisorSettings {
@@ -310,7 +310,7 @@ impl<'a> ClosedLoop<'a> {
     }
 
     /// [`Self::new`] with the run's `conditions`: the safety limit (the
-    /// [`Supervisor`]), the lost measurements (the [`Sensor`]'s
+    /// [`super::Supervisor`]), the lost measurements (the [`Sensor`]'s
     /// [`LossSchedule`]) and the horizons to record. The pick-up time is an
     /// event of the run ([`Self::events`]). Sizes every stage.
     pub fn with_conditions(
