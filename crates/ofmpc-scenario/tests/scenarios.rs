@@ -231,12 +231,11 @@ impl Drop for Dir {
 
 /// Issue #23 item 3: `[baselines]` is the library's `BaselineSettings` as read, and the run's
 /// controller builds with it. A scenario's `pid_bandwidth = 30` runs the PID whose torques
-/// equal, bit for bit, those of the library's own `PidController::new` with 30 rad/s in a
+/// equal, bit for bit, those of the library's own pid built by `ControllerBuilder` with 30 rad/s in a
 /// closed loop of its own (the same plant and reference), and differ from the default 60 rad/s.
 #[test]
 fn baselines_section_tunes_the_run_controller() {
-    use ofmpc::control::{BaselineSettings, ControllerKind, PidController, Weight};
-    use ofmpc::dynamics::RobotDynamics;
+    use ofmpc::control::{BaselineSettings, ControllerKind, Weight};
     use ofmpc::robot::Payload;
     use ofmpc::sim::{ClosedLoop, Plant};
     let text = "controllers = [\"pid\"]\n[payload]\nmasses_kg = [0.5]\n\
@@ -263,21 +262,19 @@ fn baselines_section_tunes_the_run_controller() {
     };
     assert_eq!(exp.baselines, tuned);
     let n = exp.robot.dof();
-    let mut pid = PidController::new(n, &exp.mpc, &tuned).unwrap();
-    let mut model = RobotDynamics::new(exp.robot.clone());
+    let pid = ofmpc::control::ControllerBuilder::new(ControllerKind::Pid, &exp.robot)
+        .settings(exp.mpc.clone())
+        .baselines(tuned.clone())
+        .accept_ineffective_settings()
+        .build()
+        .unwrap();
+    assert_eq!(pid.dof(), n);
     let mut plant_robot = exp.robot.clone();
     plant_robot.set_payload(Some(payload)).unwrap();
     let (q0, ts) = (exp.reference.q(0), exp.reference.ts());
     let mut plant = Plant::with_period(plant_robot, exp.plant.clone(), q0, ts).unwrap();
-    let own = ClosedLoop::new(
-        &mut pid,
-        &mut model,
-        &mut plant,
-        &exp.reference,
-        &exp.loop_settings,
-        None,
-    )
-    .run(&mut |_, _| {});
+    let own =
+        ClosedLoop::new(pid, &mut plant, &exp.reference, &exp.loop_settings).run(&mut |_, _| {});
     let own: Vec<u64> = own.record.tau.iter().map(|t| t.to_bits()).collect();
     assert!(!own.is_empty());
     assert_eq!(

@@ -95,6 +95,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             x: &x,
             w_k: w,
             preview: &preview,
+            truth: None,
         };
         let out = guarded.step(&input)?; // a failed step brakes and holds (safe stop)
         stats.step_us[k] = t0.elapsed().as_secs_f64() * 1e6;
@@ -250,7 +251,7 @@ fn set_up(
         ..LoopSettings::default()
     }
     .supervisor(&Default::default());
-    let guarded = SupervisedController::new(mpc, &robot, guard, 0)?;
+    let guarded = SupervisedController::new(mpc, &robot, guard, 0, true)?;
     let mut plant_robot = robot;
     plant_robot.set_payload(Some(Payload::point_mass(0.25)))?; // unknown to the controller
     let plant_settings = PlantSettings {

@@ -4,8 +4,8 @@
 //! G-code text → [`gcode`] (moves made of [`geometry`] segments) → [`motion`] (corner blending, timing, joint
 //! reference by IK; one entry point [`motion::plan`]) → [`control`] (the predictive
 //! controllers on their robot model) → [`sim`] (the closed loop as public stages:
-//! [`sim::Sensor`] → [`sim::Supervisor`] → [`sim::Estimator`] → controller →
-//! [`sim::Actuator`] → [`sim::Plant`] (robot + payload) → [`sim::Recorder`], composed by
+//! [`sim::Sensor`] → [`sim::SupervisedController`] (repair, [`sim::Supervisor`], the
+//! controller with its observer) → [`sim::Actuator`] → [`sim::Plant`] (robot + payload) → [`sim::Recorder`], composed by
 //! [`sim::ClosedLoop`]) → metrics.
 //!
 //! What most users need is re-exported here at the crate root: [`Robot`], [`Payload`],

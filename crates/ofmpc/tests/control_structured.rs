@@ -15,7 +15,7 @@ use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
 use ofmpc::motion::{build_reference, Orientation};
 use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{run_closed_loop, LoopSettings, Plant, PlantSettings};
+use ofmpc::sim::{LoopSettings, Plant, PlantSettings};
 
 /// `‖a − b‖₂ / ‖b‖₂`.
 fn rel(a: &[f64], b: &[f64]) -> f64 {
@@ -374,20 +374,33 @@ fn structured_equals_dense_qr_along_the_paper_path() {
             reference.ts(),
         )
         .unwrap();
+        // The closed loop on an ideal plant, the lockstep pair in the
+        // controller's place (it is no built controller: the loop is
+        // written out).
         let mut model = RobotDynamics::new(robot.clone());
-        let result = run_closed_loop(
-            &mut lock,
-            &mut model,
-            &mut plant,
-            &reference,
-            &LoopSettings {
-                hold_s: 0.5,
-                ..LoopSettings::default()
-            },
-            &mut |_, _| {},
-        );
-        assert!(result.outcome.is_completed(), "{kind}: {}", result.outcome);
-        assert_eq!(lock.steps, result.record.len());
+        let (n, ts) = (6, reference.ts());
+        let total = reference.len() + LoopSettings::default().hold_samples(ts) / 4;
+        let mut actuator = plant.settings().actuator(plant.robot(), ts);
+        let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
+        let mut preview = vec![0.0; lock.horizon() * n];
+        x[..n].copy_from_slice(plant.q());
+        x[n..].copy_from_slice(plant.qd());
+        lock.reset(&x).unwrap();
+        for k in 0..total {
+            x[..n].copy_from_slice(plant.q());
+            x[n..].copy_from_slice(plant.qd());
+            reference.preview(k, lock.horizon(), &mut preview);
+            let input = ofmpc::control::StepInput {
+                x: &x,
+                w_k: reference.q(k),
+                preview: &preview,
+            };
+            lock.step(&mut model, &input, &mut tau)
+                .unwrap_or_else(|e| panic!("{kind}: step {k} failed: {e}"));
+            let applied = actuator.apply(&tau, plant.state().path_sample).unwrap();
+            plant.advance(applied).unwrap();
+        }
+        assert_eq!(lock.steps, total);
         assert!(lock.steps > 300, "{kind}: only {} steps", lock.steps);
         // Relative difference at every step whose ΔU is not round-off: in
         // the hold at the end ΔU is ~1e-11 (the tracking error is zero), a

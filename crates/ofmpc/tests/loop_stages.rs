@@ -1,6 +1,7 @@
 //! The closed loop's stages are enough to build one's own loop: a loop
-//! written here from `Sensor`, `Supervisor`, `Estimator`, `Actuator` and
-//! `Recorder` (the order `ClosedLoop` documents) reproduces `ClosedLoop`'s
+//! written here from `Sensor`, `SupervisedController` (the built controller
+//! behind its guard), `Actuator` and `Recorder` (the order `ClosedLoop`
+//! documents) reproduces `ClosedLoop`'s
 //! record bit for bit on a run with lost samples, a noisy delayed encoder,
 //! an encoder glitch and the plausibility check, and allocates nothing per
 //! sample (counted on this thread).
@@ -10,12 +11,14 @@ mod common;
 use common::alloc_counter;
 
 use alloc_counter::allocations_during;
-use ofmpc::control::{new_controller, ControllerKind, MpcSettings, StateObserver};
-use ofmpc::dynamics::RobotDynamics;
+use ofmpc::control::{
+    Controller, ControllerBuilder, ControllerKind, MpcSettings, ObserverSettings,
+};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
-    ClosedLoop, Estimator, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant,
-    PlantSettings, Record, Recorder, RunConditions, Sample, Sensor, Supervisor,
+    ClosedLoop, Fault, LoopSettings, LossSchedule, MeasurementFaults, Plant, PlantSettings, Record,
+    Recorder, RunConditions, Sample, Sensor, SupervisedController, SupervisedInput,
+    SupervisedStatus,
 };
 
 #[global_allocator]
@@ -79,19 +82,21 @@ fn setup() -> Setup {
     }
 }
 
-fn observer(s: &Setup) -> StateObserver {
-    StateObserver::new(
-        s.robot.dof(),
-        s.mpc.ts,
-        plant_settings().delay_samples,
-        ofmpc::sim::OBSERVER_POLE,
-    )
+/// The controller of the runs: the second-order one with the observer
+/// that compensates the encoder's delay.
+fn controller(s: &Setup) -> Controller {
+    ControllerBuilder::new(ControllerKind::Second, &s.robot)
+        .settings(s.mpc.clone())
+        .observer(ObserverSettings {
+            pole: ofmpc::sim::OBSERVER_POLE,
+            measurement_delay: plant_settings().delay_samples,
+        })
+        .accept_ineffective_settings()
+        .build()
+        .unwrap()
 }
 
 fn with_closed_loop(s: &Setup) -> Record {
-    let n = s.robot.dof();
-    let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
-    let mut model = RobotDynamics::new(s.robot.clone());
     let mut plant = Plant::with_period(
         s.plant_robot.clone(),
         plant_settings(),
@@ -101,15 +106,12 @@ fn with_closed_loop(s: &Setup) -> Record {
     .unwrap();
     let settings = loop_settings();
     let conditions = conditions();
-    let mut obs = observer(s);
     let run = ClosedLoop::with_conditions(
-        controller.as_mut(),
-        &mut model,
+        controller(s),
         &mut plant,
         &s.reference,
         &settings,
         &conditions,
-        Some(&mut obs),
     )
     .run(&mut |_, _| {});
     assert!(run.outcome.is_completed(), "{:?}", run.outcome);
@@ -121,8 +123,6 @@ fn by_hand(s: &Setup) -> (Record, usize) {
     let n = s.robot.dof();
     let ts = s.reference.ts();
     let settings = loop_settings();
-    let mut controller = new_controller(ControllerKind::Second, n, &s.mpc).unwrap();
-    let mut model = RobotDynamics::new(s.robot.clone());
     let mut plant = Plant::with_period(
         s.plant_robot.clone(),
         plant_settings(),
@@ -130,24 +130,25 @@ fn by_hand(s: &Setup) -> (Record, usize) {
         ts,
     )
     .unwrap();
-    let mut obs = observer(s);
     let total = s.reference.len() + settings.hold_samples(ts);
     let conditions = conditions();
     let lost = LossSchedule::new(&conditions.faults, ts);
     let mut sensor = Sensor::new(plant.settings(), n, ts, lost).unwrap();
-    let mut supervisor =
-        Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
-    let mut estimator = Estimator::new(n, Some(&mut obs));
+    let mut controller = SupervisedController::new(
+        controller(s),
+        plant.robot(),
+        settings.supervisor(&conditions.safety),
+        plant_settings().delay_samples,
+        sensor.loses_samples(),
+    )
+    .unwrap();
     let mut actuator = plant.settings().actuator(plant.robot(), ts);
     let mut rec = Recorder::new(n, total, true, false);
-    let (mut x, mut tau) = (vec![0.0; 2 * n], vec![0.0; n]);
+    let mut x = vec![0.0; 2 * n];
     let mut preview = vec![0.0; controller.horizon() * n];
     let mut x_true = vec![0.0; 2 * n];
     sensor.measure(&plant.state(), &mut x).unwrap();
-    estimator.reset(&x);
     controller.reset(&x).unwrap();
-    sensor.reset(&x);
-    supervisor.reset(&x);
     let allocations = allocations_during(|| {
         for k in 0..total {
             let t = k as f64 * ts;
@@ -156,29 +157,27 @@ fn by_hand(s: &Setup) -> (Record, usize) {
             x_true[n..].copy_from_slice(plant.qd());
             rec.reading(&x);
             let w = s.reference.q(k);
-            let repaired = sensor.repair(&mut model, &mut x);
-            let inspection = supervisor.inspect(&mut x, w);
-            rec.fault(repaired || inspection.rejected);
             let flange = plant.flange_position();
             s.reference.preview(k, controller.horizon(), &mut preview);
-            let xs = estimator.estimate(&mut model, &x).unwrap();
-            controller
-                .step(
-                    &mut model,
-                    &ofmpc::control::StepInput {
-                        x: xs,
-                        w_k: w,
-                        preview: &preview,
-                    },
-                    &mut tau,
-                )
+            let input = SupervisedInput {
+                t,
+                x: &x,
+                w_k: w,
+                preview: &preview,
+                truth: Some(&x_true[..n]),
+            };
+            let status = controller.step(&input).unwrap().status;
+            assert!(matches!(
+                status,
+                SupervisedStatus::Controlled | SupervisedStatus::RepairedMeasurement
+            ));
+            rec.fault(controller.repaired());
+            rec.loading(actuator.account(controller.torque()));
+            let applied = actuator
+                .apply(controller.torque(), plant.state().path_sample)
                 .unwrap();
-            estimator.record_torque(&tau);
-            sensor.record_torque(&tau);
-            rec.loading(actuator.account(&tau));
-            supervisor.record_torque(&tau);
-            let applied = actuator.apply(&tau, plant.state().path_sample).unwrap();
             plant.advance(applied).unwrap();
+            controller.watch(plant.q(), plant.qd(), t);
             rec.push(&Sample {
                 t,
                 q: &x_true[..n],
@@ -190,7 +189,6 @@ fn by_hand(s: &Setup) -> (Record, usize) {
                 step_us: 0.0,
                 payload_mass_est: None,
             });
-            assert!(supervisor.divergence(w, &x_true[..n]).is_none());
         }
     });
     (rec.into_record(), allocations)

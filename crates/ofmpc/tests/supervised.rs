@@ -22,7 +22,7 @@ fn guarded(safe_stop: bool) -> (SupervisedController, Vec<f64>, usize) {
         safe_stop,
         max_joint_error_rad: None,
     };
-    let mut s = SupervisedController::new(mpc, &robot, settings, 0).unwrap();
+    let mut s = SupervisedController::new(mpc, &robot, settings, 0, true).unwrap();
     let mut x0 = vec![0.0; 12];
     x0[..6].copy_from_slice(&[0.0, 0.3, 0.2, 0.0, 0.5, 0.0]);
     s.reset(&x0).unwrap();
@@ -48,6 +48,7 @@ fn an_implausible_measurement_brings_a_safe_stop() {
             x: &x,
             w_k: &w,
             preview: &preview,
+            truth: None,
         };
         let out = s.step(&input).unwrap();
         assert_eq!(out.status, SupervisedStatus::Controlled, "k = {k}");
@@ -60,6 +61,7 @@ fn an_implausible_measurement_brings_a_safe_stop() {
             x: &x,
             w_k: &w,
             preview: &preview,
+            truth: None,
         };
         let out = s.step(&input).unwrap();
         assert!(out.tau.iter().all(|t| t.is_finite()), "k = {k}");
@@ -96,6 +98,7 @@ fn without_the_stop_law_the_readings_are_only_repaired() {
             x: &x,
             w_k: &w,
             preview: &preview,
+            truth: None,
         };
         let out = s.step(&input).unwrap();
         assert_eq!(out.status, SupervisedStatus::RepairedMeasurement, "k = {k}");
@@ -107,6 +110,7 @@ fn without_the_stop_law_the_readings_are_only_repaired() {
         x: &x[..11],
         w_k: &w,
         preview: &preview,
+        truth: None,
     };
     assert!(s.step(&input).is_err());
 }

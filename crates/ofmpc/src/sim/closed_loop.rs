@@ -2,7 +2,6 @@
 
 use super::actuator::Actuator;
 use super::conditions::{RunConditions, SafetySettings};
-use super::estimator::Estimator;
 use super::faults::{sample_at, LossSchedule, MeasurementFaults};
 use super::horizon::HorizonRecorder;
 use super::outcome::{RunFailure, RunOutcome, MAX_RECORD_VALUES};
@@ -10,9 +9,9 @@ use super::plant::{Plant, PlantError, PlantSettings};
 use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
 use super::settings_error::LoopSettingsError;
-use super::supervisor::{DivergenceRule, StopReason, Supervisor, SupervisorSettings};
-use crate::control::{Algorithm, StateObserver, StepFailure};
-use crate::dynamics::JointSpaceDynamics;
+use super::supervised::{SupervisedController, SupervisedError, SupervisedInput, SupervisedStatus};
+use super::supervisor::{DivergenceRule, SupervisorSettings};
+use crate::control::{Controller, StepFailure};
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -155,7 +154,7 @@ impl LoopSettings {
         Ok(())
     }
 
-    /// The [`Supervisor`]'s part of these settings, with the run's safety
+    /// The [`super::Supervisor`]'s part of these settings, with the run's safety
     /// function ([`RunConditions::safety`]).
     pub fn supervisor(&self, safety: &SafetySettings) -> SupervisorSettings {
         SupervisorSettings {
@@ -204,22 +203,22 @@ pub struct RunResult {
     pub wall_s: f64,
 }
 
-/// Runs `controller` (with its own `model` of the robot) against `plant`
-/// along `reference`, then holds its last point for `settings.hold_s`.
+/// Runs `controller` (built by [`crate::control::ControllerBuilder`], with
+/// its own model of the robot and observer) against `plant` along
+/// `reference`, then holds its last point for `settings.hold_s`.
 ///
 /// The plant starts at rest wherever it was built (normally the reference's
 /// first point). Row `k` of the record holds the state measured at `t_k` and
 /// the torque applied over `[t_k, t_k + Ts)`. `progress(k, total)` is called
 /// every 100 samples.
 pub fn run_closed_loop(
-    controller: &mut dyn Algorithm,
-    model: &mut dyn JointSpaceDynamics,
+    controller: Controller,
     plant: &mut Plant,
     reference: &JointReference,
     settings: &LoopSettings,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
-    ClosedLoop::new(controller, model, plant, reference, settings, None).run(progress)
+    ClosedLoop::new(controller, plant, reference, settings).run(progress)
 }
 
 /// What happens in a run besides following the path.
@@ -232,62 +231,55 @@ pub struct RunEvents {
     pub pick_up: Option<(f64, crate::robot::Payload)>,
 }
 
-/// [`run_closed_loop`] with a pre-roll at rest, a payload picked up
-/// mid-path, and an optional state observer between the sensors and the
-/// controller: [`ClosedLoop`] with [`ClosedLoop::events`].
-#[allow(clippy::too_many_arguments)]
+/// [`run_closed_loop`] with a pre-roll at rest and a payload picked up
+/// mid-path: [`ClosedLoop`] with [`ClosedLoop::events`].
 pub fn run_closed_loop_with(
-    controller: &mut dyn Algorithm,
-    model: &mut dyn JointSpaceDynamics,
+    controller: Controller,
     plant: &mut Plant,
     reference: &JointReference,
     settings: &LoopSettings,
     events: &RunEvents,
-    observer: Option<&mut StateObserver>,
     progress: &mut dyn FnMut(usize, usize),
 ) -> RunResult {
-    ClosedLoop::new(controller, model, plant, reference, settings, observer)
+    ClosedLoop::new(controller, plant, reference, settings)
         .events(events)
         .run(progress)
 }
 
 /// The closed loop, composed of its stages: per sample
-/// [`Sensor`] (the encoders on the plant's [`Plant::state`], lost samples,
-/// repair) → [`Supervisor`] (plausibility, safety limit) → [`Estimator`]
-/// (observer) → controller, or the supervisor's stop law during a safe stop
-/// → [`Actuator`] (saturation, torque drops, loading) → [`Plant`] (rigid
-/// body and payload) → [`Recorder`]; then the supervisor judges the run
-/// (divergence). Each stage is a public type a user's own loop can use one
-/// by one; the controller with its guard is one object for such a loop,
-/// [`super::SupervisedController`] (`examples/realtime_loop.rs`).
+/// [`Sensor`] (the encoders on the plant's [`Plant::state`], lost samples)
+/// → [`SupervisedController`] (repair, plausibility, safety limit, the
+/// controller with its observer or the stop law during a safe stop, the
+/// divergence judged on the true state) → [`Actuator`] (saturation, torque
+/// drops, loading) → [`Plant`] (rigid body and payload) → [`Recorder`].
+/// Each stage is a public type a user's own loop can use one by one; the
+/// supervised controller is the one object such a loop steps, as this one
+/// does (`examples/realtime_loop.rs`).
 ///
 /// During the pre-roll ([`RunEvents::pre_roll`]) the reference and its
 /// preview are the path's first point; a divergence or failure there is
 /// reported at a negative time (`−pre_roll·Ts ≤ t < 0`). The record holds
 /// the path and the hold; for a controller that identifies the payload it
-/// also holds the mass estimate after each step. With an observer the
-/// controller gets the observer's estimate of the current state instead of
-/// the (delayed, position-derived) measurement; the record keeps the
-/// measurement.
+/// also holds the mass estimate after each step. With an observer (the
+/// controller's) the controller acts on the observer's estimate of the
+/// current state instead of the (delayed, position-derived) measurement;
+/// the record keeps the measurement.
 ///
 /// Every buffer is sized by [`ClosedLoop::new`]; the samples allocate
 /// nothing (the record is sized for the run).
 pub struct ClosedLoop<'a> {
-    controller: &'a mut dyn Algorithm,
-    model: &'a mut dyn JointSpaceDynamics,
+    /// The controller behind its guard.
+    controller: SupervisedController,
     plant: &'a mut Plant,
     reference: &'a JointReference,
     settings: &'a LoopSettings,
     conditions: &'a RunConditions,
     events: RunEvents,
-    estimator: Estimator<'a>,
     sensor: Sensor,
-    supervisor: Supervisor,
     actuator: Actuator,
-    /// The reading (2n), the true state (2n), the torque (n), the preview (N·n).
+    /// The reading (2n), the true state (2n), the preview (N·n).
     x: Vec<f64>,
     x_true: Vec<f64>,
-    tau: Vec<f64>,
     preview: Vec<f64>,
     /// The sample of the pick-up and the payload, until it happened.
     pick_up: Option<(usize, crate::robot::Payload)>,
@@ -301,37 +293,32 @@ pub struct ClosedLoop<'a> {
 type Ended = RunOutcome;
 
 impl<'a> ClosedLoop<'a> {
-    /// The loop of `controller` (acting on its `model`) against `plant`
-    /// along `reference` and its hold, with an optional `observer` between
-    /// the sensor and the controller, and no [`RunConditions`] (no pick-up
+    /// The loop of `controller` (built by
+    /// [`crate::control::ControllerBuilder`]; it has `reference`'s joints and
+    /// period) against `plant` along `reference` and its hold, and no
+    /// [`RunConditions`] (no pick-up
     /// time, safety limit, fault or recorded horizon): [`Self::with_conditions`]
     /// with [`RunConditions::NONE`]. Sizes every stage.
     pub fn new(
-        controller: &'a mut dyn Algorithm,
-        model: &'a mut dyn JointSpaceDynamics,
+        controller: Controller,
         plant: &'a mut Plant,
         reference: &'a JointReference,
         settings: &'a LoopSettings,
-        observer: Option<&'a mut StateObserver>,
     ) -> Self {
         const NONE: &RunConditions = &RunConditions::NONE;
-        Self::with_conditions(
-            controller, model, plant, reference, settings, NONE, observer,
-        )
+        Self::with_conditions(controller, plant, reference, settings, NONE)
     }
 
     /// [`Self::new`] with the run's `conditions`: the safety limit (the
-    /// [`Supervisor`]), the lost measurements (the [`Sensor`]'s
+    /// [`super::Supervisor`]), the lost measurements (the [`Sensor`]'s
     /// [`LossSchedule`]) and the horizons to record. The pick-up time is an
     /// event of the run ([`Self::events`]). Sizes every stage.
     pub fn with_conditions(
-        controller: &'a mut dyn Algorithm,
-        model: &'a mut dyn JointSpaceDynamics,
+        controller: Controller,
         plant: &'a mut Plant,
         reference: &'a JointReference,
         settings: &'a LoopSettings,
         conditions: &'a RunConditions,
-        observer: Option<&'a mut StateObserver>,
     ) -> Self {
         let n = reference.dof();
         let ts = reference.ts();
@@ -342,25 +329,29 @@ impl<'a> ClosedLoop<'a> {
         let lost = LossSchedule::new(&conditions.faults, ts);
         // The plant checked its settings when it was built.
         let sensor = Sensor::checked(plant.settings(), plant.robot().dof(), ts, lost);
-        let supervisor =
-            Supervisor::with_period(plant.robot(), settings.supervisor(&conditions.safety), ts);
+        // The repair predicts with the torque of the reading's sample, and
+        // between lost samples when samples are lost.
+        let controller = SupervisedController::checked(
+            controller,
+            plant.robot(),
+            settings.supervisor(&conditions.safety),
+            ts,
+            plant.settings().delay_samples,
+            sensor.loses_samples(),
+        );
         // The plant checked its settings when it was built.
         let actuator = plant.settings().actuator(plant.robot(), ts);
         Self {
             controller,
-            model,
             plant,
             reference,
             settings,
             conditions,
             events: RunEvents::default(),
-            estimator: Estimator::new(n, observer),
             sensor,
-            supervisor,
             actuator,
             x: vec![0.0; 2 * n],
             x_true: vec![0.0; 2 * n],
-            tau: vec![0.0; n],
             preview: vec![0.0; horizon * n],
             pick_up: None,
             horizon: predicted,
@@ -420,7 +411,7 @@ impl<'a> ClosedLoop<'a> {
             Ok(()) => self.follow(total, &mut rec, progress),
             Err(ended) => ended,
         };
-        if let Some(s) = self.supervisor.stopping() {
+        if let Some(s) = self.controller.stopping() {
             if outcome.is_completed() {
                 let last = rec.record().t.last().copied().unwrap_or(s.t) + ts;
                 let qd = &rec.record().qd;
@@ -459,11 +450,9 @@ impl<'a> ClosedLoop<'a> {
         self.sensor
             .measure(&self.plant.state(), &mut self.x)
             .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
-        self.estimator.reset(&self.x);
         self.controller
             .reset(&self.x)
-            .map_err(|e| failed(0.0, RunFailure::Reset(e)))?;
-        self.supervisor.reset(&self.x);
+            .map_err(|e| failed(0.0, RunFailure::Reset(step_failure(e))))?;
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
@@ -480,10 +469,7 @@ impl<'a> ClosedLoop<'a> {
                 .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(0.0, RunFailure::Plant(e)))?;
         }
-        self.sensor.reset(&self.x);
-        if self.supervisor.stopping().is_none() {
-            self.supervisor.reset(&self.x);
-        }
+        self.controller.reset_guard(&self.x);
         Ok(())
     }
 
@@ -499,58 +485,32 @@ impl<'a> ClosedLoop<'a> {
                 .measure(&self.plant.state(), &mut self.x)
                 .map_err(|e| failed(RunFailure::Plant(e)))?;
         }
-        let reference = self.reference;
-        let w0 = reference.q(0);
+        let w0 = self.reference.q(0);
         for block in self.preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
         }
-        let controller = &mut *self.controller;
-        let (preview, tau) = (&self.preview, &mut self.tau);
-        let model = &mut *self.model;
-        let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
-            controller.step(
-                model,
-                &crate::control::StepInput {
-                    x: xs,
-                    w_k: w0,
-                    preview,
-                },
-                tau,
-            )
-        });
-        if let Err(e) = status {
-            let reason = StopReason::ControllerFailed(e);
-            return match self.supervisor.begin_stop(t, reason, &self.x, model) {
-                true => Ok(true),
-                false => Err(failed(RunFailure::Controller(e))),
-            };
+        let out = self
+            .controller
+            .step_at_rest(t, &self.x, w0, &self.preview)
+            .map_err(|e| failed(RunFailure::Controller(step_failure(e))))?;
+        if out.status == SupervisedStatus::Stopping {
+            return Ok(true);
         }
-        self.estimator.record_torque(&self.tau);
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
-        let threshold = self.settings.divergence_threshold_rad;
-        let q = self.plant.q();
-        if let Some(joint) = (0..n).find(|&i| {
-            let e = w0[i] - q[i];
-            e.is_nan() || e.abs() > threshold
-        }) {
-            let error_rad = w0[joint] - q[joint];
-            if !error_rad.is_nan() {
-                let reason = StopReason::Diverged { joint, error_rad };
-                if self.supervisor.begin_stop(t, reason, &self.x, self.model) {
-                    return Ok(true);
-                }
-            }
-            return Err(RunOutcome::Diverged {
+        // The one divergence rule ([`super::Supervisor::divergence`]): at
+        // rest on the first point, the threshold alone under either rule (no
+        // offset is expected there).
+        match self.controller.judge_at_rest(t, w0, self.plant.q()) {
+            None => Ok(false),
+            Some((_, true)) => Ok(true),
+            Some(((joint, error_rad), false)) => Err(RunOutcome::Diverged {
                 t,
                 joint,
-                error_rad: w0[joint] - q[joint],
-                threshold_rad: threshold,
-                // At rest on the first point: the threshold alone, under
-                // either rule (no offset is expected there).
+                error_rad,
+                threshold_rad: self.settings.divergence_threshold_rad,
                 rule: DivergenceRule::Threshold,
-            });
+            }),
         }
-        Ok(false)
     }
 
     /// The path and the hold, from the reading [`Self::start`] left.
@@ -564,7 +524,7 @@ impl<'a> ClosedLoop<'a> {
         let stop_samples = (SAFE_STOP_RECORD_S / ts).round() as usize;
         // A stop that began in the pre-roll: the record holds its braking
         // and hold.
-        let mut end = match self.supervisor.stopping() {
+        let mut end = match self.controller.stopping() {
             Some(_) => stop_samples,
             None => total,
         };
@@ -598,39 +558,34 @@ impl<'a> ClosedLoop<'a> {
         let failed = |cause: RunFailure| RunOutcome::Failed { t, cause };
         self.read(k).map_err(|e| failed(RunFailure::Plant(e)))?;
         rec.reading(&self.x);
-        let reference = self.reference;
-        let w = reference.q(k);
-        // A missing or invalid reading: the controller runs on the model's
-        // prediction.
-        let repaired = self.sensor.repair(self.model, &mut self.x);
-        let inspection = self.supervisor.inspect(&mut self.x, w);
-        rec.fault(repaired || inspection.rejected);
+        let w = self.reference.q(k);
         let flange = self.plant.flange_position();
         self.reference
             .preview(k, self.controller.horizon(), &mut self.preview);
         let t0 = Instant::now();
-        let mut stop_began = None;
-        if let Some(reason) = inspection.trigger {
-            let from = self.estimator.last(&self.x);
-            if self.supervisor.begin_stop(t, reason, from, self.model) {
-                stop_began = Some(k);
+        let stopping_before = self.controller.stopping().is_some();
+        // A missing or invalid reading: the controller runs on the model's
+        // prediction; the divergence is judged on the true positions.
+        let step = self.controller.step(&SupervisedInput {
+            t,
+            x: &self.x,
+            w_k: w,
+            preview: &self.preview,
+            truth: Some(&self.x_true[..n]),
+        });
+        let status = step.map(|out| out.status);
+        rec.fault(self.controller.repaired());
+        if self.controller.controller_stepped() {
+            if let Some(h) = &mut self.horizon {
+                let controller = &mut self.controller;
+                h.observe(k, |y| controller.predicted_outputs(y));
             }
         }
-        let status = self.control(k, w);
-        self.sensor.record_torque(&self.tau);
-        rec.loading(self.actuator.account(&self.tau));
+        rec.loading(self.actuator.account(self.controller.torque()));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
-        if let Err(e) = status {
-            let reason = StopReason::ControllerFailed(e);
-            // Brake from here on (this sample holds the last torque).
-            if !self.supervisor.begin_stop(t, reason, &self.x, self.model) {
-                return Err(failed(RunFailure::Controller(e)));
-            }
-            stop_began = Some(k);
-        }
-        self.supervisor.record_torque(&self.tau);
+        let status = status.map_err(|e| failed(RunFailure::Controller(step_failure(e))))?;
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
-        self.supervisor.watch(self.plant.q(), self.plant.qd(), t);
+        self.controller.watch(self.plant.q(), self.plant.qd(), t);
         rec.push(&Sample {
             t,
             q: &self.x_true[..n],
@@ -642,9 +597,23 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
-        match self.judge(k, w)? {
-            true => Ok(Some(k + 1)),
-            false => Ok(stop_began),
+        match status {
+            SupervisedStatus::NonFiniteError { joint } => {
+                Err(failed(RunFailure::NonFiniteError { joint }))
+            }
+            SupervisedStatus::Diverged => {
+                let (joint, error_rad) = self.controller.divergence().unwrap_or((0, f64::NAN));
+                Err(RunOutcome::Diverged {
+                    t,
+                    joint,
+                    error_rad,
+                    threshold_rad: self.settings.divergence_threshold_rad,
+                    rule: self.settings.divergence,
+                })
+            }
+            _ if stopping_before || self.controller.stopping().is_none() => Ok(None),
+            _ if self.controller.stop_began_at_judgement() => Ok(Some(k + 1)),
+            _ => Ok(Some(k)),
         }
     }
 
@@ -664,67 +633,21 @@ impl<'a> ClosedLoop<'a> {
         Ok(())
     }
 
-    /// Judges sample `k`'s true state against its reference `w`: a
-    /// non-finite error ends the run; a divergence begins a safe stop
-    /// (`Ok(true)`, counted from the next sample) or ends the run.
-    fn judge(&mut self, k: usize, w: &[f64]) -> Result<bool, Ended> {
-        let n = self.reference.dof();
-        let t = k as f64 * self.reference.ts();
-        let q = &self.x_true[..n];
-        if let Some(joint) = (0..n).find(|&i| (w[i] - q[i]).is_nan()) {
-            return Err(RunOutcome::Failed {
-                t,
-                cause: RunFailure::NonFiniteError { joint },
-            });
-        }
-        if let Some((joint, error_rad)) = self.supervisor.judge(w, q) {
-            let reason = StopReason::Diverged { joint, error_rad };
-            if !self.supervisor.begin_stop(t, reason, &self.x, self.model) {
-                return Err(RunOutcome::Diverged {
-                    t,
-                    joint,
-                    error_rad,
-                    threshold_rad: self.settings.divergence_threshold_rad,
-                    rule: self.settings.divergence,
-                });
-            }
-            return Ok(true);
-        }
-        Ok(false)
-    }
-
-    /// The command `self.tau` through the drives ([`Actuator::apply`]) onto
-    /// the plant over one period.
+    /// The controller's torque through the drives ([`Actuator::apply`])
+    /// onto the plant over one period.
     fn actuate(&mut self) -> Result<(), PlantError> {
         let applied = self
             .actuator
-            .apply(&self.tau, self.plant.state().path_sample)?;
+            .apply(self.controller.torque(), self.plant.state().path_sample)?;
         self.plant.advance(applied)
     }
+}
 
-    /// The torque of this sample into `self.tau`: the estimator's state
-    /// through the controller, or the supervisor's stop law during a stop.
-    fn control(&mut self, k: usize, w: &[f64]) -> Result<(), StepFailure> {
-        let model = &mut *self.model;
-        let xs = self.estimator.estimate(model, &self.x)?;
-        if self.supervisor.stopping().is_some() {
-            self.supervisor
-                .stop_torque(model, &self.x, xs, &mut self.tau)?;
-        } else {
-            self.controller.step(
-                model,
-                &crate::control::StepInput {
-                    x: xs,
-                    w_k: w,
-                    preview: &self.preview,
-                },
-                &mut self.tau,
-            )?;
-            if let Some(h) = &mut self.horizon {
-                h.observe(k, &mut *self.controller);
-            }
-        }
-        self.estimator.record_torque(&self.tau);
-        Ok(())
+/// The step failure behind a supervised controller's error (the loop sizes
+/// every input, so only a failed step is expected).
+fn step_failure(e: SupervisedError) -> StepFailure {
+    match e {
+        SupervisedError::Step(f) => f,
+        _ => StepFailure::Internal("the loop gave the controller an input of the wrong size"),
     }
 }

@@ -107,17 +107,8 @@ impl Experiment {
             });
         }
         self.mpc.validate_for_dof(n)?;
-        // The controllers' limits are the robot's peak torques (`DriveModel::from_robot`): with
-        // none finite, a QP would never bind and the run would be unconstrained (the builder's
-        // rule, `BuildError::NoTorqueLimits`).
-        if self.mpc.torque_limits
-            && DriveModel::from_robot(&self.robot)
-                .max_torque_nm
-                .iter()
-                .all(|t| t.is_infinite())
-        {
-            return Err(crate::control::BuildError::NoTorqueLimits.into());
-        }
+        // The controllers' limits are the robot's peak torques: the builder's rule.
+        crate::control::check_torque_limits(&self.mpc, &DriveModel::from_robot(&self.robot))?;
         self.loop_settings.validate()?;
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
@@ -141,11 +132,7 @@ impl Experiment {
     /// The controllers' model: [`Self::robot`] with the payload the tuning
     /// assumes ([`MpcSettings::model_payload_kg`], when > 0).
     pub fn model_robot(&self) -> Result<Robot, ExperimentError> {
-        let mut r = self.robot.clone();
-        if self.mpc.model_payload_kg > 0.0 {
-            r.set_payload(Some(Payload::point_mass(self.mpc.model_payload_kg)))?;
-        }
-        Ok(r)
+        Ok(crate::control::model_robot(&self.robot, &self.mpc)?)
     }
 
     /// Runs `kind` against the plant carrying `payload`. Errors only for
@@ -171,7 +158,7 @@ impl Experiment {
         cancel: &AtomicBool,
     ) -> Result<(RunResult, RunMetrics), ExperimentError> {
         self.validate()?;
-        let mut mpc = self.controller(kind)?;
+        let mpc = self.controller(kind)?;
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
         let events = RunEvents {
@@ -183,19 +170,11 @@ impl Experiment {
             pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
         let mut plant = self.plant_for(payload, events.pick_up.is_some())?;
-        let parts = mpc.parts_mut();
-        let result = ClosedLoop::with_conditions(
-            parts.controller,
-            parts.model,
-            &mut plant,
-            &self.reference,
-            ls,
-            &self.conditions,
-            parts.observer,
-        )
-        .events(&events)
-        .cancel_on(cancel)
-        .run(progress);
+        let result =
+            ClosedLoop::with_conditions(mpc, &mut plant, &self.reference, ls, &self.conditions)
+                .events(&events)
+                .cancel_on(cancel)
+                .run(progress);
         if let RunOutcome::Failed {
             t,
             cause: RunFailure::Interrupted,

@@ -1,9 +1,9 @@
 //! What a predictive controller predicts over its horizon, recorded every few samples (the
 //! report's 3-D replay draws it): the joint positions `ŷ_{k+1}, …, ŷ_{k+N}` its own model
 //! predicts right after its step at sample `k`, from the state it was given and its optimal
-//! sequence ([`Algorithm::increments`]).
+//! sequence ([`crate::control::Algorithm::increments`]).
 //!
-//! The controller hands them over itself ([`Algorithm::predicted_outputs`]): the ZOH model
+//! The controller hands them over itself ([`crate::control::Algorithm::predicted_outputs`]): the ZOH model
 //! of its step (its [`crate::dynamics::JointSpaceDynamics`], with the payload an adaptive
 //! variant identified, linearized at the state, `f0 = −H⁻¹C`, Eq. (6) and (12), discretized by
 //! zero-order hold, `Ad = [[I, Φ1], [0, e^M]]`, `Bd = [[Φ2], [Φ1]]`, Eq. (13)), driven by its
@@ -20,7 +20,7 @@
 //!
 //! Buffers are sized at construction: observing a step allocates nothing.
 
-use crate::control::{Algorithm, ControllerKind};
+use crate::control::ControllerKind;
 
 /// Which horizons a run records ([`super::RunConditions::horizons`]): the samples `0, every,
 /// 2·every, …`, at most `max` of them.
@@ -94,15 +94,13 @@ impl HorizonRecorder {
         })
     }
 
-    /// After a successful step of `controller` at sample `k` of the path or the hold: at a
-    /// recorded sample its predicted horizon ([`Algorithm::predicted_outputs`]) is kept. A
-    /// horizon that cannot be had or is not finite is left out. Allocates nothing.
-    pub fn observe(&mut self, k: usize, controller: &mut dyn Algorithm) {
+    /// After a successful step of the controller at sample `k` of the path or the hold: at a
+    /// recorded sample its predicted horizon, written by `predict` into the N·n values it is
+    /// given (`false`: none, as [`super::SupervisedController::predicted_outputs`]), is kept.
+    /// A horizon that cannot be had or is not finite is left out. Allocates nothing.
+    pub fn observe(&mut self, k: usize, predict: impl FnOnce(&mut [f64]) -> bool) {
         let wanted = k.is_multiple_of(self.every) && self.out.samples.len() < self.capacity;
-        if wanted
-            && controller.predicted_outputs(&mut self.y)
-            && self.y.iter().all(|v| v.is_finite())
-        {
+        if wanted && predict(&mut self.y) && self.y.iter().all(|v| v.is_finite()) {
             self.out.q.extend_from_slice(&self.y);
             self.out.samples.push(k);
         }

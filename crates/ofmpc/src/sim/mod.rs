@@ -15,7 +15,6 @@
 mod actuator;
 mod closed_loop;
 mod conditions;
-mod estimator;
 mod experiment;
 mod faults;
 mod format;
@@ -32,8 +31,6 @@ mod supervised;
 mod supervisor;
 
 pub use actuator::Actuator;
-#[doc(hidden)]
-pub use estimator::Estimator;
 #[doc(hidden)]
 pub use faults::sample_at;
 pub use faults::{Fault, LossSchedule, MeasurementFaults};

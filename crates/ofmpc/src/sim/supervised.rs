@@ -8,12 +8,22 @@
 //! ([`Supervisor::inspect`]), the controller's step — or, once a stop began,
 //! the safe-stop law on the observer's estimate — and the divergence rule
 //! ([`Supervisor::judge`], on the measured positions: a real loop knows no
-//! other). A stop begins on an implausible reading, a joint error beyond the
+//! other; a simulation gives the true ones, [`SupervisedInput::truth`]). A
+//! stop begins on an implausible reading, a joint error beyond the
 //! safety limit, a failed step or a divergence, when the settings ask for
 //! the safe stop; without it those end in the status (or, for a failed
 //! step, the error) the caller acts on.
+//!
+//! A failed step holds the last torque for its sample and the stop law
+//! brakes from the next one, from the reading; a stop on an implausible
+//! reading or the safety limit starts from the state the controller last
+//! acted on (the observer's estimate, when it runs). The simulator's
+//! [`super::ClosedLoop`] steps its controller through this object
+//! ([`SupervisedController::step_at_rest`] for the pre-roll,
+//! [`SupervisedController::watch`] for the true state after each period).
 
 use super::repair::MeasurementGuard;
+use super::supervisor::Stopping;
 use super::supervisor::{StopReason, Supervisor, SupervisorSettings, REST_SPEED};
 use crate::control::{Mpc, StepFailure, StepInput, StepOutput};
 use crate::robot::Robot;
@@ -29,6 +39,12 @@ pub struct SupervisedInput<'a> {
     pub w_k: &'a [f64],
     /// Preview `w_{k+1}, …, w_{k+N}` (N·n).
     pub preview: &'a [f64],
+    /// The true joint positions (n), known to a simulation only: when
+    /// given, the divergence is judged on them instead of the measured
+    /// positions, a non-finite error is reported
+    /// ([`SupervisedStatus::NonFiniteError`]), and the robot is watched
+    /// during a stop by the caller ([`SupervisedController::watch`]).
+    pub truth: Option<&'a [f64]>,
 }
 
 /// What the supervised controller did at one sample.
@@ -48,6 +64,12 @@ pub enum SupervisedStatus {
     /// The tracking error diverged and there is no stop law: the
     /// controller's torque is given, the caller must stop the robot.
     Diverged,
+    /// The tracking error of this joint is not a number
+    /// ([`SupervisedInput::truth`]): the caller must end the run.
+    NonFiniteError {
+        /// The first joint whose error is not a number.
+        joint: usize,
+    },
 }
 
 /// The output of [`SupervisedController::step`]; the controller's own
@@ -99,18 +121,28 @@ pub struct SupervisedController {
     /// Where a stop starts from (2n).
     from: Vec<f64>,
     output: SupervisedOutput,
+    /// The last step's reading was repaired or rejected.
+    repaired: bool,
+    /// The last step's torque is the controller's, from a successful step.
+    stepped: bool,
+    /// The last step's judgement began a stop (watched from the next sample).
+    judged_stop: bool,
+    /// The divergence the last step's judgement found.
+    diverged: Option<(usize, f64)>,
 }
 
 impl SupervisedController {
     /// `mpc` guarded for `robot` (its speed and torque limits) by the rules
     /// of `settings`, at the controller's period; `delay_samples`: how old
     /// the readings are (the repair's prediction uses the torque of that
-    /// sample).
+    /// sample); `track`: whether the repair also predicts between lost
+    /// samples ([`MeasurementGuard::new`]).
     pub fn new(
         mpc: Mpc,
         robot: &Robot,
         settings: SupervisorSettings,
         delay_samples: usize,
+        track: bool,
     ) -> Result<Self, SupervisedError> {
         let n = mpc.dof();
         if robot.dof() != n {
@@ -124,9 +156,30 @@ impl SupervisedController {
             return Err(SupervisedError::DivergenceThreshold(th));
         }
         let ts = mpc.settings().ts;
-        Ok(Self {
+        Ok(Self::checked(
+            mpc,
+            robot,
+            settings,
+            ts,
+            delay_samples,
+            track,
+        ))
+    }
+
+    /// [`Self::new`] at the period `ts` for a caller that checked the
+    /// joints and the settings (the simulator's loop).
+    pub(crate) fn checked(
+        mpc: Mpc,
+        robot: &Robot,
+        settings: SupervisorSettings,
+        ts: f64,
+        delay_samples: usize,
+        track: bool,
+    ) -> Self {
+        let n = mpc.dof();
+        Self {
             supervisor: Supervisor::with_period(robot, settings, ts),
-            repair: MeasurementGuard::new(&vec![0.0; 2 * n], delay_samples, true, ts),
+            repair: MeasurementGuard::new(&vec![0.0; 2 * n], delay_samples, track, ts),
             x: vec![0.0; 2 * n],
             from: vec![0.0; 2 * n],
             output: SupervisedOutput {
@@ -134,7 +187,11 @@ impl SupervisedController {
                 status: SupervisedStatus::Controlled,
             },
             mpc,
-        })
+            repaired: false,
+            stepped: false,
+            judged_stop: false,
+            diverged: None,
+        }
     }
 
     /// Starts a run at the reading `x0` (2n): the controller, the repair and
@@ -155,29 +212,156 @@ impl SupervisedController {
     /// or a failed step that no stop law can take over.
     pub fn step(&mut self, input: &SupervisedInput) -> Result<&SupervisedOutput, SupervisedError> {
         let n = self.output.tau.len();
-        self.check_len(input.x.len(), 2 * n)?;
-        self.check_len(input.w_k.len(), n)?;
-        self.check_len(input.preview.len(), self.mpc.horizon() * n)?;
+        self.check_input(input)?;
         self.x.copy_from_slice(input.x);
+        (self.stepped, self.judged_stop, self.diverged) = (false, false, None);
         let repaired = self.repair.check(self.mpc.parts_mut().model, &mut self.x);
         let inspection = self.supervisor.inspect(&mut self.x, input.w_k);
+        self.repaired = repaired || inspection.rejected;
         if let Some(reason) = inspection.trigger {
+            let from = self.mpc.state_estimate().unwrap_or(&self.x);
+            self.from.copy_from_slice(from);
             self.begin_stop(input.t, reason);
         }
-        if let Err(e) = self.control(input) {
+        let control = self.control(input);
+        self.repair.record_torque(&self.output.tau);
+        if let Err(e) = control {
+            // Brake from the next sample (this one holds the last torque).
+            self.from.copy_from_slice(&self.x);
             if !self.begin_stop(input.t, StopReason::ControllerFailed(e)) {
                 return Err(SupervisedError::Step(e));
             }
-            self.control(input).map_err(SupervisedError::Step)?;
         }
-        self.repair.record_torque(&self.output.tau);
         self.supervisor.record_torque(&self.output.tau);
-        let diverged = self.supervisor.judge(input.w_k, &self.x[..n]);
-        if let Some((joint, error_rad)) = diverged {
-            self.begin_stop(input.t, StopReason::Diverged { joint, error_rad });
+        let q = input.truth.unwrap_or(&self.x[..n]);
+        if let Some(joint) = (0..n).find(|&i| (input.w_k[i] - q[i]).is_nan()) {
+            self.output.status = SupervisedStatus::NonFiniteError { joint };
+            return Ok(&self.output);
         }
-        self.output.status = self.status(input.t, repaired || inspection.rejected, diverged);
+        self.diverged = self.supervisor.judge(input.w_k, q);
+        if let Some((joint, error_rad)) = self.diverged {
+            self.from.copy_from_slice(&self.x);
+            self.judged_stop = self.begin_stop(input.t, StopReason::Diverged { joint, error_rad });
+        }
+        self.output.status = self.status(input);
         Ok(&self.output)
+    }
+
+    /// One sample at rest before a run (the simulator's pre-roll, while an
+    /// adaptive controller identifies its load): the controller's step on
+    /// the reading `x` as it came (no repair, no inspection, no divergence
+    /// judgement: [`Self::judge_at_rest`]). A failed step begins a stop from
+    /// `x` ([`SupervisedStatus::Stopping`]) or, without a stop law, is the
+    /// `Err`.
+    pub fn step_at_rest(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        w: &[f64],
+        preview: &[f64],
+    ) -> Result<&SupervisedOutput, SupervisedError> {
+        let input = SupervisedInput {
+            t,
+            x,
+            w_k: w,
+            preview,
+            truth: None,
+        };
+        self.check_input(&input)?;
+        self.x.copy_from_slice(x);
+        (self.stepped, self.judged_stop, self.diverged) = (false, false, None);
+        self.repaired = false;
+        self.output.status = SupervisedStatus::Controlled;
+        if let Err(e) = self.control(&input) {
+            self.from.copy_from_slice(&self.x);
+            if !self.begin_stop(t, StopReason::ControllerFailed(e)) {
+                return Err(SupervisedError::Step(e));
+            }
+            self.output.status = SupervisedStatus::Stopping;
+        }
+        Ok(&self.output)
+    }
+
+    /// Judges the position `q` at rest against `w` after a
+    /// [`Self::step_at_rest`] by the threshold alone
+    /// ([`Supervisor::divergence`]: no offset is expected at rest): the
+    /// divergence found, and whether a stop began (from that sample's
+    /// reading; never for an error that is not a number).
+    pub fn judge_at_rest(&mut self, t: f64, w: &[f64], q: &[f64]) -> Option<((usize, f64), bool)> {
+        let (joint, error_rad) = self.supervisor.divergence(w, q)?;
+        self.from.copy_from_slice(&self.x);
+        let began =
+            !error_rad.is_nan() && self.begin_stop(t, StopReason::Diverged { joint, error_rad });
+        Some(((joint, error_rad), began))
+    }
+
+    /// Starts the run proper at the reading `x0` after steps at rest: the
+    /// repair and, unless a stop is under way, the guard; not the controller.
+    pub fn reset_guard(&mut self, x0: &[f64]) {
+        self.repair.reset(x0);
+        if self.supervisor.stopping().is_none() {
+            self.supervisor.reset(x0);
+        }
+    }
+
+    /// Watches the robot (true `q`, `q̇`) after the period `[t, t + Ts)`
+    /// during a stop, for a caller that gave [`SupervisedInput::truth`]
+    /// ([`Supervisor::watch`]); a stop the judgement of this sample began
+    /// is watched from the next sample on.
+    pub fn watch(&mut self, q: &[f64], qd: &[f64], t: f64) {
+        if !self.judged_stop {
+            self.supervisor.watch(q, qd, t);
+        }
+    }
+
+    /// The stop in progress (`None` without one).
+    pub fn stopping(&self) -> Option<&Stopping> {
+        self.supervisor.stopping()
+    }
+
+    /// Whether the last step's judgement began the stop in progress (it
+    /// counts from the next sample).
+    pub fn stop_began_at_judgement(&self) -> bool {
+        self.judged_stop
+    }
+
+    /// The divergence (joint, error `w − q`) the last step found.
+    pub fn divergence(&self) -> Option<(usize, f64)> {
+        self.diverged
+    }
+
+    /// Whether the last step's reading was repaired or rejected.
+    pub fn repaired(&self) -> bool {
+        self.repaired
+    }
+
+    /// Whether the last step's torque came from a successful step of the
+    /// controller (not the stop law, not a held torque).
+    pub fn controller_stepped(&self) -> bool {
+        self.stepped
+    }
+
+    /// The torque of the last step (n; also when the step was an `Err`).
+    pub fn torque(&self) -> &[f64] {
+        &self.output.tau
+    }
+
+    /// Prediction horizon `N` of the controller.
+    pub fn horizon(&self) -> usize {
+        self.mpc.horizon()
+    }
+
+    /// The payload mass the controller's model carries, identified online
+    /// (kg; `None` for the kinds that do not identify it).
+    pub fn payload_estimate(&mut self) -> Option<f64> {
+        self.mpc.parts_mut().controller.payload_estimate()
+    }
+
+    /// The joint positions the controller predicted over its horizon at its
+    /// last step into `y` (N·n; `false`: none,
+    /// [`crate::control::Algorithm::predicted_outputs`]).
+    pub fn predicted_outputs(&mut self, y: &mut [f64]) -> bool {
+        self.mpc.parts_mut().controller.predicted_outputs(y)
     }
 
     /// Why the stop in progress began (`None` without one).
@@ -204,13 +388,16 @@ impl SupervisedController {
                 w_k: input.w_k,
                 preview: input.preview,
             };
-            let out = self.mpc.step(&step)?;
-            // A numerical failure holds the last torque (the output says so):
-            // the guard treats it as a failed step.
+            // Refused input and a numerical failure hold the last torque
+            // (the output says so): the guard treats them as a failed step.
+            let out = self.mpc.step(&step).map_err(StepFailure::from)?;
             self.output.tau.copy_from_slice(&out.tau);
             return match out.status.failure() {
                 Some(failure) => Err(failure),
-                None => Ok(()),
+                None => {
+                    self.stepped = true;
+                    Ok(())
+                }
             };
         }
         let parts = self.mpc.parts_mut();
@@ -227,34 +414,43 @@ impl SupervisedController {
         Ok(())
     }
 
-    /// Begins a stop from the state the controller last acted on (the
-    /// observer's estimate, when it runs); whether one began.
+    /// Begins a stop from `self.from`; whether one began.
     fn begin_stop(&mut self, t: f64, reason: StopReason) -> bool {
-        let from = self.mpc.state_estimate().unwrap_or(&self.x);
-        self.from.copy_from_slice(from);
         let model = self.mpc.parts_mut().model;
         self.supervisor.begin_stop(t, reason, &self.from, model)
     }
 
-    fn status(
-        &mut self,
-        t: f64,
-        repaired: bool,
-        diverged: Option<(usize, f64)>,
-    ) -> SupervisedStatus {
+    /// The status after a step: a stop's progress (watched on the measured
+    /// state unless the caller watches the true one), a divergence without
+    /// a stop law, a repaired reading, or the controller's torque.
+    fn status(&mut self, input: &SupervisedInput) -> SupervisedStatus {
         let n = self.output.tau.len();
         match self.supervisor.stopping() {
             Some(_) => {
-                self.supervisor.watch(&self.x[..n], &self.x[n..], t);
+                if input.truth.is_none() {
+                    self.supervisor.watch(&self.x[..n], &self.x[n..], input.t);
+                }
                 let moving = self.x[n..].iter().any(|v| v.abs() >= REST_SPEED);
                 match moving {
                     true => SupervisedStatus::Stopping,
                     false => SupervisedStatus::Stopped,
                 }
             }
-            None if diverged.is_some() => SupervisedStatus::Diverged,
-            None if repaired => SupervisedStatus::RepairedMeasurement,
+            None if self.diverged.is_some() => SupervisedStatus::Diverged,
+            None if self.repaired => SupervisedStatus::RepairedMeasurement,
             None => SupervisedStatus::Controlled,
+        }
+    }
+
+    /// The lengths of `input`: 2n, n, N·n and n for the truth.
+    fn check_input(&self, input: &SupervisedInput) -> Result<(), SupervisedError> {
+        let n = self.output.tau.len();
+        self.check_len(input.x.len(), 2 * n)?;
+        self.check_len(input.w_k.len(), n)?;
+        self.check_len(input.preview.len(), self.mpc.horizon() * n)?;
+        match input.truth {
+            Some(q) => self.check_len(q.len(), n),
+            None => Ok(()),
         }
     }
 

@@ -843,9 +843,10 @@ impl Supervisor {
     }
 
     /// The first joint whose error `w − q` (reference, true position) is
-    /// beyond the divergence threshold, with the error; `None` during a
-    /// stop. The threshold rule alone ([`Self::judge`] applies the
-    /// settings' rule).
+    /// beyond the divergence threshold or not a number, with the error;
+    /// `None` during a stop. The threshold rule alone ([`Self::judge`]
+    /// applies the settings' rule; the loop's pre-roll at rest, where no
+    /// offset is expected, this one under either rule).
     pub fn divergence(&self, w: &[f64], q: &[f64]) -> Option<(usize, f64)> {
         if self.stop.is_some() {
             return None;
@@ -853,7 +854,7 @@ impl Supervisor {
         let threshold = self.settings.divergence_threshold_rad;
         (0..self.n)
             .map(|i| (i, w[i] - q[i]))
-            .find(|(_, e)| e.abs() > threshold)
+            .find(|(_, e)| e.is_nan() || e.abs() > threshold)
     }
 }
 
@@ -1008,5 +1009,31 @@ mod tests {
         let mut sized = Supervisor::with_period(&robot, settings, ts);
         assert_eq!(sized.errors.len(), 2 * m);
         assert_eq!(run(&mut sized), Some((1, -0.1)));
+    }
+
+    /// The threshold rule (the pre-roll's, and `judge`'s under
+    /// `Threshold`): the first joint beyond the threshold or not a number.
+    #[test]
+    fn the_threshold_rule_takes_the_first_joint_beyond_it_or_not_a_number() {
+        let robot = Robot::irb140();
+        let n = robot.dof();
+        let settings = SupervisorSettings {
+            divergence_threshold_rad: 0.1,
+            divergence: DivergenceRule::Threshold,
+            plausibility_check: false,
+            safe_stop: false,
+            max_joint_error_rad: None,
+        };
+        let mut s = Supervisor::with_period(&robot, settings, 0.01);
+        s.reset(&vec![0.0; 2 * n]);
+        let w = vec![0.0; n];
+        let mut q = vec![0.0; n];
+        q[3] = 0.05;
+        assert_eq!(s.divergence(&w, &q), None);
+        q[4] = 0.2;
+        assert_eq!(s.divergence(&w, &q), Some((4, -0.2)));
+        q[2] = f64::NAN;
+        let (joint, e) = s.divergence(&w, &q).unwrap();
+        assert!(joint == 2 && e.is_nan());
     }
 }
