@@ -69,7 +69,7 @@ pub use builder::{
 pub use drive_model::DriveModel;
 pub use factory::{new_controller, new_controller_with_baselines};
 pub use kind::{ControllerKind, UnknownControllerKind};
-pub use mpc::adaptive::{AdaptiveMpc, MODEL_RATE};
+pub use mpc::adaptive::{AdaptiveMpc, RealArmIdentification, MODEL_RATE};
 pub use mpc::first::FirstMpc;
 pub use mpc::model::{LinearLikeModel, TermsError};
 pub use mpc::prediction::{
