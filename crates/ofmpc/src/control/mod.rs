@@ -46,6 +46,7 @@
 mod algorithm;
 mod baselines;
 mod builder;
+pub(crate) mod dead_zone;
 mod drive_model;
 mod factory;
 mod kind;

@@ -326,6 +326,13 @@ pub struct MpcSettings {
     /// IRB 140). `0` (default): no bound beyond the estimator's own. Read by
     /// the real-arm identification ([`super::adaptive::RealArmIdentification`]).
     pub max_payload_kg: f64,
+    /// Counts per revolution of the joint encoders the measurement comes
+    /// from (e.g. 1048576 for 20 bits). When given (`> 0`), the integrating
+    /// action of the offset-free controllers is held on a joint whose
+    /// reference rests and whose error is within one count
+    /// ([`super::dead_zone`]): they settle instead of hunting under friction
+    /// and quantization. `0` (default): no dead zone.
+    pub encoder_counts: f64,
 }
 
 impl Default for MpcSettings {
@@ -346,6 +353,7 @@ impl Default for MpcSettings {
             state_observer: false,
             observer_friction: false,
             max_payload_kg: 0.0,
+            encoder_counts: 0.0,
         }
     }
 }
@@ -410,6 +418,9 @@ impl MpcSettings {
         }
         if !(self.max_payload_kg.is_finite() && self.max_payload_kg >= 0.0) {
             return Err(SettingsError::MaxPayload(self.max_payload_kg));
+        }
+        if !(self.encoder_counts.is_finite() && self.encoder_counts >= 0.0) {
+            return Err(SettingsError::EncoderCounts(self.encoder_counts));
         }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
@@ -564,6 +575,9 @@ pub enum SettingsError {
     /// The payload mass bound is negative or not finite.
     #[error("the payload mass bound (mpc.max_payload_kg) is {0} kg: it must be finite and >= 0 (0: no bound)")]
     MaxPayload(f64),
+    /// The encoder resolution is negative or not finite.
+    #[error("the encoder resolution (mpc.encoder_counts) is {0} counts per revolution: it must be finite and >= 0 (0: no dead zone)")]
+    EncoderCounts(f64),
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]
