@@ -37,7 +37,11 @@
 //!   the change detector at every reversal; the trace stays bounded by the
 //!   prior's), and
 //! * falls back to the nominal model while the mass's standard deviation is
-//!   above [`RealArmIdentification::trust_mass_sigma_kg`].
+//!   above [`RealArmIdentification::trust_mass_sigma_kg`] or fewer than
+//!   [`RealArmIdentification::min_samples`] samples were learnt from, and
+//!   gives the model a point mass (mass and centre of mass; the rotational
+//!   inertia from delayed, quantized data would make a light wrist's model
+//!   many times heavier than the plant).
 
 use crate::control::algorithm::Algorithm;
 use crate::control::baselines::ctc::CtcController;
@@ -61,6 +65,12 @@ pub struct RealArmIdentification {
     /// The model carries the estimate only once the mass's standard
     /// deviation is below this (kg); before, the nominal model.
     pub trust_mass_sigma_kg: f64,
+    /// ... and only after this many samples learnt from.
+    pub min_samples: u64,
+    /// Torque noise standard deviation assumed per joint (N·m): the
+    /// quantization's acceleration noise and the friction estimate's error,
+    /// at least (the estimator's own is the ideal plant's).
+    pub sigma_torque_nm: f64,
 }
 
 impl Default for RealArmIdentification {
@@ -70,6 +80,8 @@ impl Default for RealArmIdentification {
             max_mass_kg: 1e3,
             min_joint_speed: 0.02,
             trust_mass_sigma_kg: 0.5,
+            min_samples: 100,
+            sigma_torque_nm: 1.0,
         }
     }
 }
@@ -194,6 +206,7 @@ impl AdaptiveMpc {
         let rls = RlsSettings {
             max_mass: cfg.max_mass_kg,
             change_threshold_nm: f64::MAX,
+            sigma_torque: rls.sigma_torque.max(cfg.sigma_torque_nm),
             ..rls
         };
         self.estimator = PayloadEstimator::new(n, rls, PayloadParams::zeros())
@@ -360,11 +373,15 @@ impl Algorithm for AdaptiveMpc {
                     // Fallback: the nominal model until the mass is determined.
                     Some(ra)
                         if !(rls.covariance()[(0, 0)].max(0.0).sqrt()
-                            < ra.cfg.trust_mass_sigma_kg) =>
+                            < ra.cfg.trust_mass_sigma_kg)
+                            || rls.updates() < ra.cfg.min_samples =>
                     {
                         PayloadParams::zeros()
                     }
-                    _ => rls.model_estimate(),
+                    // A point mass: the rotational inertia from delayed,
+                    // quantized data is not to be trusted.
+                    Some(_) => rls.point_mass_estimate(),
+                    None => rls.model_estimate(),
                 };
                 self.model_pi += (target - self.model_pi) * MODEL_RATE;
                 if rd
