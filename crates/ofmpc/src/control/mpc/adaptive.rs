@@ -372,8 +372,9 @@ impl Algorithm for AdaptiveMpc {
                 let target = match self.real_arm.as_deref() {
                     // Fallback: the nominal model until the mass is determined.
                     Some(ra)
-                        if !(rls.covariance()[(0, 0)].max(0.0).sqrt()
-                            < ra.cfg.trust_mass_sigma_kg)
+                        if rls.covariance()[(0, 0)].is_nan()
+                            || rls.covariance()[(0, 0)].max(0.0).sqrt()
+                                >= ra.cfg.trust_mass_sigma_kg
                             || rls.updates() < ra.cfg.min_samples =>
                     {
                         PayloadParams::zeros()
