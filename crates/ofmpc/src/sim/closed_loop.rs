@@ -507,6 +507,7 @@ impl<'a> ClosedLoop<'a> {
         let controller = &mut *self.controller;
         let (preview, tau) = (&self.preview, &mut self.tau);
         let model = &mut *self.model;
+        controller.measurement(&self.x);
         let status = self.estimator.estimate(model, &self.x).and_then(|xs| {
             controller.step(
                 model,
@@ -711,6 +712,7 @@ impl<'a> ClosedLoop<'a> {
             self.supervisor
                 .stop_torque(model, &self.x, xs, &mut self.tau)?;
         } else {
+            self.controller.measurement(&self.x);
             self.controller.step(
                 model,
                 &crate::control::StepInput {
