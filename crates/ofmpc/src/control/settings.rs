@@ -324,13 +324,13 @@ pub struct MpcSettings {
     /// Upper bound of the payload mass an adaptive controller identifies
     /// (kg; a multiple of the arm's rated payload, e.g. 1.5 × 6 kg for the
     /// IRB 140). `0` (default): no bound beyond the estimator's own. Read by
-    /// the real-arm identification ([`super::adaptive::RealArmIdentification`]).
+    /// the real-arm identification ([`RealArmIdentification`](crate::control::RealArmIdentification)).
     pub max_payload_kg: f64,
     /// Counts per revolution of the joint encoders the measurement comes
     /// from (e.g. 1048576 for 20 bits). When given (`> 0`), the integrating
     /// action of the offset-free controllers is held on a joint whose
     /// reference rests and whose error is within one count
-    /// ([`super::dead_zone`]): they settle instead of hunting under friction
+    /// (`control/dead_zone.rs`): they settle instead of hunting under friction
     /// and quantization. `0` (default): no dead zone.
     pub encoder_counts: f64,
 }
