@@ -78,4 +78,13 @@ pub trait Algorithm {
     fn payload_estimate(&self) -> Option<f64> {
         None
     }
+    /// The raw measurement of this sample (`[q; q̇]` as read, possibly `D`
+    /// samples old), before [`Algorithm::step`]: for the controllers that
+    /// identify from measured data rather than from the state they act on
+    /// (the adaptive kinds on a real arm,
+    /// [`RealArmIdentification`](crate::control::RealArmIdentification)).
+    /// Default: ignored. Allocates nothing.
+    fn measurement(&mut self, y: &[f64]) {
+        let _ = y;
+    }
 }

@@ -58,7 +58,7 @@ use crate::control::algorithm::Algorithm;
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
-use crate::control::mpc::adaptive::AdaptiveMpc;
+use crate::control::mpc::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::mpc::core::{check_finite, check_len};
 use crate::control::observer::StateObserver;
 use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};
@@ -335,10 +335,7 @@ impl<'r> ControllerBuilder<'r> {
             check_drives(d, &s, n, lenient)?;
         }
         let model_robot = model_robot(robot, &s)?;
-        let mut controller: Box<dyn Algorithm + Send> = match estimator {
-            Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, &s, &baselines, rls)?),
-            None => new_controller_with_baselines(kind, n, &s, &baselines)?,
-        };
+        let mut controller = new_algorithm(kind, n, &s, &baselines, estimator, observer)?;
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
         }
@@ -469,6 +466,41 @@ pub struct Controller {
     started: bool,
 }
 
+/// The per-kind algorithm; the adaptive kinds with the real arm's
+/// identification ([`RealArmIdentification`]) when the settings say the
+/// plant is one (delay or friction compensation, or an observer).
+fn new_algorithm(
+    kind: ControllerKind,
+    n: usize,
+    s: &MpcSettings,
+    baselines: &BaselineSettings,
+    estimator: Option<RlsSettings>,
+    observer: Option<ObserverSettings>,
+) -> Result<Box<dyn Algorithm + Send>, BuildError> {
+    let real_arm = s.delay_compensation || s.friction_compensation || s.state_observer;
+    if real_arm && kind.is_adaptive() {
+        let cfg = RealArmIdentification {
+            delay: observer
+                .filter(|_| s.delay_compensation)
+                .map_or(0, |o| o.measurement_delay),
+            max_mass_kg: if s.max_payload_kg > 0.0 {
+                s.max_payload_kg
+            } else {
+                RealArmIdentification::default().max_mass_kg
+            },
+            ..RealArmIdentification::default()
+        };
+        let rls = estimator.unwrap_or_default();
+        let mut c = AdaptiveMpc::with_estimator(kind, n, s, baselines, rls)?;
+        c.set_real_arm(cfg, rls)?;
+        return Ok(Box::new(c));
+    }
+    Ok(match estimator {
+        Some(rls) => Box::new(AdaptiveMpc::with_estimator(kind, n, s, baselines, rls)?),
+        None => new_controller_with_baselines(kind, n, s, baselines)?,
+    })
+}
+
 impl std::fmt::Debug for Controller {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Controller")
@@ -542,6 +574,7 @@ impl Controller {
             }
             None => input.x,
         };
+        self.controller.measurement(input.x);
         let input = StepInput {
             x,
             w_k: input.w_k,

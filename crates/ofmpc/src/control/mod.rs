@@ -46,6 +46,7 @@
 mod algorithm;
 mod baselines;
 mod builder;
+pub(crate) mod dead_zone;
 mod drive_model;
 mod factory;
 mod kind;
@@ -72,6 +73,7 @@ pub use factory::{new_controller, new_controller_with_baselines};
 pub use kind::{ControllerKind, UnknownControllerKind};
 #[doc(hidden)]
 pub use mpc::adaptive::AdaptiveMpc;
+pub use mpc::adaptive::RealArmIdentification;
 pub use mpc::first::FirstMpc;
 #[doc(hidden)]
 pub use mpc::model::LinearLikeModel;

@@ -321,6 +321,18 @@ pub struct MpcSettings {
     /// make it worse (the observer then predicts a stick where the joint
     /// slides): see the README's drives section.
     pub observer_friction: bool,
+    /// Upper bound of the payload mass an adaptive controller identifies
+    /// (kg; a multiple of the arm's rated payload, e.g. 1.5 × 6 kg for the
+    /// IRB 140). `0` (default): no bound beyond the estimator's own. Read by
+    /// the real-arm identification ([`RealArmIdentification`](crate::control::RealArmIdentification)).
+    pub max_payload_kg: f64,
+    /// Counts per revolution of the joint encoders the measurement comes
+    /// from (e.g. 1048576 for 20 bits). When given (`> 0`), the integrating
+    /// action of the offset-free controllers is held on a joint whose
+    /// reference rests and whose error is within one count
+    /// (`control/dead_zone.rs`): they settle instead of hunting under friction
+    /// and quantization. `0` (default): no dead zone.
+    pub encoder_counts: f64,
 }
 
 impl Default for MpcSettings {
@@ -340,6 +352,8 @@ impl Default for MpcSettings {
             delay_compensation: false,
             state_observer: false,
             observer_friction: false,
+            max_payload_kg: 0.0,
+            encoder_counts: 0.0,
         }
     }
 }
@@ -401,6 +415,12 @@ impl MpcSettings {
         }
         if !(self.model_payload_kg.is_finite() && self.model_payload_kg >= 0.0) {
             return Err(SettingsError::ModelPayload(self.model_payload_kg));
+        }
+        if !(self.max_payload_kg.is_finite() && self.max_payload_kg >= 0.0) {
+            return Err(SettingsError::MaxPayload(self.max_payload_kg));
+        }
+        if !(self.encoder_counts.is_finite() && self.encoder_counts >= 0.0) {
+            return Err(SettingsError::EncoderCounts(self.encoder_counts));
         }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
@@ -552,6 +572,12 @@ pub enum SettingsError {
     /// The payload the model assumes is negative or not finite.
     #[error("the payload the model assumes is {0} kg: it must be a finite mass ≥ 0")]
     ModelPayload(f64),
+    /// The payload mass bound is negative or not finite.
+    #[error("the payload mass bound (mpc.max_payload_kg) is {0} kg: it must be finite and >= 0 (0: no bound)")]
+    MaxPayload(f64),
+    /// The encoder resolution is negative or not finite.
+    #[error("the encoder resolution (mpc.encoder_counts) is {0} counts per revolution: it must be finite and >= 0 (0: no dead zone)")]
+    EncoderCounts(f64),
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]

@@ -97,6 +97,51 @@ impl PayloadEstimator {
             self.qdm[i] = 0.5 * (x_prev[n + i] + x[n + i]);
             self.qdd[i] = (x[n + i] - x_prev[n + i]) / ts;
         }
+        self.learn(model, tau_prev, None)
+    }
+
+    /// One sample at a point of the motion: position `q`, velocity `qd`,
+    /// acceleration `qdd` and the torque `tau` that produced them (n values
+    /// each; the caller aligns them in time and removes what the rigid body
+    /// does not carry, e.g. the friction estimate). Only the joints with
+    /// `use_row[i]` contribute a row; with none, nothing is learnt (and
+    /// nothing forgotten). Returns whether the estimate was updated.
+    /// Allocates nothing.
+    pub fn update_point(
+        &mut self,
+        model: &mut RobotDynamics,
+        q: &[f64],
+        qd: &[f64],
+        qdd: &[f64],
+        tau: &[f64],
+        use_row: &[bool],
+    ) -> bool {
+        let n = self.y.len();
+        if model.robot().dof() != n
+            || [q.len(), qd.len(), qdd.len(), tau.len(), use_row.len()]
+                .iter()
+                .any(|&l| l != n)
+            || !q
+                .iter()
+                .chain(qd)
+                .chain(qdd)
+                .chain(tau)
+                .all(|v| v.is_finite())
+            || !use_row.iter().any(|&u| u)
+        {
+            return false;
+        }
+        self.qm.copy_from_slice(q);
+        self.qdm.copy_from_slice(qd);
+        self.qdd.copy_from_slice(qdd);
+        self.learn(model, tau, Some(use_row))
+    }
+
+    /// The regressor at `(qm, qdm, qdd)`, the payload torque of `tau`, the
+    /// recursion (rows not in `use_row` left out).
+    fn learn(&mut self, model: &mut RobotDynamics, tau: &[f64], use_row: Option<&[bool]>) -> bool {
+        let n = self.y.len();
+        let tau_prev = tau;
         let (robot, ws) = model.parts();
         joint_regressor(robot, ws, &self.qm, &self.qdm, &self.qdd, &mut self.rows);
         // The payload the model carries (normally π̂; whatever it is, τ̂ − Y π
@@ -108,6 +153,11 @@ impl PayloadEstimator {
         for i in 0..n {
             let row = PayloadParams::from_column_slice(&self.rows[i]);
             self.y[i] = tau_prev[i] - ws.tau[i] + row.dot(&model_pi);
+            if use_row.is_some_and(|u| !u[i]) {
+                // A zero row carries no information: the scalar step leaves π and P.
+                self.rows[i] = [0.0; NUM_PARAMS];
+                self.y[i] = 0.0;
+            }
         }
         self.rls.update(&self.rows, &self.y)
     }

@@ -194,6 +194,13 @@ impl PayloadRls {
         if self.inertia_identified() {
             return self.physical;
         }
+        self.point_mass_estimate()
+    }
+
+    /// The estimate's mass and first moments as a point mass (inertia about
+    /// the centre of mass zero): [`Self::model_estimate`] before the
+    /// rotational inertia is identified.
+    pub fn point_mass_estimate(&self) -> PayloadParams {
         let m = self.physical[0];
         let mut out = PayloadParams::zeros();
         out[0] = m;

@@ -296,6 +296,9 @@ pub(crate) struct JointLawCore {
     increments: Vec<f64>,
     tau_new: Vec<f64>,
     clipped: Vec<bool>,
+    /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
+    hold: Vec<bool>,
+    hold_band: f64,
     drives: Option<DriveModel>,
 }
 
@@ -323,6 +326,8 @@ impl JointLawCore {
             increments: vec![0.0; settings.horizon * n],
             tau_new: vec![0.0; n],
             clipped: vec![false; n],
+            hold: vec![false; n],
+            hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             drives: None,
         })
     }
@@ -426,6 +431,18 @@ impl JointLawCore {
             .filter(|_| limited)
             .map(|d| d.max_torque_nm.as_slice());
         clip(&mut self.tau_new, limits, &mut self.clipped);
+        // The hold dead zone (dead_zone.rs): no integration within the
+        // encoder's resolution while the reference rests.
+        crate::control::dead_zone::in_dead_zone(
+            self.hold_band,
+            w_k,
+            &x[..n],
+            preview,
+            &mut self.hold,
+        );
+        for (c, h) in self.clipped.iter_mut().zip(&self.hold) {
+            *c |= *h;
+        }
         check_result(&self.u, &self.tau_new)?;
         tau.copy_from_slice(&self.tau_new);
         self.pid.commit(&self.clipped);

@@ -64,6 +64,9 @@ pub struct DobMpc {
     tmp: Vec<f64>,
     du_clip: Vec<f64>,
     drives: Option<DriveModel>,
+    /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
+    hold: Vec<bool>,
+    hold_band: f64,
 }
 
 impl DobMpc {
@@ -104,6 +107,8 @@ impl DobMpc {
             tmp: vec![0.0; n],
             du_clip: vec![0.0; n],
             drives: None,
+            hold: vec![false; n],
+            hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
         })
     }
 
@@ -226,6 +231,20 @@ impl Algorithm for DobMpc {
             &mut self.tau_tilde,
         )?;
         self.observe(x);
+        // The hold dead zone (dead_zone.rs): the disturbance estimate, the
+        // integrating action here, rests within the encoder's resolution.
+        crate::control::dead_zone::in_dead_zone(
+            self.hold_band,
+            w_k,
+            &x[..n],
+            preview,
+            &mut self.hold,
+        );
+        for ((d, h), old) in self.d_new.iter_mut().zip(&self.hold).zip(&self.d_hat) {
+            if *h {
+                *d = *old;
+            }
+        }
         self.torque()?;
         check_result(&self.u, &self.tau_new)?;
         tau.copy_from_slice(&self.tau_new);

@@ -309,6 +309,13 @@ pub(crate) struct Core {
     qp: Option<Box<TorqueLimitQp>>,
     /// Per-joint friction feed-forward `F̂(v_ref)` of the current sample.
     damping: Vec<f64>,
+    /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
+    hold: Vec<bool>,
+    /// Half-width of the hold dead zone (rad; 0: none).
+    hold_band: f64,
+    /// The measured output as the tracking rows see it: `y_k`, with `w_k` on
+    /// the joints in the hold dead zone.
+    pub(super) y_err: Vec<f64>,
     /// Work of [`Core::predicted_outputs`].
     predicted_work: Vec<f64>,
 }
@@ -453,6 +460,9 @@ impl Core {
             drives: None,
             qp: None,
             damping: vec![0.0; n],
+            hold: vec![false; n],
+            y_err: vec![0.0; n],
+            hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             predicted_work: vec![0.0; predicted_outputs_work(n)],
         })
     }
@@ -600,6 +610,19 @@ impl Core {
                 }
                 self.model.add_bias_torque(&self.damping)?;
             }
+        }
+        // The hold dead zone (dead_zone.rs): the output error the tracking
+        // rows see is zero on a resting joint within the encoder's
+        // resolution, so nothing integrates it (the Δx rows still damp).
+        crate::control::dead_zone::in_dead_zone(
+            self.hold_band,
+            w_k,
+            &x[..n],
+            preview,
+            &mut self.hold,
+        );
+        for (((ye, h), w), y) in self.y_err.iter_mut().zip(&self.hold).zip(w_k).zip(x) {
+            *ye = if *h { *w } else { *y };
         }
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if matches!(self.backend, Backend::Dense(_)) {

@@ -56,7 +56,7 @@ impl StepTargets for FirstTargets {
     fn stage_targets(
         &mut self,
         c: &mut Core,
-        x: &[f64],
+        _x: &[f64],
         preview: &[f64],
     ) -> Result<(), StepFailure> {
         // Stage-wise: z = [y − y_k; Δq; Δq̇] (deviation from the measured
@@ -70,20 +70,20 @@ impl StepTargets for FirstTargets {
         st.z0[..n].fill(0.0);
         st.z0[n..].copy_from_slice(&c.dx);
         for (r, w) in st.r.chunks_exact_mut(2 * n).zip(preview.chunks_exact(n)) {
-            for ((r, w), y) in r[..n].iter_mut().zip(w).zip(&x[..n]) {
+            for ((r, w), y) in r[..n].iter_mut().zip(w).zip(&c.y_err) {
                 *r = w - y;
             }
         }
         Ok(())
     }
 
-    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
+    fn dense_rhs(&mut self, c: &mut Core, _x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
         let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx: block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i]).
         prefix_sums(n, &c.v1, &mut c.v2, None);
-        let y = &x[..n];
+        let y = &c.y_err;
         let b = &mut c.backend.tracking_mut()?.b;
         let (b_top, b_mid) = b.split_at_mut(rows);
         for j in 0..nh {

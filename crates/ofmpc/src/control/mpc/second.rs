@@ -71,9 +71,9 @@ struct SecondTargets<'a> {
 impl StepTargets for SecondTargets<'_> {
     const INCREMENTAL: bool = true;
 
-    fn begin(&mut self, c: &mut Core, x: &[f64], w_k: &[f64], preview: &[f64]) {
+    fn begin(&mut self, c: &mut Core, _x: &[f64], w_k: &[f64], preview: &[f64]) {
         let n = c.n;
-        let y = &x[..n];
+        let y = &c.y_err;
         // Eq. (34): e_k = w_k − y_k, ē_k = ē_{k−1} + e_k (committed on success).
         for (((e, prev), w), yi) in c.ebar_new.iter_mut().zip(&c.ebar).zip(w_k).zip(y) {
             *e = prev + (w - yi);
@@ -86,7 +86,7 @@ impl StepTargets for SecondTargets<'_> {
     fn stage_targets(
         &mut self,
         c: &mut Core,
-        x: &[f64],
+        _x: &[f64],
         preview: &[f64],
     ) -> Result<(), StepFailure> {
         // Stage-wise: z = [s; Δq; y − y_k; Δq̇] with s_j = Σ_{i≤j}(ŷ_{k+i} −
@@ -94,7 +94,7 @@ impl StepTargets for SecondTargets<'_> {
         // z_0 = [−ē_k; Δq_k; 0; Δq̇_k], c_j = [y_k − w_{k+j+1}; 0; 0; 0]
         // (s⁺ = s + (y⁺ − y_k) + (y_k − w)), targets 0.
         let n = c.n;
-        let y = &x[..n];
+        let y = &c.y_err;
         let st = c
             .backend
             .stage_mut()
@@ -114,10 +114,10 @@ impl StepTargets for SecondTargets<'_> {
         Ok(())
     }
 
-    fn dense_rhs(&mut self, c: &mut Core, x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
+    fn dense_rhs(&mut self, c: &mut Core, _x: &[f64], preview: &[f64]) -> Result<(), StepFailure> {
         let (n, nh) = (c.n, c.nh);
         let rows = nh * n;
-        let y = &x[..n];
+        let y = &c.y_err;
         // v1 = F1 Δx, v2 = (F2 + F3) Δx.
         Core::f_times(c.pred.f1().as_slice(), &c.dx, rows, &mut c.v1);
         // F2 Δx, F3 Δx by block running sums of F1 Δx (F2[j] = Σ_{i≤j} F1[i],

@@ -1,0 +1,63 @@
+//! The hold dead zone of the integrating actions (Ioannou & Sun, *Robust
+//! Adaptive Control*, §8.5.3: a dead zone on the adaptation/integration
+//! driven by an error below the noise level), issue 35.
+//!
+//! On a real arm the integrating action of an offset-free controller (the
+//! incremental input `u_k = u_{k−1} + Δu_k` of the first and second
+//! algorithms, the integral of the PID/CTC baselines, the disturbance
+//! estimate of `dob-mpc`) is driven at rest by an error the encoder cannot
+//! resolve (quantization, noise) through a friction that the model does not
+//! carry (a stiff damper `F_c/v_s` near rest, a relay beyond): it integrates
+//! until the joint breaks away, overshoots and integrates back — it hunts
+//! instead of settling. Within the sensor's resolution there is nothing left
+//! to remove, so there the integration stops: on a joint whose reference
+//! rests over the whole horizon and whose error is within
+//! [`MpcSettings::encoder_counts`](crate::control::MpcSettings::encoder_counts)'s
+//! [`DEAD_ZONE_COUNTS`] counts, the integrating state is held. Outside the
+//! band, or while the reference moves, nothing changes (the controller stays
+//! offset-free to the band). Off (`encoder_counts = 0`) by default.
+
+/// Half-width of the dead zone in encoder counts.
+pub const DEAD_ZONE_COUNTS: f64 = 1.0;
+
+/// Half-width of the dead zone (rad) for `counts` encoder counts per
+/// revolution (0: no dead zone).
+pub fn band_rad(counts: f64) -> f64 {
+    if counts > 0.0 && counts.is_finite() {
+        DEAD_ZONE_COUNTS * std::f64::consts::TAU / counts
+    } else {
+        0.0
+    }
+}
+
+/// Marks in `hold[i]` the joints whose integrating action is held: the
+/// reference rests over the horizon (`w_{k+j} = w_k`, `j = 1..N`, exactly;
+/// `preview` is N·n values) and `|w_k − y| ≤ band`. All `false` when
+/// `band ≤ 0`. Allocates nothing.
+pub fn in_dead_zone(band: f64, w_k: &[f64], y: &[f64], preview: &[f64], hold: &mut [bool]) {
+    let n = hold.len();
+    for (i, h) in hold.iter_mut().enumerate() {
+        *h = band > 0.0
+            && (w_k[i] - y[i]).abs() <= band
+            && preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn only_resting_joints_within_the_band_are_held() {
+        let band = band_rad(1_048_576.0);
+        assert!((band - 5.99e-6).abs() < 1e-8);
+        let w = [1.0, 2.0, 3.0];
+        let y = [1.0 + 0.5 * band, 2.0 + 2.0 * band, 3.0];
+        let preview = [1.0, 2.0, 3.0, 1.0, 2.0, 3.1];
+        let mut hold = [false; 3];
+        in_dead_zone(band, &w, &y, &preview, &mut hold);
+        assert_eq!(hold, [true, false, false]);
+        in_dead_zone(0.0, &w, &w, &[1.0, 2.0, 3.0], &mut hold);
+        assert_eq!(hold, [false; 3]);
+    }
+}
