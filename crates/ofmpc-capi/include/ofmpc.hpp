@@ -7,6 +7,7 @@
 #include "ofmpc.h"
 
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
