@@ -102,7 +102,7 @@ mod tests {
             // The handle still works after the caught panic: the next call
             // refuses the empty input with a size error, not a panic.
             let st = ofmpc_controller_step(c, &input, &mut out);
-            assert_eq!(st, ofmpc_status::OFMPC_NOT_RESET);
+            assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
             ofmpc_controller_free(c);
             ofmpc_robot_free(robot);
         }
