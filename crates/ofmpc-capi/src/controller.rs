@@ -134,23 +134,34 @@ pub unsafe extern "C" fn ofmpc_controller_step(
         let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
         let result = {
             let (x, w, preview) = unsafe { step_slices(input, n, c.horizon()) }?;
-            c.step(&StepInput { x, w_k: w, preview }).map_err(step_failure)?
+            c.step(&StepInput { x, w_k: w, preview })
+                .map_err(step_failure)?
         };
         write_output(result, tau, out);
         Ok(())
     })
 }
 
+/// The state, the reference and the preview of a step.
+pub(crate) type StepSlices<'a> = (&'a [f64], &'a [f64], &'a [f64]);
+
 /// The input record's arrays, checked (2n, n, N·n).
 pub(crate) unsafe fn step_slices<'a>(
     input: &ofmpc_step_input,
     n: usize,
     horizon: usize,
-) -> Result<(&'a [f64], &'a [f64], &'a [f64]), Failure> {
+) -> Result<StepSlices<'a>, Failure> {
     check_record(input.size, STEP_INPUT_V1, "ofmpc_step_input")?;
     let x = unsafe { slice(input.x, input.x_len, 2 * n, "input->x") }?;
     let w = unsafe { slice(input.w, input.w_len, n, "input->w") }?;
-    let p = unsafe { slice(input.preview, input.preview_len, horizon * n, "input->preview") }?;
+    let p = unsafe {
+        slice(
+            input.preview,
+            input.preview_len,
+            horizon * n,
+            "input->preview",
+        )
+    }?;
     Ok((x, w, p))
 }
 

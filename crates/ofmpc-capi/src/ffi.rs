@@ -121,13 +121,19 @@ pub(crate) unsafe fn text<'a>(p: *const c_char, what: &str) -> Result<&'a str, F
     unsafe { CStr::from_ptr(p) }.to_str().map_err(|e| {
         Failure::new(
             ofmpc_status::OFMPC_UTF8,
-            format!("{what} is not UTF-8 (byte {}): pass UTF-8 text", e.valid_up_to()),
+            format!(
+                "{what} is not UTF-8 (byte {}): pass UTF-8 text",
+                e.valid_up_to()
+            ),
         )
     })
 }
 
 /// An optional text argument (NULL = `None`).
-pub(crate) unsafe fn opt_text<'a>(p: *const c_char, what: &str) -> Result<Option<&'a str>, Failure> {
+pub(crate) unsafe fn opt_text<'a>(
+    p: *const c_char,
+    what: &str,
+) -> Result<Option<&'a str>, Failure> {
     if p.is_null() {
         Ok(None)
     } else {
@@ -145,7 +151,11 @@ pub(crate) unsafe fn slice<'a>(
 ) -> Result<&'a [f64], Failure> {
     check_len(len, expected, what)?;
     if p.is_null() {
-        return if expected == 0 { Ok(&[]) } else { Err(null(what)) };
+        return if expected == 0 {
+            Ok(&[])
+        } else {
+            Err(null(what))
+        };
     }
     // SAFETY: non-NULL and valid for `len` doubles (header contract).
     Ok(unsafe { std::slice::from_raw_parts(p, len) })
@@ -160,7 +170,11 @@ pub(crate) unsafe fn slice_mut<'a>(
 ) -> Result<&'a mut [f64], Failure> {
     check_len(len, expected, what)?;
     if p.is_null() {
-        return if expected == 0 { Ok(&mut []) } else { Err(null(what)) };
+        return if expected == 0 {
+            Ok(&mut [])
+        } else {
+            Err(null(what))
+        };
     }
     // SAFETY: non-NULL, valid and unaliased for `len` doubles.
     Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
@@ -268,11 +282,10 @@ pub extern "C" fn ofmpc_status_name(status: ofmpc_status) -> *const c_char {
 /// the header's `OFMPC_VERSION_*` macros to catch a header/library mismatch.
 #[no_mangle]
 pub extern "C" fn ofmpc_version() -> *const c_char {
-    const V: &CStr = match CStr::from_bytes_with_nul(
-        concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes(),
-    ) {
-        Ok(v) => v,
-        Err(_) => c"",
-    };
+    const V: &CStr =
+        match CStr::from_bytes_with_nul(concat!(env!("CARGO_PKG_VERSION"), "\0").as_bytes()) {
+            Ok(v) => v,
+            Err(_) => c"",
+        };
     V.as_ptr()
 }

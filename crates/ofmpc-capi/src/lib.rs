@@ -65,7 +65,10 @@ mod tests {
         let mut robot = std::ptr::null_mut();
         let mut c = std::ptr::null_mut();
         unsafe {
-            assert_eq!(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut robot), ofmpc_status::OFMPC_OK);
+            assert_eq!(
+                ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut robot),
+                ofmpc_status::OFMPC_OK
+            );
             let st = ofmpc_controller_new(robot, c"second".as_ptr(), std::ptr::null(), &mut c);
             assert_eq!(st, ofmpc_status::OFMPC_OK);
             let mut tau = [7.0; 6];

@@ -66,7 +66,12 @@ fn invalid(what: &str, e: &(dyn std::error::Error + 'static)) -> Failure {
 impl ofmpc_sim {
     /// The plant of `robot` carrying a point mass of `payload_kg` at the
     /// plan's first point, with the sensing, actuation and faults of `s`.
-    fn new(robot: &ofmpc::Robot, plan: &JointReference, s: &Settings, payload_kg: f64) -> Result<Self, Failure> {
+    fn new(
+        robot: &ofmpc::Robot,
+        plan: &JointReference,
+        s: &Settings,
+        payload_kg: f64,
+    ) -> Result<Self, Failure> {
         let (n, ts) = (robot.dof(), plan.ts());
         let mut r = robot.clone();
         r.set_payload(Some(Payload::point_mass(payload_kg)))
@@ -103,7 +108,10 @@ impl ofmpc_sim {
     /// The reading of the next sample (once per sample).
     fn read(&mut self) -> Res {
         if self.k >= self.total {
-            return Err(Failure::new(ofmpc_status::OFMPC_END, "the run has no more samples"));
+            return Err(Failure::new(
+                ofmpc_status::OFMPC_END,
+                "the run has no more samples",
+            ));
         }
         if !self.pending {
             let n = self.x.len() / 2;
@@ -127,7 +135,8 @@ impl ofmpc_sim {
                 "no reading awaits a torque: call ofmpc_sim_read first",
             ));
         }
-        let numeric = |e: &dyn std::fmt::Display| Failure::new(ofmpc_status::OFMPC_NUMERIC, e.to_string());
+        let numeric =
+            |e: &dyn std::fmt::Display| Failure::new(ofmpc_status::OFMPC_NUMERIC, e.to_string());
         self.sensor.record_torque(tau);
         self.recorder.loading(self.actuator.account(tau));
         let applied = self
@@ -188,7 +197,11 @@ pub unsafe extern "C" fn ofmpc_sim_samples(sim: *const ofmpc_sim) -> usize {
 /// reading again until `ofmpc_sim_apply`); `OFMPC_END` after the last.
 /// Allocates nothing.
 #[no_mangle]
-pub unsafe extern "C" fn ofmpc_sim_read(sim: *mut ofmpc_sim, x: *mut f64, x_len: usize) -> ofmpc_status {
+pub unsafe extern "C" fn ofmpc_sim_read(
+    sim: *mut ofmpc_sim,
+    x: *mut f64,
+    x_len: usize,
+) -> ofmpc_status {
     boundary(|| {
         let sim = unsafe { arg_mut(sim, "sim") }?;
         let x = unsafe { slice_mut(x, x_len, sim.x.len(), "x") }?;
@@ -216,7 +229,10 @@ pub unsafe extern "C" fn ofmpc_sim_apply(
 
 /// The metrics of the samples run so far, as `ofmpc run` computes them.
 #[no_mangle]
-pub unsafe extern "C" fn ofmpc_sim_metrics(sim: *const ofmpc_sim, out: *mut ofmpc_metrics) -> ofmpc_status {
+pub unsafe extern "C" fn ofmpc_sim_metrics(
+    sim: *const ofmpc_sim,
+    out: *mut ofmpc_metrics,
+) -> ofmpc_status {
     boundary(|| {
         let sim = unsafe { arg(sim, "sim") }?;
         let out = unsafe { arg_mut(out, "out") }?;

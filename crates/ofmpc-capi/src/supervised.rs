@@ -131,7 +131,14 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
         let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
         let x = unsafe { slice(input.x, input.x_len, 2 * n, "input->x") }?;
         let w = unsafe { slice(input.w, input.w_len, n, "input->w") }?;
-        let p = unsafe { slice(input.preview, input.preview_len, horizon * n, "input->preview") }?;
+        let p = unsafe {
+            slice(
+                input.preview,
+                input.preview_len,
+                horizon * n,
+                "input->preview",
+            )
+        }?;
         let input = SupervisedInput {
             t: input.t,
             x,
@@ -180,7 +187,9 @@ pub unsafe extern "C" fn ofmpc_supervised_dof(s: *const ofmpc_supervised) -> usi
 /// Prediction horizon N (0 for NULL).
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_supervised_horizon(s: *const ofmpc_supervised) -> usize {
-    query(0, || unsafe { s.as_ref() }.map(|s| s.0.controller().horizon()))
+    query(0, || {
+        unsafe { s.as_ref() }.map(|s| s.0.controller().horizon())
+    })
 }
 
 /// Frees a supervised controller (NULL: nothing).

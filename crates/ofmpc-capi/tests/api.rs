@@ -46,7 +46,9 @@ fn ok(st: ofmpc_status) {
 }
 
 fn last_error() -> String {
-    unsafe { CStr::from_ptr(ofmpc_last_error()) }.to_string_lossy().into_owned()
+    unsafe { CStr::from_ptr(ofmpc_last_error()) }
+        .to_string_lossy()
+        .into_owned()
 }
 
 const SETTINGS: &CStr = c"[mpc]\nhorizon = 10\n";
@@ -70,10 +72,26 @@ fn setup() -> Setup {
     let gcode = std::ffi::CString::new(ofmpc::gcode::PAPER_TABLE1).unwrap();
     unsafe {
         ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut s.robot));
-        ok(ofmpc_controller_new(s.robot, c"second".as_ptr(), SETTINGS.as_ptr(), &mut s.ctrl));
-        ok(ofmpc_supervised_new(s.robot, c"second".as_ptr(), SETTINGS.as_ptr(), &mut s.sup));
+        ok(ofmpc_controller_new(
+            s.robot,
+            c"second".as_ptr(),
+            SETTINGS.as_ptr(),
+            &mut s.ctrl,
+        ));
+        ok(ofmpc_supervised_new(
+            s.robot,
+            c"second".as_ptr(),
+            SETTINGS.as_ptr(),
+            &mut s.sup,
+        ));
         ok(ofmpc_plan_new(s.robot, gcode.as_ptr(), 0.01, &mut s.plan));
-        ok(ofmpc_sim_new(s.robot, s.plan, SETTINGS.as_ptr(), 0.25, &mut s.sim));
+        ok(ofmpc_sim_new(
+            s.robot,
+            s.plan,
+            SETTINGS.as_ptr(),
+            0.25,
+            &mut s.sim,
+        ));
     }
     s
 }
@@ -121,8 +139,13 @@ fn input(x: &[f64], w: &[f64], p: &[f64]) -> ofmpc_step_input {
 fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
     let s = setup();
     let (n, h) = (6, 10);
-    let (mut x, mut w, mut p, mut tau, mut tau_s) =
-        (vec![0.0; 2 * n], vec![0.0; n], vec![0.0; h * n], vec![0.0; n], vec![0.0; n]);
+    let (mut x, mut w, mut p, mut tau, mut tau_s) = (
+        vec![0.0; 2 * n],
+        vec![0.0; n],
+        vec![0.0; h * n],
+        vec![0.0; n],
+        vec![0.0; n],
+    );
     let mut out = output(&mut tau);
     let mut sout = ofmpc_supervised_output {
         size: size_of::<ofmpc_supervised_output>(),
@@ -161,17 +184,30 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
             ok(ofmpc_sim_apply(s.sim, tau.as_ptr(), n, 1.0));
         }
         assert_eq!(out.status, ofmpc_step_status::OFMPC_STEP_SOLVED);
-        assert_eq!(sout.status, ofmpc_supervised_status::OFMPC_SUPERVISED_CONTROLLED);
-        max_diff = tau.iter().zip(&tau_s).fold(max_diff, |m, (a, b)| m.max((a - b).abs()));
+        assert_eq!(
+            sout.status,
+            ofmpc_supervised_status::OFMPC_SUPERVISED_CONTROLLED
+        );
+        max_diff = tau
+            .iter()
+            .zip(&tau_s)
+            .fold(max_diff, |m, (a, b)| m.max((a - b).abs()));
     }
-    assert_eq!(allocations() - before, 0, "allocations in {samples} samples");
+    assert_eq!(
+        allocations() - before,
+        0,
+        "allocations in {samples} samples"
+    );
     // The supervised controller on the same readings gives the same torques.
     assert_eq!(max_diff, 0.0);
     let mut m = metrics();
     unsafe { ok(ofmpc_sim_metrics(s.sim, &mut m)) };
     assert_eq!(m.samples, samples);
     assert!(m.steady_joint_error_max_rad < 1e-9, "{m:?}"); // offset-free
-    assert!(m.cartesian_error_rms_mm > 0.0 && m.cartesian_error_rms_mm < 0.1, "{m:?}");
+    assert!(
+        m.cartesian_error_rms_mm > 0.0 && m.cartesian_error_rms_mm < 0.1,
+        "{m:?}"
+    );
     // Past the end: OFMPC_END, and nothing written.
     x.fill(7.0);
     let st = unsafe { ofmpc_sim_read(s.sim, x.as_mut_ptr(), 2 * n) };
@@ -211,7 +247,11 @@ fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
         // A preview of the wrong length.
         let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p[1..]), &mut out);
         assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
-        assert!(last_error().contains("input->preview has 59 values but 60"), "{}", last_error());
+        assert!(
+            last_error().contains("input->preview has 59 values but 60"),
+            "{}",
+            last_error()
+        );
         // NaN in the state.
         let mut bad = x.clone();
         bad[3] = f64::NAN;
@@ -227,9 +267,16 @@ fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
         out.size = 8;
         let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p), &mut out);
         assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
-        assert!(last_error().contains("sizeof(ofmpc_step_output)"), "{}", last_error());
+        assert!(
+            last_error().contains("sizeof(ofmpc_step_output)"),
+            "{}",
+            last_error()
+        );
     }
-    assert!(tau.iter().all(|t| *t == 5.0), "outputs written only on success");
+    assert!(
+        tau.iter().all(|t| *t == 5.0),
+        "outputs written only on success"
+    );
     assert_eq!(out.cost, -1.0);
     // The message getter copies and truncates.
     let mut buf = [1 as std::ffi::c_char; 8];
@@ -247,11 +294,21 @@ fn builds_that_cannot_work_are_refused_with_where_and_what() {
         let st = ofmpc_controller_new(robot, c"third".as_ptr(), null(), &mut c);
         assert_eq!(st, ofmpc_status::OFMPC_INVALID_ARG);
         assert!(last_error().contains("third"), "{}", last_error());
-        let st = ofmpc_controller_new(robot, c"second".as_ptr(), c"[mpc]\nhorizon = \"ten\"\n".as_ptr(), &mut c);
+        let st = ofmpc_controller_new(
+            robot,
+            c"second".as_ptr(),
+            c"[mpc]\nhorizon = \"ten\"\n".as_ptr(),
+            &mut c,
+        );
         assert_eq!(st, ofmpc_status::OFMPC_PARSE);
         let e = last_error();
         assert!(e.contains("line 2") && e.contains("horizon"), "{e}");
-        let st = ofmpc_controller_new(robot, c"second".as_ptr(), c"[mpc]\nhorizon = 0\n".as_ptr(), &mut c);
+        let st = ofmpc_controller_new(
+            robot,
+            c"second".as_ptr(),
+            c"[mpc]\nhorizon = 0\n".as_ptr(),
+            &mut c,
+        );
         assert_eq!(st, ofmpc_status::OFMPC_BUILD, "{}", last_error());
         let st = ofmpc_controller_new(robot, c"second".as_ptr(), c"[mcp]\n".as_ptr(), &mut c);
         assert_eq!(st, ofmpc_status::OFMPC_PARSE);

@@ -53,7 +53,10 @@ fn run(exe: &Path) -> HashMap<String, f64> {
         .arg(&scenario)
         .arg(&gcode)
         .args(["second", "0.25"])
-        .env("ASAN_OPTIONS", "detect_leaks=1:abort_on_error=0:exitcode=23")
+        .env(
+            "ASAN_OPTIONS",
+            "detect_leaks=1:abort_on_error=0:exitcode=23",
+        )
         .output()
         .expect("the example runs");
     let stdout = String::from_utf8_lossy(&out.stdout);
@@ -84,7 +87,10 @@ fn reference() -> ofmpc::RunMetrics {
 
 fn close(label: &str, got: f64, want: f64) {
     let rel = (got - want).abs() / want.abs().max(f64::MIN_POSITIVE);
-    assert!(rel <= 1e-12, "{label}: {got} vs ofmpc run's {want} (relative {rel:e})");
+    assert!(
+        rel <= 1e-12,
+        "{label}: {got} vs ofmpc run's {want} (relative {rel:e})"
+    );
 }
 
 fn compare(prefix: &str, got: &HashMap<String, f64>, m: &ofmpc::RunMetrics) {
@@ -92,11 +98,30 @@ fn compare(prefix: &str, got: &HashMap<String, f64>, m: &ofmpc::RunMetrics) {
         *got.get(&format!("{prefix}{k}"))
             .unwrap_or_else(|| panic!("no {prefix}{k} in the output: {got:?}"))
     };
-    let steady_joint = m.steady_joint_error_max_rad.iter().fold(0.0_f64, |a, b| a.max(*b));
-    close("cartesian_error_rms_mm", value("cartesian_error_rms_mm"), m.cartesian_error_rms_mm);
-    close("cartesian_error_max_mm", value("cartesian_error_max_mm"), m.cartesian_error_max_mm);
-    close("steady_cartesian_error_mm", value("steady_cartesian_error_mm"), m.steady_cartesian_error_mm);
-    close("steady_joint_error_max_rad", value("steady_joint_error_max_rad"), steady_joint);
+    let steady_joint = m
+        .steady_joint_error_max_rad
+        .iter()
+        .fold(0.0_f64, |a, b| a.max(*b));
+    close(
+        "cartesian_error_rms_mm",
+        value("cartesian_error_rms_mm"),
+        m.cartesian_error_rms_mm,
+    );
+    close(
+        "cartesian_error_max_mm",
+        value("cartesian_error_max_mm"),
+        m.cartesian_error_max_mm,
+    );
+    close(
+        "steady_cartesian_error_mm",
+        value("steady_cartesian_error_mm"),
+        m.steady_cartesian_error_mm,
+    );
+    close(
+        "steady_joint_error_max_rad",
+        value("steady_joint_error_max_rad"),
+        steady_joint,
+    );
     assert!(value("step_us_p50") > 0.0 && value("step_us_p99") >= value("step_us_p50"));
 }
 

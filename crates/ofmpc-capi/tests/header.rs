@@ -16,7 +16,9 @@ fn cbindgen() -> PathBuf {
     if let Some(p) = std::env::var_os("CBINDGEN") {
         return p.into();
     }
-    let home = std::env::var_os("HOME").map(PathBuf::from).unwrap_or_default();
+    let home = std::env::var_os("HOME")
+        .map(PathBuf::from)
+        .unwrap_or_default();
     let local = home.join(".cargo/bin/cbindgen");
     if local.is_file() {
         local
@@ -28,13 +30,16 @@ fn cbindgen() -> PathBuf {
 #[test]
 fn the_committed_header_is_what_the_pinned_cbindgen_generates() {
     let bin = cbindgen();
-    let version = Command::new(&bin).arg("--version").output().unwrap_or_else(|e| {
-        panic!(
-            "cbindgen not runnable ({}): {e}; install it with \
+    let version = Command::new(&bin)
+        .arg("--version")
+        .output()
+        .unwrap_or_else(|e| {
+            panic!(
+                "cbindgen not runnable ({}): {e}; install it with \
              `cargo install cbindgen --version {CBINDGEN_VERSION} --locked`",
-            bin.display()
-        )
-    });
+                bin.display()
+            )
+        });
     let version = String::from_utf8_lossy(&version.stdout);
     assert_eq!(
         version.trim(),
@@ -74,9 +79,18 @@ fn define<'a>(header: &'a str, name: &str) -> &'a str {
 #[test]
 fn the_version_macros_and_ofmpc_version_are_the_crates() {
     let header = std::fs::read_to_string(crate_dir().join("include/ofmpc.h")).unwrap();
-    assert_eq!(define(&header, "OFMPC_VERSION_MAJOR"), env!("CARGO_PKG_VERSION_MAJOR"));
-    assert_eq!(define(&header, "OFMPC_VERSION_MINOR"), env!("CARGO_PKG_VERSION_MINOR"));
-    assert_eq!(define(&header, "OFMPC_VERSION_PATCH"), env!("CARGO_PKG_VERSION_PATCH"));
+    assert_eq!(
+        define(&header, "OFMPC_VERSION_MAJOR"),
+        env!("CARGO_PKG_VERSION_MAJOR")
+    );
+    assert_eq!(
+        define(&header, "OFMPC_VERSION_MINOR"),
+        env!("CARGO_PKG_VERSION_MINOR")
+    );
+    assert_eq!(
+        define(&header, "OFMPC_VERSION_PATCH"),
+        env!("CARGO_PKG_VERSION_PATCH")
+    );
     assert_eq!(
         define(&header, "OFMPC_VERSION"),
         format!("\"{}\"", env!("CARGO_PKG_VERSION"))
