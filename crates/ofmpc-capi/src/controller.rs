@@ -125,7 +125,7 @@ pub unsafe extern "C" fn ofmpc_controller_step(
 ) -> ofmpc_status {
     boundary(|| {
         #[cfg(test)]
-        crate::tests::maybe_panic();
+        crate::ffi::maybe_panic();
         let c = &mut unsafe { arg_mut(c, "controller") }?.0;
         let input = unsafe { arg(input, "input") }?;
         let out = unsafe { arg_mut(out, "out") }?;

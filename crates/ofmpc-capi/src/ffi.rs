@@ -289,3 +289,23 @@ pub extern "C" fn ofmpc_version() -> *const c_char {
         };
     V.as_ptr()
 }
+
+#[cfg(test)]
+thread_local! {
+    static PANIC_NEXT: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Test builds only: the next [`maybe_panic`] on this thread panics.
+#[cfg(test)]
+pub(crate) fn panic_next() {
+    PANIC_NEXT.with(|p| p.set(true));
+}
+
+/// Test builds only: panics when [`panic_next`] asked for it (called first
+/// by `ofmpc_controller_step`, to test the panic boundary).
+#[cfg(test)]
+pub(crate) fn maybe_panic() {
+    if PANIC_NEXT.with(|p| p.replace(false)) {
+        panic!("deliberate test panic inside ofmpc_controller_step");
+    }
+}

@@ -45,20 +45,7 @@ pub use supervised::*;
 mod tests {
     //! The panic boundary, with a panic hook compiled only in tests.
     use super::*;
-    use std::cell::Cell;
     use std::ffi::CStr;
-
-    thread_local! {
-        static PANIC_NEXT: Cell<bool> = const { Cell::new(false) };
-    }
-
-    /// Panics when the test asked for it (called first by
-    /// `ofmpc_controller_step` in test builds).
-    pub(crate) fn maybe_panic() {
-        if PANIC_NEXT.with(|p| p.replace(false)) {
-            panic!("deliberate test panic inside ofmpc_controller_step");
-        }
-    }
 
     #[test]
     fn a_panic_inside_an_export_becomes_the_panic_status_and_a_message() {
@@ -95,7 +82,7 @@ mod tests {
             };
             let hook = std::panic::take_hook();
             std::panic::set_hook(Box::new(|_| {}));
-            PANIC_NEXT.with(|p| p.set(true));
+            crate::ffi::panic_next();
             let st = ofmpc_controller_step(c, &input, &mut out);
             std::panic::set_hook(hook);
             assert_eq!(st, ofmpc_status::OFMPC_PANIC);
