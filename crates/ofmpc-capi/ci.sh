@@ -28,32 +28,12 @@ vg=(valgrind --quiet --error-exitcode=42 --leak-check=full --errors-for-leak-kin
 
 cargo build --release -p ofmpc-cli >/dev/null 2>&1
 "$root/target/release/ofmpc" run "$scenario" --out "$work/run" >/dev/null
-python3 - "$work/run/metrics.json" "$work/c.txt" "$work/cpp.txt" <<'PY'
-import json, sys
-run = json.load(open(sys.argv[1]))["runs"][0]
-want = {
-    "cartesian_error_rms_mm": run["cartesian_error_rms_mm"],
-    "cartesian_error_max_mm": run["cartesian_error_max_mm"],
-    "steady_cartesian_error_mm": run["steady_cartesian_error_mm"],
-    "steady_joint_error_max_rad": max(run["steady_joint_error_max_rad"]),
-}
-def read(path):
-    out = {}
-    for line in open(path):
-        key, _, value = line.rstrip().rpartition(" ")
-        out[key] = value
-    return out
-bad = 0
-for path, prefixes in ((sys.argv[2], [""]), (sys.argv[3], ["direct ", "ros2 "])):
-    got = read(path)
-    for p in prefixes:
-        for k, w in want.items():
-            g = float(got[p + k])
-            rel = abs(g - w) / max(abs(w), 1e-300)
-            ok = rel <= 1e-12
-            bad += not ok
-            print(f"{'ok ' if ok else 'BAD'} {path.split('/')[-1]} {p}{k}: {g!r} vs ofmpc run {w!r} (rel {rel:.1e})")
-        print(f"    step time p50 {got[p + 'step_us_p50']} us, p99 {got[p + 'step_us_p99']} us, max {got[p + 'step_us_max']} us")
-sys.exit(1 if bad else 0)
-PY
+compare() { python3 "$here/compare_metrics.py" "$@"; }
+compare "$work/run/metrics.json" "$work/c.txt" "" "$work/cpp.txt" "direct " "$work/cpp.txt" "ros2 "
+
+# The paper's path at 1 kHz (N = 100, structured solver), natively (valgrind would take long).
+fast="$root/examples/paper-1khz.toml"
+"$work/paper_loop" "$fast" "$gcode" second 0.25 > "$work/c-1khz.txt"
+"$root/target/release/ofmpc" run "$fast" --out "$work/run-1khz" >/dev/null
+compare "$work/run-1khz/metrics.json" "$work/c-1khz.txt" ""
 echo "C API: examples match ofmpc run, valgrind clean"
