@@ -457,6 +457,14 @@ ofmpc_status ofmpc_robot_new_builtin(const char *name, ofmpc_robot **out);
 ofmpc_status ofmpc_robot_new_urdf(const char *urdf, const char *drives_toml, ofmpc_robot **out);
 
 /**
+ * A robot from a URDF file and, optionally, a drives file (NULL: none);
+ * paths are UTF-8, relative to the working directory.
+ */
+ofmpc_status ofmpc_robot_new_urdf_file(const char *urdf_path,
+                                       const char *drives_path,
+                                       ofmpc_robot **out);
+
+/**
  * Number of joints (0 for NULL).
  */
 size_t ofmpc_robot_dof(const ofmpc_robot *robot);

@@ -104,6 +104,13 @@ class Robot {
     if (s != OFMPC_OK) return Error(s);
     return Robot(r);
   }
+  /// A URDF file with an optional drives file (nullptr: none).
+  [[nodiscard]] static Result<Robot> urdf_file(const char *urdf_path, const char *drives_path = nullptr) {
+    ofmpc_robot *r = nullptr;
+    ofmpc_status s = ofmpc_robot_new_urdf_file(urdf_path, drives_path, &r);
+    if (s != OFMPC_OK) return Error(s);
+    return Robot(r);
+  }
   Robot() = default;
   [[nodiscard]] std::size_t dof() const { return ofmpc_robot_dof(h_.get()); }
   [[nodiscard]] const ofmpc_robot *get() const { return h_.get(); }

@@ -5,6 +5,7 @@ use crate::settings::chain;
 use ofmpc::robot::Drives;
 use ofmpc::Robot;
 use std::ffi::c_char;
+use std::path::Path;
 
 /// A robot model (kinematics, dynamics, drives). Opaque.
 pub struct ofmpc_robot(pub(crate) Robot);
@@ -58,6 +59,36 @@ pub unsafe extern "C" fn ofmpc_robot_new_urdf(
             robot
                 .apply_drives(&d)
                 .map_err(|e| model_failure("drives TOML", &e))?;
+        }
+        unsafe { give(out, ofmpc_robot(robot)) };
+        Ok(())
+    })
+}
+
+/// A robot from a URDF file and, optionally, a drives file (NULL: none);
+/// paths are UTF-8, relative to the working directory.
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_robot_new_urdf_file(
+    urdf_path: *const c_char,
+    drives_path: *const c_char,
+    out: *mut *mut ofmpc_robot,
+) -> ofmpc_status {
+    boundary(|| {
+        let urdf = unsafe { text(urdf_path, "urdf_path") }?;
+        let drives = unsafe { opt_text(drives_path, "drives_path") }?;
+        if out.is_null() {
+            return Err(null("out"));
+        }
+        let mut robot =
+            Robot::from_urdf_file(Path::new(urdf)).map_err(|e| model_failure(urdf, &e))?;
+        robot.require_inertials().map_err(|e| {
+            Failure::new(ofmpc_status::OFMPC_BUILD, format!("{urdf}: {}", chain(&e)))
+        })?;
+        if let Some(d) = drives {
+            let drives = Drives::from_file(Path::new(d)).map_err(|e| model_failure(d, &e))?;
+            robot
+                .apply_drives(&drives)
+                .map_err(|e| model_failure(d, &e))?;
         }
         unsafe { give(out, ofmpc_robot(robot)) };
         Ok(())

@@ -319,3 +319,44 @@ fn builds_that_cannot_work_are_refused_with_where_and_what() {
         ofmpc_robot_free(robot);
     }
 }
+
+#[test]
+fn a_robot_from_urdf_text_or_file_with_its_drives() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140");
+    let urdf_path = dir.join("irb140.urdf");
+    let drives_path = dir.join("drives.toml");
+    let urdf = std::ffi::CString::new(std::fs::read_to_string(&urdf_path).unwrap()).unwrap();
+    let drives = std::ffi::CString::new(std::fs::read_to_string(&drives_path).unwrap()).unwrap();
+    let (mut a, mut b, mut c) = (null_mut(), null_mut(), null_mut());
+    let up = std::ffi::CString::new(urdf_path.to_str().unwrap()).unwrap();
+    let dp = std::ffi::CString::new(drives_path.to_str().unwrap()).unwrap();
+    unsafe {
+        ok(ofmpc_robot_new_urdf(urdf.as_ptr(), drives.as_ptr(), &mut a));
+        ok(ofmpc_robot_new_urdf_file(up.as_ptr(), dp.as_ptr(), &mut b));
+        assert_eq!((ofmpc_robot_dof(a), ofmpc_robot_dof(b)), (6, 6));
+        // A controller builds on either.
+        ok(ofmpc_controller_new(b, c"second".as_ptr(), null(), &mut c));
+        assert_eq!(ofmpc_controller_dof(c), 6);
+        ofmpc_controller_free(c);
+        let mut d = null_mut();
+        let st = ofmpc_robot_new_urdf(c"<robot name=\"x\"><link".as_ptr(), null(), &mut d);
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE, "{}", last_error());
+        assert!(d.is_null());
+        let st = ofmpc_robot_new_urdf(
+            urdf.as_ptr(),
+            c"[joint_1]\narmature = \"x\"\n".as_ptr(),
+            &mut d,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        assert!(last_error().contains("drives TOML"), "{}", last_error());
+        let st = ofmpc_robot_new_urdf_file(c"/nonexistent/robot.urdf".as_ptr(), null(), &mut d);
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        assert!(
+            last_error().contains("/nonexistent/robot.urdf"),
+            "{}",
+            last_error()
+        );
+        ofmpc_robot_free(a);
+        ofmpc_robot_free(b);
+    }
+}
