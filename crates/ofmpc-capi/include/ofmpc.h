@@ -19,6 +19,13 @@
 #define OFMPC_VERSION_PATCH 0
 #define OFMPC_VERSION "0.1.0"
 
+/* Every ofmpc_status must be looked at: GCC and Clang warn when a call's status is dropped. */
+#if defined(__GNUC__) || defined(__clang__)
+#define OFMPC_MUST_USE __attribute__((warn_unused_result))
+#else
+#define OFMPC_MUST_USE
+#endif
+
 
 /**
  * The outcome of a fallible call. Outputs are written only on `OFMPC_OK`;
@@ -338,6 +345,7 @@ extern "C" {
  * `[baselines]` and `[plant]` tables; NULL: the paper's tuning).
  * `OFMPC_BUILD` when it cannot work as configured.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_controller_new(const ofmpc_robot *robot,
                                   const char *kind_name,
                                   const char *settings_toml,
@@ -346,13 +354,17 @@ ofmpc_status ofmpc_controller_new(const ofmpc_robot *robot,
 /**
  * Starts a run at the measured state `x0 = [q; q̇]` (2n values).
  */
-ofmpc_status ofmpc_controller_reset(ofmpc_controller *c, const double *x0, size_t x0_len);
+OFMPC_MUST_USE
+ofmpc_status ofmpc_controller_reset(ofmpc_controller *c,
+                                    const double *x0,
+                                    size_t x0_len);
 
 /**
  * One control step: allocates nothing, takes no lock. `OFMPC_OK` with the
  * numerical outcome in `out->status`; on bad input (sizes, non-finite
  * values, not reset) another status and nothing written.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_controller_step(ofmpc_controller *c,
                                    const ofmpc_step_input *input,
                                    ofmpc_step_output *out);
@@ -405,6 +417,7 @@ const char *ofmpc_version(void);
  * Plans the G-code `gcode` for `robot` (blended, timed with the scenario's
  * default `[timing]`, mapped to joints by IK) sampled every `ts` seconds.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_plan_new(const ofmpc_robot *robot,
                             const char *gcode,
                             double ts,
@@ -428,12 +441,17 @@ double ofmpc_plan_ts(const ofmpc_plan *plan);
 /**
  * The reference `w_k` (n values) into `w`; past the end, the last point.
  */
-ofmpc_status ofmpc_plan_reference(const ofmpc_plan *plan, size_t k, double *w, size_t w_len);
+OFMPC_MUST_USE
+ofmpc_status ofmpc_plan_reference(const ofmpc_plan *plan,
+                                  size_t k,
+                                  double *w,
+                                  size_t w_len);
 
 /**
  * The preview `w_{k+1} … w_{k+N}` (N·n values, `horizon` = N) into
  * `preview`; past the end, the last point. Allocates nothing.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_plan_preview(const ofmpc_plan *plan,
                                 size_t k,
                                 size_t horizon,
@@ -448,18 +466,22 @@ void ofmpc_plan_free(ofmpc_plan *plan);
 /**
  * The built-in robot `name` ("irb140") into `*out`.
  */
-ofmpc_status ofmpc_robot_new_builtin(const char *name, ofmpc_robot **out);
+OFMPC_MUST_USE ofmpc_status ofmpc_robot_new_builtin(const char *name, ofmpc_robot **out);
 
 /**
  * A robot from URDF text and, optionally, a drives file's TOML text
  * (armature, torque and speed limits, friction; NULL: the URDF's limits).
  */
-ofmpc_status ofmpc_robot_new_urdf(const char *urdf, const char *drives_toml, ofmpc_robot **out);
+OFMPC_MUST_USE
+ofmpc_status ofmpc_robot_new_urdf(const char *urdf,
+                                  const char *drives_toml,
+                                  ofmpc_robot **out);
 
 /**
  * A robot from a URDF file and, optionally, a drives file (NULL: none);
  * paths are UTF-8, relative to the working directory.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_robot_new_urdf_file(const char *urdf_path,
                                        const char *drives_path,
                                        ofmpc_robot **out);
@@ -480,6 +502,7 @@ void ofmpc_robot_free(ofmpc_robot *robot);
  * with the `[plant]`, `[faults]` and `[simulation]` (hold_s,
  * steady_window_s) tables of `settings_toml` (NULL: ideal).
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_sim_new(const ofmpc_robot *robot,
                            const ofmpc_plan *plan,
                            const char *settings_toml,
@@ -496,18 +519,22 @@ size_t ofmpc_sim_samples(const ofmpc_sim *sim);
  * reading again until `ofmpc_sim_apply`); `OFMPC_END` after the last.
  * Allocates nothing.
  */
-ofmpc_status ofmpc_sim_read(ofmpc_sim *sim, double *x, size_t x_len);
+OFMPC_MUST_USE ofmpc_status ofmpc_sim_read(ofmpc_sim *sim, double *x, size_t x_len);
 
 /**
  * Applies the commanded torque `tau` (n values) through the drives over
  * one period and records the sample with the step's time `step_us` (µs).
  */
-ofmpc_status ofmpc_sim_apply(ofmpc_sim *sim, const double *tau, size_t tau_len, double step_us);
+OFMPC_MUST_USE
+ofmpc_status ofmpc_sim_apply(ofmpc_sim *sim,
+                             const double *tau,
+                             size_t tau_len,
+                             double step_us);
 
 /**
  * The metrics of the samples run so far, as `ofmpc run` computes them.
  */
-ofmpc_status ofmpc_sim_metrics(const ofmpc_sim *sim, ofmpc_metrics *out);
+OFMPC_MUST_USE ofmpc_status ofmpc_sim_metrics(const ofmpc_sim *sim, ofmpc_metrics *out);
 
 /**
  * Frees a simulation (NULL: nothing).
@@ -520,6 +547,7 @@ void ofmpc_sim_free(ofmpc_sim *sim);
  * the same text's `[simulation]` (plausibility_check, safe_stop,
  * divergence) and `[safety]` tables, at `[plant] delay_samples`.
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_supervised_new(const ofmpc_robot *robot,
                                   const char *kind_name,
                                   const char *settings_toml,
@@ -528,13 +556,17 @@ ofmpc_status ofmpc_supervised_new(const ofmpc_robot *robot,
 /**
  * Starts a run at the reading `x0` (2n values): no stop in progress.
  */
-ofmpc_status ofmpc_supervised_reset(ofmpc_supervised *s, const double *x0, size_t x0_len);
+OFMPC_MUST_USE
+ofmpc_status ofmpc_supervised_reset(ofmpc_supervised *s,
+                                    const double *x0,
+                                    size_t x0_len);
 
 /**
  * One supervised sample: allocates nothing, takes no lock. Not `OFMPC_OK`
  * only for bad input or a failed step no stop law takes over
  * (`OFMPC_NUMERIC`: stop the robot).
  */
+OFMPC_MUST_USE
 ofmpc_status ofmpc_supervised_step(ofmpc_supervised *s,
                                    const ofmpc_supervised_input *input,
                                    ofmpc_supervised_output *out);

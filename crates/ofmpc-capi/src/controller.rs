@@ -80,6 +80,7 @@ pub(crate) const STEP_INPUT_V1: usize = size_of::<ofmpc_step_input>();
 /// "dob-mpc") for `robot` from `settings_toml` (the scenario's `[mpc]`,
 /// `[baselines]` and `[plant]` tables; NULL: the paper's tuning).
 /// `OFMPC_BUILD` when it cannot work as configured.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_controller_new(
     robot: *const ofmpc_robot,
@@ -101,6 +102,7 @@ pub unsafe extern "C" fn ofmpc_controller_new(
 }
 
 /// Starts a run at the measured state `x0 = [q; q̇]` (2n values).
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_controller_reset(
     c: *mut ofmpc_controller,
@@ -117,6 +119,7 @@ pub unsafe extern "C" fn ofmpc_controller_reset(
 /// One control step: allocates nothing, takes no lock. `OFMPC_OK` with the
 /// numerical outcome in `out->status`; on bad input (sizes, non-finite
 /// values, not reset) another status and nothing written.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_controller_step(
     c: *mut ofmpc_controller,

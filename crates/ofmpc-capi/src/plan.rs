@@ -11,6 +11,7 @@ pub struct ofmpc_plan(pub(crate) JointReference);
 
 /// Plans the G-code `gcode` for `robot` (blended, timed with the scenario's
 /// default `[timing]`, mapped to joints by IK) sampled every `ts` seconds.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_plan_new(
     robot: *const ofmpc_robot,
@@ -61,6 +62,7 @@ pub unsafe extern "C" fn ofmpc_plan_ts(plan: *const ofmpc_plan) -> f64 {
 }
 
 /// The reference `w_k` (n values) into `w`; past the end, the last point.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_plan_reference(
     plan: *const ofmpc_plan,
@@ -78,6 +80,7 @@ pub unsafe extern "C" fn ofmpc_plan_reference(
 
 /// The preview `w_{k+1} … w_{k+N}` (N·n values, `horizon` = N) into
 /// `preview`; past the end, the last point. Allocates nothing.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_plan_preview(
     plan: *const ofmpc_plan,

@@ -15,6 +15,7 @@ fn model_failure(what: &str, e: &(dyn std::error::Error + 'static)) -> Failure {
 }
 
 /// The built-in robot `name` ("irb140") into `*out`.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_robot_new_builtin(
     name: *const c_char,
@@ -38,6 +39,7 @@ pub unsafe extern "C" fn ofmpc_robot_new_builtin(
 
 /// A robot from URDF text and, optionally, a drives file's TOML text
 /// (armature, torque and speed limits, friction; NULL: the URDF's limits).
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_robot_new_urdf(
     urdf: *const c_char,
@@ -67,6 +69,7 @@ pub unsafe extern "C" fn ofmpc_robot_new_urdf(
 
 /// A robot from a URDF file and, optionally, a drives file (NULL: none);
 /// paths are UTF-8, relative to the working directory.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_robot_new_urdf_file(
     urdf_path: *const c_char,

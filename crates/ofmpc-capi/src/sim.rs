@@ -166,6 +166,7 @@ impl ofmpc_sim {
 /// controller's model does not know it), at rest on `plan`'s first point,
 /// with the `[plant]`, `[faults]` and `[simulation]` (hold_s,
 /// steady_window_s) tables of `settings_toml` (NULL: ideal).
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_sim_new(
     robot: *const ofmpc_robot,
@@ -196,6 +197,7 @@ pub unsafe extern "C" fn ofmpc_sim_samples(sim: *const ofmpc_sim) -> usize {
 /// The reading `[q; q̇]` (2n values) of the next sample into `x` (the same
 /// reading again until `ofmpc_sim_apply`); `OFMPC_END` after the last.
 /// Allocates nothing.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_sim_read(
     sim: *mut ofmpc_sim,
@@ -213,6 +215,7 @@ pub unsafe extern "C" fn ofmpc_sim_read(
 
 /// Applies the commanded torque `tau` (n values) through the drives over
 /// one period and records the sample with the step's time `step_us` (µs).
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_sim_apply(
     sim: *mut ofmpc_sim,
@@ -228,6 +231,7 @@ pub unsafe extern "C" fn ofmpc_sim_apply(
 }
 
 /// The metrics of the samples run so far, as `ofmpc run` computes them.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_sim_metrics(
     sim: *const ofmpc_sim,

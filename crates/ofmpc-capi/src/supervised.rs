@@ -75,6 +75,7 @@ const OUTPUT_V1: usize = size_of::<ofmpc_supervised_output>();
 /// [`crate::ofmpc_controller_new`]) behind its guard, whose rules come from
 /// the same text's `[simulation]` (plausibility_check, safe_stop,
 /// divergence) and `[safety]` tables, at `[plant] delay_samples`.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_supervised_new(
     robot: *const ofmpc_robot,
@@ -99,6 +100,7 @@ pub unsafe extern "C" fn ofmpc_supervised_new(
 }
 
 /// Starts a run at the reading `x0` (2n values): no stop in progress.
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_supervised_reset(
     s: *mut ofmpc_supervised,
@@ -115,6 +117,7 @@ pub unsafe extern "C" fn ofmpc_supervised_reset(
 /// One supervised sample: allocates nothing, takes no lock. Not `OFMPC_OK`
 /// only for bad input or a failed step no stop law takes over
 /// (`OFMPC_NUMERIC`: stop the robot).
+#[must_use]
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_supervised_step(
     s: *mut ofmpc_supervised,
