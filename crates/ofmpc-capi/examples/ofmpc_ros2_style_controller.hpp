@@ -58,9 +58,7 @@ class OfmpcController {
                                                      params.settings_toml.c_str());
     if (!ctrl) return fail("controller", ctrl.error());
     ctrl_ = ctrl.take();
-    auto probe = ofmpc::Controller::create(robot_, params.kind.c_str(), params.settings_toml.c_str());
-    if (!probe) return fail("controller", probe.error());
-    ts_ = probe.value().ts();
+    ts_ = ctrl_.ts();
     auto plan = ofmpc::Plan::from_gcode(robot_, params.gcode.c_str(), ts_);
     if (!plan) return fail("plan", plan.error());
     plan_ = plan.take();

@@ -582,6 +582,11 @@ size_t ofmpc_supervised_dof(const ofmpc_supervised *s);
 size_t ofmpc_supervised_horizon(const ofmpc_supervised *s);
 
 /**
+ * Sampling period Ts (s; 0 for NULL).
+ */
+double ofmpc_supervised_ts(const ofmpc_supervised *s);
+
+/**
  * Frees a supervised controller (NULL: nothing).
  */
 void ofmpc_supervised_free(ofmpc_supervised *s);

@@ -215,6 +215,7 @@ class SupervisedController {
   [[nodiscard]] explicit operator bool() const { return h_ != nullptr; }
   [[nodiscard]] std::size_t dof() const { return ofmpc_supervised_dof(h_.get()); }
   [[nodiscard]] std::size_t horizon() const { return ofmpc_supervised_horizon(h_.get()); }
+  [[nodiscard]] double ts() const { return ofmpc_supervised_ts(h_.get()); }
   [[nodiscard]] Status reset(ConstView x0) {
     return detail::status(ofmpc_supervised_reset(h_.get(), x0.data, x0.size));
   }

@@ -195,6 +195,14 @@ pub unsafe extern "C" fn ofmpc_supervised_horizon(s: *const ofmpc_supervised) ->
     })
 }
 
+/// Sampling period Ts (s; 0 for NULL).
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_supervised_ts(s: *const ofmpc_supervised) -> f64 {
+    query(0.0, || {
+        unsafe { s.as_ref() }.map(|s| s.0.controller().settings().ts)
+    })
+}
+
 /// Frees a supervised controller (NULL: nothing).
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_supervised_free(s: *mut ofmpc_supervised) {

@@ -12,11 +12,11 @@ fn crate_dir() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The folder cargo put this profile's libraries in (target/<profile>).
+/// The folder cargo built this test's copy of the library in
+/// (target/<profile>/deps: `cargo test` does not copy it up to target/<profile>).
 fn lib_dir() -> PathBuf {
     let exe = std::env::current_exe().expect("test path");
-    let deps = exe.parent().expect("deps folder");
-    let dir = deps.parent().expect("profile folder").to_path_buf();
+    let dir = exe.parent().expect("deps folder").to_path_buf();
     assert!(
         dir.join("libofmpc_capi.a").is_file(),
         "{} has no libofmpc_capi.a: build the crate first (cargo build -p ofmpc-capi)",
