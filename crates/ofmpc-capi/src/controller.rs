@@ -1,0 +1,223 @@
+//! The controller handle: wraps [`ofmpc::Controller`].
+
+use crate::ffi::*;
+use crate::robot::ofmpc_robot;
+use crate::settings::{build_controller, kind, Settings};
+use ofmpc::{Controller, StepError, StepInput, StepOutput, StepStatus};
+use std::ffi::c_char;
+use std::mem::size_of;
+
+/// A built controller (any kind: the paper's three, the adaptive variants,
+/// the baselines). Opaque; `Send`: one thread at a time.
+pub struct ofmpc_controller(pub(crate) Controller);
+
+/// One sample's measurement and reference (borrowed by the call).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct ofmpc_step_input {
+    /// `sizeof(ofmpc_step_input)`.
+    pub size: usize,
+    /// Measured state `[q; q̇]`, 2n values.
+    pub x: *const f64,
+    /// Length of `x`.
+    pub x_len: usize,
+    /// Current reference `w_k`, n values.
+    pub w: *const f64,
+    /// Length of `w`.
+    pub w_len: usize,
+    /// Preview `w_{k+1} … w_{k+N}`, N·n values.
+    pub preview: *const f64,
+    /// Length of `preview`.
+    pub preview_len: usize,
+}
+
+/// The numerical outcome of a step (the library's `StepStatus`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ofmpc_step_status {
+    /// The algorithm's optimum.
+    OFMPC_STEP_SOLVED = 0,
+    /// The torque-limit QP stopped at its iteration cap: feasible, not optimal.
+    OFMPC_STEP_QP_ITERATION_CAP = 1,
+    /// The step failed numerically: `tau` holds the last torque; begin a safe stop.
+    OFMPC_STEP_HELD_LAST_TORQUE = 2,
+}
+
+/// What a step computed. The caller owns `tau` (n doubles) and sets `size`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct ofmpc_step_output {
+    /// `sizeof(ofmpc_step_output)`: fields past it are not written.
+    pub size: usize,
+    /// The torque to apply (n values, written by the step).
+    pub tau: *mut f64,
+    /// Length of `tau`.
+    pub tau_len: usize,
+    /// Numerical outcome.
+    pub status: ofmpc_step_status,
+    /// Active-set iterations of the torque-limit QP (0 without limits).
+    pub qp_iterations: u32,
+    /// Minimum of the cost `J_min` (Eq. (42)).
+    pub cost: f64,
+    /// `max|R_ii| / min|R_ii|` of the least-squares factor.
+    pub r_diag_ratio: f64,
+    /// The payload mass the model carries (kg); NaN for kinds that do not identify it.
+    pub payload_estimate_kg: f64,
+    /// Wall time of the step (ns).
+    pub solve_time_ns: u64,
+    /// Doublings of the ZOH discretization.
+    pub zoh_squarings: u32,
+}
+
+/// The size of the first version of [`ofmpc_step_output`]: fields appended
+/// later are written only when the caller's `size` covers them.
+pub(crate) const STEP_OUTPUT_V1: usize = size_of::<ofmpc_step_output>();
+/// The size of the first version of [`ofmpc_step_input`].
+pub(crate) const STEP_INPUT_V1: usize = size_of::<ofmpc_step_input>();
+
+/// Builds the controller `kind_name` ("usual", "first", "second",
+/// "first-adaptive", "second-adaptive", "pid", "ctc", "ctc-adaptive",
+/// "dob-mpc") for `robot` from `settings_toml` (the scenario's `[mpc]`,
+/// `[baselines]` and `[plant]` tables; NULL: the paper's tuning).
+/// `OFMPC_BUILD` when it cannot work as configured.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_new(
+    robot: *const ofmpc_robot,
+    kind_name: *const c_char,
+    settings_toml: *const c_char,
+    out: *mut *mut ofmpc_controller,
+) -> ofmpc_status {
+    boundary(|| {
+        let robot = unsafe { arg(robot, "robot") }?;
+        let kind = kind(unsafe { text(kind_name, "kind_name") }?)?;
+        let settings = Settings::parse(unsafe { opt_text(settings_toml, "settings_toml") }?)?;
+        if out.is_null() {
+            return Err(null("out"));
+        }
+        let c = build_controller(&robot.0, kind, &settings)?;
+        unsafe { give(out, ofmpc_controller(c)) };
+        Ok(())
+    })
+}
+
+/// Starts a run at the measured state `x0 = [q; q̇]` (2n values).
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_reset(
+    c: *mut ofmpc_controller,
+    x0: *const f64,
+    x0_len: usize,
+) -> ofmpc_status {
+    boundary(|| {
+        let c = &mut unsafe { arg_mut(c, "controller") }?.0;
+        let x0 = unsafe { slice(x0, x0_len, 2 * c.dof(), "x0") }?;
+        c.reset(x0).map_err(step_failure)
+    })
+}
+
+/// One control step: allocates nothing, takes no lock. `OFMPC_OK` with the
+/// numerical outcome in `out->status`; on bad input (sizes, non-finite
+/// values, not reset) another status and nothing written.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_step(
+    c: *mut ofmpc_controller,
+    input: *const ofmpc_step_input,
+    out: *mut ofmpc_step_output,
+) -> ofmpc_status {
+    boundary(|| {
+        #[cfg(test)]
+        crate::ffi::maybe_panic();
+        let c = &mut unsafe { arg_mut(c, "controller") }?.0;
+        let input = unsafe { arg(input, "input") }?;
+        let out = unsafe { arg_mut(out, "out") }?;
+        let n = c.dof();
+        check_record(out.size, STEP_OUTPUT_V1, "ofmpc_step_output")?;
+        let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
+        let result = {
+            let (x, w, preview) = unsafe { step_slices(input, n, c.horizon()) }?;
+            c.step(&StepInput { x, w_k: w, preview })
+                .map_err(step_failure)?
+        };
+        write_output(result, tau, out);
+        Ok(())
+    })
+}
+
+/// The state, the reference and the preview of a step.
+pub(crate) type StepSlices<'a> = (&'a [f64], &'a [f64], &'a [f64]);
+
+/// The input record's arrays, checked (2n, n, N·n).
+pub(crate) unsafe fn step_slices<'a>(
+    input: &ofmpc_step_input,
+    n: usize,
+    horizon: usize,
+) -> Result<StepSlices<'a>, Failure> {
+    check_record(input.size, STEP_INPUT_V1, "ofmpc_step_input")?;
+    let x = unsafe { slice(input.x, input.x_len, 2 * n, "input->x") }?;
+    let w = unsafe { slice(input.w, input.w_len, n, "input->w") }?;
+    let p = unsafe {
+        slice(
+            input.preview,
+            input.preview_len,
+            horizon * n,
+            "input->preview",
+        )
+    }?;
+    Ok((x, w, p))
+}
+
+/// The library's step output into the C record (`tau` is `out.tau`).
+pub(crate) fn write_output(o: &StepOutput, tau: &mut [f64], out: &mut ofmpc_step_output) {
+    tau.copy_from_slice(&o.tau);
+    out.status = match o.status {
+        StepStatus::Solved => ofmpc_step_status::OFMPC_STEP_SOLVED,
+        StepStatus::QpIterationCap { .. } => ofmpc_step_status::OFMPC_STEP_QP_ITERATION_CAP,
+        _ => ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+    };
+    out.qp_iterations = o.qp_status.map_or(0, |q| q.iterations);
+    out.cost = o.cost;
+    out.r_diag_ratio = o.r_diag_ratio;
+    out.payload_estimate_kg = o.payload_estimate.unwrap_or(f64::NAN);
+    out.solve_time_ns = u64::try_from(o.solve_time.as_nanos()).unwrap_or(u64::MAX);
+    out.zoh_squarings = o.zoh_squarings;
+}
+
+/// A step's refusal as a status and message (error path only).
+#[cold]
+pub(crate) fn step_failure(e: StepError) -> Failure {
+    let status = match e {
+        StepError::NotReset => ofmpc_status::OFMPC_NOT_RESET,
+        StepError::WrongLength { .. } => ofmpc_status::OFMPC_SIZE_MISMATCH,
+        _ => ofmpc_status::OFMPC_INVALID_ARG,
+    };
+    Failure::new(status, e.to_string())
+}
+
+/// Number of joints n (0 for NULL).
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_dof(c: *const ofmpc_controller) -> usize {
+    query(0, || unsafe { c.as_ref() }.map(|c| c.0.dof()))
+}
+
+/// Prediction horizon N (the preview holds N·n values; 0 for NULL).
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_horizon(c: *const ofmpc_controller) -> usize {
+    query(0, || unsafe { c.as_ref() }.map(|c| c.0.horizon()))
+}
+
+/// Sampling period Ts (s; 0 for NULL).
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_ts(c: *const ofmpc_controller) -> f64 {
+    query(0.0, || unsafe { c.as_ref() }.map(|c| c.0.settings().ts))
+}
+
+/// Frees a controller (NULL: nothing).
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_free(c: *mut ofmpc_controller) {
+    let _ = boundary(|| {
+        unsafe { take(c) };
+        Ok(())
+    });
+}

@@ -1,0 +1,362 @@
+//! The C API called as C calls it: `*_step` allocates nothing (a counting
+//! global allocator, the calling thread only), statuses and messages for bad
+//! input, outputs written only on success.
+
+use ofmpc_capi::*;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::ffi::CStr;
+use std::mem::size_of;
+use std::ptr::{null, null_mut};
+
+thread_local! {
+    static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+}
+
+struct Counting;
+
+// SAFETY: forwards to the system allocator; counting touches a thread-local Cell.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc(l) }
+    }
+    unsafe fn alloc_zeroed(&self, l: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.alloc_zeroed(l) }
+    }
+    unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
+        unsafe { System.realloc(p, l, n) }
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: Layout) {
+        unsafe { System.dealloc(p, l) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations() -> usize {
+    ALLOCATIONS.with(|c| c.get())
+}
+
+fn ok(st: ofmpc_status) {
+    assert_eq!(st, ofmpc_status::OFMPC_OK, "{}", last_error());
+}
+
+fn last_error() -> String {
+    unsafe { CStr::from_ptr(ofmpc_last_error()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+const SETTINGS: &CStr = c"[mpc]\nhorizon = 10\n";
+
+struct Setup {
+    robot: *mut ofmpc_robot,
+    ctrl: *mut ofmpc_controller,
+    sup: *mut ofmpc_supervised,
+    plan: *mut ofmpc_plan,
+    sim: *mut ofmpc_sim,
+}
+
+fn setup() -> Setup {
+    let mut s = Setup {
+        robot: null_mut(),
+        ctrl: null_mut(),
+        sup: null_mut(),
+        plan: null_mut(),
+        sim: null_mut(),
+    };
+    let gcode = std::ffi::CString::new(ofmpc::gcode::PAPER_TABLE1).unwrap();
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut s.robot));
+        ok(ofmpc_controller_new(
+            s.robot,
+            c"second".as_ptr(),
+            SETTINGS.as_ptr(),
+            &mut s.ctrl,
+        ));
+        ok(ofmpc_supervised_new(
+            s.robot,
+            c"second".as_ptr(),
+            SETTINGS.as_ptr(),
+            &mut s.sup,
+        ));
+        ok(ofmpc_plan_new(s.robot, gcode.as_ptr(), 0.01, &mut s.plan));
+        ok(ofmpc_sim_new(
+            s.robot,
+            s.plan,
+            SETTINGS.as_ptr(),
+            0.25,
+            &mut s.sim,
+        ));
+    }
+    s
+}
+
+impl Drop for Setup {
+    fn drop(&mut self) {
+        unsafe {
+            ofmpc_sim_free(self.sim);
+            ofmpc_plan_free(self.plan);
+            ofmpc_supervised_free(self.sup);
+            ofmpc_controller_free(self.ctrl);
+            ofmpc_robot_free(self.robot);
+        }
+    }
+}
+
+fn output(tau: &mut [f64]) -> ofmpc_step_output {
+    ofmpc_step_output {
+        size: size_of::<ofmpc_step_output>(),
+        tau: tau.as_mut_ptr(),
+        tau_len: tau.len(),
+        status: ofmpc_step_status::OFMPC_STEP_SOLVED,
+        qp_iterations: 0,
+        cost: -1.0,
+        r_diag_ratio: 0.0,
+        payload_estimate_kg: 0.0,
+        solve_time_ns: 0,
+        zoh_squarings: 0,
+    }
+}
+
+fn input(x: &[f64], w: &[f64], p: &[f64]) -> ofmpc_step_input {
+    ofmpc_step_input {
+        size: size_of::<ofmpc_step_input>(),
+        x: x.as_ptr(),
+        x_len: x.len(),
+        w: w.as_ptr(),
+        w_len: w.len(),
+        preview: p.as_ptr(),
+        preview_len: p.len(),
+    }
+}
+
+#[test]
+fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
+    let s = setup();
+    let (n, h) = (6, 10);
+    let (mut x, mut w, mut p, mut tau, mut tau_s) = (
+        vec![0.0; 2 * n],
+        vec![0.0; n],
+        vec![0.0; h * n],
+        vec![0.0; n],
+        vec![0.0; n],
+    );
+    let mut out = output(&mut tau);
+    let mut sout = ofmpc_supervised_output {
+        size: size_of::<ofmpc_supervised_output>(),
+        tau: tau_s.as_mut_ptr(),
+        tau_len: n,
+        status: ofmpc_supervised_status::OFMPC_SUPERVISED_DIVERGED,
+        step_status: ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+    };
+    let samples = unsafe { ofmpc_sim_samples(s.sim) };
+    assert!(samples > 1000, "{samples}");
+    unsafe {
+        ok(ofmpc_sim_read(s.sim, x.as_mut_ptr(), 2 * n));
+        ok(ofmpc_controller_reset(s.ctrl, x.as_ptr(), 2 * n));
+        ok(ofmpc_supervised_reset(s.sup, x.as_ptr(), 2 * n));
+    }
+    let before = allocations();
+    let mut max_diff = 0.0_f64;
+    for k in 0..samples {
+        unsafe {
+            ok(ofmpc_sim_read(s.sim, x.as_mut_ptr(), 2 * n));
+            ok(ofmpc_plan_reference(s.plan, k, w.as_mut_ptr(), n));
+            ok(ofmpc_plan_preview(s.plan, k, h, p.as_mut_ptr(), h * n));
+            let inp = input(&x, &w, &p);
+            ok(ofmpc_controller_step(s.ctrl, &inp, &mut out));
+            let sin = ofmpc_supervised_input {
+                size: size_of::<ofmpc_supervised_input>(),
+                t: k as f64 * 0.01,
+                x: x.as_ptr(),
+                x_len: x.len(),
+                w: w.as_ptr(),
+                w_len: n,
+                preview: p.as_ptr(),
+                preview_len: p.len(),
+            };
+            ok(ofmpc_supervised_step(s.sup, &sin, &mut sout));
+            ok(ofmpc_sim_apply(s.sim, tau.as_ptr(), n, 1.0));
+        }
+        assert_eq!(out.status, ofmpc_step_status::OFMPC_STEP_SOLVED);
+        assert_eq!(
+            sout.status,
+            ofmpc_supervised_status::OFMPC_SUPERVISED_CONTROLLED
+        );
+        max_diff = tau
+            .iter()
+            .zip(&tau_s)
+            .fold(max_diff, |m, (a, b)| m.max((a - b).abs()));
+    }
+    assert_eq!(
+        allocations() - before,
+        0,
+        "allocations in {samples} samples"
+    );
+    // The supervised controller on the same readings gives the same torques.
+    assert_eq!(max_diff, 0.0);
+    let mut m = metrics();
+    unsafe { ok(ofmpc_sim_metrics(s.sim, &mut m)) };
+    assert_eq!(m.samples, samples);
+    assert!(m.steady_joint_error_max_rad < 1e-9, "{m:?}"); // offset-free
+    assert!(
+        m.cartesian_error_rms_mm > 0.0 && m.cartesian_error_rms_mm < 0.1,
+        "{m:?}"
+    );
+    // Past the end: OFMPC_END, and nothing written.
+    x.fill(7.0);
+    let st = unsafe { ofmpc_sim_read(s.sim, x.as_mut_ptr(), 2 * n) };
+    assert_eq!(st, ofmpc_status::OFMPC_END);
+    assert!(x.iter().all(|v| *v == 7.0));
+}
+
+fn metrics() -> ofmpc_metrics {
+    ofmpc_metrics {
+        size: size_of::<ofmpc_metrics>(),
+        samples: 0,
+        cartesian_error_rms_mm: 0.0,
+        cartesian_error_max_mm: 0.0,
+        steady_cartesian_error_mm: 0.0,
+        steady_joint_error_max_rad: 0.0,
+        joint_error_rms_max_rad: 0.0,
+        step_time_median_us: 0.0,
+        step_time_max_us: 0.0,
+    }
+}
+
+#[test]
+fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
+    let s = setup();
+    let n = 6;
+    let x = vec![0.0; 2 * n];
+    let w = vec![0.0; n];
+    let p = vec![0.0; 10 * n];
+    let mut tau = vec![5.0; n];
+    let mut out = output(&mut tau);
+    unsafe {
+        // Before reset.
+        let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p), &mut out);
+        assert_eq!(st, ofmpc_status::OFMPC_NOT_RESET);
+        assert!(last_error().contains("reset"), "{}", last_error());
+        ok(ofmpc_controller_reset(s.ctrl, x.as_ptr(), 2 * n));
+        // A preview of the wrong length.
+        let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p[1..]), &mut out);
+        assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
+        assert!(
+            last_error().contains("input->preview has 59 values but 60"),
+            "{}",
+            last_error()
+        );
+        // NaN in the state.
+        let mut bad = x.clone();
+        bad[3] = f64::NAN;
+        let st = ofmpc_controller_step(s.ctrl, &input(&bad, &w, &p), &mut out);
+        assert_eq!(st, ofmpc_status::OFMPC_INVALID_ARG);
+        assert!(last_error().contains("x[3]"), "{}", last_error());
+        // NULL handle, NULL output, a record too small.
+        let st = ofmpc_controller_step(null_mut(), &input(&x, &w, &p), &mut out);
+        assert_eq!(st, ofmpc_status::OFMPC_NULL_ARG);
+        assert!(last_error().contains("controller is NULL"));
+        let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p), null_mut());
+        assert_eq!(st, ofmpc_status::OFMPC_NULL_ARG);
+        out.size = 8;
+        let st = ofmpc_controller_step(s.ctrl, &input(&x, &w, &p), &mut out);
+        assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
+        assert!(
+            last_error().contains("sizeof(ofmpc_step_output)"),
+            "{}",
+            last_error()
+        );
+    }
+    assert!(
+        tau.iter().all(|t| *t == 5.0),
+        "outputs written only on success"
+    );
+    assert_eq!(out.cost, -1.0);
+    // The message getter copies and truncates.
+    let mut buf = [1 as std::ffi::c_char; 8];
+    let need = unsafe { ofmpc_last_error_message(buf.as_mut_ptr(), buf.len()) };
+    assert_eq!(need, last_error().len() + 1);
+    assert_eq!(buf[7], 0);
+}
+
+#[test]
+fn builds_that_cannot_work_are_refused_with_where_and_what() {
+    let mut robot = null_mut();
+    let mut c = null_mut();
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut robot));
+        let st = ofmpc_controller_new(robot, c"third".as_ptr(), null(), &mut c);
+        assert_eq!(st, ofmpc_status::OFMPC_INVALID_ARG);
+        assert!(last_error().contains("third"), "{}", last_error());
+        let st = ofmpc_controller_new(
+            robot,
+            c"second".as_ptr(),
+            c"[mpc]\nhorizon = \"ten\"\n".as_ptr(),
+            &mut c,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        let e = last_error();
+        assert!(e.contains("line 2") && e.contains("horizon"), "{e}");
+        let st = ofmpc_controller_new(
+            robot,
+            c"second".as_ptr(),
+            c"[mpc]\nhorizon = 0\n".as_ptr(),
+            &mut c,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_BUILD, "{}", last_error());
+        let st = ofmpc_controller_new(robot, c"second".as_ptr(), c"[mcp]\n".as_ptr(), &mut c);
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        assert!(last_error().contains("mcp"), "{}", last_error());
+        assert!(c.is_null(), "no handle on failure");
+        let st = ofmpc_robot_new_builtin(c"irb9999".as_ptr(), &mut robot);
+        assert_eq!(st, ofmpc_status::OFMPC_INVALID_ARG);
+        ofmpc_robot_free(robot);
+    }
+}
+
+#[test]
+fn a_robot_from_urdf_text_or_file_with_its_drives() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../ofmpc/robots/irb140");
+    let urdf_path = dir.join("irb140.urdf");
+    let drives_path = dir.join("drives.toml");
+    let urdf = std::ffi::CString::new(std::fs::read_to_string(&urdf_path).unwrap()).unwrap();
+    let drives = std::ffi::CString::new(std::fs::read_to_string(&drives_path).unwrap()).unwrap();
+    let (mut a, mut b, mut c) = (null_mut(), null_mut(), null_mut());
+    let up = std::ffi::CString::new(urdf_path.to_str().unwrap()).unwrap();
+    let dp = std::ffi::CString::new(drives_path.to_str().unwrap()).unwrap();
+    unsafe {
+        ok(ofmpc_robot_new_urdf(urdf.as_ptr(), drives.as_ptr(), &mut a));
+        ok(ofmpc_robot_new_urdf_file(up.as_ptr(), dp.as_ptr(), &mut b));
+        assert_eq!((ofmpc_robot_dof(a), ofmpc_robot_dof(b)), (6, 6));
+        // A controller builds on either.
+        ok(ofmpc_controller_new(b, c"second".as_ptr(), null(), &mut c));
+        assert_eq!(ofmpc_controller_dof(c), 6);
+        ofmpc_controller_free(c);
+        let mut d = null_mut();
+        let st = ofmpc_robot_new_urdf(c"<robot name=\"x\"><link".as_ptr(), null(), &mut d);
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE, "{}", last_error());
+        assert!(d.is_null());
+        let st = ofmpc_robot_new_urdf(
+            urdf.as_ptr(),
+            c"[joint_1]\narmature = \"x\"\n".as_ptr(),
+            &mut d,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        assert!(last_error().contains("drives TOML"), "{}", last_error());
+        let st = ofmpc_robot_new_urdf_file(c"/nonexistent/robot.urdf".as_ptr(), null(), &mut d);
+        assert_eq!(st, ofmpc_status::OFMPC_PARSE);
+        assert!(
+            last_error().contains("/nonexistent/robot.urdf"),
+            "{}",
+            last_error()
+        );
+        ofmpc_robot_free(a);
+        ofmpc_robot_free(b);
+    }
+}
