@@ -18,6 +18,11 @@ pub use links::LinkFrame;
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::TRIANGLE_TOLERANCE;
 
+/// The most moving joints a robot read from a URDF may have: far above any arm (6 to 7, a
+/// few dozen for a hand), far below what the dynamics' n×n matrices can hold in memory
+/// (1000 joints: three 8 MB matrices; 20 000 would need 3.2 GB each).
+pub const MAX_JOINTS: usize = 1000;
+
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};

@@ -227,6 +227,16 @@ const FLANGE_NAME_PARTS: [&str; 5] = ["end_effector", "tool0", "flange", "ee_lin
 /// Parses a URDF text into a [`Robot`]: the chain from the root to `tip` (a link name),
 /// or when `None` the one path of moving joints.
 pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> {
+    // The XML reader recurses on nesting: bounded before it sees the text.
+    let limit = crate::input::MAX_XML_DEPTH;
+    if let Some((line, column)) = crate::input::xml_too_deep(text, limit) {
+        return Err(UrdfError::TooDeep {
+            line,
+            column,
+            limit,
+        }
+        .into());
+    }
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
         // The deserializer gives no position: the element's line, found in the text.
@@ -257,6 +267,13 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
         return Err(UrdfError::NoMovingJoint.into());
     }
     let n = joints.len();
+    if n > super::MAX_JOINTS {
+        return Err(UrdfError::TooManyJoints {
+            count: n,
+            limit: super::MAX_JOINTS,
+        }
+        .into());
+    }
     let missing: Vec<(String, String)> = joints
         .iter()
         .filter(|j| j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0)
