@@ -114,11 +114,11 @@ pub enum MeshError {
         path: String,
     },
     /// A `<mesh filename>` that leads outside its package (`package://../x`, `package:///x`,
-    /// a path or `file://` outside the folder of the URDF's package).
+    /// a path or `file://` outside the folder holding the URDF's `package.xml`).
     #[error(
         "{filename}: leads outside the robot's package (a `package://` name with `..` or an \
-         absolute path, or a file outside the folder holding the URDF's package.xml or its \
-         urdf/ folder); copy the mesh into the package"
+         absolute path, or a path or `file://` outside the folder holding the URDF's \
+         package.xml); copy the mesh into the package"
     )]
     Outside {
         /// The `<mesh filename>` as written (shortened).
@@ -244,14 +244,17 @@ pub fn resolve(
         candidates.truncate(6);
         return Err(not_found(candidates));
     }
-    let root = package_root(urdf_dir);
     let p = match filename.strip_prefix("file://") {
         Some(abs) => PathBuf::from(abs),
         None => urdf_dir.join(filename),
     };
-    let inside = normalized(&p)
-        .zip(normalized(&root))
-        .is_some_and(|(p, r)| p.starts_with(r));
+    let inside = match package_root(urdf_dir) {
+        Some(root) => normalized(&p)
+            .zip(normalized(&root))
+            .is_some_and(|(p, r)| p.starts_with(r)),
+        // Not in a package: a path of the user's own, nothing to confine it to.
+        None => true,
+    };
     if !inside {
         return Err(outside(filename));
     }
@@ -278,15 +281,13 @@ fn stays_inside(rel: &Path) -> bool {
 }
 
 /// The package a URDF in folder `urdf_dir` belongs to: the nearest folder above it (itself
-/// included) holding a `package.xml`, else the folder above the URDF's (`urdf/` beside
-/// `meshes/`). Mesh files named by a path or `file://` must lie inside it.
-fn package_root(urdf_dir: &Path) -> PathBuf {
+/// included) holding a `package.xml`, if any. Mesh files named by a path or `file://` must
+/// lie inside it.
+fn package_root(urdf_dir: &Path) -> Option<PathBuf> {
     let dir = std::path::absolute(urdf_dir).unwrap_or_else(|_| urdf_dir.to_path_buf());
     dir.ancestors()
         .find(|d| d.join("package.xml").is_file())
-        .or_else(|| dir.parent())
-        .unwrap_or(&dir)
-        .to_path_buf()
+        .map(Path::to_path_buf)
 }
 
 /// `p` made absolute with `.` and `..` resolved by the text (symbolic links are not
@@ -346,6 +347,48 @@ mod tests {
         );
         let abs = format!("file://{}", urdf_dir.join("c.stl").display());
         assert_eq!(resolve(&abs, &tmp, None).unwrap(), urdf_dir.join("c.stl"));
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
+    /// `package://../..`, `package:///abs` and, inside a package, a path or `file://` that
+    /// leaves it are refused as such (issue #36); a FIFO is found, then refused by kind.
+    #[test]
+    fn mesh_paths_stay_inside_their_package() {
+        let tmp = std::env::temp_dir().join(format!("ofmpc-mesh-confine-{}", std::process::id()));
+        let pkg = tmp.join("ws/arm");
+        std::fs::create_dir_all(pkg.join("urdf")).unwrap();
+        std::fs::write(pkg.join("package.xml"), b"<package/>").unwrap();
+        std::fs::write(tmp.join("secret.obj"), b"v 0 0 0").unwrap();
+        let dir = pkg.join("urdf");
+        for bad in [
+            "package://../../secret.obj".to_string(),
+            "package:///etc/passwd".to_string(),
+            "package://arm/../../../secret.obj".to_string(),
+            format!("file://{}", tmp.join("secret.obj").display()),
+            "../../../secret.obj".to_string(),
+        ] {
+            let e = resolve(&bad, &dir, None).unwrap_err();
+            assert!(matches!(e, MeshError::Outside { .. }), "{bad}: {e}");
+            assert!(e.to_string().contains("leads outside"), "{e}");
+        }
+        #[cfg(unix)]
+        {
+            let fifo = pkg.join("fifo.stl");
+            assert!(std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success());
+            let p = resolve("package://arm/fifo.stl", &dir, None).unwrap();
+            let e = read_mesh(&p).unwrap_err().to_string();
+            assert!(e.contains("a named pipe (FIFO)"), "{e}");
+            let e = read_mesh(&pkg.join("urdf.stl")).unwrap_err().to_string();
+            assert!(e.contains("not found") || e.contains("No such file"), "{e}");
+            std::fs::create_dir_all(pkg.join("d.stl")).unwrap();
+            let p = resolve("../d.stl", &dir, None).unwrap();
+            let e = read_mesh(&p).unwrap_err().to_string();
+            assert!(e.contains("a folder"), "{e}");
+        }
         std::fs::remove_dir_all(&tmp).unwrap();
     }
 

@@ -471,4 +471,74 @@ mod tests {
         assert_eq!(v.meshes.len(), 5);
         std::fs::remove_dir_all(&tmp).unwrap();
     }
+
+    /// Coordinates that are not finite or absurd (a `<matrix>` of NaN, `<scale>` 1e308,
+    /// 1e38 m vertices) are refused per mesh with a warning naming the link and the file, and
+    /// the link is drawn as a capsule (issue #36: it vanished or dwarfed the robot).
+    #[test]
+    fn absurd_coordinates_are_refused_per_mesh_with_the_link_and_the_file() {
+        let tmp = std::env::temp_dir().join(format!("ofmpc-visuals-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&tmp).unwrap();
+        let dae = super::super::collada::tests::square_dae()
+            .replace("<matrix>1 0 0 10", "<matrix>NaN 0 0 10");
+        std::fs::write(tmp.join("nan.dae"), &dae).unwrap();
+        std::fs::write(
+            tmp.join("far.obj"),
+            "v 0 0 0\nv 1e38 0 0\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        let meshes = arm().parent().unwrap().join("../meshes");
+        let text = std::fs::read_to_string(arm())
+            .unwrap()
+            .replace(
+                "../meshes/link1.stl",
+                &tmp.join("far.obj").display().to_string(),
+            )
+            .replace(
+                "package://mesh_arm/meshes/link2.dae",
+                &tmp.join("nan.dae").display().to_string(),
+            )
+            .replace(
+                "<mesh filename=\"../meshes/link3.obj\"/>",
+                "<mesh filename=\"../meshes/link3.obj\" scale=\"1e308 1 1\"/>",
+            )
+            .replace("../meshes/", &format!("{}/", meshes.display()));
+        let urdf = tmp.join("arm.urdf");
+        std::fs::write(&urdf, text).unwrap();
+        let robot = Robot::from_urdf_file(&urdf).unwrap();
+        let v = load(&urdf, &robot, None);
+        assert_eq!(v.warnings.len(), 3, "{:?}", v.warnings);
+        for (w, link, file) in [
+            (&v.warnings[0], "link_1", "far.obj"),
+            (&v.warnings[1], "link_2", "nan.dae"),
+            (&v.warnings[2], "link_3", "link3.obj"),
+        ] {
+            assert!(
+                w.contains(&format!("link \"{link}\""))
+                    && w.contains(file)
+                    && w.contains("capsule"),
+                "{w}"
+            );
+        }
+        assert_eq!(
+            v.capsule,
+            vec![false, true, true, true, false, false, false]
+        );
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
+    /// Forty visuals naming one mesh read it once; past the robot's triangle budget the
+    /// visuals are capsules with a warning naming the budget.
+    #[test]
+    fn the_robots_meshes_share_one_triangle_budget() {
+        let mut b = Budget::default();
+        let m = TriMesh {
+            positions: vec![[0.0; 3]; 3],
+            triangles: vec![[0, 1, 2]; ROBOT_TRIANGLES / 2],
+        };
+        assert!(b.take(m.clone()).is_ok());
+        assert!(b.take(m.clone()).is_ok());
+        let e = b.take(m).unwrap_err();
+        assert!(e.contains("20000000 triangles together"), "{e}");
+    }
 }
