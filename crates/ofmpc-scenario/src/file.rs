@@ -526,8 +526,20 @@ impl std::str::FromStr for Override {
         let raw = raw.trim();
         let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
             .ok()
-            .and_then(|mut t| t.remove("v"))
-            .unwrap_or_else(|| toml::Value::String(raw.into()));
+            .and_then(|mut t| t.remove("v"));
+        // A whole number TOML cannot hold is too large, not a string (issue #36).
+        let digits = raw.strip_prefix(['+', '-']).unwrap_or(raw).replace('_', "");
+        if value.is_none() && !digits.is_empty() && digits.bytes().all(|c| c.is_ascii_digit()) {
+            return Err(ScenarioError::Override {
+                key,
+                value: ofmpc::input::quote(raw, ofmpc::input::QUOTE_CHARS),
+                message: format!(
+                    "too large: a whole number here is at most {} (TOML's 64-bit integers)",
+                    i64::MAX
+                ),
+            });
+        }
+        let value = value.unwrap_or_else(|| toml::Value::String(raw.into()));
         Ok(Self {
             key,
             raw: raw.into(),

@@ -169,6 +169,57 @@ pub fn quote(s: &str, max: usize) -> String {
     format!("{head}… ({n} characters)")
 }
 
+/// The longest line of a message kept whole by [`for_reader`] (characters).
+pub const MESSAGE_LINE_CHARS: usize = 300;
+
+/// A message made readable (issue #36), as the command and the Python bindings show it: a
+/// number written with more than 19 digits (`1e300` printed in full, a saturated count) is
+/// written in scientific notation with four significant digits (`1.000e300`), and a line
+/// longer than [`MESSAGE_LINE_CHARS`] is cut there with its length said, so that input
+/// quoted whole (a 3 MB TOML line) never makes a huge message.
+pub fn for_reader(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(4096));
+    for (i, line) in message.split('\n').enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        out.push_str(&quote(&short_numbers(line), MESSAGE_LINE_CHARS));
+    }
+    out
+}
+
+/// `line` with each number of more than 19 digits (not inside a word or a path) written as
+/// `{:.3e}`.
+fn short_numbers(line: &str) -> String {
+    let b = line.as_bytes();
+    let mut out = String::with_capacity(line.len());
+    let mut i = 0;
+    let mut copied = 0;
+    while i < b.len() {
+        let boundary = i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b"_/.-".contains(&b[i - 1]));
+        if !(boundary && b[i].is_ascii_digit()) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < b.len() && (b[i].is_ascii_digit() || b[i] == b'.') {
+            i += 1;
+        }
+        let token = &line[start..i];
+        let digits = token.bytes().filter(u8::is_ascii_digit).count();
+        let ends_word = i < b.len() && (b[i].is_ascii_alphabetic() || b[i] == b'_');
+        if digits > 19 && !ends_word && token.matches('.').count() <= 1 {
+            if let Ok(v) = token.parse::<f64>() {
+                out.push_str(&line[copied..start]);
+                out.push_str(&format!("{v:.3e}"));
+                copied = i;
+            }
+        }
+    }
+    out.push_str(&line[copied..]);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -177,13 +228,30 @@ mod tests {
     fn depth_is_counted_past_comments_self_closing_tags_and_quoted_brackets() {
         let t = "<?xml version=\"1.0\"?>\n<!-- <a><a><a> -->\n<r a=\"x>y\"><b/><c><d/></c></r>";
         assert_eq!(xml_too_deep(t, 2), None);
-        assert_eq!(xml_too_deep(t, 1), Some((3, 20)));
+        assert_eq!(xml_too_deep(t, 1), Some((3, 16)));
         let deep = "<a>".repeat(300) + &"</a>".repeat(300);
         assert_eq!(xml_too_deep(&deep, 300), None);
         assert_eq!(xml_too_deep(&deep, 299), Some((1, 299 * 3 + 1)));
         // Siblings do not add up.
         let wide = "<r>".to_string() + &"<a></a>".repeat(1000) + "</r>";
         assert_eq!(xml_too_deep(&wide, 2), None);
+    }
+
+    #[test]
+    fn messages_write_huge_numbers_short_and_cut_huge_lines() {
+        let e300 = format!("ts = 1{}.0 s, count {}", "0".repeat(300), u64::MAX);
+        assert_eq!(for_reader(&e300), "ts = 1.000e300 s, count 1.845e19");
+        let tiny = format!("ts = 0.{}1", "0".repeat(299));
+        assert_eq!(for_reader(&tiny), "ts = 1.000e-300");
+        // Ordinary numbers, words and paths with digits stay as they are.
+        let plain = "line 12, column 3: 0.01 s; run-20261203173811123456/x1234567890123456789012";
+        assert_eq!(for_reader(plain), plain);
+        let huge = format!("1 | x = \"{}\"\nsecond line", "a".repeat(3_000_000));
+        let m = for_reader(&huge);
+        assert!(
+            m.len() < 400 && m.ends_with("characters)\nsecond line"),
+            "{m}"
+        );
     }
 
     #[test]
