@@ -2,7 +2,7 @@
 //! `/dev/zero` or a runaway file given as a URDF or a drives file is never
 //! read whole, and text that is not UTF-8 is an error naming the byte.
 
-use super::ModelError;
+use super::error::ModelError;
 use std::path::Path;
 
 /// The largest URDF read (bytes): 64 MiB, far above any robot description (a 300-joint
