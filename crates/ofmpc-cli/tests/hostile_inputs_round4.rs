@@ -147,3 +147,60 @@ fn a_robot_of_absurd_dimension_is_refused_before_allocating() {
         "{e}"
     );
 }
+
+/// Two `init robot` at once into one folder, 50 times: one complete set of one robot (its
+/// drives file and its scenario) and a refusal, never a mix of the two robots' files.
+#[test]
+fn concurrent_inits_never_mix_their_files() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let a = data.join("../ofmpc/robots/irb140/irb140.urdf");
+    let b = data.join("tests/data/mesh_arm/urdf/mesh_arm.urdf");
+    for i in 0..50 {
+        let out = tmp.path().join(format!("o{i}"));
+        let spawn = |urdf: &Path| {
+            Command::new(BIN)
+                .args(["init", "robot"])
+                .arg(urdf)
+                .arg("--out")
+                .arg(&out)
+                .stdin(Stdio::null())
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        let (ca, cb) = (spawn(&a), spawn(&b));
+        let (oa, ob) = (
+            ca.wait_with_output().unwrap(),
+            cb.wait_with_output().unwrap(),
+        );
+        let codes = [oa.status.code(), ob.status.code()];
+        let wins = codes.iter().filter(|c| **c == Some(0)).count();
+        assert!(
+            wins >= 1 && codes.iter().all(|c| matches!(c, Some(0) | Some(2))),
+            "try {i}: {codes:?} {} {}",
+            stderr(&oa),
+            stderr(&ob)
+        );
+        assert_eq!(wins, 1, "try {i}: both said they wrote");
+        let drives = fs::read_to_string(out.join("drives.toml")).unwrap();
+        let scenario = fs::read_to_string(out.join("scenario.toml")).unwrap();
+        let from_a = drives.contains("irb140.urdf");
+        assert_eq!(
+            from_a,
+            scenario.contains("irb140.urdf"),
+            "try {i}: a mixed folder"
+        );
+        assert_eq!(
+            !from_a,
+            scenario.contains("mesh_arm.urdf"),
+            "try {i}: a mixed folder"
+        );
+        let names: Vec<_> = fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        assert_eq!(names.len(), 2, "try {i}: {names:?}");
+    }
+}

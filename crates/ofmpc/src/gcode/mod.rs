@@ -70,6 +70,7 @@ mod tools;
 pub use flow::DEFAULT_MAX_STEPS;
 use flow::{Runner, SourceLine};
 use interpreter::Interpreter;
+pub use interpreter::{MAX_EVENTS, MAX_MESSAGE_BYTES, MAX_MOVES};
 use lexer::lex_line;
 pub use program::{
     arc_tolerance, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions,

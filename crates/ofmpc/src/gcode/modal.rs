@@ -434,6 +434,14 @@ impl Interpreter {
         } else {
             (z0 + r * scale, z0 + r * scale + z * scale)
         };
+        if r_m < bottom - MIN_MOVE_LENGTH {
+            // LinuxCNC: "R less than Z in cycle" (it would rapid below the bottom, then drill up).
+            return fail(
+                InvalidValue,
+                format!("{code}: the retract plane R is below the hole's bottom"),
+                "R is the plane the drill starts from, above the bottom: give R greater than the bottom (in G91, a bottom word below 0)",
+            );
+        }
         let clear = if self.ext.retract_initial {
             z0.max(r_m)
         } else {
@@ -446,6 +454,14 @@ impl Interpreter {
             p = to;
         }
         let dwell = self.ext.cycle[3].unwrap_or(0.0);
+        if dwell < 0.0 {
+            // As G4 P-1 (a dwell never runs backwards).
+            return fail(
+                InvalidValue,
+                format!("{code}: negative dwell time P"),
+                "give P ≥ 0 (seconds), or leave it out",
+            );
+        }
         let mut given = [None; 3];
         for (a, c) in letters.into_iter().enumerate() {
             if a != d {
@@ -453,6 +469,9 @@ impl Interpreter {
             }
         }
         for _ in 0..repeats {
+            if self.over_budget().is_some() {
+                break; // reported by the caller, naming the limit
+            }
             let mut xy = if self.absolute {
                 self.place(p, given)
             } else {
@@ -525,7 +544,8 @@ impl Interpreter {
         match n {
             73 | 83 => {
                 let mut depth = top[d];
-                while depth > bottom + MIN_MOVE_LENGTH {
+                // Stopped at once past the program's budget (the caller reports it).
+                while depth > bottom + MIN_MOVE_LENGTH && self.over_budget().is_none() {
                     let next = (depth - q).max(bottom);
                     let here = self.here();
                     if n == 83 && depth < top[d] {
@@ -649,7 +669,7 @@ fn cycle_repeats(line: usize, args: &Args<'_, '_>) -> Result<usize, GcodeError> 
             l.col,
             GcodeErrorKind::InvalidValue,
             l.text,
-            "L (repeats) must be a whole number >= 0",
+            "L (repeats) must be a whole number from 0 to 1000000 (the limit)",
             "write e.g. L3",
         )),
         None => Ok(1),

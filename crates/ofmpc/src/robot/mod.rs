@@ -21,7 +21,6 @@ pub use links::LinkFrame;
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::{MAX_JOINTS, TRIANGLE_TOLERANCE};
 
-
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};
 use joint::check_inertia_tensor;
