@@ -92,3 +92,28 @@ fn canned_cycles_refuse_r_below_the_bottom_and_a_negative_dwell() {
     .unwrap();
     assert!(!p.moves.is_empty());
 }
+
+/// With a tool table, `T1 M6` chooses the length `G43` takes: no "ignored" warning for T or
+/// M6 (issue #36); without one they still have no effect and are warned.
+#[test]
+fn t_and_m6_are_not_called_ignored_when_a_tool_table_gives_their_length() {
+    let text = "T1 M6\nG21 G0 X0 Y0 Z0\nG43\nG1 Z1 F100\nM30\n";
+    let options = ParseOptions {
+        tool_table: Some(ofmpc::gcode::ToolTable::parse("T1 P1 Z10\n").unwrap()),
+        ..ParseOptions::default()
+    };
+    let p = parse(text, &options).unwrap();
+    assert!((p.tool_length - 0.01).abs() < 1e-15);
+    assert!(
+        p.warnings
+            .iter()
+            .all(|w| !w.to_string().contains("ignored")),
+        "{:?}",
+        p.warnings
+    );
+    let p = parse("T1 M6\nG21 G0 X0 Y0 Z0\nM30\n", &ParseOptions::default()).unwrap();
+    assert!(p
+        .warnings
+        .iter()
+        .any(|w| w.to_string().contains("T1 (tool) ignored")));
+}

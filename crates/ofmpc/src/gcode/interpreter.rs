@@ -523,12 +523,17 @@ impl Interpreter {
     }
 
     /// Warns about harmless words without effect on the path: S, T, O and the ignored M codes.
+    /// With a tool table, T and M6 choose the length `G43` takes: not warned (issue #36).
     fn warn_ignored_words(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
+        let table = self.tools.is_some();
         for (c, what) in [
             ('S', "spindle speed"),
             ('T', "tool"),
             ('O', "program number"),
         ] {
+            if c == 'T' && table {
+                continue;
+            }
             if let Some(w) = sorted.args.get(c) {
                 self.warn(
                     line,
@@ -539,7 +544,9 @@ impl Interpreter {
         }
         for (m, w) in &sorted.mcodes {
             if let MCode::Warn(msg) = m {
-                self.warn(line, w.col, msg.clone());
+                if !(table && msg.contains("(tool change)")) {
+                    self.warn(line, w.col, msg.clone());
+                }
             }
         }
     }
