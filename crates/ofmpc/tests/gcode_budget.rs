@@ -105,9 +105,7 @@ fn t_and_m6_are_not_called_ignored_when_a_tool_table_gives_their_length() {
     let p = parse(text, &options).unwrap();
     assert!((p.tool_length - 0.01).abs() < 1e-15);
     assert!(
-        p.warnings
-            .iter()
-            .all(|w| !w.to_string().contains("ignored")),
+        p.warnings.iter().all(|w| !w.message.contains("ignored")),
         "{:?}",
         p.warnings
     );
@@ -115,5 +113,5 @@ fn t_and_m6_are_not_called_ignored_when_a_tool_table_gives_their_length() {
     assert!(p
         .warnings
         .iter()
-        .any(|w| w.to_string().contains("T1 (tool) ignored")));
+        .any(|w| w.message.contains("T1 (tool) ignored")));
 }
