@@ -170,7 +170,7 @@ pub fn quote(s: &str, max: usize) -> String {
 }
 
 /// The longest line of a message kept whole by [`for_reader`] (characters).
-pub const MESSAGE_LINE_CHARS: usize = 300;
+pub const MESSAGE_LINE_CHARS: usize = 1000;
 
 /// A message made readable (issue #36), as the command and the Python bindings show it: a
 /// number written with more than 19 digits (`1e300` printed in full, a saturated count) is
