@@ -434,14 +434,6 @@ impl Interpreter {
         } else {
             (z0 + r * scale, z0 + r * scale + z * scale)
         };
-        if r_m < bottom - MIN_MOVE_LENGTH {
-            // LinuxCNC: "R less than Z in cycle" (it would rapid below the bottom, then drill up).
-            return fail(
-                InvalidValue,
-                format!("{code}: the retract plane R is below the hole's bottom"),
-                "R is the plane the drill starts from, above the bottom: give R greater than the bottom (in G91, a bottom word below 0)",
-            );
-        }
         let clear = if self.ext.retract_initial {
             z0.max(r_m)
         } else {
@@ -454,13 +446,8 @@ impl Interpreter {
             p = to;
         }
         let dwell = self.ext.cycle[3].unwrap_or(0.0);
-        if dwell < 0.0 {
-            // As G4 P-1 (a dwell never runs backwards).
-            return fail(
-                InvalidValue,
-                format!("{code}: negative dwell time P"),
-                "give P ≥ 0 (seconds), or leave it out",
-            );
+        if let Some((message, hint)) = cycle_checks(&code, r_m, bottom, dwell) {
+            return fail(InvalidValue, message, hint);
         }
         let mut given = [None; 3];
         for (a, c) in letters.into_iter().enumerate() {
@@ -656,6 +643,25 @@ impl Interpreter {
         }
         q + w
     }
+}
+
+/// LinuxCNC's checks of a canned cycle's words (issue #36): the retract plane `r_m` not
+/// below the hole's `bottom` ("R less than Z in cycle": it would rapid below the bottom,
+/// then drill up), and a dwell ≥ 0 (as G4 P-1). The message and the hint, if one fails.
+fn cycle_checks(code: &str, r_m: f64, bottom: f64, dwell: f64) -> Option<(String, &'static str)> {
+    if r_m < bottom - MIN_MOVE_LENGTH {
+        return Some((
+            format!("{code}: the retract plane R is below the hole's bottom"),
+            "R is the plane the drill starts from, above the bottom: give R greater than the \
+             bottom (in G91, a bottom word below 0)",
+        ));
+    }
+    (dwell < 0.0).then(|| {
+        (
+            format!("{code}: negative dwell time P"),
+            "give P ≥ 0 (seconds), or leave it out",
+        )
+    })
 }
 
 /// The L word of a canned cycle (repeats; default 1).
