@@ -36,6 +36,20 @@ TUNINGS: Dict[str, Dict[str, Any]] = {
 }
 
 
+# The scenario's shorthands for several controllers: one grid point per controller, so they
+# are expanded here (issue #36: controllers=["paper"] made a point of three runs).
+GROUPS = {
+    "paper": ["usual", "first", "second"],
+    "baselines": ["pid", "ctc", "ctc-adaptive", "dob-mpc"],
+}
+GROUPS["all"] = GROUPS["paper"] + ["first-adaptive", "second-adaptive"] + GROUPS["baselines"]
+
+
+def expand(controllers: Sequence[str]) -> List[str]:
+    """The controller names with the shorthands "paper", "baselines", "all" expanded."""
+    return [k for c in controllers for k in GROUPS.get(c, [c])]
+
+
 def grid(
     payloads: Sequence[float],
     controllers: Sequence[str],
@@ -44,7 +58,7 @@ def grid(
 ) -> List[Dict[str, Any]]:
     """One scenario dict per payload × controller × tuning, built on `base`."""
     points = []
-    for (name, tuning), kind, mass in itertools.product(tunings.items(), controllers, payloads):
+    for (name, tuning), kind, mass in itertools.product(tunings.items(), expand(controllers), payloads):
         s = json.loads(json.dumps(base or {}))  # deep copy
         s["title"] = f"{kind}, {mass} kg, tuning {name}"
         s["controllers"] = [kind]

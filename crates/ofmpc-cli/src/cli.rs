@@ -173,18 +173,19 @@ pub struct ReproduceArgs {
     /// G-code program (default: the paper's Table I, built in).
     #[arg(long)]
     pub program: Option<PathBuf>,
-    /// Payloads in kg, comma-separated; e.g. 0,0.25,0.5,1,2,4,6 for a sweep.
-    #[arg(long, default_value = "0,0.25", allow_hyphen_values = true)]
-    pub payload: String,
+    /// Payloads in kg, comma-separated; e.g. 0,0.25,0.5,1,2,4,6 for a sweep
+    /// [default: 0,0.25; with --compare: 0,0.25,1,2,6].
+    #[arg(long, allow_hyphen_values = true)]
+    pub payload: Option<String>,
     /// Controllers, comma-separated: usual, first, second, first-adaptive,
     /// second-adaptive, and the baselines pid, ctc, ctc-adaptive, dob-mpc;
     /// "all" for every one, "baselines" for the four baselines, "paper" for
-    /// the paper's three.
-    #[arg(long, default_value = "usual,first,second")]
-    pub controllers: String,
+    /// the paper's three [default: usual,first,second; with --compare: all].
+    #[arg(long)]
+    pub controllers: Option<String>,
     /// Compare every controller (the paper's, their adaptive variants and the
-    /// baselines) over 0, 0.25, 1, 2, 6 kg; --payload and --controllers,
-    /// when given other values than their defaults, still choose.
+    /// baselines) over 0, 0.25, 1, 2, 6 kg; --payload and --controllers, when
+    /// given (even with their usual defaults' values), still choose.
     #[arg(long)]
     pub compare: bool,
     /// The payload is picked up at this time (s) of the path: the plant carries

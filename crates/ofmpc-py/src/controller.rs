@@ -43,6 +43,26 @@ const WEIGHTS: [&str; 7] = [
     "dob_observer_bandwidth",
 ];
 
+/// Whether keyword `key` (a weight or `solver`) has an effect on a controller of `kind`: the
+/// predictive weights and `solver` on the paper's controllers and dob-mpc, each baseline's
+/// bandwidth on its own kind only (issue #36: `Controller("pid", q_yw=5)` was ignored).
+fn applies(key: &str, kind: ControllerKind) -> bool {
+    let predictive = !matches!(kind.base(), ControllerKind::Pid | ControllerKind::Ctc);
+    match key {
+        "pid_bandwidth" => kind == ControllerKind::Pid,
+        "ctc_bandwidth" => kind.base() == ControllerKind::Ctc,
+        "dob_observer_bandwidth" => kind == ControllerKind::DobMpc,
+        _ => predictive,
+    }
+}
+
+/// The keywords that apply to `kind`, for a message.
+fn applying(kind: ControllerKind) -> String {
+    let all = WEIGHTS.iter().copied().chain(["solver"]);
+    let keys: Vec<&str> = all.filter(|k| applies(k, kind)).collect();
+    keys.join(", ")
+}
+
 /// Reads `solver=`: `"dense-qr"`, `"structured"` or `"auto"` (the scenario's names).
 fn solver(value: &Bound<'_, PyAny>) -> PyResult<Solver> {
     match value.extract::<String>().as_deref() {
@@ -91,6 +111,15 @@ impl PyController {
         if let Some(w) = weights {
             for (key, value) in w.iter() {
                 let key: String = key.extract()?;
+                if (key == "solver" || WEIGHTS.contains(&key.as_str())) && !applies(&key, kind) {
+                    return Err(to_py(format!(
+                        "{key}= does not apply to a {:?} controller (it would be ignored): \
+                         remove it; a {:?} controller takes ts, horizon and {}",
+                        kind.name(),
+                        kind.name(),
+                        applying(kind)
+                    )));
+                }
                 if key == "solver" {
                     settings.solver = solver(&value)?;
                     continue;

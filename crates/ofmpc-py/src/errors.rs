@@ -14,7 +14,7 @@ create_exception!(
 
 /// Any library error (its `Display` is the user-facing message) as an [`OfmpcError`].
 pub fn to_py<E: std::fmt::Display>(e: E) -> PyErr {
-    OfmpcError::new_err(e.to_string())
+    OfmpcError::new_err(ofmpc::input::for_reader(&e.to_string()))
 }
 
 /// An `anyhow` error with its whole chain (`a: b: c`), as the CLI prints it (a cause the

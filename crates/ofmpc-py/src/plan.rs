@@ -154,7 +154,8 @@ pub fn plan(
     };
     let robot = robot.robot().clone();
     let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
-    py.detach(move || {
+    // Ctrl-C answered at once (issue #36).
+    crate::run::answering_signals(py, move || {
         let orientation = match rpy_deg {
             None => Orientation::AtZero,
             Some((r, p, y)) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
@@ -211,7 +212,7 @@ pub fn read_program(
         .transpose()
         .map_err(to_py)?;
     let robot = robot.map(|r| r.robot().clone());
-    py.detach(move || {
+    crate::run::answering_signals(py, move || {
         let start = match &robot {
             Some(r) => ofmpc::motion::start_position(r)
                 .ok_or_else(|| to_py("the robot's start pose has no tool position".to_string()))?,

@@ -70,6 +70,35 @@ where
     })
 }
 
+/// Runs `work` in a thread of its own, the GIL released, checking for signals meanwhile (as
+/// [`interruptible`] does) for work that has no cancel flag (a program's reading and
+/// planning, issue #36: Ctrl-C waited for them to end). On a signal's exception the call
+/// returns it at once; the thread ends on its own later (its work is bounded by the
+/// program's limits) and its result is dropped.
+pub(crate) fn answering_signals<T, F>(py: Python<'_>, work: F) -> PyResult<T>
+where
+    T: Send + 'static,
+    F: FnOnce() -> PyResult<T> + Send + 'static,
+{
+    let waiter = std::thread::current();
+    let worker = std::thread::spawn(move || {
+        let result = work();
+        waiter.unpark();
+        result
+    });
+    loop {
+        if worker.is_finished() {
+            return worker.join().unwrap_or_else(|_| {
+                Err(chain_to_py(anyhow::anyhow!(
+                    "the call stopped on an internal error (a bug: please report it)"
+                )))
+            });
+        }
+        py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
+        py.check_signals()?;
+    }
+}
+
 /// Runs a scenario file (TOML, paths inside relative to it); returns metrics.json's text.
 #[pyfunction]
 #[pyo3(name = "_run_file")]

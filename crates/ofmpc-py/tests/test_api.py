@@ -139,8 +139,15 @@ def test_baselines_step_from_python(robot, ref):
     first torque holds the robot (τ = g(q)); their bandwidths are keyword arguments."""
     w = ref.q[0]
     x = np.concatenate([w, np.zeros(6)])
-    for kind in ("pid", "ctc", "ctc-adaptive", "dob-mpc"):
-        c = ofmpc.Controller(kind, robot, pid_bandwidth=50.0, ctc_bandwidth=[120.0] * 6)
+    # Each kind takes its own bandwidth only (issue #36: the others were ignored).
+    bandwidths = {
+        "pid": {"pid_bandwidth": 50.0},
+        "ctc": {"ctc_bandwidth": [120.0] * 6},
+        "ctc-adaptive": {"ctc_bandwidth": [120.0] * 6},
+        "dob-mpc": {"dob_observer_bandwidth": 40.0},
+    }
+    for kind, kw in bandwidths.items():
+        c = ofmpc.Controller(kind, robot, **kw)
         assert c.kind == kind
         c.reset(x)
         tau = c.step(x, w, np.tile(w, (10, 1)))
@@ -273,7 +280,8 @@ def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
     """Issue #22 items 15, 17: /dev/zero is not read whole; a Latin-1 file names the byte and
     the encoding; a missing file is said to be missing, not parsed as G-code."""
     if os.path.exists("/dev/zero"):
-        with pytest.raises(ofmpc.OfmpcError, match="larger than the limit"):
+        # Issue #36: a device is refused as what it is, never read.
+        with pytest.raises(ofmpc.OfmpcError, match="it is a character device"):
             ofmpc.plan(pathlib.Path("/dev/zero"), robot)
     latin = tmp_path / "p.gcode"
     latin.write_bytes("G0 X500 Y0 Z600 ; caf\xe9\n".encode("latin-1"))

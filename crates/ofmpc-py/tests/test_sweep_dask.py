@@ -52,3 +52,10 @@ def test_a_4_point_sweep_on_2_workers_equals_the_cli(tmp_path):
     assert by[("second", "paper")]["cartesian_error_rms_mm"] != by[("second", "stiff")]["cartesian_error_rms_mm"]
     assert by[("usual", "paper")]["steady_cartesian_error_mm"] > 0.01
     assert by[("second", "paper")]["steady_cartesian_error_mm"] < 1e-6
+
+
+def test_controller_shorthands_expand_to_one_point_per_controller():
+    """Issue #36: controllers=["paper"] made one point of three runs; now three points."""
+    points = sweep_dask.grid([0.0], ["paper"], {"paper": {}})
+    assert [p["scenario"]["controllers"] for p in points] == [["usual"], ["first"], ["second"]]
+    assert len(sweep_dask.grid([0.0], ["all"], {"paper": {}})) == 9

@@ -419,7 +419,8 @@ pub fn chain_text(e: &(dyn std::error::Error + 'static)) -> String {
         }
         cause = c.source();
     }
-    text
+    // Huge numbers short, huge lines cut (issue #36): one place for the command and Python.
+    ofmpc::input::for_reader(&text)
 }
 
 #[cfg(test)]

@@ -527,8 +527,20 @@ impl std::str::FromStr for Override {
         let raw = raw.trim();
         let value = toml::from_str::<toml::Table>(&format!("v = {raw}"))
             .ok()
-            .and_then(|mut t| t.remove("v"))
-            .unwrap_or_else(|| toml::Value::String(raw.into()));
+            .and_then(|mut t| t.remove("v"));
+        // A whole number TOML cannot hold is too large, not a string (issue #36).
+        let digits = raw.strip_prefix(['+', '-']).unwrap_or(raw).replace('_', "");
+        if value.is_none() && !digits.is_empty() && digits.bytes().all(|c| c.is_ascii_digit()) {
+            return Err(ScenarioError::Override {
+                key,
+                value: ofmpc::input::quote(raw, ofmpc::input::QUOTE_CHARS),
+                message: format!(
+                    "too large: a whole number here is at most {} (TOML's 64-bit integers)",
+                    i64::MAX
+                ),
+            });
+        }
+        let value = value.unwrap_or_else(|| toml::Value::String(raw.into()));
         Ok(Self {
             key,
             raw: raw.into(),
@@ -547,23 +559,16 @@ pub const MAX_PROGRAM_BYTES: u64 = 64 << 20;
 /// Reads a text file of at most `limit` bytes: stops reading past the limit (a `/dev/zero` or
 /// a runaway file is never read whole) and says the limit; text that is not UTF-8 is an error
 /// naming the byte offset, line and column of the first bad byte and the encoding to use.
-/// Errors are of kind `InvalidData` (the caller adds the file's name).
+/// Errors are of kind `InvalidData` (the caller adds the file's name); a named pipe, a device
+/// or a folder is refused without waiting, saying what it is ([`ofmpc::input::open_regular`]).
 pub fn read_text_limited(path: &Path, limit: u64) -> std::io::Result<String> {
-    use std::io::Read;
-    let mut bytes = Vec::new();
-    std::fs::File::open(path)?
-        .take(limit + 1)
-        .read_to_end(&mut bytes)?;
-    if bytes.len() as u64 > limit {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "it is larger than the limit of {limit} bytes ({} MiB; reading stopped there): \
-                 split it, or check that it is the file you meant",
-                limit >> 20
-            ),
-        ));
-    }
+    let bytes = match ofmpc::input::read_limited(path, limit) {
+        Ok(b) => b,
+        Err(ofmpc::input::ReadLimitedError::Io(e)) => return Err(e),
+        Err(ofmpc::input::ReadLimitedError::TooLarge { .. }) => {
+            return Err(too_large(limit));
+        }
+    };
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let b = e.as_bytes();
@@ -574,20 +579,32 @@ pub fn read_text_limited(path: &Path, limit: u64) -> std::io::Result<String> {
                 .rposition(|&c| c == b'\n')
                 .map_or(0, |i| i + 1)
             + 1;
-        let hint = if b.starts_with(&[0xff, 0xfe]) || b.starts_with(&[0xfe, 0xff]) {
-            "it looks like UTF-16"
+        let (hint, from) = if b.starts_with(&[0xff, 0xfe]) || b.starts_with(&[0xfe, 0xff]) {
+            ("it looks like UTF-16", "UTF-16")
         } else {
-            "it may be Latin-1 or another 8-bit encoding"
+            ("it may be Latin-1 or another 8-bit encoding", "LATIN1")
         };
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!(
                 "not UTF-8 text: byte {at} (line {line}, column {col}) is 0x{:02x} ({hint}): save \
-                 it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)",
+                 it as UTF-8 (e.g. iconv -f {from} -t UTF-8)",
                 b[at]
             ),
         )
     })
+}
+
+/// The error for a file past its byte limit.
+fn too_large(limit: u64) -> std::io::Error {
+    std::io::Error::new(
+        std::io::ErrorKind::InvalidData,
+        format!(
+            "it is larger than the limit of {limit} bytes ({} MiB; reading stopped there): \
+             split it, or check that it is the file you meant",
+            limit >> 20
+        ),
+    )
 }
 
 /// The scenario's sections: each a table of keys. A derived deserializer would also read a

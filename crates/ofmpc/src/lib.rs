@@ -73,6 +73,7 @@ pub mod gcode;
 pub mod geometry;
 pub mod ident;
 pub mod ik;
+pub mod input;
 mod linalg;
 #[doc(hidden)]
 pub use linalg::random;

@@ -20,7 +20,8 @@ use std::path::{Path, PathBuf};
 
 /// The layers, bottom first: a module may reference only modules on lower layers.
 ///
-/// - `linalg`: dense kernels (Cholesky, RK4, dot), the pseudo-random generator;
+/// - `linalg`: dense kernels (Cholesky, RK4, dot), the pseudo-random generator; `input`:
+///   opening input files without blocking, bounded XML nesting, short quotes;
 /// - `spatial` (6-D vectors, transforms), `geometry` (path segments, planes, arcs),
 ///   `ik` (inverse kinematics against a `ForwardKinematics` trait);
 /// - `robot` (model, URDF, drives), `gcode` (program text → moves of geometry);
@@ -29,7 +30,7 @@ use std::path::{Path, PathBuf};
 /// - `control` (the MPC controllers);
 /// - `sim` (plant, closed loop, metrics), `analysis` (closed-loop stability).
 const LAYERS: &[&[&str]] = &[
-    &["linalg"],
+    &["linalg", "input"],
     &["spatial", "geometry", "ik"],
     &["robot", "gcode"],
     &["dynamics"],

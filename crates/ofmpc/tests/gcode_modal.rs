@@ -94,11 +94,24 @@ fn g43_h_takes_the_length_from_the_tool_table() {
     assert_eq!((e.line, e.column), (2, 4));
     let e = ToolTable::parse("T1 Z1\nP2 Z3\n").unwrap_err();
     assert!(e.to_string().contains("without T"), "{e}");
-    // A tool listed twice: the first line counts (LinuxCNC finds the first pocket).
-    assert_eq!(
-        ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap().length(1),
-        Some(1e-3)
+    // Issue #36: a tool listed twice, a word twice on a line and an absurd length are
+    // refused with line and column (LinuxCNC keeps the first pocket silently); a BOM is
+    // skipped.
+    let e = ToolTable::parse("T1 Z1\nT1 Z3\n").unwrap_err();
+    assert_eq!((e.line, e.column), (2, 1));
+    assert!(
+        e.to_string()
+            .contains("tool 1 is listed twice (lines 1 and 2)"),
+        "{e}"
     );
+    let e = ToolTable::parse("T1 P1 Z10 Z20\n").unwrap_err();
+    assert_eq!((e.line, e.column), (1, 11));
+    assert!(e.to_string().contains("Z is given twice"), "{e}");
+    let e = ToolTable::parse("T1 Z1e300\n").unwrap_err();
+    assert_eq!((e.line, e.column), (1, 4));
+    assert!(e.to_string().contains("past 10000 mm"), "{e}");
+    let bom = ToolTable::parse("\u{feff}T1 P1 Z12.5\n").unwrap();
+    assert_eq!(bom.length(1), Some(12.5e-3));
     let e =
         ToolTable::parse("TOOLNO POCKET LENGTH DIAMETER COMMENT\n1 1 0.5 0.1 mill\n").unwrap_err();
     assert!(e.to_string().contains("old tool table format"), "{e}");

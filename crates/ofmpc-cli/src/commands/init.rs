@@ -95,6 +95,11 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
     let robot = Robot::from_urdf_file_with(&a.urdf, &options)
         .with_context(|| format!("reading the URDF {}", a.urdf.display()))?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    // The folder's lock, as every output takes (issue #36): a second `init` (or a run) into
+    // the same folder meanwhile is refused, so the check below and both writes are one step
+    // and a race leaves one complete set, never one robot's drives with another's scenario.
+    let _lock = crate::output::atomic::DirLock::acquire(&a.out)
+        .with_context(|| format!("writing into {}", a.out.display()))?;
     let drives = a.out.join("drives.toml");
     let scenario = a.out.join("scenario.toml");
     for p in [&drives, &scenario] {

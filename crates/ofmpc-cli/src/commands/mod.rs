@@ -110,23 +110,19 @@ fn shorthand_overrides(s: &Shorthands) -> anyhow::Result<Vec<Override>> {
     Ok(v)
 }
 
-/// The payloads and controllers of `reproduce`: with `--compare`, every
-/// controller over 0, 0.25, 1, 2, 6 kg where the options keep their defaults.
+/// The payloads and controllers of `reproduce`: those given, else the defaults (with
+/// `--compare`, every controller over 0, 0.25, 1, 2, 6 kg). A value given is honoured even
+/// when it equals a default (issue #36: `--compare --payload 0,0.25` was ignored).
 fn compare_defaults(a: &crate::cli::ReproduceArgs) -> (&str, &str) {
-    if !a.compare {
-        return (&a.payload, &a.controllers);
-    }
-    let payload = if a.payload == "0,0.25" {
-        "0,0.25,1,2,6"
+    let (payload, controllers) = if a.compare {
+        ("0,0.25,1,2,6", "all")
     } else {
-        &a.payload
+        ("0,0.25", "usual,first,second")
     };
-    let controllers = if a.controllers == "usual,first,second" {
-        "all"
-    } else {
-        &a.controllers
-    };
-    (payload, controllers)
+    (
+        a.payload.as_deref().unwrap_or(payload),
+        a.controllers.as_deref().unwrap_or(controllers),
+    )
 }
 
 /// Parses the `--set KEY=VALUE` options.

@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import stat
 from typing import Any, Mapping, Optional, Sequence, Tuple, Union
 
 from ._ofmpc import (
@@ -56,7 +57,24 @@ _MAX_PROGRAM_BYTES = 64 << 20
 def _read_program_file(path: str) -> str:
     """The file's text: at most _MAX_PROGRAM_BYTES are read (a /dev/zero is never read whole);
     text that is not UTF-8 is an OfmpcError naming the byte, line and the encoding to use."""
-    with open(path, "rb") as f:
+    # Opened without blocking and refused unless a regular file (issue #36: a named pipe with
+    # no writer waited forever), as every reader of the library does (ofmpc::input).
+    fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    with open(fd, "rb") as f:
+        mode = os.fstat(fd).st_mode
+        if not stat.S_ISREG(mode):
+            kind = (
+                "a folder" if stat.S_ISDIR(mode)
+                else "a named pipe (FIFO)" if stat.S_ISFIFO(mode)
+                else "a character device" if stat.S_ISCHR(mode)
+                else "a block device" if stat.S_ISBLK(mode)
+                else "a socket" if stat.S_ISSOCK(mode)
+                else "not a regular file"
+            )
+            raise OfmpcError(
+                f"{path}: it is {kind}, not a regular file (a read would wait or never end): "
+                "give the path of a file"
+            )
         data = f.read(_MAX_PROGRAM_BYTES + 1)
     if len(data) > _MAX_PROGRAM_BYTES:
         raise OfmpcError(
@@ -66,11 +84,12 @@ def _read_program_file(path: str) -> str:
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as e:
+        enc = "UTF-16" if data[:2] in (b"\xff\xfe", b"\xfe\xff") else "LATIN1"
         line = data[: e.start].count(b"\n") + 1
         col = e.start - (data.rfind(b"\n", 0, e.start) + 1) + 1
         raise OfmpcError(
             f"{path}: not UTF-8 text: byte {e.start} (line {line}, column {col}) is 0x{data[e.start]:02x}: "
-            "save it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)"
+            f"save it as UTF-8 (e.g. iconv -f {enc} -t UTF-8)"
         ) from None
 
 

@@ -315,11 +315,16 @@ impl<'s, 'a> Runner<'s, 'a> {
         let limit = self.lines.len().saturating_add(max_steps);
         let mut steps = 0usize;
         let mut pc = 0;
+        let mut last = 0;
         while pc < self.lines.len() && !it.ended {
             steps += 1;
             if steps > limit {
                 return Err(self.step_limit(pc, max_steps));
             }
+            if let Some((what, max)) = it.over_budget() {
+                return Err(self.budget_error(last, what, max));
+            }
+            last = pc;
             let l = &self.lines[pc];
             if self.uses_parameters {
                 self.params.predefined[P_LINE] = l.no as f64;
@@ -359,7 +364,27 @@ impl<'s, 'a> Runner<'s, 'a> {
             }
             pc += 1;
         }
+        if let Some((what, max)) = it.over_budget() {
+            return Err(self.budget_error(last, what, max));
+        }
         Ok(pc)
+    }
+
+    /// The error for a program whose output passed its budget at the line of index `at`.
+    fn budget_error(&self, at: usize, what: &str, max: usize) -> GcodeError {
+        let l = &self.lines[at.min(self.lines.len().saturating_sub(1))];
+        err(
+            l.no,
+            1,
+            GcodeErrorKind::InvalidValue,
+            &crate::input::quote(l.raw.trim(), crate::input::QUOTE_CHARS),
+            format!(
+                "the program makes more than {max} {what} (the limit) by line {}",
+                l.no
+            ),
+            "check this line's repeats (L), peck depth (Q) and the loops around it; split the \
+             program into parts of fewer moves",
+        )
     }
 
     /// A block-delete line (`/`): skipped, with a warning the first time.
@@ -395,7 +420,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             col,
             GcodeErrorKind::InvalidValue,
             &text,
-            format!("the program ran {max_steps} lines more than it has without ending: {name} does not end"),
+            format!("the program ran {max_steps} lines more than it has (the limit on executed lines): {name} does not end or repeats more than that"),
             "check the loop's condition (an endless loop), or split the program",
         )
     }
@@ -742,6 +767,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                 MessageKind::Msg => c.text.trim().to_string(),
                 _ => self.substitute(&c.text),
             };
+            it.ext.message_bytes = it.ext.message_bytes.saturating_add(text.len());
             it.messages.push(ProgramMessage {
                 line: l.no,
                 kind: match c.kind {

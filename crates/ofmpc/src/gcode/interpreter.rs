@@ -53,6 +53,36 @@ pub(super) struct Extra {
     pub(super) machine_at: Option<Vector3<f64>>,
     /// The warning on G74/G84 in G18/G19 was given.
     pub(super) warned_tap: bool,
+    /// Bytes of the messages (MSG, PRINT, DEBUG) recorded so far.
+    pub(super) message_bytes: usize,
+}
+
+/// The most moves a program may make (issue #36: a canned cycle with a tiny peck or a huge
+/// L, or a loop, made millions and aborted on memory): far above a hand-written or CAM
+/// program for a robot arm; planning past it would take minutes anyway.
+pub const MAX_MOVES: usize = 250_000;
+
+/// The most events (M codes, tool changes) a program may record.
+pub const MAX_EVENTS: usize = 250_000;
+
+/// The most bytes of messages (MSG, PRINT, DEBUG) a program may record.
+pub const MAX_MESSAGE_BYTES: usize = 16 << 20;
+
+impl Interpreter {
+    /// What the program has produced past its budget, if anything: the thing counted and
+    /// its limit. Checked as the program grows (after every line, and inside the loops of a
+    /// canned cycle, which stop at once).
+    pub(super) fn over_budget(&self) -> Option<(&'static str, usize)> {
+        if self.moves.len() > MAX_MOVES {
+            Some(("moves", MAX_MOVES))
+        } else if self.events.len() > MAX_EVENTS {
+            Some(("events (M codes, tool changes)", MAX_EVENTS))
+        } else if self.ext.message_bytes > MAX_MESSAGE_BYTES {
+            Some(("bytes of messages (MSG, PRINT, DEBUG)", MAX_MESSAGE_BYTES))
+        } else {
+            None
+        }
+    }
 }
 
 /// Modal state of the reader while it walks the program, and the moves produced so far.
@@ -493,12 +523,17 @@ impl Interpreter {
     }
 
     /// Warns about harmless words without effect on the path: S, T, O and the ignored M codes.
+    /// With a tool table, T and M6 choose the length `G43` takes: not warned (issue #36).
     fn warn_ignored_words(&mut self, line: usize, sorted: &LineWords<'_, '_>) {
+        let table = self.tools.is_some();
         for (c, what) in [
             ('S', "spindle speed"),
             ('T', "tool"),
             ('O', "program number"),
         ] {
+            if c == 'T' && table {
+                continue;
+            }
             if let Some(w) = sorted.args.get(c) {
                 self.warn(
                     line,
@@ -509,7 +544,9 @@ impl Interpreter {
         }
         for (m, w) in &sorted.mcodes {
             if let MCode::Warn(msg) = m {
-                self.warn(line, w.col, msg.clone());
+                if !(table && msg.contains("(tool change)")) {
+                    self.warn(line, w.col, msg.clone());
+                }
             }
         }
     }

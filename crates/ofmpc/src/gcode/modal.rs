@@ -446,6 +446,9 @@ impl Interpreter {
             p = to;
         }
         let dwell = self.ext.cycle[3].unwrap_or(0.0);
+        if let Some((message, hint)) = cycle_checks(&code, r_m, bottom, dwell) {
+            return fail(InvalidValue, message, hint);
+        }
         let mut given = [None; 3];
         for (a, c) in letters.into_iter().enumerate() {
             if a != d {
@@ -453,6 +456,9 @@ impl Interpreter {
             }
         }
         for _ in 0..repeats {
+            if self.over_budget().is_some() {
+                break; // reported by the caller, naming the limit
+            }
             let mut xy = if self.absolute {
                 self.place(p, given)
             } else {
@@ -525,7 +531,8 @@ impl Interpreter {
         match n {
             73 | 83 => {
                 let mut depth = top[d];
-                while depth > bottom + MIN_MOVE_LENGTH {
+                // Stopped at once past the program's budget (the caller reports it).
+                while depth > bottom + MIN_MOVE_LENGTH && self.over_budget().is_none() {
                     let next = (depth - q).max(bottom);
                     let here = self.here();
                     if n == 83 && depth < top[d] {
@@ -638,6 +645,25 @@ impl Interpreter {
     }
 }
 
+/// LinuxCNC's checks of a canned cycle's words (issue #36): the retract plane `r_m` not
+/// below the hole's `bottom` ("R less than Z in cycle": it would rapid below the bottom,
+/// then drill up), and a dwell ≥ 0 (as G4 P-1). The message and the hint, if one fails.
+fn cycle_checks(code: &str, r_m: f64, bottom: f64, dwell: f64) -> Option<(String, &'static str)> {
+    if r_m < bottom - MIN_MOVE_LENGTH {
+        return Some((
+            format!("{code}: the retract plane R is below the hole's bottom"),
+            "R is the plane the drill starts from, above the bottom: give R greater than the \
+             bottom (in G91, a bottom word below 0)",
+        ));
+    }
+    (dwell < 0.0).then(|| {
+        (
+            format!("{code}: negative dwell time P"),
+            "give P ≥ 0 (seconds), or leave it out",
+        )
+    })
+}
+
 /// The L word of a canned cycle (repeats; default 1).
 fn cycle_repeats(line: usize, args: &Args<'_, '_>) -> Result<usize, GcodeError> {
     match args.get('L') {
@@ -649,7 +675,7 @@ fn cycle_repeats(line: usize, args: &Args<'_, '_>) -> Result<usize, GcodeError> 
             l.col,
             GcodeErrorKind::InvalidValue,
             l.text,
-            "L (repeats) must be a whole number >= 0",
+            "L (repeats) must be a whole number from 0 to 1000000 (the limit)",
             "write e.g. L3",
         )),
         None => Ok(1),

@@ -35,62 +35,29 @@ pub struct ToolTableError {
 }
 
 impl ToolTable {
-    /// Reads a table in LinuxCNC's `.tbl` format (see the module documentation).
+    /// Reads a table in LinuxCNC's `.tbl` format (see the module documentation). A UTF-8
+    /// byte-order mark is skipped; a tool listed twice, a word given twice on one line and a
+    /// length past [`MAX_TOOL_LENGTH_MM`] are refused with their line and column (issue #36:
+    /// they were kept or dropped silently).
     pub fn parse(text: &str) -> Result<ToolTable, ToolTableError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut lengths = BTreeMap::new();
+        let mut lines_of: BTreeMap<u32, usize> = BTreeMap::new();
         for (i, raw) in text.lines().enumerate() {
             let content = raw.split(';').next().unwrap_or("");
-            let mut tool = None;
-            let mut z = 0.0;
-            if content
-                .trim_start()
-                .to_ascii_uppercase()
-                .starts_with("TOOLNO")
-            {
-                return Err(ToolTableError {
-                    line: i + 1,
-                    column: 1,
-                    text: super::text::escape(content.trim()),
-                    message: "LinuxCNC's old tool table format (a TOOLNO POCKET LENGTH … header and columns) is not read".into(),
-                    hint: "write one tool a line as T<tool> P<pocket> Z<length> D<diameter> (LinuxCNC's current format)".into(),
-                });
+            let Some((tool, col, z)) = tool_line(i + 1, content)? else {
+                continue;
+            };
+            if let Some(first) = lines_of.insert(tool, i + 1) {
+                return Err(word_error(
+                    i + 1,
+                    col,
+                    &format!("T{tool}"),
+                    format!("tool {tool} is listed twice (lines {first} and {})", i + 1),
+                    "keep one line per tool (LinuxCNC would take the first silently)",
+                ));
             }
-            for (col, word) in words(content) {
-                let (letter, value) = letter_value(i + 1, col, word)?;
-                match letter {
-                    'T' if value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) => {
-                        tool = Some(value as u32);
-                    }
-                    'T' => {
-                        return Err(word_error(
-                            i + 1,
-                            col,
-                            word,
-                            "the tool number must be a whole number >= 0".into(),
-                            "write e.g. T3",
-                        ))
-                    }
-                    'Z' => z = value * 1e-3,
-                    _ => {}
-                }
-            }
-            match tool {
-                // A tool listed twice: LinuxCNC finds the first pocket that holds it
-                // (tooldata_find_index_for_tool), so the first line counts.
-                Some(t) => {
-                    lengths.entry(t).or_insert(z);
-                }
-                None if content.trim().is_empty() => {}
-                None => {
-                    return Err(ToolTableError {
-                        line: i + 1,
-                        column: 1,
-                        text: super::text::escape(content.trim()),
-                        message: "a tool line without T (the tool number)".into(),
-                        hint: "start the line with T<tool>, e.g. T1 P1 Z12.5".into(),
-                    })
-                }
-            }
+            lengths.insert(tool, z);
         }
         Ok(ToolTable { lengths })
     }
@@ -108,6 +75,79 @@ impl ToolTable {
     /// Whether the table lists no tool.
     pub fn is_empty(&self) -> bool {
         self.lengths.is_empty()
+    }
+}
+
+/// The largest tool length (mm, either sign) read: far beyond any tool a robot holds.
+pub const MAX_TOOL_LENGTH_MM: f64 = 10_000.0;
+
+/// One line of a tool table: its tool number, the column of its T word and its length (m);
+/// `None` for a blank or comment line.
+fn tool_line(line: usize, content: &str) -> Result<Option<(u32, usize, f64)>, ToolTableError> {
+    if content
+        .trim_start()
+        .to_ascii_uppercase()
+        .starts_with("TOOLNO")
+    {
+        return Err(ToolTableError {
+            line,
+            column: 1,
+            text: super::text::escape(content.trim()),
+            message: "LinuxCNC's old tool table format (a TOOLNO POCKET LENGTH … header and columns) is not read".into(),
+            hint: "write one tool a line as T<tool> P<pocket> Z<length> D<diameter> (LinuxCNC's current format)".into(),
+        });
+    }
+    let mut tool = None;
+    let mut z = 0.0;
+    let mut seen = String::new();
+    for (col, word) in words(content) {
+        let (letter, value) = letter_value(line, col, word)?;
+        if seen.contains(letter) {
+            return Err(word_error(
+                line,
+                col,
+                word,
+                format!("{letter} is given twice on this line"),
+                "give each word once per tool line",
+            ));
+        }
+        seen.push(letter);
+        match letter {
+            'T' if value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) => {
+                tool = Some((value as u32, col));
+            }
+            'T' => {
+                return Err(word_error(
+                    line,
+                    col,
+                    word,
+                    "the tool number must be a whole number >= 0".into(),
+                    "write e.g. T3",
+                ))
+            }
+            'Z' if value.abs() > MAX_TOOL_LENGTH_MM => {
+                return Err(word_error(
+                    line,
+                    col,
+                    word,
+                    format!("a tool length past {MAX_TOOL_LENGTH_MM} mm"),
+                    "give the length in mm (LinuxCNC's .tbl is in the machine's units)",
+                ))
+            }
+            'Z' => z = value * 1e-3,
+            _ => {}
+        }
+    }
+    match tool {
+        Some((t, col)) => Ok(Some((t, col, z))),
+        None if content.trim().is_empty() => Ok(None),
+        None => Err(ToolTableError {
+            line,
+            column: 1,
+            text: super::text::escape(content.trim()),
+            message: "a tool line without T (the tool number)".into(),
+            hint: "start the line with T<tool>, e.g. T1 P1 Z12.5".into(),
+        }),
     }
 }
 

@@ -253,6 +253,31 @@ pub enum UrdfError {
     /// Nothing moves.
     #[error("the URDF has no revolute or prismatic joint: nothing to control")]
     NoMovingJoint,
+    /// More moving joints in the chain than [`super::urdf::MAX_JOINTS`] (the dynamics' n×n
+    /// matrices would not fit in memory; no arm comes near).
+    #[error(
+        "the chain has {count} moving joints, more than the limit of {limit}: check that this \
+         is a robot arm's URDF, or choose a nearer tip link (--tip, [robot] tip)"
+    )]
+    TooManyJoints {
+        /// The moving joints found.
+        count: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// The XML nests deeper than [`crate::input::MAX_XML_DEPTH`] elements.
+    #[error(
+        "line {line}, column {column}: elements nested more than {limit} deep (the limit; a URDF \
+         needs about 3): check that this is a URDF"
+    )]
+    TooDeep {
+        /// 1-based line of the element past the limit.
+        line: usize,
+        /// 1-based column.
+        column: usize,
+        /// The limit.
+        limit: usize,
+    },
     /// The chosen tip is not a link of the URDF.
     #[error("tip link '{tip}' is not a link of the URDF; its links: {}", links.join(", "))]
     UnknownTip {
@@ -356,8 +381,9 @@ pub enum ModelError {
     /// A file is not UTF-8 text.
     #[error(
         "cannot read {path}: not UTF-8 text: byte {offset} (line {line}, column {column}) is \
-         0x{byte:02x} ({}): save it as UTF-8 (e.g. iconv -f LATIN1 -t UTF-8)",
-        if *utf16 { "it looks like UTF-16" } else { "it may be Latin-1 or another 8-bit encoding" }
+         0x{byte:02x} ({}): save it as UTF-8 (e.g. iconv -f {} -t UTF-8)",
+        if *utf16 { "it looks like UTF-16" } else { "it may be Latin-1 or another 8-bit encoding" },
+        if *utf16 { "UTF-16" } else { "LATIN1" }
     )]
     NotUtf8 {
         /// The file.

@@ -20,6 +20,7 @@ pub use joint::{Joint, JointKind, JointLimits};
 pub use links::LinkFrame;
 #[doc(hidden)]
 pub use read::MAX_URDF_BYTES;
+pub use urdf::MAX_JOINTS;
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};

@@ -3,7 +3,6 @@
 //! read whole, and text that is not UTF-8 is an error naming the byte.
 
 use super::error::ModelError;
-use std::io::Read;
 use std::path::Path;
 
 /// The largest URDF read (bytes): 64 MiB, far above any robot description (a 300-joint
@@ -23,28 +22,22 @@ pub(crate) fn read_text_limited(
     what: &'static str,
 ) -> Result<String, ModelError> {
     let name = || path.display().to_string();
-    let io = |e: std::io::Error| ModelError::Io {
-        path: name(),
-        message: e.to_string(),
-    };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let size = file
-        .metadata()
-        .ok()
-        .filter(|m| m.is_file())
-        .map(|m| m.len());
-    let mut bytes = Vec::new();
-    file.take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > limit {
-        return Err(ModelError::FileTooLarge {
+    let bytes = crate::input::read_limited(path, limit).map_err(|e| match e {
+        crate::input::ReadLimitedError::Io(e) => ModelError::Io {
+            path: name(),
+            message: if e.kind() == std::io::ErrorKind::InvalidInput {
+                format!("{e} (it was given as {what})")
+            } else {
+                e.to_string()
+            },
+        },
+        crate::input::ReadLimitedError::TooLarge { size } => ModelError::FileTooLarge {
             path: name(),
             what,
             size,
             limit,
-        });
-    }
+        },
+    })?;
     String::from_utf8(bytes).map_err(|e| {
         let offset = e.utf8_error().valid_up_to();
         let b = e.as_bytes();
@@ -106,10 +99,12 @@ mod tests {
         );
         std::fs::remove_dir_all(&dir).unwrap();
         if Path::new("/dev/zero").exists() {
+            // A device is refused as such (issue #36), never read.
             let e = read_text_limited(Path::new("/dev/zero"), 1 << 20, "a URDF").unwrap_err();
             assert!(
-                matches!(e, ModelError::FileTooLarge { size: None, .. }),
-                "{e:?}"
+                e.to_string().contains("it is a character device")
+                    && e.to_string().contains("given as a URDF"),
+                "{e}"
             );
         }
     }

@@ -242,6 +242,11 @@ fn continuous_limits(j: &urdf_rs::Joint) -> Result<(f64, f64, f64, f64), UrdfErr
     Ok((f64::NEG_INFINITY, f64::INFINITY, velocity, effort))
 }
 
+/// The most moving joints a robot read from a URDF may have: far above any arm (6 to 7, a
+/// few dozen for a hand), far below what the dynamics' n×n matrices can hold in memory
+/// (1000 joints: three 8 MB matrices; 20 000 would need 3.2 GB each).
+pub const MAX_JOINTS: usize = 1000;
+
 /// Link names that mark the end of an arm, in order of preference, for the default flange:
 /// exact names first, then parts of names. A finger or other leaf is taken only when no
 /// link on the last body is named like this.
@@ -269,6 +274,16 @@ pub(super) struct Chain {
 /// Parses a URDF text into a [`Chain`]: the chain from the root to `tip` (a link name),
 /// or when `None` the one path of moving joints.
 pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> {
+    // The XML reader recurses on nesting: bounded before it sees the text.
+    let limit = crate::input::MAX_XML_DEPTH;
+    if let Some((line, column)) = crate::input::xml_too_deep(text, limit) {
+        return Err(UrdfError::TooDeep {
+            line,
+            column,
+            limit,
+        }
+        .into());
+    }
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
         // The deserializer gives no position: the element's line, found in the text.
@@ -297,6 +312,13 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> 
     } = tree.walk(root, &has_moving)?;
     if joints.is_empty() {
         return Err(UrdfError::NoMovingJoint.into());
+    }
+    if joints.len() > MAX_JOINTS {
+        return Err(UrdfError::TooManyJoints {
+            count: joints.len(),
+            limit: MAX_JOINTS,
+        }
+        .into());
     }
     let missing = missing_inertials(&joints, &mut warnings);
     let (flange_name, flange) = flange(tip, &frames, &joints, last_link);

@@ -69,11 +69,18 @@ fn malformed_at(text: &str, name: &str, pos: u64, what: String) -> MeshError {
     }
 }
 
-/// The document's root element (an iterative build: no recursion on deep nesting).
+/// The most elements a Collada document may hold: far above any mesh file (the numbers
+/// are text inside a few elements), far below what would exhaust memory (issue #36).
+const MAX_ELEMENTS: usize = 1_000_000;
+
+/// The document's root element (an iterative build: no recursion on deep nesting, which is
+/// refused past [`ofmpc::input::MAX_XML_DEPTH`] levels, as are more than [`MAX_ELEMENTS`]
+/// elements; dropping the tree recurses, so its depth must be bounded).
 fn document(text: &str, name: &str) -> Result<Element, MeshError> {
     let mut reader = quick_xml::Reader::from_str(text);
     let mut stack = vec![Element::default()];
     let bad = |pos: u64, what: String| malformed_at(text, name, pos, what);
+    let mut elements = 0usize;
     loop {
         let ev = reader.read_event().map_err(|e| {
             bad(
@@ -81,8 +88,29 @@ fn document(text: &str, name: &str) -> Result<Element, MeshError> {
                 format!("not well-formed XML: {e}"),
             )
         })?;
+        if matches!(ev, Event::Start(_) | Event::Empty(_)) {
+            elements += 1;
+            if elements > MAX_ELEMENTS {
+                return Err(bad(
+                    reader.buffer_position(),
+                    format!("more than {MAX_ELEMENTS} elements: not a mesh file this reader takes"),
+                ));
+            }
+        }
         match ev {
-            Event::Start(e) => stack.push(element(&e)),
+            Event::Start(e) => {
+                if stack.len() > ofmpc::input::MAX_XML_DEPTH {
+                    return Err(bad(
+                        reader.buffer_position(),
+                        format!(
+                            "elements nested more than {} deep (the limit): flatten the \
+                             document's nodes",
+                            ofmpc::input::MAX_XML_DEPTH
+                        ),
+                    ));
+                }
+                stack.push(element(&e));
+            }
             Event::Empty(e) => {
                 let el = element(&e);
                 if let Some(top) = stack.last_mut() {
@@ -128,7 +156,10 @@ fn numbers<T: std::str::FromStr>(s: &str, what: &str, name: &str) -> Result<Vec<
         .map(|w| {
             w.parse().map_err(|_| MeshError::Malformed {
                 path: name.to_string(),
-                what: format!("<{what}>: {w:?} is not a number"),
+                what: format!(
+                    "<{what}>: {:?} is not a number",
+                    ofmpc::input::quote(w, ofmpc::input::QUOTE_CHARS)
+                ),
             })
         })
         .collect()
@@ -469,6 +500,20 @@ pub(crate) mod tests {
         let text = format!("{}{}", &text[..cut], &text[end..]);
         let m = parse(&text, "sq.dae").unwrap();
         assert_eq!(m.bounds(), Some(([0.0; 3], [1.0, 1.0, 0.0])));
+    }
+
+    #[test]
+    fn deep_nesting_is_refused_with_its_limit_not_a_stack_overflow() {
+        let deep = format!(
+            "<COLLADA>{}{}</COLLADA>",
+            "<node>".repeat(300_000),
+            "</node>".repeat(300_000)
+        );
+        let e = parse(&deep, "deep.dae").unwrap_err().to_string();
+        assert!(e.contains("nested more than 256 deep"), "{e}");
+        let wide = format!("<COLLADA>{}</COLLADA>", "<a/>".repeat(1_000_001));
+        let e = parse(&wide, "wide.dae").unwrap_err().to_string();
+        assert!(e.contains("more than 1000000 elements"), "{e}");
     }
 
     #[test]

@@ -15,7 +15,6 @@ pub mod obj;
 pub mod stl;
 pub mod visuals;
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// The largest mesh file read (bytes): 64 MiB, like the largest URDF
@@ -114,6 +113,17 @@ pub enum MeshError {
         /// The file.
         path: String,
     },
+    /// A `<mesh filename>` that leads outside its package (`package://../x`, `package:///x`,
+    /// a path or `file://` outside the folder holding the URDF's `package.xml`).
+    #[error(
+        "{filename}: leads outside the robot's package (a `package://` name with `..` or an \
+         absolute path, or a path or `file://` outside the folder holding the URDF's \
+         package.xml); copy the mesh into the package"
+    )]
+    Outside {
+        /// The `<mesh filename>` as written (shortened).
+        filename: String,
+    },
     /// A `package://` or other URL whose file was not found.
     #[error(
         "{filename}: not found (looked in {tried}); put the package beside the URDF's folders \
@@ -135,18 +145,13 @@ pub fn read_limited(path: &Path, limit: u64) -> Result<Vec<u8>, MeshError> {
         path: name(),
         message: e.to_string(),
     };
-    let file = std::fs::File::open(path).map_err(io)?;
-    let mut bytes = Vec::new();
-    file.take(limit.saturating_add(1))
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
-    if bytes.len() as u64 > limit {
-        return Err(MeshError::TooLarge {
+    ofmpc::input::read_limited(path, limit).map_err(|e| match e {
+        ofmpc::input::ReadLimitedError::Io(e) => io(e),
+        ofmpc::input::ReadLimitedError::TooLarge { .. } => MeshError::TooLarge {
             path: name(),
             limit,
-        });
-    }
-    Ok(bytes)
+        },
+    })
 }
 
 /// Reads a mesh file by its extension (`.stl`, `.dae`, `.obj`, any case), in the file's
@@ -206,7 +211,9 @@ pub fn resolve(
     };
     if let Some(rest) = filename.strip_prefix("package://") {
         let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
-        let mut tried = Vec::new();
+        if !plain_name(pkg) || !stays_inside(Path::new(rel)) {
+            return Err(outside(filename));
+        }
         let mut candidates: Vec<PathBuf> = Vec::new();
         for dir in urdf_dir.ancestors() {
             if dir.file_name().is_some_and(|n| n == pkg) {
@@ -225,23 +232,85 @@ pub fn resolve(
             }
             candidates.push(e.join(pkg).join(rel));
         }
-        for c in candidates {
-            if c.is_file() {
-                return Ok(c);
-            }
-            tried.push(c);
+        // A file first; else the first thing of that name (a folder, a pipe: the read says
+        // what it is rather than "not found").
+        if let Some(c) = candidates
+            .iter()
+            .find(|c| c.is_file())
+            .or_else(|| candidates.iter().find(|c| c.exists()))
+        {
+            return Ok(c.clone());
         }
-        tried.truncate(6);
-        return Err(not_found(tried));
+        candidates.truncate(6);
+        return Err(not_found(candidates));
     }
     let p = match filename.strip_prefix("file://") {
         Some(abs) => PathBuf::from(abs),
         None => urdf_dir.join(filename),
     };
-    if p.is_file() {
+    let inside = match package_root(urdf_dir) {
+        Some(root) => normalized(&p)
+            .zip(normalized(&root))
+            .is_some_and(|(p, r)| p.starts_with(r)),
+        // Not in a package: a path of the user's own, nothing to confine it to.
+        None => true,
+    };
+    if !inside {
+        return Err(outside(filename));
+    }
+    if p.exists() {
         Ok(p)
     } else {
         Err(not_found(vec![p]))
+    }
+}
+
+/// A package name: one path component, not `.` or `..`.
+fn plain_name(s: &str) -> bool {
+    !s.is_empty() && s != "." && s != ".." && !s.contains(['/', '\\'])
+}
+
+/// Whether a relative path stays below where it starts (no root, no `..`).
+fn stays_inside(rel: &Path) -> bool {
+    rel.components().all(|c| {
+        matches!(
+            c,
+            std::path::Component::Normal(_) | std::path::Component::CurDir
+        )
+    })
+}
+
+/// The package a URDF in folder `urdf_dir` belongs to: the nearest folder above it (itself
+/// included) holding a `package.xml`, if any. Mesh files named by a path or `file://` must
+/// lie inside it.
+fn package_root(urdf_dir: &Path) -> Option<PathBuf> {
+    let dir = std::path::absolute(urdf_dir).unwrap_or_else(|_| urdf_dir.to_path_buf());
+    dir.ancestors()
+        .find(|d| d.join("package.xml").is_file())
+        .map(Path::to_path_buf)
+}
+
+/// `p` made absolute with `.` and `..` resolved by the text (symbolic links are not
+/// followed: a workspace installed with links stays readable).
+fn normalized(p: &Path) -> Option<PathBuf> {
+    let abs = std::path::absolute(p).ok()?;
+    let mut out = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            std::path::Component::ParentDir => {
+                out.pop();
+            }
+            std::path::Component::CurDir => {}
+            c => out.push(c),
+        }
+    }
+    Some(out)
+}
+
+/// The error for a mesh path that leaves its package.
+fn outside(filename: &str) -> MeshError {
+    MeshError::Outside {
+        filename: ofmpc::input::quote(filename, 80),
     }
 }
 
@@ -281,13 +350,54 @@ mod tests {
         std::fs::remove_dir_all(&tmp).unwrap();
     }
 
+    /// `package://../..`, `package:///abs` and, inside a package, a path or `file://` that
+    /// leaves it are refused as such (issue #36); a FIFO is found, then refused by kind.
+    #[test]
+    fn mesh_paths_stay_inside_their_package() {
+        let tmp = std::env::temp_dir().join(format!("ofmpc-mesh-confine-{}", std::process::id()));
+        let pkg = tmp.join("ws/arm");
+        std::fs::create_dir_all(pkg.join("urdf")).unwrap();
+        std::fs::write(pkg.join("package.xml"), b"<package/>").unwrap();
+        std::fs::write(tmp.join("secret.obj"), b"v 0 0 0").unwrap();
+        let dir = pkg.join("urdf");
+        for bad in [
+            "package://../../secret.obj".to_string(),
+            "package:///etc/passwd".to_string(),
+            "package://arm/../../../secret.obj".to_string(),
+            format!("file://{}", tmp.join("secret.obj").display()),
+            "../../../secret.obj".to_string(),
+        ] {
+            let e = resolve(&bad, &dir, None).unwrap_err();
+            assert!(matches!(e, MeshError::Outside { .. }), "{bad}: {e}");
+            assert!(e.to_string().contains("leads outside"), "{e}");
+        }
+        #[cfg(unix)]
+        {
+            let fifo = pkg.join("fifo.stl");
+            assert!(std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success());
+            let p = resolve("package://arm/fifo.stl", &dir, None).unwrap();
+            let e = read_mesh(&p).unwrap_err().to_string();
+            assert!(e.contains("a named pipe (FIFO)"), "{e}");
+            let e = read_mesh(&pkg.join("urdf.stl")).unwrap_err().to_string();
+            assert!(e.contains("not found") || e.contains("No such file"), "{e}");
+            std::fs::create_dir_all(pkg.join("d.stl")).unwrap();
+            let p = resolve("../d.stl", &dir, None).unwrap();
+            let e = read_mesh(&p).unwrap_err().to_string();
+            assert!(e.contains("a folder"), "{e}");
+        }
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
     #[test]
     fn a_file_past_the_limit_is_refused() {
         if Path::new("/dev/zero").exists() {
-            assert!(matches!(
-                read_limited(Path::new("/dev/zero"), 1000),
-                Err(MeshError::TooLarge { limit: 1000, .. })
-            ));
+            // A device is refused as what it is, never read (issue #36).
+            let e = read_limited(Path::new("/dev/zero"), 1000).unwrap_err();
+            assert!(e.to_string().contains("a character device"), "{e}");
         }
         assert!(matches!(
             read_mesh(Path::new("/nonexistent/x.stl")),

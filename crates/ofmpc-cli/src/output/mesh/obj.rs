@@ -10,7 +10,11 @@ pub fn parse(text: &str, name: &str) -> Result<TriMesh, MeshError> {
     for (i, line) in text.lines().enumerate() {
         let bad = |what: &str| MeshError::Malformed {
             path: name.to_string(),
-            what: format!("line {}: {what}: {:?}", i + 1, line.trim()),
+            what: format!(
+                "line {}: {what}: {:?}",
+                i + 1,
+                ofmpc::input::quote(line.trim(), ofmpc::input::QUOTE_CHARS)
+            ),
         };
         let mut words = line.split_whitespace();
         match words.next() {
@@ -63,5 +67,9 @@ mod tests {
         assert_eq!(m.bounds(), Some(([0.0; 3], [1.0, 2.0, 0.0])));
         let e = parse("v 0 0 0\nf 1 2 3\n", "bad.obj").unwrap_err();
         assert!(e.to_string().contains("line 2"), "{e}");
+        // A huge bad line is quoted by its first few dozen characters only (issue #36).
+        let long = format!("v 0 0 0\nf {}\n", "9".repeat(100_000));
+        let e = parse(&long, "long.obj").unwrap_err().to_string();
+        assert!(e.len() < 200 && e.contains("(100002 characters)"), "{e}");
     }
 }

@@ -45,7 +45,89 @@ fn read_urdf(urdf: &Path) -> Result<urdf_rs::Robot, String> {
     read_limited(urdf, ofmpc::robot::MAX_URDF_BYTES)
         .map_err(|e| e.to_string())
         .and_then(|b| String::from_utf8(b).map_err(|e| e.to_string()))
-        .and_then(|t| urdf_rs::read_from_string(&t).map_err(|e| e.to_string()))
+        .and_then(|t| {
+            // The XML reader recurses on nesting: bounded first (issue #36).
+            let limit = ofmpc::input::MAX_XML_DEPTH;
+            match ofmpc::input::xml_too_deep(&t, limit) {
+                Some((l, c)) => Err(format!(
+                    "line {l}, column {c}: elements nested more than {limit} deep (the limit)"
+                )),
+                None => urdf_rs::read_from_string(&t).map_err(|e| e.to_string()),
+            }
+        })
+}
+
+/// The most triangles read for the whole robot's meshes, before decimation (issue #36): a
+/// visual past it is drawn as a capsule (each file is read once however many visuals name
+/// it).
+pub const ROBOT_TRIANGLES: usize = 20_000_000;
+
+/// The most bytes of mesh files read for the whole robot (each file counted once).
+pub const ROBOT_MESH_BYTES: u64 = 256 << 20;
+
+/// The largest coordinate (m) of a placed mesh: a visual reaching farther from its body's
+/// frame is taken for a unit or scale error (1e38 m vertices, `<scale>1e308`) and refused.
+pub const MAX_MESH_EXTENT: f64 = 1000.0;
+
+/// What the robot's meshes have used of [`ROBOT_TRIANGLES`] and [`ROBOT_MESH_BYTES`], and
+/// the meshes already read (by file).
+#[derive(Default)]
+struct Budget {
+    triangles: usize,
+    bytes: u64,
+    read: std::collections::HashMap<std::path::PathBuf, TriMesh>,
+}
+
+impl Budget {
+    /// The mesh of the file at `path`: from the files already read, else read if the file's
+    /// size and the triangles left allow it.
+    fn mesh(&mut self, path: &Path) -> Result<TriMesh, String> {
+        if let Some(m) = self.read.get(path) {
+            return self.take(m.clone());
+        }
+        let size = std::fs::metadata(path).map_or(0, |m| m.len());
+        if self.bytes.saturating_add(size) > ROBOT_MESH_BYTES {
+            return Err(format!(
+                "{}: the robot's mesh files pass {} MiB together (the budget for the replay); \
+                 decimate the meshes",
+                path.display(),
+                ROBOT_MESH_BYTES >> 20
+            ));
+        }
+        self.bytes += size;
+        let m = read_mesh(path).map_err(|e| e.to_string())?;
+        self.read.insert(path.to_path_buf(), m.clone());
+        self.take(m)
+    }
+
+    /// Counts `m`'s triangles against the budget.
+    fn take(&mut self, m: TriMesh) -> Result<TriMesh, String> {
+        self.triangles = self.triangles.saturating_add(m.triangles.len());
+        if self.triangles > ROBOT_TRIANGLES {
+            return Err(format!(
+                "the robot's meshes pass {ROBOT_TRIANGLES} triangles together (the budget for \
+                 the replay); decimate the meshes"
+            ));
+        }
+        Ok(m)
+    }
+}
+
+/// Ok when every coordinate of `m` is finite and within [`MAX_MESH_EXTENT`] of the frame.
+fn check_extent(m: &TriMesh) -> Result<(), String> {
+    let bad = m
+        .positions
+        .iter()
+        .flatten()
+        .find(|x| !(x.is_finite() && x.abs() <= MAX_MESH_EXTENT));
+    match bad {
+        None => Ok(()),
+        Some(x) => Err(format!(
+            "a vertex coordinate of {} m once placed (not finite, or past {MAX_MESH_EXTENT} m: \
+             a unit, <scale> or <matrix> error?)",
+            ofmpc::input::quote(&format!("{x:e}"), 24)
+        )),
+    }
 }
 
 impl Visuals {
@@ -85,30 +167,24 @@ pub fn load(urdf: &Path, robot: &Robot, ros_package_path: Option<&str>) -> Visua
         .collect();
     let mut has_mesh = vec![false; n + 1];
     let mut failed = vec![false; n + 1];
+    let mut budget = Budget::default();
     for link in &doc.links {
         let Some(frame) = frames.get(link.name.as_str()) else {
             continue;
         };
         let body = frame.body.map_or(0, |i| i + 1);
         for v in &link.visual {
-            let mut mesh = match geometry(&v.geometry, dir, ros_package_path) {
+            let mesh = match placed(v, &frame.pose, dir, ros_package_path, &mut budget) {
                 Ok(m) => m,
                 Err(e) => {
                     out.warnings.push(format!(
                         "link {:?}: {e}; the link is drawn as a capsule",
-                        link.name
+                        ofmpc::input::quote(&link.name, 80)
                     ));
                     failed[body] = true;
                     continue;
                 }
             };
-            let t = frame
-                .pose
-                .compose(&Transform::from_xyz_rpy(*v.origin.xyz, *v.origin.rpy));
-            mesh.map(|p| {
-                let q = t.apply_point(&Vector3::new(p[0], p[1], p[2]));
-                [q[0], q[1], q[2]]
-            });
             let color =
                 material_color(v.material.as_ref(), &doc.materials).unwrap_or(GREYS[body % 2]);
             has_mesh[body] = true;
@@ -135,11 +211,48 @@ fn material_color(m: Option<&urdf_rs::Material>, all: &[urdf_rs::Material]) -> O
         .then(|| [rgba[0], rgba[1], rgba[2]].map(|v| v.clamp(0.0, 1.0)))
 }
 
-/// A `<geometry>` as triangles in the visual's frame (scale applied).
+/// The visual `v`'s triangles in the frame of its body (`link_pose`: its link's pose there),
+/// refused when a coordinate is not finite or past [`MAX_MESH_EXTENT`], before or after
+/// placing (issue #36: such a link vanished from the replay or dwarfed the robot).
+fn placed(
+    v: &urdf_rs::Visual,
+    link_pose: &Transform,
+    dir: &Path,
+    ros_package_path: Option<&str>,
+    budget: &mut Budget,
+) -> Result<TriMesh, String> {
+    let named = |e: String| format!("{}: {e}", name_of(&v.geometry));
+    let mut mesh = geometry(&v.geometry, dir, ros_package_path, budget)?;
+    check_extent(&mesh).map_err(named)?;
+    let t = link_pose.compose(&Transform::from_xyz_rpy(*v.origin.xyz, *v.origin.rpy));
+    mesh.map(|p| {
+        let q = t.apply_point(&Vector3::new(p[0], p[1], p[2]));
+        [q[0], q[1], q[2]]
+    });
+    check_extent(&mesh).map_err(named)?;
+    Ok(mesh)
+}
+
+/// The geometry named for a warning: the mesh's file (shortened), or the primitive.
+fn name_of(g: &urdf_rs::Geometry) -> String {
+    match g {
+        urdf_rs::Geometry::Mesh { filename, .. } => {
+            format!("mesh {:?}", ofmpc::input::quote(filename, 80))
+        }
+        urdf_rs::Geometry::Box { .. } => "<box>".into(),
+        urdf_rs::Geometry::Cylinder { .. } => "<cylinder>".into(),
+        urdf_rs::Geometry::Sphere { .. } => "<sphere>".into(),
+        urdf_rs::Geometry::Capsule { .. } => "<capsule>".into(),
+    }
+}
+
+/// A `<geometry>` as triangles in the visual's frame (scale applied; mesh files read within
+/// the robot's `budget`).
 fn geometry(
     g: &urdf_rs::Geometry,
     dir: &Path,
     ros_package_path: Option<&str>,
+    budget: &mut Budget,
 ) -> Result<TriMesh, String> {
     let check = |what: &str, v: &[f64]| {
         if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
@@ -157,7 +270,7 @@ fn geometry(
                 ));
             }
             let path = resolve(filename, dir, ros_package_path).map_err(|e| e.to_string())?;
-            let mut m = read_mesh(&path).map_err(|e| e.to_string())?;
+            let mut m = budget.mesh(&path)?;
             m.map(|p| [p[0] * s[0], p[1] * s[1], p[2] * s[2]]);
             Ok(m)
         }
@@ -357,5 +470,75 @@ mod tests {
         );
         assert_eq!(v.meshes.len(), 5);
         std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
+    /// Coordinates that are not finite or absurd (a `<matrix>` of NaN, `<scale>` 1e308,
+    /// 1e38 m vertices) are refused per mesh with a warning naming the link and the file, and
+    /// the link is drawn as a capsule (issue #36: it vanished or dwarfed the robot).
+    #[test]
+    fn absurd_coordinates_are_refused_per_mesh_with_the_link_and_the_file() {
+        let tmp = std::env::temp_dir().join(format!("ofmpc-visuals-nan-{}", std::process::id()));
+        std::fs::create_dir_all(&tmp).unwrap();
+        let dae = super::super::collada::tests::square_dae()
+            .replace("<matrix>1 0 0 10", "<matrix>NaN 0 0 10");
+        std::fs::write(tmp.join("nan.dae"), &dae).unwrap();
+        std::fs::write(
+            tmp.join("far.obj"),
+            "v 0 0 0\nv 1e38 0 0\nv 0 1 0\nf 1 2 3\n",
+        )
+        .unwrap();
+        let meshes = arm().parent().unwrap().join("../meshes");
+        let text = std::fs::read_to_string(arm())
+            .unwrap()
+            .replace(
+                "../meshes/link1.stl",
+                &tmp.join("far.obj").display().to_string(),
+            )
+            .replace(
+                "package://mesh_arm/meshes/link2.dae",
+                &tmp.join("nan.dae").display().to_string(),
+            )
+            .replace(
+                "<mesh filename=\"../meshes/link3.obj\"/>",
+                "<mesh filename=\"../meshes/link3.obj\" scale=\"1e308 1 1\"/>",
+            )
+            .replace("../meshes/", &format!("{}/", meshes.display()));
+        let urdf = tmp.join("arm.urdf");
+        std::fs::write(&urdf, text).unwrap();
+        let robot = Robot::from_urdf_file(&urdf).unwrap();
+        let v = load(&urdf, &robot, None);
+        assert_eq!(v.warnings.len(), 3, "{:?}", v.warnings);
+        for (w, link, file) in [
+            (&v.warnings[0], "link_1", "far.obj"),
+            (&v.warnings[1], "link_2", "nan.dae"),
+            (&v.warnings[2], "link_3", "link3.obj"),
+        ] {
+            assert!(
+                w.contains(&format!("link \"{link}\""))
+                    && w.contains(file)
+                    && w.contains("capsule"),
+                "{w}"
+            );
+        }
+        assert_eq!(
+            v.capsule,
+            vec![false, true, true, true, false, false, false]
+        );
+        std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
+    /// Forty visuals naming one mesh read it once; past the robot's triangle budget the
+    /// visuals are capsules with a warning naming the budget.
+    #[test]
+    fn the_robots_meshes_share_one_triangle_budget() {
+        let mut b = Budget::default();
+        let m = TriMesh {
+            positions: vec![[0.0; 3]; 3],
+            triangles: vec![[0, 1, 2]; ROBOT_TRIANGLES / 2],
+        };
+        assert!(b.take(m.clone()).is_ok());
+        assert!(b.take(m.clone()).is_ok());
+        let e = b.take(m).unwrap_err();
+        assert!(e.contains("20000000 triangles together"), "{e}");
     }
 }
