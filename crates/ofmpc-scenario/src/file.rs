@@ -160,6 +160,11 @@ pub struct OrientationSection {
     pub rpy_deg: Option<[f64; 3]>,
 }
 
+/// The title of a scenario that sets none. A run of another robot or program than the
+/// paper's is titled after the robot and program that ran instead
+/// ([`crate::Scenario::resolve`]).
+pub const DEFAULT_TITLE: &str = "Offset-free MPC of the ABB IRB 140 on the paper's path";
+
 /// A scenario file as written, defaults filled in.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -266,7 +271,7 @@ pub type SafetySection = ofmpc::sim::SafetySettings;
 impl Default for ScenarioFile {
     fn default() -> Self {
         Self {
-            title: "Offset-free MPC of the ABB IRB 140 on the paper's path".into(),
+            title: DEFAULT_TITLE.into(),
             controllers: ControllerKind::PAPER.to_vec(),
             robot: RobotSection::default(),
             payload: PayloadSection::default(),

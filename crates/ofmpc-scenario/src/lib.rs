@@ -22,6 +22,7 @@ pub mod analysis;
 pub mod baseline_tuning;
 pub mod error;
 pub mod file;
+pub mod placement;
 pub mod program_json;
 pub mod resolve;
 pub mod runner;
@@ -35,6 +36,7 @@ pub use file::{
     OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
+pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
     is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,

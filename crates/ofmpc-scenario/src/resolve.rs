@@ -256,6 +256,17 @@ fn friction_warnings(f: &ScenarioFile, robot: &Robot) -> Vec<String> {
 impl Scenario {
     /// Resolves a scenario file: loads, parses, times and maps to joint space.
     pub fn resolve(f: &ScenarioFile) -> Result<Self, ScenarioError> {
+        let (program_name, text) = read_program(f.program.file.as_deref())?;
+        Self::resolve_program(f, program_name, &text)
+    }
+
+    /// [`Scenario::resolve`] with the program given as text (`program_name` names it in
+    /// messages) instead of `[program] file`.
+    pub fn resolve_program(
+        f: &ScenarioFile,
+        program_name: String,
+        text: &str,
+    ) -> Result<Self, ScenarioError> {
         if f.controllers.is_empty() {
             return Err(ScenarioError::NoControllers);
         }
@@ -281,7 +292,6 @@ impl Scenario {
             .map_err(|e| settings_error(e.into()))?;
         let payloads = file_payloads(f)?;
         check_model_payload(&robot, f.mpc.model_payload_kg)?;
-        let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
             .program
             .origin_mm
@@ -314,7 +324,7 @@ impl Scenario {
             orientation,
             ts: f.mpc.ts,
         };
-        let planned = plan(&text, &robot, &options).map_err(|error| ScenarioError::Plan {
+        let planned = plan(text, &robot, &options).map_err(|error| ScenarioError::Plan {
             program: program_name.clone(),
             error: Box::new(error),
         })?;
@@ -348,8 +358,10 @@ impl Scenario {
         experiment
             .validate()
             .map_err(|error| ScenarioError::experiment(Some(program_name.clone()), error))?;
+        let mut file = f.clone();
+        file.title = run_title(f, &experiment.robot, &program_name);
         Ok(Self {
-            file: f.clone(),
+            file,
             program_name,
             payloads,
             experiment,
@@ -378,6 +390,44 @@ impl Scenario {
         file.controllers = controllers.to_vec();
         file
     }
+}
+
+/// The report's title: the scenario's own, or for a scenario that keeps the default title
+/// ([`crate::file::DEFAULT_TITLE`]) while running another robot or program than the
+/// paper's, one that names the robot and program that run.
+fn run_title(f: &ScenarioFile, robot: &Robot, program_name: &str) -> String {
+    let paper_program = f.program.file.is_none();
+    let builtin = !is_model_path(&f.robot.model);
+    if f.title != crate::file::DEFAULT_TITLE || (paper_program && builtin) {
+        return f.title.clone();
+    }
+    let robot_name = if builtin && f.robot.model == "irb140" {
+        "the ABB IRB 140".to_string()
+    } else {
+        let name = robot.name().trim();
+        if name.is_empty() {
+            file_stem(&f.robot.model)
+        } else {
+            name.to_string()
+        }
+    };
+    let program = if paper_program {
+        "the paper's path".to_string()
+    } else {
+        Path::new(program_name)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| program_name.to_string())
+    };
+    format!("Offset-free MPC of {robot_name} on {program}")
+}
+
+/// The file name of `path` without its extension (or `path` itself).
+fn file_stem(path: &str) -> String {
+    Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string())
 }
 
 /// The controllers' model carries `[mpc] model_payload_kg` (`Experiment::model_robot`):
