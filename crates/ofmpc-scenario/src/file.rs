@@ -203,6 +203,65 @@ pub struct ScenarioFile {
     /// as read. Written with the results only when set.
     #[serde(skip_serializing_if = "is_default_baselines")]
     pub baselines: BaselineSettings,
+    /// `[output]`: how much of each run's time series is written. Written with the results
+    /// only when set.
+    #[serde(skip_serializing_if = "is_default_output")]
+    pub output: OutputSection,
+}
+
+fn is_default_output(o: &OutputSection) -> bool {
+    *o == OutputSection::default()
+}
+
+/// `[output] timeseries`: which samples of each run `timeseries.csv` holds. The metrics
+/// and figures use every sample whatever is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum TimeseriesOutput {
+    /// Every sample when a run's file stays within [`AUTO_TIMESERIES_BYTES`], else decimated.
+    #[default]
+    Auto,
+    /// Every sample, whatever the size.
+    Full,
+    /// Every `stride`-th sample (default: the stride that keeps a run's file within
+    /// [`AUTO_TIMESERIES_BYTES`]), the last sample always included.
+    Decimated,
+    /// No `timeseries.csv`.
+    None,
+}
+
+/// The size (bytes) a run's `timeseries.csv` keeps under `[output] timeseries = "auto"`
+/// (and "decimated" without a stride): 12 MB, so a 30-minute path with two payloads and
+/// the paper's three controllers writes well under 100 MB.
+pub const AUTO_TIMESERIES_BYTES: u64 = 12_000_000;
+
+/// `[output]`
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSection {
+    /// `"auto"` (the default), `"full"`, `"decimated"` or `"none"` ([`TimeseriesOutput`]).
+    pub timeseries: TimeseriesOutput,
+    /// Under `"decimated"`: write every `stride`-th sample (at least 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stride: Option<std::num::NonZeroUsize>,
+}
+
+impl OutputSection {
+    /// The stride of the time series of a run of `rows` samples whose file would take
+    /// `bytes_per_row` bytes a row: `None` for no file, `Some(1)` for every sample.
+    pub fn timeseries_stride(&self, rows: usize, bytes_per_row: u64) -> Option<usize> {
+        let auto = || {
+            let total = rows as u64 * bytes_per_row;
+            (total.div_ceil(AUTO_TIMESERIES_BYTES).max(1)) as usize
+        };
+        match self.timeseries {
+            TimeseriesOutput::None => None,
+            TimeseriesOutput::Full => Some(1),
+            TimeseriesOutput::Auto => Some(auto()),
+            TimeseriesOutput::Decimated => Some(self.stride.map_or_else(auto, |s| s.get())),
+        }
+    }
 }
 
 fn is_default_baselines(b: &BaselineSettings) -> bool {
@@ -284,6 +343,7 @@ impl Default for ScenarioFile {
             faults: FaultsSection::default(),
             safety: SafetySection::default(),
             baselines: BaselineSettings::default(),
+            output: OutputSection::default(),
         }
     }
 }

@@ -33,7 +33,7 @@ pub use error::{
 };
 pub use file::{
     absolute, expand_shorthand, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
-    OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
+    OrientationSection, OutputSection, Override, TimeseriesOutput, AUTO_TIMESERIES_BYTES, PayloadSection, ProgramSection, RobotSection, SafetySection,
     ScenarioFile, TimingSection,
 };
 pub use placement::{place_paper_program, Placement};
