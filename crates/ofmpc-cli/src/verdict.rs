@@ -402,8 +402,14 @@ mod tests {
             after.contains("first keeps a steady offset of 0.0100 mm at 0.25 kg"),
             "{after}"
         );
-        assert!(after.contains("second is offset-free: its steady error"), "{after}");
-        assert!(!after.contains("first and second are offset-free"), "{after}");
+        assert!(
+            after.contains("second is offset-free: its steady error"),
+            "{after}"
+        );
+        assert!(
+            !after.contains("first and second are offset-free"),
+            "{after}"
+        );
         // The second algorithm no longer diverges: no stopped sentence, and it is the best at 2 kg.
         runs[8] = run("second", 2.0, 0.006, 1e-12, RunStatus::Ok);
         let after = verdict(&runs).join(" ");

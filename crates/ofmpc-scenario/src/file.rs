@@ -368,7 +368,7 @@ impl ScenarioFile {
             })?;
         let parse_error = |e: toml::de::Error| ScenarioError::Parse {
             origin: path.display().to_string(),
-            message: e.to_string(),
+            message: plain_types(&e.to_string()),
         };
         // The sections' shapes first (an array is never read by position), then the file
         // alone: its errors carry their line and column.
@@ -654,9 +654,26 @@ pub fn read_text_limited(path: &Path, limit: u64) -> std::io::Result<String> {
     })
 }
 
+/// A deserializer's message with Rust type names in words ("expected usize" → "expected a
+/// whole number ≥ 0").
+pub(crate) fn plain_types(message: &str) -> String {
+    let mut m = message.to_string();
+    for (rust, words) in [
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected a nonzero usize", "expected a whole number ≥ 1"),
+        ("expected f64", "expected a number"),
+    ] {
+        m = m.replace(rust, words);
+    }
+    m
+}
+
 /// The scenario's sections: each a table of keys. A derived deserializer would also read a
 /// section from an array, by position (`mpc = [0.02, 3]` as ts and horizon): refused instead.
-const SECTIONS: [&str; 10] = [
+const SECTIONS: [&str; 11] = [
+    "output",
     "robot",
     "payload",
     "program",
@@ -780,7 +797,7 @@ fn apply_overrides(
             ScenarioError::Override {
                 key: o.key.clone(),
                 value: o.raw.clone(),
-                message: e.message().trim_end().to_string(),
+                message: plain_types(e.message().trim_end()),
             }
         })?;
         file = Some(parsed);
@@ -790,7 +807,7 @@ fn apply_overrides(
         None => {
             ScenarioFile::deserialize(toml::Value::Table(doc)).map_err(|e| ScenarioError::Parse {
                 origin: "scenario".into(),
-                message: e.message().trim_end().to_string(),
+                message: plain_types(e.message().trim_end()),
             })
         }
     }

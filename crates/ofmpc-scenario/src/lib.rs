@@ -33,8 +33,8 @@ pub use error::{
 };
 pub use file::{
     absolute, expand_shorthand, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
-    OrientationSection, OutputSection, Override, TimeseriesOutput, AUTO_TIMESERIES_BYTES, PayloadSection, ProgramSection, RobotSection, SafetySection,
-    ScenarioFile, TimingSection,
+    OrientationSection, OutputSection, Override, PayloadSection, ProgramSection, RobotSection,
+    SafetySection, ScenarioFile, TimeseriesOutput, TimingSection, AUTO_TIMESERIES_BYTES,
 };
 pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};

@@ -23,9 +23,10 @@ const TRIED: usize = 16;
 /// Path speeds (m/s) tried in turn for each start pose, fastest first.
 const SPEEDS_M_S: [f64; 3] = [0.5, 0.25, 0.1];
 
-/// The paper's program placed for a robot: `start_q` (`[robot] start_q`), `rpy_deg`
-/// (`[orientation] rpy_deg`), `max_speed_m_s` (`[timing] max_speed_m_s`) and `program`, the
-/// paper's program with its work offset `offset_mm` (written as a file beside the scenario).
+/// The paper's program placed for a robot: `start_q` (`[robot] start_q`), `max_speed_m_s`
+/// (`[timing] max_speed_m_s`) and `program`, the paper's program with its work offset
+/// `offset_mm` (written as a file beside the scenario). The tool keeps the start pose's
+/// orientation (`rpy_deg`), the default of `[orientation]`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Placement {
     /// Start pose (rad; m for a prismatic joint).
@@ -188,7 +189,6 @@ fn not_singular(robot: &Robot, q: &[f64]) -> bool {
 fn resolve_placed(base: &ScenarioFile, p: &Placement) -> Result<f64, ScenarioError> {
     let mut f = base.clone();
     f.robot.start_q = Some(p.start_q.clone());
-    f.orientation.rpy_deg = Some(p.rpy_deg);
     f.timing.max_speed_m_s = p.max_speed_m_s;
     Scenario::resolve_program(&f, "paper-table1.gcode (placed)".into(), &p.program)
         .map(|s| s.experiment.reference.duration())

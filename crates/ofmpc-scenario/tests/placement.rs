@@ -41,9 +41,6 @@ fn every_public_arm_gets_a_placement_that_resolves() {
                 let mut g = f.clone();
                 g.robot.start_q = Some(p.start_q.clone());
                 g.timing.max_speed_m_s = p.max_speed_m_s;
-                if !p.as_published {
-                    g.orientation.rpy_deg = Some(p.rpy_deg);
-                }
                 let s = Scenario::resolve_program(&g, "placed".into(), &p.program)
                     .unwrap_or_else(|e| panic!("{rel}: the placement does not resolve: {e}"));
                 eprintln!(
