@@ -515,6 +515,9 @@ fn replay_html(h: &mut String, json: &str) {
          <div class=\"replay-controls\"><button type=\"button\" id=\"replay-play\">Play</button>\n\
          <input type=\"range\" id=\"replay-slider\" min=\"0\" max=\"0\" value=\"0\" step=\"1\">\n\
          <span id=\"replay-time\">t = 0 s</span>\n<select id=\"replay-run\"></select>\n\
+         <label>speed <select id=\"replay-speed\"><option value=\"1\" selected>1×</option>\
+         <option value=\"4\">4×</option><option value=\"16\">16×</option><option value=\"64\">64×</option>\
+         </select></label>\n\
          <label><input type=\"checkbox\" id=\"replay-follow\"> slow motion</label></div>\n\
          <canvas id=\"replay-canvas\" width=\"960\" height=\"540\"></canvas>\n\
          <p id=\"replay-state\" class=\"replay-state\"></p>\n\
