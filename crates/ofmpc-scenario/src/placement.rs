@@ -221,7 +221,8 @@ fn placement_at(robot: &Robot, q: &[f64], reach: f64, scale: f64) -> Option<Plac
 }
 
 /// Start poses worth planning, best first: [`SAMPLES`] deterministic points within the
-/// limits (a joint without limits within ±π) scored by [`score`], the best [`TRIED`].
+/// limits (a joint without limits within ±π; 4 decimals) scored by [`score`], the best
+/// [`TRIED`].
 pub fn start_candidates(robot: &Robot) -> Vec<Vec<f64>> {
     let (lo, hi) = (robot.lower_limits(), robot.upper_limits());
     let n = robot.dof();
@@ -236,7 +237,10 @@ pub fn start_candidates(robot: &Robot) -> Vec<Vec<f64>> {
                     );
                     // Halton-like: the k-th point of a radical inverse in base prime(j),
                     // shrunk to the middle 80 % of the range.
-                    a + (b - a) * (0.1 + 0.8 * radical_inverse(k + 1, PRIMES[j % PRIMES.len()]))
+                    let v = a
+                        + (b - a) * (0.1 + 0.8 * radical_inverse(k + 1, PRIMES[j % PRIMES.len()]));
+                    // Rounded as a scenario file writes it, so the pose tried is the pose run.
+                    (v * 1e4).round() / 1e4
                 })
                 .collect();
             score(robot, &mut ws, &q, &lo, &hi).map(|s| (s, q))
