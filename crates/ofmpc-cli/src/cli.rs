@@ -1,5 +1,7 @@
-//! Command-line arguments (clap). The commands live in `commands/`.
+//! Command-line arguments (clap): every command's, with the groups they share in
+//! `args.rs`. The commands live in `commands/`.
 
+use crate::args::{ChainArgs, FormatArgs, RobotArgs, SetupArgs, TuningArgs};
 use clap::{Args, Parser, Subcommand};
 use ofmpc::motion::{PlanOptions, TimingOptions};
 use ofmpc_scenario::{mode_name, profile_name};
@@ -32,7 +34,7 @@ pub enum Command {
     Analyze(Analyze),
     /// Search the tuning that keeps the non-adaptive controllers stable over a
     /// payload range with the least RMS error; write it as a scenario file.
-    Tune(crate::commands::tune::TuneArgs),
+    Tune(TuneArgs),
     /// Starting files for your own robot: `init robot my.urdf` writes drives.toml and
     /// scenario.toml.
     #[command(subcommand)]
@@ -44,7 +46,7 @@ pub enum Command {
 pub enum Init {
     /// A drives file (one table per moving joint, the URDF's limits filled in) and a scenario
     /// that runs the robot, in --out.
-    Robot(crate::commands::init::InitRobotArgs),
+    Robot(InitRobotArgs),
 }
 
 /// `ofmpc analyze ...`
@@ -54,7 +56,7 @@ pub enum Analyze {
     /// controller is stable near rest, and the largest payload that keeps the
     /// ratio inside it along the program, as JSON; the spectral radius against
     /// α as a figure.
-    Stability(crate::commands::analyze::StabilityArgs),
+    Stability(StabilityArgs),
 }
 
 /// `ofmpc trajectory`
@@ -251,45 +253,6 @@ pub struct InspectRobot {
     pub robot: RobotArgs,
 }
 
-/// Which robot: built in by name, or a URDF file, with drives and payload.
-#[derive(Debug, Args, Clone)]
-pub struct RobotArgs {
-    /// `irb140` (built in, with its drives) or the path of a .urdf file.
-    #[arg(long, default_value = "irb140")]
-    pub robot: String,
-    /// Drives file (TOML: armature, torque and speed limits per joint). The
-    /// built-in IRB 140 has its own; a URDF has none by default.
-    #[arg(long)]
-    pub drives: Option<PathBuf>,
-    /// Tip, tool centre point and start pose.
-    #[command(flatten)]
-    pub chain: ChainArgs,
-}
-
-/// The robot's chain and tool (as the scenario's `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
-/// `start_q`).
-#[derive(Debug, Args, Clone, Default)]
-pub struct ChainArgs {
-    /// The URDF link that ends the chain (the flange); joints beyond it or on other
-    /// branches are held rigid (e.g. --tip panda_hand for a Panda with fingers). Default:
-    /// the one path of moving joints, ending at tool0, flange or an end-effector link.
-    #[arg(long)]
-    pub tip: Option<String>,
-    /// Tool centre point X,Y,Z in mm, in the tip's frame: planning, IK, metrics and
-    /// figures use it. Default: the tip itself.
-    #[arg(long, allow_hyphen_values = true)]
-    pub tcp: Option<String>,
-    /// Orientation of the tool centre point relative to the tip: roll,pitch,yaw in degrees
-    /// (R = Rz·Ry·Rx).
-    #[arg(long = "tcp-rpy", allow_hyphen_values = true)]
-    pub tcp_rpy: Option<String>,
-    /// Start pose, one value per joint, comma-separated (rad; m for a prismatic joint):
-    /// the robot's initial state and the IK's first seed. Default: q = 0 where that is
-    /// inside the limits, else the limits' centre.
-    #[arg(long = "start-q", allow_hyphen_values = true)]
-    pub start_q: Option<String>,
-}
-
 /// `ofmpc inspect dynamics`
 #[derive(Debug, Args)]
 pub struct InspectDynamics {
@@ -308,4 +271,60 @@ pub struct InspectDynamics {
     /// Joint accelerations, comma-separated (default zero).
     #[arg(long, allow_hyphen_values = true)]
     pub qdd: Option<String>,
+}
+
+/// `ofmpc analyze stability`
+#[derive(Debug, Args)]
+pub struct StabilityArgs {
+    /// Robot and program.
+    #[command(flatten)]
+    pub setup: SetupArgs,
+    /// Controllers, comma-separated (usual, first, second).
+    #[arg(long, default_value = "usual,first,second")]
+    pub controllers: String,
+    /// Tuning.
+    #[command(flatten)]
+    pub tuning: TuningArgs,
+    /// Directory for the figure (`stability.png`, `stability.svg`).
+    #[arg(long, default_value = "ofmpc-out")]
+    pub out: PathBuf,
+    /// JSON or words.
+    #[command(flatten)]
+    pub format: FormatArgs,
+}
+
+/// `ofmpc tune`
+#[derive(Debug, Args)]
+pub struct TuneArgs {
+    /// Robot and program.
+    #[command(flatten)]
+    pub setup: SetupArgs,
+    /// Payload range LO,HI in kg (point mass at the flange).
+    #[arg(long)]
+    pub payload_range: String,
+    /// Controllers to tune for, comma-separated (usual, first, second); or
+    /// one baseline (pid, ctc, ctc-adaptive, dob-mpc): its bandwidth.
+    #[arg(long, default_value = "first,second")]
+    pub controllers: String,
+    /// The scenario file to write (TOML).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// JSON or words.
+    #[command(flatten)]
+    pub format: FormatArgs,
+}
+
+/// `ofmpc init robot`
+#[derive(Debug, Args)]
+pub struct InitRobotArgs {
+    /// The robot's URDF file.
+    pub urdf: PathBuf,
+    /// Folder for `drives.toml` and `scenario.toml` (made if absent; existing files are never
+    /// replaced).
+    #[arg(long, default_value = ".")]
+    pub out: PathBuf,
+    /// The link that ends the chain (as `--tip` of run, written as `[robot] tip`): a branched
+    /// tree such as an arm with a hand and fingers loads with the hand as its tip.
+    #[arg(long)]
+    pub tip: Option<String>,
 }

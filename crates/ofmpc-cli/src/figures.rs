@@ -5,8 +5,8 @@
 use crate::output::plot::{
     Figure, Panel, Series, Series3d, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
 };
-use ofmpc::motion::reference::JointReference;
-use ofmpc::motion::trajectory::{CartesianSample, CartesianTrajectory};
+use ofmpc::motion::JointReference;
+use ofmpc::motion::{CartesianSample, CartesianTrajectory};
 use ofmpc::sim::{Record, RunMetrics};
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).

@@ -6,6 +6,7 @@
 
 #![warn(missing_docs)]
 
+pub mod args;
 pub mod chain_sets;
 pub mod cli;
 pub mod commands;

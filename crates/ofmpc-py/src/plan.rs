@@ -8,7 +8,7 @@ use nalgebra::UnitQuaternion;
 use numpy::{PyArray1, PyArray2};
 use ofmpc::control::settings::MAX_HORIZON;
 use ofmpc::gcode::{ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::timelaw::Profile;
+use ofmpc::motion::Profile;
 use ofmpc::motion::{plan as motion_plan, JointReference, Orientation, PlanOptions, TimingOptions};
 use pyo3::prelude::*;
 

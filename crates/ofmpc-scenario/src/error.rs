@@ -283,9 +283,9 @@ pub const SCENARIO_KEYS: SettingNames = SettingNames {
 /// A planning error in the front end's words: the library's message, followed by the
 /// setting (flag or key) to change where the library names one.
 pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
-    use ofmpc::motion::reference::ReferenceFailure;
-    use ofmpc::motion::trajectory::{TimingLimit, TrajectoryError};
+    use ofmpc::motion::ReferenceFailure;
     use ofmpc::motion::SampleCause;
+    use ofmpc::motion::{TimingLimit, TrajectoryError};
     let setting = match e {
         PlanError::SamplePeriod(_) => Some(names.ts),
         PlanError::TooManySamples { cause, .. } => match cause {

@@ -11,8 +11,9 @@
 
 use crate::error::ScenarioError;
 use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings};
-use ofmpc::motion::timelaw::Profile;
-use ofmpc::motion::{PathMode, TimingOptions};
+use ofmpc::gcode::PathMode;
+use ofmpc::motion::Profile;
+use ofmpc::motion::TimingOptions;
 use ofmpc::sim::{LoopSettings, MeasurementFaults, PlantSettings, RunConditions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

@@ -174,7 +174,7 @@ fn a_robot_that_is_not_an_irb140() {
 
 mod never_panics {
     use super::*;
-    use ofmpc::motion::reference::JointReference;
+    use ofmpc::motion::JointReference;
     use ofmpc::sim::PlantSettings;
     use proptest::prelude::*;
 

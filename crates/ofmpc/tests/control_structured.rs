@@ -12,8 +12,8 @@ use ofmpc::control::{
 };
 use ofmpc::dynamics::{JointSpaceDynamics, RobotDynamics};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{run_closed_loop, LoopSettings, Plant, PlantSettings};
 

@@ -6,8 +6,8 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{DivergenceRule, Experiment, LoopSettings, RunOutcome, RunStatus};
 

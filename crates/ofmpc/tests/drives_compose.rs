@@ -7,7 +7,7 @@
 mod common;
 
 use ofmpc::control::{ControllerKind, MpcSettings};
-use ofmpc::motion::reference::JointReference;
+use ofmpc::motion::JointReference;
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, Fault, LoopSettings, PlantSettings, RunStatus};
 use proptest::prelude::*;

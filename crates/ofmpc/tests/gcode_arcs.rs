@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use ofmpc::gcode::{parse, MoveKind, ParseOptions};
-use ofmpc::motion::segment::{Plane, Segment};
+use ofmpc::geometry::{Plane, Segment};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

@@ -3,7 +3,7 @@
 //! into a trajectory with finite samples, and every error points into the text.
 
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use proptest::prelude::*;
 
 /// Parse; on success time and sample it; on failure check that the position is in the text.

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use ofmpc::gcode::{
     parse, GcodeError, GcodeErrorKind, MoveKind, ParseOptions, Program, PAPER_TABLE1,
 };
-use ofmpc::motion::segment::{Plane, Segment};
+use ofmpc::geometry::{Plane, Segment};
 use std::f64::consts::PI;
 
 /// Asserts position and kind, and that the rendered message contains every `needle`.
@@ -956,7 +956,7 @@ fn exponent_notation_nested_comments_bom_and_cr_line_ends() {
 
 #[test]
 fn path_modes_g61_and_g64_with_tolerance() {
-    use ofmpc::motion::PathMode;
+    use ofmpc::gcode::PathMode;
     let modes = |p: &Program| -> Vec<Option<PathMode>> {
         p.moves
             .iter()

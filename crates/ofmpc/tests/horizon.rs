@@ -10,8 +10,8 @@ use ofmpc::control::zoh::Zoh;
 use ofmpc::control::{new_controller, ControllerKind, LinearLikeModel, MpcSettings, Solver};
 use ofmpc::dynamics::RobotDynamics;
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
     Experiment, HorizonSampling, LoopSettings, LossSchedule, Plant, PlantSettings, Record,

@@ -7,7 +7,8 @@
 //! The programs are those of `crates/ofmpc-py/tests/timing_programs.py`, generated here
 //! again (the torture test with this file's own random numbers).
 
-use ofmpc::motion::{plan, PathMode, Plan, PlanOptions, TimingOptions};
+use ofmpc::gcode::PathMode;
+use ofmpc::motion::{plan, Plan, PlanOptions, TimingOptions};
 use ofmpc::random::uniform;
 use ofmpc::robot::Robot;
 use std::fmt::Write;

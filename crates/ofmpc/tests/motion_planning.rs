@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::build_reference;
+use ofmpc::motion::build_reference;
 use ofmpc::motion::{
     plan, CartesianTrajectory, Orientation, Plan, PlanError, PlanOptions, SampleCause,
     TimingOptions, MAX_PLAN_VALUES,
@@ -427,7 +427,7 @@ fn joint_acceleration_limits_hold_on_every_sample() {
 #[test]
 fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
     use ofmpc::dynamics::{forward_kinematics, Workspace};
-    use ofmpc::motion::reference::ReferenceFailure;
+    use ofmpc::motion::ReferenceFailure;
     // The IRB 140's q = 0 is a wrist singularity (joints 4 and 6 on one axis): leaving it
     // along this path at a constant orientation needs joint 4 to jump by about 90°.
     let text = "G17\nG1 X0 Y20 F200\nG1 X-20 Y40\n";
@@ -520,7 +520,7 @@ fn a_singular_start_pose_turns_the_wrist_in_place_before_the_first_move() {
 /// The turn's error message remains for what a turn cannot cure.
 #[test]
 fn the_singular_start_message_names_the_start_pose() {
-    use ofmpc::motion::reference::ReferenceFailure;
+    use ofmpc::motion::ReferenceFailure;
     let f = ReferenceFailure::StartSingular {
         joint: 4,
         name: "joint_4".into(),
@@ -538,8 +538,8 @@ fn the_singular_start_message_names_the_start_pose() {
 /// near the edge of the workspace before the corner that no configuration reaches).
 #[test]
 fn a_path_out_of_reach_is_refused_for_its_reach_not_for_a_joint_speed_before_it() {
-    use ofmpc::motion::reference::ReferenceFailure;
     use ofmpc::motion::PlanError;
+    use ofmpc::motion::ReferenceFailure;
     let text = "G21 G90\nG0 X0 Y0 Z0\nG1 X0 Y0 F10000\nG1 X1000\nG1 Y1000\nG1 X0\nG1 Y0\n";
     let options = at_origin([0.0, -0.5, 0.35]);
     let robot = Robot::irb140();

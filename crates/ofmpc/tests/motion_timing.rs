@@ -2,8 +2,9 @@
 //! joint's speed and acceleration limit, blended runs plan tiny segments, stop where they
 //! must without crawling, and are never slower than exact stop on the programs.
 
+use ofmpc::gcode::PathMode;
 use ofmpc::gcode::PAPER_TABLE1;
-use ofmpc::motion::{plan, JointQuantity, PathMode, Plan, PlanOptions, TimingOptions};
+use ofmpc::motion::{plan, JointQuantity, Plan, PlanOptions, TimingOptions};
 use ofmpc::robot::Robot;
 
 /// Largest joint speed and acceleration over the samples, as fractions of the limits.

@@ -4,8 +4,8 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, JointReference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, JointReference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, ExperimentError, LoopSettings, PlantSettings, RunStatus};
 use proptest::prelude::*;

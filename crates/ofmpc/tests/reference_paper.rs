@@ -2,8 +2,8 @@
 
 use ofmpc::dynamics::{forward_kinematics, Workspace};
 use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::Robot;
 
 #[test]

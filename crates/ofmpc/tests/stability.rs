@@ -73,8 +73,8 @@ fn paper_tuning_reproduces_the_known_intervals_and_payloads() {
     ];
     // The payloads are along the paper's path (docs/guide/paper-notes.md, "The test path").
     use ofmpc::gcode::{parse, ParseOptions, PAPER_TABLE1};
-    use ofmpc::motion::reference::{build_reference, Orientation};
-    use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+    use ofmpc::motion::{build_reference, Orientation};
+    use ofmpc::motion::{CartesianTrajectory, TimingOptions};
     let program = parse(PAPER_TABLE1, &ParseOptions::default()).unwrap();
     let traj = CartesianTrajectory::new(&program, &TimingOptions::default()).unwrap();
     let reference = build_reference(&robot, &traj, Orientation::AtZero, 0.01).unwrap();

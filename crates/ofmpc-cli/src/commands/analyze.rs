@@ -3,140 +3,22 @@
 //! point payload that keeps the ratio inside it along the program, and the
 //! spectral radius against α as a figure.
 
+use crate::args::SetupArgs;
+use crate::cli::StabilityArgs;
 use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series, COLOR_REFERENCE};
 use anyhow::Context;
-use clap::Args;
-use ofmpc::control::{ControllerKind, MpcSettings, Weight};
+use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc_scenario::analysis::{margin, model_robot, radius_curves, Margin, RadiusCurve};
 use ofmpc_scenario::{Scenario, ScenarioFile};
 use std::io::IsTerminal;
 use std::path::PathBuf;
-
-/// How `analyze stability` and `tune` print their result: JSON for scripts (the default when
-/// stdout is not a terminal: a pipe or a file), a summary in words for a person (the default
-/// on a terminal).
-#[derive(Debug, Args, Clone)]
-pub struct FormatArgs {
-    /// Print the result as JSON (the default when stdout is not a terminal).
-    #[arg(long, conflicts_with = "words")]
-    pub json: bool,
-    /// Print a summary in words (the default when stdout is a terminal).
-    #[arg(long)]
-    pub words: bool,
-}
-
-impl FormatArgs {
-    /// Whether to print JSON.
-    pub fn json(&self) -> bool {
-        self.json || (!self.words && !std::io::stdout().is_terminal())
-    }
-}
 
 /// A progress line on stderr, when stderr is a terminal (scripts read stdout; a log stays clean).
 pub(crate) fn progress(text: &str) {
     if std::io::stderr().is_terminal() {
         crate::output::console::note(text);
     }
-}
-
-/// Robot, program and tuning options shared by `analyze stability` and `tune`.
-#[derive(Debug, Args, Clone)]
-pub struct SetupArgs {
-    /// `irb140` (built in, with its drives) or the path of a .urdf file.
-    #[arg(long, default_value = "irb140")]
-    pub robot: String,
-    /// Drives file for a URDF robot.
-    #[arg(long)]
-    pub drives: Option<PathBuf>,
-    /// G-code program (default: the paper's Table I, built in).
-    #[arg(long)]
-    pub program: Option<PathBuf>,
-    /// G54 work offset X,Y,Z in mm, for programs that set none.
-    #[arg(long, allow_hyphen_values = true)]
-    pub origin: Option<String>,
-    /// Constant tool orientation as roll,pitch,yaw in degrees (base frame, R = Rz·Ry·Rx),
-    /// as `trajectory --rpy` and `[orientation] rpy_deg`; default: the orientation at the
-    /// start pose.
-    #[arg(long, allow_hyphen_values = true)]
-    pub rpy: Option<String>,
-    /// Tip, tool centre point and start pose (as `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
-    /// `start_q`).
-    #[command(flatten)]
-    pub chain: crate::cli::ChainArgs,
-}
-
-/// Tuning options, as in `[mpc]` (default: the paper's).
-#[derive(Debug, Args, Clone)]
-pub struct TuningArgs {
-    /// Sampling period Ts (s).
-    #[arg(long)]
-    pub ts: Option<f64>,
-    /// Prediction horizon N (samples).
-    #[arg(long)]
-    pub horizon: Option<usize>,
-    /// Output-error weight Q_yw (scalar, times I).
-    #[arg(long)]
-    pub q_yw: Option<f64>,
-    /// Output-increment weight Q_Δy (scalar, times I).
-    #[arg(long)]
-    pub q_dy: Option<f64>,
-    /// Input-increment weight Q_Δu (scalar, times I).
-    #[arg(long)]
-    pub q_du: Option<f64>,
-    /// Input weight Q_u of the usual MPC (scalar, times I).
-    #[arg(long)]
-    pub q_u: Option<f64>,
-    /// The payload the controllers' model assumes (kg, point mass at the flange).
-    #[arg(long)]
-    pub model_payload_kg: Option<f64>,
-}
-
-impl TuningArgs {
-    /// The paper's tuning with these options applied.
-    pub fn settings(&self) -> MpcSettings {
-        let mut s = MpcSettings::default();
-        if let Some(v) = self.ts {
-            s.ts = v;
-        }
-        if let Some(v) = self.horizon {
-            s.horizon = v;
-        }
-        for (w, v) in [
-            (&mut s.q_yw, self.q_yw),
-            (&mut s.q_dy, self.q_dy),
-            (&mut s.q_du, self.q_du),
-            (&mut s.q_u, self.q_u),
-        ] {
-            if let Some(v) = v {
-                *w = Weight::Scalar(v);
-            }
-        }
-        if let Some(v) = self.model_payload_kg {
-            s.model_payload_kg = v;
-        }
-        s
-    }
-}
-
-/// `ofmpc analyze stability`
-#[derive(Debug, Args)]
-pub struct StabilityArgs {
-    /// Robot and program.
-    #[command(flatten)]
-    pub setup: SetupArgs,
-    /// Controllers, comma-separated (usual, first, second).
-    #[arg(long, default_value = "usual,first,second")]
-    pub controllers: String,
-    /// Tuning.
-    #[command(flatten)]
-    pub tuning: TuningArgs,
-    /// Directory for the figure (`stability.png`, `stability.svg`).
-    #[arg(long, default_value = "ofmpc-out")]
-    pub out: PathBuf,
-    /// JSON or words.
-    #[command(flatten)]
-    pub format: FormatArgs,
 }
 
 /// The margins of `analyze stability` in words: per controller its α interval and payload,
@@ -179,7 +61,7 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
     f.robot.drives = setup.drives.clone();
     f.program.file = setup.program.clone();
     if let Some(o) = &setup.origin {
-        let v = super::parse_fixed(
+        let v = super::robot::parse_fixed(
             "--origin",
             o,
             3,
@@ -189,7 +71,7 @@ pub fn scenario_file(setup: &SetupArgs, mpc: MpcSettings) -> anyhow::Result<Scen
         f.program.origin_mm = Some([v[0], v[1], v[2]]);
     }
     if let Some(r) = &setup.rpy {
-        let v = super::parse_fixed("--rpy", r, 3, "roll,pitch,yaw in degrees", "180,0,0")?;
+        let v = super::robot::parse_fixed("--rpy", r, 3, "roll,pitch,yaw in degrees", "180,0,0")?;
         f.orientation.rpy_deg = Some([v[0], v[1], v[2]]);
     }
     setup.chain.apply(&mut f.robot)?;
@@ -321,7 +203,7 @@ const STABILITY: [&str; 2] = ["stability.png", "stability.svg"];
 
 /// Runs `ofmpc analyze stability`.
 pub fn stability(a: &StabilityArgs) -> anyhow::Result<()> {
-    let kinds = super::parse_controllers("--controllers", &a.controllers)?;
+    let kinds = super::values::parse_controllers("--controllers", &a.controllers)?;
     if let Some(k) = kinds.iter().find(|k| k.is_adaptive()) {
         anyhow::bail!(
             "--controllers {k}: the adaptive variants identify the payload, so no fixed margin applies; analyse {} instead",

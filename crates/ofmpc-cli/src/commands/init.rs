@@ -2,27 +2,12 @@
 //! table per moving joint (the URDF's limits filled in, what a URDF lacks marked to fill) and a
 //! scenario that runs the robot — so that the next command is `ofmpc run`.
 
+use crate::cli::InitRobotArgs;
 use crate::output::atomic::write_atomic;
 use anyhow::{bail, Context};
-use clap::Args;
 use ofmpc::robot::Robot;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-
-/// `ofmpc init robot`
-#[derive(Debug, Args)]
-pub struct InitRobotArgs {
-    /// The robot's URDF file.
-    pub urdf: PathBuf,
-    /// Folder for `drives.toml` and `scenario.toml` (made if absent; existing files are never
-    /// replaced).
-    #[arg(long, default_value = ".")]
-    pub out: PathBuf,
-    /// The link that ends the chain (as `--tip` of run, written as `[robot] tip`): a branched
-    /// tree such as an arm with a hand and fingers loads with the hand as its tip.
-    #[arg(long)]
-    pub tip: Option<String>,
-}
+use std::path::Path;
 
 /// A TOML number for a known limit, or the line commented out with a note when unknown.
 fn limit_line(key: &str, value: f64, unit: &str) -> String {

@@ -1,7 +1,7 @@
 //! `ofmpc inspect dynamics`: the model's quantities at one state, as JSON, so
 //! that any peer implementation can be checked against this one.
 
-use super::{load_robot, parse_vector};
+use super::robot::{load_robot, parse_fixed, parse_vector};
 use crate::cli::{InspectDynamics, InspectProgram, InspectRobot};
 use crate::output::console;
 use nalgebra::DMatrix;
@@ -126,7 +126,7 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
     let (name, text) = ofmpc_scenario::read_program(Some(&a.file))?;
     let origin = match &a.origin {
         Some(o) => {
-            let v = super::parse_fixed(
+            let v = parse_fixed(
                 "--origin",
                 o,
                 3,
@@ -145,7 +145,7 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
             (nalgebra::Vector3::zeros(), None)
         }
         Some(r) => {
-            let chain = crate::cli::ChainArgs {
+            let chain = crate::args::ChainArgs {
                 start_q: a.start_q.clone(),
                 ..Default::default()
             };
@@ -161,7 +161,7 @@ pub fn program(a: &InspectProgram) -> anyhow::Result<()> {
         origin,
         start: Some(start),
         tool_axis,
-        tool_table: super::read_tool_table(a.tool_table.as_deref())?,
+        tool_table: super::values::read_tool_table(a.tool_table.as_deref())?,
         ..Default::default()
     };
     let program = ofmpc::gcode::parse(&text, &options)

@@ -7,11 +7,13 @@ mod inspect;
 mod robot;
 mod trajectory;
 pub mod tune;
+mod values;
 
 use crate::cli::{Analyze, Cli, Command, Init, Inspect};
 use ofmpc_scenario::{Override, Scenario, ScenarioError, ScenarioFile};
 
-pub(crate) use robot::{load_model_with, load_robot, parse_fixed, parse_vector};
+use robot::parse_vector;
+use values::parse_controllers;
 
 /// Runs one command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
@@ -153,39 +155,4 @@ fn override_error(e: ScenarioError, origin: Option<&str>) -> anyhow::Error {
             None => e.into(),
         },
     }
-}
-
-/// Parses a comma-separated list of controller names for option `name`.
-pub(crate) fn parse_controllers(
-    name: &str,
-    text: &str,
-) -> anyhow::Result<Vec<ofmpc::control::ControllerKind>> {
-    let mut v = Vec::new();
-    for (i, part) in text.split(',').enumerate() {
-        if let Some(kinds) = ofmpc_scenario::expand_shorthand(part) {
-            for k in kinds {
-                if !v.contains(k) {
-                    v.push(*k);
-                }
-            }
-            continue;
-        }
-        let k: ofmpc::control::ControllerKind = part
-            .trim()
-            .parse()
-            .map_err(|e| anyhow::anyhow!("{name}: value {} '{}': {e}", i + 1, part.trim()))?;
-        if !v.contains(&k) {
-            v.push(k);
-        }
-    }
-    Ok(v)
-}
-
-/// The tool table of `--tool-table FILE`, if given.
-fn read_tool_table(
-    path: Option<&std::path::Path>,
-) -> anyhow::Result<Option<ofmpc::gcode::ToolTable>> {
-    Ok(path
-        .map(|p| ofmpc_scenario::read_tool_table(p, "--tool-table"))
-        .transpose()?)
 }

@@ -1,6 +1,6 @@
 //! Robot selection shared by the commands: `--robot`, `--drives`, `--payload`.
 
-use crate::cli::{ChainArgs, RobotArgs};
+use crate::args::{ChainArgs, RobotArgs};
 use anyhow::bail;
 use ofmpc::robot::{Payload, Robot};
 use ofmpc_scenario::RobotSection;

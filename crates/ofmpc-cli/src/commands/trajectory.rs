@@ -1,6 +1,6 @@
 //! `ofmpc trajectory`: a program's timed path and joint reference.
 
-use super::parse_fixed;
+use super::robot::{load_model_with, parse_fixed};
 use crate::cli::TrajectoryArgs;
 use crate::figures;
 use crate::output::atomic::{check_destinations, Input};
@@ -70,7 +70,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         inputs.push(Input::new(d, "the drives file"));
     }
     check_destinations(&out_dir, &files, &inputs)?;
-    let robot = super::load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
+    let robot = load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
     let file =
         (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
     let (name, text) = read_program(file)?;
@@ -100,7 +100,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     };
     let options = PlanOptions {
         parse: ParseOptions {
-            tool_table: super::read_tool_table(a.tool_table.as_deref())?,
+            tool_table: super::values::read_tool_table(a.tool_table.as_deref())?,
             ..ParseOptions::with_origin(origin)
         },
         timing: TimingOptions {

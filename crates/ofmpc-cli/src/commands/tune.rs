@@ -5,38 +5,17 @@
 //! parses the options, writes the scenario and the trade-off figure, and
 //! prints the choice as JSON.
 
-use super::analyze::{progress, scenario_file, FormatArgs, SetupArgs};
+use super::analyze::{progress, scenario_file};
+use crate::cli::TuneArgs;
 use crate::output::console;
 use crate::output::plot::{
     render_both, Figure, Panel, Series, COLOR_FIRST, COLOR_SECOND, COLOR_USUAL,
 };
 use anyhow::{bail, Context};
-use clap::Args;
 use ofmpc::control::MpcSettings;
 use ofmpc_scenario::analysis::{robust_tuning, Candidate};
 use ofmpc_scenario::Scenario;
 use std::path::{Path, PathBuf};
-
-/// `ofmpc tune`
-#[derive(Debug, Args)]
-pub struct TuneArgs {
-    /// Robot and program.
-    #[command(flatten)]
-    pub setup: SetupArgs,
-    /// Payload range LO,HI in kg (point mass at the flange).
-    #[arg(long)]
-    pub payload_range: String,
-    /// Controllers to tune for, comma-separated (usual, first, second); or
-    /// one baseline (pid, ctc, ctc-adaptive, dob-mpc): its bandwidth.
-    #[arg(long, default_value = "first,second")]
-    pub controllers: String,
-    /// The scenario file to write (TOML).
-    #[arg(long)]
-    pub out: PathBuf,
-    /// JSON or words.
-    #[command(flatten)]
-    pub format: FormatArgs,
-}
 
 /// The result of `tune` in words (the JSON's fields, explained).
 fn tune_words(summary: &serde_json::Value, lo_kg: f64, hi_kg: f64) -> String {
@@ -116,12 +95,13 @@ fn base_scenario(a: &TuneArgs) -> anyhow::Result<Scenario> {
 
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
-    let range = super::parse_fixed("--payload-range", &a.payload_range, 2, "LO,HI in kg", "0,3")?;
+    let range =
+        super::robot::parse_fixed("--payload-range", &a.payload_range, 2, "LO,HI in kg", "0,3")?;
     let (lo_kg, hi_kg) = (range[0], range[1]);
     if !(lo_kg >= 0.0 && hi_kg >= lo_kg) {
         bail!("--payload-range {lo_kg},{hi_kg}: give LO,HI with 0 ≤ LO ≤ HI (kg)");
     }
-    let kinds = super::parse_controllers("--controllers", &a.controllers)?;
+    let kinds = super::values::parse_controllers("--controllers", &a.controllers)?;
     if kinds.iter().any(|k| k.is_baseline()) {
         return tune_baselines(a, lo_kg, hi_kg, &kinds);
     }

@@ -2,7 +2,7 @@
 
 use super::rnea::rnea_unchecked;
 use super::terms::crba;
-use super::{check, check_ws, finite_result, Workspace};
+use super::workspace::{check, check_ws, finite_result, Workspace};
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place};
 use crate::robot::{ModelError, Robot};
 use nalgebra::DVector;
@@ -65,7 +65,7 @@ pub fn kinetic_energy(
 /// Potential energy in the gravity field, zero at the base origin:
 /// `−Σ_k m_k gravityᵀ c_k`.
 pub fn potential_energy(robot: &Robot, ws: &mut Workspace, q: &[f64]) -> Result<f64, ModelError> {
-    super::forward_kinematics(robot, ws, q)?;
+    super::kinematics::forward_kinematics(robot, ws, q)?;
     let g = robot.gravity();
     Ok((0..robot.dof())
         .map(|k| {

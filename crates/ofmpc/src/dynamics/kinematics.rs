@@ -1,6 +1,6 @@
 //! Forward kinematics and the geometric Jacobian.
 
-use super::{check, check_ws, finite_result, Workspace};
+use super::workspace::{check, check_ws, finite_result, Workspace};
 use crate::robot::{JointKind, ModelError, Robot};
 use crate::spatial::{axis_angle, Motion, Transform};
 use nalgebra::DMatrix;

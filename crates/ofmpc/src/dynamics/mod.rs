@@ -3,7 +3,7 @@
 //! One algorithm per file, Pinocchio's layout: the [`Robot`] is constant, a
 //! [`Workspace`] sized once by [`Workspace::new`] receives the results, and no
 //! algorithm allocates. Every entry point checks the lengths and finiteness of
-//! its vectors and returns a [`ModelError`] instead of panicking.
+//! its vectors and returns a [`ModelError`](crate::robot::ModelError) instead of panicking.
 //!
 //! | algorithm | file | result |
 //! |---|---|---|
@@ -43,7 +43,7 @@ pub(crate) fn rnea_unchecked_parts(
     (ws.v[last], ws.a[last])
 }
 
-use crate::robot::{ModelError, Robot};
+use crate::robot::Robot;
 use nalgebra::{DMatrix, DVector};
 
 /// What a controller or a simulator needs of a robot model: the terms of the
@@ -137,33 +137,6 @@ impl JointSpaceDynamics for RobotDynamics {
                 g.fill(f64::NAN);
             }
         }
-    }
-}
-
-pub(crate) fn check(robot: &Robot, what: &str, v: &[f64]) -> Result<(), ModelError> {
-    robot.check_vector(what, v)
-}
-
-/// The workspace must have been built for this robot's number of joints.
-pub(crate) fn check_ws(robot: &Robot, ws: &Workspace) -> Result<(), ModelError> {
-    if !ws.fits(robot.dof()) {
-        return Err(ModelError::WorkspaceMismatch {
-            workspace: ws.dof(),
-            robot: robot.dof(),
-        });
-    }
-    Ok(())
-}
-
-/// A result must be finite (inputs such as q̇ = 1e160 overflow it).
-pub(crate) fn finite_result(what: &'static str, v: &[f64]) -> Result<(), ModelError> {
-    match v.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(index) => Err(ModelError::NonFiniteResult {
-            what,
-            index,
-            value: v[index],
-        }),
     }
 }
 

@@ -2,7 +2,7 @@
 //! *Rigid Body Dynamics Algorithms*, §5.3), in body frames.
 
 use super::kinematics::{joint_transform, local_axis};
-use super::{check, check_ws, finite_result, Workspace};
+use super::workspace::{check, check_ws, finite_result, Workspace};
 use crate::robot::{ModelError, Robot};
 use crate::spatial::Motion;
 use nalgebra::DVector;

@@ -16,7 +16,7 @@
 //!   `½ Ḣ + S` (docs/guide/paper-notes.md, "The model").
 
 use super::kinematics::fk_unchecked;
-use super::{check, check_ws, finite_result, Workspace};
+use super::workspace::{check, check_ws, finite_result, Workspace};
 use crate::robot::{ModelError, Robot};
 use crate::spatial::{Force, Inertia, Motion};
 use nalgebra::{DMatrix, DVector};

@@ -1,6 +1,6 @@
 //! Buffers of the rigid-body algorithms, sized once per robot.
 
-use crate::robot::Robot;
+use crate::robot::{ModelError, Robot};
 use crate::spatial::{Force, Inertia, Motion, Transform};
 use nalgebra::{DMatrix, DVector};
 
@@ -96,5 +96,33 @@ impl Workspace {
             && self.h.shape() == (n, n)
             && self.c.shape() == (n, n)
             && self.chol.shape() == (n, n)
+    }
+}
+
+/// A vector must have one finite value per joint of `robot` ([`Robot::check_vector`]).
+pub(crate) fn check(robot: &Robot, what: &str, v: &[f64]) -> Result<(), ModelError> {
+    robot.check_vector(what, v)
+}
+
+/// The workspace must have been built for this robot's number of joints.
+pub(crate) fn check_ws(robot: &Robot, ws: &Workspace) -> Result<(), ModelError> {
+    if !ws.fits(robot.dof()) {
+        return Err(ModelError::WorkspaceMismatch {
+            workspace: ws.dof(),
+            robot: robot.dof(),
+        });
+    }
+    Ok(())
+}
+
+/// A result must be finite (inputs such as q̇ = 1e160 overflow it).
+pub(crate) fn finite_result(what: &'static str, v: &[f64]) -> Result<(), ModelError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(index) => Err(ModelError::NonFiniteResult {
+            what,
+            index,
+            value: v[index],
+        }),
     }
 }

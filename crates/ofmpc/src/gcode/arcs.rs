@@ -6,7 +6,7 @@ use super::codes::{Args, Motion};
 use super::frames::rotate_z;
 use super::interpreter::Interpreter;
 use super::lexer::Word;
-use super::{arc_tolerance, err, GcodeError, GcodeErrorKind};
+use super::program::{arc_tolerance, err, GcodeError, GcodeErrorKind};
 use crate::geometry::{center_from_radius, ArcDirection, ArcError, Plane, RadiusArcError, Segment};
 use nalgebra::Vector3;
 

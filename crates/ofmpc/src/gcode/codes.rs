@@ -1,7 +1,7 @@
 //! The G and M codes the reader knows, their modal groups, and the argument letters.
 
 use super::lexer::Word;
-use super::{err, GcodeError, GcodeErrorKind};
+use super::program::{err, GcodeError, GcodeErrorKind};
 use crate::geometry::Plane;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

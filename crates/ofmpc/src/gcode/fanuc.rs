@@ -15,38 +15,11 @@
 //! Calls count towards the step limit like every executed line.
 
 use super::expr::{P_CALL_LEVEL, P_VALUE, P_VALUE_RETURNED};
-use super::flow::{Frame, Runner, SourceLine, MAX_CALL_DEPTH};
+use super::flow::{Frame, Runner, MAX_CALL_DEPTH};
 use super::interpreter::Interpreter;
-use super::lexer::{Block, Lexed, Value};
-use super::{err, GcodeError, GcodeErrorKind};
+use super::lexer::{Block, Value};
+use super::program::{err, GcodeError, GcodeErrorKind};
 use std::collections::HashMap;
-
-/// The numbered subprograms of a file: number → line indices of its `O<n>` lines, in order.
-pub(super) fn numbered_programs(lines: &[SourceLine<'_>]) -> HashMap<u64, Vec<usize>> {
-    let mut out: HashMap<u64, Vec<usize>> = HashMap::new();
-    for (i, l) in lines.iter().enumerate() {
-        if let Some(n) = program_number(l) {
-            out.entry(n).or_default().push(i);
-        }
-    }
-    out
-}
-
-/// The number of a line that holds only `O<n>` (and comments).
-fn program_number(l: &SourceLine<'_>) -> Option<u64> {
-    let Ok(Lexed::Block(b)) = &l.lexed else {
-        return None;
-    };
-    match b.words.as_slice() {
-        [w] if w.letter == 'O' && !b.delete && b.o.is_none() && b.assigns.is_empty() => {
-            match w.value {
-                Value::Num(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e15 => Some(v as u64),
-                _ => None,
-            }
-        }
-        _ => None,
-    }
-}
 
 /// Which Fanuc code a block holds.
 enum Code {
@@ -126,6 +99,44 @@ impl<'s, 'a> Runner<'s, 'a> {
         col: usize,
         text: &str,
     ) -> Result<usize, GcodeError> {
+        let (n, repeats) = self.m98_args(pc, b, col, text)?;
+        let sub = self.find_numbered(pc, n, col, text)?;
+        if repeats == 0 {
+            return Ok(pc + 1);
+        }
+        if self.frames.len() >= MAX_CALL_DEPTH {
+            return Err(err(
+                self.lines[pc].no,
+                col,
+                GcodeErrorKind::InvalidValue,
+                text,
+                format!("subprogram calls nested deeper than {MAX_CALL_DEPTH}"),
+                "check for a subprogram that calls itself without end",
+            ));
+        }
+        let mut saved = [0.0; 30];
+        saved.copy_from_slice(&self.params.numbered[1..31]);
+        self.params.locals.push(HashMap::new());
+        self.frames.push(Frame {
+            return_to: pc + 1,
+            saved,
+            repeats: self.repeats.len(),
+            numbered: Some((sub, repeats)),
+        });
+        self.params.predefined[P_CALL_LEVEL] = self.frames.len() as f64;
+        self.last_loop = sub;
+        Ok(sub + 1)
+    }
+
+    /// M98's P (the subprogram's number) and L (the repeat count, default 1) of block `b`
+    /// at line `pc`: whole numbers >= 0, possibly expressions.
+    fn m98_args(
+        &self,
+        pc: usize,
+        b: &Block<'a>,
+        col: usize,
+        text: &str,
+    ) -> Result<(u64, u64), GcodeError> {
         let l = &self.lines[pc];
         let word = |c: char| b.words.iter().find(|w| w.letter == c);
         let value =
@@ -174,32 +185,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                 )
             })?,
         };
-        let sub = self.find_numbered(pc, n, col, text)?;
-        if repeats == 0 {
-            return Ok(pc + 1);
-        }
-        if self.frames.len() >= MAX_CALL_DEPTH {
-            return Err(err(
-                l.no,
-                col,
-                GcodeErrorKind::InvalidValue,
-                text,
-                format!("subprogram calls nested deeper than {MAX_CALL_DEPTH}"),
-                "check for a subprogram that calls itself without end",
-            ));
-        }
-        let mut saved = [0.0; 30];
-        saved.copy_from_slice(&self.params.numbered[1..31]);
-        self.params.locals.push(HashMap::new());
-        self.frames.push(Frame {
-            return_to: pc + 1,
-            saved,
-            repeats: self.repeats.len(),
-            numbered: Some((sub, repeats)),
-        });
-        self.params.predefined[P_CALL_LEVEL] = self.frames.len() as f64;
-        self.last_loop = sub;
-        Ok(sub + 1)
+        Ok((n, repeats))
     }
 
     /// The line index of the first `O<n>` after line `pc`, or the error that names why

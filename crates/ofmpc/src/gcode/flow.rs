@@ -7,8 +7,9 @@ use super::expr::{
     is_system_parameter, EvalError, Expr, Params, P_CALL_LEVEL, P_LINE, P_VALUE, P_VALUE_RETURNED,
 };
 use super::interpreter::Interpreter;
-use super::lexer::{escape, Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
-use super::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
+use super::lexer::{Block, Lexed, MessageKind, OKind, OStmt, Target, Value, Word};
+use super::program::{err, GcodeError, GcodeErrorKind, ProgramMessage, MAX_WORD_VALUE};
+use super::text::escape;
 use std::collections::HashMap;
 
 /// Lines a program may execute beyond its own length before the reader stops it as an
@@ -298,7 +299,7 @@ impl<'s, 'a> Runner<'s, 'a> {
             frames: Vec::new(),
             repeats: Vec::new(),
             last_loop: NONE,
-            numbered: super::fanuc::numbered_programs(lines),
+            numbered: numbered_programs(lines),
             warned_delete: false,
             uses_parameters: lines.iter().any(|l| l.raw.contains('#')),
         })
@@ -339,15 +340,7 @@ impl<'s, 'a> Runner<'s, 'a> {
                 Ok(Lexed::Block(b)) => b,
             };
             if b.delete {
-                if !self.warned_delete {
-                    self.warned_delete = true;
-                    it.warn(
-                        l.no,
-                        1,
-                        "block delete: lines starting with `/` are skipped (LinuxCNC's default)",
-                    );
-                }
-                it.seen_content = true;
+                self.skip_deleted(it, l.no);
                 pc += 1;
                 continue;
             }
@@ -367,6 +360,19 @@ impl<'s, 'a> Runner<'s, 'a> {
             pc += 1;
         }
         Ok(pc)
+    }
+
+    /// A block-delete line (`/`): skipped, with a warning the first time.
+    fn skip_deleted(&mut self, it: &mut Interpreter, no: usize) {
+        if !self.warned_delete {
+            self.warned_delete = true;
+            it.warn(
+                no,
+                1,
+                "block delete: lines starting with `/` are skipped (LinuxCNC's default)",
+            );
+        }
+        it.seen_content = true;
     }
 
     fn step_limit(&self, pc: usize, max_steps: usize) -> GcodeError {
@@ -459,6 +465,20 @@ impl<'s, 'a> Runner<'s, 'a> {
                 self.last_loop = k.next[pc];
                 k.next[pc]
             }
+            OKind::Repeat | OKind::Endrepeat | OKind::Break | OKind::Continue => {
+                self.loop_word(pc, o)?
+            }
+            OKind::Call => self.call(pc, o)?,
+            OKind::Return | OKind::Endsub => self.ret(it, pc, o)?,
+        })
+    }
+
+    /// The `repeat` loop's statements and `break`/`continue` (of any loop) at `pc`; returns
+    /// the next line to run.
+    fn loop_word(&mut self, pc: usize, o: &OStmt<'_>) -> Result<usize, GcodeError> {
+        let l = &self.lines[pc];
+        let k = &self.links;
+        Ok(match o.kind {
             OKind::Repeat => {
                 let n = self.arg0(l, o)?.round();
                 if n >= 1.0 {
@@ -494,8 +514,8 @@ impl<'s, 'a> Runner<'s, 'a> {
                     _ => k.end[start],
                 }
             }
-            OKind::Call => self.call(pc, o)?,
-            OKind::Return | OKind::Endsub => self.ret(it, pc, o)?,
+            // Not one of those (o_word dispatches only them here): the next line.
+            _ => pc + 1,
         })
     }
 
@@ -639,6 +659,22 @@ impl<'s, 'a> Runner<'s, 'a> {
         l: &SourceLine<'a>,
         b: &Block<'a>,
     ) -> Result<(), GcodeError> {
+        let words = self.evaluated_words(l, b)?;
+        self.assign_parameters(l, b)?;
+        self.messages(it, l, b);
+        if !words.is_empty() {
+            it.line(l.no, l.raw, &words)?;
+        }
+        Ok(())
+    }
+
+    /// The words of block `b` with their expressions evaluated (before the block's
+    /// parameter assignments take effect).
+    fn evaluated_words(
+        &self,
+        l: &SourceLine<'a>,
+        b: &Block<'a>,
+    ) -> Result<Vec<Word<'a>>, GcodeError> {
         let mut words: Vec<Word<'a>> = Vec::with_capacity(b.words.len());
         for w in &b.words {
             let value = match &w.value {
@@ -665,6 +701,12 @@ impl<'s, 'a> Runner<'s, 'a> {
                 text: w.text,
             });
         }
+        Ok(words)
+    }
+
+    /// The parameter assignments of block `b`: every value is evaluated first, then all are
+    /// set (LinuxCNC's order).
+    fn assign_parameters(&mut self, l: &SourceLine<'a>, b: &Block<'a>) -> Result<(), GcodeError> {
         let mut sets = Vec::with_capacity(b.assigns.len());
         for a in &b.assigns {
             let v = self.eval(l, a.col, a.text, &a.value)?;
@@ -689,10 +731,6 @@ impl<'s, 'a> Runner<'s, 'a> {
                 Ok(i) => self.params.numbered[i] = v,
                 Err(n) => self.params.set_named(n, v),
             }
-        }
-        self.messages(it, l, b);
-        if !words.is_empty() {
-            it.line(l.no, l.raw, &words)?;
         }
         Ok(())
     }
@@ -791,4 +829,31 @@ fn read_only(line: usize, col: usize, text: &str, name: &str) -> GcodeError {
 fn eval_error(line: usize, col: usize, text: &str, e: &EvalError) -> GcodeError {
     let (m, h) = e.describe();
     err(line, col, GcodeErrorKind::InvalidValue, text, m, h)
+}
+
+/// The numbered subprograms of a file (Fanuc `M98 P<n>` calls them, fanuc.rs): number → line indices of its `O<n>` lines, in order.
+fn numbered_programs(lines: &[SourceLine<'_>]) -> HashMap<u64, Vec<usize>> {
+    let mut out: HashMap<u64, Vec<usize>> = HashMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        if let Some(n) = program_number(l) {
+            out.entry(n).or_default().push(i);
+        }
+    }
+    out
+}
+
+/// The number of a line that holds only `O<n>` (and comments).
+fn program_number(l: &SourceLine<'_>) -> Option<u64> {
+    let Ok(Lexed::Block(b)) = &l.lexed else {
+        return None;
+    };
+    match b.words.as_slice() {
+        [w] if w.letter == 'O' && !b.delete && b.o.is_none() && b.assigns.is_empty() => {
+            match w.value {
+                Value::Num(v) if v >= 0.0 && v.fract() == 0.0 && v < 1e15 => Some(v as u64),
+                _ => None,
+            }
+        }
+        _ => None,
+    }
 }

@@ -6,13 +6,54 @@ use super::codes::{
     N_ARGS,
 };
 use super::lexer::Word;
-use super::modal::Extra;
-use super::{
+use super::program::{
     err, GcodeError, GcodeErrorKind, GcodeWarning, Move, MoveKind, ParseOptions, PathMode, Program,
     ProgramEvent, ProgramMessage, MIN_MOVE_LENGTH,
 };
 use crate::geometry::{ArcDirection, Plane, Segment};
 use nalgebra::Vector3;
+
+/// State of the codes `modal.rs` executes (G92/G52, G53, G28/G30 homes, arcs, canned-cycle
+/// retract, ...): part of the interpreter's state.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Extra {
+    /// G92/G52 offset (m) and the one G92.2 suspended.
+    pub(super) g92: [f64; 3],
+    pub(super) g92_saved: [f64; 3],
+    /// This line is G53 (machine coordinates).
+    pub(super) machine: bool,
+    /// Positions stored by G28.1 / G30.1 (m, machine).
+    pub(super) home: [Option<Vector3<f64>>; 2],
+    /// G90.1 in force.
+    pub(super) arc_absolute: bool,
+    /// G98 (retract to the initial Z) in force; default G99 (LinuxCNC's R_PLANE).
+    pub(super) retract_initial: bool,
+    /// 93, 94 or 95.
+    pub(super) feed_mode: u8,
+    /// Last spindle speed S (for G95).
+    pub(super) spindle: Option<f64>,
+    /// Sticky canned-cycle words R, Z, Q, P (program units / s) and the Z (m) where the
+    /// cycles began.
+    pub(super) cycle: [Option<f64>; 4],
+    pub(super) cycle_z0: Option<f64>,
+    /// G64 Q tolerance (m) and the points removed from the last move by merging.
+    pub(super) merge_q: Option<f64>,
+    pub(super) merged: Vec<Vector3<f64>>,
+    /// Spindle direction from M3 (1), M4 (-1), M5 (0); coolant from M7/M8/M9.
+    pub(super) spindle_dir: i8,
+    pub(super) mist: bool,
+    pub(super) flood: bool,
+    /// Rotation (degrees about Z) of the coordinate systems G54 … G59 (G10 L2 R).
+    pub(super) rotation: [f64; 6],
+    /// Tool selected by T and the tool in the spindle (M6, M61 Q).
+    pub(super) tool_selected: f64,
+    pub(super) tool_current: f64,
+    /// Where the tool is when it is not at the current point `pos` (after G74/G84 in
+    /// G18/G19, see `tap_point`): the next move starts there.
+    pub(super) machine_at: Option<Vector3<f64>>,
+    /// The warning on G74/G84 in G18/G19 was given.
+    pub(super) warned_tap: bool,
+}
 
 /// Modal state of the reader while it walks the program, and the moves produced so far.
 pub(super) struct Interpreter {
@@ -53,41 +94,15 @@ pub(super) struct Interpreter {
     /// State of the codes of [`super::modal`].
     pub(super) ext: Extra,
     /// The tool table of the options (G43 H).
-    pub(super) tools: Option<super::ToolTable>,
+    pub(super) tools: Option<super::tools::ToolTable>,
     /// The warning that the origin option applies to G54 only was given.
     warned_wcs: bool,
 }
 
 impl Interpreter {
     pub(super) fn new(options: &ParseOptions) -> Result<Self, GcodeError> {
-        let mut offsets = [[0.0; 3]; 6];
-        if let Some(o) = options.origin {
-            if !o.iter().all(|x| x.is_finite()) {
-                return Err(err(
-                    0,
-                    0,
-                    GcodeErrorKind::InvalidOption,
-                    "",
-                    format!("the part origin (work offset) must be finite, got {o:?} m"),
-                    "give the part origin in metres",
-                ));
-            }
-            offsets[0] = o;
-        }
-        let tool_axis = options.tool_axis.unwrap_or(-Vector3::z());
-        if !(tool_axis.iter().all(|x| x.is_finite()) && (tool_axis.norm() - 1.0).abs() < 1e-9) {
-            return Err(err(
-                0,
-                0,
-                GcodeErrorKind::InvalidOption,
-                "",
-                format!(
-                    "the tool axis must be a finite unit vector, got [{}, {}, {}]",
-                    tool_axis.x, tool_axis.y, tool_axis.z
-                ),
-                "give the direction from the controlled point to the tool tip, of length 1",
-            ));
-        }
+        let offsets = Self::initial_offsets(options)?;
+        let tool_axis = Self::checked_tool_axis(options)?;
         Ok(Interpreter {
             inch: false,
             absolute: true,
@@ -120,6 +135,45 @@ impl Interpreter {
             tools: options.tool_table.clone(),
             warned_wcs: false,
         })
+    }
+
+    /// The work offsets G54..G59 before the program: the part origin of the options as
+    /// G54's, which must be finite.
+    fn initial_offsets(options: &ParseOptions) -> Result<[[f64; 3]; 6], GcodeError> {
+        let mut offsets = [[0.0; 3]; 6];
+        if let Some(o) = options.origin {
+            if !o.iter().all(|x| x.is_finite()) {
+                return Err(err(
+                    0,
+                    0,
+                    GcodeErrorKind::InvalidOption,
+                    "",
+                    format!("the part origin (work offset) must be finite, got {o:?} m"),
+                    "give the part origin in metres",
+                ));
+            }
+            offsets[0] = o;
+        }
+        Ok(offsets)
+    }
+
+    /// The tool axis of the options (default −Z), which must be a finite unit vector.
+    fn checked_tool_axis(options: &ParseOptions) -> Result<Vector3<f64>, GcodeError> {
+        let tool_axis = options.tool_axis.unwrap_or(-Vector3::z());
+        if !(tool_axis.iter().all(|x| x.is_finite()) && (tool_axis.norm() - 1.0).abs() < 1e-9) {
+            return Err(err(
+                0,
+                0,
+                GcodeErrorKind::InvalidOption,
+                "",
+                format!(
+                    "the tool axis must be a finite unit vector, got [{}, {}, {}]",
+                    tool_axis.x, tool_axis.y, tool_axis.z
+                ),
+                "give the direction from the controlled point to the tool tip, of length 1",
+            ));
+        }
+        Ok(tool_axis)
     }
 
     pub(super) fn scale(&self) -> f64 {
@@ -205,12 +259,36 @@ impl Interpreter {
             .collect();
         Self::check_unused_args(line, &cmd, motion_mode, args, &mletters)?;
         self.record_events(line, &sorted);
+        self.apply_commands(line, line_text, &cmd, args)?;
+        let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
+        // G04 uses no axis words, so a motion may share its line (LinuxCNC: the dwell
+        // runs first); without one, G04 X… is a dwell time.
+        let dwell_only = cmd.dwell.is_some() && cmd.explicit_motion.is_none();
+        if !dwell_only && cmd.set_offset.is_none() && !consumes_axes {
+            if let Some(m) = motion_mode {
+                self.line_motion(line, line_text, words, &cmd, m, args)?;
+            }
+        }
+        if sorted.mcodes.iter().any(|(m, _)| matches!(m, MCode::End)) {
+            self.ended = true;
+        }
+        Ok(())
+    }
 
+    /// The line's non-motion commands, in LinuxCNC's order: G10, the work offset, the
+    /// spindle speed, the tool length, G28/G30/G92, G04; then the new motion mode.
+    fn apply_commands(
+        &mut self,
+        line: usize,
+        line_text: &str,
+        cmd: &LineCommands<'_, '_>,
+        args: &Args<'_, '_>,
+    ) -> Result<(), GcodeError> {
         if let Some(g10) = cmd.set_offset {
             self.set_offset(line, g10, args)?;
         }
         if let Some(k) = cmd.wcs {
-            self.select_wcs(line, k, &cmd);
+            self.select_wcs(line, k, cmd);
         }
         if let Some(sw) = args.get('S') {
             self.ext.spindle = Some(sw.value);
@@ -232,18 +310,6 @@ impl Interpreter {
                 self.ext.cycle_z0 = None;
             }
             self.motion = Some(m.0);
-        }
-        let consumes_axes = cmd.axis_cmd.is_some() || cmd.tool.is_some_and(|(c, _)| c == 431);
-        // G04 uses no axis words, so a motion may share its line (LinuxCNC: the dwell
-        // runs first); without one, G04 X… is a dwell time.
-        let dwell_only = cmd.dwell.is_some() && cmd.explicit_motion.is_none();
-        if !dwell_only && cmd.set_offset.is_none() && !consumes_axes {
-            if let Some(m) = motion_mode {
-                self.line_motion(line, line_text, words, &cmd, m, args)?;
-            }
-        }
-        if sorted.mcodes.iter().any(|(m, _)| matches!(m, MCode::End)) {
-            self.ended = true;
         }
         Ok(())
     }
@@ -670,6 +736,38 @@ impl Interpreter {
         args: &Args<'_, '_>,
         motion_on_line: bool,
     ) -> Result<(), GcodeError> {
+        let w = Self::dwell_time(line, line_text, g4, args, motion_on_line)?;
+        if w.value > 0.0 {
+            if let (None, Some(p0)) = (self.pos, self.initial_tip()) {
+                self.begin_at(p0, line);
+            }
+            if self.pos.is_none() {
+                return Err(err(
+                    line,
+                    g4.col,
+                    GcodeErrorKind::StartPoint,
+                    line_text,
+                    "dwell before the start point is known",
+                    "start the program with G00 X.. Y.. Z..",
+                ));
+            }
+            self.moves.push(Move {
+                line,
+                kind: MoveKind::Dwell { seconds: w.value },
+                tool_length: self.tool_length,
+            });
+        }
+        Ok(())
+    }
+
+    /// G04's time word: P, or X when no motion shares the line; one of them, >= 0.
+    fn dwell_time<'l, 'w>(
+        line: usize,
+        line_text: &str,
+        g4: &Word<'_>,
+        args: &Args<'l, 'w>,
+        motion_on_line: bool,
+    ) -> Result<&'l Word<'w>, GcodeError> {
         use GcodeErrorKind::*;
         let p = args.get('P');
         let x = args.get('X').filter(|_| !motion_on_line);
@@ -707,27 +805,7 @@ impl Interpreter {
                 "give the dwell time in seconds, >= 0",
             ));
         }
-        if w.value > 0.0 {
-            if let (None, Some(p0)) = (self.pos, self.initial_tip()) {
-                self.begin_at(p0, line);
-            }
-            if self.pos.is_none() {
-                return Err(err(
-                    line,
-                    g4.col,
-                    StartPoint,
-                    line_text,
-                    "dwell before the start point is known",
-                    "start the program with G00 X.. Y.. Z..",
-                ));
-            }
-            self.moves.push(Move {
-                line,
-                kind: MoveKind::Dwell { seconds: w.value },
-                tool_length: self.tool_length,
-            });
-        }
-        Ok(())
+        Ok(w)
     }
 
     /// Executes the line's motion in mode `m` if the line gives coordinates (or, for an arc,
@@ -767,6 +845,82 @@ impl Interpreter {
         g10: &Word<'_>,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
+        let arg = |c| args.get(c);
+        let l20 = Self::g10_is_l20(line, g10, args)?;
+        let k = self.g10_offset_index(line, g10, args)?;
+        if k == 0 && self.p1_from_options {
+            self.p1_from_options = false;
+            if self.origin_given {
+                self.warn(
+                    line,
+                    g10.col,
+                    "the program sets the G54 offset itself (G10 L2 P1): the part origin given with the reading options is not used",
+                );
+            }
+            self.offsets[0] = [0.0; 3];
+        }
+        if let (Some(r), Some(rot)) = (arg('R'), self.ext.rotation.get_mut(k)) {
+            *rot = r.value;
+        }
+        let theta = self.ext.rotation.get(k).copied().unwrap_or(0.0);
+        if l20 && theta != 0.0 {
+            self.set_offset_l20_rotated(k, args);
+            return Ok(());
+        }
+        let scale = self.scale();
+        let here = self.here();
+        let g92 = self.ext.g92;
+        for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
+            if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
+                // L20: the offset that makes the current point read as the given value.
+                o[axis] = if l20 {
+                    here[axis] - w.value * scale - g92[axis]
+                } else {
+                    w.value * scale
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// G10's P: the work offset it sets (P1..P6: G54..G59, P0: the active one).
+    fn g10_offset_index(
+        &self,
+        line: usize,
+        g10: &Word<'_>,
+        args: &Args<'_, '_>,
+    ) -> Result<usize, GcodeError> {
+        use GcodeErrorKind::*;
+        let p = args.get('P').ok_or_else(|| {
+            err(
+                line,
+                g10.col,
+                Missing,
+                g10.text,
+                "G10 L2 without P",
+                "P1..P6 selects the work offset of G54..G59",
+            )
+        })?;
+        if !(0.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
+            return Err(err(
+                line,
+                p.col,
+                InvalidValue,
+                p.text,
+                "G10 L2 needs P1..P6 (or P0)",
+                "P1..P6 selects the work offset of G54..G59, P0 the active one",
+            ));
+        }
+        Ok(if p.value == 0.0 {
+            self.wcs
+        } else {
+            p.value as usize - 1
+        })
+    }
+
+    /// G10's L: L2 (the offset itself) or L20 (the offset that makes the current point read
+    /// as the given value); R (the rotation about Z) only with L2. Returns whether L20.
+    fn g10_is_l20(line: usize, g10: &Word<'_>, args: &Args<'_, '_>) -> Result<bool, GcodeError> {
         use GcodeErrorKind::*;
         let arg = |c| args.get(c);
         match arg('L') {
@@ -804,64 +958,7 @@ impl Interpreter {
                 "set the rotation with G10 L2 Pn R<degrees>, then the origin with G10 L20",
             ));
         }
-        let p = arg('P').ok_or_else(|| {
-            err(
-                line,
-                g10.col,
-                Missing,
-                g10.text,
-                "G10 L2 without P",
-                "P1..P6 selects the work offset of G54..G59",
-            )
-        })?;
-        if !(0.0..=6.0).contains(&p.value) || p.value.fract() != 0.0 {
-            return Err(err(
-                line,
-                p.col,
-                InvalidValue,
-                p.text,
-                "G10 L2 needs P1..P6 (or P0)",
-                "P1..P6 selects the work offset of G54..G59, P0 the active one",
-            ));
-        }
-        let k = if p.value == 0.0 {
-            self.wcs
-        } else {
-            p.value as usize - 1
-        };
-        if k == 0 && self.p1_from_options {
-            self.p1_from_options = false;
-            if self.origin_given {
-                self.warn(
-                    line,
-                    g10.col,
-                    "the program sets the G54 offset itself (G10 L2 P1): the part origin given with the reading options is not used",
-                );
-            }
-            self.offsets[0] = [0.0; 3];
-        }
-        if let (Some(r), Some(rot)) = (arg('R'), self.ext.rotation.get_mut(k)) {
-            *rot = r.value;
-        }
-        let theta = self.ext.rotation.get(k).copied().unwrap_or(0.0);
-        if l20 && theta != 0.0 {
-            self.set_offset_l20_rotated(k, args);
-            return Ok(());
-        }
-        let scale = self.scale();
-        let here = self.here();
-        let g92 = self.ext.g92;
-        for (axis, c) in ['X', 'Y', 'Z'].into_iter().enumerate() {
-            if let (Some(w), Some(o)) = (arg(c), self.offsets.get_mut(k)) {
-                // L20: the offset that makes the current point read as the given value.
-                o[axis] = if l20 {
-                    here[axis] - w.value * scale - g92[axis]
-                } else {
-                    w.value * scale
-                };
-            }
-        }
-        Ok(())
+        Ok(l20)
     }
 
     /// Selects work offset `k` (G54 + k); warns once when the origin option, which sets
@@ -934,6 +1031,13 @@ impl Interpreter {
             }
             Motion::Cw | Motion::Ccw => self.arc_segment(&block, pos, target)?,
         };
+        self.push_arc(line, pos, segment);
+        Ok(())
+    }
+
+    /// Appends the arc `segment` from `pos` (after a straight move to `pos` when a
+    /// G74/G84 in G18/G19 left the tool elsewhere).
+    fn push_arc(&mut self, line: usize, pos: Vector3<f64>, segment: Segment) {
         if let Some(m) = self.ext.machine_at {
             // After G74/G84 in G18/G19 the tool is elsewhere: a straight move to the arc.
             self.push_line(line, m, pos, true);
@@ -950,7 +1054,6 @@ impl Interpreter {
             },
             tool_length: self.tool_length,
         });
-        Ok(())
     }
 
     /// Starts the program at `p` (the tool position before the program), at `line`.

@@ -1,7 +1,8 @@
 //! Lexer: one line of text → words (letter, value, column, source text).
 
 use super::expr::{Expr, Func, Op};
-use super::{err, GcodeError, GcodeErrorKind, MAX_WORD_VALUE};
+use super::program::{err, GcodeError, GcodeErrorKind, MAX_WORD_VALUE};
+use super::text::{escape, is_invisible};
 use std::cell::Cell;
 
 /// One word of a line: an upper-case letter and its value.
@@ -434,41 +435,7 @@ impl<'a> LineChars<'a> {
             return Err(self.syntax(j, format!("`{name}` where a value was expected"), "functions take their argument in [ ], e.g. SIN[30]; operators such as MOD and EQ stand between two values"));
         }
         if name == "EXISTS" {
-            let (k2, c2) = self.peek(k + 1);
-            let (k3, c3) = self.peek(k2 + 1);
-            if c2 == Some('#') && c3 != Some('<') {
-                let (e, k4) = self.real_value(k2 + 1, depth)?;
-                let (k5, c5) = self.peek(k4);
-                if c5 == Some(']') {
-                    // A numbered parameter exists when its number is valid.
-                    let exists = Expr::Bin(
-                        Op::And,
-                        Box::new(Expr::Bin(
-                            Op::Ge,
-                            Box::new(e.clone()),
-                            Box::new(Expr::Num(1.0)),
-                        )),
-                        Box::new(Expr::Bin(
-                            Op::Le,
-                            Box::new(e),
-                            Box::new(Expr::Num(super::expr::MAX_PARAMETER as f64)),
-                        )),
-                    );
-                    return Ok((exists, k5 + 1));
-                }
-            }
-            if c2 == Some('#') && c3 == Some('<') {
-                let (n, k4) = self.name(k3)?;
-                let (k5, c5) = self.peek(k4);
-                if c5 == Some(']') {
-                    return Ok((Expr::Exists(n), k5 + 1));
-                }
-            }
-            return Err(self.syntax(
-                j,
-                "EXISTS takes one named parameter",
-                "write EXISTS[#<name>]",
-            ));
+            return self.exists(j, k, depth);
         }
         let (a, k) = self.bracket(k, depth)?;
         if name == "ATAN" {
@@ -491,6 +458,46 @@ impl<'a> LineChars<'a> {
                 "functions: ABS ACOS ASIN ATAN COS EXISTS EXP FIX FUP LN ROUND SIN SQRT TAN",
             )),
         }
+    }
+
+    /// `EXISTS[#<name>]` (or `EXISTS[#n]`: whether n is a valid parameter number) whose
+    /// name starts at `j` and `[` is at `k`.
+    fn exists(&self, j: usize, k: usize, depth: usize) -> Result<(Expr, usize), GcodeError> {
+        let (k2, c2) = self.peek(k + 1);
+        let (k3, c3) = self.peek(k2 + 1);
+        if c2 == Some('#') && c3 != Some('<') {
+            let (e, k4) = self.real_value(k2 + 1, depth)?;
+            let (k5, c5) = self.peek(k4);
+            if c5 == Some(']') {
+                // A numbered parameter exists when its number is valid.
+                let exists = Expr::Bin(
+                    Op::And,
+                    Box::new(Expr::Bin(
+                        Op::Ge,
+                        Box::new(e.clone()),
+                        Box::new(Expr::Num(1.0)),
+                    )),
+                    Box::new(Expr::Bin(
+                        Op::Le,
+                        Box::new(e),
+                        Box::new(Expr::Num(super::expr::MAX_PARAMETER as f64)),
+                    )),
+                );
+                return Ok((exists, k5 + 1));
+            }
+        }
+        if c2 == Some('#') && c3 == Some('<') {
+            let (n, k4) = self.name(k3)?;
+            let (k5, c5) = self.peek(k4);
+            if c5 == Some(']') {
+                return Ok((Expr::Exists(n), k5 + 1));
+            }
+        }
+        Err(self.syntax(
+            j,
+            "EXISTS takes one named parameter",
+            "write EXISTS[#<name>]",
+        ))
     }
 
     /// A name `<…>` whose `<` is at `j`: lower case, blanks removed; the index after `>`.
@@ -732,16 +739,7 @@ impl<'a> LineChars<'a> {
     /// sign and a decimal number. Returns the word and the index after it.
     fn word(&self, i: usize, c: char) -> Result<(RawWord<'a>, usize), GcodeError> {
         if self.expression_starts(i + 1) {
-            let letter = c.to_ascii_uppercase();
-            let (e, k) = self.real_value(i + 1, 0)?;
-            let text = &self.raw[self.byte_at(i)..self.byte_at(k)];
-            let word = RawWord {
-                letter,
-                value: Value::Expr(e),
-                col: i + 1,
-                text,
-            };
-            return Ok((word, k));
+            return self.expression_word(i, c);
         }
         let (raw, chars, line) = (self.raw, &self.chars, self.line);
         let col = i + 1;
@@ -791,6 +789,20 @@ impl<'a> LineChars<'a> {
             text,
         };
         Ok((word, j))
+    }
+
+    /// The word of letter `c` at character `i` whose value is an expression (`X[…]`, `X#1`).
+    fn expression_word(&self, i: usize, c: char) -> Result<(RawWord<'a>, usize), GcodeError> {
+        let letter = c.to_ascii_uppercase();
+        let (e, k) = self.real_value(i + 1, 0)?;
+        let text = &self.raw[self.byte_at(i)..self.byte_at(k)];
+        let word = RawWord {
+            letter,
+            value: Value::Expr(e),
+            col: i + 1,
+            text,
+        };
+        Ok((word, k))
     }
 
     /// The error for the letter at character `i` without a number (which would start at
@@ -913,26 +925,6 @@ impl<'a> LineChars<'a> {
             hint,
         )
     }
-}
-
-/// Is `c` a character that shows as nothing or as a blank (control characters, no-break and
-/// zero-width spaces, byte-order marks, directional marks)?
-pub(super) fn is_invisible(c: char) -> bool {
-    c.is_control()
-        || matches!(c, '\u{a0}' | '\u{ad}' | '\u{2000}'..='\u{200f}' | '\u{2028}'..='\u{202f}' | '\u{205f}'..='\u{206f}' | '\u{feff}')
-}
-
-/// `s` with invisible characters written as `\u{…}` escapes.
-pub(super) fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        if is_invisible(c) && c != ' ' {
-            out.push_str(&format!("\\u{{{:x}}}", c as u32));
-        } else {
-            out.push(c);
-        }
-    }
-    out
 }
 
 /// The message in a comment's `body` (`MSG,…`, `PRINT,…`, `DEBUG,…`, any case).

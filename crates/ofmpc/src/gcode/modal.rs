@@ -8,9 +8,9 @@
 
 use super::codes::{Args, Motion};
 use super::frames::rotate_z;
-use super::interpreter::Interpreter;
+use super::interpreter::{Extra, Interpreter};
 use super::lexer::Word;
-use super::{
+use super::program::{
     err, GcodeError, GcodeErrorKind, Move, MoveKind, PathMode, ProgramEvent, MIN_MOVE_LENGTH,
 };
 use crate::geometry::{Plane, Segment};
@@ -21,47 +21,6 @@ const PECK_DELTA_INCH: f64 = 0.010;
 
 /// Longest run of moves G64 Q merges into one (bounds the work per move).
 const MAX_MERGE_RUN: usize = 1000;
-
-/// State of the codes of this module.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Extra {
-    /// G92/G52 offset (m) and the one G92.2 suspended.
-    pub(super) g92: [f64; 3],
-    pub(super) g92_saved: [f64; 3],
-    /// This line is G53 (machine coordinates).
-    pub(super) machine: bool,
-    /// Positions stored by G28.1 / G30.1 (m, machine).
-    pub(super) home: [Option<Vector3<f64>>; 2],
-    /// G90.1 in force.
-    pub(super) arc_absolute: bool,
-    /// G98 (retract to the initial Z) in force; default G99 (LinuxCNC's R_PLANE).
-    pub(super) retract_initial: bool,
-    /// 93, 94 or 95.
-    pub(super) feed_mode: u8,
-    /// Last spindle speed S (for G95).
-    pub(super) spindle: Option<f64>,
-    /// Sticky canned-cycle words R, Z, Q, P (program units / s) and the Z (m) where the
-    /// cycles began.
-    pub(super) cycle: [Option<f64>; 4],
-    pub(super) cycle_z0: Option<f64>,
-    /// G64 Q tolerance (m) and the points removed from the last move by merging.
-    pub(super) merge_q: Option<f64>,
-    pub(super) merged: Vec<Vector3<f64>>,
-    /// Spindle direction from M3 (1), M4 (-1), M5 (0); coolant from M7/M8/M9.
-    pub(super) spindle_dir: i8,
-    pub(super) mist: bool,
-    pub(super) flood: bool,
-    /// Rotation (degrees about Z) of the coordinate systems G54 … G59 (G10 L2 R).
-    pub(super) rotation: [f64; 6],
-    /// Tool selected by T and the tool in the spindle (M6, M61 Q).
-    pub(super) tool_selected: f64,
-    pub(super) tool_current: f64,
-    /// Where the tool is when it is not at the current point `pos` (after G74/G84 in
-    /// G18/G19, see `tap_point`): the next move starts there.
-    pub(super) machine_at: Option<Vector3<f64>>,
-    /// The warning on G74/G84 in G18/G19 was given.
-    pub(super) warned_tap: bool,
-}
 
 impl Interpreter {
     /// The offset from program to machine coordinates (m): work offset plus G92/G52, or
@@ -202,53 +161,7 @@ impl Interpreter {
     ) -> Result<(), GcodeError> {
         let length = match (code, args.get('Z')) {
             (431, Some(z)) => z.value * self.scale(),
-            (430, _) => {
-                let (n, at) = match args.get('H') {
-                    Some(h) => (h.value, h),
-                    None => (self.ext.tool_current, w),
-                };
-                let fail = |message: String, hint: &str| {
-                    Err(err(
-                        line,
-                        at.col,
-                        GcodeErrorKind::InvalidValue,
-                        at.text,
-                        message,
-                        hint,
-                    ))
-                };
-                if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
-                    return fail(
-                        format!("G43 H{n}: the tool number must be a whole number >= 0"),
-                        "write e.g. G43 H1",
-                    );
-                }
-                if n == 0.0 {
-                    0.0
-                } else {
-                    match &self.tools {
-                        None => {
-                            return Err(err(
-                                line,
-                                at.col,
-                                GcodeErrorKind::Missing,
-                                at.text,
-                                format!("G43 with tool {n}: no tool table was given, so its length is not known"),
-                                "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
-                            ))
-                        }
-                        Some(t) => match t.length(n as u32) {
-                            Some(z) => z,
-                            None => {
-                                return fail(
-                                    format!("G43 with tool {n}: the tool table has no tool {n}"),
-                                    "add the tool to the table (T<n> Z<length>) or use a tool it lists",
-                                )
-                            }
-                        },
-                    }
-                }
-            }
+            (430, _) => self.g43_length(line, w, args)?,
             _ => 0.0,
         };
         // No axis moves, so the tip's current point moves with the length (LinuxCNC's
@@ -262,6 +175,61 @@ impl Interpreter {
         }
         self.tool_length = length;
         Ok(())
+    }
+
+    /// G43's length: tool H<n>'s (without H the tool in the spindle) from the tool table;
+    /// H0: no length.
+    fn g43_length(
+        &self,
+        line: usize,
+        w: &Word<'_>,
+        args: &Args<'_, '_>,
+    ) -> Result<f64, GcodeError> {
+        let (n, at) = match args.get('H') {
+            Some(h) => (h.value, h),
+            None => (self.ext.tool_current, w),
+        };
+        let fail = |message: String, hint: &str| {
+            Err(err(
+                line,
+                at.col,
+                GcodeErrorKind::InvalidValue,
+                at.text,
+                message,
+                hint,
+            ))
+        };
+        if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
+            return fail(
+                format!("G43 H{n}: the tool number must be a whole number >= 0"),
+                "write e.g. G43 H1",
+            );
+        }
+        Ok(if n == 0.0 {
+            0.0
+        } else {
+            match &self.tools {
+                None => {
+                    return Err(err(
+                        line,
+                        at.col,
+                        GcodeErrorKind::Missing,
+                        at.text,
+                        format!("G43 with tool {n}: no tool table was given, so its length is not known"),
+                        "give a tool table (LinuxCNC's .tbl format, lengths in mm) with the reading options, or the length with G43.1 Z<length>",
+                    ))
+                }
+                Some(t) => match t.length(n as u32) {
+                    Some(z) => z,
+                    None => {
+                        return fail(
+                            format!("G43 with tool {n}: the tool table has no tool {n}"),
+                            "add the tool to the table (T<n> Z<length>) or use a tool it lists",
+                        )
+                    }
+                },
+            }
+        })
     }
 
     /// The feed (m/s) of a move of `length` m in the active feed mode.

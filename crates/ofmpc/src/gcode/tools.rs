@@ -50,44 +50,22 @@ impl ToolTable {
                 return Err(ToolTableError {
                     line: i + 1,
                     column: 1,
-                    text: super::lexer::escape(content.trim()),
+                    text: super::text::escape(content.trim()),
                     message: "LinuxCNC's old tool table format (a TOOLNO POCKET LENGTH … header and columns) is not read".into(),
                     hint: "write one tool a line as T<tool> P<pocket> Z<length> D<diameter> (LinuxCNC's current format)".into(),
                 });
             }
             for (col, word) in words(content) {
-                let fail = |message: String, hint: &str| ToolTableError {
-                    line: i + 1,
-                    column: col,
-                    text: super::lexer::escape(word),
-                    message,
-                    hint: hint.to_string(),
-                };
-                let mut chars = word.chars();
-                let letter = chars.next().unwrap_or(' ').to_ascii_uppercase();
-                if !LETTERS.contains(letter) {
-                    return Err(fail(
-                        format!("`{letter}` is not a word of a tool table"),
-                        "write T<tool> P<pocket> Z<length> D<diameter> ;comment (LinuxCNC's .tbl format)",
-                    ));
-                }
-                let value: f64 = chars
-                    .as_str()
-                    .parse()
-                    .ok()
-                    .filter(|v: &f64| v.is_finite())
-                    .ok_or_else(|| {
-                        fail(
-                            format!("{letter} has no number"),
-                            "write the letter and its number without a blank, e.g. Z12.5",
-                        )
-                    })?;
+                let (letter, value) = letter_value(i + 1, col, word)?;
                 match letter {
                     'T' if value >= 0.0 && value.fract() == 0.0 && value <= f64::from(u32::MAX) => {
                         tool = Some(value as u32);
                     }
                     'T' => {
-                        return Err(fail(
+                        return Err(word_error(
+                            i + 1,
+                            col,
+                            word,
                             "the tool number must be a whole number >= 0".into(),
                             "write e.g. T3",
                         ))
@@ -107,7 +85,7 @@ impl ToolTable {
                     return Err(ToolTableError {
                         line: i + 1,
                         column: 1,
-                        text: super::lexer::escape(content.trim()),
+                        text: super::text::escape(content.trim()),
                         message: "a tool line without T (the tool number)".into(),
                         hint: "start the line with T<tool>, e.g. T1 P1 Z12.5".into(),
                     })
@@ -131,6 +109,49 @@ impl ToolTable {
     pub fn is_empty(&self) -> bool {
         self.lengths.is_empty()
     }
+}
+
+/// The error at word `word` (column `column`) of line `line`.
+fn word_error(
+    line: usize,
+    column: usize,
+    word: &str,
+    message: String,
+    hint: &str,
+) -> ToolTableError {
+    ToolTableError {
+        line,
+        column,
+        text: super::text::escape(word),
+        message,
+        hint: hint.to_string(),
+    }
+}
+
+/// The letter (upper case, one of the table's) and the finite number of word `word`
+/// (column `col`) of line `line`.
+fn letter_value(line: usize, col: usize, word: &str) -> Result<(char, f64), ToolTableError> {
+    let fail = |message: String, hint: &str| word_error(line, col, word, message, hint);
+    let mut chars = word.chars();
+    let letter = chars.next().unwrap_or(' ').to_ascii_uppercase();
+    if !LETTERS.contains(letter) {
+        return Err(fail(
+            format!("`{letter}` is not a word of a tool table"),
+            "write T<tool> P<pocket> Z<length> D<diameter> ;comment (LinuxCNC's .tbl format)",
+        ));
+    }
+    let value: f64 = chars
+        .as_str()
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite())
+        .ok_or_else(|| {
+            fail(
+                format!("{letter} has no number"),
+                "write the letter and its number without a blank, e.g. Z12.5",
+            )
+        })?;
+    Ok((letter, value))
 }
 
 /// The blank-separated words of `s` with their 1-based columns (in characters).

@@ -1,8 +1,8 @@
 //! Path geometry: straight lines and circular / helical arcs in 3-D, parameterized by arc
 //! length.
 //!
-//! A [`Segment`] knows nothing about time; [`crate::motion::timelaw`] decides how fast the arc length
-//! `s` advances and [`crate::motion::trajectory`] combines both. Every query takes the arc length
+//! A [`Segment`] knows nothing about time; [`crate::motion::TimeLaw`] decides how fast the arc length
+//! `s` advances and [`crate::motion::CartesianTrajectory`] combines both. Every query takes the arc length
 //! `s ∈ [0, L]` (clamped) and returns the point `p(s)`, the unit tangent `p'(s)` and the
 //! curvature vector `p''(s)`, so that along a time law `s(t)`:
 //!

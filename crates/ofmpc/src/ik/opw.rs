@@ -283,15 +283,7 @@ impl OpwParameters {
         // (θ1, wrist-centre x in the rotated arm plane, θ1 hinted?)
         let mut shoulders = [(base - off, lat, false), (base + off - PI, -lat, false)];
         if let Some(h) = hint {
-            let t1 = self.theta(0, h[0]);
-            let (s, c) = t1.sin_cos();
-            let x1 = cx * c + cy * s;
-            let y1 = -cx * s + cy * c;
-            if rho <= SHOULDER_SINGULAR_RADIUS && (y1 - self.b).abs() <= SINGULAR_POSITION_TOLERANCE
-            {
-                let idx = usize::from(x1 < 0.0);
-                shoulders[idx] = (t1, x1, true);
-            }
+            self.hint_shoulder(h, centre, rho, &mut shoulders);
         }
 
         let k = self.a2.hypot(self.c3);
@@ -319,6 +311,26 @@ impl OpwParameters {
         }
         out.reach_excess = best_excess;
         out
+    }
+
+    /// At the shoulder singularity (wrist centre on axis 1) θ1 is free: the hinted θ1
+    /// replaces the shoulder configuration on its side of the arm plane.
+    fn hint_shoulder(
+        &self,
+        h: &[f64; 6],
+        centre: Vector3<f64>,
+        rho: f64,
+        shoulders: &mut [(f64, f64, bool); 2],
+    ) {
+        let (cx, cy) = (centre.x, centre.y);
+        let t1 = self.theta(0, h[0]);
+        let (s, c) = t1.sin_cos();
+        let x1 = cx * c + cy * s;
+        let y1 = -cx * s + cy * c;
+        if rho <= SHOULDER_SINGULAR_RADIUS && (y1 - self.b).abs() <= SINGULAR_POSITION_TOLERANCE {
+            let idx = usize::from(x1 < 0.0);
+            shoulders[idx] = (t1, x1, true);
+        }
     }
 
     /// Appends the two wrist configurations of one arm configuration.

@@ -307,6 +307,37 @@ impl RobustIk {
         }
     }
 
+    /// One step of the posture pull in `self.trial`: `q + δ` clamped into the limits, with
+    /// `z = −k (q − q_start)` and `δ = z − Jᵀ (J Jᵀ + μI)⁻¹ J z` (`self.jac` holds `J`);
+    /// `false` when `J Jᵀ + μI` cannot be factored.
+    fn null_space_trial(&mut self, k: f64) -> bool {
+        let n = self.n;
+        // z = −k (q − q_start); δ = z − Jᵀ (J Jᵀ + μI)⁻¹ J z: the null-space projection.
+        for i in 0..n {
+            self.trial[i] = -k * (self.q[i] - self.start_q[i]);
+        }
+        for r in 0..6 {
+            for c in 0..6 {
+                self.jjt[(r, c)] = (0..n).map(|i| self.jac[(r, i)] * self.jac[(c, i)]).sum();
+            }
+        }
+        // Tikhonov μ: the projection stays bounded near singularities.
+        let mu = 1e-12 * (1.0 + self.jjt.trace());
+        for r in 0..6 {
+            self.jjt[(r, r)] += mu;
+            self.y[r] = (0..n).map(|c| self.jac[(r, c)] * self.trial[c]).sum();
+        }
+        if crate::linalg::cholesky_in_place(6, 6, self.jjt.as_mut_slice()).is_err() {
+            return false;
+        }
+        crate::linalg::cholesky_solve_in_place(6, 6, self.jjt.as_slice(), &mut self.y);
+        for c in 0..n {
+            let back: f64 = (0..6).map(|r| self.jac[(r, c)] * self.y[r]).sum();
+            self.trial[c] = (self.q[c] + self.trial[c] - back).clamp(self.lower[c], self.upper[c]);
+        }
+        true
+    }
+
     /// Null-space steps towards the start pose (module docs), each polished back onto the
     /// pose and kept only if it converged nearer to the start pose. `self.q` holds a
     /// converged solution on entry and on exit.
@@ -318,7 +349,6 @@ impl RobustIk {
         steps: usize,
         k: f64,
     ) -> Result<(), IkError> {
-        let n = self.n;
         let dist =
             |a: &[f64], b: &[f64]| -> f64 { a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum() };
         let mut d = dist(&self.q, &self.start_q);
@@ -327,29 +357,8 @@ impl RobustIk {
                 break;
             }
             fk.flange_jacobian(&self.q, &mut self.jac);
-            // z = −k (q − q_start); δ = z − Jᵀ (J Jᵀ + μI)⁻¹ J z: the null-space projection.
-            for i in 0..n {
-                self.trial[i] = -k * (self.q[i] - self.start_q[i]);
-            }
-            for r in 0..6 {
-                for c in 0..6 {
-                    self.jjt[(r, c)] = (0..n).map(|i| self.jac[(r, i)] * self.jac[(c, i)]).sum();
-                }
-            }
-            // Tikhonov μ: the projection stays bounded near singularities.
-            let mu = 1e-12 * (1.0 + self.jjt.trace());
-            for r in 0..6 {
-                self.jjt[(r, r)] += mu;
-                self.y[r] = (0..n).map(|c| self.jac[(r, c)] * self.trial[c]).sum();
-            }
-            if crate::linalg::cholesky_in_place(6, 6, self.jjt.as_mut_slice()).is_err() {
+            if !self.null_space_trial(k) {
                 break;
-            }
-            crate::linalg::cholesky_solve_in_place(6, 6, self.jjt.as_slice(), &mut self.y);
-            for c in 0..n {
-                let back: f64 = (0..6).map(|r| self.jac[(r, c)] * self.y[r]).sum();
-                self.trial[c] =
-                    (self.q[c] + self.trial[c] - back).clamp(self.lower[c], self.upper[c]);
             }
             let mut cand = std::mem::take(&mut self.trial);
             let polished = self.numeric.solve(fk, target, &mut cand);

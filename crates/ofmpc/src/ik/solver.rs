@@ -9,7 +9,6 @@ use nalgebra::Isometry3;
 
 use super::opw::OpwParameters;
 use super::solutions::Solutions;
-use super::ur::UrKinematics;
 use super::{pose_is_finite, IkError};
 
 /// Joint values may exceed a limit by this much (rad) and still count as inside:
@@ -21,7 +20,7 @@ const TWO_PI: f64 = 2.0 * PI;
 
 /// What [`ClosedFormSolver`] needs of a closed-form kinematics: every branch of a pose,
 /// with the joints the pose leaves free (at a singularity) taken from a hint. Implemented
-/// by [`OpwParameters`] (OPW arms) and [`UrKinematics`] (the UR family).
+/// by [`OpwParameters`] (OPW arms) and [`super::UrKinematics`] (the UR family, in ur.rs).
 pub trait ClosedFormKinematics {
     /// Checks the kinematics' constants ([`ClosedFormSolver::new`] calls it).
     fn validate(&self) -> Result<(), IkError> {
@@ -49,13 +48,6 @@ impl ClosedFormKinematics for OpwParameters {
     }
 }
 
-impl ClosedFormKinematics for UrKinematics {
-    fn branches(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> ClosedFormBranches {
-        let s = self.inverse_near(pose, hint);
-        ClosedFormBranches::new(s.as_slice(), s.reach_excess().max(0.0))
-    }
-}
-
 /// Sequential inverse kinematics of an arm with a closed form ([`ClosedFormKinematics`]):
 /// for each pose, the solution with the smallest weighted joint distance
 /// `Σ w_i (q_i − q_prev,i)²` to the previous sample among all closed-form branches and
@@ -68,7 +60,7 @@ impl ClosedFormKinematics for UrKinematics {
 /// pose; q4 stays at its previous value and the rest goes into q6, as long as that costs
 /// at most [`super::opw::SINGULAR_ORIENTATION_TOLERANCE`] rad of orientation. The
 /// shoulder singularity (wrist centre on axis 1) keeps q1 likewise. See
-/// [`OpwParameters::inverse_near`] and [`UrKinematics::inverse_near`].
+/// [`OpwParameters::inverse_near`] and [`super::UrKinematics::inverse_near`].
 ///
 /// Allocation-free; [`ClosedFormSolver::solve`] may be called per control step.
 #[derive(Debug, Clone, PartialEq)]

@@ -34,7 +34,7 @@ use nalgebra::{Isometry3, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3, 
 
 use super::opw::wrap_angle;
 use super::solutions::Solutions;
-use super::solver::ClosedFormSolver;
+use super::solver::{ClosedFormBranches, ClosedFormKinematics, ClosedFormSolver};
 use super::{pose_is_finite, rotation_log};
 
 /// Largest angle (rad) between two axes that the detection still calls parallel, and
@@ -420,6 +420,13 @@ impl UrKinematics {
 /// for OPW arms; [`ClosedFormSolver::kinematics`] gives the [`UrKinematics`]).
 /// Allocation-free.
 pub type UrSolver = ClosedFormSolver<UrKinematics>;
+
+impl ClosedFormKinematics for UrKinematics {
+    fn branches(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> ClosedFormBranches {
+        let s = self.inverse_near(pose, hint);
+        ClosedFormBranches::new(s.as_slice(), s.reach_excess().max(0.0))
+    }
+}
 
 #[cfg(test)]
 mod tests {

@@ -2,16 +2,17 @@
 //! the controllers follow. One entry point, [`plan`] (or [`plan_program`] for a parsed
 //! program), assembles the pipeline:
 //!
-//! 1. [`crate::gcode::parse`]: program text → [`Program`] (start point, [`segment`]s, feeds,
-//!    dwells, path modes `G61` / `G64 P…`);
-//! 2. [`blend`]: under `G64` the corners between consecutive lines are rounded within the
-//!    tolerance;
-//! 3. timing ([`trajectory`]): `G61` moves rest to rest with the paper's septic law
-//!    ([`timelaw`]), slowed down where a joint's speed or acceleration limit needs it
-//!    ([`exact`]); `G64` runs time-optimally under the feed, path acceleration and jerk
-//!    and every joint's speed and acceleration limit ([`topp`]);
-//! 4. [`reference`](mod@reference): inverse kinematics (analytic when the robot declares OPW parameters,
-//!    else numeric) sampled every `Ts`, checked against the joint limits.
+//! 1. [`crate::gcode::parse`]: program text → [`Program`] (start point, segments
+//!    ([`crate::geometry::Segment`]), feeds, dwells, path modes `G61` / `G64 P…`);
+//! 2. the path stage (`path/`, [`blend`]): under `G64` the corners between consecutive lines
+//!    are rounded within the tolerance;
+//! 3. the timing stage (`timing/`, [`CartesianTrajectory`]): `G61` moves rest to rest with
+//!    the paper's septic law ([`TimeLaw`]), slowed down where a joint's speed or acceleration
+//!    limit needs it ([`JointLimitedMove`]); `G64` runs time-optimally under the feed, path
+//!    acceleration and jerk and every joint's speed and acceleration limit ([`Run`]);
+//! 4. the joint reference (`reference/`, [`JointReference`]): inverse kinematics (analytic
+//!    when the robot declares OPW parameters, else numeric) sampled every `Ts`, checked
+//!    against the joint limits.
 //!
 //! `G61` (exact stop) is the default of programs that select neither mode, so that the
 //! paper's Table I program runs exactly as published; `G64` without `P` rounds corners within
@@ -33,30 +34,38 @@
 //! # Ok::<(), ofmpc::motion::PlanError>(())
 //! ```
 
-pub mod blend;
-pub mod exact;
-pub mod g2blend;
-pub mod reference;
-pub mod segment;
-pub mod timelaw;
+mod error;
+mod limits;
+mod path;
+mod reference;
+mod timing;
 mod tool;
-pub mod topp;
-pub mod trajectory;
 
-pub use blend::PathMode;
-pub use exact::JointLimitedMove;
-pub use reference::{JointReference, Orientation, ReferenceError, StartTurn, MAX_PLAN_VALUES};
-pub use tool::tool_axis;
-pub use trajectory::{CartesianTrajectory, TimingOptions, TrajectoryError};
-
-use crate::gcode::{parse, GcodeError, MoveKind, ParseOptions, Program};
-use crate::robot::Robot;
-use reference::{
-    build_reference, build_turning_reference, first_unreachable, sample_count, values_per_sample,
-    JointMap, ReferenceFailure,
+pub use error::{PlanError, SampleCause};
+pub use limits::{
+    values_per_sample, JointQuantity, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
+    MAX_PLAN_VALUES, SINGULAR_PASS_RATIO, START_POSE_TOLERANCE,
 };
-use topp::JointConstraints;
-use trajectory::LongCause;
+pub use path::blend::{
+    blend, blend_timed, Geometry, Piece, RunMove, NEAR_TANGENT_ANGLE, TURN_JERK_SHARE,
+};
+pub use path::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
+pub use reference::{build_reference, JointReference, StartTurn, START_TURN_TOLERANCE};
+pub use timing::exact::JointLimitedMove;
+pub use timing::timelaw::{PathState, Profile, ProfileValue, TimeLaw};
+pub use timing::topp::{Run, RunState, GRID_STEP, MAX_GRID_NODES, MIN_NODE_SPACING, RUN_STEP};
+pub use timing::trajectory::{
+    CartesianSample, CartesianTrajectory, TimedKind, TimedSegment, TimingLimit, TimingOptions,
+    TrajectoryError,
+};
+pub use tool::tool_axis;
+
+use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};
+use crate::robot::Robot;
+use limits::JointMap;
+use reference::{build_turning_reference, first_unreachable, sample_count};
+use timing::topp::JointConstraints;
+use timing::trajectory::LongCause;
 
 /// Everything [`plan`] needs besides the program and the robot. Every field has the
 /// library's default; the command line takes its defaults from here.
@@ -121,119 +130,6 @@ pub struct Plan {
     /// program's `G43` length at its first path move; 0 without): the reference moves the
     /// TCP of [`Robot::with_tool_length`]`(tool_length)` along [`Plan::trajectory`].
     pub tool_length: f64,
-}
-
-/// What makes a plan too large to sample.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum SampleCause {
-    /// The feed (`F`) of a move on this program line is too small for its length.
-    Feed {
-        /// Program line.
-        line: usize,
-    },
-    /// The dwell (`G04`) on this program line is too long.
-    Dwell {
-        /// Program line.
-        line: usize,
-    },
-    /// The path speed limit ([`TimingOptions::max_speed`]) is too small.
-    PathSpeed {
-        /// The slowest move's program line.
-        line: usize,
-    },
-    /// The path acceleration limit is too small.
-    PathAcceleration {
-        /// The slowest move's program line.
-        line: usize,
-    },
-    /// The sample period is too small for the path's duration.
-    SamplePeriod,
-}
-
-impl std::fmt::Display for SampleCause {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            SampleCause::Feed { line } => {
-                write!(f, "the feed of program line {line} is too small for its move")
-            }
-            SampleCause::Dwell { line } => write!(f, "the dwell of program line {line} is too long"),
-            SampleCause::PathSpeed { line } => write!(
-                f,
-                "the path speed limit is too small (the slowest move is on program line {line})"
-            ),
-            SampleCause::PathAcceleration { line } => write!(
-                f,
-                "the path acceleration limit is too small (the slowest move is on program line {line})"
-            ),
-            SampleCause::SamplePeriod => f.write_str("the sample period is too small"),
-        }
-    }
-}
-
-/// Which joint limit a plan could not keep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum JointQuantity {
-    /// Speed (rad/s).
-    Speed,
-    /// Acceleration (rad/s²).
-    Acceleration,
-}
-
-impl std::fmt::Display for JointQuantity {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            JointQuantity::Speed => "speed",
-            JointQuantity::Acceleration => "acceleration",
-        })
-    }
-}
-
-/// Why a program could not be planned.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum PlanError {
-    /// The program text is wrong.
-    #[error("{0}")]
-    Program(GcodeError),
-    /// The timing options or a move are invalid, or a blended run cannot be timed.
-    #[error("{0}")]
-    Timing(TrajectoryError),
-    /// The path cannot be followed in joint space.
-    #[error("{0}")]
-    Reference(ReferenceError),
-    /// The sample period is not positive and finite.
-    #[error("the sample period must be positive and finite, got {0} s")]
-    SamplePeriod(f64),
-    /// The joint reference would need more values than [`MAX_PLAN_VALUES`]; nothing was
-    /// allocated.
-    #[error("the joint reference would need {count:.3e} values (samples × columns), above the limit of {limit}: {cause}")]
-    TooManySamples {
-        /// What makes it large.
-        cause: SampleCause,
-        /// Values needed.
-        count: f64,
-        /// The limit.
-        limit: usize,
-    },
-    /// A blended run's reference still exceeds a joint limit after replanning with scaled
-    /// limits.
-    #[error("joint {joint} reaches {value:.3} at program line {line}, above its {quantity} limit {limit:.3}, after {attempts} timing attempts")]
-    JointLimit {
-        /// Joint number, 1-based.
-        joint: usize,
-        /// Which limit.
-        quantity: JointQuantity,
-        /// The value reached.
-        value: f64,
-        /// The limit.
-        limit: f64,
-        /// Program line.
-        line: usize,
-        /// Attempts made.
-        attempts: usize,
-    },
 }
 
 /// Largest number of timing attempts of [`plan_program`] (the first and the replans with
@@ -341,7 +237,7 @@ pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
 /// jerk filter mixes neighbouring accelerations) the runs are timed again with the limits
 /// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. A `G61` move whose fastest law would
 /// exceed a joint's speed or acceleration limit is slowed down uniformly until it keeps them
-/// ([`crate::motion::exact`]); the moves so slowed are listed in
+/// ([`JointLimitedMove`]); the moves so slowed are listed in
 /// [`PlanDiagnostics::joint_limited`]. Before it allocates the reference the planner checks its
 /// size against [`MAX_PLAN_VALUES`].
 ///
@@ -362,12 +258,7 @@ pub fn plan_program(
     let tool_length = tool::reference_length(&program);
     let tooled = tool::tooled_robot(robot, tool_length, &program)?;
     let robot = tooled.as_ref().unwrap_or(robot);
-    let moved = tool_axis(robot, options.orientation)
-        .and_then(|a| tool::controlled_program(&program, tool_length, a));
-    let (program, as_read) = match moved {
-        Some(m) => (m, Some(program)),
-        None => (program, None),
-    };
+    let (program, as_read) = at_tool_tip(program, robot, options.orientation, tool_length);
     let n = robot.dof();
     let has_runs = has_blended_runs(&program, options);
     let limits = RobotLimits::of(robot);
@@ -400,20 +291,7 @@ pub fn plan_program(
             if !ok {
                 return Err(limits.limit_error(worst, &reference, attempts));
             }
-            let diagnostics = PlanDiagnostics {
-                duration: trajectory.duration(),
-                runs: trajectory
-                    .segments()
-                    .iter()
-                    .filter(|s| matches!(s.kind, trajectory::TimedKind::Run(_)))
-                    .count(),
-                limit_scale: scale,
-                attempts,
-                peak_speed_ratio: worst[0].0,
-                peak_accel_ratio: worst[1].0,
-                joint_limited: trajectory.joint_limited().to_vec(),
-                start_turn,
-            };
+            let diagnostics = PlanDiagnostics::of(&trajectory, scale, attempts, worst, start_turn);
             return Ok(Plan {
                 program: as_read.unwrap_or(program),
                 trajectory,
@@ -422,10 +300,60 @@ pub fn plan_program(
                 tool_length,
             });
         }
-        for (s, w) in scale.iter_mut().zip(worst) {
-            if w.0 > 1.0 {
-                *s *= 0.995 / w.0;
-            }
+        slow_down(&mut scale, worst);
+    }
+}
+
+/// Scales down the speed and acceleration limit factors `scale` whose worst ratio over the
+/// runs' samples exceeds 1, to just below the limit (0.995 of the ratio's inverse).
+fn slow_down(scale: &mut [f64; 2], worst: [(f64, usize, usize); 2]) {
+    for (s, w) in scale.iter_mut().zip(worst) {
+        if w.0 > 1.0 {
+            *s *= 0.995 / w.0;
+        }
+    }
+}
+
+/// The program with its moves under another tool length than `tool_length` planned for
+/// that length's tip, and the program as read; the program itself and `None` when no move
+/// needs it (the module `tool`).
+fn at_tool_tip(
+    program: Program,
+    robot: &Robot,
+    orientation: Orientation,
+    tool_length: f64,
+) -> (Program, Option<Program>) {
+    let moved = tool_axis(robot, orientation)
+        .and_then(|a| tool::controlled_program(&program, tool_length, a));
+    match moved {
+        Some(m) => (m, Some(program)),
+        None => (program, None),
+    }
+}
+
+impl PlanDiagnostics {
+    /// The diagnostics of a plan accepted after `attempts` timings with the joint limits
+    /// scaled by `scale`; `worst` is the worst speed and acceleration ratio over the runs.
+    fn of(
+        trajectory: &CartesianTrajectory,
+        scale: [f64; 2],
+        attempts: usize,
+        worst: [(f64, usize, usize); 2],
+        start_turn: Option<StartTurn>,
+    ) -> Self {
+        Self {
+            duration: trajectory.duration(),
+            runs: trajectory
+                .segments()
+                .iter()
+                .filter(|s| matches!(s.kind, TimedKind::Run(_)))
+                .count(),
+            limit_scale: scale,
+            attempts,
+            peak_speed_ratio: worst[0].0,
+            peak_accel_ratio: worst[1].0,
+            joint_limited: trajectory.joint_limited().to_vec(),
+            start_turn,
         }
     }
 }

@@ -12,7 +12,8 @@
 //! `L_ref` along the axis lies there when the tip of the `L_m` tool is on the programmed
 //! point.
 
-use super::{Orientation, PlanError};
+use super::error::PlanError;
+use super::limits::Orientation;
 use crate::gcode::{GcodeError, GcodeErrorKind, MoveKind, Program};
 use crate::geometry::Segment;
 use crate::robot::Robot;

@@ -1,8 +1,51 @@
 //! Errors of the robot description and of the vectors given to it: typed,
 //! each with the offending names and values.
 
-use super::drives::DrivesError;
 use thiserror::Error;
+
+/// Why a drives file cannot be used.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DrivesError {
+    /// Not TOML, or a value of the wrong type (the message has line and column).
+    #[error("{0}")]
+    Syntax(String),
+    /// A table or key the format does not have (a typo?).
+    #[error("unknown {what} '{key}'{}: expected {expected}", joint.as_ref().map(|j| format!(" in [joints.{j}]")).unwrap_or_default())]
+    UnknownKey {
+        /// `"table"` or `"key"`.
+        what: &'static str,
+        /// The key as written.
+        key: String,
+        /// The joint's table it is in, if any.
+        joint: Option<String>,
+        /// The keys that exist there.
+        expected: &'static str,
+    },
+    /// A value is out of its range.
+    #[error("[joints.{joint}] {key} = {value}: must be a finite number {requirement}")]
+    Value {
+        /// The joint.
+        joint: String,
+        /// The key.
+        key: &'static str,
+        /// The value.
+        value: f64,
+        /// `"≥ 0"` or `"> 0"`.
+        requirement: &'static str,
+    },
+    /// The file sets nothing.
+    #[error("the drives file sets no joint: add a [joints.<joint name>] table per joint (armature_kgm2, max_torque_nm, max_speed_rad_s)")]
+    Empty,
+    /// A joint table names no moving joint of the robot.
+    #[error("joint '{name}' of the drives file is not a moving joint of the robot (its joints: {joints})")]
+    UnknownJoint {
+        /// The name in the file.
+        name: String,
+        /// The robot's moving joints, comma-separated.
+        joints: String,
+    },
+}
 
 /// What is wrong with an inertia tensor about a centre of mass.
 #[derive(Debug, Clone, Copy, PartialEq, Error)]

@@ -7,19 +7,23 @@
 
 mod drives;
 mod error;
+mod joint;
 mod links;
 mod read;
 mod urdf;
 mod urdf_locate;
 
-pub use drives::{DriveData, Drives, DrivesError};
+pub use drives::{DriveData, Drives};
+pub use error::DrivesError;
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
+pub use joint::{Joint, JointKind, JointLimits};
 pub use links::LinkFrame;
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::TRIANGLE_TOLERANCE;
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};
+use joint::check_inertia_tensor;
 use nalgebra::{Matrix3, Vector3};
 
 /// The built-in ABB IRB 140 URDF (copied from `shared/robots/irb140`; every
@@ -30,59 +34,6 @@ pub const IRB140_DRIVES: &str = include_str!("../../robots/irb140/drives.toml");
 
 /// Standard gravity (m/s²).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
-
-/// Kind of a moving joint.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum JointKind {
-    /// Rotation about the joint axis (rad).
-    Revolute,
-    /// Translation along the joint axis (m).
-    Prismatic,
-}
-
-/// Limits of one joint. Position limits may be infinite (continuous joints).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JointLimits {
-    /// Lower position limit (rad or m).
-    pub lower: f64,
-    /// Upper position limit (rad or m).
-    pub upper: f64,
-    /// Speed limit, symmetric (rad/s or m/s); infinite when unknown.
-    pub velocity: f64,
-    /// Torque or force limit, symmetric (N·m or N); infinite when unknown.
-    pub effort: f64,
-    /// Acceleration limit, symmetric (rad/s² or m/s²); infinite when unknown (URDF has
-    /// none: it comes from a drives file). The motion planner keeps blended runs within it.
-    pub acceleration: f64,
-}
-
-/// One moving joint and the rigid body it moves.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Joint {
-    /// Joint name (URDF).
-    pub name: String,
-    /// Name of the link it moves (URDF child link).
-    pub link: String,
-    /// Revolute or prismatic.
-    pub kind: JointKind,
-    /// Pose of the joint frame in the previous body's frame at q = 0 (fixed
-    /// joints in between are folded in).
-    pub placement: Transform,
-    /// Unit joint axis in the joint frame.
-    pub axis: Vector3<f64>,
-    /// Inertia of the moved body in the joint frame, links rigidly attached
-    /// through fixed joints included, payload excluded.
-    pub body: Inertia,
-    /// Position, speed and effort limits.
-    pub limits: JointLimits,
-    /// Reflected rotor inertia of the drive (kg·m²), added to `H[i][i]`.
-    pub armature: f64,
-    /// Coulomb friction estimate of the drive (N·m), for the controllers'
-    /// friction compensation (the simulated plant has its own friction).
-    pub coulomb_nm: f64,
-    /// Viscous friction estimate of the drive (N·m·s/rad), likewise.
-    pub viscous_nms: f64,
-}
 
 /// A rigid payload attached at the flange: mass, centre of mass and inertia
 /// about the centre of mass, both in flange coordinates.
@@ -130,27 +81,6 @@ impl Payload {
 /// A payload may weigh at most this many times the robot's own moving mass:
 /// beyond, the joint-space inertia loses the robot's terms to round-off.
 pub const MAX_PAYLOAD_RATIO: f64 = 1e3;
-
-/// Checks a rotational inertia about the centre of mass: symmetric, principal
-/// moments ≥ 0 and satisfying the triangle inequality.
-pub(crate) fn check_inertia_tensor(i: &Matrix3<f64>) -> Result<(), InertiaError> {
-    let asym = (i - i.transpose()).abs().max();
-    let scale = i.abs().max().max(1e-300);
-    if asym > 1e-9 * scale {
-        return Err(InertiaError::NotSymmetric(asym));
-    }
-    let eig = i.symmetric_eigenvalues();
-    let moments = [eig[0], eig[1], eig[2]];
-    let tol = 1e-9 * scale;
-    if eig.iter().any(|&e| e < -tol) {
-        return Err(InertiaError::NegativeMoment(moments));
-    }
-    let (a, b, c) = (eig[0], eig[1], eig[2]);
-    if a + b < c - tol || a + c < b - tol || b + c < a - tol {
-        return Err(InertiaError::Triangle(moments));
-    }
-    Ok(())
-}
 
 /// The default start pose: q = 0 where it lies inside every joint's limits, else the centre
 /// of the limits (an infinite bound taken as 0 on its side, the result clamped into the limits).
@@ -340,7 +270,11 @@ impl Robot {
 
     /// Loads a URDF text with a chosen tip and tool centre point ([`ChainOptions`]).
     pub fn from_urdf_str_with(text: &str, options: &ChainOptions) -> Result<Self, ModelError> {
-        let mut robot = urdf::parse(text, options.tip.as_deref())?;
+        let chain = urdf::parse(text, options.tip.as_deref())?;
+        let mut robot = Self::assemble(chain.name, chain.joints, chain.flange, chain.flange_name);
+        robot.warnings = chain.warnings;
+        robot.missing_inertials = chain.missing_inertials;
+        robot.link_frames = chain.link_frames;
         if let Some(t) = &options.tcp {
             robot.set_tcp(*t)?;
         }

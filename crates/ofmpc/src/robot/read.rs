@@ -2,7 +2,7 @@
 //! `/dev/zero` or a runaway file given as a URDF or a drives file is never
 //! read whole, and text that is not UTF-8 is an error naming the byte.
 
-use super::ModelError;
+use super::error::ModelError;
 use std::io::Read;
 use std::path::Path;
 

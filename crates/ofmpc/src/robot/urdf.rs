@@ -15,8 +15,10 @@
 //! The walk over the tree is iterative and linear in the number of links
 //! (a chain of thousands of fixed frames neither recurses nor rescans).
 
+use super::error::{InertiaError, ModelError};
 use super::error::{UrdfError, UrdfWarning};
-use super::{check_inertia_tensor, InertiaError, Joint, JointKind, JointLimits, ModelError, Robot};
+use super::joint::{check_inertia_tensor, Joint, JointKind, JointLimits};
+use super::links::LinkFrame;
 use crate::spatial::{Inertia, Transform};
 use nalgebra::{Matrix3, Vector3};
 use std::collections::HashMap;
@@ -128,76 +130,12 @@ fn moving_joint(
     if !norm.is_finite() || norm < 1e-9 {
         return Err(UrdfError::BadAxis(j.name.clone()));
     }
-    let l = &j.limit;
     let (lower, upper, velocity, effort) = if limited {
-        if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
-            return Err(UrdfError::LimitOrder {
-                joint: j.name.clone(),
-                lower: l.lower,
-                upper: l.upper,
-            });
-        }
-        if l.lower == l.upper {
-            return Err(UrdfError::EmptyRange {
-                joint: j.name.clone(),
-                kind: kind_name,
-                value: l.lower,
-            });
-        }
-        // ROS tools read 0 as "not given" (ROS-Industrial's descriptions write effort="0"):
-        // unlimited, with a warning; a negative or non-finite value is an error.
-        let mut given = |attribute: &'static str, value: f64| {
-            if value == 0.0 {
-                warnings.push(UrdfWarning::UnspecifiedLimit {
-                    joint: j.name.clone(),
-                    attribute,
-                });
-                Ok(f64::INFINITY)
-            } else if value.is_finite() && value > 0.0 {
-                Ok(value)
-            } else {
-                Err(UrdfError::MissingLimit {
-                    joint: j.name.clone(),
-                    kind: kind_name,
-                    attribute,
-                    value,
-                })
-            }
-        };
-        let velocity = given("velocity", l.velocity)?;
-        let effort = given("effort", l.effort)?;
-        (l.lower, l.upper, velocity, effort)
+        limited_range(j, kind_name, warnings)?
     } else {
-        // Continuous: no range; velocity and effort optional (0 = not given).
-        let optional = |attribute: &'static str, v: f64| {
-            if v.is_nan() || v < 0.0 {
-                Err(UrdfError::NegativeLimit {
-                    joint: j.name.clone(),
-                    attribute,
-                    value: v,
-                })
-            } else if v == 0.0 {
-                Ok(f64::INFINITY)
-            } else {
-                Ok(v)
-            }
-        };
-        let velocity = optional("velocity", l.velocity)?;
-        let effort = optional("effort", l.effort)?;
-        (f64::NEG_INFINITY, f64::INFINITY, velocity, effort)
+        continuous_limits(j)?
     };
-    if let Some(d) = &j.dynamics {
-        if d.damping != 0.0 || d.friction != 0.0 {
-            warnings.push(UrdfWarning::IgnoredDynamics {
-                joint: j.name.clone(),
-                damping: d.damping,
-                friction: d.friction,
-            });
-        }
-    }
-    if j.safety_controller.is_some() {
-        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
-    }
+    warn_ignored(j, warnings);
     Ok(Joint {
         name: j.name.clone(),
         link: j.child.link.clone(),
@@ -218,15 +156,119 @@ fn moving_joint(
     })
 }
 
+/// Warns of what a joint declares that the model ignores: damping and friction
+/// (`<dynamics>`), a `<safety_controller>`.
+fn warn_ignored(j: &urdf_rs::Joint, warnings: &mut Vec<UrdfWarning>) {
+    if let Some(d) = &j.dynamics {
+        if d.damping != 0.0 || d.friction != 0.0 {
+            warnings.push(UrdfWarning::IgnoredDynamics {
+                joint: j.name.clone(),
+                damping: d.damping,
+                friction: d.friction,
+            });
+        }
+    }
+    if j.safety_controller.is_some() {
+        warnings.push(UrdfWarning::IgnoredSafetyController(j.name.clone()));
+    }
+}
+
+/// The limits of a revolute or prismatic joint: an ordered, non-empty range, a positive
+/// speed and effort (0 = not given: unlimited, with a warning).
+fn limited_range(
+    j: &urdf_rs::Joint,
+    kind_name: &'static str,
+    warnings: &mut Vec<UrdfWarning>,
+) -> Result<(f64, f64, f64, f64), UrdfError> {
+    let l = &j.limit;
+    if l.lower.is_nan() || l.upper.is_nan() || l.lower > l.upper {
+        return Err(UrdfError::LimitOrder {
+            joint: j.name.clone(),
+            lower: l.lower,
+            upper: l.upper,
+        });
+    }
+    if l.lower == l.upper {
+        return Err(UrdfError::EmptyRange {
+            joint: j.name.clone(),
+            kind: kind_name,
+            value: l.lower,
+        });
+    }
+    // ROS tools read 0 as "not given" (ROS-Industrial's descriptions write effort="0"):
+    // unlimited, with a warning; a negative or non-finite value is an error.
+    let mut given = |attribute: &'static str, value: f64| {
+        if value == 0.0 {
+            warnings.push(UrdfWarning::UnspecifiedLimit {
+                joint: j.name.clone(),
+                attribute,
+            });
+            Ok(f64::INFINITY)
+        } else if value.is_finite() && value > 0.0 {
+            Ok(value)
+        } else {
+            Err(UrdfError::MissingLimit {
+                joint: j.name.clone(),
+                kind: kind_name,
+                attribute,
+                value,
+            })
+        }
+    };
+    let velocity = given("velocity", l.velocity)?;
+    let effort = given("effort", l.effort)?;
+    Ok((l.lower, l.upper, velocity, effort))
+}
+
+/// The limits of a continuous joint: no range; speed and effort optional (0 = not given).
+fn continuous_limits(j: &urdf_rs::Joint) -> Result<(f64, f64, f64, f64), UrdfError> {
+    let l = &j.limit;
+    // Continuous: no range; velocity and effort optional (0 = not given).
+    let optional = |attribute: &'static str, v: f64| {
+        if v.is_nan() || v < 0.0 {
+            Err(UrdfError::NegativeLimit {
+                joint: j.name.clone(),
+                attribute,
+                value: v,
+            })
+        } else if v == 0.0 {
+            Ok(f64::INFINITY)
+        } else {
+            Ok(v)
+        }
+    };
+    let velocity = optional("velocity", l.velocity)?;
+    let effort = optional("effort", l.effort)?;
+    Ok((f64::NEG_INFINITY, f64::INFINITY, velocity, effort))
+}
+
 /// Link names that mark the end of an arm, in order of preference, for the default flange:
 /// exact names first, then parts of names. A finger or other leaf is taken only when no
 /// link on the last body is named like this.
 const FLANGE_NAMES: [&str; 2] = ["tool0", "flange"];
 const FLANGE_NAME_PARTS: [&str; 5] = ["end_effector", "tool0", "flange", "ee_link", "tcp"];
 
-/// Parses a URDF text into a [`Robot`]: the chain from the root to `tip` (a link name),
+/// A kinematic chain read from a URDF: what the robot is assembled from.
+pub(super) struct Chain {
+    /// The robot's name (`robot` when the URDF has none).
+    pub(super) name: String,
+    /// The moving joints, base to tip.
+    pub(super) joints: Vec<Joint>,
+    /// The flange frame in the last body's frame.
+    pub(super) flange: Transform,
+    /// The flange link's name.
+    pub(super) flange_name: String,
+    /// What the description said that is not modelled.
+    pub(super) warnings: Vec<UrdfWarning>,
+    /// Moving links without `<inertial>` and their joints.
+    pub(super) missing_inertials: Vec<(String, String)>,
+    /// Every URDF link and the body it is attached to.
+    pub(super) link_frames: Vec<LinkFrame>,
+}
+
+/// Parses a URDF text into a [`Chain`]: the chain from the root to `tip` (a link name),
 /// or when `None` the one path of moving joints.
-pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> {
+pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> {
     let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
         file: String::new(),
         // The deserializer gives no position: the element's line, found in the text.
@@ -256,7 +298,38 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
     if joints.is_empty() {
         return Err(UrdfError::NoMovingJoint.into());
     }
-    let n = joints.len();
+    let missing = missing_inertials(&joints, &mut warnings);
+    let (flange_name, flange) = flange(tip, &frames, &joints, last_link);
+    let name = if urdf.name.is_empty() {
+        "robot".to_string()
+    } else {
+        urdf.name.clone()
+    };
+    let link_frames = urdf
+        .links
+        .iter()
+        .filter_map(|l| {
+            let (body, pose) = frames.get(l.name.as_str())?;
+            Some(LinkFrame {
+                name: l.name.clone(),
+                body: *body,
+                pose: *pose,
+            })
+        })
+        .collect();
+    Ok(Chain {
+        name,
+        joints,
+        flange,
+        flange_name,
+        warnings,
+        missing_inertials: missing,
+        link_frames,
+    })
+}
+
+/// The moving links without `<inertial>` and their joints, with a warning naming them.
+fn missing_inertials(joints: &[Joint], warnings: &mut Vec<UrdfWarning>) -> Vec<(String, String)> {
     let missing: Vec<(String, String)> = joints
         .iter()
         .filter(|j| j.body.mass <= 0.0 && j.body.i_o.abs().max() <= 0.0)
@@ -267,8 +340,22 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
             links: missing.iter().map(|(l, _)| l.clone()).collect(),
         });
     }
+    missing
+}
+
+/// The flange of a chain of `joints`: the `tip` link when it lies on the last body, else,
+/// with no tip given, a link on the last body named like a flange ([`FLANGE_NAMES`] first,
+/// then [`FLANGE_NAME_PARTS`]), else the last link on the last body; failing all, the last
+/// joint's link itself.
+fn flange(
+    tip: Option<&str>,
+    frames: &HashMap<&str, (Option<usize>, Transform)>,
+    joints: &[Joint],
+    last_link: Option<(String, Transform)>,
+) -> (String, Transform) {
+    let n = joints.len();
     let on_last = |name: &str| matches!(frames.get(name), Some((Some(b), _)) if *b == n - 1);
-    let (flange_name, flange) = match tip {
+    match tip {
         Some(t) => match frames.get(t) {
             Some((Some(b), pose)) if *b == n - 1 => (t.to_string(), *pose),
             _ => (joints[n - 1].link.clone(), Transform::identity()),
@@ -301,28 +388,7 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Robot, ModelError> 
                 },
             }
         }
-    };
-    let name = if urdf.name.is_empty() {
-        "robot".to_string()
-    } else {
-        urdf.name.clone()
-    };
-    let mut robot = Robot::assemble(name, joints, flange, flange_name);
-    robot.warnings = warnings;
-    robot.missing_inertials = missing;
-    robot.link_frames = urdf
-        .links
-        .iter()
-        .filter_map(|l| {
-            let (body, pose) = frames.get(l.name.as_str())?;
-            Some(super::LinkFrame {
-                name: l.name.clone(),
-                body: *body,
-                pose: *pose,
-            })
-        })
-        .collect();
-    Ok(robot)
+    }
 }
 
 /// The link tree of a URDF: link indices by name, the child joints of each link and the

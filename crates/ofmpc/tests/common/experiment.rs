@@ -3,8 +3,8 @@
 
 use ofmpc::control::{ControllerKind, MpcSettings};
 use ofmpc::gcode::{parse, ParseOptions};
-use ofmpc::motion::reference::{build_reference, Orientation};
-use ofmpc::motion::trajectory::{CartesianTrajectory, TimingOptions};
+use ofmpc::motion::{build_reference, Orientation};
+use ofmpc::motion::{CartesianTrajectory, TimingOptions};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, RunMetrics};
 

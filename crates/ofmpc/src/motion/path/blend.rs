@@ -1,5 +1,5 @@
 //! Corner blending under `G64 P<tol>`: consecutive moves are joined by curvature-continuous
-//! (G2) quintic blends ([`crate::motion::g2blend`]) that leave the programmed path by at most
+//! (G2) quintic blends (`path/g2blend.rs`) that leave the programmed path by at most
 //! the tolerance, so the path need not stop there and its curvature never steps.
 //!
 //! A corner between two straight lines with unit directions `u₁`, `u₂` turns by
@@ -22,17 +22,13 @@
 //! (capped at half of each move), shortened until the blend keeps within the tolerance of the
 //! moves it replaces. The path stops at a tolerance of 0 and at reversals.
 
+use super::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
 use crate::geometry::Segment;
-use crate::motion::g2blend::{blend_deviation, QuinticBlend, SegmentPart};
 use nalgebra::Vector3;
 
 /// The corner arc and the angles that classify a corner are path geometry
 /// ([`crate::geometry::corner`]); re-exported here where the blending uses them.
-pub use crate::geometry::corner::{CornerArc, REVERSAL_ANGLE, TANGENT_ANGLE};
-
-/// The path modes `G61` / `G64` are a program's modal state, read by [`crate::gcode`]; the
-/// blending here is what `G64` asks for.
-pub use crate::gcode::PathMode;
+use crate::geometry::corner::{CornerArc, REVERSAL_ANGLE, TANGENT_ANGLE};
 
 /// Angle (rad) below which a join is passed without a stop when its tolerance is positive:
 /// 0.05°, a direction change of under 0.1 % of the speed (rounding of CAM output, LinuxCNC's
@@ -154,7 +150,7 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
 /// [`blend`], but a corner whose blend would be slower than a stop under the path
 /// acceleration `max_accel` and jerk `max_jerk` stops instead.
 ///
-/// The timing ([`crate::motion::topp`]) holds a blend's speed `v_c = min(F, √(a R))`
+/// The timing (`timing/topp.rs`) holds a blend's speed `v_c = min(F, √(a R))`
 /// (feed, centripetal limit on the radius `R`) over about `±1.1 T_j v_c` around it,
 /// `T_j = 2a/j` (its jerk filter), which costs about `2.2 T_j (1 − v_c/F)` against cruising;
 /// a stop costs one more filter window, `T_j`, and the deceleration from `v_c` to rest,
@@ -165,7 +161,7 @@ pub fn blend_timed(moves: &[RunMove], max_accel: f64, max_jerk: f64) -> Vec<Piec
 
 /// Whether the corner blend `curve` between moves of feeds `f1`, `f2` is slower than
 /// stopping (see [`blend_timed`]): its speed is also held within the jerk bound of its
-/// curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j` ([`crate::motion::topp`]).
+/// curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j` (`timing/topp.rs`).
 fn stop_is_faster(curve: &QuinticBlend, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) -> bool {
     let feed = f1.min(f2);
     let v_c = feed.min(turn_speed(curve, max_accel, max_jerk));

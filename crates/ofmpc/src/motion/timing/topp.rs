@@ -3,7 +3,7 @@
 //!
 //! # Method
 //!
-//! The run (a blended path from rest to rest, [`crate::motion::blend`]) is gridded in arc
+//! The run (a blended path from rest to rest, `path/blend.rs`) is gridded in arc
 //! length `s` (nodes at most [`GRID_STEP`] apart, at least two intervals per piece, every
 //! piece boundary a node). With the state `x = ṡ²` and the control `u = s̈` (constant between
 //! nodes, so `x_{i+1} = x_i + 2 Δs_i u_i`), each node has
@@ -43,8 +43,8 @@
 //! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
 //! and both constrain it.
 
-use crate::motion::blend::{Geometry, Piece, TURN_JERK_SHARE};
-use crate::motion::reference::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use crate::motion::limits::{JointMap, ReferenceFailure, MAX_PLAN_VALUES};
+use crate::motion::path::blend::{Geometry, Piece, TURN_JERK_SHARE};
 use nalgebra::Vector3;
 
 /// Largest node spacing of the grid (m).
@@ -367,15 +367,11 @@ fn grid_step(pieces: &[Piece]) -> f64 {
     }
 }
 
-/// Grid nodes: piece boundaries and interior points at most `step` apart, with the path part
-/// of the velocity limit, `x̄ = min(F², a_max / κ)` (feed and curvature of both pieces at a
-/// boundary), and rest at the ends and after stopping pieces.
-fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
-    let max_accel = limits.max_accel;
-    // Per piece: the speed² within which the turning of its curvature vector keeps the jerk
-    // `ṡ³ |dk/ds|` within its share of the bound, and its largest curvature (a blend's peak
-    // may fall between the nodes).
-    let bounds: Vec<(f64, f64)> = pieces
+/// Per piece: the speed² within which the turning of its curvature vector keeps the jerk
+/// `ṡ³ |dk/ds|` within its share of the bound, and its largest curvature (a blend's peak
+/// may fall between the nodes).
+fn turn_bounds(pieces: &[Piece], limits: PathLimits) -> Vec<(f64, f64)> {
+    pieces
         .iter()
         .map(|p| {
             let (kappa, rate) = p.geometry.curvature_bounds();
@@ -387,7 +383,29 @@ fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
             let curved = matches!(p.geometry, Geometry::Curve(_) | Geometry::Corner(_));
             (x_turn, if curved { kappa } else { 0.0 })
         })
-        .collect();
+        .collect()
+}
+
+/// The grid spacing on piece `p` for the run's spacing `step`.
+fn piece_step(p: &Piece, step: f64, limits: PathLimits) -> f64 {
+    // Slow pieces get a finer grid: the erosion of a limit reaches one node spacing
+    // beyond `1.1 T_j v` ([`eroded_limits`]), so a 1 mm spacing would hold a 5 mm/s feed
+    // 0.2 s longer at each change of feed; an eighth of the filter's reach at the feed
+    // (`T_j = 2a/j` at most) keeps that within an eighth of the reach itself.
+    let fine = (0.25 * limits.max_accel / limits.max_jerk * p.feed).max(4.0 * MIN_NODE_SPACING);
+    if step <= GRID_STEP {
+        step.min(fine)
+    } else {
+        step
+    }
+}
+
+/// Grid nodes: piece boundaries and interior points at most `step` apart, with the path part
+/// of the velocity limit, `x̄ = min(F², a_max / κ)` (feed and curvature of both pieces at a
+/// boundary), and rest at the ends and after stopping pieces.
+fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
+    let max_accel = limits.max_accel;
+    let bounds = turn_bounds(pieces, limits);
     let mut nodes: Vec<Node> = Vec::new();
     for (k, p) in pieces.iter().enumerate() {
         let len = p.geometry.length();
@@ -396,16 +414,7 @@ fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
         if tiny && !(p.stop_after || last_piece || k == 0) {
             continue;
         }
-        // Slow pieces get a finer grid: the erosion of a limit reaches one node spacing
-        // beyond `1.1 T_j v` ([`eroded_limits`]), so a 1 mm spacing would hold a 5 mm/s feed
-        // 0.2 s longer at each change of feed; an eighth of the filter's reach at the feed
-        // (`T_j = 2a/j` at most) keeps that within an eighth of the reach itself.
-        let fine = (0.25 * max_accel / limits.max_jerk * p.feed).max(4.0 * MIN_NODE_SPACING);
-        let piece_step = if step <= GRID_STEP {
-            step.min(fine)
-        } else {
-            step
-        };
+        let piece_step = piece_step(p, step, limits);
         let m = if tiny {
             1
         } else {

@@ -4,21 +4,21 @@
 //! [`TimeLaw`] (section IV of the paper: "time parameterized with 5th order polynomial of
 //! acceleration"): velocity and acceleration are continuous (zero) at every join; with
 //! [`Profile::Septic`] the jerk is too, and the move's feed is its peak speed. Consecutive
-//! moves under `G64` form a *run*: their corners are blended ([`crate::motion::blend`]) and
+//! moves under `G64` form a *run*: their corners are blended (`path/blend.rs`) and
 //! the run is timed as fast as the path and joint limits allow, with the feed as cruise
-//! speed, from rest to rest ([`crate::motion::topp`]). Dwells hold the position.
+//! speed, from rest to rest (`timing/topp.rs`). Dwells hold the position.
 //! Orientation is not handled here (it is constant in the paper's experiments).
 //!
 //! [`CartesianTrajectory::sample`] allocates nothing and is meant to be called every control
 //! step.
 
+use super::exact::{joint_limited_duration, JointLimitedMove};
+use super::timelaw::{Profile, TimeLaw};
+use super::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
 use crate::gcode::{MoveKind, PathMode, Program};
 use crate::geometry::Segment;
-use crate::motion::blend::{blend_timed, RunMove};
-use crate::motion::exact::{joint_limited_duration, JointLimitedMove};
-use crate::motion::reference::{ReferenceError, MAX_PLAN_VALUES};
-use crate::motion::timelaw::{Profile, TimeLaw};
-use crate::motion::topp::{time_run, JointConstraints, PathLimits, Run, RunError};
+use crate::motion::limits::{ReferenceError, MAX_PLAN_VALUES};
+use crate::motion::path::blend::{blend_timed, RunMove};
 use nalgebra::Vector3;
 
 /// Limits, profile and path mode used to time a program.
@@ -542,7 +542,7 @@ impl CartesianTrajectory {
     }
 
     /// The same trajectory after holding its start point for `hold` seconds (a leading
-    /// dwell; every piece `hold` later): the time a [`crate::motion::reference::StartTurn`]
+    /// dwell; every piece `hold` later): the time a `StartTurn`
     /// takes.
     pub(crate) fn delayed(mut self, hold: f64) -> Self {
         for s in &mut self.segments {

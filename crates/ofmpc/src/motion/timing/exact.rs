@@ -1,7 +1,7 @@
 //! Joint limits of exact-stop (`G61`) moves: the move's rest-to-rest law is slowed down
 //! uniformly until no joint exceeds its speed or acceleration limit.
 //!
-//! Along a law `s(t) = L σ(t/T)` (see [`crate::motion::timelaw`]) and a joint path `q(s)`
+//! Along a law `s(t) = L σ(t/T)` (see [`TimeLaw`]) and a joint path `q(s)`
 //! (inverse kinematics), the chain rule gives
 //!
 //! `q̇_j = q'_j(s) L σ'(τ) / T`, `q̈_j = (q'_j(s) L σ''(τ) + q''_j(s) L² σ'(τ)²) / T²`,
@@ -12,10 +12,10 @@
 //! (time scaling, e.g. Hollerbach 1984, "Dynamic scaling of manipulator trajectories").
 //! A move whose fastest law already keeps the limits is left exactly as it is.
 
+use super::timelaw::{ProfileValue, TimeLaw};
+use super::topp::JointConstraints;
 use crate::geometry::Segment;
-use crate::motion::timelaw::{ProfileValue, TimeLaw};
-use crate::motion::topp::JointConstraints;
-use crate::motion::JointQuantity;
+use crate::motion::limits::JointQuantity;
 
 /// Samples of `τ` per move at which the joint speed and acceleration are evaluated.
 const TAU_SAMPLES: usize = 512;
