@@ -50,18 +50,33 @@ pub fn read_chain(urdf: &Path, tip: Option<&str>) -> anyhow::Result<Chain> {
     }
 }
 
-/// The placement of the paper's program for the robot of `model` (as the scenario names it,
-/// absolute or relative to the working directory), its `drives` file and `tip`.
-pub fn place(model: &Path, drives: &Path, tip: Option<&str>) -> anyhow::Result<Placement> {
+/// The placement of the paper's program for the robot of `model` (absolute, or relative to
+/// the working directory) with `tip`, its limits as the URDF gives them (what init's drives
+/// file holds).
+pub fn place(model: &Path, tip: Option<&str>) -> Result<Placement, ofmpc_scenario::ScenarioError> {
     let mut f = ScenarioFile::default();
     f.robot.model = model.display().to_string();
-    f.robot.drives = Some(drives.to_path_buf());
     f.robot.tip = tip.map(str::to_string);
-    ofmpc_scenario::place_paper_program(&f).context(
-        "no start pose found from which this arm runs the paper's program (the error of the \
-         last one tried above); choose one with [robot] start_q and place a program of yours with \
-         [program] file and origin_mm",
-    )
+    ofmpc_scenario::place_paper_program(&f)
+}
+
+/// `path` relative to the folder `base` (both absolute): `../robots/ur5.urdf`; `path` itself
+/// when they share no root.
+pub fn relative_to(path: &Path, base: &Path) -> std::path::PathBuf {
+    let (p, b): (Vec<_>, Vec<_>) = (path.components().collect(), base.components().collect());
+    let common = p.iter().zip(&b).take_while(|(x, y)| x == y).count();
+    // Only the root in common (or nothing): the absolute path reads better.
+    if common <= 1 {
+        return path.to_path_buf();
+    }
+    let mut out = std::path::PathBuf::new();
+    for _ in common..b.len() {
+        out.push("..");
+    }
+    for c in &p[common..] {
+        out.push(c);
+    }
+    out
 }
 
 /// A list of numbers as TOML (`[0.1, -0.2]`) with 4 decimals.
@@ -99,8 +114,13 @@ pub fn tool_position_mm(p: &Placement) -> [f64; 3] {
 
 /// The scenario init writes: the robot (`model` as the scenario finds it, `tip`), its drives
 /// file, the start pose and program of the placement `p`, two payloads.
-pub fn scenario_text(model: &str, tip: Option<&str>, p: &Placement) -> String {
+pub fn scenario_text(robot_name: &str, model: &str, tip: Option<&str>, p: &Placement) -> String {
     let tip = tip.map(|t| format!("tip = {t:?}\n")).unwrap_or_default();
+    let placed = if p.as_published {
+        ""
+    } else {
+        " (placed for it)"
+    };
     let (start, program, timing) = if p.as_published {
         (
             String::new(),
@@ -130,7 +150,8 @@ pub fn scenario_text(model: &str, tip: Option<&str>, p: &Placement) -> String {
     format!(
         "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
          # default (examples/scenario.toml, docs/guide/reference/scenario.md). Relative paths are\n\
-         # relative to this file. The report is titled after the robot and program.\n\
+         # relative to this file.\n\
+         title = \"Offset-free MPC of {robot_name} on the paper's path{placed}\"\n\
          controllers = [\"usual\", \"first\", \"second\"]\n\n\
          [robot]\n\
          model = {model:?}\n{tip}\
@@ -161,15 +182,15 @@ pub fn next_steps(urdf: &Path, out: &Path, chain: &Chain, p: &Placement) -> Stri
         .as_deref()
         .map(|t| format!(" --tip {t}"))
         .unwrap_or_default();
-    let at = tool_position_mm(p);
+    let at = tool_position_mm(p).map(|v| (v * 10.0).round() / 10.0);
     if !p.as_published {
         s.push_str(&format!(
             "start pose {} (--start-q {}); the tool there is at {} mm: a program of yours placed \
              with --origin {} starts where the tool is\n",
             toml_list(&p.start_q),
             flag_list(&p.start_q),
-            toml_list(&at),
-            flag_list(&at),
+            format!("[{:.1}, {:.1}, {:.1}]", at[0], at[1], at[2]),
+            format!("{:.1},{:.1},{:.1}", at[0], at[1], at[2]),
         ));
     }
     s.push_str(&format!(
@@ -192,5 +213,17 @@ mod tests {
             "[0.1235, 0.0000, 2.0000]"
         );
         assert_eq!(flag_list(&[-1.5, 0.0]), "-1.5000,0.0000");
+    }
+
+    #[test]
+    fn a_path_relative_to_a_folder() {
+        assert_eq!(
+            relative_to(Path::new("/a/robots/ur5.urdf"), Path::new("/a/work/ur5")),
+            Path::new("../../robots/ur5.urdf")
+        );
+        assert_eq!(
+            relative_to(Path::new("/a/w/x.urdf"), Path::new("/a/w")),
+            Path::new("x.urdf")
+        );
     }
 }

@@ -26,11 +26,8 @@ fn num(s: &mut String, x: f64) {
 /// Runs of a controller that identifies the payload online (the adaptive
 /// variants) have one more column, `payload_mass_est_kg`: the mass its model
 /// carries after the step of that row.
-pub fn timeseries_csv(rec: &Record) -> String {
-    timeseries_csv_every(rec, 1)
-}
-
-/// [`timeseries_csv`] with every `stride`-th row (rows 0, stride, 2·stride, …, and always
+///
+/// Every `stride`-th row (rows 0, stride, 2·stride, …, and always
 /// the last): `[output] timeseries = "decimated"`. A stride of 1 (or 0) writes every row.
 pub fn timeseries_csv_every(rec: &Record, stride: usize) -> String {
     let stride = stride.max(1);
@@ -66,7 +63,7 @@ pub fn timeseries_csv_every(rec: &Record, stride: usize) -> String {
     s
 }
 
-/// Row `k` of [`timeseries_csv`].
+/// Row `k` of [`timeseries_csv_every`].
 fn timeseries_row(s: &mut String, rec: &Record, k: usize, with_mass: bool, with_meas: bool) {
     let n = rec.n;
     num(s, rec.t[k]);
@@ -136,8 +133,10 @@ pub fn reference_csv(reference: &JointReference) -> String {
 }
 
 fn fmt_opt(v: f64, prec: usize) -> String {
-    if v.is_finite() {
-        if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+    if v == 0.0 {
+        "0".to_string()
+    } else if v.is_finite() {
+        if v.abs() < 1e-3 || v.abs() >= 1e5 {
             format!("{v:.2e}")
         } else {
             format!("{v:.prec$}")
