@@ -41,7 +41,7 @@ fn next_command(out: &str, command: &str) -> Vec<String> {
 fn title(report: &Path) -> String {
     let html = std::fs::read_to_string(report).unwrap();
     let at = html.find("<title>").unwrap() + "<title>".len();
-    html[at..at + html[at..].find("</title>").unwrap()].to_string()
+    html[at..at + html[at..].find("</title>").unwrap()].replace("&#39;", "'")
 }
 
 fn step(cwd: &Path, args: &[String]) -> String {
@@ -143,7 +143,9 @@ fn the_readme_steps_run_on_a_panda_with_its_hand() {
 }
 
 /// The public arms with dynamics the repository ships: `init robot` then its printed `run`
-/// (one controller, one payload, to keep the test short), without a hand-chosen start pose.
+/// as printed (the three controllers, 0 and 0.5 kg), without a hand-chosen start pose: exits
+/// 0, every run planned and simulated (a controller may diverge under the payload its model
+/// does not know: a result, reported), the usual MPC without payload completes.
 #[test]
 fn every_public_arm_runs_after_init() {
     let arms = [
@@ -162,9 +164,14 @@ fn every_public_arm_runs_after_init() {
             &["init", "robot", &urdf.display().to_string(), "--out", "my"].map(String::from),
         );
         let mut run = next_command(&out, "run");
-        run.extend(["--controllers", "second", "--payload", "0.5", "--out", "r"].map(String::from));
+        run.extend(["--out", "r"].map(String::from));
         step(tmp.path(), &run);
         let m = metrics(&tmp.path().join("r"));
-        assert_eq!(m["runs"][0]["status"], "ok", "{rel}: {m}");
+        assert_eq!(m["runs"].as_array().unwrap().len(), 6, "{rel}: {m}");
+        assert_eq!(run_of(&m, "usual_m0")["status"], "ok", "{rel}: {m}");
     }
+}
+
+fn run_of<'a>(m: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    bin::run(m, name)
 }

@@ -40,7 +40,7 @@ pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
     is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
-    Scenario,
+    urdf_warning_lines, Scenario,
 };
 pub use runner::{
     metrics_json, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,

@@ -91,9 +91,8 @@ pub fn load_robot_with(
     let mut robot = if from_urdf {
         let robot = Robot::from_urdf_file_with(path, chain)?;
         warnings.extend(
-            robot
-                .warnings()
-                .iter()
+            urdf_warning_lines(robot.warnings())
+                .into_iter()
                 .map(|w| format!("{}: {w}", path.display())),
         );
         robot
@@ -137,6 +136,52 @@ pub fn load_robot_with(
         }
     }
     Ok((robot, warnings))
+}
+
+/// A URDF's warnings, one line per kind: the ignored `<dynamics>` of every joint in one, the
+/// ignored `<safety_controller>`s in one, the limits read as not given in one per attribute;
+/// the others one each.
+pub fn urdf_warning_lines(warnings: &[ofmpc::robot::UrdfWarning]) -> Vec<String> {
+    use ofmpc::robot::UrdfWarning as W;
+    // Per kind: the joints, and the warnings as the library words them (kept for one joint).
+    let mut kinds: [(Vec<String>, Vec<String>); 4] = Default::default();
+    let mut other = Vec::new();
+    for w in warnings {
+        let (kind, joint) = match w {
+            W::IgnoredDynamics { joint, .. } => (0, joint),
+            W::IgnoredSafetyController(joint) => (1, joint),
+            W::UnspecifiedLimit { joint, attribute } if *attribute == "effort" => (2, joint),
+            W::UnspecifiedLimit { joint, .. } => (3, joint),
+            w => {
+                other.push(w.to_string());
+                continue;
+            }
+        };
+        kinds[kind].0.push(format!("'{joint}'"));
+        kinds[kind].1.push(w.to_string());
+    }
+    let what = [
+        "<dynamics damping friction> ignored (the robot model has no joint friction; set the \
+         simulated plant's friction instead)"
+            .to_string(),
+        "<safety_controller> soft limits ignored; the <limit> range is used".to_string(),
+        "<limit effort=\"0\"> read as not given (no effort limit); give it in a drives file \
+         (max_torque_nm) if a controller or the planner needs it"
+            .to_string(),
+        "<limit velocity=\"0\"> read as not given (no velocity limit); give it in a drives file \
+         (max_speed_rad_s) if a controller or the planner needs it"
+            .to_string(),
+    ];
+    let mut lines = Vec::new();
+    for ((joints, words), what) in kinds.iter().zip(what) {
+        match joints.len() {
+            0 => {}
+            1 => lines.push(words[0].clone()),
+            n => lines.push(format!("{n} joints ({}): {what}", joints.join(", "))),
+        }
+    }
+    lines.extend(other);
+    lines
 }
 
 /// Reads a program: a file, or the built-in paper program when `None`. Returns its

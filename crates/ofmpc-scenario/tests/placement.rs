@@ -65,3 +65,21 @@ fn every_public_arm_gets_a_placement_that_resolves() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// The Panda's URDF gives `<dynamics>` and `<safety_controller>` on each of its 7 joints: one
+/// warning line per kind (not 14), each naming the 7 joints.
+#[test]
+fn urdf_warnings_come_one_line_per_kind() {
+    let chain = ofmpc::robot::ChainOptions {
+        tip: Some("panda_hand".into()),
+        tcp: None,
+    };
+    let path = robot_file("panda/panda.urdf");
+    let robot =
+        ofmpc::robot::Robot::from_urdf_file_with(std::path::Path::new(&path), &chain).unwrap();
+    let raw = robot.warnings().len();
+    let (_, lines) = ofmpc_scenario::load_robot_with(&path, None, &chain).unwrap();
+    assert!(raw >= 14, "{raw} warnings from the library");
+    assert_eq!(lines.len(), 2, "{lines:#?}");
+    assert!(lines.iter().all(|l| l.contains("7 joints")), "{lines:#?}");
+}
