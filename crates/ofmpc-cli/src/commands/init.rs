@@ -85,6 +85,28 @@ pub fn scenario_skeleton_with_tip(model: &str, tip: Option<&str>) -> String {
     )
 }
 
+/// The scenario text for the placement (or, when none was found, the skeleton, with a
+/// warning saying why).
+fn scenario_for(
+    placement: &Result<ofmpc_scenario::Placement, ofmpc_scenario::ScenarioError>,
+    model: &str,
+    chain: &crate::init_choice::Chain,
+) -> String {
+    match placement {
+        Ok(p) => {
+            crate::init_choice::scenario_text(chain.robot.name(), model, chain.tip.as_deref(), p)
+        }
+        Err(e) => {
+            crate::output::console::warn(&format!(
+                "no start pose found from which this robot runs the paper's program: {e}; the \
+                 scenario written needs [robot] start_q and a program of yours ([program] file, \
+                 origin_mm)"
+            ));
+            scenario_skeleton_with_tip(model, chain.tip.as_deref())
+        }
+    }
+}
+
 /// Runs `ofmpc init robot`: reads the URDF (choosing the tip of a branched arm), places the
 /// paper's program for it ([`crate::init_choice`]), writes the drives file, the scenario and
 /// the placed program, and prints the choice and the next commands.
@@ -110,28 +132,11 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
     let placement = crate::init_choice::place(&urdf, chain.tip.as_deref());
     write_atomic(&drives, drives_skeleton(robot, &a.urdf).as_bytes())
         .with_context(|| format!("writing {}", drives.display()))?;
-    let text = match &placement {
-        Ok(p) => {
-            if !p.as_published {
-                write_atomic(&program, p.program.as_bytes())
-                    .with_context(|| format!("writing {}", program.display()))?;
-            }
-            crate::init_choice::scenario_text(
-                robot.name(),
-                &model.display().to_string(),
-                chain.tip.as_deref(),
-                p,
-            )
-        }
-        Err(e) => {
-            crate::output::console::warn(&format!(
-                "no start pose found from which this robot runs the paper's program: {e}; the \
-                 scenario written needs [robot] start_q and a program of yours ([program] file, \
-                 origin_mm)"
-            ));
-            scenario_skeleton_with_tip(&model.display().to_string(), chain.tip.as_deref())
-        }
-    };
+    if let Ok(p) = placement.as_ref().filter(|p| !p.as_published) {
+        write_atomic(&program, p.program.as_bytes())
+            .with_context(|| format!("writing {}", program.display()))?;
+    }
+    let text = scenario_for(&placement, &model.display().to_string(), &chain);
     write_atomic(&scenario, text.as_bytes())
         .with_context(|| format!("writing {}", scenario.display()))?;
     let written = if placement.as_ref().is_ok_and(|p| !p.as_published) {
