@@ -184,13 +184,12 @@ pub fn next_steps(urdf: &Path, out: &Path, chain: &Chain, p: &Placement) -> Stri
         .unwrap_or_default();
     let at = tool_position_mm(p).map(|v| (v * 10.0).round() / 10.0);
     if !p.as_published {
+        let (x, y, z) = (at[0], at[1], at[2]);
         s.push_str(&format!(
-            "start pose {} (--start-q {}); the tool there is at {} mm: a program of yours placed \
-             with --origin {} starts where the tool is\n",
+            "start pose {} (--start-q {}); the tool there is at [{x:.1}, {y:.1}, {z:.1}] mm: a \
+             program of yours placed with --origin {x:.1},{y:.1},{z:.1} starts where the tool is\n",
             toml_list(&p.start_q),
             flag_list(&p.start_q),
-            format!("[{:.1}, {:.1}, {:.1}]", at[0], at[1], at[2]),
-            format!("{:.1},{:.1},{:.1}", at[0], at[1], at[2]),
         ));
     }
     s.push_str(&format!(

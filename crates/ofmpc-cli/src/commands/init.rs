@@ -132,7 +132,7 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
     let placement = crate::init_choice::place(&urdf, chain.tip.as_deref());
     write_atomic(&drives, drives_skeleton(robot, &a.urdf).as_bytes())
         .with_context(|| format!("writing {}", drives.display()))?;
-    if let Ok(p) = placement.as_ref().filter(|p| !p.as_published) {
+    if let Some(p) = placement.as_ref().ok().filter(|p| !p.as_published) {
         write_atomic(&program, p.program.as_bytes())
             .with_context(|| format!("writing {}", program.display()))?;
     }
