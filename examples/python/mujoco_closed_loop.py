@@ -243,7 +243,13 @@ def closed_loop(
 
     `path_s` cuts the path after that many seconds (the hold then holds the sample
     reached), for short runs; `reference` reuses a planned reference."""
-    import mujoco
+    try:
+        import mujoco
+    except ModuleNotFoundError as e:
+        raise SystemExit(
+            "this example needs MuJoCo's Python package: pip install mujoco "
+            "(in the environment where ofmpc is installed)"
+        ) from e
 
     robot = ofmpc.Robot.from_urdf(IRB140_URDF, drives=IRB140_DRIVES)  # the controller's model
     ref = reference if reference is not None else ofmpc.plan(program, robot, ts=ts)

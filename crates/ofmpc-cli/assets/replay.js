@@ -289,6 +289,10 @@
     drawLines(gridB, gridCB, gl.LINES, 0, gridN, VP);
     if (refB) { drawLines(refB, refCB, gl.LINE_STRIP, 0, refN, VP); }
     drawLines(r.traceB, r.colB, gl.LINE_STRIP, 0, frame + 1, VP);
+    // The trace thick enough to read (WebGL draws lines 1 px wide): its samples as 3 px dots.
+    gl.uniform1f(locFlat.ps, 3.0);
+    drawLines(r.traceB, r.colB, gl.POINTS, 0, frame + 1, VP);
+    gl.uniform1f(locFlat.ps, 5.0);
     drawLines(r.traceB, r.colB, gl.POINTS, frame, 1, VP);
     var k = Math.min(frame * r.stride, r.len - 1), hi = horizonAt(r, k);
     if (hi >= 0) {
@@ -336,13 +340,15 @@
   slider.addEventListener('input', function () { setFrame(+slider.value); });
   sel.addEventListener('change', function () { selectRun(+sel.value); });
   var last = null, tPlay = 0, slow = document.getElementById('replay-follow');
+  var speedSel = document.getElementById('replay-speed');
   S.stamps = [];
   function tick(ts) {
     if (!playing) { last = null; return; }
     if (S.stamps.length < 100000) { S.stamps.push(ts); }
     if (last !== null) {
       var r = runs[cur];
-      tPlay += (ts - last) / 1000 * (slow.checked ? 0.1 : 1);
+      var speed = speedSel ? +speedSel.value || 1 : 1;
+      tPlay += (ts - last) / 1000 * speed * (slow.checked ? 0.1 : 1);
       var f = frame;
       while (f + 1 < r.n && r.t[f + 1] <= tPlay) { f++; }
       if (f >= r.n - 1 && r.t[r.n - 1] <= tPlay) { tPlay = r.t[0]; f = 0; }

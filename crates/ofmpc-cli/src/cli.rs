@@ -158,6 +158,14 @@ pub struct RunArgs {
     /// (as `--set timing.mode=...`).
     #[arg(long)]
     pub mode: Option<String>,
+    /// Tip, tool centre point and start pose: set `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
+    /// `start_q` (as `--set robot.start_q=[...]`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
+    /// Tool table (LinuxCNC's .tbl format, lengths in mm) for `G43 H<n>`: sets
+    /// `[program] tool_table`.
+    #[arg(long)]
+    pub tool_table: Option<PathBuf>,
     /// Set a scenario key (KEY=VALUE; repeatable), after the options above.
     #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
     pub set: Vec<String>,
@@ -203,6 +211,14 @@ pub struct ReproduceArgs {
     /// (blend): sets `[timing] mode`.
     #[arg(long)]
     pub mode: Option<String>,
+    /// Tip, tool centre point and start pose: set `[robot] tip`, `tcp_mm`, `tcp_rpy_deg`,
+    /// `start_q` (as `--set robot.start_q=[...]`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
+    /// Tool table (LinuxCNC's .tbl format, lengths in mm) for `G43 H<n>`: sets
+    /// `[program] tool_table`.
+    #[arg(long)]
+    pub tool_table: Option<PathBuf>,
     /// Set a scenario key (KEY=VALUE; repeatable), after the options above.
     #[arg(long = "set", value_name = "KEY=VALUE", long_help = SET_HELP, allow_hyphen_values = true)]
     pub set: Vec<String>,

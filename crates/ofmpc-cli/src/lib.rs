@@ -7,10 +7,12 @@
 #![warn(missing_docs)]
 
 pub mod args;
+pub mod chain_sets;
 pub mod cli;
 pub mod commands;
 pub mod errors;
 pub(crate) mod figures;
+pub mod init_choice;
 pub mod output;
 pub(crate) mod tables;
 pub mod verdict;

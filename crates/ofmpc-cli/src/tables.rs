@@ -26,10 +26,15 @@ fn num(s: &mut String, x: f64) {
 /// Runs of a controller that identifies the payload online (the adaptive
 /// variants) have one more column, `payload_mass_est_kg`: the mass its model
 /// carries after the step of that row.
-pub fn timeseries_csv(rec: &Record) -> String {
+///
+/// Every `stride`-th row (rows 0, stride, 2·stride, …, and always
+/// the last): `[output] timeseries = "decimated"`. A stride of 1 (or 0) writes every row.
+pub fn timeseries_csv_every(rec: &Record, stride: usize) -> String {
+    let stride = stride.max(1);
     let with_mass = !rec.payload_mass_est.is_empty() && rec.payload_mass_est.len() == rec.len();
     let n = rec.n;
-    let mut s = String::with_capacity(rec.len() * (6 * n + 9) * 20 + 256);
+    let rows = rec.len().div_ceil(stride) + 1;
+    let mut s = String::with_capacity(rows * (6 * n + 9) * 20 + 256);
     s.push('t');
     for prefix in ["q", "qd", "tau", "qref", "e"] {
         for i in 1..=n {
@@ -51,38 +56,51 @@ pub fn timeseries_csv(rec: &Record) -> String {
         }
     }
     s.push('\n');
-    for k in 0..rec.len() {
-        num(&mut s, rec.t[k]);
-        for v in [&rec.q, &rec.qd, &rec.tau, &rec.q_ref] {
-            for x in &v[k * n..(k + 1) * n] {
-                s.push(',');
-                num(&mut s, *x);
-            }
-        }
-        for i in 0..n {
-            s.push(',');
-            num(&mut s, rec.joint_error(k, i));
-        }
-        let (p, r, e) = (rec.flange[k], rec.flange_ref[k], rec.cartesian_error(k));
-        for x in p.iter().chain(&r).chain(&e) {
-            s.push(',');
-            num(&mut s, *x);
-        }
-        if with_mass {
-            s.push(',');
-            num(&mut s, rec.payload_mass_est[k]);
-        }
-        if with_meas {
-            for v in [&rec.q_meas, &rec.qd_meas] {
-                for x in &v[k * n..(k + 1) * n] {
-                    s.push(',');
-                    num(&mut s, *x);
-                }
-            }
-        }
-        s.push('\n');
+    let last = rec.len().checked_sub(1);
+    for k in (0..rec.len()).filter(|k| k % stride == 0 || Some(*k) == last) {
+        timeseries_row(&mut s, rec, k, with_mass, with_meas);
     }
     s
+}
+
+/// Row `k` of [`timeseries_csv_every`].
+fn timeseries_row(s: &mut String, rec: &Record, k: usize, with_mass: bool, with_meas: bool) {
+    let n = rec.n;
+    num(s, rec.t[k]);
+    for v in [&rec.q, &rec.qd, &rec.tau, &rec.q_ref] {
+        for x in &v[k * n..(k + 1) * n] {
+            s.push(',');
+            num(s, *x);
+        }
+    }
+    for i in 0..n {
+        s.push(',');
+        num(s, rec.joint_error(k, i));
+    }
+    let (p, r, e) = (rec.flange[k], rec.flange_ref[k], rec.cartesian_error(k));
+    for x in p.iter().chain(&r).chain(&e) {
+        s.push(',');
+        num(s, *x);
+    }
+    if with_mass {
+        s.push(',');
+        num(s, rec.payload_mass_est[k]);
+    }
+    if with_meas {
+        for v in [&rec.q_meas, &rec.qd_meas] {
+            for x in &v[k * n..(k + 1) * n] {
+                s.push(',');
+                num(s, *x);
+            }
+        }
+    }
+    s.push('\n');
+}
+
+/// The bytes a row of a run's `timeseries.csv` takes, estimated (about 20 characters a
+/// number) for a robot of `n` joints: for the size estimate before a run.
+pub fn timeseries_bytes_per_row(n: usize) -> u64 {
+    (7 * n as u64 + 12) * 20
 }
 
 /// The reference CSV of `ofmpc trajectory`: `t,x,y,z,q1..qn,qd1..qdn`
@@ -115,8 +133,10 @@ pub fn reference_csv(reference: &JointReference) -> String {
 }
 
 fn fmt_opt(v: f64, prec: usize) -> String {
-    if v.is_finite() {
-        if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+    if v == 0.0 {
+        "0".to_string()
+    } else if v.is_finite() {
+        if v.abs() < 1e-3 || v.abs() >= 1e5 {
             format!("{v:.2e}")
         } else {
             format!("{v:.prec$}")

@@ -66,7 +66,7 @@ pub fn verdict(runs: &[RunMetrics]) -> Vec<String> {
 
 /// Offset-free controllers and those that keep a steady offset under a payload.
 fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
-    let mut free = Vec::new();
+    let mut free: Vec<(String, f64, f64)> = Vec::new();
     let mut offset = Vec::new();
     for &c in names {
         let loaded: Vec<&RunMetrics> = runs
@@ -74,23 +74,14 @@ fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
             .filter(|m| m.controller == c && m.payload_kg > 0.0 && m.status == RunStatus::Ok)
             .filter(|m| m.steady_cartesian_error_mm.is_finite())
             .collect();
-        if loaded.is_empty() {
-            continue;
-        }
-        let worst = loaded
-            .iter()
-            .max_by(|a, b| {
-                a.steady_cartesian_error_mm
-                    .total_cmp(&b.steady_cartesian_error_mm)
-            })
-            .copied();
+        let worst = loaded.iter().copied().max_by(|a, b| {
+            a.steady_cartesian_error_mm
+                .total_cmp(&b.steady_cartesian_error_mm)
+        });
         let Some(worst) = worst else { continue };
         if worst.steady_cartesian_error_mm < OFFSET_FREE_MM {
-            free.push(format!(
-                "{c} (steady error ≤ {} up to {})",
-                mm(worst.steady_cartesian_error_mm),
-                kg(loaded.iter().map(|m| m.payload_kg).fold(0.0, f64::max))
-            ));
+            let heaviest = loaded.iter().map(|m| m.payload_kg).fold(0.0, f64::max);
+            free.push((c.to_string(), worst.steady_cartesian_error_mm, heaviest));
         } else {
             offset.push(offset_phrase(c, &loaded, worst));
         }
@@ -103,14 +94,38 @@ fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
         ));
     }
     if !free.is_empty() {
-        let verb = if free.len() == 1 { "is" } else { "are" };
-        v.push(format!(
-            "Offset-free: {} {verb} (the steady error is round-off, below {}).",
-            and_list(&free),
-            mm(OFFSET_FREE_MM)
-        ));
+        v.push(offset_free_sentence(&free));
     }
     v
+}
+
+/// "first and second are offset-free: their steady errors (at most … up to … kg and …) are
+/// round-off, below 1.00e-6 mm." for `(controller, largest steady error, heaviest payload)`.
+fn offset_free_sentence(free: &[(String, f64, f64)]) -> String {
+    let names: Vec<String> = free.iter().map(|(c, _, _)| c.clone()).collect();
+    let numbers: Vec<String> = free
+        .iter()
+        .map(|(c, e, p)| {
+            let whose = if free.len() > 1 {
+                format!(" for {c}")
+            } else {
+                String::new()
+            };
+            format!("at most {}{whose} up to {}", mm(*e), kg(*p))
+        })
+        .collect();
+    let (verb, their, errors) = if free.len() == 1 {
+        ("is", "its", "steady error")
+    } else {
+        ("are", "their", "steady errors")
+    };
+    format!(
+        "{} {verb} offset-free: {their} {errors} ({}) {} round-off, below {}.",
+        and_list(&names),
+        and_list(&numbers),
+        if free.len() == 1 { "is" } else { "are" },
+        mm(OFFSET_FREE_MM)
+    )
 }
 
 /// "`c` keeps a steady offset of … at <the lightest payload with an offset>", with the
@@ -346,8 +361,14 @@ mod tests {
             v.contains("usual keeps a steady offset of 0.0867 mm at 0.25 kg (0.690 mm at 2 kg)"),
             "{v}"
         );
-        assert!(v.contains("Offset-free: first"), "{v}");
-        assert!(v.contains("and second"), "{v}");
+        assert!(
+            v.contains(
+                "first and second are offset-free: their steady errors (at most 7.00e-13 mm for \
+                 first up to 2 kg and at most 9.00e-13 mm for second up to 0.25 kg) are \
+                 round-off, below 1.00e-6 mm."
+            ),
+            "{v}"
+        );
         assert!(
             v.contains("second diverged with 2 kg (at t = 3.50 s): joint 2 error"),
             "{v}"
@@ -381,7 +402,14 @@ mod tests {
             after.contains("first keeps a steady offset of 0.0100 mm at 0.25 kg"),
             "{after}"
         );
-        assert!(!after.contains("Offset-free: first"), "{after}");
+        assert!(
+            after.contains("second is offset-free: its steady error"),
+            "{after}"
+        );
+        assert!(
+            !after.contains("first and second are offset-free"),
+            "{after}"
+        );
         // The second algorithm no longer diverges: no stopped sentence, and it is the best at 2 kg.
         runs[8] = run("second", 2.0, 0.006, 1e-12, RunStatus::Ok);
         let after = verdict(&runs).join(" ");

@@ -96,7 +96,7 @@ pub enum ScenarioError {
         error: Box<SettingsError>,
     },
     /// A payload of `[payload]` is not a physical body.
-    #[error("[payload] mass {mass} kg: {error}")]
+    #[error("[payload] masses_kg: {error}")]
     Payload {
         /// The mass (kg).
         mass: f64,

@@ -161,6 +161,11 @@ pub struct OrientationSection {
     pub rpy_deg: Option<[f64; 3]>,
 }
 
+/// The title of a scenario that sets none. A run of another robot or program than the
+/// paper's is titled after the robot and program that ran instead
+/// ([`crate::Scenario::resolve`]).
+pub const DEFAULT_TITLE: &str = "Offset-free MPC of the ABB IRB 140 on the paper's path";
+
 /// A scenario file as written, defaults filled in.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -199,6 +204,65 @@ pub struct ScenarioFile {
     /// as read. Written with the results only when set.
     #[serde(skip_serializing_if = "is_default_baselines")]
     pub baselines: BaselineSettings,
+    /// `[output]`: how much of each run's time series is written. Written with the results
+    /// only when set.
+    #[serde(skip_serializing_if = "is_default_output")]
+    pub output: OutputSection,
+}
+
+fn is_default_output(o: &OutputSection) -> bool {
+    *o == OutputSection::default()
+}
+
+/// `[output] timeseries`: which samples of each run `timeseries.csv` holds. The metrics
+/// and figures use every sample whatever is chosen.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+#[non_exhaustive]
+pub enum TimeseriesOutput {
+    /// Every sample when a run's file stays within [`AUTO_TIMESERIES_BYTES`], else decimated.
+    #[default]
+    Auto,
+    /// Every sample, whatever the size.
+    Full,
+    /// Every `stride`-th sample (default: the stride that keeps a run's file within
+    /// [`AUTO_TIMESERIES_BYTES`]), the last sample always included.
+    Decimated,
+    /// No `timeseries.csv`.
+    None,
+}
+
+/// The size (bytes) a run's `timeseries.csv` keeps under `[output] timeseries = "auto"`
+/// (and "decimated" without a stride): 12 MB, so a 30-minute path with two payloads and
+/// the paper's three controllers writes well under 100 MB.
+pub const AUTO_TIMESERIES_BYTES: u64 = 12_000_000;
+
+/// `[output]`
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutputSection {
+    /// `"auto"` (the default), `"full"`, `"decimated"` or `"none"` ([`TimeseriesOutput`]).
+    pub timeseries: TimeseriesOutput,
+    /// Under `"decimated"`: write every `stride`-th sample (at least 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stride: Option<std::num::NonZeroUsize>,
+}
+
+impl OutputSection {
+    /// The stride of the time series of a run of `rows` samples whose file would take
+    /// `bytes_per_row` bytes a row: `None` for no file, `Some(1)` for every sample.
+    pub fn timeseries_stride(&self, rows: usize, bytes_per_row: u64) -> Option<usize> {
+        let auto = || {
+            let total = rows as u64 * bytes_per_row;
+            (total.div_ceil(AUTO_TIMESERIES_BYTES).max(1)) as usize
+        };
+        match self.timeseries {
+            TimeseriesOutput::None => None,
+            TimeseriesOutput::Full => Some(1),
+            TimeseriesOutput::Auto => Some(auto()),
+            TimeseriesOutput::Decimated => Some(self.stride.map_or_else(auto, |s| s.get())),
+        }
+    }
 }
 
 fn is_default_baselines(b: &BaselineSettings) -> bool {
@@ -267,7 +331,7 @@ pub type SafetySection = ofmpc::sim::SafetySettings;
 impl Default for ScenarioFile {
     fn default() -> Self {
         Self {
-            title: "Offset-free MPC of the ABB IRB 140 on the paper's path".into(),
+            title: DEFAULT_TITLE.into(),
             controllers: ControllerKind::PAPER.to_vec(),
             robot: RobotSection::default(),
             payload: PayloadSection::default(),
@@ -280,6 +344,7 @@ impl Default for ScenarioFile {
             faults: FaultsSection::default(),
             safety: SafetySection::default(),
             baselines: BaselineSettings::default(),
+            output: OutputSection::default(),
         }
     }
 }
@@ -304,7 +369,7 @@ impl ScenarioFile {
             })?;
         let parse_error = |e: toml::de::Error| ScenarioError::Parse {
             origin: path.display().to_string(),
-            message: e.to_string(),
+            message: plain_types(&e.to_string()),
         };
         // The sections' shapes first (an array is never read by position), then the file
         // alone: its errors carry their line and column.
@@ -607,9 +672,26 @@ fn too_large(limit: u64) -> std::io::Error {
     )
 }
 
+/// A deserializer's message with Rust type names in words ("expected usize" → "expected a
+/// whole number ≥ 0").
+pub(crate) fn plain_types(message: &str) -> String {
+    let mut m = message.to_string();
+    for (rust, words) in [
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected u32", "expected a whole number ≥ 0"),
+        ("expected a nonzero usize", "expected a whole number ≥ 1"),
+        ("expected f64", "expected a number"),
+    ] {
+        m = m.replace(rust, words);
+    }
+    m
+}
+
 /// The scenario's sections: each a table of keys. A derived deserializer would also read a
 /// section from an array, by position (`mpc = [0.02, 3]` as ts and horizon): refused instead.
-const SECTIONS: [&str; 10] = [
+const SECTIONS: [&str; 11] = [
+    "output",
     "robot",
     "payload",
     "program",
@@ -733,7 +815,7 @@ fn apply_overrides(
             ScenarioError::Override {
                 key: o.key.clone(),
                 value: o.raw.clone(),
-                message: e.message().trim_end().to_string(),
+                message: plain_types(e.message().trim_end()),
             }
         })?;
         file = Some(parsed);
@@ -743,7 +825,7 @@ fn apply_overrides(
         None => {
             ScenarioFile::deserialize(toml::Value::Table(doc)).map_err(|e| ScenarioError::Parse {
                 origin: "scenario".into(),
-                message: e.message().trim_end().to_string(),
+                message: plain_types(e.message().trim_end()),
             })
         }
     }

@@ -22,6 +22,7 @@ pub mod analysis;
 pub mod baseline_tuning;
 pub mod error;
 pub mod file;
+pub mod placement;
 pub mod program_json;
 pub mod resolve;
 pub mod runner;
@@ -32,13 +33,14 @@ pub use error::{
 };
 pub use file::{
     absolute, expand_shorthand, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
-    OrientationSection, Override, PayloadSection, ProgramSection, RobotSection, SafetySection,
-    ScenarioFile, TimingSection,
+    OrientationSection, OutputSection, Override, PayloadSection, ProgramSection, RobotSection,
+    SafetySection, ScenarioFile, TimeseriesOutput, TimingSection, AUTO_TIMESERIES_BYTES,
 };
+pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
     is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
-    Scenario,
+    urdf_warning_lines, Scenario,
 };
 pub use runner::{
     metrics_json, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,

@@ -91,9 +91,8 @@ pub fn load_robot_with(
     let mut robot = if from_urdf {
         let robot = Robot::from_urdf_file_with(path, chain)?;
         warnings.extend(
-            robot
-                .warnings()
-                .iter()
+            urdf_warning_lines(robot.warnings())
+                .into_iter()
                 .map(|w| format!("{}: {w}", path.display())),
         );
         robot
@@ -137,6 +136,52 @@ pub fn load_robot_with(
         }
     }
     Ok((robot, warnings))
+}
+
+/// A URDF's warnings, one line per kind: the ignored `<dynamics>` of every joint in one, the
+/// ignored `<safety_controller>`s in one, the limits read as not given in one per attribute;
+/// the others one each.
+pub fn urdf_warning_lines(warnings: &[ofmpc::robot::UrdfWarning]) -> Vec<String> {
+    use ofmpc::robot::UrdfWarning as W;
+    // Per kind: the joints, and the warnings as the library words them (kept for one joint).
+    let mut kinds: [(Vec<String>, Vec<String>); 4] = Default::default();
+    let mut other = Vec::new();
+    for w in warnings {
+        let (kind, joint) = match w {
+            W::IgnoredDynamics { joint, .. } => (0, joint),
+            W::IgnoredSafetyController(joint) => (1, joint),
+            W::UnspecifiedLimit { joint, attribute } if *attribute == "effort" => (2, joint),
+            W::UnspecifiedLimit { joint, .. } => (3, joint),
+            w => {
+                other.push(w.to_string());
+                continue;
+            }
+        };
+        kinds[kind].0.push(format!("'{joint}'"));
+        kinds[kind].1.push(w.to_string());
+    }
+    let what = [
+        "<dynamics damping friction> ignored (the robot model has no joint friction; set the \
+         simulated plant's friction instead)"
+            .to_string(),
+        "<safety_controller> soft limits ignored; the <limit> range is used".to_string(),
+        "<limit effort=\"0\"> read as not given (no effort limit); give it in a drives file \
+         (max_torque_nm) if a controller or the planner needs it"
+            .to_string(),
+        "<limit velocity=\"0\"> read as not given (no velocity limit); give it in a drives file \
+         (max_speed_rad_s) if a controller or the planner needs it"
+            .to_string(),
+    ];
+    let mut lines = Vec::new();
+    for ((joints, words), what) in kinds.iter().zip(what) {
+        match joints.len() {
+            0 => {}
+            1 => lines.push(words[0].clone()),
+            n => lines.push(format!("{n} joints ({}): {what}", joints.join(", "))),
+        }
+    }
+    lines.extend(other);
+    lines
 }
 
 /// Reads a program: a file, or the built-in paper program when `None`. Returns its
@@ -256,6 +301,17 @@ fn friction_warnings(f: &ScenarioFile, robot: &Robot) -> Vec<String> {
 impl Scenario {
     /// Resolves a scenario file: loads, parses, times and maps to joint space.
     pub fn resolve(f: &ScenarioFile) -> Result<Self, ScenarioError> {
+        let (program_name, text) = read_program(f.program.file.as_deref())?;
+        Self::resolve_program(f, program_name, &text)
+    }
+
+    /// [`Scenario::resolve`] with the program given as text (`program_name` names it in
+    /// messages) instead of `[program] file`.
+    pub fn resolve_program(
+        f: &ScenarioFile,
+        program_name: String,
+        text: &str,
+    ) -> Result<Self, ScenarioError> {
         if f.controllers.is_empty() {
             return Err(ScenarioError::NoControllers);
         }
@@ -281,7 +337,6 @@ impl Scenario {
             .map_err(|e| settings_error(e.into()))?;
         let payloads = file_payloads(f)?;
         check_model_payload(&robot, f.mpc.model_payload_kg)?;
-        let (program_name, text) = read_program(f.program.file.as_deref())?;
         let origin = f
             .program
             .origin_mm
@@ -314,7 +369,7 @@ impl Scenario {
             orientation,
             ts: f.mpc.ts,
         };
-        let planned = plan(&text, &robot, &options).map_err(|error| ScenarioError::Plan {
+        let planned = plan(text, &robot, &options).map_err(|error| ScenarioError::Plan {
             program: program_name.clone(),
             error: Box::new(error),
         })?;
@@ -348,8 +403,10 @@ impl Scenario {
         experiment
             .validate()
             .map_err(|error| ScenarioError::experiment(Some(program_name.clone()), error))?;
+        let mut file = f.clone();
+        file.title = run_title(f, &experiment.robot, &program_name);
         Ok(Self {
-            file: f.clone(),
+            file,
             program_name,
             payloads,
             experiment,
@@ -378,6 +435,44 @@ impl Scenario {
         file.controllers = controllers.to_vec();
         file
     }
+}
+
+/// The report's title: the scenario's own, or for a scenario that keeps the default title
+/// ([`crate::file::DEFAULT_TITLE`]) while running another robot or program than the
+/// paper's, one that names the robot and program that run.
+fn run_title(f: &ScenarioFile, robot: &Robot, program_name: &str) -> String {
+    let paper_program = f.program.file.is_none();
+    let builtin = !is_model_path(&f.robot.model);
+    if f.title != crate::file::DEFAULT_TITLE || (paper_program && builtin) {
+        return f.title.clone();
+    }
+    let robot_name = if builtin && f.robot.model == "irb140" {
+        "the ABB IRB 140".to_string()
+    } else {
+        let name = robot.name().trim();
+        if name.is_empty() {
+            file_stem(&f.robot.model)
+        } else {
+            name.to_string()
+        }
+    };
+    let program = if paper_program {
+        "the paper's path".to_string()
+    } else {
+        Path::new(program_name)
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| program_name.to_string())
+    };
+    format!("Offset-free MPC of {robot_name} on {program}")
+}
+
+/// The file name of `path` without its extension (or `path` itself).
+fn file_stem(path: &str) -> String {
+    Path::new(path)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| path.to_string())
 }
 
 /// The controllers' model carries `[mpc] model_payload_kg` (`Experiment::model_robot`):

@@ -13,7 +13,9 @@ use crate::output::run_files::{
     controllers_in_words, per_payload, per_run, the_controllers, RunFiles, CARTESIAN_REFERENCE,
     METRICS, PATH, PAYLOAD_SWEEP, REPORT, SCENARIO, TIMESERIES,
 };
-use crate::tables::{summary_rows, summary_text, timeseries_csv, SUMMARY_HEADER};
+use crate::tables::{
+    summary_rows, summary_text, timeseries_bytes_per_row, timeseries_csv_every, SUMMARY_HEADER,
+};
 use anyhow::Context;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
@@ -133,6 +135,7 @@ pub fn execute(
             leftovers.join(", ")
         ));
     }
+    size_notes(scenario, payloads.len() * controllers.len());
     let runs = run_with_progress(scenario, &payloads, &controllers)?;
     let metrics: Vec<RunMetrics> = runs.iter().map(|r| r.metrics.clone()).collect();
     let mut w = Writer {
@@ -185,6 +188,38 @@ pub fn execute(
     Ok(())
 }
 
+/// Time series above this total (bytes) get a warning before the run.
+const LARGE_OUTPUT_BYTES: u64 = 300_000_000;
+
+/// Before the runs: the time series' size estimated, a note when `[output] timeseries`
+/// decimates them by default, a warning when they would pass [`LARGE_OUTPUT_BYTES`].
+fn size_notes(scenario: &Scenario, runs: usize) {
+    let rows = scenario.samples_per_run();
+    let per_row = timeseries_bytes_per_row(scenario.experiment.robot.dof());
+    let output = &scenario.file.output;
+    let Some(stride) = output.timeseries_stride(rows, per_row) else {
+        return;
+    };
+    let full_mb = (rows as u64 * per_row) as f64 * 1e-6;
+    let total = runs as u64 * (rows.div_ceil(stride) as u64) * per_row;
+    if stride > 1 && output.timeseries == ofmpc_scenario::TimeseriesOutput::Auto {
+        console::note(&format!(
+            "each run's timeseries.csv holds every {stride}th of its {rows} samples (about \
+             {:.0} MB in all; every sample would take about {full_mb:.0} MB a run): [output] \
+             timeseries = \"full\" writes them all; the metrics and figures use every sample",
+            total as f64 * 1e-6
+        ));
+    }
+    if total > LARGE_OUTPUT_BYTES {
+        console::warn(&format!(
+            "this run writes about {:.0} MB of time series ({runs} runs × {} rows): [output] \
+             timeseries = \"decimated\" (with a stride) or \"none\" writes less",
+            total as f64 * 1e-6,
+            rows.div_ceil(stride)
+        ));
+    }
+}
+
 /// Every run of `controllers` × `payloads`, with a progress bar on stderr
 /// when it is a terminal.
 fn run_with_progress(
@@ -205,7 +240,15 @@ fn run_with_progress(
     } else {
         bar.set_draw_target(ProgressDrawTarget::hidden());
     }
-    let runs = run_jobs(scenario, payloads, controllers, &|samples| bar.inc(samples))?;
+    // Not a terminal (a pipe, a CI log): a plain line every few seconds instead of the bar.
+    let plain = (!std::io::stderr().is_terminal())
+        .then(|| console::PlainProgress::new(steps_per_run * jobs as u64));
+    let runs = run_jobs(scenario, payloads, controllers, &|samples| {
+        bar.inc(samples);
+        if let Some(p) = &plain {
+            p.inc(samples);
+        }
+    })?;
     bar.finish_and_clear();
     Ok(runs)
 }
@@ -263,7 +306,8 @@ impl Writer<'_> {
                 std::env::var("ROS_PACKAGE_PATH").ok().as_deref(),
             )
         });
-        for w in visuals.iter().flat_map(|v| &v.warnings) {
+        let mesh_summary = visuals.as_ref().and_then(|v| v.summary());
+        if let Some(w) = &mesh_summary {
             console::warn(&format!("3-D replay: {w}"));
         }
         let drawn = match &visuals {
@@ -279,8 +323,8 @@ impl Writer<'_> {
              controller predicted over its horizon at the latest recorded sample. Play/pause, \
              the time slider and the run menu; drag to orbit, wheel to zoom. Stopped runs end at the stop.",
         ));
-        for w in visuals.iter().flat_map(|v| &v.warnings) {
-            self.report.paragraph(format!("Not drawn: {w}."));
+        if let Some(w) = &mesh_summary {
+            self.report.paragraph(format!("{w}."));
         }
         self.report
             .replay(replay_json_with(robot, &runs, visuals.as_ref()));
@@ -593,10 +637,18 @@ impl Writer<'_> {
         );
         for r in self.runs {
             let name = &r.metrics.name;
-            self.dir.write(
-                format!("{name}/{TIMESERIES}"),
-                timeseries_csv(&r.result.record).as_bytes(),
-            )?;
+            let rec = &r.result.record;
+            let stride = self
+                .scenario
+                .file
+                .output
+                .timeseries_stride(rec.len(), timeseries_bytes_per_row(rec.n));
+            if let Some(stride) = stride {
+                self.dir.write(
+                    format!("{name}/{TIMESERIES}"),
+                    timeseries_csv_every(rec, stride).as_bytes(),
+                )?;
+            }
             let m = &r.metrics;
             self.report.details(format!(
                 "{name}: {}, RMS Cartesian error {}",

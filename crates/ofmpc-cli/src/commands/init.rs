@@ -71,9 +71,8 @@ pub fn scenario_skeleton_with_tip(model: &str, tip: Option<&str>) -> String {
     let tip = tip.map(|t| format!("tip = {t:?}\n")).unwrap_or_default();
     format!(
         "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
-         # default (examples/scenario.toml, docs/guide/reference/scenario.md). Paths are relative to\n\
-         # this file.\n\
-         title = \"My robot\"\n\
+         # default (examples/scenario.toml, docs/guide/reference/scenario.md). Relative paths are\n\
+         # relative to this file.\n\
          controllers = [\"usual\", \"first\", \"second\"]\n\n\
          [robot]\n\
          model = {model:?}\n{tip}\
@@ -86,14 +85,34 @@ pub fn scenario_skeleton_with_tip(model: &str, tip: Option<&str>) -> String {
     )
 }
 
-/// Runs `ofmpc init robot`.
+/// The scenario text for the placement (or, when none was found, the skeleton, with a
+/// warning saying why).
+fn scenario_for(
+    placement: &Result<ofmpc_scenario::Placement, ofmpc_scenario::ScenarioError>,
+    model: &str,
+    chain: &crate::init_choice::Chain,
+) -> String {
+    match placement {
+        Ok(p) => {
+            crate::init_choice::scenario_text(chain.robot.name(), model, chain.tip.as_deref(), p)
+        }
+        Err(e) => {
+            crate::output::console::warn(&format!(
+                "no start pose found from which this robot runs the paper's program: {e}; the \
+                 scenario written needs [robot] start_q and a program of yours ([program] file, \
+                 origin_mm)"
+            ));
+            scenario_skeleton_with_tip(model, chain.tip.as_deref())
+        }
+    }
+}
+
+/// Runs `ofmpc init robot`: reads the URDF (choosing the tip of a branched arm), places the
+/// paper's program for it ([`crate::init_choice`]), writes the drives file, the scenario and
+/// the placed program, and prints the choice and the next commands.
 pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
-    let options = ofmpc::robot::ChainOptions {
-        tip: a.tip.clone(),
-        tcp: None,
-    };
-    let robot = Robot::from_urdf_file_with(&a.urdf, &options)
-        .with_context(|| format!("reading the URDF {}", a.urdf.display()))?;
+    let chain = crate::init_choice::read_chain(&a.urdf, a.tip.as_deref())?;
+    let robot = &chain.robot;
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     // The folder's lock, as every output takes (issue #36): a second `init` (or a run) into
     // the same folder meanwhile is refused, so the check below and both writes are one step
@@ -102,7 +121,8 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
         .with_context(|| format!("writing into {}", a.out.display()))?;
     let drives = a.out.join("drives.toml");
     let scenario = a.out.join("scenario.toml");
-    for p in [&drives, &scenario] {
+    let program = a.out.join(crate::init_choice::PROGRAM_FILE);
+    for p in [&drives, &scenario, &program] {
         if p.exists() {
             bail!(
                 "{} exists: init never replaces a file; choose another --out",
@@ -110,29 +130,34 @@ pub fn robot(a: &InitRobotArgs) -> anyhow::Result<()> {
             );
         }
     }
-    // The URDF as the scenario will find it: relative to --out when it can be, else absolute.
+    // The URDF as the scenario will find it: relative to --out.
     let urdf = ofmpc_scenario::absolute(&a.urdf);
     let out = ofmpc_scenario::absolute(&a.out);
-    let model = urdf
-        .strip_prefix(&out)
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|_| urdf.clone());
-    write_atomic(&drives, drives_skeleton(&robot, &a.urdf).as_bytes())
+    let model = crate::init_choice::relative_to(&urdf, &out);
+    let placement = crate::init_choice::place(&urdf, chain.tip.as_deref());
+    write_atomic(&drives, drives_skeleton(robot, &a.urdf).as_bytes())
         .with_context(|| format!("writing {}", drives.display()))?;
-    write_atomic(
-        &scenario,
-        scenario_skeleton_with_tip(&model.display().to_string(), a.tip.as_deref()).as_bytes(),
-    )
-    .with_context(|| format!("writing {}", scenario.display()))?;
+    if let Some(p) = placement.as_ref().ok().filter(|p| !p.as_published) {
+        write_atomic(&program, p.program.as_bytes())
+            .with_context(|| format!("writing {}", program.display()))?;
+    }
+    let text = scenario_for(&placement, &model.display().to_string(), &chain);
+    write_atomic(&scenario, text.as_bytes())
+        .with_context(|| format!("writing {}", scenario.display()))?;
+    let written = if placement.as_ref().is_ok_and(|p| !p.as_published) {
+        format!(", {} and {}", scenario.display(), program.display())
+    } else {
+        format!(" and {}", scenario.display())
+    };
     crate::output::console::println(&format!(
-        "wrote {} ({} joints: fill in armature_kgm2 and what the URDF lacks) and {}; next:\n  \
-         ofmpc inspect robot --robot {} --drives {}\n  ofmpc run {}",
+        "wrote {} ({} joints: fill in armature_kgm2 and what the URDF lacks){written}",
         drives.display(),
         robot.dof(),
-        scenario.display(),
-        a.urdf.display(),
-        drives.display(),
-        scenario.display()
     ))?;
+    if let Ok(p) = &placement {
+        crate::output::console::println(&crate::init_choice::next_steps(
+            &a.urdf, &a.out, &chain, p,
+        ))?;
+    }
     Ok(())
 }

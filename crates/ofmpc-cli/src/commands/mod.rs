@@ -29,6 +29,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 origin: None,
                 mode: a.mode.as_deref(),
             })?;
+            sets.extend(chain_sets(&a.chain, a.tool_table.as_deref())?);
             sets.extend(parse_overrides(&a.set)?);
             let mut file = ScenarioFile::from_file_with(&a.scenario, &sets)
                 .map_err(|e| override_error(e, Some(&a.scenario.display().to_string())))?;
@@ -54,6 +55,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
                 origin: a.origin.as_deref(),
                 mode: a.mode.as_deref(),
             })?;
+            sets.extend(chain_sets(&a.chain, a.tool_table.as_deref())?);
             sets.extend(parse_overrides(&a.set)?);
             let file = file
                 .with_overrides(&sets)
@@ -123,6 +125,20 @@ fn compare_defaults(a: &crate::cli::ReproduceArgs) -> (&str, &str) {
         a.payload.as_deref().unwrap_or(payload),
         a.controllers.as_deref().unwrap_or(controllers),
     )
+}
+
+/// The overrides of `--tip`, `--tcp`, `--tcp-rpy`, `--start-q` and `--tool-table`.
+fn chain_sets(
+    c: &crate::args::ChainArgs,
+    tool_table: Option<&std::path::Path>,
+) -> anyhow::Result<Vec<Override>> {
+    crate::chain_sets::chain_overrides(&crate::chain_sets::ChainFlags {
+        tip: c.tip.as_deref(),
+        tcp: c.tcp.as_deref(),
+        tcp_rpy: c.tcp_rpy.as_deref(),
+        start_q: c.start_q.as_deref(),
+        tool_table,
+    })
 }
 
 /// Parses the `--set KEY=VALUE` options.

@@ -6,8 +6,9 @@
 //!
 //! A small inline script runs on `load` and checks that each figure was really drawn (an `<img>`
 //! is complete with a non-zero natural width, an inline `<svg>` has a non-empty bounding box).
-//! It writes the result into `<p id="figure-check" data-ok="…" data-total="…">`, so a person sees
-//! it and a headless browser (`chromium --headless --dump-dom`) can assert it.
+//! It writes the result into `<p id="figure-check" data-ok="…" data-total="…">`: a headless
+//! browser (`chromium --headless --dump-dom`) can assert it, and a reader sees it only when a
+//! figure is broken (the line is hidden when every figure rendered).
 
 use std::fmt::Write as _;
 use std::hash::{Hash, Hasher};
@@ -514,6 +515,9 @@ fn replay_html(h: &mut String, json: &str) {
          <div class=\"replay-controls\"><button type=\"button\" id=\"replay-play\">Play</button>\n\
          <input type=\"range\" id=\"replay-slider\" min=\"0\" max=\"0\" value=\"0\" step=\"1\">\n\
          <span id=\"replay-time\">t = 0 s</span>\n<select id=\"replay-run\"></select>\n\
+         <label>speed <select id=\"replay-speed\"><option value=\"1\" selected>1×</option>\
+         <option value=\"4\">4×</option><option value=\"16\">16×</option><option value=\"64\">64×</option>\
+         </select></label>\n\
          <label><input type=\"checkbox\" id=\"replay-follow\"> slow motion</label></div>\n\
          <canvas id=\"replay-canvas\" width=\"960\" height=\"540\"></canvas>\n\
          <p id=\"replay-state\" class=\"replay-state\"></p>\n\
@@ -548,7 +552,7 @@ nav#toc{background:#f6f8fa;border:1px solid #ddd;padding:.5em 1em;margin:1em 0;f
 ul.verdict{background:#f3f7ff;border-left:4px solid #3b6fd8;padding:.6em 1em .6em 2em;margin:1em 0}
 details{margin:.5em 0;border:1px solid #e3e3e3;border-radius:4px;padding:.2em .8em}summary{cursor:pointer;font-weight:bold;padding:.3em 0}
 #figure-check{font-size:.85em;padding:.3em .6em;border-radius:3px}
-#figure-check.ok{background:#e6f4ea;color:#1e5631}#figure-check.bad,#figure-check.pending{background:#fdecea;color:#8a1c1c}
+#figure-check.ok{display:none}#figure-check.bad,#figure-check.pending{background:#fdecea;color:#8a1c1c}
 ";
 
 const SCRIPT: &str = "

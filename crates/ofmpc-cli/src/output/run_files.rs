@@ -79,6 +79,8 @@ pub(crate) struct RunFiles {
     pub drives: bool,
     /// Measurement error figures per run (the runs record the measurement apart).
     pub measurement: bool,
+    /// Each run's `timeseries.csv` (`[output] timeseries` is not `"none"`).
+    pub timeseries: bool,
 }
 
 impl RunFiles {
@@ -96,6 +98,7 @@ impl RunFiles {
             compare: super::compare::wanted(controllers),
             drives,
             measurement: drives && file.records_measurement(),
+            timeseries: file.output.timeseries != ofmpc_scenario::TimeseriesOutput::None,
         }
     }
 
@@ -137,7 +140,9 @@ impl RunFiles {
             .into_iter()
             .flat_map(|f| [format!("{f}.png"), format!("{f}.svg")])
             .collect();
-        v.extend(self.runs.iter().map(|r| format!("{r}/{TIMESERIES}")));
+        if self.timeseries {
+            v.extend(self.runs.iter().map(|r| format!("{r}/{TIMESERIES}")));
+        }
         v.extend([METRICS, SCENARIO, REPORT].map(String::from));
         v.into_iter().map(PathBuf::from).collect()
     }

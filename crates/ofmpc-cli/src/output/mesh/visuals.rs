@@ -131,6 +131,39 @@ fn check_extent(m: &TriMesh) -> Result<(), String> {
 }
 
 impl Visuals {
+    /// The warnings in one line (the terminal's and the report's): how many links are drawn
+    /// as capsules because their meshes could not be used, the first reason, and the fix
+    /// (`ROS_PACKAGE_PATH` when a mesh was not found). `None` when every visual was used.
+    pub fn summary(&self) -> Option<String> {
+        let first = self.warnings.first()?;
+        let mut links: Vec<&str> = self
+            .warnings
+            .iter()
+            .map(|w| w.split(':').next().unwrap_or(w))
+            .collect();
+        links.dedup();
+        let n = links.len();
+        let not_found = self.warnings.iter().any(|w| w.contains("not found"));
+        let (links, cause) = if not_found {
+            (
+                "meshes not found",
+                "; set ROS_PACKAGE_PATH to the folder holding the URDF's packages",
+            )
+        } else {
+            ("meshes not readable", "")
+        };
+        let what = if n == 1 { "1 link" } else { "links" };
+        let count = if n == 1 {
+            String::new()
+        } else {
+            format!("{n} ")
+        };
+        Some(format!(
+            "{count}{what} drawn as capsules: {links}{cause} (first: {})",
+            first.trim_end_matches("; the link is drawn as a capsule")
+        ))
+    }
+
     /// Adds `mesh` to the body's mesh of that colour (a new one for a new colour).
     fn add(&mut self, body: usize, color: [f64; 3], mesh: TriMesh) {
         match self
@@ -453,6 +486,11 @@ mod tests {
         let robot = Robot::from_urdf_file(&urdf).unwrap();
         let v = load(&urdf, &robot, None);
         assert_eq!(v.warnings.len(), 2, "{:?}", v.warnings);
+        let summary = v.summary().expect("two warnings: a summary");
+        assert!(
+            summary.starts_with("2 links drawn as capsules: meshes ") && !summary.contains('\n'),
+            "{summary}"
+        );
         assert!(
             v.warnings[0].contains("link \"link_1\"") && v.warnings[0].contains("nowhere.stl"),
             "{:?}",
