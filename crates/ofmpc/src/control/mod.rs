@@ -63,7 +63,7 @@ pub use baselines::baseline::triple_pole_inertia_ratio_range;
 pub use baselines::ctc::CtcController;
 pub use baselines::dob_mpc::DobMpc;
 pub use baselines::pid::PidController;
-pub(crate) use builder::DEFAULT_OBSERVER_POLE;
+pub(crate) use builder::{check_torque_limits, DEFAULT_OBSERVER_POLE};
 pub use builder::{
     model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, ObserverSettings,
 };
