@@ -342,6 +342,18 @@ impl ScenarioFile {
             .drives
             .as_deref()
             .map(|p| resolve("robot.drives", p));
+        for (key, p) in [
+            ("plant.robot", &mut s.plant.robot),
+            ("plant.drives", &mut s.plant.drives),
+        ] {
+            let builtin = p
+                .as_deref()
+                .and_then(Path::to_str)
+                .is_some_and(|m| ofmpc::robot::Robot::builtin(m).is_ok());
+            if !builtin {
+                *p = p.as_deref().map(|p| resolve(key, p));
+            }
+        }
         s.program.file = s
             .program
             .file
@@ -378,6 +390,20 @@ impl ScenarioFile {
         }
         if set("robot.drives") {
             s.robot.drives = s.robot.drives.as_deref().map(absolute);
+        }
+        if set("plant.robot") {
+            let builtin = s
+                .plant
+                .robot
+                .as_deref()
+                .and_then(Path::to_str)
+                .is_some_and(|m| ofmpc::robot::Robot::builtin(m).is_ok());
+            if !builtin {
+                s.plant.robot = s.plant.robot.as_deref().map(absolute);
+            }
+        }
+        if set("plant.drives") {
+            s.plant.drives = s.plant.drives.as_deref().map(absolute);
         }
         if set("program.file") {
             s.program.file = s.program.file.as_deref().map(absolute);

@@ -8,7 +8,7 @@ use ofmpc::control::ControllerKind;
 use ofmpc::gcode::{ParseOptions, ToolTable, PAPER_TABLE1};
 use ofmpc::motion::{plan, CartesianTrajectory, Orientation, PlanOptions, TimingOptions};
 use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, PlantSettings, MAX_SUBSTEPS};
+use ofmpc::sim::{Experiment, PlantError, PlantSettings, MAX_SUBSTEPS};
 use std::path::Path;
 
 /// A resolved scenario: the experiment and what to run.
@@ -66,6 +66,34 @@ pub fn load_robot_section(
         })?;
     }
     Ok((robot, warnings))
+}
+
+/// The plant's own robot of `[plant] robot` / `[plant] drives` (`None` when neither is
+/// set): the plant's URDF (default `[robot] model`) with the plant's drives file (default
+/// `[robot] drives`), `[robot]`'s tip and tool centre point; refused when its joints do
+/// not match the controllers' `robot`.
+pub fn load_plant_robot(
+    f: &ScenarioFile,
+    robot: &Robot,
+) -> Result<(Option<Robot>, Vec<String>), ScenarioError> {
+    let p = &f.plant;
+    if p.robot.is_none() && p.drives.is_none() {
+        return Ok((None, Vec::new()));
+    }
+    let model = match &p.robot {
+        Some(m) => m.display().to_string(),
+        None => f.robot.model.clone(),
+    };
+    let drives = p.drives.as_deref().or(f.robot.drives.as_deref());
+    let (plant, warnings) = load_robot_with(&model, drives, &f.robot.chain_options())?;
+    plant.require_inertials()?;
+    ofmpc::sim::check_plant_model(&plant, robot)
+        .map_err(|e| ScenarioError::experiment(None, PlantError::Settings(e).into()))?;
+    let warnings = warnings
+        .into_iter()
+        .map(|w| format!("[plant] robot: {w}"))
+        .collect();
+    Ok((Some(plant), warnings))
 }
 
 /// [`load_robot_section`] for runs and the stability analysis, which need the dynamics:
@@ -261,6 +289,8 @@ impl Scenario {
         }
         check_mass_labels(&f.payload.masses_kg)?;
         let (robot, mut warnings) = load_robot_for_dynamics(&f.robot)?;
+        let (plant_model, plant_warnings) = load_plant_robot(f, &robot)?;
+        warnings.extend(plant_warnings);
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)
@@ -340,7 +370,10 @@ impl Scenario {
             robot,
             reference,
             mpc: f.mpc.clone(),
-            plant: f.plant.clone(),
+            plant: PlantSettings {
+                model: plant_model,
+                ..f.plant.clone()
+            },
             loop_settings,
             conditions,
             baselines: f.baselines.clone(),

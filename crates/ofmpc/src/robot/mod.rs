@@ -8,6 +8,7 @@
 mod drives;
 mod error;
 mod links;
+mod perturb;
 mod read;
 mod urdf;
 mod urdf_locate;
@@ -15,6 +16,7 @@ mod urdf_locate;
 pub use drives::{DriveData, Drives, DrivesError};
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use links::LinkFrame;
+pub use perturb::{LinkInertiaError, MAX_INERTIA_ERROR};
 pub use read::{MAX_DRIVES_BYTES, MAX_URDF_BYTES};
 pub use urdf::TRIANGLE_TOLERANCE;
 

@@ -59,7 +59,7 @@ pub use outcome::{
 };
 pub use plant::{
     FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
-    MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
+    check_plant_model, DEFAULT_STRIBECK_VELOCITY, MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
 };
 pub use supervisor::{
     DivergenceRule, Inspection, Plausibility, SafeStop, StopReason, Stopping, Supervisor,
