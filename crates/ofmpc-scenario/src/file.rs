@@ -486,6 +486,29 @@ impl ScenarioFile {
             "[plant] measurement noise".into(),
         );
         on(
+            plant.inertia_error > 0.0,
+            format!(
+                "[plant] inertia_error = {} (seed {})",
+                plant.inertia_error, plant.seed
+            ),
+        );
+        on(
+            !plant.stribeck_friction.is_empty(),
+            format!(
+                "[plant] stribeck_friction = {:?} N·m",
+                plant.stribeck_friction
+            ),
+        );
+        for (key, path) in [("robot", &plant.robot), ("drives", &plant.drives)] {
+            on(
+                path.is_some(),
+                format!(
+                    "[plant] {key} = {}",
+                    path.as_deref().unwrap_or(Path::new("")).display()
+                ),
+            );
+        }
+        on(
             !plant.faults.is_empty(),
             format!("[plant] faults ({})", plant.faults.len()),
         );
