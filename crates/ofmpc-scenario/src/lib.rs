@@ -24,6 +24,7 @@ pub mod error;
 pub mod file;
 pub mod program_json;
 pub mod resolve;
+pub mod robustness;
 pub mod runner;
 
 pub use error::{
@@ -37,10 +38,10 @@ pub use file::{
 };
 pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
-    is_model_path, load_plant_robot, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
-    Scenario,
+    is_model_path, load_plant_robot, load_robot, load_robot_section, load_robot_with, read_program,
+    read_tool_table, Scenario,
 };
 pub use runner::{
-    metrics_json, metrics_json_with_plant, plant_report, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,
-    unique_runs, LinkDraw, PlantReport, Run,
+    metrics_json, metrics_json_with_plant, plant_report, run_jobs, run_jobs_cancellable,
+    run_metrics, run_metrics_cancellable, unique_runs, LinkDraw, PlantReport, Run,
 };

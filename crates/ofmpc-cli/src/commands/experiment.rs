@@ -49,10 +49,16 @@ fn plant_section(report: &mut Report, plant: &ofmpc_scenario::PlantReport) {
     report.table(Table {
         caption: "The plant's inertial parameters against the model (relative errors drawn, %)"
             .into(),
-        header: ["link", "mass", "centre of mass offset / link", "inertia", "rotor inertia"]
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
+        header: [
+            "link",
+            "mass",
+            "centre of mass offset / link",
+            "inertia",
+            "rotor inertia",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
         rows: plant
             .links
             .iter()
@@ -685,8 +691,7 @@ impl Writer<'_> {
 
     /// `metrics.json`, the effective `scenario.toml` and `report.html`.
     fn finish(mut self) -> anyhow::Result<()> {
-        self.dir
-            .write(METRICS, self.metrics_json()?.as_bytes())?;
+        self.dir.write(METRICS, self.metrics_json()?.as_bytes())?;
         // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
         // file re-runs from any working directory.
         let effective = self

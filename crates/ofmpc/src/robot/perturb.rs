@@ -126,12 +126,7 @@ impl Default for LinkInertiaError {
 
 /// One body drawn around `body` (its joint frame), with the link length
 /// scale `length` (m).
-fn draw_body(
-    body: &Inertia,
-    length: f64,
-    sd: f64,
-    rng: &mut Draw,
-) -> (Inertia, LinkInertiaError) {
+fn draw_body(body: &Inertia, length: f64, sd: f64, rng: &mut Draw) -> (Inertia, LinkInertiaError) {
     if body.mass <= 0.0 {
         return (*body, LinkInertiaError::default());
     }
@@ -245,6 +240,9 @@ mod tests {
         }
         let rms = (com.iter().map(|x| x * x).sum::<f64>() / com.len() as f64).sqrt();
         let expect = sd * 3f64.sqrt();
-        assert!((rms - expect).abs() < 0.1 * expect, "com rms {rms} vs {expect}");
+        assert!(
+            (rms - expect).abs() < 0.1 * expect,
+            "com rms {rms} vs {expect}"
+        );
     }
 }

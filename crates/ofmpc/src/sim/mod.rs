@@ -58,8 +58,8 @@ pub use outcome::{
     ExperimentError, RunFailure, RunOutcome, RunStatus, FAILED_STOP_SPEED, MAX_RECORD_VALUES,
 };
 pub use plant::{
-    FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError,
-    check_plant_model, DEFAULT_STRIBECK_VELOCITY, MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
+    check_plant_model, FrictionKind, NoiseKind, Plant, PlantError, PlantSettings,
+    PlantSettingsError, DEFAULT_STRIBECK_VELOCITY, MAX_DELAY_SAMPLES, MAX_SUBSTEPS,
 };
 pub use supervisor::{
     DivergenceRule, Inspection, Plausibility, SafeStop, StopReason, Stopping, Supervisor,

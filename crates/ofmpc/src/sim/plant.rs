@@ -413,7 +413,11 @@ pub fn check_plant_model(plant: &Robot, model: &Robot) -> Result<(), PlantSettin
     }
     for (i, (a, b)) in plant.joints().iter().zip(model.joints()).enumerate() {
         if a.name != b.name {
-            return mismatch(format!("joint {}'s name", i + 1), a.name.clone(), b.name.clone());
+            return mismatch(
+                format!("joint {}'s name", i + 1),
+                a.name.clone(),
+                b.name.clone(),
+            );
         }
         if a.kind != b.kind {
             return mismatch(
