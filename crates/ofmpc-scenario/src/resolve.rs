@@ -85,15 +85,33 @@ pub fn load_plant_robot(
         None => f.robot.model.clone(),
     };
     let drives = p.drives.as_deref().or(f.robot.drives.as_deref());
-    let (plant, warnings) = load_robot_with(&model, drives, &f.robot.chain_options())?;
-    plant.require_inertials()?;
+    let (mut plant, warnings) = load_robot_with(&model, drives, &f.robot.chain_options())?;
     ofmpc::sim::check_plant_model(&plant, robot)
         .map_err(|e| ScenarioError::experiment(None, PlantError::Settings(e).into()))?;
+    if drives.is_none() && p.robot.is_some() {
+        // No drives file for the plant: it has the controllers' robot's drives (rotor
+        // inertia, torque limits), not none (a plant without rotor inertia is another arm).
+        plant.apply_drives(&drive_data_of(robot))?;
+    }
+    plant.require_inertials()?;
     let warnings = warnings
         .into_iter()
         .map(|w| format!("[plant] robot: {w}"))
         .collect();
     Ok((Some(plant), warnings))
+}
+
+/// The drive data of `robot`'s joints (rotor inertia and torque limit), as a drives file
+/// would give them.
+fn drive_data_of(robot: &Robot) -> Drives {
+    let mut d = Drives::default();
+    for j in robot.joints() {
+        let mut data = ofmpc::robot::DriveData::default();
+        data.armature_kgm2 = Some(j.armature);
+        data.max_torque_nm = j.limits.effort.is_finite().then_some(j.limits.effort);
+        d.joints.insert(j.name.clone(), data);
+    }
+    d
 }
 
 /// [`load_robot_section`] for runs and the stability analysis, which need the dynamics:
