@@ -57,6 +57,10 @@ pub enum Analyze {
     /// ratio inside it along the program, as JSON; the spectral radius against
     /// α as a figure.
     Stability(StabilityArgs),
+    /// Each controller over a grid of measurement delay × encoder quantization ×
+    /// friction-estimate error × model (inertia) error × payload: where it holds (stable,
+    /// steady error, RMS), as robustness.json, a figure and report.html, and a table.
+    Robustness(crate::commands::robustness::RobustnessArgs),
 }
 
 /// `ofmpc trajectory`

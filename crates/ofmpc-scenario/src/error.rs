@@ -352,9 +352,13 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
                 "[plant] {}",
                 match kind {
                     FrictionKind::Viscous => "viscous_friction",
+                    FrictionKind::Stribeck => "stribeck_friction",
                     _ => "coulomb_friction",
                 }
             ),
+            PlantSettingsError::InertiaError(v) => format!("[plant] inertia_error = {v}"),
+            PlantSettingsError::StribeckVelocity(v) => format!("[plant] stribeck_velocity = {v}"),
+            PlantSettingsError::ModelMismatch { .. } => "[plant] robot".into(),
             PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
             PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
             PlantSettingsError::Fault {

@@ -408,6 +408,18 @@ impl ScenarioFile {
             .drives
             .as_deref()
             .map(|p| resolve("robot.drives", p));
+        for (key, p) in [
+            ("plant.robot", &mut s.plant.robot),
+            ("plant.drives", &mut s.plant.drives),
+        ] {
+            let builtin = p
+                .as_deref()
+                .and_then(Path::to_str)
+                .is_some_and(|m| ofmpc::robot::Robot::builtin(m).is_ok());
+            if !builtin {
+                *p = p.as_deref().map(|p| resolve(key, p));
+            }
+        }
         s.program.file = s
             .program
             .file
@@ -444,6 +456,20 @@ impl ScenarioFile {
         }
         if set("robot.drives") {
             s.robot.drives = s.robot.drives.as_deref().map(absolute);
+        }
+        if set("plant.robot") {
+            let builtin = s
+                .plant
+                .robot
+                .as_deref()
+                .and_then(Path::to_str)
+                .is_some_and(|m| ofmpc::robot::Robot::builtin(m).is_ok());
+            if !builtin {
+                s.plant.robot = s.plant.robot.as_deref().map(absolute);
+            }
+        }
+        if set("plant.drives") {
+            s.plant.drives = s.plant.drives.as_deref().map(absolute);
         }
         if set("program.file") {
             s.program.file = s.program.file.as_deref().map(absolute);
@@ -525,6 +551,29 @@ impl ScenarioFile {
             plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
             "[plant] measurement noise".into(),
         );
+        on(
+            plant.inertia_error > 0.0,
+            format!(
+                "[plant] inertia_error = {} (seed {})",
+                plant.inertia_error, plant.seed
+            ),
+        );
+        on(
+            !plant.stribeck_friction.is_empty(),
+            format!(
+                "[plant] stribeck_friction = {:?} N·m",
+                plant.stribeck_friction
+            ),
+        );
+        for (key, path) in [("robot", &plant.robot), ("drives", &plant.drives)] {
+            on(
+                path.is_some(),
+                format!(
+                    "[plant] {key} = {}",
+                    path.as_deref().unwrap_or(Path::new("")).display()
+                ),
+            );
+        }
         on(
             !plant.faults.is_empty(),
             format!("[plant] faults ({})", plant.faults.len()),

@@ -25,6 +25,7 @@ pub mod file;
 pub mod placement;
 pub mod program_json;
 pub mod resolve;
+pub mod robustness;
 pub mod runner;
 
 pub use error::{
@@ -39,10 +40,10 @@ pub use file::{
 pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};
 pub use resolve::{
-    is_model_path, load_robot, load_robot_section, load_robot_with, read_program, read_tool_table,
-    urdf_warning_lines, Scenario,
+    is_model_path, load_plant_robot, load_robot, load_robot_section, load_robot_with, read_program,
+    read_tool_table, urdf_warning_lines, Scenario,
 };
 pub use runner::{
-    metrics_json, run_jobs, run_jobs_cancellable, run_metrics, run_metrics_cancellable,
-    unique_runs, Run,
+    metrics_json, metrics_json_with_plant, plant_report, run_jobs, run_jobs_cancellable,
+    run_metrics, run_metrics_cancellable, unique_runs, LinkDraw, PlantReport, Run,
 };

@@ -8,7 +8,7 @@ use ofmpc::control::ControllerKind;
 use ofmpc::gcode::{ParseOptions, ToolTable, PAPER_TABLE1};
 use ofmpc::motion::{plan, CartesianTrajectory, Orientation, PlanOptions, TimingOptions};
 use ofmpc::robot::{ChainOptions, Drives, Payload, Robot};
-use ofmpc::sim::{Experiment, PlantSettings, MAX_SUBSTEPS};
+use ofmpc::sim::{Experiment, PlantError, PlantSettings, MAX_SUBSTEPS};
 use std::path::Path;
 
 /// A resolved scenario: the experiment and what to run.
@@ -66,6 +66,52 @@ pub fn load_robot_section(
         })?;
     }
     Ok((robot, warnings))
+}
+
+/// The plant's own robot of `[plant] robot` / `[plant] drives` (`None` when neither is
+/// set): the plant's URDF (default `[robot] model`) with the plant's drives file (default
+/// `[robot] drives`), `[robot]`'s tip and tool centre point; refused when its joints do
+/// not match the controllers' `robot`.
+pub fn load_plant_robot(
+    f: &ScenarioFile,
+    robot: &Robot,
+) -> Result<(Option<Robot>, Vec<String>), ScenarioError> {
+    let p = &f.plant;
+    if p.robot.is_none() && p.drives.is_none() {
+        return Ok((None, Vec::new()));
+    }
+    let model = match &p.robot {
+        Some(m) => m.display().to_string(),
+        None => f.robot.model.clone(),
+    };
+    let drives = p.drives.as_deref().or(f.robot.drives.as_deref());
+    let (mut plant, warnings) = load_robot_with(&model, drives, &f.robot.chain_options())?;
+    ofmpc::sim::check_plant_model(&plant, robot)
+        .map_err(|e| ScenarioError::experiment(None, PlantError::Settings(e).into()))?;
+    if drives.is_none() && p.robot.is_some() {
+        // No drives file for the plant: it has the controllers' robot's drives (rotor
+        // inertia, torque limits), not none (a plant without rotor inertia is another arm).
+        plant.apply_drives(&drive_data_of(robot))?;
+    }
+    plant.require_inertials()?;
+    let warnings = warnings
+        .into_iter()
+        .map(|w| format!("[plant] robot: {w}"))
+        .collect();
+    Ok((Some(plant), warnings))
+}
+
+/// The drive data of `robot`'s joints (rotor inertia and torque limit), as a drives file
+/// would give them.
+fn drive_data_of(robot: &Robot) -> Drives {
+    let mut d = Drives::default();
+    for j in robot.joints() {
+        let mut data = ofmpc::robot::DriveData::default();
+        data.armature_kgm2 = Some(j.armature);
+        data.max_torque_nm = j.limits.effort.is_finite().then_some(j.limits.effort);
+        d.joints.insert(j.name.clone(), data);
+    }
+    d
 }
 
 /// [`load_robot_section`] for runs and the stability analysis, which need the dynamics:
@@ -317,6 +363,8 @@ impl Scenario {
         }
         check_mass_labels(&f.payload.masses_kg)?;
         let (robot, mut warnings) = load_robot_for_dynamics(&f.robot)?;
+        let (plant_model, plant_warnings) = load_plant_robot(f, &robot)?;
+        warnings.extend(plant_warnings);
         let n = robot.dof();
         f.mpc
             .validate_for_dof(n)
@@ -395,7 +443,10 @@ impl Scenario {
             robot,
             reference,
             mpc: f.mpc.clone(),
-            plant: f.plant.clone(),
+            plant: PlantSettings {
+                model: plant_model,
+                ..f.plant.clone()
+            },
             loop_settings,
             conditions,
             baselines: f.baselines.clone(),

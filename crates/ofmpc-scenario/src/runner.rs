@@ -146,11 +146,79 @@ pub fn run_metrics_cancellable(
 
 /// The text of `metrics.json` for these metrics: `{"runs": [...]}`, pretty-printed.
 pub fn metrics_json(runs: &[RunMetrics]) -> Result<String, ScenarioError> {
+    metrics_json_with_plant(runs, None)
+}
+
+/// The plant that is not the model, as `metrics.json`'s `plant` block says it: the drawn
+/// relative errors of `[plant] inertia_error` and the plant's own robot and drives files.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PlantReport {
+    /// `[plant] inertia_error` (relative standard deviation).
+    pub inertia_error: f64,
+    /// `[plant] seed`, which drew them.
+    pub seed: u64,
+    /// The relative errors drawn, link by link (empty without `inertia_error`).
+    pub links: Vec<LinkDraw>,
+    /// `[plant] robot`, when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robot: Option<String>,
+    /// `[plant] drives`, when set.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drives: Option<String>,
+}
+
+/// One link's drawn relative errors ([`PlantReport`]).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LinkDraw {
+    /// The link (URDF).
+    pub link: String,
+    /// The errors.
+    #[serde(flatten)]
+    pub error: ofmpc::robot::LinkInertiaError,
+}
+
+/// The plant block of a scenario's runs: `None` when the plant is the model (no
+/// `[plant] inertia_error`, robot or drives), so `metrics.json` stays as it was.
+pub fn plant_report(scenario: &Scenario) -> Result<Option<PlantReport>, ScenarioError> {
+    let e = &scenario.experiment;
+    let p = &e.plant;
+    if p.inertia_error == 0.0 && p.robot.is_none() && p.drives.is_none() {
+        return Ok(None);
+    }
+    let (robot, draws) = p
+        .plant_robot(&e.robot)
+        .map_err(|error| ScenarioError::experiment(None, error.into()))?;
+    let links = robot
+        .joints()
+        .iter()
+        .zip(draws)
+        .map(|(j, error)| LinkDraw {
+            link: j.link.clone(),
+            error,
+        })
+        .collect();
+    let path = |p: &Option<std::path::PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    Ok(Some(PlantReport {
+        inertia_error: p.inertia_error,
+        seed: p.seed,
+        links,
+        robot: path(&p.robot),
+        drives: path(&p.drives),
+    }))
+}
+
+/// `metrics.json` with the plant block ([`plant_report`]) when there is one.
+pub fn metrics_json_with_plant(
+    runs: &[RunMetrics],
+    plant: Option<&PlantReport>,
+) -> Result<String, ScenarioError> {
     #[derive(serde::Serialize)]
     struct MetricsFile<'a> {
         runs: &'a [RunMetrics],
+        #[serde(skip_serializing_if = "Option::is_none")]
+        plant: Option<&'a PlantReport>,
     }
-    serde_json::to_string_pretty(&MetricsFile { runs }).map_err(|e| ScenarioError::Write {
+    serde_json::to_string_pretty(&MetricsFile { runs, plant }).map_err(|e| ScenarioError::Write {
         what: "metrics.json",
         message: e.to_string(),
     })

@@ -21,10 +21,61 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
 use ofmpc::sim::{kind_name, mass_label, RunMetrics, RunStatus};
-use ofmpc_scenario::{metrics_json, run_jobs, unique_runs, Run, Scenario};
+use ofmpc_scenario::{metrics_json_with_plant, plant_report, run_jobs, unique_runs, Run, Scenario};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+
+/// The plant that is not the model: its files and the relative errors drawn per link.
+fn plant_section(report: &mut Report, plant: &ofmpc_scenario::PlantReport) {
+    let files: Vec<String> = [("robot", &plant.robot), ("drives", &plant.drives)]
+        .iter()
+        .filter_map(|(k, v)| v.as_ref().map(|v| format!("[plant] {k} = {v}")))
+        .collect();
+    report.paragraph(format!(
+        "The plant is not the controllers' model: {}. The controllers keep the nominal model.",
+        if files.is_empty() {
+            format!(
+                "every link's mass, centre of mass, inertia and rotor inertia drawn with relative \
+                 standard deviation {} (seed {})",
+                plant.inertia_error, plant.seed
+            )
+        } else {
+            files.join(", ")
+        }
+    ));
+    if plant.links.is_empty() {
+        return;
+    }
+    let pct = |x: f64| format!("{:+.1}", 100.0 * x);
+    report.table(Table {
+        caption: "The plant's inertial parameters against the model (relative errors drawn, %)"
+            .into(),
+        header: [
+            "link",
+            "mass",
+            "centre of mass offset / link",
+            "inertia",
+            "rotor inertia",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+        rows: plant
+            .links
+            .iter()
+            .map(|l| {
+                vec![
+                    l.link.clone(),
+                    pct(l.error.mass),
+                    format!("{:.1}", 100.0 * l.error.com_offset),
+                    format!("{:.1}", 100.0 * l.error.inertia),
+                    pct(l.error.drive_inertia),
+                ]
+            })
+            .collect(),
+    });
+}
 
 /// Renders `fig` into the staged directory as `<rel>.png` and `<rel>.svg`,
 /// and adds the PNG to the report.
@@ -555,6 +606,9 @@ impl Writer<'_> {
                 })
                 .collect(),
         });
+        if let Some(plant) = plant_report(scenario)? {
+            plant_section(report, &plant);
+        }
         let limits: Vec<f64> = robot.joints().iter().map(|j| j.limits.effort).collect();
         for p in self.payloads {
             let these = records_with_mass(runs, p.mass);
@@ -681,10 +735,15 @@ impl Writer<'_> {
         Ok(())
     }
 
+    /// `metrics.json`: the runs, and the plant block when the plant is not the model.
+    fn metrics_json(&self) -> anyhow::Result<String> {
+        let plant = plant_report(self.scenario)?;
+        Ok(metrics_json_with_plant(self.metrics, plant.as_ref())?)
+    }
+
     /// `metrics.json`, the effective `scenario.toml` and `report.html`.
     fn finish(mut self) -> anyhow::Result<()> {
-        self.dir
-            .write(METRICS, metrics_json(self.metrics)?.as_bytes())?;
+        self.dir.write(METRICS, self.metrics_json()?.as_bytes())?;
         // What ran: repeats removed; paths are absolute (see `ScenarioFile::from_file`), so the
         // file re-runs from any working directory.
         let effective = self

@@ -5,6 +5,7 @@ pub(crate) mod experiment;
 pub mod init;
 mod inspect;
 mod robot;
+pub mod robustness;
 mod trajectory;
 pub mod tune;
 mod values;
@@ -64,6 +65,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             experiment::execute(&mut scenario, None, &a.out)
         }
         Command::Analyze(Analyze::Stability(a)) => analyze::stability(&a),
+        Command::Analyze(Analyze::Robustness(a)) => robustness::robustness_command(&a),
         Command::Tune(a) => tune::tune(&a),
         Command::Init(Init::Robot(a)) => init::robot(&a),
     }

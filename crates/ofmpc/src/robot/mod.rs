@@ -9,6 +9,7 @@ mod drives;
 mod error;
 mod joint;
 mod links;
+mod perturb;
 mod read;
 mod urdf;
 mod urdf_locate;
@@ -21,6 +22,7 @@ pub use links::LinkFrame;
 #[doc(hidden)]
 pub use read::MAX_URDF_BYTES;
 pub use urdf::MAX_JOINTS;
+pub use perturb::{LinkInertiaError, MAX_INERTIA_ERROR};
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};

@@ -112,6 +112,9 @@ impl Experiment {
         self.loop_settings.validate()?;
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
+        if let Some(m) = &self.plant.model {
+            super::plant::check_plant_model(m, &self.robot)?;
+        }
         let samples = self
             .reference
             .len()
@@ -201,7 +204,7 @@ impl Experiment {
         payload: &Payload,
         picked_up_later: bool,
     ) -> Result<Plant, ExperimentError> {
-        let mut plant_robot = self.robot.clone();
+        let (mut plant_robot, _) = self.plant.plant_robot(&self.robot)?;
         plant_robot.set_payload((!picked_up_later).then_some(*payload))?;
         Ok(Plant::with_period(
             plant_robot,

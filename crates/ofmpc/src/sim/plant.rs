@@ -41,6 +41,43 @@ pub struct PlantSettings {
     pub delay_samples: usize,
     /// Injected faults (encoder glitch, encoder dropout, torque drop).
     pub faults: Vec<Fault>,
+    /// Relative standard deviation of every link's mass, centre of mass
+    /// (scaled to the link), inertia and drive inertia in the plant, drawn
+    /// once per run from `seed` ([`Robot::with_inertia_error`]); the
+    /// controllers keep the nominal model. 0 = the plant is the model.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub inertia_error: f64,
+    /// Stribeck friction per joint (N·m): the breakaway torque's excess over
+    /// the Coulomb level, fading as `exp(−(q̇/stribeck_velocity)²)`; one value
+    /// for all joints or one per joint. Empty = none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub stribeck_friction: Vec<f64>,
+    /// Velocity scale of the Stribeck effect (rad/s).
+    #[serde(skip_serializing_if = "is_default_stribeck_velocity")]
+    pub stribeck_velocity: f64,
+    /// The plant's own URDF (a measured arm against the nominal model), as
+    /// the caller named it; the library does not read it: the caller loads
+    /// it into [`Self::model`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub robot: Option<std::path::PathBuf>,
+    /// The plant's own drives file, likewise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drives: Option<std::path::PathBuf>,
+    /// The plant's own robot (joints matching the controllers' robot,
+    /// [`check_plant_model`]); `None` = the controllers' robot.
+    #[serde(skip)]
+    pub model: Option<Robot>,
+}
+
+/// Default velocity scale of the Stribeck effect (rad/s).
+pub const DEFAULT_STRIBECK_VELOCITY: f64 = 0.01;
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+fn is_default_stribeck_velocity(x: &f64) -> bool {
+    *x == DEFAULT_STRIBECK_VELOCITY
 }
 
 /// The largest number of integration substeps per control period.
@@ -64,6 +101,12 @@ impl Default for PlantSettings {
             velocity_from_encoder: false,
             delay_samples: 0,
             faults: Vec::new(),
+            inertia_error: 0.0,
+            stribeck_friction: Vec::new(),
+            stribeck_velocity: DEFAULT_STRIBECK_VELOCITY,
+            robot: None,
+            drives: None,
+            model: None,
         }
     }
 }
@@ -76,6 +119,8 @@ pub enum FrictionKind {
     Viscous,
     /// Coulomb friction (N·m).
     Coulomb,
+    /// Stribeck friction (N·m).
+    Stribeck,
 }
 
 impl fmt::Display for FrictionKind {
@@ -83,6 +128,7 @@ impl fmt::Display for FrictionKind {
         f.write_str(match self {
             FrictionKind::Viscous => "viscous friction",
             FrictionKind::Coulomb => "Coulomb friction",
+            FrictionKind::Stribeck => "Stribeck friction",
         })
     }
 }
@@ -168,6 +214,22 @@ pub enum PlantSettingsError {
     /// The velocity scale of the smoothed Coulomb friction is not > 0.
     #[error("the Coulomb friction's velocity scale is {0} rad/s: it must be finite and > 0")]
     CoulombVelocity(f64),
+    /// The inertia error is not in [0, [`crate::robot::MAX_INERTIA_ERROR`]].
+    #[error("the inertia error is {0}: it must be a relative standard deviation from 0 to {max}", max = crate::robot::MAX_INERTIA_ERROR)]
+    InertiaError(f64),
+    /// The Stribeck velocity scale is not > 0.
+    #[error("the Stribeck friction's velocity scale is {0} rad/s: it must be finite and > 0")]
+    StribeckVelocity(f64),
+    /// The plant's own robot does not have the controllers' joints.
+    #[error("the plant's robot does not match the controllers' robot: {what} (the plant's {plant}, the controllers' {model}); give a plant robot with the same joints")]
+    ModelMismatch {
+        /// What differs.
+        what: String,
+        /// The plant robot's value.
+        plant: String,
+        /// The controllers' robot's value.
+        model: String,
+    },
     /// A noise level is negative or not finite.
     #[error("the {kind} is {value}: it must be finite and ≥ 0")]
     Noise {
@@ -247,6 +309,7 @@ impl PlantSettings {
         for (kind, v) in [
             (FrictionKind::Viscous, &self.viscous_friction),
             (FrictionKind::Coulomb, &self.coulomb_friction),
+            (FrictionKind::Stribeck, &self.stribeck_friction),
         ] {
             if !(v.is_empty() || v.len() == 1 || v.len() == n) {
                 return Err(PlantSettingsError::FrictionLength {
@@ -268,6 +331,23 @@ impl PlantSettings {
         }
         if self.delay_samples > MAX_DELAY_SAMPLES {
             return Err(PlantSettingsError::Delay(self.delay_samples));
+        }
+        let e = self.inertia_error;
+        if !(e.is_finite() && (0.0..=crate::robot::MAX_INERTIA_ERROR).contains(&e)) {
+            return Err(PlantSettingsError::InertiaError(e));
+        }
+        let sv = self.stribeck_velocity;
+        if !(sv.is_finite() && sv > 0.0) {
+            return Err(PlantSettingsError::StribeckVelocity(sv));
+        }
+        if let Some(m) = &self.model {
+            if m.dof() != n {
+                return Err(PlantSettingsError::ModelMismatch {
+                    what: "the number of joints".into(),
+                    plant: m.dof().to_string(),
+                    model: n.to_string(),
+                });
+            }
         }
         let cv = self.coulomb_velocity;
         if !(cv.is_finite() && cv > 0.0) {
@@ -291,6 +371,63 @@ impl PlantSettings {
         self.validate(n)?;
         substeps(ts, self.substep)
     }
+
+    /// The plant's robot for a controller whose model is `nominal`: its own
+    /// robot ([`Self::model`], checked against `nominal` by
+    /// [`check_plant_model`], with `nominal`'s tool centre point) or
+    /// `nominal`, with the inertial parameters drawn by `inertia_error` from
+    /// `seed` ([`Robot::with_inertia_error`]), and the relative errors drawn
+    /// (empty when `inertia_error` is 0).
+    pub fn plant_robot(
+        &self,
+        nominal: &Robot,
+    ) -> Result<(Robot, Vec<crate::robot::LinkInertiaError>), PlantError> {
+        let base = match &self.model {
+            Some(m) => {
+                check_plant_model(m, nominal)?;
+                let mut m = m.clone();
+                m.set_tcp(*nominal.tcp())?;
+                m
+            }
+            None => nominal.clone(),
+        };
+        if self.inertia_error == 0.0 {
+            return Ok((base, Vec::new()));
+        }
+        Ok(base.with_inertia_error(self.inertia_error, self.seed)?)
+    }
+}
+
+/// Checks that a plant's own robot has the joints of the controllers' robot
+/// `model`: as many, of the same kinds, with the same names, in order.
+pub fn check_plant_model(plant: &Robot, model: &Robot) -> Result<(), PlantSettingsError> {
+    let mismatch = |what: String, plant: String, model: String| {
+        Err(PlantSettingsError::ModelMismatch { what, plant, model })
+    };
+    if plant.dof() != model.dof() {
+        return mismatch(
+            "the number of joints".into(),
+            plant.dof().to_string(),
+            model.dof().to_string(),
+        );
+    }
+    for (i, (a, b)) in plant.joints().iter().zip(model.joints()).enumerate() {
+        if a.name != b.name {
+            return mismatch(
+                format!("joint {}'s name", i + 1),
+                a.name.clone(),
+                b.name.clone(),
+            );
+        }
+        if a.kind != b.kind {
+            return mismatch(
+                format!("joint {} ({})'s kind", i + 1, a.name),
+                format!("{:?}", a.kind),
+                format!("{:?}", b.kind),
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Checks fault `index` of the plant's settings for `n` joints: a joint
@@ -364,6 +501,8 @@ pub struct Plant {
     settings: PlantSettings,
     viscous: Vec<f64>,
     coulomb: Vec<f64>,
+    /// Stribeck excess per joint; empty when there is none.
+    stribeck: Vec<f64>,
     q: Vec<f64>,
     qd: Vec<f64>,
     t: f64,
@@ -405,6 +544,11 @@ impl Plant {
         Ok(Self {
             viscous: per_joint(&settings.viscous_friction, n),
             coulomb: per_joint(&settings.coulomb_friction, n),
+            stribeck: if settings.stribeck_friction.is_empty() {
+                Vec::new()
+            } else {
+                per_joint(&settings.stribeck_friction, n)
+            },
             robot,
             ws,
             settings,
@@ -566,12 +710,14 @@ impl Plant {
     fn integrate(&mut self, steps: usize, h: f64) -> Result<(), PlantError> {
         let n = self.q.len();
         let vs = self.settings.coulomb_velocity;
+        let vst = self.settings.stribeck_velocity;
         for _ in 0..steps {
             let Self {
                 robot,
                 ws,
                 viscous,
                 coulomb,
+                stribeck,
                 tau,
                 net,
                 rk4,
@@ -584,6 +730,10 @@ impl Plant {
                 for i in 0..n {
                     net[i] = tau[i]
                         - crate::dynamics::friction::torque(viscous[i], coulomb[i], vs, v[i]);
+                }
+                // Stribeck: the breakaway excess, fading with speed.
+                for (i, s) in stribeck.iter().enumerate() {
+                    net[i] -= s * (-(v[i] / vst).powi(2)).exp() * (v[i] / vs).tanh();
                 }
                 a.copy_from_slice(forward_dynamics(robot, ws, q, v, net)?.as_slice());
                 Ok::<(), ModelError>(())
