@@ -92,7 +92,7 @@ pub unsafe extern "C" fn ofmpc_supervised_new(
         }
         let c = build_controller(&robot.0, kind, &s)?;
         let rules = s.simulation.supervisor(&s.safety);
-        let sc = SupervisedController::new(c, &robot.0, rules, s.plant.delay_samples)
+        let sc = SupervisedController::new(c, &robot.0, rules, s.plant.delay_samples, true)
             .map_err(|e| Failure::new(ofmpc_status::OFMPC_BUILD, e.to_string()))?;
         unsafe { give(out, ofmpc_supervised(sc)) };
         Ok(())
@@ -147,6 +147,7 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
             x,
             w_k: w,
             preview: p,
+            truth: None,
         };
         let result = s.step(&input).map_err(supervised_failure)?;
         tau.copy_from_slice(&result.tau);

@@ -3,7 +3,8 @@
 //! ([`ofmpc_scenario::robustness`]), written as `robustness.json`, a figure and
 //! `report.html` (staged, as every command's output), and a table on stdout.
 
-use super::analyze::{progress, FormatArgs};
+use super::analyze::progress;
+use crate::args::FormatArgs;
 use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series};
 use crate::output::report::{Image, Report, Table};

@@ -19,10 +19,10 @@ pub use error::DrivesError;
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use joint::{Joint, JointKind, JointLimits};
 pub use links::LinkFrame;
+pub use perturb::{LinkInertiaError, MAX_INERTIA_ERROR};
 #[doc(hidden)]
 pub use read::MAX_URDF_BYTES;
 pub use urdf::MAX_JOINTS;
-pub use perturb::{LinkInertiaError, MAX_INERTIA_ERROR};
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};

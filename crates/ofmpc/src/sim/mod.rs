@@ -57,7 +57,7 @@ pub use metrics::{compute as compute_metrics, quantile};
 pub use metrics::{RunMetrics, StepTime};
 pub use outcome::{ExperimentError, RunFailure, RunOutcome, RunStatus};
 #[doc(hidden)]
-pub use plant::{check_plant_model, MAX_SUBSTEPS};
+pub use plant::{check_plant_model, MAX_DELAY_SAMPLES, MAX_SUBSTEPS};
 pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, PlantSettingsError};
 pub use supervisor::{DivergenceRule, StopReason, SupervisorSettings};
 #[doc(hidden)]

@@ -286,9 +286,9 @@ impl Sensor {
 
 #[cfg(test)]
 mod tests {
+    use super::super::plant::MAX_DELAY_SAMPLES;
     use super::*;
     use crate::robot::Robot;
-    use super::super::plant::MAX_DELAY_SAMPLES;
     use crate::sim::Plant;
 
     /// Quantized positions, from a plain state (no plant): each position a
