@@ -505,7 +505,7 @@ fn inspect_robot_names_the_closed_form_and_its_parameters() {
 }
 
 /// `ofmpc init robot --tip`: the Panda (a hand with two prismatic fingers: a branched
-/// tree) is refused without a tip and starts with `--tip panda_hand`; the written scenario
+/// tree) gets the tip panda_hand chosen without `--tip` and starts with it given; the written scenario
 /// carries the tip and loads the 7-joint arm that `inspect robot --tip` describes.
 #[test]
 fn init_robot_with_a_tip_starts_a_branched_arm() {
@@ -515,8 +515,11 @@ fn init_robot_with_a_tip_starts_a_branched_arm() {
     let out = dir.path().join("panda");
     let p = panda.to_str().unwrap();
     let o = out.to_str().unwrap();
-    let e = fails(&["init", "robot", p, "--out", o]);
-    assert!(!out.join("scenario.toml").exists(), "{e}");
+    // Without --tip, init chooses the branching link (panda_hand) itself.
+    let auto = dir.path().join("panda-auto");
+    ok(&["init", "robot", p, "--out", auto.to_str().unwrap()]);
+    let chosen = std::fs::read_to_string(auto.join("scenario.toml")).unwrap();
+    assert!(chosen.contains("panda_hand"), "{chosen}");
     ok(&["init", "robot", p, "--out", o, "--tip", "panda_hand"]);
     let scenario = std::fs::read_to_string(out.join("scenario.toml")).unwrap();
     let file: toml::Value = toml::from_str(&scenario).unwrap();

@@ -36,7 +36,7 @@ fn absurd_sample_counts_and_substeps_are_rejected_up_front() {
     for (substep, needle) in [
         ("1e-300", "whole number"),
         ("1e-9", "whole number"),
-        ("0.003", "e.g. 0.0033"),
+        ("0.003", "e.g. 3.333e-3"),
     ] {
         let s = scenario(tmp.path(), &format!("[plant]\nsubstep = {substep}\n"));
         let o = ofmpc(&["run", &s, "--out", out.to_str().unwrap()]);

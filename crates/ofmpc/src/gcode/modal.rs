@@ -446,7 +446,7 @@ impl Interpreter {
             p = to;
         }
         let dwell = self.ext.cycle[3].unwrap_or(0.0);
-        if let Some((message, hint)) = cycle_checks(&code, r_m, bottom, dwell) {
+        if let Some((message, hint)) = cycle_checks(code, r_m, bottom, dwell) {
             return fail(InvalidValue, message, hint);
         }
         let mut given = [None; 3];
