@@ -76,7 +76,7 @@ def test_plan_answers_ctrl_c(tmp_path):
     """A program that takes long to plan: SIGINT raises KeyboardInterrupt within seconds."""
     program = tmp_path / "long.ngc"
     program.write_text("G21 G90\nG0 X500 Y0 Z600\n" + "".join(
-        f"G1 X{500 + (i % 2) * 0.01:.2f} Y0 Z600 F6000\n" for i in range(300000)
+        f"G1 X{500 + (i % 2) * 0.01:.2f} Y0 Z600 F6000\n" for i in range(200000)
     ))
     code = textwrap.dedent(
         f"""

@@ -174,7 +174,7 @@ const SCALES: [f64; 2] = [1.0, 0.5];
 /// Duration (s) of the paper's program at 0.5 m/s on the IRB 140.
 const PAPER_DURATION_S: f64 = 11.6;
 /// A placement whose joint limits stretch the path's duration beyond this factor of
-/// [`PAPER_DURATION_S`] (at the same speed) is kept only when no other runs.
+/// `PAPER_DURATION_S` (at the same speed) is kept only when no other runs.
 pub const SLOW_FACTOR: f64 = 1.5;
 
 /// Whether the Jacobian at `q` has full rank, its smallest singular value at least 0.01.
@@ -220,9 +220,9 @@ fn placement_at(robot: &Robot, q: &[f64], reach: f64, scale: f64) -> Option<Plac
     })
 }
 
-/// Start poses worth planning, best first: [`SAMPLES`] deterministic points within the
-/// limits (a joint without limits within ±π; 4 decimals) scored by [`score`], the best
-/// [`TRIED`].
+/// Start poses worth planning, best first: `SAMPLES` deterministic points within the
+/// limits (a joint without limits within ±π; 4 decimals) scored by `score`, the best
+/// `TRIED`.
 pub fn start_candidates(robot: &Robot) -> Vec<Vec<f64>> {
     let (lo, hi) = (robot.lower_limits(), robot.upper_limits());
     let n = robot.dof();

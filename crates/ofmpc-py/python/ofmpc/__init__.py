@@ -106,7 +106,7 @@ def _program_text(program: Union[str, "os.PathLike[str]"]) -> Tuple[Optional[str
         raise TypeError(f"program must be a path, G-code text or 'paper', not {type(program).__name__}")
     if program.strip().lower() == "paper":
         return None, "paper-table1.gcode (built in)"
-    if "\n" not in program and os.path.isfile(program):
+    if "\n" not in program and os.path.exists(program):
         return _read_program_file(program), program
     one_line = "\n" not in program.strip()
     if one_line and (

@@ -1,5 +1,5 @@
 //! Analyses of the closed loop that need no full run: the stability of the
-//! controllers near rest against an inertia mismatch ([`stability`]).
+//! controllers near rest against an inertia mismatch (`stability`).
 
 pub(crate) mod stability;
 

@@ -249,7 +249,7 @@ impl StabilityProblem<'_> {
         )
     }
 
-    /// The loop linearized once ([`LinearizedLoop`]; the errors of
+    /// The loop linearized once (`LinearizedLoop`; the errors of
     /// [`StabilityProblem::closed_loop_matrix`]).
     pub fn linearized(&self) -> Result<LinearizedLoop, StabilityError> {
         let p = self;
@@ -260,7 +260,7 @@ impl StabilityProblem<'_> {
     /// is stable (`ρ < 1`), by bisection from `α = 1` towards
     /// [`StabilityOptions::alpha_min`] and [`StabilityOptions::alpha_max`] (a
     /// bound still stable there is reported as that end). Assumes one interval.
-    /// `ρ(α)` is that of the loop linearized once ([`LinearizedLoop`]).
+    /// `ρ(α)` is that of the loop linearized once (`LinearizedLoop`).
     pub fn alpha_interval(&self) -> Result<(f64, f64), StabilityError> {
         let p = self;
         alpha_interval(p.robot, p.kind, p.settings, p.baselines, p.q0, p.options)

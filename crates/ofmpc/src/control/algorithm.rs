@@ -34,7 +34,7 @@ pub trait Algorithm {
     /// (used when the settings' torque limits or friction compensation are
     /// on; without them such a controller refuses to step,
     /// [`StepFailure::NoDriveModel`]). Allocates (sizes the constrained
-    /// solver); call before a run. [`ControllerBuilder`] does it.
+    /// solver); call before a run. `ControllerBuilder` does it.
     fn set_drive_model(&mut self, drives: &DriveModel) -> Result<(), SettingsError> {
         let _ = drives;
         Err(SettingsError::DrivesUnsupported(self.kind().name()))
@@ -47,7 +47,7 @@ pub trait Algorithm {
     /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
     /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal
     /// sequence ([`Algorithm::increments`]) of that step
-    /// ([`prediction::predicted_outputs`]). `false` (and `out` unspecified)
+    /// (`prediction::predicted_outputs`). `false` (and `out` unspecified)
     /// for a controller without a prediction horizon (the baselines `pid`,
     /// `ctc`, `ctc-adaptive`) or an `out` not N·n long. Allocates nothing
     /// (mutable for its work buffer only: the controller's state is unchanged).

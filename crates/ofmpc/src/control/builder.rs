@@ -78,7 +78,7 @@ pub const DEFAULT_OBSERVER_POLE: f64 = 0.7;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ObserverSettings {
     /// The three poles `p` of the observer's error dynamics, in `(0, 1)`
-    /// (default [`DEFAULT_OBSERVER_POLE`]).
+    /// (default `DEFAULT_OBSERVER_POLE`).
     pub pole: f64,
     /// Age of the measurement in samples `D` (default 0). With
     /// [`MpcSettings::delay_compensation`] the observer predicts over it;

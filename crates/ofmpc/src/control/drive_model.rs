@@ -70,7 +70,7 @@ impl DriveModel {
 
     /// The linear-like damping `d_i(q̇) = F_v + F_c tanh(q̇/v_s)/q̇` with
     /// `d_i q̇_i` = the friction torque (its limit `F_v + F_c/v_s` at rest;
-    /// [`crate::dynamics::friction::damping`]).
+    /// `crate::dynamics::friction::damping`).
     pub fn damping(&self, i: usize, v: f64) -> f64 {
         crate::dynamics::friction::damping(
             self.viscous_nms[i],

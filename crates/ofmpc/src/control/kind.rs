@@ -6,7 +6,7 @@ use std::fmt;
 use std::str::FromStr;
 
 /// Which controller: the paper's three, and the adaptive variants of the
-/// incremental ones ([`crate::control::mpc::adaptive`]). Serde names: `"usual"`, `"first"`,
+/// incremental ones (`crate::control::mpc::adaptive`). Serde names: `"usual"`, `"first"`,
 /// `"second"`, `"first-adaptive"`, `"second-adaptive"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -24,17 +24,17 @@ pub enum ControllerKind {
     #[serde(rename = "second-adaptive")]
     SecondAdaptive,
     /// Baseline: independent joint PID with gravity compensation and velocity
-    /// feed-forward ([`crate::control::baselines::pid`]).
+    /// feed-forward (`crate::control::baselines::pid`).
     Pid,
     /// Baseline: computed torque on the nominal model with PID on the error
-    /// ([`crate::control::baselines::ctc`]).
+    /// (`crate::control::baselines::ctc`).
     Ctc,
     /// Baseline: computed torque with the payload identified online by the
     /// adaptive controllers' estimator ([`crate::control::AdaptiveMpc`]).
     #[serde(rename = "ctc-adaptive")]
     CtcAdaptive,
     /// Baseline: offset-free MPC with an input-disturbance model and observer
-    /// ([`crate::control::baselines::dob_mpc`]).
+    /// (`crate::control::baselines::dob_mpc`).
     #[serde(rename = "dob-mpc")]
     DobMpc,
 }
@@ -58,7 +58,7 @@ impl ControllerKind {
 
     /// The baselines an engineer compares against: PID with gravity
     /// compensation, computed torque, adaptive computed torque and the
-    /// disturbance-observer MPC ([`crate::control::baselines::baseline`]).
+    /// disturbance-observer MPC (`crate::control::baselines::baseline`).
     pub const BASELINES: [ControllerKind; 4] = [
         ControllerKind::Pid,
         ControllerKind::Ctc,

@@ -172,7 +172,7 @@ pub const DEFAULT_DOB_OBSERVER_BANDWIDTH: f64 = 100.0;
 
 /// Tuning of the baselines: one bandwidth each (rad/s), a number for every
 /// joint or one per joint. The PID and computed-torque error dynamics get a
-/// discrete triple pole at `e^(−ωn·Ts)` ([`crate::control::baselines::baseline`]); the disturbance
+/// discrete triple pole at `e^(−ωn·Ts)` (`crate::control::baselines::baseline`); the disturbance
 /// observer of the MPC baseline a pole at `e^(−ω_o·Ts)`.
 ///
 /// Its own settings type, given beside the [`MpcSettings`] where a baseline
@@ -184,13 +184,13 @@ pub const DEFAULT_DOB_OBSERVER_BANDWIDTH: f64 = 100.0;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct BaselineSettings {
-    /// `ωn` of the PID baseline (default [`DEFAULT_PID_BANDWIDTH`]).
+    /// `ωn` of the PID baseline (default `DEFAULT_PID_BANDWIDTH`).
     pub pid_bandwidth: Weight,
     /// `ωn` of the computed-torque baselines, `ctc` and `ctc-adaptive`
     /// (default [`DEFAULT_CTC_BANDWIDTH`]).
     pub ctc_bandwidth: Weight,
     /// `ω_o` of the disturbance observer of `dob-mpc` (default
-    /// [`DEFAULT_DOB_OBSERVER_BANDWIDTH`]).
+    /// `DEFAULT_DOB_OBSERVER_BANDWIDTH`).
     pub dob_observer_bandwidth: Weight,
 }
 
@@ -273,7 +273,7 @@ pub struct MpcSettings {
     /// Robust tuning over a payload range centres the model inside it.
     pub model_payload_kg: f64,
     /// Respect the drives' torque limits `|τ_i| ≤ τmax_i` over the whole
-    /// horizon as constraints of the optimization ([`crate::control::solvers::constrained`]);
+    /// horizon as constraints of the optimization (`crate::control::solvers::constrained`);
     /// the limits come from the controller's [`crate::control::DriveModel`]. Default off.
     /// With the dense solver the QP is built from the dense system's QR
     /// factor; with the structured one, on the steps whose plan passes a
@@ -368,7 +368,7 @@ impl MpcSettings {
 
     /// [`MpcSettings::validate`] plus: every diagonal weight has `dof` entries,
     /// and the dense least-squares system of the horizon fits in
-    /// [`MAX_SYSTEM_ENTRIES`] when the dense solver is used (checked here,
+    /// `MAX_SYSTEM_ENTRIES` when the dense solver is used (checked here,
     /// once, for the largest of the three controllers' systems: an
     /// incremental algorithm's, `2·N·n` rows and its tracking reduction),
     /// so that a setting that validates also builds.

@@ -21,7 +21,7 @@ pub struct StepInfo {
     pub zoh_squarings: u32,
 }
 
-/// Bad input to [`Controller::step`] or [`Controller::reset`]: the call did
+/// Bad input to `Controller::step` or `Controller::reset`: the call did
 /// nothing (the controller's state and last output are as before). The
 /// numerical outcome of a step is not an error: it is
 /// [`StepOutput::status`].
@@ -48,7 +48,7 @@ pub enum StepError {
         /// Index of the first bad value.
         index: usize,
     },
-    /// Stepped before the first [`Controller::reset`].
+    /// Stepped before the first `Controller::reset`.
     #[error("the controller was stepped before it was reset at a measured state")]
     NotReset,
     /// [`Controller::reset`](crate::control::Controller::reset) passed its
@@ -80,7 +80,7 @@ impl From<StepError> for StepFailure {
     }
 }
 
-/// The numerical outcome of one [`Controller::step`], in
+/// The numerical outcome of one `Controller::step`, in
 /// [`StepOutput::status`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -120,7 +120,7 @@ impl StepStatus {
 }
 
 /// Why a control algorithm's step failed (the internal algorithms' error;
-/// the built [`Controller`] reports it as [`StepStatus::HeldLastTorque`]).
+/// the built `Controller` reports it as [`StepStatus::HeldLastTorque`]).
 /// The algorithm's state is as before the call.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -167,9 +167,9 @@ pub enum StepFailure {
     #[error("an adaptive controller needs a rigid-body model of the robot to identify and update its payload")]
     NoRigidBodyModel,
     /// The settings ask for torque limits or friction compensation but the
-    /// controller was given no drive model ([`Algorithm::set_drive_model`]):
+    /// controller was given no drive model (`Algorithm::set_drive_model`):
     /// it would run unconstrained, or compensate nothing. Build it with
-    /// [`ControllerBuilder`], which supplies the drives, or set them first.
+    /// `ControllerBuilder`, which supplies the drives, or set them first.
     #[error("torque limits or friction compensation are on but the controller has no drive model: give it the drives' limits and friction estimates before stepping")]
     NoDriveModel,
     /// The adaptive controller's payload estimate was refused by the model (not a physical
@@ -194,7 +194,7 @@ pub struct StepInput<'a> {
     pub preview: &'a [f64],
 }
 
-/// What one successful [`Controller::step`] computed. Sized at build: the step
+/// What one successful `Controller::step` computed. Sized at build: the step
 /// only overwrites it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepOutput {

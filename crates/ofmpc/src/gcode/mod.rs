@@ -38,7 +38,7 @@
 //!
 //! Offsets use the plane's letters (`G17`: `I J`, `G18`: `K I`, `G19`: `J K`); the offset
 //! along the plane normal must be 0 or absent. The start and end radii must agree within
-//! [`arc_tolerance`] (0.002 mm in `G21`, 0.0002 in in `G20`, LinuxCNC's absolute tolerances;
+//! `arc_tolerance` (0.002 mm in `G21`, 0.0002 in in `G20`, LinuxCNC's absolute tolerances;
 //! no relative slack): beyond that the program is wrong and the reader says so, and if the
 //! offsets would fit another plane it names it (the paper's Table I program has `G19` but
 //! XY-plane offsets). Within the tolerance the arc keeps the start radius and ends on its

@@ -27,7 +27,7 @@ pub struct ParseOptions {
     /// motion must give X, Y and Z (it sets the start point).
     pub start: Option<Vector3<f64>>,
     /// Lines the program may execute beyond its own length (loops, calls) before it is
-    /// stopped as an endless loop; `None`: [`DEFAULT_MAX_STEPS`](super::DEFAULT_MAX_STEPS).
+    /// stopped as an endless loop; `None`: `DEFAULT_MAX_STEPS`.
     pub max_steps: Option<usize>,
     /// The tool table `G43 H<n>` takes tool n's length from; `None`: `G43 H<n>` (n > 0)
     /// is refused.

@@ -37,7 +37,7 @@ pub struct ToolTableError {
 impl ToolTable {
     /// Reads a table in LinuxCNC's `.tbl` format (see the module documentation). A UTF-8
     /// byte-order mark is skipped; a tool listed twice, a word given twice on one line and a
-    /// length past [`MAX_TOOL_LENGTH_MM`] are refused with their line and column (issue #36:
+    /// length past `MAX_TOOL_LENGTH_MM` are refused with their line and column (issue #36:
     /// they were kept or dropped silently).
     pub fn parse(text: &str) -> Result<ToolTable, ToolTableError> {
         let text = text.strip_prefix('\u{feff}').unwrap_or(text);

@@ -139,7 +139,7 @@ impl Segment {
     /// direction of `end` seen from `center` (the caller checks that `end` lies on the circle;
     /// if it does not, the arc ends on the circle at that angle). The normal coordinate moves
     /// linearly with angle from `start` to `end` (helix). If `end` and `start` coincide in the
-    /// plane (within [`CLOSED_ARC_TOLERANCE`]) the arc is a full turn. The normal coordinate of
+    /// plane (within `CLOSED_ARC_TOLERANCE`) the arc is a full turn. The normal coordinate of
     /// `center` is ignored.
     pub fn arc(
         start: Vector3<f64>,

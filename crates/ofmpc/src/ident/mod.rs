@@ -1,9 +1,9 @@
 //! Online identification of the payload's inertial parameters.
 //!
-//! * [`regressor`]: the ten parameters `π` of a rigid payload, their physical
+//! * `regressor`: the ten parameters `π` of a rigid payload, their physical
 //!   consistency (pseudo-inertia) and the joint-space regressor
 //!   `τ_payload = Y_q(q, q̇, q̈) π`;
-//! * [`rls`]: recursive least squares with forgetting, projected onto the
+//! * `rls`: recursive least squares with forgetting, projected onto the
 //!   physically consistent set after each sample;
 //! * [`PayloadEstimator`]: the two together on closed-loop data — measured
 //!   `q`, `q̇` at two consecutive samples and the torque held in between.

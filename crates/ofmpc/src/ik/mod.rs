@@ -2,22 +2,22 @@
 //!
 //! The parts, one per file:
 //!
-//! - [`opw`]: the closed-form solver of Brandstötter, Hofbaur et al. (2014) for
+//! - `opw`: the closed-form solver of Brandstötter, Hofbaur et al. (2014) for
 //!   ortho-parallel arms with a spherical wrist (ABB, KUKA, Fanuc, Stäubli six-axis
 //!   arms), with [`OpwParameters::irb140`] matching this project's URDF `flange` frame.
 //!   It returns all (up to 8) solutions without allocating.
-//! - [`opw_detect`]: [`OpwParameters::detect`] reads the OPW parameters off any
+//! - `opw_detect`: [`OpwParameters::detect`] reads the OPW parameters off any
 //!   six-revolute chain's joint axes (a URDF as ROS-Industrial ships it), or says it is
 //!   not of that form.
-//! - [`solver`]: [`ClosedFormSolver`] ([`IkSolver`] for OPW arms, [`UrSolver`] for the UR
+//! - `solver`: `ClosedFormSolver` ([`IkSolver`] for OPW arms, [`UrSolver`] for the UR
 //!   family) picks, from the analytic solutions and their
 //!   2π-equivalents inside the joint limits, the one closest to the previous sample,
 //!   and keeps the result continuous through the wrist singularity.
-//! - [`ur`]: the closed form of the Universal Robots family (axes 2–4 parallel, axes 5
+//! - `ur`: the closed form of the Universal Robots family (axes 2–4 parallel, axes 5
 //!   and 6 intersecting; Hawkins 2013) on the product-of-exponentials model read off the
 //!   robot's joint axes, up to 8 solutions, and [`UrSolver`], the nearest one within the
 //!   limits.
-//! - [`numeric`]: [`NumericIk`], damped least squares (Levenberg–Marquardt with
+//! - `numeric`: [`NumericIk`], damped least squares (Levenberg–Marquardt with
 //!   adaptive damping) for any robot that implements [`ForwardKinematics`].
 //!
 //! Conventions: SI units and radians; poses are the flange frame expressed in the

@@ -242,11 +242,11 @@ impl OpwParameters {
     }
 
     /// Like [`OpwParameters::inverse`], but inside the singularity bands the free
-    /// joint takes the hint's value: q4 when `|sin θ5| ≤` [`WRIST_SINGULAR_SIN`]
+    /// joint takes the hint's value: q4 when `|sin θ5| ≤` `WRIST_SINGULAR_SIN`
     /// (then q6 takes the rest of q4 + q6), q1 when the wrist centre is within
-    /// [`SHOULDER_SINGULAR_RADIUS`] of axis 1 — each only if the resulting pose error
-    /// stays below [`SINGULAR_ORIENTATION_TOLERANCE`] /
-    /// [`SINGULAR_POSITION_TOLERANCE`]. Hinted joints are returned unwrapped (equal to
+    /// `SHOULDER_SINGULAR_RADIUS` of axis 1 — each only if the resulting pose error
+    /// stays below `SINGULAR_ORIENTATION_TOLERANCE` /
+    /// `SINGULAR_POSITION_TOLERANCE`. Hinted joints are returned unwrapped (equal to
     /// the hint). A non-finite hint is ignored.
     pub fn inverse_near(&self, pose: &Isometry3<f64>, hint: &[f64; 6]) -> OpwSolutions {
         if hint.iter().all(|x| x.is_finite()) {

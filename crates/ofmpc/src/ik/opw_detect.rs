@@ -141,7 +141,7 @@ impl OpwParameters {
     /// The OPW parameters of a chain of six revolute joints given by its axes at q = 0
     /// (`axes`, unit or not; `points` on them; base frame) and its flange pose at q = 0,
     /// or `None` when the chain is not an ortho-parallel arm with a spherical wrist whose
-    /// axis 1 is the base z axis (within [`OPW_DETECT_TOLERANCE`]): axes 2 ∥ 3, both ⟂ 1,
+    /// axis 1 is the base z axis (within `OPW_DETECT_TOLERANCE`): axes 2 ∥ 3, both ⟂ 1,
     /// axis 4 ⟂ 3, axes 4, 5, 6 meeting in one point, 5 ⟂ 4 and 6 ⟂ 5 (Brandstötter et
     /// al. 2014). The derivation is in the module text; the result's
     /// [`OpwParameters::forward`] is the chain's flange pose (checked at test poses).

@@ -416,8 +416,8 @@ impl UrKinematics {
 
 /// Sequential inverse kinematics of a UR-type arm: for each pose, the solution nearest to
 /// the previous sample (weighted joint distance) among all closed-form solutions and their
-/// 2π-equivalents inside the joint limits ([`ClosedFormSolver`], as [`super::IkSolver`]
-/// for OPW arms; [`ClosedFormSolver::kinematics`] gives the [`UrKinematics`]).
+/// 2π-equivalents inside the joint limits (`ClosedFormSolver`, as [`super::IkSolver`]
+/// for OPW arms; `ClosedFormSolver::kinematics` gives the `UrKinematics`).
 /// Allocation-free.
 pub type UrSolver = ClosedFormSolver<UrKinematics>;
 

@@ -62,7 +62,7 @@ pub enum ReferenceFailure {
     },
     /// Following the path continuously would take a joint outside its range because the path
     /// passes next to a singularity of the arm (its Jacobian's smallest singular value below
-    /// [`SINGULAR_PASS_RATIO`] of its largest), where the branch turns that joint by a large
+    /// `SINGULAR_PASS_RATIO` of its largest), where the branch turns that joint by a large
     /// angle within a short distance.
     #[error(
         "the path passes next to a singularity of the arm (for a 6-axis arm, usually the wrist straight, joint 5 \
@@ -101,7 +101,7 @@ pub enum ReferenceFailure {
         limit: f64,
     },
     /// A joint would move faster than its speed limit while the tool is still at its start
-    /// point (within [`LEAVING_START`]) and the run started at the robot's start pose: the
+    /// point (within `LEAVING_START`) and the run started at the robot's start pose: the
     /// start pose is at (or next to) a singularity, where following the path at a constant
     /// orientation needs the joints to jump (q = 0 of the IRB 140: the wrist straight, joints
     /// 4 and 6 on one axis).

@@ -7,7 +7,7 @@
 //! 2. the path stage (`path/`, [`blend`]): under `G64` the corners between consecutive lines
 //!    are rounded within the tolerance;
 //! 3. the timing stage (`timing/`, [`CartesianTrajectory`]): `G61` moves rest to rest with
-//!    the paper's septic law ([`TimeLaw`]), slowed down where a joint's speed or acceleration
+//!    the paper's septic law (`TimeLaw`), slowed down where a joint's speed or acceleration
 //!    limit needs it ([`JointLimitedMove`]); `G64` runs time-optimally under the feed, path
 //!    acceleration and jerk and every joint's speed and acceleration limit ([`Run`]);
 //! 4. the joint reference (`reference/`, [`JointReference`]): inverse kinematics (analytic
@@ -111,7 +111,7 @@ pub struct PlanDiagnostics {
     /// The exact-stop (`G61`) moves a joint limit slowed down, with the cause.
     pub joint_limited: Vec<JointLimitedMove>,
     /// The turn of the joints in place before the first move, from a start pose that is
-    /// singular for the path ([`StartTurn`]); `None` when the path starts without one.
+    /// singular for the path (`StartTurn`); `None` when the path starts without one.
     pub start_turn: Option<StartTurn>,
 }
 

@@ -329,7 +329,7 @@ pub enum UrdfWarning {
         attribute: &'static str,
     },
     /// A link's principal moments break the triangle inequality by at most
-    /// [`super::TRIANGLE_TOLERANCE`]: accepted as given.
+    /// `super::TRIANGLE_TOLERANCE`: accepted as given.
     #[error("link '{link}': the principal moments {moments:?} violate the triangle inequality a + b ≥ c by {:.3} % of c (accepted up to 1 %, as given)", excess * 100.0)]
     InertiaTriangle {
         /// The link.
@@ -361,7 +361,7 @@ pub enum ModelError {
         message: String,
     },
     /// A file is larger than its limit ([`super::MAX_URDF_BYTES`],
-    /// [`super::MAX_DRIVES_BYTES`]): reading stopped at the limit.
+    /// `super::MAX_DRIVES_BYTES`): reading stopped at the limit.
     #[error(
         "cannot read {path}: it is {} than the limit of {limit} bytes ({} MiB) for {what}; reading \
          stopped there: check that it is the file you meant",

@@ -150,7 +150,7 @@ pub enum IkMethod {
     /// The closed form of ortho-parallel arms with a spherical wrist ([`OpwParameters`]).
     Opw,
     /// The closed form of the Universal Robots family: axes 2–4 parallel, axes 5 and 6
-    /// intersecting ([`UrKinematics`]), detected from the joint axes.
+    /// intersecting (`UrKinematics`), detected from the joint axes.
     Ur,
     /// Multi-start damped least squares within the joint limits ([`crate::ik::RobustIk`]).
     Numeric,
@@ -215,7 +215,7 @@ impl Robot {
         }
     }
 
-    /// The closed-form kinematics of the Universal Robots family ([`UrKinematics::detect`]:
+    /// The closed-form kinematics of the Universal Robots family (`UrKinematics::detect`:
     /// six revolute joints, axes 2–4 parallel, axes 5 and 6 intersecting), from the joint
     /// axes at q = 0 and the tool centre point; `None` for any other arm.
     pub fn ur_kinematics(&self) -> Option<UrKinematics> {

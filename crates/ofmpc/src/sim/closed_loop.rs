@@ -38,7 +38,7 @@ pub struct LoopSettings {
     /// The "steady" window at the end of the hold, for the metrics (s).
     pub steady_window_s: f64,
     /// Identification phase of the adaptive controllers (s, at most
-    /// [`MAX_IDENTIFICATION_S`]): they hold the path's first point this long
+    /// `MAX_IDENTIFICATION_S`): they hold the path's first point this long
     /// before the path starts, as industrial robots identify a newly attached
     /// load at rest. Not recorded (the record starts with the path at
     /// t = 0); ignored by the other controllers.
@@ -48,7 +48,7 @@ pub struct LoopSettings {
     pub plausibility_check: bool,
     /// On divergence, a failed controller step or an implausible
     /// measurement, bring the robot to a safe stop (brake, hold) and record
-    /// [`SAFE_STOP_RECORD_S`] more seconds, instead of ending the run.
+    /// `SAFE_STOP_RECORD_S` more seconds, instead of ending the run.
     pub safe_stop: bool,
 }
 
@@ -180,7 +180,7 @@ impl LoopSettings {
 /// Whether a run records the measurement the controller was given apart
 /// from the true state: the plant's sensing is not ideal, or measurements
 /// are lost ([`MeasurementFaults`]). The one rule for sizing, validating and
-/// recording ([`record_columns`]'s `measured`).
+/// recording (`record_columns`'s `measured`).
 pub fn records_measurement(plant: &PlantSettings, faults: &MeasurementFaults) -> bool {
     !(plant.measurement_is_ideal() && faults.is_empty())
 }
@@ -256,7 +256,7 @@ pub fn run_closed_loop_with(
 /// supervised controller is the one object such a loop steps, as this one
 /// does (`examples/realtime_loop.rs`).
 ///
-/// During the pre-roll ([`RunEvents::pre_roll`]) the reference and its
+/// During the pre-roll (`RunEvents::pre_roll`) the reference and its
 /// preview are the path's first point; a divergence or failure there is
 /// reported at a negative time (`−pre_roll·Ts ≤ t < 0`). The record holds
 /// the path and the hold; for a controller that identifies the payload it

@@ -18,7 +18,7 @@ use crate::control::{
 /// the paper's path with a 22-bit encoder and one sample of delay (second
 /// algorithm, 0.25 kg): 0.3 → steady joint error 1.7e-5 rad, 0.5 → 8.4e-6,
 /// 0.7 → 3.0e-6, 0.85 → 2.0e-6 rad but Cartesian RMS 0.068 mm (0.012 at 0.7).
-/// The builder's default ([`crate::control::DEFAULT_OBSERVER_POLE`]).
+/// The builder's default (`crate::control::DEFAULT_OBSERVER_POLE`).
 pub const OBSERVER_POLE: f64 = crate::control::DEFAULT_OBSERVER_POLE;
 use crate::motion::JointReference;
 use crate::robot::{ModelError, Payload, Robot};
@@ -90,7 +90,7 @@ impl Experiment {
     /// Checks everything a run needs but the payload, before anything is
     /// allocated: the reference fits the robot and the controller's sample
     /// time, the tuning, the loop and plant settings, and the number of
-    /// samples the run would record ([`MAX_RECORD_VALUES`]).
+    /// samples the run would record (`MAX_RECORD_VALUES`).
     pub fn validate(&self) -> Result<(), ExperimentError> {
         let n = self.robot.dof();
         if self.reference.dof() != n {

@@ -28,7 +28,7 @@ pub fn at_or_after(t: f64, at: f64, ts: f64) -> bool {
 }
 
 /// The first sample `k` whose time `k·ts` is at or after `t − 10⁻⁹·ts`
-/// ([`TIME_MATCH_TOLERANCE`]). `t` must be finite and `ts > 0`; negative
+/// (`TIME_MATCH_TOLERANCE`). `t` must be finite and `ts > 0`; negative
 /// times give sample 0.
 ///
 /// Exactly the comparison `k as f64 * ts >= t − 1e-9 * ts` the loop makes
@@ -68,7 +68,7 @@ pub struct FaultSchedule {
     ranges: Vec<(usize, usize)>,
 }
 
-/// The measurement faults' [`FaultSchedule`] (its former name, kept).
+/// The measurement faults' `FaultSchedule` (its former name, kept).
 pub type LossSchedule = FaultSchedule;
 
 /// The samples a fault at `t` covers when it lasts one sample:
@@ -146,7 +146,7 @@ impl FaultSchedule {
 
 /// An injected fault of one joint, from path time `t` on (`t = 0`: the
 /// path's first sample, after any pre-roll at rest), matched to samples as
-/// every timed event of a run ([`super::FaultSchedule::for_plant`],
+/// every timed event of a run (`super::FaultSchedule::for_plant`,
 /// [`super::sample_at`]). In TOML:
 /// `faults = [{ kind = "encoder_glitch", t = 2.0, joint = 6, offset_rad = 0.01 }]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -10,7 +10,7 @@
 //! (plausibility, safety limit, divergence, safe stop) and, for a real loop,
 //! the controller behind that guard as one object, the
 //! [`SupervisedController`]. The faults of a run have one home (`faults.rs`:
-//! [`Fault`], [`MeasurementFaults`], [`FaultSchedule`]).
+//! [`Fault`], [`MeasurementFaults`], `FaultSchedule`).
 
 mod actuator;
 mod closed_loop;

@@ -155,8 +155,8 @@ impl RunOutcome {
 
     /// A safe stop that is not one: a joint left its position limits after
     /// the stop began, or the robot was not at rest by the end of the record
-    /// (a true joint speed above [`crate::sim::REST_SPEED`]) and still
-    /// moved faster than [`FAILED_STOP_SPEED`] there.
+    /// (a true joint speed above `crate::sim::REST_SPEED`) and still
+    /// moved faster than `FAILED_STOP_SPEED` there.
     pub fn is_failed_stop(&self) -> bool {
         matches!(
             self,
@@ -270,7 +270,7 @@ pub enum ExperimentError {
     /// refuses it, never run unconstrained.
     #[error(transparent)]
     Build(#[from] crate::control::BuildError),
-    /// The run would record more values than [`MAX_RECORD_VALUES`].
+    /// The run would record more values than `MAX_RECORD_VALUES`.
     #[error(
         "the run would record {samples} samples × {columns} values = {values} values, more than the limit of {limit}: \
          shorten the path or the hold, or use a longer sample time"
@@ -282,7 +282,7 @@ pub enum ExperimentError {
         columns: usize,
         /// `samples × columns` (saturating).
         values: usize,
-        /// [`MAX_RECORD_VALUES`].
+        /// `MAX_RECORD_VALUES`.
         limit: usize,
     },
     /// The caller interrupted the run ([`super::Experiment::run_cancellable`]) at path time

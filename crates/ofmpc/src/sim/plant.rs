@@ -527,7 +527,7 @@ impl Plant {
     /// each [`Self::advance`]: `ts` must be a whole number of the settings'
     /// substeps ([`PlantSettings::validate_for`]). The faults of the
     /// settings are matched to samples of `ts` here, once
-    /// ([`FaultSchedule::for_plant`]); the path starts at once
+    /// (`FaultSchedule::for_plant`); the path starts at once
     /// ([`Self::start_path_after`]).
     pub fn with_period(
         robot: Robot,
@@ -603,7 +603,7 @@ impl Plant {
     /// The path — sample 0 of the faults' schedule, whose times are path
     /// times — begins after `samples` more periods: a loop that holds the
     /// robot at rest before the path (the adaptive controllers'
-    /// identification, [`super::RunEvents::pre_roll`]) says so before its
+    /// identification, `super::RunEvents::pre_roll`) says so before its
     /// first sample, and no fault happens in those periods. Without it the
     /// path begins with the plant's first period.
     pub fn start_path_after(&mut self, samples: usize) {

@@ -272,7 +272,7 @@ impl Sensor {
     }
 
     /// Replaces the non-finite entries of `x` by the model's prediction
-    /// ([`MeasurementGuard::check`]); returns whether it did (a fault).
+    /// (`MeasurementGuard::check`); returns whether it did (a fault).
     pub fn repair(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64]) -> bool {
         self.guard.check(model, x)
     }

@@ -136,7 +136,7 @@ impl SupervisedController {
     /// of `settings`, at the controller's period; `delay_samples`: how old
     /// the readings are (the repair's prediction uses the torque of that
     /// sample); `track`: whether the repair also predicts between lost
-    /// samples ([`MeasurementGuard::new`]).
+    /// samples (`MeasurementGuard::new`).
     pub fn new(
         mpc: Mpc,
         robot: &Robot,

@@ -65,11 +65,11 @@ pub const GROWTH_CEILING_RAD: f64 = std::f64::consts::PI;
 /// above 1; `analysis::stability`). With `ε_k = max_i |w_i − q_i|` (the true
 /// joint error at sample `k`) and the floor `f` = the divergence threshold:
 /// * [`DivergenceRule::Growth`] (the default): diverged when `ε_k > f` and
-///   either `ε_k ≥` [`GROWTH_FACTOR`] `· max{ε_j : k − 2M ≤ j < k − M}`
-///   (`M` = [`GROWTH_WINDOW_S`]`/Ts` samples, or half the samples so far at
+///   either `ε_k ≥` `GROWTH_FACTOR` `· max{ε_j : k − 2M ≤ j < k − M}`
+///   (`M` = `GROWTH_WINDOW_S``/Ts` samples, or half the samples so far at
 ///   the start of a run, not before `M/2` samples: the error quadrupled
 ///   within a second), or a joint
-///   is beyond its position limits, or `ε_k >` [`GROWTH_CEILING_RAD`]. A
+///   is beyond its position limits, or `ε_k >` `GROWTH_CEILING_RAD`. A
 ///   step disturbance at the start (a payload that sags the arm within
 ///   0.1–0.3 s) rises by less than the factor against the look-back, an
 ///   instability keeps growing (the paper's unstable runs grow 2–4× per
@@ -502,10 +502,10 @@ pub struct SupervisorSettings {
     pub divergence_threshold_rad: f64,
     /// How a divergence is recognised ([`DivergenceRule`]).
     pub divergence: DivergenceRule,
-    /// Check each measurement ([`Plausibility`]) and replace rejected values
+    /// Check each measurement (`Plausibility`) and replace rejected values
     /// by predictions.
     pub plausibility_check: bool,
-    /// Stop safely ([`SafeStop`]) on a divergence, a failed controller step
+    /// Stop safely (`SafeStop`) on a divergence, a failed controller step
     /// or an implausible measurement, instead of ending the run.
     pub safe_stop: bool,
     /// A safety function: a joint error of the state the controller is
@@ -522,7 +522,7 @@ pub struct Stopping {
     /// Why.
     pub reason: StopReason,
     /// The end of the last period in which a joint moved faster than
-    /// [`REST_SPEED`] (s).
+    /// `REST_SPEED` (s).
     pub moving_until: f64,
     /// Every joint stayed within its position limits since the stop began.
     pub within_limits: bool,

@@ -114,7 +114,7 @@ pub fn triple_pole_is_stable(omega_n: f64, ts: f64, gamma: f64) -> bool {
 /// which the sampled triple-pole loop at `omega_n` stays stable (module
 /// docs), to a relative `1e-9`: the boundaries of the stable interval of
 /// `γ = 1/r` around `γ = 1`, found by bisection on the Jury test
-/// ([`triple_pole_is_stable`]). `(NaN, NaN)` when the loop is not stable at
+/// (`triple_pole_is_stable`). `(NaN, NaN)` when the loop is not stable at
 /// the nominal inertia (`omega_n` or `ts` not finite and `> 0`).
 pub fn triple_pole_inertia_ratio_range(omega_n: f64, ts: f64) -> (f64, f64) {
     let valid = omega_n > 0.0 && ts > 0.0 && omega_n.is_finite() && ts.is_finite();

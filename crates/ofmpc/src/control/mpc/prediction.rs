@@ -351,7 +351,7 @@ pub const fn predicted_outputs_work(n: usize) -> usize {
 /// * incremental (Eq. (20)–(29); `y_k = Some(q_k)`): from `z_0 = Δx_k = x_k − x_{k−1}`,
 ///   `ŷ_{k+j+1} = ŷ_{k+j} + Δq_{j+1}` from `ŷ_k = y_k` (`F_I y_k + F2 Δx_k + G2 ΔU`).
 ///
-/// `work` holds [`predicted_outputs_work`]`(n)` values. Allocates nothing.
+/// `work` holds `predicted_outputs_work``(n)` values. Allocates nothing.
 pub fn predicted_outputs(
     zoh: &Zoh,
     z0: &[f64],

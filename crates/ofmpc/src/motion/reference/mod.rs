@@ -35,7 +35,7 @@ pub(crate) fn sample_count(duration: f64, ts: f64) -> f64 {
 /// step within its speed limit times `ts`. The first sample takes the
 /// solution closest to the start pose ([`Robot::start_q`], within limits); each later
 /// one the solution closest to the previous sample. Where the path's first sample is the
-/// start pose's tool pose (within [`START_POSE_TOLERANCE`]; a program starts there), it is
+/// start pose's tool pose (within `START_POSE_TOLERANCE`; a program starts there), it is
 /// the start pose itself: the run's initial state is then the start pose even where the
 /// inverse kinematics would pick another configuration of that tool pose (a redundant arm,
 /// a singular wrist). Where they differ, the first sample is the inverse kinematics' solution

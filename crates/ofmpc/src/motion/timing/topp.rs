@@ -89,7 +89,7 @@ pub(crate) enum RunError {
     TooManySamples { count: f64, line: usize },
 }
 
-/// A blended run with its timing: `s(t)` stored every [`RUN_STEP`].
+/// A blended run with its timing: `s(t)` stored every `RUN_STEP`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Run {
     pieces: Vec<Piece>,
