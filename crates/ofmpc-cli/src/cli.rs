@@ -60,7 +60,7 @@ pub enum Analyze {
     /// Each controller over a grid of measurement delay × encoder quantization ×
     /// friction-estimate error × model (inertia) error × payload: where it holds (stable,
     /// steady error, RMS), as robustness.json, a figure and report.html, and a table.
-    Robustness(crate::commands::robustness::RobustnessArgs),
+    Robustness(RobustnessArgs),
 }
 
 /// `ofmpc trajectory`
@@ -348,4 +348,41 @@ pub struct InitRobotArgs {
     /// tree such as an arm with a hand and fingers loads with the hand as its tip.
     #[arg(long)]
     pub tip: Option<String>,
+}
+
+/// `ofmpc analyze robustness`
+#[derive(Debug, Args)]
+pub struct RobustnessArgs {
+    /// Scenario file (TOML): the arm, program, tuning and plant the grid varies
+    /// (default: the built-in default scenario, the paper's).
+    pub scenario: Option<PathBuf>,
+    /// Controllers, comma-separated (default: the scenario's).
+    #[arg(long)]
+    pub controllers: Option<String>,
+    /// Measurement delays (control periods), comma-separated.
+    #[arg(long, default_value = "0,1")]
+    pub delay: String,
+    /// Encoder resolutions in bits per revolution (0 = ideal; > 0 also derives the velocity
+    /// from the encoder), comma-separated.
+    #[arg(long, default_value = "0,20")]
+    pub encoder_bits: String,
+    /// Friction-estimate errors (the controllers' estimates are the plant's friction times
+    /// 1 − e), comma-separated.
+    #[arg(long, default_value = "0.2")]
+    pub friction_error: String,
+    /// Model errors: `[plant] inertia_error` values, comma-separated.
+    #[arg(long, default_value = "0,0.1")]
+    pub inertia_error: String,
+    /// Payloads (kg), comma-separated.
+    #[arg(long, default_value = "0,6")]
+    pub payload: String,
+    /// A cell holds when its run ends "ok" with a steady Cartesian error at most this (mm).
+    #[arg(long, default_value_t = 0.01)]
+    pub steady_mm: f64,
+    /// Output directory (robustness.json, robustness.png/.svg, report.html).
+    #[arg(long, default_value = "ofmpc-out")]
+    pub out: PathBuf,
+    /// JSON or words on stdout.
+    #[command(flatten)]
+    pub format: FormatArgs,
 }

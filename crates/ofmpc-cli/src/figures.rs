@@ -3,7 +3,7 @@
 //! payload), the Cartesian errors, the path, and the payload sweep.
 
 use crate::output::plot::{
-    Figure, Panel, Series, Series3d, COLOR_FIRST, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
+    controller_color, Figure, Panel, Series, Series3d, COLOR_REFERENCE, COLOR_SECOND, COLOR_USUAL,
 };
 use ofmpc::motion::JointReference;
 use ofmpc::motion::{CartesianSample, CartesianTrajectory};
@@ -11,24 +11,6 @@ use ofmpc::sim::{Record, RunMetrics};
 
 /// Palette indices for joints 1..6 (no yellow: it vanishes on white).
 const JOINT_COLORS: [usize; 6] = [1, 2, 3, 4, 5, 6];
-
-/// Palette index of a controller by name: a distinct colour for every kind, the baselines
-/// (`pid`, `ctc`, `ctc-adaptive`, `dob-mpc`) included; an adaptive variant is far from its base
-/// (reddish purple and indigo against blue and green).
-pub fn controller_color(name: &str) -> usize {
-    match name {
-        "usual" => COLOR_USUAL,
-        "first" => COLOR_FIRST,
-        "second" => COLOR_SECOND,
-        "first-adaptive" => 6,
-        "second-adaptive" => 9,
-        "pid" => 4,
-        "ctc" => 5,
-        "ctc-adaptive" => 8,
-        "dob-mpc" => 10,
-        _ => COLOR_REFERENCE,
-    }
-}
 
 /// Floor of the error plots' log axes: |e| below it (exact zeros) is drawn at it.
 pub const ERROR_FLOOR_RAD: f64 = 1e-15;

@@ -153,7 +153,7 @@ fn radius_figure(curves: &[RadiusCurve], by_payload: &[Vec<f64>]) -> Figure {
             capped(c.kind, radius),
             PAYLOAD_AXIS_KG.to_vec(),
             radius.iter().map(|r| r.min(RADIUS_CAP)).collect(),
-            crate::figures::controller_color(c.kind.name()),
+            crate::output::plot::controller_color(c.kind.name()),
         ));
     }
     p.series.push(Series::dashed(
@@ -182,7 +182,7 @@ fn radius_alpha_figure(curves: &[RadiusCurve]) -> Figure {
             capped(c.kind, &c.radius),
             c.alpha.clone(),
             c.radius.iter().map(|r| r.min(RADIUS_CAP)).collect(),
-            crate::figures::controller_color(c.kind.name()),
+            crate::output::plot::controller_color(c.kind.name()),
         ));
     }
     if let Some(alphas) = curves.first().map(|c| &c.alpha) {

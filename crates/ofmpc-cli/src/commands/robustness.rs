@@ -4,53 +4,15 @@
 //! `report.html` (staged, as every command's output), and a table on stdout.
 
 use super::analyze::progress;
-use crate::args::FormatArgs;
+use crate::cli::RobustnessArgs;
 use crate::output::console;
 use crate::output::plot::{render_both, Figure, Panel, Series};
 use crate::output::report::{Image, Report, Table};
 use anyhow::Context;
-use clap::Args;
 use ofmpc_scenario::robustness::{robustness, Robustness, RobustnessGrid};
 use ofmpc_scenario::{Scenario, ScenarioFile};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// `ofmpc analyze robustness`
-#[derive(Debug, Args)]
-pub struct RobustnessArgs {
-    /// Scenario file (TOML): the arm, program, tuning and plant the grid varies
-    /// (default: the built-in default scenario, the paper's).
-    pub scenario: Option<PathBuf>,
-    /// Controllers, comma-separated (default: the scenario's).
-    #[arg(long)]
-    pub controllers: Option<String>,
-    /// Measurement delays (control periods), comma-separated.
-    #[arg(long, default_value = "0,1")]
-    pub delay: String,
-    /// Encoder resolutions in bits per revolution (0 = ideal; > 0 also derives the velocity
-    /// from the encoder), comma-separated.
-    #[arg(long, default_value = "0,20")]
-    pub encoder_bits: String,
-    /// Friction-estimate errors (the controllers' estimates are the plant's friction times
-    /// 1 − e), comma-separated.
-    #[arg(long, default_value = "0.2")]
-    pub friction_error: String,
-    /// Model errors: `[plant] inertia_error` values, comma-separated.
-    #[arg(long, default_value = "0,0.1")]
-    pub inertia_error: String,
-    /// Payloads (kg), comma-separated.
-    #[arg(long, default_value = "0,6")]
-    pub payload: String,
-    /// A cell holds when its run ends "ok" with a steady Cartesian error at most this (mm).
-    #[arg(long, default_value_t = 0.01)]
-    pub steady_mm: f64,
-    /// Output directory (robustness.json, robustness.png/.svg, report.html).
-    #[arg(long, default_value = "ofmpc-out")]
-    pub out: PathBuf,
-    /// JSON or words on stdout.
-    #[command(flatten)]
-    pub format: FormatArgs,
-}
 
 /// The files `analyze robustness` writes into `--out`.
 const FILES: [&str; 4] = [
@@ -235,7 +197,7 @@ fn figure(r: &Robustness) -> Figure {
     steady.log_y = true;
     rms.log_y = true;
     for s in &r.summary {
-        let color = crate::figures::controller_color(&s.controller);
+        let color = crate::output::plot::controller_color(&s.controller);
         let mine = || {
             r.cells
                 .iter()

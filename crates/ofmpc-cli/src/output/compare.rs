@@ -127,7 +127,7 @@ pub(crate) fn rms_figure(metrics: &[RunMetrics], controllers: &[ControllerKind])
             .collect();
         let (ok, bad): (Vec<&RunMetrics>, Vec<&RunMetrics>) =
             mine.iter().partition(|m| m.status == RunStatus::Ok);
-        let color = crate::figures::controller_color(k.name());
+        let color = crate::output::plot::controller_color(k.name());
         // The baselines dashed: the palette has 8 colours for 9 controllers.
         let line = if k.is_baseline() {
             Series::dashed

@@ -88,6 +88,24 @@ pub const COLOR_FIRST: usize = 2;
 /// Palette index of the second incremental predictive algorithm (bluish green).
 pub const COLOR_SECOND: usize = 3;
 
+/// Palette index of a controller by name: a distinct colour for every kind, the baselines
+/// (`pid`, `ctc`, `ctc-adaptive`, `dob-mpc`) included; an adaptive variant is far from its base
+/// (reddish purple and indigo against blue and green).
+pub fn controller_color(name: &str) -> usize {
+    match name {
+        "usual" => COLOR_USUAL,
+        "first" => COLOR_FIRST,
+        "second" => COLOR_SECOND,
+        "first-adaptive" => 6,
+        "second-adaptive" => 9,
+        "pid" => 4,
+        "ctc" => 5,
+        "ctc-adaptive" => 8,
+        "dob-mpc" => 10,
+        _ => COLOR_REFERENCE,
+    }
+}
+
 /// The palette colour for index `i` (wraps around after [`PALETTE`]`.len()`).
 pub fn color(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]

@@ -9,7 +9,7 @@
 //! z, as URDF viewers do. A file without a `<visual_scene>` contributes every geometry as
 //! it stands. Materials and normals are not read (the page computes per-face normals).
 
-use super::{MeshError, TriMesh, MAX_TRIANGLES};
+use super::tri_mesh::{MeshError, TriMesh, MAX_TRIANGLES};
 use nalgebra::{Matrix4, Rotation3, Unit, Vector3};
 use quick_xml::events::{BytesStart, Event};
 use std::collections::HashMap;

@@ -8,8 +8,8 @@
 //! quantized to 16 bits per axis in the mesh's bounding box (at most `extent / 65 535`, a few
 //! µm on an arm's link) and base64-encoded; the page computes per-face normals.
 
+use super::tri_mesh::TriMesh;
 use super::visuals::Visuals;
-use super::TriMesh;
 use crate::output::report::base64;
 use serde_json::{json, Value};
 use std::collections::{HashMap, HashSet};

@@ -2,7 +2,7 @@
 //! ones counted back from the last vertex, `a/t/n` forms; polygons split into fans). Other
 //! statements (normals, texture coordinates, groups, materials) are skipped.
 
-use super::{MeshError, TriMesh, MAX_TRIANGLES};
+use super::tri_mesh::{MeshError, TriMesh, MAX_TRIANGLES};
 
 /// Parses an OBJ document (`name`: the file, for messages).
 pub fn parse(text: &str, name: &str) -> Result<TriMesh, MeshError> {

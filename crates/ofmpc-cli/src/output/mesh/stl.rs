@@ -5,7 +5,7 @@
 //! A file is binary when its size is `84 + 50·count` (binary files may also start with
 //! `solid`); the normals are not read (the page computes per-face normals).
 
-use super::{MeshError, TriMesh, MAX_TRIANGLES};
+use super::tri_mesh::{MeshError, TriMesh, MAX_TRIANGLES};
 
 /// Parses an STL file's bytes (`name`: the file, for messages).
 pub fn parse(bytes: &[u8], name: &str) -> Result<TriMesh, MeshError> {
