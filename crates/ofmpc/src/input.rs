@@ -170,12 +170,12 @@ pub fn quote(s: &str, max: usize) -> String {
 }
 
 /// The longest line of a message kept whole by [`for_reader`] (characters).
-pub const MESSAGE_LINE_CHARS: usize = 1000;
+pub(crate) const MESSAGE_LINE_CHARS: usize = 1000;
 
 /// A message made readable (issue #36), as the command and the Python bindings show it: a
 /// number written with more than 19 digits (`1e300` printed in full, a saturated count) is
 /// written in scientific notation with four significant digits (`1.000e300`), and a line
-/// longer than [`MESSAGE_LINE_CHARS`] is cut there with its length said, so that input
+/// longer than `MESSAGE_LINE_CHARS` (1000) is cut there with its length said, so that input
 /// quoted whole (a 3 MB TOML line) never makes a huge message.
 pub fn for_reader(message: &str) -> String {
     let mut out = String::with_capacity(message.len().min(4096));

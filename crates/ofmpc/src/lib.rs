@@ -72,7 +72,13 @@ pub mod dynamics;
 pub mod gcode;
 pub mod geometry;
 pub mod ident;
+// Inverse kinematics behind `robot::IkMethod` (the planner calls it): for the workspace's own
+// tests, not part of the API.
+#[doc(hidden)]
 pub mod ik;
+// Bounded, checked reading of input files and quoting of user text in messages, shared by the
+// workspace's crates (CLI, scenario, Python): not part of the API.
+#[doc(hidden)]
 pub mod input;
 mod linalg;
 #[doc(hidden)]

@@ -200,7 +200,7 @@ pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 
 /// Rotation by `angle` about the unit `axis` (Rodrigues).
 #[inline]
-pub fn axis_angle(axis: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
+pub(crate) fn axis_angle(axis: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
     let (s, c) = angle.sin_cos();
     let k = skew(axis);
     Matrix3::identity() + k * s + (k * k) * (1.0 - c)

@@ -82,7 +82,7 @@ pub trait Algorithm {
     /// samples old), before [`Algorithm::step`]: for the controllers that
     /// identify from measured data rather than from the state they act on
     /// (the adaptive kinds on a real arm,
-    /// [`RealArmIdentification`](crate::control::RealArmIdentification)).
+    /// `RealArmIdentification`).
     /// Default: ignored. Allocates nothing.
     fn measurement(&mut self, y: &[f64]) {
         let _ = y;

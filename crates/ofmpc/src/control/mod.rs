@@ -60,9 +60,6 @@ mod step;
 pub use algorithm::Algorithm;
 #[doc(hidden)]
 pub use baselines::baseline::triple_pole_inertia_ratio_range;
-pub use baselines::ctc::CtcController;
-pub use baselines::dob_mpc::DobMpc;
-pub use baselines::pid::PidController;
 pub(crate) use builder::{check_torque_limits, DEFAULT_OBSERVER_POLE};
 pub use builder::{
     model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, ObserverSettings,
@@ -73,15 +70,11 @@ pub use factory::{new_controller, new_controller_with_baselines};
 pub use kind::{ControllerKind, UnknownControllerKind};
 #[doc(hidden)]
 pub use mpc::adaptive::AdaptiveMpc;
-pub use mpc::adaptive::RealArmIdentification;
-pub use mpc::first::FirstMpc;
 #[doc(hidden)]
 pub use mpc::model::LinearLikeModel;
 pub use mpc::model::TermsError;
 #[doc(hidden)]
 pub use mpc::prediction::{fill_f_i, fill_f_ii, fill_w_s, predicted_outputs, Predictions};
-pub use mpc::second::SecondMpc;
-pub use mpc::usual::UsualMpc;
 #[doc(hidden)]
 pub use mpc::zoh::Zoh;
 pub use mpc::zoh::ZohError;

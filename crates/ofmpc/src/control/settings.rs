@@ -176,8 +176,8 @@ pub const DEFAULT_DOB_OBSERVER_BANDWIDTH: f64 = 100.0;
 /// observer of the MPC baseline a pole at `e^(−ω_o·Ts)`.
 ///
 /// Its own settings type, given beside the [`MpcSettings`] where a baseline
-/// is built ([`crate::control::PidController::new`], [`crate::control::CtcController::new`],
-/// [`crate::control::DobMpc::new`], [`crate::control::AdaptiveMpc::new`],
+/// is built (`PidController::new`, `CtcController::new`,
+/// `DobMpc::new`, [`crate::control::AdaptiveMpc::new`],
 /// [`crate::control::new_controller_with_baselines`],
 /// [`crate::control::ControllerBuilder::baselines`]); the predictive controllers of
 /// the paper do not read it.
@@ -324,7 +324,7 @@ pub struct MpcSettings {
     /// Upper bound of the payload mass an adaptive controller identifies
     /// (kg; a multiple of the arm's rated payload, e.g. 1.5 × 6 kg for the
     /// IRB 140). `0` (default): no bound beyond the estimator's own. Read by
-    /// the real-arm identification ([`RealArmIdentification`](crate::control::RealArmIdentification)).
+    /// the real-arm identification (`RealArmIdentification`).
     pub max_payload_kg: f64,
     /// Counts per revolution of the joint encoders the measurement comes
     /// from (e.g. 1048576 for 20 bits). When given (`> 0`), the integrating

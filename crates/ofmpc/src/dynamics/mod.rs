@@ -20,7 +20,9 @@ mod rnea;
 mod terms;
 mod workspace;
 
-pub use forward::{forward_dynamics, kinetic_energy, potential_energy};
+pub use forward::forward_dynamics;
+#[doc(hidden)]
+pub use forward::{kinetic_energy, potential_energy};
 pub use kinematics::{flange_jacobian, forward_kinematics};
 pub use rnea::rnea;
 pub use terms::{coriolis_matrix, crba, gravity, joint_space_terms};

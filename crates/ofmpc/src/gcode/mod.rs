@@ -70,6 +70,7 @@ mod tools;
 pub(crate) use flow::DEFAULT_MAX_STEPS;
 use flow::{Runner, SourceLine};
 use interpreter::Interpreter;
+#[doc(hidden)]
 pub use interpreter::{MAX_EVENTS, MAX_MESSAGE_BYTES, MAX_MOVES};
 use lexer::lex_line;
 pub use program::{

@@ -217,7 +217,10 @@ pub fn rotation_log(q: &UnitQuaternion<f64>) -> Vector3<f64> {
 
 /// Pose error `[p_target − p; log(R_target·Rᵀ)]` (position in m, rotation vector in
 /// rad, both in the base frame): the quantity the geometric Jacobian maps q̇ to.
-pub fn pose_error(target: &Isometry3<f64>, pose: &Isometry3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+pub(crate) fn pose_error(
+    target: &Isometry3<f64>,
+    pose: &Isometry3<f64>,
+) -> (Vector3<f64>, Vector3<f64>) {
     let dp = target.translation.vector - pose.translation.vector;
     let dr = rotation_log(&(target.rotation * pose.rotation.inverse()));
     (dp, dr)

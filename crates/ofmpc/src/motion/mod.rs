@@ -48,8 +48,10 @@ pub use limits::MAX_PLAN_VALUES;
 pub use limits::{JointQuantity, Orientation, ReferenceError, ReferenceFailure};
 #[doc(hidden)]
 pub use path::blend::{blend, Geometry};
+#[doc(hidden)]
+pub use reference::build_reference;
+pub use reference::JointReference;
 pub(crate) use reference::StartTurn;
-pub use reference::{build_reference, JointReference};
 pub use timing::exact::JointLimitedMove;
 pub use timing::timelaw::Profile;
 pub use timing::topp::Run;
@@ -134,7 +136,7 @@ pub struct Plan {
 
 /// Largest number of timing attempts of [`plan_program`] (the first and the replans with
 /// scaled joint limits).
-pub const MAX_TIMING_ATTEMPTS: usize = 6;
+pub(crate) const MAX_TIMING_ATTEMPTS: usize = 6;
 
 /// Parses `text` and plans it: see [`plan_program`].
 ///
@@ -235,7 +237,7 @@ pub fn start_position(robot: &Robot) -> Option<nalgebra::Vector3<f64>> {
 /// Blended runs respect every joint's speed and acceleration limit on every sample of the
 /// reference: the timing uses them, and if the sampled reference still exceeds one (the
 /// jerk filter mixes neighbouring accelerations) the runs are timed again with the limits
-/// scaled down, at most [`MAX_TIMING_ATTEMPTS`] times. A `G61` move whose fastest law would
+/// scaled down, at most `MAX_TIMING_ATTEMPTS` (6) times. A `G61` move whose fastest law would
 /// exceed a joint's speed or acceleration limit is slowed down uniformly until it keeps them
 /// ([`JointLimitedMove`]); the moves so slowed are listed in
 /// [`PlanDiagnostics::joint_limited`]. Before it allocates the reference the planner checks its

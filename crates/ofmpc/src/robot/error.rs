@@ -253,7 +253,7 @@ pub enum UrdfError {
     /// Nothing moves.
     #[error("the URDF has no revolute or prismatic joint: nothing to control")]
     NoMovingJoint,
-    /// More moving joints in the chain than [`super::urdf::MAX_JOINTS`] (the dynamics' n×n
+    /// More moving joints in the chain than `MAX_JOINTS` (1000; the dynamics' n×n
     /// matrices would not fit in memory; no arm comes near).
     #[error(
         "the chain has {count} moving joints, more than the limit of {limit}: check that this \

@@ -19,10 +19,10 @@ pub use error::DrivesError;
 pub use error::{InertiaError, ModelError, PayloadError, UrdfError, UrdfWarning};
 pub use joint::{Joint, JointKind, JointLimits};
 pub use links::LinkFrame;
-pub use perturb::{LinkInertiaError, MAX_INERTIA_ERROR};
+pub use perturb::LinkInertiaError;
+pub(crate) use perturb::MAX_INERTIA_ERROR;
 #[doc(hidden)]
 pub use read::MAX_URDF_BYTES;
-pub use urdf::MAX_JOINTS;
 
 use crate::ik::{OpwParameters, UrKinematics};
 use crate::spatial::{Inertia, Transform};
@@ -33,6 +33,7 @@ use nalgebra::{Matrix3, Vector3};
 /// number and its source: `robots/irb140/PARAMETERS.md` in this crate).
 pub const IRB140_URDF: &str = include_str!("../../robots/irb140/irb140.urdf");
 /// The built-in IRB 140 drive data: armature, torque and speed limits.
+#[doc(hidden)]
 pub const IRB140_DRIVES: &str = include_str!("../../robots/irb140/drives.toml");
 
 /// Standard gravity (m/s²).
@@ -83,7 +84,7 @@ impl Payload {
 
 /// A payload may weigh at most this many times the robot's own moving mass:
 /// beyond, the joint-space inertia loses the robot's terms to round-off.
-pub const MAX_PAYLOAD_RATIO: f64 = 1e3;
+pub(crate) const MAX_PAYLOAD_RATIO: f64 = 1e3;
 
 /// The default start pose: q = 0 where it lies inside every joint's limits, else the centre
 /// of the limits (an infinite bound taken as 0 on its side, the result clamped into the limits).
@@ -510,7 +511,7 @@ impl Robot {
     }
     /// Attaches (or with `None`, removes) a payload at the flange. It must be
     /// physical ([`Payload::validate`]) and weigh at most
-    /// [`MAX_PAYLOAD_RATIO`] times the robot's own moving mass.
+    /// `MAX_PAYLOAD_RATIO` (1000) times the robot's own moving mass.
     pub fn set_payload(&mut self, payload: Option<Payload>) -> Result<(), ModelError> {
         if let Some(p) = &payload {
             p.validate()?;

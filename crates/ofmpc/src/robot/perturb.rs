@@ -34,7 +34,7 @@ pub struct LinkInertiaError {
 
 /// The largest accepted relative standard deviation of the inertial
 /// parameters ([`Robot::with_inertia_error`]).
-pub const MAX_INERTIA_ERROR: f64 = 1.0;
+pub(crate) const MAX_INERTIA_ERROR: f64 = 1.0;
 
 /// A Gaussian generator (splitmix64 + Box–Muller): reproducible from its
 /// seed, independent of the sensor's noise stream.
@@ -69,7 +69,7 @@ impl Robot {
     /// standard deviation `relative_sd` from `seed` (the same seed, the same
     /// robot), and the relative errors drawn, link by link. The payload, if
     /// any, is kept. `relative_sd` must be finite, in
-    /// [0, [`MAX_INERTIA_ERROR`]]; 0 returns the robot unchanged.
+    /// [0, 1] (`MAX_INERTIA_ERROR`); 0 returns the robot unchanged.
     pub fn with_inertia_error(
         &self,
         relative_sd: f64,

@@ -245,7 +245,7 @@ fn continuous_limits(j: &urdf_rs::Joint) -> Result<(f64, f64, f64, f64), UrdfErr
 /// The most moving joints a robot read from a URDF may have: far above any arm (6 to 7, a
 /// few dozen for a hand), far below what the dynamics' n×n matrices can hold in memory
 /// (1000 joints: three 8 MB matrices; 20 000 would need 3.2 GB each).
-pub const MAX_JOINTS: usize = 1000;
+pub(crate) const MAX_JOINTS: usize = 1000;
 
 /// Link names that mark the end of an arm, in order of preference, for the default flange:
 /// exact names first, then parts of names. A finger or other leaf is taken only when no

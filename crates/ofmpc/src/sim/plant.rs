@@ -214,7 +214,7 @@ pub enum PlantSettingsError {
     /// The velocity scale of the smoothed Coulomb friction is not > 0.
     #[error("the Coulomb friction's velocity scale is {0} rad/s: it must be finite and > 0")]
     CoulombVelocity(f64),
-    /// The inertia error is not in [0, [`crate::robot::MAX_INERTIA_ERROR`]].
+    /// The inertia error is not in [0, 1] (`MAX_INERTIA_ERROR`).
     #[error("the inertia error is {0}: it must be a relative standard deviation from 0 to {max}", max = crate::robot::MAX_INERTIA_ERROR)]
     InertiaError(f64),
     /// The Stribeck velocity scale is not > 0.

@@ -112,11 +112,6 @@ impl DobMpc {
         })
     }
 
-    /// The disturbance estimate `d̂` (rad/s², n values).
-    pub fn disturbance(&self) -> &[f64] {
-        &self.d_hat
-    }
-
     /// `d̂_k` into `d_new` from the velocity prediction error (module docs).
     fn observe(&mut self, x: &[f64]) {
         let n = self.n;

@@ -36,11 +36,6 @@ impl SecondMpc {
         })
     }
 
-    /// The aggregated error `ē_{k}` of the last successful step (Eq. (17)).
-    pub fn aggregated_error(&self) -> &[f64] {
-        &self.core.ebar
-    }
-
     /// [`Algorithm::step`](crate::control::Algorithm::step) of the second algorithm:
     /// [`Core::step_with`] with its targets ([`SecondTargets`]).
     fn run_step(
