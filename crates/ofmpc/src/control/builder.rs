@@ -54,11 +54,11 @@
 
 use std::time::{Duration, Instant};
 
+use crate::control::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::algorithm::Algorithm;
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
-use crate::control::mpc::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::mpc::core::{check_finite, check_len};
 use crate::control::observer::StateObserver;
 use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};

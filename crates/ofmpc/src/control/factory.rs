@@ -1,12 +1,12 @@
 //! Builds the algorithm of a kind ([`new_controller_with_baselines`]), for
 //! [`ControllerBuilder`](crate::control::ControllerBuilder).
 
+use crate::control::adaptive::AdaptiveMpc;
 use crate::control::algorithm::Algorithm;
 use crate::control::baselines::ctc::CtcController;
 use crate::control::baselines::dob_mpc::DobMpc;
 use crate::control::baselines::pid::PidController;
 use crate::control::kind::ControllerKind;
-use crate::control::mpc::adaptive::AdaptiveMpc;
 use crate::control::mpc::first::FirstMpc;
 use crate::control::mpc::second::SecondMpc;
 use crate::control::mpc::usual::UsualMpc;

@@ -6,7 +6,7 @@ use std::fmt;
 use std::str::FromStr;
 
 /// Which controller: the paper's three, and the adaptive variants of the
-/// incremental ones (`crate::control::mpc::adaptive`). Serde names: `"usual"`, `"first"`,
+/// incremental ones (`crate::control::adaptive`). Serde names: `"usual"`, `"first"`,
 /// `"second"`, `"first-adaptive"`, `"second-adaptive"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

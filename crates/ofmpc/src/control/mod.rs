@@ -36,13 +36,19 @@
 //!
 //! Layout: the paper's controllers in `mpc/` (model, discretization,
 //! prediction, the shared step skeleton, the three algorithms and their
-//! adaptive variants), the numerical solvers in `solvers/` (least squares,
-//! the structured recursion, the torque-limit QP), the baselines in
-//! `baselines/`; beside them the builder and its object (`builder.rs`), the
-//! step types (`step.rs`), the internal per-kind trait (`algorithm.rs`) and
-//! its factory (`factory.rs`), the settings, the kinds, the observer and
-//! the drive model. Every public item is re-exported here, at one path.
+//! torque-limit step), the numerical solvers in `solvers/` (least squares,
+//! the structured recursion, the box QP), the baselines in `baselines/`
+//! (built on the `mpc/` engine); above both the adaptive variants
+//! (`adaptive.rs`: they wrap an MPC or the CTC baseline); beside them the
+//! builder and its object (`builder.rs`), the step types (`step.rs`) and the
+//! model's failure causes they name (`model_errors.rs`), the internal
+//! per-kind trait (`algorithm.rs`) and its factory (`factory.rs`), the
+//! settings, the kinds, the observer and the drive model. Each of them
+//! imports only those before it in: solvers, settings, drive model, step,
+//! algorithm, mpc, baselines, adaptive, builder. Every public item is
+//! re-exported here, at one path.
 
+mod adaptive;
 mod algorithm;
 mod baselines;
 mod builder;
@@ -50,12 +56,15 @@ pub(crate) mod dead_zone;
 mod drive_model;
 mod factory;
 mod kind;
+mod model_errors;
 mod mpc;
 mod observer;
 mod settings;
 mod solvers;
 mod step;
 
+#[doc(hidden)]
+pub use adaptive::AdaptiveMpc;
 #[doc(hidden)]
 pub use algorithm::Algorithm;
 #[doc(hidden)]
@@ -68,16 +77,13 @@ pub use drive_model::DriveModel;
 #[doc(hidden)]
 pub use factory::{new_controller, new_controller_with_baselines};
 pub use kind::{ControllerKind, UnknownControllerKind};
-#[doc(hidden)]
-pub use mpc::adaptive::AdaptiveMpc;
+pub use model_errors::{TermsError, ZohError};
 #[doc(hidden)]
 pub use mpc::model::LinearLikeModel;
-pub use mpc::model::TermsError;
 #[doc(hidden)]
 pub use mpc::prediction::{fill_f_i, fill_f_ii, fill_w_s, predicted_outputs, Predictions};
 #[doc(hidden)]
 pub use mpc::zoh::Zoh;
-pub use mpc::zoh::ZohError;
 #[doc(hidden)]
 pub use observer::StateObserver;
 pub use settings::{

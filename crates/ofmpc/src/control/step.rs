@@ -4,8 +4,7 @@
 
 use std::time::Duration;
 
-use crate::control::mpc::model::TermsError;
-use crate::control::mpc::zoh::ZohError;
+use crate::control::model_errors::{TermsError, ZohError};
 use crate::control::solvers::constrained::QpStatus;
 use crate::control::solvers::lsq::LsqError;
 

@@ -41,9 +41,10 @@ use crate::control::mpc::model::LinearLikeModel;
 use crate::control::mpc::prediction::{
     predicted_outputs, predicted_outputs_work, PredictionError, Predictions,
 };
+use crate::control::mpc::torque_limits::TorqueLimitQp;
 use crate::control::mpc::zoh::Zoh;
 use crate::control::settings::{MpcSettings, SettingsError, Solver};
-use crate::control::solvers::constrained::{QpStatus, TorqueLimitQp};
+use crate::control::solvers::constrained::QpStatus;
 use crate::control::solvers::dense::gemm;
 use crate::control::solvers::lsq::{LsqError, LsqInfo, LsqWorkspace};
 use crate::control::solvers::structured::{StageError, StageLq};

@@ -4,14 +4,15 @@
 //! ([`prediction`], Eq. (20)–(29)), the step skeleton they share ([`core`])
 //! and the three algorithms: the usual MPC ([`usual`], Eq. (43)), the first
 //! ([`first`], Eq. (32)/(37)) and second ([`second`], Eq. (34)/(39))
-//! offset-free incremental algorithms, with their adaptive variants
-//! ([`adaptive`]).
+//! offset-free incremental algorithms, and the torque-limit step they share
+//! ([`torque_limits`]). Their adaptive variants are one level up (`control/adaptive.rs`):
+//! they also wrap the CTC baseline, which is built on this engine.
 
-pub(crate) mod adaptive;
 pub(crate) mod core;
 pub(crate) mod first;
 pub(crate) mod model;
 pub(crate) mod prediction;
 pub(crate) mod second;
+pub(crate) mod torque_limits;
 pub(crate) mod usual;
 pub(crate) mod zoh;

@@ -4,47 +4,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::control::model_errors::TermsError;
 use crate::dynamics::JointSpaceDynamics;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
-
-/// Why the model terms of one sample cannot be used.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum TermsError {
-    /// The robot model has another number of joints than the controller.
-    #[error("the robot model has {got} joints but the controller was built for {expected}: build the controller with the model's dof()")]
-    DofMismatch {
-        /// Joints of the controller.
-        expected: usize,
-        /// Joints of the model.
-        got: usize,
-    },
-    /// `H`, `C` or `g` returned by the robot model contain NaN or ±∞.
-    #[error("the robot model returned a non-finite entry in {term}[{index}] (column-major): check the state passed to it and the model parameters")]
-    NonFiniteTerm {
-        /// `"H"`, `"C"` or `"g"`.
-        term: &'static str,
-        /// Column-major index of the first bad entry.
-        index: usize,
-    },
-    /// A slice or matrix passed in has the wrong size.
-    #[error("{what} has {got} entries but the model has {expected} joints (n for q, q̇, u, τ; n×n for H and C)")]
-    WrongLength {
-        /// Which argument.
-        what: &'static str,
-        /// Needed length (`n`, or `n·n` for matrices).
-        expected: usize,
-        /// Given length.
-        got: usize,
-    },
-    /// `H` is not symmetric positive definite (Cholesky pivot ≤ 0).
-    #[error("the inertia matrix H is not positive definite (Cholesky pivot {pivot} = {value:e}): check the model's masses, inertias and armature")]
-    InertiaNotPositiveDefinite {
-        /// Index of the failing pivot.
-        pivot: usize,
-        /// The pivot value `H_jj − Σ L_jk²`.
-        value: f64,
-    },
-}
 
 /// The terms `H, C, g` of one sample and the derived `f0 = −H⁻¹C`, in
 /// preallocated n×n buffers. [`LinearLikeModel::update`] allocates nothing.

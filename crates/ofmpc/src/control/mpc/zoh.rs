@@ -22,6 +22,7 @@
 
 use nalgebra::DMatrix;
 
+use crate::control::model_errors::ZohError;
 use crate::control::solvers::dense::{gemm, norm1};
 
 /// Largest 1-norm of the scaled `X = M/2^s` summed by the Taylor series.
@@ -30,28 +31,6 @@ const THETA: f64 = 0.25;
 const TERMS: usize = 12;
 /// Largest accepted number of doublings (‖M‖₁ up to 2^60·θ).
 const MAX_SQUARINGS: u32 = 60;
-
-/// Why a discretization failed.
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum ZohError {
-    /// `f0·Ts` has a non-finite entry or a norm too large to exponentiate.
-    #[error("f0·Ts has 1-norm {norm:e}, which cannot be exponentiated (non-finite or above 2^60/4): check the model's Coriolis terms and the sampling period")]
-    BadNorm {
-        /// The 1-norm of `f0·Ts`.
-        norm: f64,
-    },
-    /// `f0` (or an output matrix) has the wrong shape.
-    #[error("a matrix has shape {got:?} but the discretization was built for n = {n} (f0 n×n, Ad 2n×2n, Bd 2n×n)")]
-    WrongShape {
-        /// Joints the `Zoh` was built for.
-        n: usize,
-        /// Shape of the given `f0`.
-        got: (usize, usize),
-    },
-    /// The result overflowed.
-    #[error("the zero-order-hold matrices overflowed (e^(f0·Ts) too large): the model is violently unstable over one sample")]
-    Overflow,
-}
 
 /// ZOH discretization of `q̈ = f0 q̇ + u` for `n` joints, with preallocated
 /// n×n buffers. Allocation-free after [`Zoh::new`].
