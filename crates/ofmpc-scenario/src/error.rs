@@ -321,58 +321,8 @@ pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
 /// with that value, e.g. `[plant] substep = 1e-300`.
 pub fn experiment_key(e: &ExperimentError) -> Option<String> {
     Some(match e {
-        ExperimentError::Loop(l) => match l {
-            LoopSettingsError::HoldTime(v) => format!("[simulation] hold_s = {v}"),
-            LoopSettingsError::DivergenceThreshold(v) => {
-                format!("[simulation] divergence_threshold_rad = {v}")
-            }
-            LoopSettingsError::SteadyWindow { value, .. } => {
-                format!("[simulation] steady_window_s = {value}")
-            }
-            LoopSettingsError::IdentificationTime { value, .. } => {
-                format!("[simulation] identification_s = {value}")
-            }
-            LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
-            LoopSettingsError::FaultTime { index, value } => {
-                format!("[faults] nan_at_s[{index}] = {value}")
-            }
-            LoopSettingsError::DropoutInterval { index, from, to } => {
-                format!("[faults] dropout_s[{index}] = [{from}, {to}]")
-            }
-            LoopSettingsError::MaxJointError(v) => format!("[safety] max_joint_error_rad = {v}"),
-            _ => "[simulation]".into(),
-        },
-        ExperimentError::Plant(PlantError::Settings(p)) => match p {
-            PlantSettingsError::Substep(v) => format!("[plant] substep = {v}"),
-            PlantSettingsError::SubstepRatio { ts, substep, .. } => {
-                format!("[plant] substep = {substep} with [mpc] ts = {ts}")
-            }
-            PlantSettingsError::FrictionLength { kind, .. }
-            | PlantSettingsError::FrictionValue { kind, .. } => format!(
-                "[plant] {}",
-                match kind {
-                    FrictionKind::Viscous => "viscous_friction",
-                    FrictionKind::Stribeck => "stribeck_friction",
-                    _ => "coulomb_friction",
-                }
-            ),
-            PlantSettingsError::InertiaError(v) => format!("[plant] inertia_error = {v}"),
-            PlantSettingsError::StribeckVelocity(v) => format!("[plant] stribeck_velocity = {v}"),
-            PlantSettingsError::ModelMismatch { .. } => "[plant] robot".into(),
-            PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
-            PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
-            PlantSettingsError::Fault {
-                index, what, value, ..
-            } => format!("[plant] faults[{index}].{what} = {value}"),
-            PlantSettingsError::Noise { kind, value } => format!(
-                "[plant] {} = {value}",
-                match kind {
-                    NoiseKind::Position => "position_noise",
-                    _ => "velocity_noise",
-                }
-            ),
-            _ => "[plant]".into(),
-        },
+        ExperimentError::Loop(l) => loop_key(l),
+        ExperimentError::Plant(PlantError::Settings(p)) => plant_key(p),
         ExperimentError::Mpc(SettingsError::DriveModelLength { what, .. })
         | ExperimentError::Mpc(SettingsError::DriveModelValue { what, .. }) => format!(
             "the drives file's {}",
@@ -398,6 +348,66 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
         ExperimentError::Model(_) => "[payload]".into(),
         _ => return None,
     })
+}
+
+/// The `[simulation]`, `[payload]`, `[faults]` or `[safety]` key of a loop setting's error.
+fn loop_key(l: &LoopSettingsError) -> String {
+    match l {
+        LoopSettingsError::HoldTime(v) => format!("[simulation] hold_s = {v}"),
+        LoopSettingsError::DivergenceThreshold(v) => {
+            format!("[simulation] divergence_threshold_rad = {v}")
+        }
+        LoopSettingsError::SteadyWindow { value, .. } => {
+            format!("[simulation] steady_window_s = {value}")
+        }
+        LoopSettingsError::IdentificationTime { value, .. } => {
+            format!("[simulation] identification_s = {value}")
+        }
+        LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
+        LoopSettingsError::FaultTime { index, value } => {
+            format!("[faults] nan_at_s[{index}] = {value}")
+        }
+        LoopSettingsError::DropoutInterval { index, from, to } => {
+            format!("[faults] dropout_s[{index}] = [{from}, {to}]")
+        }
+        LoopSettingsError::MaxJointError(v) => format!("[safety] max_joint_error_rad = {v}"),
+        _ => "[simulation]".into(),
+    }
+}
+
+/// The `[plant]` key of a plant setting's error.
+fn plant_key(p: &PlantSettingsError) -> String {
+    match p {
+        PlantSettingsError::Substep(v) => format!("[plant] substep = {v}"),
+        PlantSettingsError::SubstepRatio { ts, substep, .. } => {
+            format!("[plant] substep = {substep} with [mpc] ts = {ts}")
+        }
+        PlantSettingsError::FrictionLength { kind, .. }
+        | PlantSettingsError::FrictionValue { kind, .. } => format!(
+            "[plant] {}",
+            match kind {
+                FrictionKind::Viscous => "viscous_friction",
+                FrictionKind::Stribeck => "stribeck_friction",
+                _ => "coulomb_friction",
+            }
+        ),
+        PlantSettingsError::InertiaError(v) => format!("[plant] inertia_error = {v}"),
+        PlantSettingsError::StribeckVelocity(v) => format!("[plant] stribeck_velocity = {v}"),
+        PlantSettingsError::ModelMismatch { .. } => "[plant] robot".into(),
+        PlantSettingsError::CoulombVelocity(v) => format!("[plant] coulomb_velocity = {v}"),
+        PlantSettingsError::Delay(v) => format!("[plant] delay_samples = {v}"),
+        PlantSettingsError::Fault {
+            index, what, value, ..
+        } => format!("[plant] faults[{index}].{what} = {value}"),
+        PlantSettingsError::Noise { kind, value } => format!(
+            "[plant] {} = {value}",
+            match kind {
+                NoiseKind::Position => "position_noise",
+                _ => "velocity_noise",
+            }
+        ),
+        _ => "[plant]".into(),
+    }
 }
 
 /// `key: explanation` for an [`ExperimentError`].

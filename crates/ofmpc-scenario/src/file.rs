@@ -385,7 +385,15 @@ impl ScenarioFile {
             let doc: toml::Table = toml::from_str(&text).map_err(parse_error)?;
             s = apply_overrides(doc, overrides)?;
         }
-        let dir = absolute(path.parent().unwrap_or(Path::new(".")));
+        s.resolve_paths(path, overrides);
+        Ok(s)
+    }
+
+    /// Makes the paths of the file (robot, drives, plant robot and drives, program, tool
+    /// table) absolute: against the folder of `file`, or the working directory for a path set
+    /// by one of `overrides`; a built-in model's name stays a name.
+    fn resolve_paths(&mut self, file: &Path, overrides: &[Override]) {
+        let dir = absolute(file.parent().unwrap_or(Path::new(".")));
         let set = |key: &str| overrides.iter().any(|o| o.key == key);
         let base = |key: &str| {
             if set(key) {
@@ -395,22 +403,22 @@ impl ScenarioFile {
             }
         };
         let resolve = |key: &str, p: &Path| absolute(&base(key).join(p));
-        let model = resolve("robot.model", Path::new(&s.robot.model));
-        let builtin = ofmpc::robot::Robot::builtin(&s.robot.model).is_ok();
-        if s.robot.model.ends_with(".urdf")
-            || s.robot.model.contains(['/', std::path::MAIN_SEPARATOR])
+        let model = resolve("robot.model", Path::new(&self.robot.model));
+        let builtin = ofmpc::robot::Robot::builtin(&self.robot.model).is_ok();
+        if self.robot.model.ends_with(".urdf")
+            || self.robot.model.contains(['/', std::path::MAIN_SEPARATOR])
             || (!builtin && model.is_file())
         {
-            s.robot.model = model.display().to_string();
+            self.robot.model = model.display().to_string();
         }
-        s.robot.drives = s
+        self.robot.drives = self
             .robot
             .drives
             .as_deref()
             .map(|p| resolve("robot.drives", p));
         for (key, p) in [
-            ("plant.robot", &mut s.plant.robot),
-            ("plant.drives", &mut s.plant.drives),
+            ("plant.robot", &mut self.plant.robot),
+            ("plant.drives", &mut self.plant.drives),
         ] {
             let builtin = p
                 .as_deref()
@@ -420,17 +428,16 @@ impl ScenarioFile {
                 *p = p.as_deref().map(|p| resolve(key, p));
             }
         }
-        s.program.file = s
+        self.program.file = self
             .program
             .file
             .as_deref()
             .map(|p| resolve("program.file", p));
-        s.program.tool_table = s
+        self.program.tool_table = self
             .program
             .tool_table
             .as_deref()
             .map(|p| resolve("program.tool_table", p));
-        Ok(s)
     }
 
     /// This scenario with `overrides` applied (as to a file's document; a path set by one
@@ -517,67 +524,7 @@ impl ScenarioFile {
         on(mpc.delay_compensation, "[mpc] delay_compensation".into());
         on(mpc.state_observer, "[mpc] state_observer".into());
         on(mpc.observer_friction, "[mpc] observer_friction".into());
-        on(
-            plant.torque_limits,
-            "[plant] torque_limits (saturation)".into(),
-        );
-        on(
-            !plant.coulomb_friction.is_empty(),
-            format!(
-                "[plant] coulomb_friction = {:?} N·m",
-                plant.coulomb_friction
-            ),
-        );
-        on(
-            !plant.viscous_friction.is_empty(),
-            format!(
-                "[plant] viscous_friction = {:?} N·m·s/rad",
-                plant.viscous_friction
-            ),
-        );
-        on(
-            plant.encoder_counts > 0,
-            format!("[plant] encoder_counts = {}", plant.encoder_counts),
-        );
-        on(
-            plant.velocity_from_encoder,
-            "[plant] velocity_from_encoder".into(),
-        );
-        on(
-            plant.delay_samples > 0,
-            format!("[plant] delay_samples = {}", plant.delay_samples),
-        );
-        on(
-            plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
-            "[plant] measurement noise".into(),
-        );
-        on(
-            plant.inertia_error > 0.0,
-            format!(
-                "[plant] inertia_error = {} (seed {})",
-                plant.inertia_error, plant.seed
-            ),
-        );
-        on(
-            !plant.stribeck_friction.is_empty(),
-            format!(
-                "[plant] stribeck_friction = {:?} N·m",
-                plant.stribeck_friction
-            ),
-        );
-        for (key, path) in [("robot", &plant.robot), ("drives", &plant.drives)] {
-            on(
-                path.is_some(),
-                format!(
-                    "[plant] {key} = {}",
-                    path.as_deref().unwrap_or(Path::new("")).display()
-                ),
-            );
-        }
-        on(
-            !plant.faults.is_empty(),
-            format!("[plant] faults ({})", plant.faults.len()),
-        );
+        plant_effects(plant, &mut on);
         on(
             !self.faults.nan_at_s.is_empty(),
             format!("[faults] nan_at_s = {:?}", self.faults.nan_at_s),
@@ -611,6 +558,71 @@ impl ScenarioFile {
             message: e.to_string(),
         })
     }
+}
+
+/// The `[plant]` part of [`ScenarioFile::effects`]: `on(condition, text)` for each setting.
+fn plant_effects(plant: &PlantSettings, on: &mut dyn FnMut(bool, String)) {
+    on(
+        plant.torque_limits,
+        "[plant] torque_limits (saturation)".into(),
+    );
+    on(
+        !plant.coulomb_friction.is_empty(),
+        format!(
+            "[plant] coulomb_friction = {:?} N·m",
+            plant.coulomb_friction
+        ),
+    );
+    on(
+        !plant.viscous_friction.is_empty(),
+        format!(
+            "[plant] viscous_friction = {:?} N·m·s/rad",
+            plant.viscous_friction
+        ),
+    );
+    on(
+        plant.encoder_counts > 0,
+        format!("[plant] encoder_counts = {}", plant.encoder_counts),
+    );
+    on(
+        plant.velocity_from_encoder,
+        "[plant] velocity_from_encoder".into(),
+    );
+    on(
+        plant.delay_samples > 0,
+        format!("[plant] delay_samples = {}", plant.delay_samples),
+    );
+    on(
+        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
+        "[plant] measurement noise".into(),
+    );
+    on(
+        plant.inertia_error > 0.0,
+        format!(
+            "[plant] inertia_error = {} (seed {})",
+            plant.inertia_error, plant.seed
+        ),
+    );
+    on(
+        !plant.stribeck_friction.is_empty(),
+        format!(
+            "[plant] stribeck_friction = {:?} N·m",
+            plant.stribeck_friction
+        ),
+    );
+    for (key, path) in [("robot", &plant.robot), ("drives", &plant.drives)] {
+        on(
+            path.is_some(),
+            format!(
+                "[plant] {key} = {}",
+                path.as_deref().unwrap_or(Path::new("")).display()
+            ),
+        );
+    }
+    on(
+        !plant.faults.is_empty(),
+        format!("[plant] faults ({})", plant.faults.len()),
+    );
 }
 
 /// One override of a scenario key: `key=value`, the key a dotted path into the

@@ -385,51 +385,12 @@ impl Scenario {
             .map_err(|e| settings_error(e.into()))?;
         let payloads = file_payloads(f)?;
         check_model_payload(&robot, f.mpc.model_payload_kg)?;
-        let origin = f
-            .program
-            .origin_mm
-            .map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
-        let orientation = match f.orientation.rpy_deg {
-            None => Orientation::AtZero,
-            Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
-                r.to_radians(),
-                p.to_radians(),
-                y.to_radians(),
-            )),
-        };
-        let profile = parse_profile(&f.timing.profile).map_err(|_| ScenarioError::Profile {
-            key: "[timing] profile".into(),
-            value: f.timing.profile.clone(),
-        })?;
-        let options = PlanOptions {
-            parse: ParseOptions {
-                tool_table: program_tool_table(&f.program)?,
-                ..ParseOptions::with_origin(origin)
-            },
-            timing: TimingOptions {
-                profile,
-                max_speed: f.timing.max_speed_m_s,
-                max_accel: f.timing.max_accel_m_s2,
-                max_jerk: f.timing.max_jerk_m_s3,
-                blend_tolerance: f.timing.tolerance_mm * 1e-3,
-                default_mode: parse_mode(&f.timing.mode, "[timing] mode")?,
-            },
-            orientation,
-            ts: f.mpc.ts,
-        };
+        let options = plan_options(f)?;
         let planned = plan(text, &robot, &options).map_err(|error| ScenarioError::Plan {
             program: program_name.clone(),
             error: Box::new(error),
         })?;
-        warnings.extend(plan_warnings(&program_name, &planned));
-        warnings.extend(friction_warnings(f, &robot));
-        if let Some(w) =
-            friction_substep_warning(&robot, &f.plant, planned.reference.q(0), f.mpc.ts)
-        {
-            warnings.push(w);
-        }
-        let end_s = planned.reference.duration() + f.simulation.hold_s;
-        warnings.extend(events_after_the_end(f, end_s));
+        warnings.extend(run_warnings(f, &robot, &program_name, &planned));
         let (trajectory, reference) = (planned.trajectory, planned.reference);
         // The program's tool length (G43) extends the TCP the run records and follows.
         let robot = robot.with_tool_length(planned.tool_length).unwrap_or(robot);
@@ -616,6 +577,60 @@ fn events_after_the_end(f: &ScenarioFile, end_s: f64) -> Vec<String> {
         }
     }
     w
+}
+
+/// The planner's options from `[program]`, `[orientation]`, `[timing]` and the sample time.
+fn plan_options(f: &ScenarioFile) -> Result<PlanOptions, ScenarioError> {
+    let origin = f
+        .program
+        .origin_mm
+        .map(|o| [o[0] * 1e-3, o[1] * 1e-3, o[2] * 1e-3]);
+    let orientation = match f.orientation.rpy_deg {
+        None => Orientation::AtZero,
+        Some([r, p, y]) => Orientation::Fixed(UnitQuaternion::from_euler_angles(
+            r.to_radians(),
+            p.to_radians(),
+            y.to_radians(),
+        )),
+    };
+    let profile = parse_profile(&f.timing.profile).map_err(|_| ScenarioError::Profile {
+        key: "[timing] profile".into(),
+        value: f.timing.profile.clone(),
+    })?;
+    Ok(PlanOptions {
+        parse: ParseOptions {
+            tool_table: program_tool_table(&f.program)?,
+            ..ParseOptions::with_origin(origin)
+        },
+        timing: TimingOptions {
+            profile,
+            max_speed: f.timing.max_speed_m_s,
+            max_accel: f.timing.max_accel_m_s2,
+            max_jerk: f.timing.max_jerk_m_s3,
+            blend_tolerance: f.timing.tolerance_mm * 1e-3,
+            default_mode: parse_mode(&f.timing.mode, "[timing] mode")?,
+        },
+        orientation,
+        ts: f.mpc.ts,
+    })
+}
+
+/// The warnings of a planned run: the planner's, the friction settings', the substeps' and the
+/// events scheduled after the run's end.
+fn run_warnings(
+    f: &ScenarioFile,
+    robot: &Robot,
+    program_name: &str,
+    planned: &ofmpc::motion::Plan,
+) -> Vec<String> {
+    let mut warnings = plan_warnings(program_name, planned);
+    warnings.extend(friction_warnings(f, robot));
+    if let Some(w) = friction_substep_warning(robot, &f.plant, planned.reference.q(0), f.mpc.ts) {
+        warnings.push(w);
+    }
+    let end_s = planned.reference.duration() + f.simulation.hold_s;
+    warnings.extend(events_after_the_end(f, end_s));
+    warnings
 }
 
 /// The plan's warnings to show, each prefixed with the program's name: the program's own and

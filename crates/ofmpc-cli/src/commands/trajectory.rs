@@ -9,7 +9,7 @@ use crate::output::plot::render_both;
 use crate::tables::reference_csv;
 use anyhow::Context;
 use ofmpc::gcode::ParseOptions;
-use ofmpc::motion::{plan, Orientation, PlanOptions, TimingOptions};
+use ofmpc::motion::{plan, Orientation, Plan, PlanOptions, TimingOptions};
 use ofmpc_scenario::{parse_mode, parse_profile, plan_error_message, read_program, SettingNames};
 use std::path::{Path, PathBuf};
 
@@ -57,23 +57,9 @@ fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 7])> {
     Ok((dir, files))
 }
 
-/// Parses, times and maps the program; writes the CSV and the figure.
-pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
-    // The outputs are checked before any work: no device, FIFO, folder or symbolic link is
-    // replaced, and no input of this run is overwritten.
-    let (out_dir, files) = outputs(&a.out)?;
-    let mut inputs = vec![Input::new(&a.program, "the program")];
-    if Path::new(&a.robot).is_file() {
-        inputs.push(Input::new(&a.robot, "the robot model"));
-    }
-    if let Some(d) = &a.drives {
-        inputs.push(Input::new(d, "the drives file"));
-    }
-    check_destinations(&out_dir, &files, &inputs)?;
-    let robot = load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
-    let file =
-        (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
-    let (name, text) = read_program(file)?;
+/// The planner's options from the command's flags (work offset, tool orientation, tool table,
+/// timing), every value checked.
+fn plan_options(a: &TrajectoryArgs) -> anyhow::Result<PlanOptions> {
     let origin = match &a.origin {
         Some(o) => {
             let v = parse_fixed(
@@ -98,7 +84,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         }
         None => Orientation::AtZero,
     };
-    let options = PlanOptions {
+    Ok(PlanOptions {
         parse: ParseOptions {
             tool_table: super::values::read_tool_table(a.tool_table.as_deref())?,
             ..ParseOptions::with_origin(origin)
@@ -113,9 +99,11 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
         },
         orientation,
         ts: a.ts,
-    };
-    let planned = plan(&text, &robot, &options)
-        .map_err(|e| anyhow::anyhow!("{name}: {}", plan_error_message(&e, &FLAGS)))?;
+    })
+}
+
+/// The planner's warnings on stderr: the program's, the start turn and the joint-limited moves.
+fn warn_plan(name: &str, planned: &Plan) {
     for w in &planned.program.warnings {
         console::warn(&format!("{name}: {w}"));
     }
@@ -125,6 +113,29 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     for w in &planned.diagnostics.joint_limited {
         console::warn(&format!("{name}: {w}"));
     }
+}
+
+/// Parses, times and maps the program; writes the CSV and the figure.
+pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
+    // The outputs are checked before any work: no device, FIFO, folder or symbolic link is
+    // replaced, and no input of this run is overwritten.
+    let (out_dir, files) = outputs(&a.out)?;
+    let mut inputs = vec![Input::new(&a.program, "the program")];
+    if Path::new(&a.robot).is_file() {
+        inputs.push(Input::new(&a.robot, "the robot model"));
+    }
+    if let Some(d) = &a.drives {
+        inputs.push(Input::new(d, "the drives file"));
+    }
+    check_destinations(&out_dir, &files, &inputs)?;
+    let robot = load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
+    let file =
+        (a.program != "paper" || Path::new(&a.program).exists()).then(|| Path::new(&a.program));
+    let (name, text) = read_program(file)?;
+    let options = plan_options(a)?;
+    let planned = plan(&text, &robot, &options)
+        .map_err(|e| anyhow::anyhow!("{name}: {}", plan_error_message(&e, &FLAGS)))?;
+    warn_plan(&name, &planned);
     let (traj, reference) = (&planned.trajectory, &planned.reference);
     let fig = render_both(&figures::path(
         &format!("{name}: path and joint reference"),

@@ -13,7 +13,7 @@ use crate::output::plot::{
 };
 use anyhow::{bail, Context};
 use ofmpc::control::MpcSettings;
-use ofmpc_scenario::analysis::{robust_tuning, Candidate};
+use ofmpc_scenario::analysis::{robust_tuning, Candidate, Tuning};
 use ofmpc_scenario::Scenario;
 use std::path::{Path, PathBuf};
 
@@ -93,6 +93,39 @@ fn base_scenario(a: &TuneArgs) -> anyhow::Result<Scenario> {
     )?)?)
 }
 
+/// The tuned scenario file's text, its header saying how it was found (and a warning when
+/// only the adaptive controllers hold the range).
+fn scenario_text(
+    tuning: &Tuning,
+    lo_kg: f64,
+    hi_kg: f64,
+    controllers: &str,
+    chose: &str,
+) -> anyhow::Result<String> {
+    let (chosen, masses) = (&tuning.chosen, tuning.simulated_kg);
+    if tuning.adaptive {
+        crate::output::console::warn(&format!(
+            "no plain {} tuning (scalar or per-joint weights) holds {lo_kg}..{hi_kg} kg; the scenario runs \
+             {chose} (online payload identification), which held every payload simulated",
+            controllers
+        ));
+    }
+    let margin_text = if tuning.adaptive {
+        "Stability margin of the identified (exact) model, min ln(1/α_lo), ln(α_hi)"
+    } else {
+        "Stability margin (min over the range of ln(α/α_lo), ln(α_hi/α))"
+    };
+    Ok(format!(
+        "# Written by `ofmpc tune --payload-range {lo_kg},{hi_kg}`: `ofmpc run` this file.\n\
+         # Controllers: {chose}. {margin_text}: {:.3}; worst RMS Cartesian error \
+         over {lo_kg}, {}, {hi_kg} kg: {:.4} mm.\n{}",
+        chosen.margin,
+        masses[1],
+        chosen.rms_mm,
+        tuning.file.to_toml()?
+    ))
+}
+
 /// Runs `ofmpc tune`.
 pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     let range =
@@ -124,34 +157,14 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
         "searched in {:.0} s",
         started.elapsed().as_secs_f64()
     ));
-    let (candidates, chosen, masses) = (&tuning.candidates, &tuning.chosen, tuning.simulated_kg);
+    let (candidates, chosen) = (&tuning.candidates, &tuning.chosen);
     let chose = tuning
         .controllers
         .iter()
         .map(|k| k.name())
         .collect::<Vec<_>>()
         .join(",");
-    if tuning.adaptive {
-        crate::output::console::warn(&format!(
-            "no plain {} tuning (scalar or per-joint weights) holds {lo_kg}..{hi_kg} kg; the scenario runs \
-             {chose} (online payload identification), which held every payload simulated",
-            a.controllers
-        ));
-    }
-    let margin_text = if tuning.adaptive {
-        "Stability margin of the identified (exact) model, min ln(1/α_lo), ln(α_hi)"
-    } else {
-        "Stability margin (min over the range of ln(α/α_lo), ln(α_hi/α))"
-    };
-    let text = format!(
-        "# Written by `ofmpc tune --payload-range {lo_kg},{hi_kg}`: `ofmpc run` this file.\n\
-         # Controllers: {chose}. {margin_text}: {:.3}; worst RMS Cartesian error \
-         over {lo_kg}, {}, {hi_kg} kg: {:.4} mm.\n{}",
-        chosen.margin,
-        masses[1],
-        chosen.rms_mm,
-        tuning.file.to_toml()?
-    );
+    let text = scenario_text(&tuning, lo_kg, hi_kg, &a.controllers, &chose)?;
     // The trade-off figure beside it; all three files staged and moved into place together.
     let fig = tradeoff_figure(candidates, chosen);
     let r = render_both(&fig).context("rendering the trade-off figure")?;
