@@ -580,22 +580,7 @@ fn plant_effects(plant: &PlantSettings, on: &mut dyn FnMut(bool, String)) {
             plant.viscous_friction
         ),
     );
-    on(
-        plant.encoder_counts > 0,
-        format!("[plant] encoder_counts = {}", plant.encoder_counts),
-    );
-    on(
-        plant.velocity_from_encoder,
-        "[plant] velocity_from_encoder".into(),
-    );
-    on(
-        plant.delay_samples > 0,
-        format!("[plant] delay_samples = {}", plant.delay_samples),
-    );
-    on(
-        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
-        "[plant] measurement noise".into(),
-    );
+    sensor_effects(plant, on);
     on(
         plant.inertia_error > 0.0,
         format!(
@@ -622,6 +607,26 @@ fn plant_effects(plant: &PlantSettings, on: &mut dyn FnMut(bool, String)) {
     on(
         !plant.faults.is_empty(),
         format!("[plant] faults ({})", plant.faults.len()),
+    );
+}
+
+/// The sensing part of [`plant_effects`]: encoder, delay and noise.
+fn sensor_effects(plant: &PlantSettings, on: &mut dyn FnMut(bool, String)) {
+    on(
+        plant.encoder_counts > 0,
+        format!("[plant] encoder_counts = {}", plant.encoder_counts),
+    );
+    on(
+        plant.velocity_from_encoder,
+        "[plant] velocity_from_encoder".into(),
+    );
+    on(
+        plant.delay_samples > 0,
+        format!("[plant] delay_samples = {}", plant.delay_samples),
+    );
+    on(
+        plant.position_noise > 0.0 || plant.velocity_noise > 0.0,
+        "[plant] measurement noise".into(),
     );
 }
 

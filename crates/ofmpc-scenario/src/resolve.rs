@@ -366,23 +366,7 @@ impl Scenario {
         let (plant_model, plant_warnings) = load_plant_robot(f, &robot)?;
         warnings.extend(plant_warnings);
         let n = robot.dof();
-        f.mpc
-            .validate_for_dof(n)
-            .map_err(|error| ScenarioError::Mpc {
-                error: Box::new(error),
-            })?;
-        let loop_settings = f.loop_settings();
-        let conditions = f.run_conditions();
-        let settings_error = |error| ScenarioError::experiment(None, error);
-        loop_settings
-            .validate()
-            .map_err(|e| settings_error(e.into()))?;
-        conditions
-            .validate()
-            .map_err(|e| settings_error(e.into()))?;
-        f.plant
-            .validate_for(n, f.mpc.ts)
-            .map_err(|e| settings_error(e.into()))?;
+        let (loop_settings, conditions) = checked_settings(f, n)?;
         let payloads = file_payloads(f)?;
         check_model_payload(&robot, f.mpc.model_payload_kg)?;
         let options = plan_options(f)?;
@@ -577,6 +561,32 @@ fn events_after_the_end(f: &ScenarioFile, end_s: f64) -> Vec<String> {
         }
     }
     w
+}
+
+/// The loop settings and run conditions of `f`, with `[mpc]`, `[simulation]` and `[plant]`
+/// checked for a robot of `n` joints.
+fn checked_settings(
+    f: &ScenarioFile,
+    n: usize,
+) -> Result<(ofmpc::sim::LoopSettings, ofmpc::sim::RunConditions), ScenarioError> {
+    f.mpc
+        .validate_for_dof(n)
+        .map_err(|error| ScenarioError::Mpc {
+            error: Box::new(error),
+        })?;
+    let loop_settings = f.loop_settings();
+    let conditions = f.run_conditions();
+    let settings_error = |error| ScenarioError::experiment(None, error);
+    loop_settings
+        .validate()
+        .map_err(|e| settings_error(e.into()))?;
+    conditions
+        .validate()
+        .map_err(|e| settings_error(e.into()))?;
+    f.plant
+        .validate_for(n, f.mpc.ts)
+        .map_err(|e| settings_error(e.into()))?;
+    Ok((loop_settings, conditions))
 }
 
 /// The planner's options from `[program]`, `[orientation]`, `[timing]` and the sample time.

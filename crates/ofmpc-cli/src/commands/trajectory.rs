@@ -57,6 +57,18 @@ fn outputs(out: &Path) -> anyhow::Result<(PathBuf, [PathBuf; 7])> {
     Ok((dir, files))
 }
 
+/// The files the command reads (none of them may be overwritten by its outputs).
+fn inputs(a: &TrajectoryArgs) -> Vec<Input> {
+    let mut inputs = vec![Input::new(&a.program, "the program")];
+    if Path::new(&a.robot).is_file() {
+        inputs.push(Input::new(&a.robot, "the robot model"));
+    }
+    if let Some(d) = &a.drives {
+        inputs.push(Input::new(d, "the drives file"));
+    }
+    inputs
+}
+
 /// The planner's options from the command's flags (work offset, tool orientation, tool table,
 /// timing), every value checked.
 fn plan_options(a: &TrajectoryArgs) -> anyhow::Result<PlanOptions> {
@@ -120,13 +132,7 @@ pub fn trajectory(a: &TrajectoryArgs) -> anyhow::Result<()> {
     // The outputs are checked before any work: no device, FIFO, folder or symbolic link is
     // replaced, and no input of this run is overwritten.
     let (out_dir, files) = outputs(&a.out)?;
-    let mut inputs = vec![Input::new(&a.program, "the program")];
-    if Path::new(&a.robot).is_file() {
-        inputs.push(Input::new(&a.robot, "the robot model"));
-    }
-    if let Some(d) = &a.drives {
-        inputs.push(Input::new(d, "the drives file"));
-    }
+    let inputs = inputs(a);
     check_destinations(&out_dir, &files, &inputs)?;
     let robot = load_model_with(&a.robot, a.drives.as_deref(), &a.chain)?;
     let file =

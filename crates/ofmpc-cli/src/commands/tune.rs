@@ -93,6 +93,26 @@ fn base_scenario(a: &TuneArgs) -> anyhow::Result<Scenario> {
     )?)?)
 }
 
+/// The `tune` summary (stdout, as JSON or in words): the chosen tuning and the search's counts.
+fn tune_summary(tuning: &Tuning, chose: &str, out: &Path, png: &Path) -> serde_json::Value {
+    let (candidates, chosen) = (&tuning.candidates, &tuning.chosen);
+    serde_json::json!({
+        "q_dy": chosen.q_dy,
+        "q_du": chosen.q_du,
+        "wrist_scale": chosen.wrist_scale,
+        "controllers": chose,
+        "adaptive": tuning.adaptive,
+        "model_payload_kg": chosen.model_payload_kg,
+        "stability_margin": chosen.margin,
+        "worst_rms_mm": chosen.rms_mm,
+        "candidates_stable": candidates.iter().filter(|c| c.margin > 0.0).count(),
+        "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
+        "candidates_pruned": candidates.iter().filter(|c| c.pruned).count(),
+        "scenario": out.display().to_string(),
+        "figure": png.display().to_string(),
+    })
+}
+
 /// The tuned scenario file's text, its header saying how it was found (and a warning when
 /// only the adaptive controllers hold the range).
 fn scenario_text(
@@ -174,21 +194,7 @@ pub fn tune(a: &TuneArgs) -> anyhow::Result<()> {
     dir.commit()
         .with_context(|| format!("moving the results into {}", folder.display()))?;
     let png = a.out.with_file_name(&names[1]);
-    let summary = serde_json::json!({
-            "q_dy": chosen.q_dy,
-            "q_du": chosen.q_du,
-            "wrist_scale": chosen.wrist_scale,
-            "controllers": chose,
-            "adaptive": tuning.adaptive,
-            "model_payload_kg": chosen.model_payload_kg,
-            "stability_margin": chosen.margin,
-            "worst_rms_mm": chosen.rms_mm,
-            "candidates_stable": candidates.iter().filter(|c| c.margin > 0.0).count(),
-            "candidates_offset_free": candidates.iter().filter(|c| c.offset_free).count(),
-            "candidates_pruned": candidates.iter().filter(|c| c.pruned).count(),
-            "scenario": a.out.display().to_string(),
-            "figure": png.display().to_string(),
-    });
+    let summary = tune_summary(&tuning, &chose, &a.out, &png);
     let text = if a.format.json() {
         serde_json::to_string_pretty(&summary)?
     } else {

@@ -498,53 +498,7 @@ pub fn check_destinations(target: &Path, rels: &[PathBuf], inputs: &[Input]) -> 
     }
     for rel in rels {
         check_relative(rel)?;
-        let comps: Vec<Component> = rel.components().collect();
-        let mut cur = target.to_path_buf();
-        for (i, c) in comps.iter().enumerate() {
-            cur.push(c);
-            let last = i + 1 == comps.len();
-            let meta = match fs::symlink_metadata(&cur) {
-                Ok(m) => m,
-                Err(e) if e.kind() == io::ErrorKind::NotFound => break,
-                Err(e) => {
-                    push(format!("{}: {e}", cur.display()));
-                    break;
-                }
-            };
-            let t = meta.file_type();
-            if !last {
-                if !t.is_dir() {
-                    push(format!(
-                        "{} is {}, where this run writes a folder",
-                        cur.display(),
-                        describe(t)
-                    ));
-                    break;
-                }
-                continue;
-            }
-            if !t.is_file() {
-                let what = match fs::read_link(&cur) {
-                    Ok(to) => format!("a symbolic link to {}", to.display()),
-                    Err(_) => describe(t).to_string(),
-                };
-                push(format!(
-                    "{} is {what}, where this run writes a file (it is never replaced or \
-                     written through)",
-                    cur.display()
-                ));
-            } else if let Some(input) = inputs
-                .iter()
-                .find(|i| i.id.is_some() && i.id == FileId::of(&cur))
-            {
-                push(format!(
-                    "{} is {} of this run ({}); it is never overwritten",
-                    cur.display(),
-                    input.role,
-                    input.path.display()
-                ));
-            }
-        }
+        destination_conflicts(target, rel, inputs, &mut push);
     }
     if conflicts.is_empty() {
         return Ok(());
@@ -558,6 +512,64 @@ pub fn check_destinations(target: &Path, rels: &[PathBuf], inputs: &[Input]) -> 
             if conflicts.len() == 1 { "it" } else { "them" }
         ),
     ))
+}
+
+/// The conflicts of writing `rel` into `target` (see [`check_destinations`]), each given to
+/// `push`: a component on the way that is not a folder, a destination that is not a regular
+/// file, or one that is an input of this run.
+fn destination_conflicts(
+    target: &Path,
+    rel: &Path,
+    inputs: &[Input],
+    push: &mut dyn FnMut(String),
+) {
+    let comps: Vec<Component> = rel.components().collect();
+    let mut cur = target.to_path_buf();
+    for (i, c) in comps.iter().enumerate() {
+        cur.push(c);
+        let last = i + 1 == comps.len();
+        let meta = match fs::symlink_metadata(&cur) {
+            Ok(m) => m,
+            Err(e) if e.kind() == io::ErrorKind::NotFound => break,
+            Err(e) => {
+                push(format!("{}: {e}", cur.display()));
+                break;
+            }
+        };
+        let t = meta.file_type();
+        if !last {
+            if !t.is_dir() {
+                push(format!(
+                    "{} is {}, where this run writes a folder",
+                    cur.display(),
+                    describe(t)
+                ));
+                break;
+            }
+            continue;
+        }
+        if !t.is_file() {
+            let what = match fs::read_link(&cur) {
+                Ok(to) => format!("a symbolic link to {}", to.display()),
+                Err(_) => describe(t).to_string(),
+            };
+            push(format!(
+                "{} is {what}, where this run writes a file (it is never replaced or \
+                 written through)",
+                cur.display()
+            ));
+        } else if let Some(input) = inputs
+            .iter()
+            .find(|i| i.id.is_some() && i.id == FileId::of(&cur))
+        {
+            push(format!(
+                "{} is {} of this run ({}); it is never overwritten",
+                cur.display(),
+                input.role,
+                input.path.display()
+            ));
+        }
+    }
 }
 
 /// An output folder whose files appear only when the whole run succeeded.

@@ -168,17 +168,6 @@ fn numbers<T: std::str::FromStr>(s: &str, what: &str, name: &str) -> Result<Vec<
 /// Parses a Collada document (`name`: the file, for messages).
 pub fn parse(text: &str, name: &str) -> Result<TriMesh, MeshError> {
     let root = document(text, name)?;
-    let asset = root.child("asset");
-    let meter = asset
-        .and_then(|a| a.child("unit"))
-        .and_then(|u| u.attr("meter"))
-        .and_then(|m| m.trim().parse::<f64>().ok())
-        .filter(|m| m.is_finite() && *m > 0.0)
-        .unwrap_or(1.0);
-    let up = asset
-        .and_then(|a| a.child("up_axis"))
-        .map(|u| u.text.trim().to_ascii_uppercase())
-        .unwrap_or_else(|| "Y_UP".into());
     let mut geometries: HashMap<&str, &Element> = HashMap::new();
     for lib in root.all("library_geometries") {
         for g in lib.all("geometry") {
@@ -232,6 +221,24 @@ pub fn parse(text: &str, name: &str) -> Result<TriMesh, MeshError> {
             }
         }
     }
+    to_metres_z_up(&root, &mut out);
+    Ok(out)
+}
+
+/// The mesh in metres with z up: scaled by the document's `<asset><unit meter>` and turned
+/// from its `<up_axis>` (default `Y_UP`).
+fn to_metres_z_up(root: &Element, out: &mut TriMesh) {
+    let asset = root.child("asset");
+    let meter = asset
+        .and_then(|a| a.child("unit"))
+        .and_then(|u| u.attr("meter"))
+        .and_then(|m| m.trim().parse::<f64>().ok())
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(1.0);
+    let up = asset
+        .and_then(|a| a.child("up_axis"))
+        .map(|u| u.text.trim().to_ascii_uppercase())
+        .unwrap_or_else(|| "Y_UP".into());
     // Units to metres, the up axis to z.
     let turn: [[f64; 3]; 3] = match up.as_str() {
         "X_UP" => [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]],
@@ -242,7 +249,6 @@ pub fn parse(text: &str, name: &str) -> Result<TriMesh, MeshError> {
         let r = |i: usize| meter * (turn[i][0] * p[0] + turn[i][1] * p[1] + turn[i][2] * p[2]);
         [r(0), r(1), r(2)]
     });
-    Ok(out)
 }
 
 /// The visual scene drawn: the one `<scene><instance_visual_scene url>` names, else the first.
@@ -354,14 +360,13 @@ fn geometry(mesh: &Element, name: &str) -> Result<TriMesh, MeshError> {
     Ok(out)
 }
 
-/// Appends the triangles of a `<triangles>`, `<polylist>` or `<polygons>` element to `out`
-/// (polygons as fans).
-fn primitive(
+/// The positions a primitive's `<input semantic="VERTEX">` names, with that input's offset and
+/// the stride of the primitive's index lists (`(positions, offset, stride)`).
+fn vertex_input<'p>(
     prim: &Element,
-    positions: &HashMap<String, Vec<[f64; 3]>>,
+    positions: &'p HashMap<String, Vec<[f64; 3]>>,
     name: &str,
-    out: &mut TriMesh,
-) -> Result<(), MeshError> {
+) -> Result<(&'p [[f64; 3]], usize, usize), MeshError> {
     let bad = |what: String| MeshError::Malformed {
         path: name.to_string(),
         what,
@@ -387,6 +392,22 @@ fn primitive(
         )));
     };
     let voff = offset(vin);
+    Ok((pos, voff, stride))
+}
+
+/// Appends the triangles of a `<triangles>`, `<polylist>` or `<polygons>` element to `out`
+/// (polygons as fans).
+fn primitive(
+    prim: &Element,
+    positions: &HashMap<String, Vec<[f64; 3]>>,
+    name: &str,
+    out: &mut TriMesh,
+) -> Result<(), MeshError> {
+    let bad = |what: String| MeshError::Malformed {
+        path: name.to_string(),
+        what,
+    };
+    let (pos, voff, stride) = vertex_input(prim, positions, name)?;
     let base = out.positions.len() as u32;
     out.positions.extend_from_slice(pos);
     let fan = |idx: &[u32], out: &mut TriMesh| -> Result<(), MeshError> {

@@ -97,24 +97,7 @@ pub fn resolve(
         if !plain_name(pkg) || !stays_inside(Path::new(rel)) {
             return Err(outside(filename));
         }
-        let mut candidates: Vec<PathBuf> = Vec::new();
-        for dir in urdf_dir.ancestors() {
-            if dir.file_name().is_some_and(|n| n == pkg) {
-                candidates.push(dir.join(rel));
-            }
-            candidates.push(dir.join(pkg).join(rel));
-        }
-        for entry in ros_package_path
-            .unwrap_or("")
-            .split(':')
-            .filter(|e| !e.is_empty())
-        {
-            let e = Path::new(entry);
-            if e.file_name().is_some_and(|n| n == pkg) {
-                candidates.push(e.join(rel));
-            }
-            candidates.push(e.join(pkg).join(rel));
-        }
+        let mut candidates = package_candidates(pkg, rel, urdf_dir, ros_package_path);
         // A file first; else the first thing of that name (a folder, a pipe: the read says
         // what it is rather than "not found").
         if let Some(c) = candidates
@@ -146,6 +129,35 @@ pub fn resolve(
     } else {
         Err(not_found(vec![p]))
     }
+}
+
+/// The places `package://PKG/REL` may be, nearest first: in the folders above `urdf_dir`,
+/// then on `ros_package_path` (see [`resolve`]).
+fn package_candidates(
+    pkg: &str,
+    rel: &str,
+    urdf_dir: &Path,
+    ros_package_path: Option<&str>,
+) -> Vec<PathBuf> {
+    let mut candidates: Vec<PathBuf> = Vec::new();
+    for dir in urdf_dir.ancestors() {
+        if dir.file_name().is_some_and(|n| n == pkg) {
+            candidates.push(dir.join(rel));
+        }
+        candidates.push(dir.join(pkg).join(rel));
+    }
+    for entry in ros_package_path
+        .unwrap_or("")
+        .split(':')
+        .filter(|e| !e.is_empty())
+    {
+        let e = Path::new(entry);
+        if e.file_name().is_some_and(|n| n == pkg) {
+            candidates.push(e.join(rel));
+        }
+        candidates.push(e.join(pkg).join(rel));
+    }
+    candidates
 }
 
 /// A package name: one path component, not `.` or `..`.
