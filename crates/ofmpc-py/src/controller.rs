@@ -90,6 +90,60 @@ fn weight(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Weight> {
         })
 }
 
+/// The keyword arguments of `Controller(...)` (`solver`, the weights, the baselines'
+/// bandwidths) into `settings` and `baselines`; a keyword that does not apply to `kind` or is
+/// unknown is an error.
+fn apply_keywords(
+    kind: ControllerKind,
+    w: &Bound<'_, PyDict>,
+    settings: &mut MpcSettings,
+    baselines: &mut BaselineSettings,
+) -> PyResult<()> {
+    for (key, value) in w.iter() {
+        let key: String = key.extract()?;
+        if (key == "solver" || WEIGHTS.contains(&key.as_str())) && !applies(&key, kind) {
+            return Err(to_py(format!(
+                "{key}= does not apply to a {:?} controller (it would be ignored): \
+                 remove it; a {:?} controller takes ts, horizon and {}",
+                kind.name(),
+                kind.name(),
+                applying(kind)
+            )));
+        }
+        if key == "solver" {
+            settings.solver = solver(&value)?;
+            continue;
+        }
+        if !WEIGHTS.contains(&key.as_str()) {
+            return Err(to_py(format!(
+                "unknown weight or keyword argument {key:?}: Controller() takes ts, \
+                 horizon, solver (\"dense-qr\", \"structured\" or \"auto\"), the weights \
+                 q_yw, q_dy, q_du and q_u, and the baselines' bandwidths pid_bandwidth, \
+                 ctc_bandwidth and dob_observer_bandwidth"
+            )));
+        }
+        let wt = weight(&key, &value)?;
+        match key.as_str() {
+            "q_yw" => settings.q_yw = wt,
+            "q_dy" => settings.q_dy = wt,
+            "q_du" => settings.q_du = wt,
+            "q_u" => settings.q_u = wt,
+            // The baselines' bandwidths (rad/s): pid, ctc/ctc-adaptive, dob-mpc.
+            "pid_bandwidth" => baselines.pid_bandwidth = wt,
+            "ctc_bandwidth" => baselines.ctc_bandwidth = wt,
+            "dob_observer_bandwidth" => baselines.dob_observer_bandwidth = wt,
+            _ => {
+                return Err(to_py(format!(
+                    "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u, \
+                     the baselines' bandwidths pid_bandwidth, ctc_bandwidth and \
+                     dob_observer_bandwidth"
+                )))
+            }
+        }
+    }
+    Ok(())
+}
+
 #[pymethods]
 impl PyController {
     #[new]
@@ -109,48 +163,7 @@ impl PyController {
         };
         let mut baselines = BaselineSettings::default();
         if let Some(w) = weights {
-            for (key, value) in w.iter() {
-                let key: String = key.extract()?;
-                if (key == "solver" || WEIGHTS.contains(&key.as_str())) && !applies(&key, kind) {
-                    return Err(to_py(format!(
-                        "{key}= does not apply to a {:?} controller (it would be ignored): \
-                         remove it; a {:?} controller takes ts, horizon and {}",
-                        kind.name(),
-                        kind.name(),
-                        applying(kind)
-                    )));
-                }
-                if key == "solver" {
-                    settings.solver = solver(&value)?;
-                    continue;
-                }
-                if !WEIGHTS.contains(&key.as_str()) {
-                    return Err(to_py(format!(
-                        "unknown weight or keyword argument {key:?}: Controller() takes ts, \
-                         horizon, solver (\"dense-qr\", \"structured\" or \"auto\"), the weights \
-                         q_yw, q_dy, q_du and q_u, and the baselines' bandwidths pid_bandwidth, \
-                         ctc_bandwidth and dob_observer_bandwidth"
-                    )));
-                }
-                let wt = weight(&key, &value)?;
-                match key.as_str() {
-                    "q_yw" => settings.q_yw = wt,
-                    "q_dy" => settings.q_dy = wt,
-                    "q_du" => settings.q_du = wt,
-                    "q_u" => settings.q_u = wt,
-                    // The baselines' bandwidths (rad/s): pid, ctc/ctc-adaptive, dob-mpc.
-                    "pid_bandwidth" => baselines.pid_bandwidth = wt,
-                    "ctc_bandwidth" => baselines.ctc_bandwidth = wt,
-                    "dob_observer_bandwidth" => baselines.dob_observer_bandwidth = wt,
-                    _ => {
-                        return Err(to_py(format!(
-                            "unknown weight {key:?}: the weights are q_yw, q_dy, q_du and q_u, \
-                             the baselines' bandwidths pid_bandwidth, ctc_bandwidth and \
-                             dob_observer_bandwidth"
-                        )))
-                    }
-                }
-            }
+            apply_keywords(kind, w, &mut settings, &mut baselines)?;
         }
         let n = robot.robot().dof();
         let mut builder = ControllerBuilder::new(kind, robot.robot()).settings(settings);

@@ -271,9 +271,8 @@ pub(super) struct Chain {
     pub(super) link_frames: Vec<LinkFrame>,
 }
 
-/// Parses a URDF text into a [`Chain`]: the chain from the root to `tip` (a link name),
-/// or when `None` the one path of moving joints.
-pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> {
+/// The URDF document of `text`, its nesting bounded and its errors located (line, element).
+fn read(text: &str) -> Result<urdf_rs::Robot, ModelError> {
     // The XML reader recurses on nesting: bounded before it sees the text.
     let limit = crate::input::MAX_XML_DEPTH;
     if let Some((line, column)) = crate::input::xml_too_deep(text, limit) {
@@ -298,6 +297,13 @@ pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> 
             ),
         });
     }
+    Ok(urdf)
+}
+
+/// Parses a URDF text into a [`Chain`]: the chain from the root to `tip` (a link name),
+/// or when `None` the one path of moving joints.
+pub(super) fn parse(text: &str, tip: Option<&str>) -> Result<Chain, ModelError> {
+    let urdf = read(text)?;
     let mut tree = Tree::new(&urdf)?;
     let root = tree.root()?;
     if let Some(t) = tip {

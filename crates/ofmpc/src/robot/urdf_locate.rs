@@ -96,6 +96,37 @@ fn attributes(inside: &str) -> Vec<(&str, &str)> {
     out
 }
 
+/// Line and column of byte offsets met in increasing order, the lines counted from the last
+/// offset on (linear in the text's length).
+struct Lines {
+    counted: usize,
+    line: usize,
+    line_start: usize,
+}
+
+impl Default for Lines {
+    fn default() -> Self {
+        Self {
+            counted: 0,
+            line: 1,
+            line_start: 0,
+        }
+    }
+}
+
+impl Lines {
+    /// `(line, column)` of byte `at` of `text` (1-based), `at` not before the last one.
+    fn at(&mut self, text: &str, at: usize) -> (usize, usize) {
+        let between = &text[self.counted..at];
+        self.line += between.matches('\n').count();
+        if let Some(n) = between.rfind('\n') {
+            self.line_start = self.counted + n + 1;
+        }
+        self.counted = at;
+        (self.line, at - self.line_start + 1)
+    }
+}
+
 /// The first tag (in document order) for which `judge(tag)` is `Some(attribute)`; tags are
 /// judged when they close (their child elements known).
 fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) -> Option<String> {
@@ -109,7 +140,7 @@ fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) 
             }
         }
     };
-    let (mut i, mut counted, mut line, mut line_start) = (0, 0, 1, 0);
+    let (mut i, mut lines) = (0, Lines::default());
     while let Some(open) = text[i..].find('<').map(|o| i + o) {
         let rest = &text[open..];
         let skip_to = |end: &str| rest.find(end).map_or(text.len(), |e| open + e + end.len());
@@ -133,14 +164,7 @@ fn find<'t>(text: &'t str, judge: &dyn Fn(&Tag<'t>) -> Option<Option<&'t str>>) 
             let self_closing = inside.ends_with('/');
             let inside = inside.trim_end_matches('/');
             let name_end = inside.find(char::is_whitespace).unwrap_or(inside.len());
-            // Lines counted from the last tag on (linear in the text's length).
-            let between = &text[counted..open];
-            line += between.matches('\n').count();
-            if let Some(n) = between.rfind('\n') {
-                line_start = counted + n + 1;
-            }
-            counted = open;
-            let column = open - line_start + 1;
+            let (line, column) = lines.at(text, open);
             let tag = Tag {
                 line,
                 column,

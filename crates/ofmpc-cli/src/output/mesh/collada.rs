@@ -395,6 +395,32 @@ fn vertex_input<'p>(
     Ok((pos, voff, stride))
 }
 
+/// Appends the polygon `idx` (indices into the `count` positions appended at `base`) as a
+/// triangle fan.
+fn fan(
+    idx: &[u32],
+    base: u32,
+    count: usize,
+    prim: &Element,
+    name: &str,
+    out: &mut TriMesh,
+) -> Result<(), MeshError> {
+    if let Some(&i) = idx.iter().find(|&&i| i as usize >= count) {
+        return Err(MeshError::Malformed {
+            path: name.to_string(),
+            what: format!(
+                "<{}>: vertex index {i} but only {count} positions",
+                prim.name
+            ),
+        });
+    }
+    for j in 1..idx.len().saturating_sub(1) {
+        out.triangles
+            .push([base + idx[0], base + idx[j], base + idx[j + 1]]);
+    }
+    Ok(())
+}
+
 /// Appends the triangles of a `<triangles>`, `<polylist>` or `<polygons>` element to `out`
 /// (polygons as fans).
 fn primitive(
@@ -410,20 +436,7 @@ fn primitive(
     let (pos, voff, stride) = vertex_input(prim, positions, name)?;
     let base = out.positions.len() as u32;
     out.positions.extend_from_slice(pos);
-    let fan = |idx: &[u32], out: &mut TriMesh| -> Result<(), MeshError> {
-        if let Some(&i) = idx.iter().find(|&&i| i as usize >= pos.len()) {
-            return Err(bad(format!(
-                "<{}>: vertex index {i} but only {} positions",
-                prim.name,
-                pos.len()
-            )));
-        }
-        for j in 1..idx.len().saturating_sub(1) {
-            out.triangles
-                .push([base + idx[0], base + idx[j], base + idx[j + 1]]);
-        }
-        Ok(())
-    };
+    let fan = |idx: &[u32], out: &mut TriMesh| fan(idx, base, pos.len(), prim, name, out);
     let corners = |p: &Element| -> Result<Vec<u32>, MeshError> {
         let all: Vec<u32> = numbers(&p.text, "p", name)?;
         Ok(all.iter().skip(voff).step_by(stride).copied().collect())
