@@ -126,6 +126,17 @@ impl PyReference {
     }
 }
 
+/// The time law named `profile` (`"septic"`/`"paper"` or `"quintic"`, any case).
+fn profile_named(profile: &str) -> PyResult<Profile> {
+    match profile.to_ascii_lowercase().as_str() {
+        "septic" | "paper" => Ok(Profile::Septic),
+        "quintic" => Ok(Profile::Quintic),
+        other => Err(to_py(format!(
+            "profile {other:?}: use \"septic\" (the paper's) or \"quintic\""
+        ))),
+    }
+}
+
 /// Plans a program (`text`; `None`: the paper's Table I program) for `robot`.
 /// `name` prefixes error messages (the file name).
 #[pyfunction]
@@ -143,15 +154,7 @@ pub fn plan(
     max_accel: f64,
     rpy_deg: Option<(f64, f64, f64)>,
 ) -> PyResult<PyReference> {
-    let profile = match profile.to_ascii_lowercase().as_str() {
-        "septic" | "paper" => Profile::Septic,
-        "quintic" => Profile::Quintic,
-        other => {
-            return Err(to_py(format!(
-                "profile {other:?}: use \"septic\" (the paper's) or \"quintic\""
-            )))
-        }
-    };
+    let profile = profile_named(profile)?;
     let robot = robot.robot().clone();
     let text = text.unwrap_or_else(|| PAPER_TABLE1.to_string());
     // Ctrl-C answered at once (issue #36).

@@ -268,12 +268,34 @@ pub fn robust_tuning(
             (c, adaptive_kinds, true)
         }
     };
+    let file = tuned_file(base, &chosen, &controllers, adaptive, (lo_kg, hi_kg), kinds);
+    Ok(Tuning {
+        candidates,
+        chosen,
+        simulated_kg: masses,
+        file,
+        controllers,
+        adaptive,
+    })
+}
+
+/// The scenario file of a tuning: `base`'s with the chosen controllers and weights, a title
+/// saying how they hold the payload range `(lo_kg, hi_kg)` and five payloads across it.
+fn tuned_file(
+    base: &Scenario,
+    chosen: &Candidate,
+    controllers: &[ControllerKind],
+    adaptive: bool,
+    (lo_kg, hi_kg): (f64, f64),
+    kinds: &[ControllerKind],
+) -> ScenarioFile {
+    let names = kinds.iter().map(|k| k.name()).collect::<Vec<_>>().join(",");
     let mut file = base.file.clone();
     file.title = if adaptive {
         format!(
             "Payload range {lo_kg}..{hi_kg} kg: no plain tuning of {} holds it; the adaptive variants \
              (online identification) with the paper's tuning do",
-            controllers_text()
+            names
         )
     } else {
         format!(
@@ -288,19 +310,12 @@ pub fn robust_tuning(
             }
         )
     };
-    file.controllers = controllers.clone();
-    file.mpc = candidate_settings(&chosen, base.experiment.robot.dof());
+    file.controllers = controllers.to_vec();
+    file.mpc = candidate_settings(chosen, base.experiment.robot.dof());
     file.payload.masses_kg = (0..=4)
         .map(|i| lo_kg + (hi_kg - lo_kg) * i as f64 / 4.0)
         .collect();
-    Ok(Tuning {
-        candidates,
-        chosen,
-        simulated_kg: masses,
-        file,
-        controllers,
-        adaptive,
-    })
+    file
 }
 
 /// The grid of weight pairs (`TUNING_Q_DY` × `TUNING_Q_DU`) for each wrist scale, as

@@ -73,6 +73,23 @@ fn malformed_at(text: &str, name: &str, pos: u64, what: String) -> MeshError {
 /// are text inside a few elements), far below what would exhaust memory (issue #36).
 const MAX_ELEMENTS: usize = 1_000_000;
 
+/// The `<COLLADA>` root of a document read to its end (`stack`: the open elements, only the
+/// document's own left).
+fn root(mut stack: Vec<Element>, text: &str, name: &str) -> Result<Element, MeshError> {
+    let bad = |pos: u64, what: String| malformed_at(text, name, pos, what);
+    let mut top = stack.pop().unwrap_or_default();
+    if !stack.is_empty() {
+        return Err(bad(
+            text.len() as u64,
+            "the document ends inside an element".into(),
+        ));
+    }
+    top.children
+        .pop()
+        .filter(|c| c.name == "COLLADA")
+        .ok_or_else(|| bad(0, "no <COLLADA> root element".into()))
+}
+
 /// The document's root element (an iterative build: no recursion on deep nesting, which is
 /// refused past [`ofmpc::input::MAX_XML_DEPTH`] levels, as are more than [`MAX_ELEMENTS`]
 /// elements; dropping the tree recurses, so its depth must be bounded).
@@ -88,14 +105,12 @@ fn document(text: &str, name: &str) -> Result<Element, MeshError> {
                 format!("not well-formed XML: {e}"),
             )
         })?;
-        if matches!(ev, Event::Start(_) | Event::Empty(_)) {
-            elements += 1;
-            if elements > MAX_ELEMENTS {
-                return Err(bad(
-                    reader.buffer_position(),
-                    format!("more than {MAX_ELEMENTS} elements: not a mesh file this reader takes"),
-                ));
-            }
+        elements += usize::from(matches!(ev, Event::Start(_) | Event::Empty(_)));
+        if elements > MAX_ELEMENTS {
+            return Err(bad(
+                reader.buffer_position(),
+                format!("more than {MAX_ELEMENTS} elements: not a mesh file this reader takes"),
+            ));
         }
         match ev {
             Event::Start(e) => {
@@ -112,9 +127,8 @@ fn document(text: &str, name: &str) -> Result<Element, MeshError> {
                 stack.push(element(&e));
             }
             Event::Empty(e) => {
-                let el = element(&e);
                 if let Some(top) = stack.last_mut() {
-                    top.children.push(el);
+                    top.children.push(element(&e));
                 }
             }
             Event::End(_) => {
@@ -137,17 +151,7 @@ fn document(text: &str, name: &str) -> Result<Element, MeshError> {
             _ => {}
         }
     }
-    let mut top = stack.pop().unwrap_or_default();
-    if !stack.is_empty() {
-        return Err(bad(
-            text.len() as u64,
-            "the document ends inside an element".into(),
-        ));
-    }
-    top.children
-        .pop()
-        .filter(|c| c.name == "COLLADA")
-        .ok_or_else(|| bad(0, "no <COLLADA> root element".into()))
+    root(stack, text, name)
 }
 
 /// Numbers of a whitespace-separated list.
