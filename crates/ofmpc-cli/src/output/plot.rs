@@ -1802,23 +1802,16 @@ fn draw_axes_3d<DB: DrawingBackend>(
         if nx * (mx - f64::from(x0)) + ny * (my - f64::from(y0)) < 0.0 {
             (nx, ny) = (-nx, -ny);
         }
-        let (h, v) = label_alignment(nx, ny);
         let off = |d: f64| ((nx * d).round() as i32, (ny * d).round() as i32);
-        let a = &axes[idx];
-        let (mut lw, mut lh) = (0u32, 0u32);
-        for &t in &ticks[idx] {
-            let text = a.format.format(t);
-            if let Ok((w, h)) = area.estimate_text_size(&text, &tick_font) {
-                (lw, lh) = (lw.max(w), lh.max(h));
-            }
-            let style = tick_font.clone().pos(Pos::new(h, v));
-            area.draw(
-                &(EmptyElement::at(pt3(with(start, idx, t)))
-                    + PathElement::new(vec![(0, 0), off(f64::from(TICK_3D))], axis_line)
-                    + Text::new(text, off(f64::from(TICK_3D + 3)), style)),
-            )
-            .map_err(err)?;
-        }
+        let (lw, lh) = draw_ticks_3d(
+            area,
+            (&axes[idx], &ticks[idx]),
+            (start, idx),
+            (nx, ny),
+            &tick_font,
+            axis_line,
+        )
+        .map_err(err)?;
         if name.is_empty() {
             continue;
         }
@@ -1835,6 +1828,37 @@ fn draw_axes_3d<DB: DrawingBackend>(
             .map_err(err)?;
     }
     Ok(())
+}
+
+/// The ticks of axis `idx` of a 3-D chart along its edge from `start`, each a short line and
+/// its label on the side of the outward normal `(nx, ny)` (screen); returns the largest label
+/// size (width, height in pixels).
+fn draw_ticks_3d<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Cartesian3d<RangedCoordf64, RangedCoordf64, RangedCoordf64>>,
+    (a, ticks): (&LinearAxis, &[f64]),
+    (start, idx): ([f64; 3], usize),
+    (nx, ny): (f64, f64),
+    tick_font: &TextStyle<'_>,
+    axis_line: ShapeStyle,
+) -> Result<(u32, u32), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (h, v) = label_alignment(nx, ny);
+    let off = |d: f64| ((nx * d).round() as i32, (ny * d).round() as i32);
+    let (mut lw, mut lh) = (0u32, 0u32);
+    for &t in ticks {
+        let text = a.format.format(t);
+        if let Ok((w, h)) = area.estimate_text_size(&text, tick_font) {
+            (lw, lh) = (lw.max(w), lh.max(h));
+        }
+        let style = tick_font.clone().pos(Pos::new(h, v));
+        let mut at = start;
+        at[idx] = t;
+        area.draw(
+            &(EmptyElement::at(pt3(at))
+                + PathElement::new(vec![(0, 0), off(f64::from(TICK_3D))], axis_line)
+                + Text::new(text, off(f64::from(TICK_3D + 3)), style)),
+        )?;
+    }
+    Ok((lw, lh))
 }
 
 /// The three back faces of a 3-D chart's box (`back[i]`: the far end of

@@ -66,18 +66,10 @@ impl Interpreter {
         Segment::arc(start, center, end, plane, dir).map_err(|e| arc_error(e, line, col, line_text))
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn arc_by_centre(
-        &self,
-        line: usize,
-        col: usize,
-        line_text: &str,
-        mode: Motion,
-        start: Vector3<f64>,
-        end: Vector3<f64>,
-        args: &Args<'_, '_>,
-        dir: ArcDirection,
-    ) -> Result<Segment, GcodeError> {
+    /// The centre's offset from `start` that I, J, K give (program units scaled to metres;
+    /// G90.1: from the centre in program coordinates; rotated with a rotated system) and which
+    /// of the three are given.
+    fn centre_offset(&self, start: Vector3<f64>, args: &Args<'_, '_>) -> (Vector3<f64>, [bool; 3]) {
         let scale = self.scale();
         let ijk = [args.get('I'), args.get('J'), args.get('K')];
         let mut given = ijk.map(|w| w.is_some());
@@ -107,19 +99,18 @@ impl Interpreter {
             // A rotated system (G10 L2 R, G17 only): the offsets rotate with it.
             off = rotate_z(off, self.rotation());
         }
-        let tol = arc_tolerance(self.inch);
-        let center = start + off;
-        let check = |p: Plane| check_arc_plane(p, start, end, off, given, tol);
-        let Err(problem) = check(self.plane) else {
-            return Segment::arc(start, center, end, self.plane, dir)
-                .map_err(|e| arc_error(e, line, col, line_text));
-        };
+        (off, given)
+    }
+
+    /// What is wrong with an arc whose centre offsets do not fit the plane.
+    fn arc_problem_text(&self, problem: &ArcProblem, mode: Motion, tol: f64) -> String {
+        let scale = self.scale();
         let letters = |p: Plane| {
             let (u, v, _) = p.axes();
             format!("{}/{}", IJK[u], IJK[v])
         };
         let unit = if self.inch { "in" } else { "mm" };
-        let message = match problem {
+        match problem {
             ArcProblem::MissingOffsets => format!(
                 "{} in the {} plane ({}) needs the centre offsets {} (or R)",
                 mode.code(),
@@ -133,7 +124,7 @@ impl Interpreter {
                 self.plane.gcode(),
                 letters(self.plane)
             ),
-            ArcProblem::RadiusMismatch { r0, r1 } => format!(
+            &ArcProblem::RadiusMismatch { r0, r1 } => format!(
                 "arc start and end radii differ in the {} plane ({}): {:.4} {unit} vs {:.4} {unit} (tolerance {} {unit})",
                 self.plane.name(),
                 self.plane.gcode(),
@@ -141,12 +132,39 @@ impl Interpreter {
                 r1 / scale,
                 tol / scale
             ),
-            ArcProblem::NormalOffset { letter } => format!(
+            &ArcProblem::NormalOffset { letter } => format!(
                 "the {letter} offset lies along the normal of the {} plane ({}) and must be 0",
                 self.plane.name(),
                 self.plane.gcode()
             ),
+        }
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn arc_by_centre(
+        &self,
+        line: usize,
+        col: usize,
+        line_text: &str,
+        mode: Motion,
+        start: Vector3<f64>,
+        end: Vector3<f64>,
+        args: &Args<'_, '_>,
+        dir: ArcDirection,
+    ) -> Result<Segment, GcodeError> {
+        let (off, given) = self.centre_offset(start, args);
+        let tol = arc_tolerance(self.inch);
+        let center = start + off;
+        let check = |p: Plane| check_arc_plane(p, start, end, off, given, tol);
+        let Err(problem) = check(self.plane) else {
+            return Segment::arc(start, center, end, self.plane, dir)
+                .map_err(|e| arc_error(e, line, col, line_text));
         };
+        let letters = |p: Plane| {
+            let (u, v, _) = p.axes();
+            format!("{}/{}", IJK[u], IJK[v])
+        };
+        let message = self.arc_problem_text(&problem, mode, tol);
         let fits: Vec<Plane> = Plane::ALL
             .into_iter()
             .filter(|&p| p != self.plane && check(p).is_ok())

@@ -455,6 +455,36 @@ impl Interpreter {
                 given[a] = args.get(c).map(|w| w.value * scale);
             }
         }
+        let hole = Hole {
+            top: p,
+            axis: d,
+            bottom,
+            clear,
+        };
+        self.drill_holes(
+            line,
+            n,
+            (p, given),
+            (repeats, r_m),
+            &hole,
+            (q * scale, dwell),
+        );
+        Ok(())
+    }
+
+    /// The holes of a canned cycle from `p` (its `repeats`, each shifted by `given` in G91):
+    /// to the hole's position, down to the retract plane `r_m`, drilled as `hole` says (its
+    /// `top` set per hole), and out to its clearance level.
+    fn drill_holes(
+        &mut self,
+        line: usize,
+        n: u8,
+        (mut p, given): (Vector3<f64>, [Option<f64>; 3]),
+        (repeats, r_m): (usize, f64),
+        hole: &Hole,
+        (peck, dwell): (f64, f64),
+    ) {
+        let (d, clear) = (hole.axis, hole.clear);
         for _ in 0..repeats {
             if self.over_budget().is_some() {
                 break; // reported by the caller, naming the limit
@@ -469,13 +499,8 @@ impl Interpreter {
             let mut top = xy;
             top[d] = r_m;
             self.push_line(line, xy, top, true);
-            let hole = Hole {
-                top,
-                axis: d,
-                bottom,
-                clear,
-            };
-            self.drill(line, n, &hole, q * scale, dwell);
+            let hole = Hole { top, ..*hole };
+            self.drill(line, n, &hole, peck, dwell);
             let mut end = xy;
             end[d] = clear;
             if self.ext.machine_at.is_none() {
@@ -484,7 +509,6 @@ impl Interpreter {
             }
             p = end;
         }
-        Ok(())
     }
 
     /// G74 needs the spindle turning counter-clockwise, G84 clockwise (LinuxCNC's
