@@ -101,7 +101,6 @@ impl ofmpc_sim {
         sim.sensor
             .measure(&sim.plant.state(), &mut sim.x)
             .map_err(|e| invalid("the first reading", &e))?;
-        sim.sensor.reset(&sim.x);
         Ok(sim)
     }
 
@@ -137,7 +136,6 @@ impl ofmpc_sim {
         }
         let numeric =
             |e: &dyn std::fmt::Display| Failure::new(ofmpc_status::OFMPC_NUMERIC, e.to_string());
-        self.sensor.record_torque(tau);
         self.recorder.loading(self.actuator.account(tau));
         let applied = self
             .actuator

@@ -7,9 +7,9 @@
 //! velocity, the encoder faults of a scenario's `[plant] faults` (glitch,
 //! dropout), the delay line (all set by the sensing part of
 //! [`PlantSettings`]), then the loss of whole samples ([`LossSchedule`]: NaN
-//! readings and dropouts). [`Sensor::repair`] stands in for a lost or invalid
-//! reading with the model's prediction ([`MeasurementGuard`]), so that
-//! everything after it sees finite numbers.
+//! readings and dropouts). Standing in for a lost or invalid reading is the
+//! supervised controller's measurement repair ([`super::SupervisedController`]),
+//! not the sensor's.
 //!
 //! The noise keeps its own generator (xorshift + Box–Muller, seeded by
 //! `[plant] seed`): `linalg::random` is a linear congruential generator, whose
@@ -17,9 +17,7 @@
 
 use super::faults::{Fault, FaultSchedule, LossSchedule};
 use super::plant::{PlantError, PlantSettings, PlantSettingsError};
-use super::repair::MeasurementGuard;
 use super::state::JointState;
-use crate::dynamics::JointSpaceDynamics;
 
 /// A small deterministic Gaussian generator (xorshift + Box–Muller), so that
 /// noisy runs are reproducible from their seed.
@@ -74,14 +72,12 @@ pub struct Sensor {
     /// The last measurement before the delay line (for frozen encoders).
     last_meas: Vec<f64>,
     lost: LossSchedule,
-    guard: MeasurementGuard,
 }
 
 impl Sensor {
     /// A sensor for `n` joints read once per control period `ts` (s), with
     /// the sensing effects and encoder faults of `settings` (checked here),
-    /// losing the samples of `lost` (scheduled at `ts`). Starts at rest at
-    /// zero; call [`Self::reset`] with the first reading.
+    /// losing the samples of `lost` (scheduled at `ts`).
     pub fn new(
         settings: &PlantSettings,
         n: usize,
@@ -101,7 +97,6 @@ impl Sensor {
     /// [`Self::new`] with settings already checked (by the plant's
     /// construction).
     pub(crate) fn checked(settings: &PlantSettings, n: usize, ts: f64, lost: LossSchedule) -> Self {
-        let track = !lost.is_empty();
         let delay = settings.delay_samples;
         let resolution = if settings.encoder_counts > 0 {
             2.0 * std::f64::consts::PI / settings.encoder_counts as f64
@@ -124,16 +119,8 @@ impl Sensor {
             schedule: FaultSchedule::for_plant(&settings.faults, ts),
             fired: vec![false; settings.faults.len()],
             last_meas: vec![0.0; 2 * n],
-            guard: MeasurementGuard::new(&vec![0.0; 2 * n], delay, track, ts),
             lost,
         }
-    }
-
-    /// Starts a run at rest at `x0` (2n values, the first reading): the
-    /// repair's prior. The encoders keep their history (delay line, last
-    /// positions).
-    pub fn reset(&mut self, x0: &[f64]) {
-        self.guard.reset(x0);
     }
 
     /// Whether samples can be lost (the readings then differ from the
@@ -269,18 +256,6 @@ impl Sensor {
         // The oldest slot is the one written next.
         let old = self.ring_next;
         x[..w].copy_from_slice(&self.ring[old * w..(old + 1) * w]);
-    }
-
-    /// Replaces the non-finite entries of `x` by the model's prediction
-    /// (`MeasurementGuard::check`); returns whether it did (a fault).
-    pub fn repair(&mut self, model: &mut dyn JointSpaceDynamics, x: &mut [f64]) -> bool {
-        self.guard.check(model, x)
-    }
-
-    /// The torque commanded at the current sample (n values), for the
-    /// prediction of the samples to come.
-    pub fn record_torque(&mut self, tau: &[f64]) {
-        self.guard.record_torque(tau);
     }
 }
 
