@@ -46,9 +46,8 @@ impl Gauss {
     }
 }
 
-/// Measures the true state, loses the scheduled samples, repairs invalid
-/// readings. Sized at construction; [`Sensor::read`], [`Sensor::measure`]
-/// and [`Sensor::repair`] allocate nothing.
+/// Measures the true state and loses the scheduled samples. Sized at
+/// construction; [`Sensor::read`] and [`Sensor::measure`] allocate nothing.
 #[derive(Debug, Clone)]
 pub struct Sensor {
     n: usize,
