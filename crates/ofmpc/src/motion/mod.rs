@@ -203,6 +203,8 @@ impl Sampled {
         let joints_failed = matches!(
             error.failure,
             ReferenceFailure::JointSpeed { .. }
+                | ReferenceFailure::ReachEdge { .. }
+                | ReferenceFailure::BranchJump { .. }
                 | ReferenceFailure::StartSingular { .. }
                 | ReferenceFailure::BranchLimit { .. }
                 | ReferenceFailure::SingularPass { .. }
@@ -213,7 +215,11 @@ impl Sampled {
             }
         }
         match error.failure {
-            ReferenceFailure::JointSpeed { speed, limit, .. } if trajectory.in_run(error.time) => {
+            ReferenceFailure::JointSpeed { speed, limit, .. }
+            | ReferenceFailure::ReachEdge { speed, limit, .. }
+            | ReferenceFailure::BranchJump { speed, limit, .. }
+                if trajectory.in_run(error.time) =>
+            {
                 Self::RunTooFast(speed / limit, PlanError::Reference(error))
             }
             _ => Self::Failed(PlanError::Reference(error)),

@@ -575,6 +575,12 @@ impl CartesianTrajectory {
         self.start
     }
 
+    /// Source line of the start point: the motion that set it (a point of the path at rest
+    /// before `t = 0` belongs to that line, not to the first move after it).
+    pub(crate) fn start_line(&self) -> usize {
+        self.start_line
+    }
+
     /// End point (m), held after [`Self::duration`].
     pub fn end(&self) -> Vector3<f64> {
         self.segments
