@@ -73,7 +73,7 @@ fn an_unreachable_start_point_is_reported_at_its_own_line() {
         let (line, f, message) = failure(&text, &robot);
         assert_eq!(line, 2, "{eol:?}: {message}");
         assert!(matches!(f, ReferenceFailure::Ik(_)), "{message}");
-        assert!(message.contains("program line 2 "), "{message}");
+        assert!(message.contains("program line 2, column 1 "), "{message}");
     }
 }
 
@@ -104,4 +104,35 @@ fn line_endings_are_counted_as_editors_count_them() {
     // A blank line written as a lone CR before a CRLF still counts: CR LF CR CR LF is 2 ends.
     let blank = "G21 G90\r\n\rG0 X500 Y0 Z400\r\nG1 X510 F600\r\n";
     assert_eq!(lines_of(blank), vec![4]);
+}
+
+/// The error names the column of the motion that produced the point (the troubleshooting
+/// page's promise): the start point's `G0`, and a later move's `G1` or first axis word.
+#[test]
+fn a_point_out_of_reach_names_the_line_and_column_of_its_motion() {
+    let robot = Robot::irb140();
+    let text = "G21 G90\n  G0 X2000 Y0 Z400\nG1 X500 F600\n";
+    let err = plan(text, &robot, &PlanOptions::default()).unwrap_err();
+    let PlanError::Reference(r) = &err else {
+        panic!("{err}")
+    };
+    assert_eq!((r.line, r.column), (2, 3), "{err}");
+    assert!(
+        err.to_string().contains("program line 2, column 3 "),
+        "{err}"
+    );
+    // A later move out of reach: the IRB 140 reaches about 810 mm.
+    let text = "G21 G90\nG0 X500 Y0 Z400\nG1 X510 F600\nM3 S1000 G1 X2000\n";
+    let err = plan(text, &robot, &PlanOptions::default()).unwrap_err();
+    let PlanError::Reference(r) = &err else {
+        panic!("{err}")
+    };
+    assert_eq!(r.line, 4, "{err}");
+    assert!(r.column > 1, "{err}");
+    assert!(
+        err.to_string()
+            .contains(&format!("program line 4, column {} ", r.column)),
+        "{err}"
+    );
+    eprintln!("{err}");
 }

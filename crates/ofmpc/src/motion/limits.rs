@@ -205,18 +205,29 @@ pub enum ReferenceFailure {
 /// position) and what ([`ReferenceFailure`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
-    "program line {line} (t = {time:.3} s), flange at ({:.1}, {:.1}, {:.1}) mm: {failure}",
-    position[0] * 1e3, position[1] * 1e3, position[2] * 1e3
+    "program line {line}{} (t = {time:.3} s), flange at ({:.1}, {:.1}, {:.1}) mm: {failure}",
+    column_text(*column), position[0] * 1e3, position[1] * 1e3, position[2] * 1e3
 )]
 pub struct ReferenceError {
-    /// Program line of the failing sample.
+    /// Program line of the failing sample: the line of the motion that produced the point.
     pub line: usize,
+    /// Column (1-based) of that motion on its line; 0 when unknown.
+    pub column: usize,
     /// Time of the failing sample (s).
     pub time: f64,
     /// Requested flange position (m, base frame).
     pub position: [f64; 3],
     /// What failed.
     pub failure: ReferenceFailure,
+}
+
+/// `", column C"` for a known column `C` (> 0), else nothing.
+fn column_text(column: usize) -> String {
+    if column > 0 {
+        format!(", column {column}")
+    } else {
+        String::new()
+    }
 }
 
 /// How the flange orientation along the path is chosen: constant.

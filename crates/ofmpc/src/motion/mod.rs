@@ -257,6 +257,27 @@ pub fn plan_program(
     robot: &Robot,
     options: &PlanOptions,
 ) -> Result<Plan, PlanError> {
+    let columns = program.motion_columns.clone();
+    plan_lines(program, robot, options).map_err(|e| with_column(e, &columns))
+}
+
+/// A failure at a program line with the column of that line's motion
+/// ([`Program::motion_columns`]), where it names no column yet.
+fn with_column(mut e: PlanError, columns: &[(usize, usize)]) -> PlanError {
+    let reference = match &mut e {
+        PlanError::Reference(r) | PlanError::Timing(TrajectoryError::Joint(r)) => r,
+        _ => return e,
+    };
+    if reference.column == 0 {
+        if let Some(&(_, c)) = columns.iter().find(|&&(l, _)| l == reference.line) {
+            reference.column = c;
+        }
+    }
+    e
+}
+
+/// [`plan_program`] without the columns of its errors.
+fn plan_lines(program: Program, robot: &Robot, options: &PlanOptions) -> Result<Plan, PlanError> {
     let ts = options.ts;
     if !(ts.is_finite() && ts > 0.0) {
         return Err(PlanError::SamplePeriod(ts));
@@ -383,6 +404,7 @@ fn joint_map(
     JointMap::new(robot, options.orientation).map_err(|e| {
         PlanError::Reference(ReferenceError {
             line: program.start_line,
+            column: program.motion_column(program.start_line).unwrap_or(0),
             time: 0.0,
             position: program.start.into(),
             failure: ReferenceFailure::Ik(e),

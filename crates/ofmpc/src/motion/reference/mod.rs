@@ -65,6 +65,7 @@ pub(crate) fn build_turning_reference(
     let start = trajectory.start();
     let fail = |line: usize, time: f64, p: Vector3<f64>, failure| ReferenceError {
         line,
+        column: 0,
         time,
         position: [p.x, p.y, p.z],
         failure,
@@ -353,6 +354,7 @@ pub(crate) fn first_unreachable(
                 } else {
                     sample.line
                 },
+                column: 0,
                 time: t,
                 position: [p.x, p.y, p.z],
                 failure,

@@ -237,6 +237,7 @@ impl Timeline {
                 failure,
             } => TrajectoryError::Joint(ReferenceError {
                 line,
+                column: 0,
                 time: t,
                 position: [position.x, position.y, position.z],
                 failure,
