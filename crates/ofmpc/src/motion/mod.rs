@@ -178,12 +178,19 @@ fn reference_turning_if_singular(
     }
 }
 
+/// Largest ratio of a sampled joint speed to its limit in an exact-stop (`G61`) move that is
+/// cured by timing the program again under scaled limits: a peak between the time scaling's
+/// grid points (issue 38: 2.200 rad/s against 2.175 on a 7-axis arm). A larger excess is a
+/// jump or a singularity, reported as such.
+const EXACT_STOP_RETIME_RATIO: f64 = 1.2;
+
 /// What sampling a timed path in joint space gave.
 #[allow(clippy::large_enum_variant)]
 enum Sampled {
     /// The trajectory (delayed by the start turn, if any), its reference and the turn.
     Reference(CartesianTrajectory, JointReference, Option<StartTurn>),
-    /// A joint exceeds its speed limit inside a blended run by this ratio.
+    /// A joint exceeds its speed limit by this ratio inside a blended run, or by a little in
+    /// an exact-stop move ([`EXACT_STOP_RETIME_RATIO`]): timed again under scaled limits.
     RunTooFast(f64, PlanError),
     /// Another failure.
     Failed(PlanError),
@@ -219,6 +226,15 @@ impl Sampled {
             | ReferenceFailure::ReachEdge { speed, limit, .. }
             | ReferenceFailure::BranchJump { speed, limit, .. }
                 if trajectory.in_run(error.time) =>
+            {
+                Self::RunTooFast(speed / limit, PlanError::Reference(error))
+            }
+            // An exact-stop move whose sampled joint speed exceeds the limit by a little: the
+            // time scaling's grid missed the peak (`timing/exact.rs`). Timed again under
+            // scaled limits, the move is slowed down and listed as joint-limited (the G-code
+            // tutorial's promise: slowed, with a warning), not refused.
+            ReferenceFailure::JointSpeed { speed, limit, .. }
+                if speed / limit <= EXACT_STOP_RETIME_RATIO =>
             {
                 Self::RunTooFast(speed / limit, PlanError::Reference(error))
             }
