@@ -24,7 +24,7 @@ fn exercise(text: &str) {
         Err(e) => {
             // Lines end at \n (with any carriage returns before it) or a lone \r (the reader's
             // rule).
-            let unix = crlf_runs_to_lf(&text);
+            let unix = crlf_runs_to_lf(text);
             let lines: Vec<&str> = unix.split(['\n', '\r']).collect();
             if e.line > 0 {
                 let line = lines.get(e.line - 1).expect("error line inside the text");
@@ -153,12 +153,12 @@ fn crlf_runs_to_lf(text: &str) -> String {
                 out.push('\n');
             }
             _ => {
-                out.extend(std::iter::repeat('\r').take(pending));
+                out.extend(std::iter::repeat_n('\r', pending));
                 pending = 0;
                 out.push(c);
             }
         }
     }
-    out.extend(std::iter::repeat('\r').take(pending));
+    out.extend(std::iter::repeat_n('\r', pending));
     out
 }

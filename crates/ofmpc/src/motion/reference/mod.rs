@@ -96,7 +96,7 @@ pub(crate) fn build_turning_reference(
     let mut map = JointMap::new(robot, orientation)
         .map_err(|e| fail(first_line, 0.0, start, ReferenceFailure::Ik(e)))?;
     let mut q = Vec::with_capacity(steps * n);
-    let mut position = Vec::with_capacity(steps);
+    let mut position: Vec<[f64; 3]> = Vec::with_capacity(steps);
     let mut lines = Vec::with_capacity(steps);
     let mut prev = vec![0.0; n];
     let mut jac = nalgebra::DMatrix::zeros(6, n);
@@ -122,14 +122,7 @@ pub(crate) fn build_turning_reference(
             prev.copy_from_slice(&q_t);
             continue;
         }
-        // The start point is the target of the motion that set it (issue 38: an unreachable
-        // point from line 2 was reported at line 3, the first move after it).
-        let line = if k == 0 {
-            trajectory.start_line()
-        } else {
-            sample.line
-        };
-        let moved = (p - start).norm();
+        let (line, moved) = (point_line(trajectory, k, sample.line), (p - start).norm());
         let mut sol = map
             .solve(&p)
             .map_err(|e| fail(line, t, p, reach_failure(e, from_start_pose, moved)))?
@@ -148,10 +141,8 @@ pub(crate) fn build_turning_reference(
             // step may exceed by rounding: 1 % slack there (a jump to another arm
             // configuration is far larger; the planner checks the exact speeds itself).
             let slack = if trajectory.in_run(t) { 1.01 } else { 1.0 };
-            let leaving_start = from_start_pose && (p - start).norm() <= LEAVING_START;
-            let from = position
-                .last()
-                .map_or(start, |x: &[f64; 3]| Vector3::from(*x));
+            let leaving_start = from_start_pose && moved <= LEAVING_START;
+            let from = position.last().map_or(start, |x| Vector3::from(*x));
             step_within_speed_limits(&mut map, &from, &p, &prev, &sol, ts, slack, leaving_start)
                 .map_err(|failure| fail(sample.line, t, p, failure))?;
         }
@@ -349,11 +340,7 @@ pub(crate) fn first_unreachable(
         map.reset();
         match map.solve(&p) {
             Err(failure @ ReferenceFailure::Ik(_)) => Some(ReferenceError {
-                line: if k == 0 {
-                    trajectory.start_line()
-                } else {
-                    sample.line
-                },
+                line: point_line(trajectory, k, sample.line),
                 column: 0,
                 time: t,
                 position: [p.x, p.y, p.z],
@@ -438,6 +425,17 @@ fn speed_failure(
         name,
         speed,
         limit,
+    }
+}
+
+/// The program line of sample `k` (its own line `line`): the start point (`k = 0`) is the
+/// target of the motion that set it (issue 38: an unreachable point from line 2 was reported at
+/// line 3, the first move after it).
+fn point_line(trajectory: &CartesianTrajectory, k: usize, line: usize) -> usize {
+    if k == 0 {
+        trajectory.start_line()
+    } else {
+        line
     }
 }
 
