@@ -303,9 +303,13 @@ pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
         PlanError::Reference(r) => match &r.failure {
             ReferenceFailure::Ik(_)
             | ReferenceFailure::BranchLimit { .. }
-            | ReferenceFailure::SingularPass { .. } => Some(names.origin),
+            | ReferenceFailure::SingularPass { .. }
+            | ReferenceFailure::ReachEdge { .. }
+            | ReferenceFailure::BranchJump { .. } => Some(names.origin),
             ReferenceFailure::JointSpeed { .. } => Some(names.speed),
-            ReferenceFailure::StartSingular { .. } => Some(names.start_q),
+            ReferenceFailure::StartSingular { .. } | ReferenceFailure::StartAtReach { .. } => {
+                Some(names.start_q)
+            }
             ReferenceFailure::SamplePeriod(_) => Some(names.ts),
             _ => None,
         },

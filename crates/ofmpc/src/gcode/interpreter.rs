@@ -102,6 +102,8 @@ pub(super) struct Interpreter {
     pub(super) pos: Option<Vector3<f64>>,
     pub(super) start: Vector3<f64>,
     pub(super) start_line: usize,
+    /// `(line, column)` of each line's first motion block ([`Program::motion_columns`]).
+    pub(super) motion_columns: Vec<(usize, usize)>,
     pub(super) moves: Vec<Move>,
     pub(super) warnings: Vec<GcodeWarning>,
     pub(super) ended: bool,
@@ -146,6 +148,7 @@ impl Interpreter {
             pos: None,
             start: Vector3::zeros(),
             start_line: 0,
+            motion_columns: Vec::new(),
             moves: Vec::new(),
             warnings: Vec::new(),
             ended: false,
@@ -260,6 +263,7 @@ impl Interpreter {
             messages: self.messages,
             tool_length: self.tool_length,
             start_tool_length: self.start_tool_length,
+            motion_columns: self.motion_columns,
         })
     }
 
@@ -1031,6 +1035,9 @@ impl Interpreter {
         mode: Motion,
         args: &Args<'_, '_>,
     ) -> Result<(), GcodeError> {
+        if self.motion_columns.last().is_none_or(|&(l, _)| l != line) {
+            self.motion_columns.push((line, col));
+        }
         let block = MotionBlock {
             line,
             col,

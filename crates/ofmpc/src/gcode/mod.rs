@@ -117,14 +117,22 @@ pub fn parse(text: &str, options: &ParseOptions) -> Result<Program, GcodeError> 
 }
 
 /// The lines of `text`, ended by `\n`, `\r\n` or a lone `\r` (old Mac, some controllers),
-/// without their terminators.
+/// without their terminators. Carriage returns right before a `\n` belong to that line end:
+/// `\r\r\n` (a CRLF file converted to CRLF again) ends one line, as vim, `wc -l`, GitHub and
+/// LinuxCNC's reader count it (VS Code counts `\r` and `\r\n` apart, two lines); a `\r`
+/// followed by anything else ends a line.
 fn lines(text: &str) -> impl Iterator<Item = &str> {
     let mut rest = Some(text);
     std::iter::from_fn(move || {
         let t = rest?;
         match t.find(['\n', '\r']) {
             Some(i) => {
-                let skip = if t[i..].starts_with("\r\n") { 2 } else { 1 };
+                let crs = t[i..].bytes().take_while(|&b| b == b'\r').count();
+                let skip = if t[i + crs..].starts_with('\n') {
+                    crs + 1
+                } else {
+                    1
+                };
                 rest = Some(&t[i + skip..]).filter(|r| !r.is_empty());
                 Some(&t[..i])
             }

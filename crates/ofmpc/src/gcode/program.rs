@@ -72,6 +72,21 @@ pub struct Program {
     /// Tool length offset (m) in force when the start point was set: [`Program::start`] is
     /// the tip of a tool this long.
     pub start_tool_length: f64,
+    /// `(line, column)` of each line's first motion block (1-based; the column of its
+    /// anchor word, e.g. `G1` or its first axis word), in program order: where a point of the
+    /// path came from ([`Program::motion_column`]).
+    pub motion_columns: Vec<(usize, usize)>,
+}
+
+impl Program {
+    /// The column (1-based) of the motion on program line `line` (see
+    /// [`Program::motion_columns`]); `None` for a line without one.
+    pub fn motion_column(&self, line: usize) -> Option<usize> {
+        self.motion_columns
+            .iter()
+            .find(|&&(l, _)| l == line)
+            .map(|&(_, c)| c)
+    }
 }
 
 /// An M code or an S/T word of a program: recorded in order, never a reason to reject.

@@ -18,6 +18,16 @@ pub const MAX_PLAN_VALUES: usize = 50_000_000;
 /// ([`ReferenceFailure::SingularPass`]).
 pub const SINGULAR_PASS_RATIO: f64 = 1e-3;
 
+/// The ratio of the smallest to the largest singular value of the flange Jacobian's position
+/// rows below which a joint speed over its limit is blamed on the edge of the arm's reach
+/// ([`ReferenceFailure::ReachEdge`]): the elbow straight, where the flange cannot move
+/// along the arm.
+pub const REACH_EDGE_RATIO: f64 = 0.02;
+
+/// Distance (m) from the path's start point within which a point out of reach is blamed on a
+/// start pose at the edge of the reach ([`ReferenceFailure::StartAtReach`]).
+pub const LEAVING_REACH: f64 = 5e-3;
+
 /// Distance (m) from the path's start point within which a jump of the joints is blamed on a
 /// singular start pose ([`ReferenceFailure::StartSingular`]).
 pub const LEAVING_START: f64 = 1e-3;
@@ -87,8 +97,8 @@ pub enum ReferenceFailure {
     /// A joint would move faster than its speed limit.
     #[error(
         "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s; lower \
-         the path speed or acceleration, plan the program with blending (G64), or move the part away from the \
-         wrist singularity with a work offset"
+         the path speed (F) or acceleration, or move the part away from the wrist singularity with a work \
+         offset"
     )]
     JointSpeed {
         /// Joint number, 1-based.
@@ -121,6 +131,63 @@ pub enum ReferenceFailure {
         /// Its limit (rad/s).
         limit: f64,
     },
+    /// A joint would jump between two samples: the inverse kinematics' solution nearest to the
+    /// previous one changes arm configuration (a branch change: the path crosses a singularity
+    /// or a configuration boundary), so the step does not shrink with the distance travelled;
+    /// a slower path would not help.
+    #[error(
+        "joint {joint} ({name}) would jump by {:.1}° between two samples ({speed:.1} rad/s, its limit \
+         {limit:.3} rad/s): the inverse kinematics changes arm configuration there (a branch change at a \
+         singularity), which no path speed can follow; move the part with a work offset so that the path \
+         keeps away from the singularity, or change the orientation or the start pose",
+        step.to_degrees()
+    )]
+    BranchJump {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// The joint's step between the two samples (rad).
+        step: f64,
+        /// Speed that step needs (rad/s).
+        speed: f64,
+        /// Its limit (rad/s).
+        limit: f64,
+    },
+    /// A joint would move faster than its speed limit because the path runs at the edge of
+    /// the arm's reach: the flange Jacobian's position rows are near rank-deficient (the elbow
+    /// straight, the arm stretched out), where a small move of the tool needs a large turn of
+    /// the joints.
+    #[error(
+        "the path reaches the edge of the arm's reach (the arm stretched out, its elbow almost straight): \
+         joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s, to \
+         follow it; move the part towards the robot with a work offset, or start from a pose with the elbow \
+         bent"
+    )]
+    ReachEdge {
+        /// Joint number, 1-based.
+        joint: usize,
+        /// Joint name.
+        name: String,
+        /// Speed needed (rad/s).
+        speed: f64,
+        /// Its limit (rad/s).
+        limit: f64,
+    },
+    /// The path leaves the arm's reach right after the start pose, where the run starts: the
+    /// start pose holds the arm at the edge of its reach (stretched out, e.g. a UR arm's q = 0).
+    #[error(
+        "the tool leaves the arm's reach as it leaves its start point (its wrist centre {:.2} mm outside the \
+         workspace {:.2} mm into the path): the robot's start pose holds the arm stretched out at the edge of \
+         its reach; start from a pose with the elbow bent",
+        excess * 1e3, moved * 1e3
+    )]
+    StartAtReach {
+        /// Distance (m) by which the wrist centre misses the reachable shell.
+        excess: f64,
+        /// Distance (m) of the failing point from the start point.
+        moved: f64,
+    },
     /// The sample period is not positive and finite.
     #[error("the sample period must be positive and finite, got {0} s")]
     SamplePeriod(f64),
@@ -138,18 +205,29 @@ pub enum ReferenceFailure {
 /// position) and what ([`ReferenceFailure`]).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error(
-    "program line {line} (t = {time:.3} s), flange at ({:.1}, {:.1}, {:.1}) mm: {failure}",
-    position[0] * 1e3, position[1] * 1e3, position[2] * 1e3
+    "program line {line}{} (t = {time:.3} s), flange at ({:.1}, {:.1}, {:.1}) mm: {failure}",
+    column_text(*column), position[0] * 1e3, position[1] * 1e3, position[2] * 1e3
 )]
 pub struct ReferenceError {
-    /// Program line of the failing sample.
+    /// Program line of the failing sample: the line of the motion that produced the point.
     pub line: usize,
+    /// Column (1-based) of that motion on its line; 0 when unknown.
+    pub column: usize,
     /// Time of the failing sample (s).
     pub time: f64,
     /// Requested flange position (m, base frame).
     pub position: [f64; 3],
     /// What failed.
     pub failure: ReferenceFailure,
+}
+
+/// `", column C"` for a known column `C` (> 0), else nothing.
+fn column_text(column: usize) -> String {
+    if column > 0 {
+        format!(", column {column}")
+    } else {
+        String::new()
+    }
 }
 
 /// How the flange orientation along the path is chosen: constant.
@@ -360,6 +438,49 @@ impl JointMap {
         } else {
             0.0
         }
+    }
+
+    /// The ratio of the smallest to the largest singular value of the position rows of the
+    /// flange Jacobian at `q` (0 at the edge of the reach, where the elbow is straight).
+    pub(crate) fn position_ratio(&mut self, q: &[f64]) -> f64 {
+        let mut jac = nalgebra::DMatrix::zeros(6, q.len());
+        self.fk.flange_jacobian(q, &mut jac);
+        let sv = jac.rows(0, 3).singular_values();
+        let max = sv.max();
+        if max > 0.0 {
+            sv.min() / max
+        } else {
+            0.0
+        }
+    }
+
+    /// Whether joint `i`'s step from `prev` (at `from`) to `sol` (at `to`) is a jump: halving
+    /// the interval six times, keeping the half where the joint turns more, still leaves half
+    /// of the step in 1/64 of the distance (a continuous branch would leave about 1/64).
+    pub(crate) fn jumps(
+        &mut self,
+        from: &Vector3<f64>,
+        to: &Vector3<f64>,
+        prev: &[f64],
+        sol: &[f64],
+        i: usize,
+    ) -> bool {
+        let full = (sol[i] - prev[i]).abs();
+        let (mut a, mut b) = (*from, *to);
+        let (mut qa, mut qb) = (prev.to_vec(), sol.to_vec());
+        for _ in 0..6 {
+            let mid = (a + b) / 2.0;
+            self.set_state(&qa);
+            let Ok(qm) = self.solve(&mid).map(<[f64]>::to_vec) else {
+                return false;
+            };
+            if (qm[i] - qa[i]).abs() >= (qb[i] - qm[i]).abs() {
+                (b, qb) = (mid, qm);
+            } else {
+                (a, qa) = (mid, qm);
+            }
+        }
+        (qb[i] - qa[i]).abs() >= 0.5 * full
     }
 
     /// Exact joint velocity `J(q)⁻¹ [v; 0]` at the current solution (six joints, regular

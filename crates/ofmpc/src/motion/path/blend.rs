@@ -147,26 +147,34 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
     blend_within(moves, None)
 }
 
-/// [`blend`], but a corner whose blend would be slower than a stop under the path
-/// acceleration `max_accel` and jerk `max_jerk` stops instead.
+/// [`blend`], but a corner whose blend would be a near-stop (slower than a tenth of the
+/// feed) and slower than a stop under the path acceleration `max_accel` and jerk `max_jerk`
+/// stops instead.
 ///
 /// The timing (`timing/topp.rs`) holds a blend's speed `v_c = min(F, √(a R))`
 /// (feed, centripetal limit on the radius `R`) over about `±1.1 T_j v_c` around it,
 /// `T_j = 2a/j` (its jerk filter), which costs about `2.2 T_j (1 − v_c/F)` against cruising;
 /// a stop costs one more filter window, `T_j`, and the deceleration from `v_c` to rest,
-/// `v_c / a`. The cheaper one is taken.
+/// `v_c / a`. Only a blend below [`MIN_BLEND_SPEED_SHARE`] of the feed is traded for a stop
+/// when that is cheaper: above it the path keeps moving, as a CNC's `G64` does (issue 38: the
+/// 90° corners of a square at F12000, P0.5 stopped, their 44 mm/s blends estimated 45 ms slower
+/// each than a stop).
 pub fn blend_timed(moves: &[RunMove], max_accel: f64, max_jerk: f64) -> Vec<Piece> {
     blend_within(moves, Some((max_accel, max_jerk)))
 }
 
-/// Whether the corner blend `curve` between moves of feeds `f1`, `f2` is slower than
-/// stopping (see [`blend_timed`]): its speed is also held within the jerk bound of its
-/// curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j` (`timing/topp.rs`).
+/// Share of the feed at or above which a corner's blend is always kept under `G64`
+/// ([`blend_timed`]): below it the blend is a near-stop, and a stop is taken where faster.
+pub const MIN_BLEND_SPEED_SHARE: f64 = 0.1;
+
+/// Whether the corner blend `curve` between moves of feeds `f1`, `f2` is a near-stop that is
+/// slower than stopping (see [`blend_timed`]): its speed is also held within the jerk bound of
+/// its curvature change, `ṡ³ |dk/ds| ≤ TURN_JERK_SHARE · j` (`timing/topp.rs`).
 fn stop_is_faster(curve: &QuinticBlend, f1: f64, f2: f64, max_accel: f64, max_jerk: f64) -> bool {
     let feed = f1.min(f2);
     let v_c = feed.min(turn_speed(curve, max_accel, max_jerk));
     let t_j = 2.0 * max_accel / max_jerk;
-    2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
+    v_c < MIN_BLEND_SPEED_SHARE * feed && 2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
 }
 
 /// Share of the jerk setting that the turning of the path's curvature vector may take,

@@ -18,9 +18,10 @@ use crate::robot::Robot;
 use nalgebra::Vector3;
 
 use super::limits::{
-    values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_START,
-    MAX_PLAN_VALUES, START_POSE_TOLERANCE,
+    values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_REACH, LEAVING_START,
+    MAX_PLAN_VALUES, REACH_EDGE_RATIO, START_POSE_TOLERANCE,
 };
+use crate::ik::IkError;
 
 /// Number of samples at period `ts` of a path of `duration` seconds (samples at 0, ts, …
 /// up to and including the end).
@@ -64,11 +65,12 @@ pub(crate) fn build_turning_reference(
     let start = trajectory.start();
     let fail = |line: usize, time: f64, p: Vector3<f64>, failure| ReferenceError {
         line,
+        column: 0,
         time,
         position: [p.x, p.y, p.z],
         failure,
     };
-    let first_line = trajectory.sample(0.0).line;
+    let first_line = trajectory.start_line();
     if !(ts.is_finite() && ts > 0.0) {
         return Err(fail(
             first_line,
@@ -94,7 +96,7 @@ pub(crate) fn build_turning_reference(
     let mut map = JointMap::new(robot, orientation)
         .map_err(|e| fail(first_line, 0.0, start, ReferenceFailure::Ik(e)))?;
     let mut q = Vec::with_capacity(steps * n);
-    let mut position = Vec::with_capacity(steps);
+    let mut position: Vec<[f64; 3]> = Vec::with_capacity(steps);
     let mut lines = Vec::with_capacity(steps);
     let mut prev = vec![0.0; n];
     let mut jac = nalgebra::DMatrix::zeros(6, n);
@@ -120,9 +122,10 @@ pub(crate) fn build_turning_reference(
             prev.copy_from_slice(&q_t);
             continue;
         }
+        let (line, moved) = (point_line(trajectory, k, sample.line), (p - start).norm());
         let mut sol = map
             .solve(&p)
-            .map_err(|e| fail(sample.line, t, p, e))?
+            .map_err(|e| fail(line, t, p, reach_failure(e, from_start_pose, moved)))?
             .to_vec();
         if k == 0 {
             if let Some(start) = map.keep_start_pose(&p) {
@@ -138,8 +141,9 @@ pub(crate) fn build_turning_reference(
             // step may exceed by rounding: 1 % slack there (a jump to another arm
             // configuration is far larger; the planner checks the exact speeds itself).
             let slack = if trajectory.in_run(t) { 1.01 } else { 1.0 };
-            let leaving_start = from_start_pose && (p - start).norm() <= LEAVING_START;
-            step_within_speed_limits(&mut map, &p, &prev, &sol, ts, slack, leaving_start)
+            let leaving_start = from_start_pose && moved <= LEAVING_START;
+            let from = position.last().map_or(start, |x| Vector3::from(*x));
+            step_within_speed_limits(&mut map, &from, &p, &prev, &sol, ts, slack, leaving_start)
                 .map_err(|failure| fail(sample.line, t, p, failure))?;
         }
         // Exact joint velocity where the Jacobian is square and regular:
@@ -303,8 +307,12 @@ impl std::fmt::Display for StartTurn {
     }
 }
 
-/// The first sample of `trajectory` (every `ts`, checked where the tool moved by 1 mm since
-/// the last check) whose pose no arm configuration within the joint limits reaches: the
+/// Distance (m) the tool moves between the points [`first_unreachable`] checks: 0.1 mm, so
+/// that a short move past the edge of the reach is found (a 1 mm move from a stretched arm).
+const REACH_CHECK_STEP: f64 = 1e-4;
+
+/// The first sample of `trajectory` (every `ts`, checked where the tool moved by
+/// [`REACH_CHECK_STEP`] since the last check, and the last sample) whose pose no arm configuration within the joint limits reaches: the
 /// closed-form inverse kinematics (OPW, UR) solved afresh from the start pose. `None` when
 /// every checked sample is in reach, or for a robot without a closed form (a numeric solver
 /// failing from one start proves nothing).
@@ -324,14 +332,16 @@ pub(crate) fn first_unreachable(
         let t = (k as f64 * ts).min(trajectory.duration());
         let sample = trajectory.sample(t);
         let p = sample.position;
-        if last.is_some_and(|l| (p - l).norm() < 1e-3) {
+        let end = k + 1 == steps as usize;
+        if !end && last.is_some_and(|l| (p - l).norm() < REACH_CHECK_STEP) {
             return None;
         }
         last = Some(p);
         map.reset();
         match map.solve(&p) {
             Err(failure @ ReferenceFailure::Ik(_)) => Some(ReferenceError {
-                line: sample.line,
+                line: point_line(trajectory, k, sample.line),
+                column: 0,
                 time: t,
                 position: [p.x, p.y, p.z],
                 failure,
@@ -341,11 +351,12 @@ pub(crate) fn first_unreachable(
     })
 }
 
-/// Checks the step from `prev` to `sol` (at flange position `p`) against every joint's speed
-/// limit times `slack`; the failure names its cause: a joint limit the continuous branch
-/// meets ([`JointMap::branch_limit`]), a singular start pose (`leaving_start`), or the speed.
+/// Checks the step from `prev` (at `from`) to `sol` (at flange position `p`) against every
+/// joint's speed limit times `slack`; the failure names its cause ([`speed_failure`]).
+#[allow(clippy::too_many_arguments)]
 fn step_within_speed_limits(
     map: &mut JointMap,
+    from: &Vector3<f64>,
     p: &Vector3<f64>,
     prev: &[f64],
     sol: &[f64],
@@ -361,21 +372,85 @@ fn step_within_speed_limits(
     let Some((joint, name, speed, limit)) = too_fast else {
         return Ok(());
     };
-    Err(map.branch_limit(p, prev).unwrap_or(if leaving_start {
-        ReferenceFailure::StartSingular {
+    if let Some(failure) = map.branch_limit(p, prev) {
+        return Err(failure);
+    }
+    Err(speed_failure(
+        map,
+        (from, p),
+        (prev, sol),
+        (joint, name, speed, limit),
+        leaving_start,
+    ))
+}
+
+/// The cause of a joint's speed over its limit on the step from `prev` (at `from`) to `sol`
+/// (at `to`), in this order: the edge of the reach (the position rows of the Jacobian near
+/// rank-deficient, [`REACH_EDGE_RATIO`]), a singular start pose (`leaving_start`), a jump to
+/// another arm configuration ([`JointMap::jumps`]), or the speed itself.
+fn speed_failure(
+    map: &mut JointMap,
+    (from, to): (&Vector3<f64>, &Vector3<f64>),
+    (prev, sol): (&[f64], &[f64]),
+    (joint, name, speed, limit): (usize, String, f64, f64),
+    leaving_start: bool,
+) -> ReferenceFailure {
+    if map.position_ratio(prev) < REACH_EDGE_RATIO {
+        return ReferenceFailure::ReachEdge {
             joint,
             name,
             speed,
             limit,
-        }
+        };
+    }
+    if leaving_start {
+        return ReferenceFailure::StartSingular {
+            joint,
+            name,
+            speed,
+            limit,
+        };
+    }
+    if map.jumps(from, to, prev, sol, joint - 1) {
+        return ReferenceFailure::BranchJump {
+            joint,
+            name,
+            step: (sol[joint - 1] - prev[joint - 1]).abs(),
+            speed,
+            limit,
+        };
+    }
+    ReferenceFailure::JointSpeed {
+        joint,
+        name,
+        speed,
+        limit,
+    }
+}
+
+/// The program line of sample `k` (its own line `line`): the start point (`k = 0`) is the
+/// target of the motion that set it (issue 38: an unreachable point from line 2 was reported at
+/// line 3, the first move after it).
+fn point_line(trajectory: &CartesianTrajectory, k: usize, line: usize) -> usize {
+    if k == 0 {
+        trajectory.start_line()
     } else {
-        ReferenceFailure::JointSpeed {
-            joint,
-            name,
-            speed,
-            limit,
+        line
+    }
+}
+
+/// A point out of reach `failure` at `moved` (m) from the start point: blamed on the start
+/// pose ([`ReferenceFailure::StartAtReach`]) when the run started there and the point lies
+/// within [`LEAVING_REACH`] of it.
+fn reach_failure(failure: ReferenceFailure, from_start_pose: bool, moved: f64) -> ReferenceFailure {
+    match failure {
+        ReferenceFailure::Ik(IkError::Unreachable { excess, .. })
+            if from_start_pose && moved <= LEAVING_REACH =>
+        {
+            ReferenceFailure::StartAtReach { excess, moved }
         }
-    }))
+        other => other,
+    }
 }
 
 /// A joint reference sampled at `ts`. Vectors are stored row-major (`k·n + i`).

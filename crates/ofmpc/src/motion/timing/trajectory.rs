@@ -237,6 +237,7 @@ impl Timeline {
                 failure,
             } => TrajectoryError::Joint(ReferenceError {
                 line,
+                column: 0,
                 time: t,
                 position: [position.x, position.y, position.z],
                 failure,
@@ -573,6 +574,12 @@ impl CartesianTrajectory {
     /// Start point (m), where the robot rests before `t = 0`.
     pub fn start(&self) -> Vector3<f64> {
         self.start
+    }
+
+    /// Source line of the start point: the motion that set it (a point of the path at rest
+    /// before `t = 0` belongs to that line, not to the first move after it).
+    pub(crate) fn start_line(&self) -> usize {
+        self.start_line
     }
 
     /// End point (m), held after [`Self::duration`].
