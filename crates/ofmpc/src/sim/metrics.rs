@@ -75,8 +75,8 @@ pub struct RunMetrics {
     pub diverged: bool,
     /// Time of the divergence (s), `None` when it did not diverge.
     pub diverged_at_s: Option<f64>,
-    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"` or `"failed_stop"`
-    /// ([`RunStatus`]).
+    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"` or
+    /// `"hunting"` ([`RunStatus`]).
     pub status: RunStatus,
     /// How the run ended, in words (the outcome's `Display`).
     pub reason: String,
@@ -96,6 +96,90 @@ pub struct RunMetrics {
     /// Largest change of the applied torque between two samples,
     /// `max_{k,i} |τ_{k,i} − τ_{k−1,i}|` (N·m; NaN with fewer than two samples).
     pub torque_step_max_nm: f64,
+    /// The hold's judgement on a plant with quantized encoders: the largest
+    /// peak-to-peak, over the joints, of the measured joint error over the
+    /// steady window, in encoder counts; above 2 the run is
+    /// [`RunStatus::Hunting`] instead of `"ok"`. `None` (`null`) when not
+    /// judged: no encoder quantization, or a run that did not complete.
+    pub hold_error_pp_counts: Option<f64>,
+}
+
+/// A hold whose measured joint error moves by more than this many encoder
+/// counts peak-to-peak over the steady window hunts ([`RunStatus::Hunting`]).
+pub(crate) const HOLD_HUNTING_COUNTS: f64 = 2.0;
+
+/// The largest peak-to-peak over the joints of the measured joint error
+/// (`q_ref − q_meas`, the true `q` when no measurement was recorded) over the
+/// record's last `steady_window` s, in counts of an encoder with
+/// `encoder_counts` per turn; `None` without encoder or steady samples.
+/// Samples whose measurement is missing (NaN) are left out.
+pub(crate) fn hold_error_pp_counts(
+    rec: &Record,
+    steady_window: f64,
+    encoder_counts: u64,
+) -> Option<f64> {
+    let (n, len) = (rec.n, rec.len());
+    let t_end = *rec.t.last()?;
+    if encoder_counts == 0 || n == 0 {
+        return None;
+    }
+    let from = rec
+        .t
+        .iter()
+        .position(|&t| t >= t_end - steady_window + 1e-9)?;
+    let measured = rec.q_meas.len() == len * n;
+    let count = std::f64::consts::TAU / encoder_counts as f64;
+    (0..n)
+        .map(|i| {
+            let (lo, hi) = (from..len)
+                .map(|k| {
+                    let q = if measured {
+                        rec.q_meas[k * n + i]
+                    } else {
+                        rec.q[k * n + i]
+                    };
+                    rec.q_ref[k * n + i] - q
+                })
+                .filter(|e| e.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| {
+                    (lo.min(e), hi.max(e))
+                });
+            if hi >= lo {
+                (hi - lo) / count
+            } else {
+                0.0
+            }
+        })
+        .reduce(f64::max)
+}
+
+/// Judges the hold of a completed run on a plant with `encoder_counts`
+/// (0: an ideal encoder, nothing judged): records the peak-to-peak in
+/// [`RunMetrics::hold_error_pp_counts`] and turns `"ok"` into
+/// [`RunStatus::Hunting`] above [`HOLD_HUNTING_COUNTS`], saying which
+/// joint in [`RunMetrics::reason`].
+pub(crate) fn judge_hold(
+    m: &mut RunMetrics,
+    rec: &Record,
+    steady_window: f64,
+    encoder_counts: u64,
+) {
+    if m.status != RunStatus::Ok {
+        return;
+    }
+    m.hold_error_pp_counts = hold_error_pp_counts(rec, steady_window, encoder_counts);
+    if let Some(pp) = m
+        .hold_error_pp_counts
+        .filter(|&pp| pp > HOLD_HUNTING_COUNTS)
+    {
+        m.status = RunStatus::Hunting;
+        m.reason = format!(
+            "{}, but the hold did not settle: the measured joint error moved by {pp:.1} \
+             encoder counts peak-to-peak over the last {steady_window} s (more than \
+             {HOLD_HUNTING_COUNTS})",
+            m.reason
+        );
+    }
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -229,6 +313,7 @@ pub fn compute(
         saturated_samples: rec.saturated_samples,
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
+        hold_error_pp_counts: None,
     }
 }
 
