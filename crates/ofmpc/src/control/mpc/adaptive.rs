@@ -113,6 +113,12 @@ struct RealArm {
     cfg: RealArmIdentification,
     /// The window in samples (`W`).
     window: usize,
+    /// Per sample, the model moves this fraction of the way to `target`:
+    /// [`MODEL_RATE`] at `W = 1`, else `1 − (1 − MODEL_RATE)^(1/W)` at every
+    /// sample (the same time constant).
+    model_rate: f64,
+    /// The model's target at the last learnt sample.
+    target: Option<PayloadParams>,
     /// The last `2W + 1` measured positions, ring.
     q_ring: Vec<f64>,
     measured: usize,
@@ -243,6 +249,12 @@ impl AdaptiveMpc {
         self.real_arm = Some(Box::new(RealArm {
             cfg,
             window,
+            model_rate: if window == 1 {
+                MODEL_RATE
+            } else {
+                1.0 - (1.0 - MODEL_RATE).powf(1.0 / window as f64)
+            },
+            target: None,
             q_ring: vec![0.0; (2 * window + 1) * n],
             measured: 0,
             tau_ring: vec![0.0; (cfg.delay + 2 * window) * n],
@@ -314,6 +326,27 @@ impl AdaptiveMpc {
         })
     }
 
+    /// What the model should carry: the estimate; on a real arm (`cfg`) the
+    /// nominal model until the mass is determined, then a point mass (the
+    /// rotational inertia from delayed, quantized data is not to be trusted).
+    fn model_target(
+        rls: &crate::ident::PayloadRls,
+        cfg: Option<&RealArmIdentification>,
+    ) -> PayloadParams {
+        let p00 = rls.covariance()[(0, 0)];
+        match cfg {
+            Some(cfg)
+                if p00.is_nan()
+                    || p00.max(0.0).sqrt() >= cfg.trust_mass_sigma_kg
+                    || rls.updates() < cfg.min_samples =>
+            {
+                PayloadParams::zeros()
+            }
+            Some(_) => rls.point_mass_estimate(),
+            None => rls.model_estimate(),
+        }
+    }
+
     /// The payload estimator (its current estimate, covariance, restarts).
     pub fn estimator(&self) -> &PayloadEstimator {
         &self.estimator
@@ -342,6 +375,7 @@ impl Algorithm for AdaptiveMpc {
             ra.measured = 0;
             ra.steps = 0;
             ra.tau_ring.fill(0.0);
+            ra.target = None;
         }
         Ok(())
     }
@@ -394,6 +428,7 @@ impl Algorithm for AdaptiveMpc {
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();
         let saved_pi = self.model_pi;
+        let saved_target = self.real_arm.as_deref().and_then(|ra| ra.target);
         let saved_payload;
         {
             let Some(rd) = model.robot_dynamics_mut() else {
@@ -409,26 +444,26 @@ impl Algorithm for AdaptiveMpc {
                             .update(rd, &self.x_prev, x, &self.tau_prev, ts)
                 }
             };
-            if learnt {
+            let target = match self.real_arm.as_deref_mut() {
+                Some(ra) => {
+                    // W > 1: the model follows the last target at every sample
+                    // (the same time constant as per learnt sample at W = 1,
+                    // without a step every W samples).
+                    if learnt {
+                        ra.target = Some(Self::model_target(self.estimator.rls(), Some(&ra.cfg)));
+                    }
+                    ra.target.filter(|_| learnt || ra.window > 1)
+                }
+                None => learnt.then(|| Self::model_target(self.estimator.rls(), None)),
+            };
+            if let Some(target) = target {
+                let rate = self
+                    .real_arm
+                    .as_deref()
+                    .map_or(MODEL_RATE, |ra| ra.model_rate);
                 // A convex combination of two physical bodies is physical, so the
                 // model should accept it; if it does not, the step is undone and says so.
-                let rls = self.estimator.rls();
-                let target = match self.real_arm.as_deref() {
-                    // Fallback: the nominal model until the mass is determined.
-                    Some(ra)
-                        if rls.covariance()[(0, 0)].is_nan()
-                            || rls.covariance()[(0, 0)].max(0.0).sqrt()
-                                >= ra.cfg.trust_mass_sigma_kg
-                            || rls.updates() < ra.cfg.min_samples =>
-                    {
-                        PayloadParams::zeros()
-                    }
-                    // A point mass: the rotational inertia from delayed,
-                    // quantized data is not to be trusted.
-                    Some(_) => rls.point_mass_estimate(),
-                    None => rls.model_estimate(),
-                };
-                self.model_pi += (target - self.model_pi) * MODEL_RATE;
+                self.model_pi += (target - self.model_pi) * rate;
                 if rd
                     .robot_mut()
                     .set_payload(payload_of(&self.model_pi))
@@ -436,6 +471,9 @@ impl Algorithm for AdaptiveMpc {
                 {
                     *self.estimator.rls_mut() = saved_rls;
                     self.model_pi = saved_pi;
+                    if let Some(ra) = self.real_arm.as_deref_mut() {
+                        ra.target = saved_target;
+                    }
                     return Err(StepFailure::PayloadRefused);
                 }
             }
@@ -460,6 +498,9 @@ impl Algorithm for AdaptiveMpc {
             Err(e) => {
                 *self.estimator.rls_mut() = saved_rls;
                 self.model_pi = saved_pi;
+                if let Some(ra) = self.real_arm.as_deref_mut() {
+                    ra.target = saved_target;
+                }
                 // The payload it had before this step, which it accepted then.
                 if let Some(rd) = model.robot_dynamics_mut() {
                     if rd.robot_mut().set_payload(saved_payload).is_err() {
