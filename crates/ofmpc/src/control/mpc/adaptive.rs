@@ -383,7 +383,7 @@ impl Algorithm for AdaptiveMpc {
         if let Some(ra) = self.real_arm.as_deref_mut() {
             let n = ra.q.len();
             if y.len() >= n && y[..n].iter().all(|v| v.is_finite()) {
-                let s = (ra.measured % 3) * n;
+                let s = (ra.measured % (2 * ra.window + 1)) * n;
                 ra.q_ring[s..s + n].copy_from_slice(&y[..n]);
                 ra.measured += 1;
             }
