@@ -70,7 +70,12 @@ fn a_longer_run_allocates_no_more() {
         &Payload::point_mass(0.25),
         &mut |_, _| {},
     );
-    for kind in [ControllerKind::First, ControllerKind::Second] {
+    // first-adaptive: the real-arm identification (delay compensation on) too.
+    for kind in [
+        ControllerKind::First,
+        ControllerKind::Second,
+        ControllerKind::FirstAdaptive,
+    ] {
         let (mut counts, mut fault_counts) = (Vec::new(), Vec::new());
         for hold_s in [0.3, 2.0] {
             let exp = experiment(hold_s);
@@ -79,7 +84,12 @@ fn a_longer_run_allocates_no_more() {
                 let (_, m) = exp
                     .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
                     .unwrap();
-                assert_eq!(m.status.to_string(), "ok", "{kind}: {}", m.reason);
+                // Completed (a limit cycle in the hold is judged "hunting", issue 35).
+                assert!(
+                    matches!(m.status.to_string().as_str(), "ok" | "hunting"),
+                    "{kind}: {}",
+                    m.reason
+                );
                 faults = m.faults;
             });
             counts.push(n);
