@@ -190,8 +190,8 @@ fn robustness_output_on_a_tiny_grid() {
             .collect();
         assert_eq!(sum.cells, 2);
         // Completed: "ok" or "hunting" (a hold that did not settle holds nothing).
-        let completed = |c: &&CellResult| matches!(c.status, RunStatus::Ok | RunStatus::Hunting);
-        let stable = mine.iter().filter(completed).count();
+        let completed = |c: &CellResult| matches!(c.status, RunStatus::Ok | RunStatus::Hunting);
+        let stable = mine.iter().filter(|c| completed(c)).count();
         assert_eq!(sum.stable, stable);
         assert_eq!(sum.holds, mine.iter().filter(|c| c.holds).count());
         for c in &mine {
@@ -199,7 +199,7 @@ fn robustness_output_on_a_tiny_grid() {
                 c.holds,
                 c.status == RunStatus::Ok && c.steady_mm.is_some_and(|s| s <= 0.01)
             );
-            assert_eq!(c.rms_mm.is_some(), completed(&c));
+            assert_eq!(c.rms_mm.is_some(), completed(c));
         }
     }
     // Without delay, on an ideal sensor, the first algorithm holds against a 10 % model error.

@@ -70,12 +70,7 @@ fn a_longer_run_allocates_no_more() {
         &Payload::point_mass(0.25),
         &mut |_, _| {},
     );
-    // first-adaptive: the real-arm identification (delay compensation on) too.
-    for kind in [
-        ControllerKind::First,
-        ControllerKind::Second,
-        ControllerKind::FirstAdaptive,
-    ] {
+    for kind in [ControllerKind::First, ControllerKind::Second] {
         let (mut counts, mut fault_counts) = (Vec::new(), Vec::new());
         for hold_s in [0.3, 2.0] {
             let exp = experiment(hold_s);
