@@ -284,7 +284,11 @@ impl AdaptiveMpc {
         let n = ra.q.len();
         let (d, w) = (ra.cfg.delay, ra.window);
         let moving = preview.chunks_exact(n).any(|b| b != w_k);
-        if !moving || ra.measured < 2 * w + 1 || ra.steps < d + 2 * w || ra.measured % w != 0 {
+        if !moving
+            || ra.measured < 2 * w + 1
+            || ra.steps < d + 2 * w
+            || !ra.measured.is_multiple_of(w)
+        {
             return false;
         }
         // Newest measurement q_m at slot (measured − 1) % (2W + 1).
@@ -509,6 +513,51 @@ impl Algorithm for AdaptiveMpc {
                 }
                 Err(e)
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::window_weight;
+
+    /// On a unit mass driven by torques held over each period, the second
+    /// difference over `W` periods divided by `(W·Ts)²` equals the torques
+    /// through the window's weights, exactly (the identification's two sides
+    /// pass through the same filter); the weights sum to 1 and are `½` at
+    /// `W = 1` (the 10 ms algorithm).
+    #[test]
+    fn the_window_weights_are_the_second_difference_of_a_double_integrator() {
+        assert_eq!(window_weight(1, 1), 0.5);
+        let ts = 1e-3;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 200.0 - 100.0
+        };
+        for w in 1..=15 {
+            let sum: f64 = (1..=w).map(|j| 2.0 * window_weight(j, w)).sum();
+            assert!((sum - 1.0).abs() < 1e-14, "W = {w}: {sum}");
+            let tau: Vec<f64> = (0..2 * w).map(|_| next()).collect();
+            // Exact positions at the period boundaries from rest-free start.
+            let (mut q, mut v) = (vec![0.3], 0.7);
+            for &t in &tau {
+                let last = *q.last().unwrap();
+                q.push(last + v * ts + 0.5 * t * ts * ts);
+                v += t * ts;
+            }
+            let h = w as f64 * ts;
+            let second = (q[2 * w] - 2.0 * q[w] + q[0]) / (h * h);
+            // Centre c = W: τ_{c−j} and τ_{c+j−1}.
+            let filtered: f64 = (1..=w)
+                .map(|j| window_weight(j, w) * (tau[w - j] + tau[w + j - 1]))
+                .sum();
+            assert!(
+                (second - filtered).abs() < 1e-6 * (1.0 + filtered.abs()),
+                "W = {w}: {second} vs {filtered}"
+            );
         }
     }
 }
