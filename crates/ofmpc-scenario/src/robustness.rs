@@ -198,7 +198,9 @@ pub fn robustness(
             let r = experiments[i].run(kind, &payload, &mut |_, _| {});
             progress();
             let m = r.map_err(|error| ScenarioError::experiment(None, error))?.1;
-            let ok = m.status == RunStatus::Ok;
+            // Completed: "ok", or "hunting" (a hold that did not settle, issue 35:
+            // stable, with its errors, but it does not hold).
+            let ok = matches!(m.status, RunStatus::Ok | RunStatus::Hunting);
             let finite = |x: f64| (ok && x.is_finite()).then_some(x);
             let steady = finite(m.steady_cartesian_error_mm);
             Ok(CellResult {
@@ -207,7 +209,7 @@ pub fn robustness(
                 status: m.status,
                 rms_mm: finite(m.cartesian_error_rms_mm),
                 steady_mm: steady,
-                holds: steady.is_some_and(|s| s <= steady_bound_mm),
+                holds: m.status == RunStatus::Ok && steady.is_some_and(|s| s <= steady_bound_mm),
             })
         })
         .collect::<Result<Vec<_>, ScenarioError>>()?;
@@ -230,7 +232,10 @@ fn summarize(controllers: &[ControllerKind], results: &[CellResult]) -> Vec<Cont
             ControllerSummary {
                 controller: name.to_string(),
                 cells: mine.len(),
-                stable: mine.iter().filter(|r| r.status == RunStatus::Ok).count(),
+                stable: mine
+                    .iter()
+                    .filter(|r| matches!(r.status, RunStatus::Ok | RunStatus::Hunting))
+                    .count(),
                 holds: mine.iter().filter(|r| r.holds).count(),
                 worst_steady_mm: max(&mut mine.iter().filter_map(|r| r.steady_mm)),
                 worst_rms_mm: max(&mut mine.iter().filter_map(|r| r.rms_mm)),

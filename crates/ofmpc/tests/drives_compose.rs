@@ -139,7 +139,12 @@ proptest! {
         let (r, m) = exp
             .run(ControllerKind::PAPER[kind], &Payload::point_mass(payload), &mut |_, _| {})
             .unwrap();
-        prop_assert_eq!(m.status, r.outcome.status());
+        // The outcome's status, but a completed run whose hold moved by more than 2
+        // encoder counts is judged "hunting" (issue 35).
+        let hunting = m.status == RunStatus::Hunting
+            && r.outcome.status() == RunStatus::Ok
+            && m.hold_error_pp_counts.is_some_and(|p| p > 2.0);
+        prop_assert!(m.status == r.outcome.status() || hunting, "{:?} {:?}", m.status, r.outcome);
         prop_assert_eq!(m.stopped_at_s, r.outcome.stopped_at());
         prop_assert!(r.record.q.iter().chain(&r.record.tau).all(|x| x.is_finite()));
         if supervise {

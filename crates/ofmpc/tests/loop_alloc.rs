@@ -79,7 +79,12 @@ fn a_longer_run_allocates_no_more() {
                 let (_, m) = exp
                     .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
                     .unwrap();
-                assert_eq!(m.status.to_string(), "ok", "{kind}: {}", m.reason);
+                // Completed (a limit cycle in the hold is judged "hunting", issue 35).
+                assert!(
+                    matches!(m.status.to_string().as_str(), "ok" | "hunting"),
+                    "{kind}: {}",
+                    m.reason
+                );
                 faults = m.faults;
             });
             counts.push(n);

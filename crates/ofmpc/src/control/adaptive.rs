@@ -24,10 +24,14 @@
 //! `state_observer`, issue 35) the identification instead:
 //! * learns from the raw measured positions (not the observer's prediction,
 //!   which is the model's own output), delay-aligned: with a measurement
-//!   `D` samples old, the positions `q_{m−2}, q_{m−1}, q_m` (`m = k − D`) give
-//!   `q̇`, `q̈` at `m − 1` by central differences, paired with the torques
-//!   `½(τ_{m−2} + τ_{m−1})` applied around it, minus the drives' friction
-//!   estimate at that velocity;
+//!   `D` samples old, the positions `q_{m−2W}, q_{m−W}, q_m` (`m = k − D`,
+//!   `W` samples spanning [`RealArmIdentification::window_s`]) give `q̇`,
+//!   `q̈` at `m − W` by central differences over `W` periods, paired with the
+//!   torques applied around it through the same filter ([`window_weight`];
+//!   `½(τ_{m−2} + τ_{m−1})` for `W = 1`), minus the drives' friction
+//!   estimate at that velocity; one sample in `W` is learnt from (at
+//!   Ts = 10 ms `W = 1`: the differences over one period; no acceleration
+//!   over 1 ms at 1 kHz, where one encoder count would be 6 rad/s²);
 //! * only while the reference moves (excitation gating: at rest the data are
 //!   quantization, noise and an unknown stiction) and, per joint, only while
 //!   the joint slides (`|q̇_i| ≥` [`RealArmIdentification::min_joint_speed`]:
@@ -71,6 +75,22 @@ pub struct RealArmIdentification {
     /// quantization's acceleration noise and the friction estimate's error,
     /// at least (the estimator's own is the ideal plant's).
     pub sigma_torque_nm: f64,
+    /// The differences span `W = max(1, round(window_s / Ts))` samples
+    /// (s): one encoder count `δ` is an acceleration error of `δ/(W·Ts)²`,
+    /// so at high rates the regressor is built over several periods
+    /// (10 ms: `W = 1` at Ts = 10 ms, `W = 10` at 1 kHz).
+    pub window_s: f64,
+}
+
+/// The weight of the torque held over the `j`-th period on either side of
+/// the centre of a window of `w` periods (`j = 1..=w`): the central second
+/// difference `(q(t+h) − 2q(t) + q(t−h))/h²`, `h = w·Ts`, is exactly the mean
+/// of `q̈` under the triangle `(h − |s|)/h²`; these are that triangle's
+/// integrals over the periods, so the torque passes through the same filter
+/// as the acceleration (they sum to 1 over both sides; `½` each for `w = 1`).
+pub(crate) fn window_weight(j: usize, w: usize) -> f64 {
+    let (j, w) = (j as f64, w as f64);
+    (2.0 * w - 2.0 * j + 1.0) / (2.0 * w * w)
 }
 
 impl Default for RealArmIdentification {
@@ -82,6 +102,7 @@ impl Default for RealArmIdentification {
             trust_mass_sigma_kg: 0.5,
             min_samples: 100,
             sigma_torque_nm: 1.0,
+            window_s: 0.01,
         }
     }
 }
@@ -90,10 +111,18 @@ impl Default for RealArmIdentification {
 #[derive(Debug, Clone)]
 struct RealArm {
     cfg: RealArmIdentification,
-    /// The last three measured positions, ring (3n).
+    /// The window in samples (`W`).
+    window: usize,
+    /// Per sample, the model moves this fraction of the way to `target`:
+    /// [`MODEL_RATE`] at `W = 1`, else `1 − (1 − MODEL_RATE)^(1/W)` at every
+    /// sample (the same time constant).
+    model_rate: f64,
+    /// The model's target at the last learnt sample.
+    target: Option<PayloadParams>,
+    /// The last `2W + 1` measured positions, ring.
     q_ring: Vec<f64>,
     measured: usize,
-    /// The last `D + 2` torques, ring.
+    /// The last `D + 2W` torques, ring.
     tau_ring: Vec<f64>,
     steps: usize,
     coulomb: Vec<f64>,
@@ -203,6 +232,12 @@ impl AdaptiveMpc {
         rls: RlsSettings,
     ) -> Result<(), SettingsError> {
         let n = self.inner.dof();
+        let ts = self.inner.settings().ts;
+        let window = if cfg.window_s.is_finite() && ts > 0.0 {
+            ((cfg.window_s / ts).round() as usize).clamp(1, 1000)
+        } else {
+            1
+        };
         let rls = RlsSettings {
             max_mass: cfg.max_mass_kg,
             change_threshold_nm: f64::MAX,
@@ -213,9 +248,16 @@ impl AdaptiveMpc {
             .map_err(SettingsError::Estimator)?;
         self.real_arm = Some(Box::new(RealArm {
             cfg,
-            q_ring: vec![0.0; 3 * n],
+            window,
+            model_rate: if window == 1 {
+                MODEL_RATE
+            } else {
+                1.0 - (1.0 - MODEL_RATE).powf(1.0 / window as f64)
+            },
+            target: None,
+            q_ring: vec![0.0; (2 * window + 1) * n],
             measured: 0,
-            tau_ring: vec![0.0; (cfg.delay + 2) * n],
+            tau_ring: vec![0.0; (cfg.delay + 2 * window) * n],
             steps: 0,
             coulomb: vec![0.0; n],
             viscous: vec![0.0; n],
@@ -240,34 +282,73 @@ impl AdaptiveMpc {
         ts: f64,
     ) -> bool {
         let n = ra.q.len();
-        let d = ra.cfg.delay;
+        let (d, w) = (ra.cfg.delay, ra.window);
         let moving = preview.chunks_exact(n).any(|b| b != w_k);
-        if !moving || ra.measured < 3 || ra.steps < d + 2 {
+        if !moving
+            || ra.measured < 2 * w + 1
+            || ra.steps < d + 2 * w
+            || !ra.measured.is_multiple_of(w)
+        {
             return false;
         }
-        // Newest measurement q_m at slot (measured − 1) % 3.
-        let slot = |back: usize| ((ra.measured - 1 - back) % 3) * n;
-        let (s0, s1, s2) = (slot(0), slot(1), slot(2));
-        let slots = d + 2;
-        // τ_{m−1} = τ_{k−D−1}, τ_{m−2} = τ_{k−D−2}; k = steps.
-        let t1 = ((ra.steps - d - 1) % slots) * n;
-        let t2 = ((ra.steps - d - 2) % slots) * n;
+        // Newest measurement q_m at slot (measured − 1) % (2W + 1).
+        let q_slots = 2 * w + 1;
+        let slot = |back: usize| ((ra.measured - 1 - back) % q_slots) * n;
+        let (s0, s1, s2) = (slot(0), slot(w), slot(2 * w));
+        let h = w as f64 * ts;
         for i in 0..n {
             let (qm, qm1, qm2) = (ra.q_ring[s0 + i], ra.q_ring[s1 + i], ra.q_ring[s2 + i]);
-            let v = (qm - qm2) / (2.0 * ts);
+            let v = (qm - qm2) / (2.0 * h);
             ra.q[i] = qm1;
             ra.qd[i] = v;
-            ra.qdd[i] = (qm - 2.0 * qm1 + qm2) / (ts * ts);
+            ra.qdd[i] = (qm - 2.0 * qm1 + qm2) / (h * h);
             let friction = crate::dynamics::friction::torque(
                 ra.viscous[i],
                 ra.coulomb[i],
                 ra.coulomb_velocity,
                 v,
             );
-            ra.tau[i] = 0.5 * (ra.tau_ring[t1 + i] + ra.tau_ring[t2 + i]) - friction;
+            ra.tau[i] = Self::window_torque(ra, i) - friction;
             ra.use_row[i] = v.abs() >= ra.cfg.min_joint_speed;
         }
         estimator.update_point(rd, &ra.q, &ra.qd, &ra.qdd, &ra.tau, &ra.use_row)
+    }
+
+    /// Joint `i`'s torque around the window's centre `c = m − W` through the
+    /// acceleration's filter ([`window_weight`]): `τ_{c−j}` (held over
+    /// `[c−j, c−j+1]`) and `τ_{c+j−1}` (over `[c+j−1, c+j]`), `j = 1..=W`;
+    /// with `c = k − D − W` (`k` = steps), all within the ring's `D + 2W`.
+    fn window_torque(ra: &RealArm, i: usize) -> f64 {
+        let n = ra.q.len();
+        let (d, w) = (ra.cfg.delay, ra.window);
+        let slots = d + 2 * w;
+        let c = ra.steps - d - w;
+        let at = |t: usize| ra.tau_ring[(t % slots) * n + i];
+        (1..=w).fold(0.0, |acc, j| {
+            let wj = window_weight(j, w);
+            acc + wj * at(c - j) + wj * at(c + j - 1)
+        })
+    }
+
+    /// What the model should carry: the estimate; on a real arm (`cfg`) the
+    /// nominal model until the mass is determined, then a point mass (the
+    /// rotational inertia from delayed, quantized data is not to be trusted).
+    fn model_target(
+        rls: &crate::ident::PayloadRls,
+        cfg: Option<&RealArmIdentification>,
+    ) -> PayloadParams {
+        let p00 = rls.covariance()[(0, 0)];
+        match cfg {
+            Some(cfg)
+                if p00.is_nan()
+                    || p00.max(0.0).sqrt() >= cfg.trust_mass_sigma_kg
+                    || rls.updates() < cfg.min_samples =>
+            {
+                PayloadParams::zeros()
+            }
+            Some(_) => rls.point_mass_estimate(),
+            None => rls.model_estimate(),
+        }
     }
 
     /// The payload estimator (its current estimate, covariance, restarts).
@@ -298,6 +379,7 @@ impl Algorithm for AdaptiveMpc {
             ra.measured = 0;
             ra.steps = 0;
             ra.tau_ring.fill(0.0);
+            ra.target = None;
         }
         Ok(())
     }
@@ -305,7 +387,7 @@ impl Algorithm for AdaptiveMpc {
         if let Some(ra) = self.real_arm.as_deref_mut() {
             let n = ra.q.len();
             if y.len() >= n && y[..n].iter().all(|v| v.is_finite()) {
-                let s = (ra.measured % 3) * n;
+                let s = (ra.measured % (2 * ra.window + 1)) * n;
                 ra.q_ring[s..s + n].copy_from_slice(&y[..n]);
                 ra.measured += 1;
             }
@@ -350,6 +432,7 @@ impl Algorithm for AdaptiveMpc {
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();
         let saved_pi = self.model_pi;
+        let saved_target = self.real_arm.as_deref().and_then(|ra| ra.target);
         let saved_payload;
         {
             let Some(rd) = model.robot_dynamics_mut() else {
@@ -365,26 +448,26 @@ impl Algorithm for AdaptiveMpc {
                             .update(rd, &self.x_prev, x, &self.tau_prev, ts)
                 }
             };
-            if learnt {
+            let target = match self.real_arm.as_deref_mut() {
+                Some(ra) => {
+                    // W > 1: the model follows the last target at every sample
+                    // (the same time constant as per learnt sample at W = 1,
+                    // without a step every W samples).
+                    if learnt {
+                        ra.target = Some(Self::model_target(self.estimator.rls(), Some(&ra.cfg)));
+                    }
+                    ra.target.filter(|_| learnt || ra.window > 1)
+                }
+                None => learnt.then(|| Self::model_target(self.estimator.rls(), None)),
+            };
+            if let Some(target) = target {
+                let rate = self
+                    .real_arm
+                    .as_deref()
+                    .map_or(MODEL_RATE, |ra| ra.model_rate);
                 // A convex combination of two physical bodies is physical, so the
                 // model should accept it; if it does not, the step is undone and says so.
-                let rls = self.estimator.rls();
-                let target = match self.real_arm.as_deref() {
-                    // Fallback: the nominal model until the mass is determined.
-                    Some(ra)
-                        if rls.covariance()[(0, 0)].is_nan()
-                            || rls.covariance()[(0, 0)].max(0.0).sqrt()
-                                >= ra.cfg.trust_mass_sigma_kg
-                            || rls.updates() < ra.cfg.min_samples =>
-                    {
-                        PayloadParams::zeros()
-                    }
-                    // A point mass: the rotational inertia from delayed,
-                    // quantized data is not to be trusted.
-                    Some(_) => rls.point_mass_estimate(),
-                    None => rls.model_estimate(),
-                };
-                self.model_pi += (target - self.model_pi) * MODEL_RATE;
+                self.model_pi += (target - self.model_pi) * rate;
                 if rd
                     .robot_mut()
                     .set_payload(payload_of(&self.model_pi))
@@ -392,6 +475,9 @@ impl Algorithm for AdaptiveMpc {
                 {
                     *self.estimator.rls_mut() = saved_rls;
                     self.model_pi = saved_pi;
+                    if let Some(ra) = self.real_arm.as_deref_mut() {
+                        ra.target = saved_target;
+                    }
                     return Err(StepFailure::PayloadRefused);
                 }
             }
@@ -407,7 +493,7 @@ impl Algorithm for AdaptiveMpc {
                 self.has_prev = true;
                 if let Some(ra) = self.real_arm.as_deref_mut() {
                     let n = ra.q.len();
-                    let s = (ra.steps % (ra.cfg.delay + 2)) * n;
+                    let s = (ra.steps % (ra.cfg.delay + 2 * ra.window)) * n;
                     ra.tau_ring[s..s + n].copy_from_slice(tau);
                     ra.steps += 1;
                 }
@@ -416,6 +502,9 @@ impl Algorithm for AdaptiveMpc {
             Err(e) => {
                 *self.estimator.rls_mut() = saved_rls;
                 self.model_pi = saved_pi;
+                if let Some(ra) = self.real_arm.as_deref_mut() {
+                    ra.target = saved_target;
+                }
                 // The payload it had before this step, which it accepted then.
                 if let Some(rd) = model.robot_dynamics_mut() {
                     if rd.robot_mut().set_payload(saved_payload).is_err() {
@@ -424,6 +513,51 @@ impl Algorithm for AdaptiveMpc {
                 }
                 Err(e)
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::window_weight;
+
+    /// On a unit mass driven by torques held over each period, the second
+    /// difference over `W` periods divided by `(W·Ts)²` equals the torques
+    /// through the window's weights, exactly (the identification's two sides
+    /// pass through the same filter); the weights sum to 1 and are `½` at
+    /// `W = 1` (the 10 ms algorithm).
+    #[test]
+    fn the_window_weights_are_the_second_difference_of_a_double_integrator() {
+        assert_eq!(window_weight(1, 1), 0.5);
+        let ts = 1e-3;
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 * 200.0 - 100.0
+        };
+        for w in 1..=15 {
+            let sum: f64 = (1..=w).map(|j| 2.0 * window_weight(j, w)).sum();
+            assert!((sum - 1.0).abs() < 1e-14, "W = {w}: {sum}");
+            let tau: Vec<f64> = (0..2 * w).map(|_| next()).collect();
+            // Exact positions at the period boundaries from rest-free start.
+            let (mut q, mut v) = (vec![0.3], 0.7);
+            for &t in &tau {
+                let last = *q.last().unwrap();
+                q.push(last + v * ts + 0.5 * t * ts * ts);
+                v += t * ts;
+            }
+            let h = w as f64 * ts;
+            let second = (q[2 * w] - 2.0 * q[w] + q[0]) / (h * h);
+            // Centre c = W: τ_{c−j} and τ_{c+j−1}.
+            let filtered: f64 = (1..=w)
+                .map(|j| window_weight(j, w) * (tau[w - j] + tau[w + j - 1]))
+                .sum();
+            assert!(
+                (second - filtered).abs() < 1e-6 * (1.0 + filtered.abs()),
+                "W = {w}: {second} vs {filtered}"
+            );
         }
     }
 }

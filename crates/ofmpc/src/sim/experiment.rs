@@ -6,7 +6,7 @@ use super::closed_loop::{
     record_columns, records_measurement, ClosedLoop, LoopSettings, RunEvents, RunResult,
 };
 use super::conditions::RunConditions;
-use super::metrics::{compute, RunMetrics};
+use super::metrics::{compute, judge_hold, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
 use super::plant::{Plant, PlantSettings};
 use crate::control::{
@@ -185,7 +185,7 @@ impl Experiment {
         {
             return Err(ExperimentError::Interrupted { t });
         }
-        let metrics = compute(
+        let mut metrics = compute(
             &run_name(kind, payload),
             kind_name(kind),
             payload.mass,
@@ -193,6 +193,12 @@ impl Experiment {
             self.loop_settings.steady_window_s,
             result.wall_s,
             &result.outcome,
+        );
+        judge_hold(
+            &mut metrics,
+            &result.record,
+            self.loop_settings.steady_window_s,
+            self.plant.encoder_counts,
         );
         Ok((result, metrics))
     }

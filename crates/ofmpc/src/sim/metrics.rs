@@ -75,8 +75,8 @@ pub struct RunMetrics {
     pub diverged: bool,
     /// Time of the divergence (s), `None` when it did not diverge.
     pub diverged_at_s: Option<f64>,
-    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"` or `"failed_stop"`
-    /// ([`RunStatus`]).
+    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"` or
+    /// `"hunting"` ([`RunStatus`]).
     pub status: RunStatus,
     /// How the run ended, in words (the outcome's `Display`).
     pub reason: String,
@@ -96,6 +96,90 @@ pub struct RunMetrics {
     /// Largest change of the applied torque between two samples,
     /// `max_{k,i} |τ_{k,i} − τ_{k−1,i}|` (N·m; NaN with fewer than two samples).
     pub torque_step_max_nm: f64,
+    /// The hold's judgement on a plant with quantized encoders: the largest
+    /// peak-to-peak, over the joints, of the measured joint error over the
+    /// steady window, in encoder counts; above 2 the run is
+    /// [`RunStatus::Hunting`] instead of `"ok"`. `None` (`null`) when not
+    /// judged: no encoder quantization, or a run that did not complete.
+    pub hold_error_pp_counts: Option<f64>,
+}
+
+/// A hold whose measured joint error moves by more than this many encoder
+/// counts peak-to-peak over the steady window hunts ([`RunStatus::Hunting`]).
+pub(crate) const HOLD_HUNTING_COUNTS: f64 = 2.0;
+
+/// The largest peak-to-peak over the joints of the measured joint error
+/// (`q_ref − q_meas`, the true `q` when no measurement was recorded) over the
+/// record's last `steady_window` s, in counts of an encoder with
+/// `encoder_counts` per turn; `None` without encoder or steady samples.
+/// Samples whose measurement is missing (NaN) are left out.
+pub(crate) fn hold_error_pp_counts(
+    rec: &Record,
+    steady_window: f64,
+    encoder_counts: u64,
+) -> Option<f64> {
+    let (n, len) = (rec.n, rec.len());
+    let t_end = *rec.t.last()?;
+    if encoder_counts == 0 || n == 0 {
+        return None;
+    }
+    let from = rec
+        .t
+        .iter()
+        .position(|&t| t >= t_end - steady_window + 1e-9)?;
+    let measured = rec.q_meas.len() == len * n;
+    let count = std::f64::consts::TAU / encoder_counts as f64;
+    (0..n)
+        .map(|i| {
+            let (lo, hi) = (from..len)
+                .map(|k| {
+                    let q = if measured {
+                        rec.q_meas[k * n + i]
+                    } else {
+                        rec.q[k * n + i]
+                    };
+                    rec.q_ref[k * n + i] - q
+                })
+                .filter(|e| e.is_finite())
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), e| {
+                    (lo.min(e), hi.max(e))
+                });
+            if hi >= lo {
+                (hi - lo) / count
+            } else {
+                0.0
+            }
+        })
+        .reduce(f64::max)
+}
+
+/// Judges the hold of a completed run on a plant with `encoder_counts`
+/// (0: an ideal encoder, nothing judged): records the peak-to-peak in
+/// [`RunMetrics::hold_error_pp_counts`] and turns `"ok"` into
+/// [`RunStatus::Hunting`] above [`HOLD_HUNTING_COUNTS`], saying which
+/// joint in [`RunMetrics::reason`].
+pub(crate) fn judge_hold(
+    m: &mut RunMetrics,
+    rec: &Record,
+    steady_window: f64,
+    encoder_counts: u64,
+) {
+    if m.status != RunStatus::Ok {
+        return;
+    }
+    m.hold_error_pp_counts = hold_error_pp_counts(rec, steady_window, encoder_counts);
+    if let Some(pp) = m
+        .hold_error_pp_counts
+        .filter(|&pp| pp > HOLD_HUNTING_COUNTS)
+    {
+        m.status = RunStatus::Hunting;
+        m.reason = format!(
+            "{}, but the hold did not settle: the measured joint error moved by {pp:.1} \
+             encoder counts peak-to-peak over the last {steady_window} s (more than \
+             {HOLD_HUNTING_COUNTS})",
+            m.reason
+        );
+    }
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -229,6 +313,7 @@ pub fn compute(
         saturated_samples: rec.saturated_samples,
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
+        hold_error_pp_counts: None,
     }
 }
 
@@ -349,5 +434,97 @@ mod tests {
         {
             assert!(v.is_nan(), "{v}");
         }
+    }
+
+    /// One joint held at rest for 1 s (Ts = 10 ms) whose measured error is
+    /// `e(t)`; the metrics of the completed run on a 20-bit encoder.
+    fn hold(e: impl Fn(f64) -> f64, encoder_counts: u64) -> RunMetrics {
+        let mut r = Record::with_capacity(1, 100);
+        for k in 0..100 {
+            let t = k as f64 * 0.01;
+            r.t.push(t);
+            r.q.push(0.0);
+            r.qd.push(0.0);
+            r.q_meas.push(-e(t));
+            r.qd_meas.push(0.0);
+            r.q_ref.push(0.0);
+            r.tau.push(0.0);
+            r.flange.push([0.0; 3]);
+            r.flange_ref.push([0.0; 3]);
+            r.step_us.push(1.0);
+        }
+        let mut m = compute("x", "second", 2.0, &r, 0.5, 1.0, &RunOutcome::Completed);
+        judge_hold(&mut m, &r, 0.5, encoder_counts);
+        m
+    }
+
+    #[test]
+    fn a_hold_that_hunts_or_drifts_is_not_ok_and_one_that_settles_is() {
+        let count = std::f64::consts::TAU / 1_048_576.0;
+        // A ±3-count limit cycle of 0.35 s (as the wrist's on the real-arm preset).
+        let hunts = hold(
+            |t| 3.0 * count * (t * std::f64::consts::TAU / 0.35).sin(),
+            1 << 20,
+        );
+        assert_eq!(hunts.status, RunStatus::Hunting, "{}", hunts.reason);
+        let pp = hunts.hold_error_pp_counts.unwrap();
+        assert!(pp > 5.0 && pp <= 6.0, "{pp}");
+        assert!(hunts.reason.contains("did not settle"), "{}", hunts.reason);
+        // The steady metrics stay those of a completed run.
+        assert!(hunts.steady_joint_error_max_rad[0].is_finite());
+        // An error that grows by 3 counts over the steady window.
+        let drifts = hold(|t| 6.0 * count * t, 1 << 20);
+        assert_eq!(drifts.status, RunStatus::Hunting);
+        // Settled within one count (a constant offset and quantization flicker): ok.
+        let settles = hold(|t| count * (5.0 + f64::from(u8::from(t > 0.7))), 1 << 20);
+        assert_eq!(settles.status, RunStatus::Ok, "{}", settles.reason);
+        assert_eq!(settles.hold_error_pp_counts, Some(1.0));
+        // Exactly 2 counts is the limit, still ok.
+        let two = hold(|t| count * 2.0 * f64::from(u8::from(t > 0.9)), 1 << 20);
+        assert_eq!(two.status, RunStatus::Ok);
+        // No encoder (an ideal plant): not judged, whatever the hold does.
+        let ideal = hold(|t| 1e-3 * (t * 40.0).sin(), 0);
+        assert_eq!(
+            (ideal.status, ideal.hold_error_pp_counts),
+            (RunStatus::Ok, None)
+        );
+        // Coarser encoders: the same motion is within 2 counts of a 12-bit one.
+        let coarse = hold(
+            |t| 3.0 * count * (t * std::f64::consts::TAU / 0.35).sin(),
+            1 << 12,
+        );
+        assert_eq!(coarse.status, RunStatus::Ok);
+    }
+
+    #[test]
+    fn a_run_that_did_not_complete_is_not_judged() {
+        let mut r = Record::with_capacity(1, 10);
+        for k in 0..10 {
+            r.t.push(k as f64 * 0.01);
+            r.q.push(0.0);
+            r.qd.push(0.0);
+            r.q_ref.push(if k % 2 == 0 { 1.0 } else { -1.0 });
+            r.tau.push(0.0);
+            r.flange.push([0.0; 3]);
+            r.flange_ref.push([0.0; 3]);
+            r.step_us.push(1.0);
+        }
+        let outcome = RunOutcome::Diverged {
+            t: 0.09,
+            joint: 0,
+            error_rad: 1.0,
+            threshold_rad: 0.2,
+            rule: crate::sim::DivergenceRule::Threshold,
+        };
+        let mut m = compute("x", "first", 0.0, &r, 0.05, 1.0, &outcome);
+        judge_hold(&mut m, &r, 0.05, 1 << 20);
+        assert_eq!(
+            (m.status, m.hold_error_pp_counts),
+            (RunStatus::Diverged, None)
+        );
+        // Without a measurement column the true position is judged.
+        let mut m = compute("x", "first", 0.0, &r, 0.05, 1.0, &RunOutcome::Completed);
+        judge_hold(&mut m, &r, 0.05, 1 << 20);
+        assert_eq!(m.status, RunStatus::Hunting);
     }
 }

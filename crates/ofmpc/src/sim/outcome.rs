@@ -15,8 +15,8 @@ use std::fmt;
 /// before anything is allocated ([`ExperimentError::TooManySamples`]).
 pub const MAX_RECORD_VALUES: usize = 100_000_000;
 
-/// The five ways a run ends, as written in `metrics.json` (`"ok"`,
-/// `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"`).
+/// The ways a run ends, as written in `metrics.json` (`"ok"`,
+/// `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"`, `"hunting"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RunStatus {
@@ -37,10 +37,18 @@ pub enum RunStatus {
     /// real cell needs its brakes). A failure, like [`RunStatus::Failed`].
     #[serde(rename = "failed_stop")]
     FailedStop,
+    /// The run went through the path and the hold, but the hold did not
+    /// settle: on a plant with quantized encoders, a joint's measured error
+    /// moved by more than 2 encoder counts peak-to-peak over the steady
+    /// window (the last part of the hold: it hunts, oscillates or drifts).
+    /// A warning, not a failure: the metrics are those of a completed run.
+    /// Judged from the record after the run (never on an ideal plant).
+    Hunting,
 }
 
 impl RunStatus {
-    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"` or `"failed_stop"`.
+    /// `"ok"`, `"diverged"`, `"failed"`, `"stopped"`, `"failed_stop"` or
+    /// `"hunting"`.
     pub fn name(self) -> &'static str {
         match self {
             RunStatus::Ok => "ok",
@@ -48,6 +56,7 @@ impl RunStatus {
             RunStatus::Failed => "failed",
             RunStatus::Stopped => "stopped",
             RunStatus::FailedStop => "failed_stop",
+            RunStatus::Hunting => "hunting",
         }
     }
 
