@@ -127,25 +127,11 @@ fn load_robot_for_dynamics(
 /// A tip other than the flange asked of a built-in robot: its chain always ends at the
 /// flange. Names the links it has (a link that exists is not called unknown) and what to do.
 fn builtin_tip_error(robot: &Robot, tip: &str) -> ScenarioError {
-    let links: Vec<&str> = robot.link_frames().iter().map(|l| l.name.as_str()).collect();
-    let is_link = links.contains(&tip);
-    ScenarioError::Override {
-        key: "[robot] tip".into(),
-        value: ofmpc::input::quote(tip, 40),
-        message: format!(
-            "{} the built-in robot {}, whose chain always ends at its flange '{}' (its links: {}); \
-             leave the tip unset (or give '{}'), place a tool with the tool centre point \
-             (robot.tcp_mm, --tcp), or bring a URDF to end the chain at another link",
-            if is_link {
-                "is a link of"
-            } else {
-                "is not a link of"
-            },
-            robot.name(),
-            robot.flange_name(),
-            links.join(", "),
-            robot.flange_name(),
-        ),
+    ScenarioError::BuiltinTip {
+        tip: ofmpc::input::quote(tip, ofmpc::input::QUOTE_CHARS),
+        robot: robot.name().to_string(),
+        flange: robot.flange_name().to_string(),
+        links: robot.link_frames().iter().map(|l| l.name.clone()).collect(),
     }
 }
 

@@ -248,7 +248,7 @@ fn size_notes(scenario: &Scenario, runs: usize) {
     let rows = scenario.samples_per_run();
     let per_row = timeseries_bytes_per_row(scenario.experiment.robot.dof());
     let output = &scenario.file.output;
-    let Some(stride) = output.timeseries_stride(rows, per_row) else {
+    let Some(stride) = output.timeseries_stride_of(rows, per_row, runs) else {
         return;
     };
     let full_mb = (rows as u64 * per_row) as f64 * 1e-6;
@@ -325,7 +325,14 @@ impl Writer<'_> {
 
     /// The verdict in words from the metrics ([`crate::verdict`]) and the table of contents.
     fn verdict(&mut self) {
-        let sentences = crate::verdict::verdict(self.metrics);
+        let mut sentences = crate::verdict::verdict(self.metrics);
+        // With the baselines compared: the section's recommendation, said up front.
+        if self.files.compare {
+            sentences.extend(crate::output::compare::verdict_choice(
+                self.metrics,
+                self.controllers,
+            ));
+        }
         if !sentences.is_empty() {
             self.report.list("verdict", sentences);
         }
@@ -692,11 +699,11 @@ impl Writer<'_> {
         for r in self.runs {
             let name = &r.metrics.name;
             let rec = &r.result.record;
-            let stride = self
-                .scenario
-                .file
-                .output
-                .timeseries_stride(rec.len(), timeseries_bytes_per_row(rec.n));
+            let stride = self.scenario.file.output.timeseries_stride_of(
+                rec.len(),
+                timeseries_bytes_per_row(rec.n),
+                self.runs.len(),
+            );
             if let Some(stride) = stride {
                 self.dir.write(
                     format!("{name}/{TIMESERIES}"),

@@ -405,12 +405,24 @@ impl<'s, 'a> Runner<'s, 'a> {
             1,
             GcodeErrorKind::InvalidValue,
             &crate::input::quote(l.raw.trim(), crate::input::QUOTE_CHARS),
-            format!(
-                "the program makes more than {max} {what} (the limit) by line {}",
-                l.no
-            ),
-            "check this line's repeats (L), peck depth (Q) and the loops around it; split the \
-             program into parts of fewer moves",
+            match what.strip_prefix("bytes of ") {
+                Some(rest) => format!(
+                    "the program makes more than {} MB of {rest} (the limit) by line {}",
+                    max >> 20,
+                    l.no
+                ),
+                None => format!(
+                    "the program makes more than {max} {what} (the limit) by line {}",
+                    l.no
+                ),
+            },
+            if what == "moves" {
+                "check this line's repeats (L), peck depth (Q) and the loops around it; split the \
+                 program into parts of fewer moves"
+            } else {
+                "check the loops around this line (how often they repeat it); split the program \
+                 into parts, or move the statement out of the loop"
+            },
         )
     }
 

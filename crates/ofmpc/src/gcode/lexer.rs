@@ -674,6 +674,20 @@ impl<'a> LineChars<'a> {
         let Some(kind) = OKind::from_word(&kw) else {
             if kw.len() >= 2 && (label.starts_with('<') || label_expr.is_some() || kw.len() >= 3) {
                 let shown = self.raw[self.byte_at(k)..self.byte_at(k2)].to_lowercase();
+                // A keyword followed by a word (`o100 sub X5`): text after the statement.
+                let known = shown
+                    .split_once(char::is_whitespace)
+                    .and_then(|(head, rest)| {
+                        OKind::from_word(&head.to_ascii_uppercase()).map(|o| (o, rest.trim()))
+                    });
+                if let Some((o, rest)) = known {
+                    return Err(self.syntax(
+                        k,
+                        format!("text `{rest}` after the statement o{label} {}", o.name()),
+                        "an O-word statement (sub, call, if, while, …) stands alone on its line; \
+                         conditions and arguments go in [ ]",
+                    ));
+                }
                 return Err(self.syntax(
                     k,
                     format!("unknown O-word keyword `{shown}` after o{label}"),

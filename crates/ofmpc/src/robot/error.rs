@@ -466,7 +466,7 @@ pub enum ModelError {
         upper: f64,
     },
     /// A tool centre point that is not a rigid transform.
-    #[error("the tool centre point at {position:?} m is not a rigid transform (finite position, proper rotation)")]
+    #[error("the tool centre point at {position:?} m is not a rigid transform within 10 m of the tip (finite position at most 10 m away, proper rotation): check its units")]
     InvalidTcp {
         /// Its position (m).
         position: [f64; 3],
