@@ -10,19 +10,31 @@ use ofmpc::sim::{mass_label, RunMetrics, RunStatus};
 /// ≈ 0.1 mm at 0.25 kg (README, "What it shows").
 pub const OFFSET_FREE_MM: f64 = 1e-6;
 
-/// A length in mm with three significant digits in words ("0.0867 mm", "1.2e-12 mm").
+/// A length in mm with three significant digits in words ("0.0867 mm", "1.20e-12 mm").
 pub fn mm(v: f64) -> String {
     if !v.is_finite() {
         return "n/a".into();
     }
+    format!("{} mm", number(v))
+}
+
+/// The report's one number format (issue #38: one number appeared as 0.00189, 0.0019 and
+/// 1.89e-3): three significant digits, trailing zeros dropped ("0.0019", "0.69", "309"),
+/// and `1.89e-4` below 0.001 or from 10 000.
+pub fn number(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
-        "0 mm".into()
+    if a == 0.0 || !v.is_finite() {
+        format!("{v}")
     } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.2e} mm")
+        format!("{v:.2e}")
     } else {
         let digits = (2 - a.log10().floor() as i32).max(0) as usize;
-        format!("{v:.digits$} mm")
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     }
 }
 
@@ -358,7 +370,7 @@ mod tests {
     fn the_verdict_says_the_papers_claims_from_the_numbers() {
         let v = verdict(&paper()).join(" ");
         assert!(
-            v.contains("usual keeps a steady offset of 0.0867 mm at 0.25 kg (0.690 mm at 2 kg)"),
+            v.contains("usual keeps a steady offset of 0.0867 mm at 0.25 kg (0.69 mm at 2 kg)"),
             "{v}"
         );
         assert!(
@@ -374,11 +386,11 @@ mod tests {
             "{v}"
         );
         assert!(
-            v.contains("The smallest RMS Cartesian error: second at 0 kg (1.40e-4 mm), second at 0.25 kg (9.90e-4 mm) and first at 2 kg (0.0240 mm)"),
+            v.contains("The smallest RMS Cartesian error: second at 0 kg (1.40e-4 mm), second at 0.25 kg (9.90e-4 mm) and first at 2 kg (0.024 mm)"),
             "{v}"
         );
         assert!(
-            v.contains("usual's RMS error goes from 0.00190 mm at 0 kg to 0.630 mm at 2 kg"),
+            v.contains("usual's RMS error goes from 0.0019 mm at 0 kg to 0.630 mm at 2 kg"),
             "{v}"
         );
     }
@@ -399,7 +411,7 @@ mod tests {
         runs[4].steady_cartesian_error_mm = 0.01;
         let after = verdict(&runs).join(" ");
         assert!(
-            after.contains("first keeps a steady offset of 0.0100 mm at 0.25 kg"),
+            after.contains("first keeps a steady offset of 0.01 mm at 0.25 kg"),
             "{after}"
         );
         assert!(
@@ -426,6 +438,11 @@ mod tests {
         assert_eq!(mm(309.2), "309 mm");
         assert_eq!(mm(5e-13), "5.00e-13 mm");
         assert_eq!(mm(f64::NAN), "n/a");
+        assert_eq!(mm(0.00189), "0.00189 mm");
+        assert_eq!(mm(0.0019), "0.0019 mm");
+        assert_eq!(mm(0.69), "0.69 mm");
+        assert_eq!(number(1.89e-4), "1.89e-4");
+        assert_eq!(number(0.25), "0.25");
         assert!(verdict(&[]).is_empty());
     }
 }

@@ -24,13 +24,8 @@ fn num(v: f64) -> String {
         "—".into()
     } else if v == 0.0 {
         "0".into()
-    } else if v.abs() >= 0.01 && v.abs() < 1e4 {
-        format!("{:.3}", v)
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .to_string()
     } else {
-        format!("{v:.2e}")
+        crate::verdict::number(v)
     }
 }
 
