@@ -748,9 +748,14 @@ fn the_verdict_carries_the_comparison_recommendation() {
         &out_s,
     ]);
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    let verdict_at = html.find("Recommendation: Over the whole range 0–0.25 kg").expect("in the verdict");
+    let verdict_at = html
+        .find("Recommendation: Over the whole range 0–0.25 kg")
+        .expect("in the verdict");
     let section_at = html.find("Controllers compared").unwrap();
     assert!(verdict_at < section_at, "the recommendation comes first");
     assert!(html.contains("choose it when the payload is not known"));
-    assert!(!html.contains("figures rendered."), "no developer check for readers");
+    assert!(
+        !html.contains("figures rendered."),
+        "no developer check for readers"
+    );
 }

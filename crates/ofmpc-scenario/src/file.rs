@@ -842,7 +842,7 @@ impl ScenarioFile {
         // The JSON position means nothing to the caller (it wrote a dict).
         let plain = |e: serde_json::Error| {
             let m = e.to_string();
-            m.split(" at line ").next().unwrap_or(&m).to_string()
+            plain_types(m.split(" at line ").next().unwrap_or(&m))
         };
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| error(plain(e)))?;
         if let serde_json::Value::Object(top) = &value {

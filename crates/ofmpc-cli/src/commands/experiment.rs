@@ -239,6 +239,18 @@ pub fn execute(
     Ok(())
 }
 
+/// `n` as an English ordinal: 2nd, 3rd, 11th, 21st.
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
 /// Time series above this total (bytes) get a warning before the run.
 const LARGE_OUTPUT_BYTES: u64 = 300_000_000;
 
@@ -255,9 +267,10 @@ fn size_notes(scenario: &Scenario, runs: usize) {
     let total = runs as u64 * (rows.div_ceil(stride) as u64) * per_row;
     if stride > 1 && output.timeseries == ofmpc_scenario::TimeseriesOutput::Auto {
         console::note(&format!(
-            "each run's timeseries.csv holds every {stride}th of its {rows} samples (about \
+            "each run's timeseries.csv holds every {} of its {rows} samples (about \
              {:.0} MB in all; every sample would take about {full_mb:.0} MB a run): [output] \
              timeseries = \"full\" writes them all; the metrics and figures use every sample",
+            ordinal(stride),
             total as f64 * 1e-6
         ));
     }

@@ -257,7 +257,7 @@ pub enum UrdfError {
     /// matrices would not fit in memory; no arm comes near).
     #[error(
         "the chain has {count} moving joints, more than the limit of {limit}: check that this \
-         is a robot arm's URDF, or choose a nearer tip link (--tip, [robot] tip)"
+         is a robot arm's URDF, or choose a nearer tip link"
     )]
     TooManyJoints {
         /// The moving joints found.
