@@ -454,3 +454,46 @@ fn unreadable_meshes_become_capsules_with_a_warning() {
         fs::remove_dir_all(d.join("r")).unwrap();
     }
 }
+
+/// `tune --words` for a baseline prints words, not the JSON (issue 36: the flag was ignored);
+/// `--json` still prints the numbers.
+#[test]
+fn tune_words_for_a_baseline_prints_words() {
+    let tmp = tempfile::tempdir().unwrap();
+    let d = tmp.path();
+    let o = bin::ofmpc_in(
+        d,
+        &[
+            "tune",
+            "--payload-range",
+            "0,0.25",
+            "--controllers",
+            "pid",
+            "--words",
+            "--out",
+            "t.toml",
+        ],
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        out.starts_with("Tuning pid for an unknown payload of 0–0.25 kg"),
+        "{out}"
+    );
+    assert!(!out.trim_start().starts_with('{'), "{out}");
+    let o = bin::ofmpc_in(
+        d,
+        &[
+            "tune",
+            "--payload-range",
+            "0,0.25",
+            "--controllers",
+            "pid",
+            "--json",
+            "--out",
+            "t2.toml",
+        ],
+    );
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
+    assert!(v["bandwidth_rad_s"].as_f64().unwrap() > 0.0, "{v}");
+}
