@@ -22,9 +22,16 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Sequence
 
-import numpy as np
+try:
+    import numpy as np
 
-import ofmpc
+    import ofmpc
+except ModuleNotFoundError as _e:  # pragma: no cover
+    raise SystemExit(
+        f"this example needs the Python package {_e.name!r}: install ofmpc's wheel with "
+        "pip install ./crates/ofmpc-py (it brings numpy), then pip install mujoco, in the same "
+        "environment (README, Python)"
+    ) from _e
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
 IRB140_URDF = REPO / "crates" / "ofmpc" / "robots" / "irb140" / "irb140.urdf"
@@ -104,7 +111,10 @@ def read_armature(drives: pathlib.Path) -> Dict[str, float]:
     try:
         import tomllib  # Python >= 3.11
     except ModuleNotFoundError:  # pragma: no cover
-        import tomli as tomllib
+        try:
+            import tomli as tomllib
+        except ModuleNotFoundError as e:
+            raise SystemExit("Python < 3.11 reads TOML with tomli: pip install tomli") from e
     with open(drives, "rb") as f:
         data = tomllib.load(f)
     return {name: float(d.get("armature_kgm2", 0.0)) for name, d in data.get("joints", {}).items()}

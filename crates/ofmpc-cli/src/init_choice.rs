@@ -149,8 +149,8 @@ pub fn scenario_text(robot_name: &str, model: &str, tip: Option<&str>, p: &Place
     };
     format!(
         "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
-         # default (examples/scenario.toml, docs/guide/reference/scenario.md). Relative paths are\n\
-         # relative to this file.\n\
+         # default (examples/scenario.toml, docs/guide/reference/scenario.md). A relative path is\n\
+         # relative to this file; an absolute one (the URDF's when it lies elsewhere) is used as is.\n\
          title = \"Offset-free MPC of {robot_name} on the paper's path{placed}\"\n\
          controllers = [\"usual\", \"first\", \"second\"]\n\n\
          [robot]\n\

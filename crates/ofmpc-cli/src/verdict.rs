@@ -15,14 +15,32 @@ pub fn mm(v: f64) -> String {
     if !v.is_finite() {
         return "n/a".into();
     }
+    format!("{} mm", number(v))
+}
+
+/// The report's one number format (issue #38: one number appeared as 0.00189, 0.0019 and
+/// 1.89e-3): three significant digits, trailing zeros dropped ("0.0019", "0.69", "309"),
+/// and `1.89e-4` below 0.001 or from 10 000.
+pub fn number(v: f64) -> String {
     let a = v.abs();
-    if a == 0.0 {
-        "0 mm".into()
+    if a == 0.0 || !v.is_finite() {
+        format!("{v}")
     } else if !(1e-3..1e4).contains(&a) {
-        format!("{v:.2e} mm")
+        let s = format!("{v:.2e}");
+        match s.split_once('e') {
+            Some((m, e)) if m.contains('.') => {
+                format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+            }
+            _ => s,
+        }
     } else {
         let digits = (2 - a.log10().floor() as i32).max(0) as usize;
-        format!("{v:.digits$} mm")
+        let s = format!("{v:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     }
 }
 
@@ -100,7 +118,7 @@ fn offset_sentences(runs: &[RunMetrics], names: &[&str]) -> Vec<String> {
 }
 
 /// "first and second are offset-free: their steady errors (at most … up to … kg and …) are
-/// round-off, below 1.00e-6 mm." for `(controller, largest steady error, heaviest payload)`.
+/// round-off, below 1e-6 mm." for `(controller, largest steady error, heaviest payload)`.
 fn offset_free_sentence(free: &[(String, f64, f64)]) -> String {
     let names: Vec<String> = free.iter().map(|(c, _, _)| c.clone()).collect();
     let numbers: Vec<String> = free
@@ -359,14 +377,14 @@ mod tests {
     fn the_verdict_says_the_papers_claims_from_the_numbers() {
         let v = verdict(&paper()).join(" ");
         assert!(
-            v.contains("usual keeps a steady offset of 0.0867 mm at 0.25 kg (0.690 mm at 2 kg)"),
+            v.contains("usual keeps a steady offset of 0.0867 mm at 0.25 kg (0.69 mm at 2 kg)"),
             "{v}"
         );
         assert!(
             v.contains(
-                "first and second are offset-free: their steady errors (at most 7.00e-13 mm for \
-                 first up to 2 kg and at most 9.00e-13 mm for second up to 0.25 kg) are \
-                 round-off, below 1.00e-6 mm."
+                "first and second are offset-free: their steady errors (at most 7e-13 mm for \
+                 first up to 2 kg and at most 9e-13 mm for second up to 0.25 kg) are \
+                 round-off, below 1e-6 mm."
             ),
             "{v}"
         );
@@ -375,11 +393,11 @@ mod tests {
             "{v}"
         );
         assert!(
-            v.contains("The smallest RMS Cartesian error: second at 0 kg (1.40e-4 mm), second at 0.25 kg (9.90e-4 mm) and first at 2 kg (0.0240 mm)"),
+            v.contains("The smallest RMS Cartesian error: second at 0 kg (1.4e-4 mm), second at 0.25 kg (9.9e-4 mm) and first at 2 kg (0.024 mm)"),
             "{v}"
         );
         assert!(
-            v.contains("usual's RMS error goes from 0.00190 mm at 0 kg to 0.630 mm at 2 kg"),
+            v.contains("usual's RMS error goes from 0.0019 mm at 0 kg to 0.63 mm at 2 kg"),
             "{v}"
         );
     }
@@ -400,7 +418,7 @@ mod tests {
         runs[4].steady_cartesian_error_mm = 0.01;
         let after = verdict(&runs).join(" ");
         assert!(
-            after.contains("first keeps a steady offset of 0.0100 mm at 0.25 kg"),
+            after.contains("first keeps a steady offset of 0.01 mm at 0.25 kg"),
             "{after}"
         );
         assert!(
@@ -425,8 +443,14 @@ mod tests {
     fn lengths_in_words() {
         assert_eq!(mm(0.08671), "0.0867 mm");
         assert_eq!(mm(309.2), "309 mm");
-        assert_eq!(mm(5e-13), "5.00e-13 mm");
+        assert_eq!(mm(5e-13), "5e-13 mm");
         assert_eq!(mm(f64::NAN), "n/a");
+        assert_eq!(mm(0.00189), "0.00189 mm");
+        assert_eq!(mm(0.0019), "0.0019 mm");
+        assert_eq!(mm(0.69), "0.69 mm");
+        assert_eq!(number(1.89e-4), "1.89e-4");
+        assert_eq!(number(1.4e-4), "1.4e-4");
+        assert_eq!(number(0.25), "0.25");
         assert!(verdict(&[]).is_empty());
     }
 }

@@ -729,3 +729,33 @@ fn g43_h_reads_with_a_tool_table_and_is_refused_without_one() {
         "{e}"
     );
 }
+
+/// With a baseline compared, the report's verdict (at the top) carries the recommendation of
+/// "Controllers compared" (issue #38: it was only at the bottom of that section), and the
+/// figure check says nothing to readers when every figure is drawn.
+#[test]
+fn the_verdict_carries_the_comparison_recommendation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r");
+    let out_s = out.display().to_string();
+    ok(&[
+        "reproduce",
+        "--controllers",
+        "second,ctc",
+        "--payload",
+        "0,0.25",
+        "--out",
+        &out_s,
+    ]);
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let verdict_at = html
+        .find("Recommendation: Over the whole range 0–0.25 kg")
+        .expect("in the verdict");
+    let section_at = html.find("Controllers compared").unwrap();
+    assert!(verdict_at < section_at, "the recommendation comes first");
+    assert!(html.contains("choose it when the payload is not known"));
+    assert!(
+        !html.contains("figures rendered."),
+        "no developer check for readers"
+    );
+}

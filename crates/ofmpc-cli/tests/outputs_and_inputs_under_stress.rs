@@ -647,6 +647,19 @@ fn urdf_errors_have_a_line_and_messages_say_things_once() {
             && e.contains("xyz=\"1,5 0 0 0\""),
         "{e}"
     );
+    // Four plain numbers: the XML reader refuses them without a position (issue 36); the
+    // message has the line and column.
+    let four = format!("{}0 0 0 0{}", &urdf[..at], &urdf[end..]);
+    fs::write(d.join("four.urdf"), &four).unwrap();
+    let e = fails_in(d, &["inspect", "robot", "--robot", "four.urdf"]);
+    let line = line_of(&four, "0 0 0 0\"");
+    assert!(
+        e.contains("four.urdf")
+            && e.contains("three numbers")
+            && e.contains(&format!("(line {line}, column "))
+            && e.contains("xyz=\"0 0 0 0\""),
+        "{e}"
+    );
     // Said once.
     let e = fails_in(
         d,

@@ -142,7 +142,9 @@ fn the_readme_steps_run_on_a_panda_with_its_hand() {
     );
 }
 
-/// The public arms with dynamics the repository ships: `init robot` then its printed `run`
+/// The public arms with dynamics the repository ships (issue 38's "8 public arms": UR3, UR5,
+/// UR10, Panda, iiwa, Kinova, LWR, Z1 — the UR5 and the Panda are the two README walks above,
+/// which run init's printed `run` too; the six others here): `init robot` then its printed `run`
 /// as printed (the three controllers, 0 and 0.5 kg), without a hand-chosen start pose: exits
 /// 0, every run planned and simulated (a controller may diverge under the payload its model
 /// does not know: a result, reported), the usual MPC without payload completes.

@@ -97,3 +97,39 @@ def test_plan_answers_ctrl_c(tmp_path):
     p.send_signal(signal.SIGINT)
     out, _ = p.communicate(timeout=60)
     assert out.strip() in ("interrupted", "finished"), out
+
+
+def test_a_program_that_expands_without_bound_raises():
+    """G83 with a tiny peck over 100 m makes millions of moves from one line: read_program
+    raises naming the move limit and the line (it aborted the interpreter before)."""
+    text = "G21 G90\nG0 X0 Y0 Z5\nG83 X0 Y0 Z-100000 R1 Q0.0001\nM2\n"
+    with pytest.raises(ofmpc.OfmpcError, match=r"line 3.*more than 250000 moves \(the limit\)"):
+        ofmpc.read_program(text)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child")
+def test_read_program_answers_ctrl_c(tmp_path):
+    """A program whose loop runs for seconds: SIGINT during read_program raises
+    KeyboardInterrupt (or the read ends) within seconds, not after the loop."""
+    code = textwrap.dedent(
+        """
+        import ofmpc
+        text = "#1=0\\no1 while [#1 LT 9000000]\\n#1=[#1+1]\\no1 endwhile\\nM2\\n"
+        print("ready", flush=True)
+        try:
+            ofmpc.read_program(text)
+            print("finished", flush=True)
+        except KeyboardInterrupt:
+            print("interrupted", flush=True)
+        except ofmpc.OfmpcError:
+            print("finished", flush=True)
+        """
+    )
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, text=True)
+    assert p.stdout.readline().strip() == "ready"
+    import time
+
+    time.sleep(0.5)
+    p.send_signal(signal.SIGINT)
+    out, _ = p.communicate(timeout=60)
+    assert out.strip() in ("interrupted", "finished"), out

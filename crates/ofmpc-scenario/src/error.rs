@@ -73,6 +73,26 @@ pub enum ScenarioError {
         /// Why.
         error: Box<ModelError>,
     },
+    /// `[robot] tip` other than the flange for a built-in robot, whose chain always ends at
+    /// its flange.
+    #[error(
+        "[robot] tip = {tip:?}: '{tip}' {} the built-in robot {robot}, whose chain always ends at its \
+         flange '{flange}' (its links: {}); leave the tip unset (or give '{flange}'), place a \
+         tool with the tool centre point (robot.tcp_mm), or bring a URDF to end the chain at \
+         another link",
+        if links.contains(tip) { "is a link of" } else { "is not a link of" },
+        links.join(", ")
+    )]
+    BuiltinTip {
+        /// The tip asked for (quoted short).
+        tip: String,
+        /// The robot's name.
+        robot: String,
+        /// Its flange link.
+        flange: String,
+        /// Its links.
+        links: Vec<String>,
+    },
     /// The drives file could not be read or applied.
     #[error("applying {}", path.display())]
     Drives {

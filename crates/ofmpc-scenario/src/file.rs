@@ -237,6 +237,11 @@ pub enum TimeseriesOutput {
 /// the paper's three controllers writes well under 100 MB.
 pub const AUTO_TIMESERIES_BYTES: u64 = 12_000_000;
 
+/// The size (bytes) all runs' `timeseries.csv` keep together under `"auto"` when there are
+/// many runs ([`OutputSection::timeseries_stride_of`]): 48 MB, so that `reproduce --compare`
+/// (45 runs) writes tens of MB, not 80 (issue #38).
+pub const AUTO_TIMESERIES_TOTAL_BYTES: u64 = 48_000_000;
+
 /// `[output]`
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -252,9 +257,22 @@ impl OutputSection {
     /// The stride of the time series of a run of `rows` samples whose file would take
     /// `bytes_per_row` bytes a row: `None` for no file, `Some(1)` for every sample.
     pub fn timeseries_stride(&self, rows: usize, bytes_per_row: u64) -> Option<usize> {
+        self.timeseries_stride_of(rows, bytes_per_row, 1)
+    }
+
+    /// [`Self::timeseries_stride`] for one of `runs` runs written together: under `"auto"`
+    /// a run keeps at most [`AUTO_TIMESERIES_BYTES`] and the runs together at most
+    /// [`AUTO_TIMESERIES_TOTAL_BYTES`] (the smaller share wins).
+    pub fn timeseries_stride_of(
+        &self,
+        rows: usize,
+        bytes_per_row: u64,
+        runs: usize,
+    ) -> Option<usize> {
+        let budget = AUTO_TIMESERIES_BYTES.min(AUTO_TIMESERIES_TOTAL_BYTES / runs.max(1) as u64);
         let auto = || {
             let total = rows as u64 * bytes_per_row;
-            (total.div_ceil(AUTO_TIMESERIES_BYTES).max(1)) as usize
+            (total.div_ceil(budget.max(1)).max(1)) as usize
         };
         match self.timeseries {
             TimeseriesOutput::None => None,
@@ -751,7 +769,40 @@ pub(crate) fn plain_types(message: &str) -> String {
     ] {
         m = m.replace(rust, words);
     }
-    m
+    short_snippet(&m)
+}
+
+/// The longest source line a TOML error's snippet keeps whole (characters).
+const SNIPPET_CHARS: usize = 80;
+
+/// `message` (a TOML error: a header naming `line L, column C`, then the source line and a
+/// caret line, each after `| `) with each snippet line longer than [`SNIPPET_CHARS`] cut to
+/// a window around column C, so that a huge line of input makes a short message.
+fn short_snippet(message: &str) -> String {
+    let column = message
+        .split_once("column ")
+        .and_then(|(_, r)| r.split(|c: char| !c.is_ascii_digit()).next())
+        .and_then(|c| c.parse::<usize>().ok())
+        .unwrap_or(1);
+    let from = column.saturating_sub(40);
+    let lines: Vec<String> = message
+        .split('\n')
+        .map(|line| match line.split_once("| ") {
+            Some((prefix, rest)) if rest.chars().count() > SNIPPET_CHARS => {
+                let n = rest.chars().count();
+                let window: String = rest.chars().skip(from).take(SNIPPET_CHARS - 20).collect();
+                let head = if from > 0 { "…" } else { "" };
+                let tail = if from + SNIPPET_CHARS - 20 < n {
+                    "…"
+                } else {
+                    ""
+                };
+                format!("{prefix}| {head}{window}{tail}")
+            }
+            _ => line.to_string(),
+        })
+        .collect();
+    lines.join("\n")
 }
 
 /// The scenario's sections: each a table of keys. A derived deserializer would also read a
@@ -808,7 +859,7 @@ impl ScenarioFile {
         // The JSON position means nothing to the caller (it wrote a dict).
         let plain = |e: serde_json::Error| {
             let m = e.to_string();
-            m.split(" at line ").next().unwrap_or(&m).to_string()
+            plain_types(m.split(" at line ").next().unwrap_or(&m))
         };
         let value: serde_json::Value = serde_json::from_str(text).map_err(|e| error(plain(e)))?;
         if let serde_json::Value::Object(top) = &value {

@@ -36,6 +36,7 @@ pub use file::{
     absolute, expand_shorthand, mode_name, parse_mode, parse_profile, profile_name, FaultsSection,
     OrientationSection, OutputSection, Override, PayloadSection, ProgramSection, RobotSection,
     SafetySection, ScenarioFile, TimeseriesOutput, TimingSection, AUTO_TIMESERIES_BYTES,
+    AUTO_TIMESERIES_TOTAL_BYTES,
 };
 pub use placement::{place_paper_program, Placement};
 pub use program_json::{program_json, program_json_with_tool_axis};

@@ -124,6 +124,17 @@ fn load_robot_for_dynamics(
     Ok((robot, warnings))
 }
 
+/// A tip other than the flange asked of a built-in robot: its chain always ends at the
+/// flange. Names the links it has (a link that exists is not called unknown) and what to do.
+fn builtin_tip_error(robot: &Robot, tip: &str) -> ScenarioError {
+    ScenarioError::BuiltinTip {
+        tip: ofmpc::input::quote(tip, ofmpc::input::QUOTE_CHARS),
+        robot: robot.name().to_string(),
+        flange: robot.flange_name().to_string(),
+        links: robot.link_frames().iter().map(|l| l.name.clone()).collect(),
+    }
+}
+
 /// [`load_robot`] with a chosen tip and tool centre point ([`ChainOptions`]); the built-in
 /// robot takes the tool centre point and refuses a tip other than its flange.
 pub fn load_robot_with(
@@ -145,16 +156,7 @@ pub fn load_robot_with(
     } else {
         let mut robot = Robot::builtin(model)?;
         if let Some(tip) = chain.tip.as_deref().filter(|t| *t != robot.flange_name()) {
-            return Err(ScenarioError::RobotKey {
-                key: "[robot] tip",
-                error: Box::new(
-                    ofmpc::robot::UrdfError::UnknownTip {
-                        tip: tip.to_string(),
-                        links: vec![robot.flange_name().to_string()],
-                    }
-                    .into(),
-                ),
-            });
+            return Err(builtin_tip_error(&robot, tip));
         }
         if let Some(t) = chain.tcp {
             robot.set_tcp(t)?;

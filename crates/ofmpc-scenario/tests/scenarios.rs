@@ -291,3 +291,38 @@ fn baselines_section_tunes_the_run_controller() {
         "pid_bandwidth changed nothing"
     );
 }
+
+/// `[output] timeseries = "auto"` keeps a run within 12 MB and all runs together within
+/// 48 MB (issue #38: `reproduce --compare` wrote 80 MB); "full" keeps every sample whatever
+/// the number of runs; a single run's stride is unchanged.
+#[test]
+fn auto_time_series_share_a_total_budget() {
+    use ofmpc_scenario::{
+        OutputSection, TimeseriesOutput, AUTO_TIMESERIES_BYTES, AUTO_TIMESERIES_TOTAL_BYTES,
+    };
+    let auto = OutputSection::default();
+    let (rows, per_row) = (2_000usize, 700u64); // 1.4 MB a run: the paper's path
+    assert_eq!(auto.timeseries_stride(rows, per_row), Some(1));
+    assert_eq!(auto.timeseries_stride_of(rows, per_row, 6), Some(1));
+    for runs in [45usize, 100] {
+        let stride = auto.timeseries_stride_of(rows, per_row, runs).unwrap();
+        let total = runs as u64 * rows.div_ceil(stride) as u64 * per_row;
+        assert!(
+            total <= AUTO_TIMESERIES_TOTAL_BYTES + runs as u64 * per_row,
+            "{runs}: {total}"
+        );
+        assert!(stride > 1, "{runs}");
+    }
+    // A 30-minute path (183 000 samples of 700 bytes) with 6 runs: ≤ 48 MB in all.
+    let stride = auto.timeseries_stride_of(183_000, per_row, 6).unwrap();
+    assert!(
+        6 * 183_000u64.div_ceil(stride as u64) * per_row
+            <= AUTO_TIMESERIES_TOTAL_BYTES + 6 * per_row
+    );
+    assert!(183_000u64.div_ceil(stride as u64) * per_row <= AUTO_TIMESERIES_BYTES + per_row);
+    let full = OutputSection {
+        timeseries: TimeseriesOutput::Full,
+        stride: None,
+    };
+    assert_eq!(full.timeseries_stride_of(rows, per_row, 45), Some(1));
+}

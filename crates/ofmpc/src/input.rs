@@ -196,7 +196,11 @@ fn short_numbers(line: &str) -> String {
     let mut i = 0;
     let mut copied = 0;
     while i < b.len() {
-        let boundary = i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b"_/.-".contains(&b[i - 1]));
+        let word = |c: u8| c.is_ascii_alphanumeric() || b"_/.-".contains(&c);
+        // A minus sign counts as a boundary when it starts a number ("(-1452…, 0)"), not
+        // inside a word ("run-2026…").
+        let boundary =
+            i == 0 || !word(b[i - 1]) || (b[i - 1] == b'-' && (i == 1 || !word(b[i - 2])));
         if !(boundary && b[i].is_ascii_digit()) {
             i += 1;
             continue;
@@ -244,6 +248,8 @@ mod tests {
         let tiny = format!("ts = 0.{}1", "0".repeat(299));
         assert_eq!(for_reader(&tiny), "ts = 1.000e-300");
         // Ordinary numbers, words and paths with digits stay as they are.
+        let neg = format!("flange at (-1{}.0000, 0.0000)", "4".repeat(250));
+        assert_eq!(for_reader(&neg), "flange at (-1.444e250, 0.0000)");
         let plain = "line 12, column 3: 0.01 s; run-20261203173811123456/x1234567890123456789012";
         assert_eq!(for_reader(plain), plain);
         let huge = format!("1 | x = \"{}\"\nsecond line", "a".repeat(3_000_000));

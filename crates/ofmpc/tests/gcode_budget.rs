@@ -38,7 +38,10 @@ fn loops_that_store_messages_or_events_stop_at_their_budgets() {
         "G21 G0 X0 Y0 Z0\n#1=0\no1 while [#1 LT 2000000]\n(PRINT,{long})\n#1=[#1+1]\no1 endwhile\nM30\n"
     ));
     assert!(
-        e.contains(&format!("more than {MAX_MESSAGE_BYTES} bytes of messages")),
+        e.contains(&format!(
+            "more than {} MB of messages",
+            MAX_MESSAGE_BYTES >> 20
+        )),
         "{e}"
     );
     assert!(

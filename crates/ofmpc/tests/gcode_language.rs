@@ -134,6 +134,36 @@ fn structure_errors_name_the_statements() {
 }
 
 #[test]
+fn a_syntax_error_on_an_opening_or_closing_line_is_reported_at_that_line() {
+    // The opener cannot be read: the error is its own (line 1), not "endif without its
+    // opening statement" at the closer (line 3).
+    for (text, col) in [
+        ("G0 X0 Y0 Z0\no1 if [1e3 GT 2]\nG0 X1\no1 endif\nM2\n", 9),
+        (
+            "G0 X0 Y0 Z0\no1 while [0] junk\nG0 X1\no1 endwhile\nM2\n",
+            14,
+        ),
+        ("G0 X0 Y0 Z0\no100 sub X5\nG0 X1\no100 endsub\nM2\n", 6),
+        (
+            "G0 X0 Y0 Z0\nN10 o1 if [1e3 GT 2]\nG0 X1\no1 endif\nM2\n",
+            13,
+        ),
+    ] {
+        let e = parse(text, &ParseOptions::default()).unwrap_err();
+        assert_eq!((e.line, e.column), (2, col), "{text:?}: {e}");
+        assert!(!e.to_string().contains("opening statement"), "{e}");
+    }
+    // The closer cannot be read: reported at the closer, not "never closed" at the opener.
+    let e = parse(
+        "o1 if [1]\nG0 X0 Y0 Z0\no1 endif junk\nM2\n",
+        &ParseOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(e.line, 3, "{e}");
+    assert!(!e.to_string().contains("never closed"), "{e}");
+}
+
+#[test]
 fn m_codes_s_and_t_are_events_and_comments_are_messages() {
     let p = ok("G0 X0 Y0 Z0 S1000 M3\n(MSG, hello)\n#<d> = 2\n(DEBUG, d=#<d> one=#1)\nM62 P1\nG1 X1\nM66 P0 L0 E1 Q2\nM67 E0 Q50\nT2 M6\nM30\n");
     let codes: Vec<(&str, usize, usize)> = p

@@ -239,6 +239,18 @@ pub fn execute(
     Ok(())
 }
 
+/// `n` as an English ordinal: 2nd, 3rd, 11th, 21st.
+fn ordinal(n: usize) -> String {
+    let suffix = match (n % 10, n % 100) {
+        (_, 11..=13) => "th",
+        (1, _) => "st",
+        (2, _) => "nd",
+        (3, _) => "rd",
+        _ => "th",
+    };
+    format!("{n}{suffix}")
+}
+
 /// Time series above this total (bytes) get a warning before the run.
 const LARGE_OUTPUT_BYTES: u64 = 300_000_000;
 
@@ -248,16 +260,17 @@ fn size_notes(scenario: &Scenario, runs: usize) {
     let rows = scenario.samples_per_run();
     let per_row = timeseries_bytes_per_row(scenario.experiment.robot.dof());
     let output = &scenario.file.output;
-    let Some(stride) = output.timeseries_stride(rows, per_row) else {
+    let Some(stride) = output.timeseries_stride_of(rows, per_row, runs) else {
         return;
     };
     let full_mb = (rows as u64 * per_row) as f64 * 1e-6;
     let total = runs as u64 * (rows.div_ceil(stride) as u64) * per_row;
     if stride > 1 && output.timeseries == ofmpc_scenario::TimeseriesOutput::Auto {
         console::note(&format!(
-            "each run's timeseries.csv holds every {stride}th of its {rows} samples (about \
+            "each run's timeseries.csv holds every {} of its {rows} samples (about \
              {:.0} MB in all; every sample would take about {full_mb:.0} MB a run): [output] \
              timeseries = \"full\" writes them all; the metrics and figures use every sample",
+            ordinal(stride),
             total as f64 * 1e-6
         ));
     }
@@ -325,7 +338,14 @@ impl Writer<'_> {
 
     /// The verdict in words from the metrics ([`crate::verdict`]) and the table of contents.
     fn verdict(&mut self) {
-        let sentences = crate::verdict::verdict(self.metrics);
+        let mut sentences = crate::verdict::verdict(self.metrics);
+        // With the baselines compared: the section's recommendation, said up front.
+        if self.files.compare {
+            sentences.extend(crate::output::compare::verdict_choice(
+                self.metrics,
+                self.controllers,
+            ));
+        }
         if !sentences.is_empty() {
             self.report.list("verdict", sentences);
         }
@@ -692,11 +712,11 @@ impl Writer<'_> {
         for r in self.runs {
             let name = &r.metrics.name;
             let rec = &r.result.record;
-            let stride = self
-                .scenario
-                .file
-                .output
-                .timeseries_stride(rec.len(), timeseries_bytes_per_row(rec.n));
+            let stride = self.scenario.file.output.timeseries_stride_of(
+                rec.len(),
+                timeseries_bytes_per_row(rec.n),
+                self.runs.len(),
+            );
             if let Some(stride) = stride {
                 self.dir.write(
                     format!("{name}/{TIMESERIES}"),

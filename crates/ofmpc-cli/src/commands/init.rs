@@ -71,8 +71,8 @@ pub fn scenario_skeleton_with_tip(model: &str, tip: Option<&str>) -> String {
     let tip = tip.map(|t| format!("tip = {t:?}\n")).unwrap_or_default();
     format!(
         "# Written by `ofmpc init robot`: `ofmpc run scenario.toml`. Every key left out keeps its\n\
-         # default (examples/scenario.toml, docs/guide/reference/scenario.md). Relative paths are\n\
-         # relative to this file.\n\
+         # default (examples/scenario.toml, docs/guide/reference/scenario.md). A relative path is\n\
+         # relative to this file; an absolute one (the URDF's when it lies elsewhere) is used as is.\n\
          controllers = [\"usual\", \"first\", \"second\"]\n\n\
          [robot]\n\
          model = {model:?}\n{tip}\

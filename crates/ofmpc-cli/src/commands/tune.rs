@@ -243,14 +243,32 @@ fn tune_baselines(
     dir.write(&names[0], text.as_bytes())?;
     dir.commit()
         .with_context(|| format!("moving the results into {}", folder.display()))?;
-    console::println(&serde_json::to_string_pretty(&serde_json::json!({
+    let summary = serde_json::json!({
             "controller": kind.name(),
             "bandwidth_rad_s": t.chosen.bandwidth,
             "margin": t.margin,
             "worst_rms_mm": t.chosen.rms_mm,
             "candidates": t.candidates,
             "scenario": a.out.display().to_string(),
-    }))?)?;
+    });
+    let text = if a.format.json() {
+        serde_json::to_string_pretty(&summary)?
+    } else {
+        format!(
+            "Tuning {kind} for an unknown payload of {lo_kg}–{hi_kg} kg: the largest bandwidth \
+             keeping {lo_kg}, {}, {hi_kg} kg offset-free is {} rad/s ({} bandwidths tried).\n\
+             Margin {margin}.\n\
+             Worst RMS Cartesian error over the range: {:.4} mm.\n\
+             Written: {} (run it with `ofmpc run {}`). `--json` prints the numbers.",
+            t.simulated_kg[1],
+            t.chosen.bandwidth,
+            t.candidates.len(),
+            t.chosen.rms_mm,
+            a.out.display(),
+            a.out.display(),
+        )
+    };
+    console::println(&text)?;
     Ok(())
 }
 

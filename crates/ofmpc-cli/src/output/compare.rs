@@ -24,13 +24,8 @@ fn num(v: f64) -> String {
         "—".into()
     } else if v == 0.0 {
         "0".into()
-    } else if v.abs() >= 0.01 && v.abs() < 1e4 {
-        format!("{:.3}", v)
-            .trim_end_matches('0')
-            .trim_end_matches('.')
-            .to_string()
     } else {
-        format!("{v:.2e}")
+        crate::verdict::number(v)
     }
 }
 
@@ -200,6 +195,29 @@ fn winners(metrics: &[RunMetrics], keep: &dyn Fn(&str) -> bool) -> String {
         })
         .collect::<Vec<_>>()
         .join("; ")
+}
+
+/// The recommendation for the verdict at the top of the report: the sentence of
+/// [`robust_choice`] over the controllers offset-free at every payload (`None` when none is).
+pub(crate) fn verdict_choice(
+    metrics: &[RunMetrics],
+    controllers: &[ControllerKind],
+) -> Option<String> {
+    let mut payloads: Vec<f64> = metrics.iter().map(|m| m.payload_kg).collect();
+    payloads.sort_by(f64::total_cmp);
+    payloads.dedup();
+    let complete: Vec<&str> = controllers
+        .iter()
+        .filter(|k| {
+            metrics
+                .iter()
+                .filter(|m| m.controller == k.name())
+                .all(offset_free)
+        })
+        .map(|k| k.name())
+        .collect();
+    let s = robust_choice(metrics, &complete, &payloads);
+    (!s.is_empty()).then(|| format!("Recommendation: {}", s.trim_end()))
 }
 
 /// The most robust choice: of the controllers offset-free at every payload (`complete`), the

@@ -72,7 +72,7 @@ fn link(lines: &[SourceLine<'_>]) -> Result<Links, GcodeError> {
     let mut stack: Vec<Open> = Vec::new();
     for (i, l) in lines.iter().enumerate() {
         if let Some(o) = o_stmt(l) {
-            link_one(lines, &mut stack, &mut k, i, o)?;
+            link_one(lines, &mut stack, &mut k, i, o).map_err(|e| opener_error(lines, i, e))?;
         }
     }
     if let Some(t) = stack.pop() {
@@ -86,15 +86,42 @@ fn link(lines: &[SourceLine<'_>]) -> Result<Links, GcodeError> {
         };
         if let Some(o) = o_stmt(l) {
             let m = format!("o{} {} is never closed", t.label, t.kind.name());
-            return Err(structure_error(
-                l,
-                o,
-                m,
-                &format!("close it with o{} {closer}", t.label),
-            ));
+            let e = structure_error(l, o, m, &format!("close it with o{} {closer}", t.label));
+            // A closer that could not be read is the real cause: report it at its line.
+            return Err(lines[t.at..]
+                .iter()
+                .find_map(|l| match &l.lexed {
+                    Err(le) if looks_like_o_word(l.raw) => Some(le.clone()),
+                    _ => None,
+                })
+                .unwrap_or(e));
         }
     }
     Ok(k)
+}
+
+/// The error to report when linking fails at line index `i`: an O-word line before it that
+/// could not be read (its statement is missing from the structure, so the closer seems
+/// unmatched) is the real cause, reported at its own line; otherwise `e` itself.
+fn opener_error(lines: &[SourceLine<'_>], i: usize, e: GcodeError) -> GcodeError {
+    lines[..i]
+        .iter()
+        .find_map(|l| match &l.lexed {
+            Err(le) if looks_like_o_word(l.raw) => Some(le.clone()),
+            _ => None,
+        })
+        .unwrap_or(e)
+}
+
+/// A line whose first word (after an optional block delete `/` and line number `N…`) is an
+/// O-word.
+fn looks_like_o_word(raw: &str) -> bool {
+    let s = raw.trim_start().trim_start_matches('/').trim_start();
+    let s = match s.strip_prefix(['n', 'N']) {
+        Some(rest) => rest.trim_start_matches(|c: char| c.is_ascii_digit() || c == '.'),
+        None => s,
+    };
+    s.trim_start().starts_with(['o', 'O'])
 }
 
 /// Links the O-word statement `o` at line index `i` (see [`link`]).
@@ -378,12 +405,24 @@ impl<'s, 'a> Runner<'s, 'a> {
             1,
             GcodeErrorKind::InvalidValue,
             &crate::input::quote(l.raw.trim(), crate::input::QUOTE_CHARS),
-            format!(
-                "the program makes more than {max} {what} (the limit) by line {}",
-                l.no
-            ),
-            "check this line's repeats (L), peck depth (Q) and the loops around it; split the \
-             program into parts of fewer moves",
+            match what.strip_prefix("bytes of ") {
+                Some(rest) => format!(
+                    "the program makes more than {} MB of {rest} (the limit) by line {}",
+                    max >> 20,
+                    l.no
+                ),
+                None => format!(
+                    "the program makes more than {max} {what} (the limit) by line {}",
+                    l.no
+                ),
+            },
+            if what == "moves" {
+                "check this line's repeats (L), peck depth (Q) and the loops around it; split the \
+                 program into parts of fewer moves"
+            } else {
+                "check the loops around this line (how often they repeat it); split the program \
+                 into parts, or move the statement out of the loop"
+            },
         )
     }
 

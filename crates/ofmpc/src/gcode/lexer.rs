@@ -333,6 +333,30 @@ impl<'a> LineChars<'a> {
     }
 
     /// An error of kind Syntax at character `i`.
+    /// The error for an O-word keyword not known (characters `k..k2` after o`label`): a
+    /// known keyword followed by more text (`o100 sub X5`) is text after the statement.
+    fn unknown_keyword(&self, k: usize, k2: usize, label: &str) -> GcodeError {
+        let shown = self.raw[self.byte_at(k)..self.byte_at(k2)].to_lowercase();
+        let known = shown
+            .split_once(char::is_whitespace)
+            .and_then(|(head, rest)| {
+                OKind::from_word(&head.to_ascii_uppercase()).map(|o| (o, rest.trim()))
+            });
+        match known {
+            Some((o, rest)) => self.syntax(
+                k,
+                format!("text `{rest}` after the statement o{label} {}", o.name()),
+                "an O-word statement (sub, call, if, while, …) stands alone on its line; \
+                 conditions and arguments go in [ ]",
+            ),
+            None => self.syntax(
+                k,
+                format!("unknown O-word keyword `{shown}` after o{label}"),
+                "O-word keywords: sub endsub call return if elseif else endif while endwhile do repeat endrepeat break continue",
+            ),
+        }
+    }
+
     fn syntax(&self, i: usize, message: impl Into<String>, hint: impl Into<String>) -> GcodeError {
         let i = i.min(self.chars.len().saturating_sub(1));
         let end = self.byte_at((i + 1).min(self.chars.len()));
@@ -673,12 +697,7 @@ impl<'a> LineChars<'a> {
         }
         let Some(kind) = OKind::from_word(&kw) else {
             if kw.len() >= 2 && (label.starts_with('<') || label_expr.is_some() || kw.len() >= 3) {
-                let shown = self.raw[self.byte_at(k)..self.byte_at(k2)].to_lowercase();
-                return Err(self.syntax(
-                    k,
-                    format!("unknown O-word keyword `{shown}` after o{label}"),
-                    "O-word keywords: sub endsub call return if elseif else endif while endwhile do repeat endrepeat break continue",
-                ));
+                return Err(self.unknown_keyword(k, k2, &label));
             }
             if label.starts_with('<') && kw.is_empty() {
                 return Ok(Some((

@@ -257,7 +257,7 @@ pub enum UrdfError {
     /// matrices would not fit in memory; no arm comes near).
     #[error(
         "the chain has {count} moving joints, more than the limit of {limit}: check that this \
-         is a robot arm's URDF, or choose a nearer tip link (--tip, [robot] tip)"
+         is a robot arm's URDF, or choose a nearer tip link"
     )]
     TooManyJoints {
         /// The moving joints found.
@@ -466,7 +466,7 @@ pub enum ModelError {
         upper: f64,
     },
     /// A tool centre point that is not a rigid transform.
-    #[error("the tool centre point at {position:?} m is not a rigid transform (finite position, proper rotation)")]
+    #[error("the tool centre point at {position:?} m is not a rigid transform within 10 m of the tip (finite position at most 10 m away, proper rotation): check its units")]
     InvalidTcp {
         /// Its position (m).
         position: [f64; 3],

@@ -86,6 +86,9 @@ impl Payload {
 /// beyond, the joint-space inertia loses the robot's terms to round-off.
 pub(crate) const MAX_PAYLOAD_RATIO: f64 = 1e3;
 
+/// The farthest a tool centre point may lie from the tip (m): past it, a unit error.
+const MAX_TCP_DISTANCE_M: f64 = 10.0;
+
 /// The default start pose: q = 0 where it lies inside every joint's limits, else the centre
 /// of the limits (an infinite bound taken as 0 on its side, the result clamped into the limits).
 fn default_start_q(joints: &[Joint]) -> Vec<f64> {
@@ -306,10 +309,13 @@ impl Robot {
         &self.tcp
     }
 
-    /// Sets the tool centre point in the flange frame (rotation proper, values finite).
+    /// Sets the tool centre point in the flange frame (rotation proper, values finite, at
+    /// most 10 m from the flange).
     pub fn set_tcp(&mut self, tcp: Transform) -> Result<(), ModelError> {
         let finite = tcp.pos.iter().chain(tcp.rot.iter()).all(|v| v.is_finite());
+        // A tool centre point kilometres away is a unit error, not a tool (issue #36).
         let proper = finite
+            && tcp.pos.norm() <= MAX_TCP_DISTANCE_M
             && (tcp.rot.transpose() * tcp.rot - nalgebra::Matrix3::identity())
                 .abs()
                 .max()

@@ -283,19 +283,25 @@ fn read(text: &str) -> Result<urdf_rs::Robot, ModelError> {
         }
         .into());
     }
-    let urdf = urdf_rs::read_from_string(text).map_err(|e| ModelError::Urdf {
-        file: String::new(),
-        // The deserializer gives no position: the element's line, found in the text.
-        message: super::urdf_locate::locate(text, &e.to_string()),
-    })?;
-    if let Some(place) = super::urdf_locate::malformed_vector(text) {
-        return Err(ModelError::Urdf {
+    let malformed = || {
+        super::urdf_locate::malformed_vector(text).map(|place| ModelError::Urdf {
             file: String::new(),
             message: format!(
                 "expected three numbers separated by spaces ({place}); write e.g. \
                  xyz=\"0 0 0.1\" (a decimal point, not a comma)"
             ),
-        });
+        })
+    };
+    // The deserializer gives no position: a malformed xyz/rpy (four values, a comma) is
+    // found in the text with its line and column; other errors get the element's line.
+    let urdf = urdf_rs::read_from_string(text).map_err(|e| {
+        malformed().unwrap_or_else(|| ModelError::Urdf {
+            file: String::new(),
+            message: super::urdf_locate::locate(text, &e.to_string()),
+        })
+    })?;
+    if let Some(e) = malformed() {
+        return Err(e);
     }
     Ok(urdf)
 }

@@ -68,7 +68,7 @@ pub enum MeshError {
         message: String,
     },
     /// The file is larger than [`MAX_MESH_BYTES`].
-    #[error("{path} is larger than the limit of {limit} bytes for a mesh; decimate it")]
+    #[error("{path} is larger than the limit of {} MB for a mesh; decimate it", limit / (1 << 20))]
     TooLarge {
         /// The file.
         path: String,
