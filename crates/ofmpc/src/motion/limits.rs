@@ -177,10 +177,10 @@ pub enum ReferenceFailure {
     /// The path leaves the arm's reach right after the start pose, where the run starts: the
     /// start pose holds the arm at the edge of its reach (stretched out, e.g. a UR arm's q = 0).
     #[error(
-        "the tool leaves the arm's reach as it leaves its start point (its wrist centre {:.2} mm outside the \
-         workspace {:.2} mm into the path): the robot's start pose holds the arm stretched out at the edge of \
-         its reach; start from a pose with the elbow bent",
-        excess * 1e3, moved * 1e3
+        "the tool leaves the arm's reach as it leaves its start point (after {:.3} mm of path its wrist centre \
+         lies {:.3} mm outside the workspace): the robot's start pose holds the arm stretched out at the edge \
+         of its reach; start from a pose with the elbow bent",
+        moved * 1e3, excess * 1e3
     )]
     StartAtReach {
         /// Distance (m) by which the wrist centre misses the reachable shell.
