@@ -348,6 +348,9 @@ impl<'r> ControllerBuilder<'r> {
             let mut obs = StateObserver::new(n, s.ts, delay, o.pole);
             if let Some(d) = drives.as_ref().filter(|_| s.observer_friction) {
                 obs.set_friction(&d.coulomb_nm, &d.viscous_nms);
+                if s.friction_creep {
+                    obs.set_creep(d.coulomb_velocity_rad_s);
+                }
             }
             obs
         });
@@ -488,6 +491,7 @@ fn new_algorithm(
             } else {
                 RealArmIdentification::default().max_mass_kg
             },
+            max_com_m: s.payload_com_max_m,
             ..RealArmIdentification::default()
         };
         let rls = estimator.unwrap_or_default();

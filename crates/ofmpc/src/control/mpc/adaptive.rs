@@ -71,6 +71,16 @@ pub struct RealArmIdentification {
     /// quantization's acceleration noise and the friction estimate's error,
     /// at least (the estimator's own is the ideal plant's).
     pub sigma_torque_nm: f64,
+    /// Largest distance of the payload's centre of mass from the flange (m)
+    /// the model is given: a point mass further out is moved in along its
+    /// direction (its mass kept). `0`: no bound (and the model's payload
+    /// follows the estimate at the ideal plant's [`MODEL_RATE`]).
+    pub max_com_m: f64,
+    /// With `max_com_m > 0`: the time constant (s) with which the model's
+    /// payload follows the estimate (a first-order filter on the samples
+    /// learnt from), so that a burst of the estimate over a fast transient
+    /// does not reach the model.
+    pub model_time_s: f64,
 }
 
 impl Default for RealArmIdentification {
@@ -82,6 +92,8 @@ impl Default for RealArmIdentification {
             trust_mass_sigma_kg: 0.5,
             min_samples: 100,
             sigma_torque_nm: 1.0,
+            max_com_m: 0.0,
+            model_time_s: 0.5,
         }
     }
 }
@@ -276,6 +288,29 @@ impl AdaptiveMpc {
     }
 }
 
+/// The point mass `pi` (mass, first moments, the inertia of a point) with
+/// its centre of mass moved in to at most `r` from the flange along its
+/// direction; unchanged when `r ≤ 0`, the mass is not positive or it lies
+/// within `r`.
+fn bound_com(pi: PayloadParams, r: f64) -> PayloadParams {
+    let m = pi[0];
+    let h = nalgebra::Vector3::new(pi[1], pi[2], pi[3]);
+    if !(r > 0.0 && m > 0.0) || h.norm() <= m * r {
+        return pi;
+    }
+    let c = h * (r / h.norm());
+    let i_o = (nalgebra::Matrix3::identity() * c.norm_squared() - c * c.transpose()) * m;
+    let mut out = pi;
+    let hc = c * m;
+    for (k, v) in [hc.x, hc.y, hc.z, i_o[(0, 0)], i_o[(0, 1)], i_o[(0, 2)], i_o[(1, 1)], i_o[(1, 2)], i_o[(2, 2)]]
+        .into_iter()
+        .enumerate()
+    {
+        out[k + 1] = v;
+    }
+    out
+}
+
 impl Algorithm for AdaptiveMpc {
     fn kind(&self) -> ControllerKind {
         self.kind
@@ -381,10 +416,16 @@ impl Algorithm for AdaptiveMpc {
                     }
                     // A point mass: the rotational inertia from delayed,
                     // quantized data is not to be trusted.
-                    Some(_) => rls.point_mass_estimate(),
+                    Some(ra) => bound_com(rls.point_mass_estimate(), ra.cfg.max_com_m),
                     None => rls.model_estimate(),
                 };
-                self.model_pi += (target - self.model_pi) * MODEL_RATE;
+                let rate = match self.real_arm.as_deref() {
+                    Some(ra) if ra.cfg.max_com_m > 0.0 && ra.cfg.model_time_s > 0.0 => {
+                        1.0 - (-ts / ra.cfg.model_time_s).exp()
+                    }
+                    _ => MODEL_RATE,
+                };
+                self.model_pi += (target - self.model_pi) * rate;
                 if rd
                     .robot_mut()
                     .set_payload(payload_of(&self.model_pi))

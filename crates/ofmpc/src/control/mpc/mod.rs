@@ -5,10 +5,11 @@
 //! and the three algorithms: the usual MPC ([`usual`], Eq. (43)), the first
 //! ([`first`], Eq. (32)/(37)) and second ([`second`], Eq. (34)/(39))
 //! offset-free incremental algorithms, with their adaptive variants
-//! ([`adaptive`]).
+//! ([`adaptive`]); the friction law near rest for a real arm ([`creep`]).
 
 pub(crate) mod adaptive;
 pub(crate) mod core;
+pub(crate) mod creep;
 pub(crate) mod first;
 pub(crate) mod model;
 pub(crate) mod prediction;
