@@ -471,7 +471,8 @@ pub struct Controller {
 
 /// The per-kind algorithm; the adaptive kinds with the real arm's
 /// identification ([`RealArmIdentification`]) when the settings say the
-/// plant is one (delay or friction compensation, or an observer).
+/// plant is one (delay or friction compensation, an observer, or a bound on
+/// the payload's centre of mass).
 fn new_algorithm(
     kind: ControllerKind,
     n: usize,
@@ -480,7 +481,10 @@ fn new_algorithm(
     estimator: Option<RlsSettings>,
     observer: Option<ObserverSettings>,
 ) -> Result<Box<dyn Algorithm + Send>, BuildError> {
-    let real_arm = s.delay_compensation || s.friction_compensation || s.state_observer;
+    let real_arm = s.delay_compensation
+        || s.friction_compensation
+        || s.state_observer
+        || s.payload_com_max_m > 0.0;
     if real_arm && kind.is_adaptive() {
         let cfg = RealArmIdentification {
             delay: observer

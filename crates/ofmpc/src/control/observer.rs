@@ -150,7 +150,11 @@ impl StateObserver {
     /// implicitly over each sample (`crate::control::mpc::creep`), instead of
     /// the stick-aware clamp. `v_s ≤ 0` or not finite: the clamp.
     pub fn set_creep(&mut self, v_s: f64) {
-        self.creep_velocity = if v_s.is_finite() && v_s > 0.0 { v_s } else { 0.0 };
+        self.creep_velocity = if v_s.is_finite() && v_s > 0.0 {
+            v_s
+        } else {
+            0.0
+        };
     }
 
     /// The gains `(l1, l2, l3)`.

@@ -347,6 +347,9 @@ pub struct MpcSettings {
     /// [`crate::control::REAL_ARM_MODEL_TIME_S`] instead of a few samples):
     /// the first moment identified from delayed, quantized data is noise while
     /// the mass is small, and `h/m` then puts the mass metres away.
+    /// A bound (`> 0`) also selects the real arm's identification when no
+    /// other real-arm setting does (a plant whose links are not the model's
+    /// makes the ideal plant's identification diverge).
     /// `0` (default): no bound, the model rate of the ideal plant.
     pub payload_com_max_m: f64,
 }

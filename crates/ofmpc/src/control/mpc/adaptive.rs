@@ -302,9 +302,19 @@ fn bound_com(pi: PayloadParams, r: f64) -> PayloadParams {
     let i_o = (nalgebra::Matrix3::identity() * c.norm_squared() - c * c.transpose()) * m;
     let mut out = pi;
     let hc = c * m;
-    for (k, v) in [hc.x, hc.y, hc.z, i_o[(0, 0)], i_o[(0, 1)], i_o[(0, 2)], i_o[(1, 1)], i_o[(1, 2)], i_o[(2, 2)]]
-        .into_iter()
-        .enumerate()
+    for (k, v) in [
+        hc.x,
+        hc.y,
+        hc.z,
+        i_o[(0, 0)],
+        i_o[(0, 1)],
+        i_o[(0, 2)],
+        i_o[(1, 1)],
+        i_o[(1, 2)],
+        i_o[(2, 2)],
+    ]
+    .into_iter()
+    .enumerate()
     {
         out[k + 1] = v;
     }
@@ -466,5 +476,50 @@ impl Algorithm for AdaptiveMpc {
                 Err(e)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_centre_of_mass_is_moved_in_to_the_bound_with_its_mass() {
+        // 0.5 kg at c = (0.3, 0, 0.4) m (|c| = 0.5) as a point mass.
+        let mut pi = PayloadParams::zeros();
+        pi[0] = 0.5;
+        let c = nalgebra::Vector3::<f64>::new(0.3, 0.0, 0.4);
+        let i_o: nalgebra::Matrix3<f64> =
+            (nalgebra::Matrix3::<f64>::identity() * c.norm_squared() - c * c.transpose()) * 0.5;
+        for (k, v) in [
+            0.15,
+            0.0,
+            0.2,
+            i_o[(0, 0)],
+            i_o[(0, 1)],
+            i_o[(0, 2)],
+            i_o[(1, 1)],
+            i_o[(1, 2)],
+            i_o[(2, 2)],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            pi[k + 1] = v;
+        }
+        let b = bound_com(pi, 0.2);
+        assert_eq!(b[0], 0.5);
+        let h = nalgebra::Vector3::new(b[1], b[2], b[3]);
+        assert!((h.norm() / 0.5 - 0.2).abs() < 1e-12);
+        assert!((h.normalize() - c.normalize()).norm() < 1e-12);
+        // The inertia of the moved point: m (|c'|² − c'_x²) about x.
+        let cx = 0.2 * 0.6;
+        assert!((b[4] - 0.5 * (0.04 - cx * cx)).abs() < 1e-12);
+        // Within the bound, no bound, or no mass: unchanged.
+        assert_eq!(bound_com(pi, 0.6), pi);
+        assert_eq!(bound_com(pi, 0.0), pi);
+        let mut empty = pi;
+        empty[0] = 0.0;
+        assert_eq!(bound_com(empty, 0.2), empty);
     }
 }

@@ -38,7 +38,14 @@ pub(crate) fn slope(viscous: f64, coulomb: f64, v_s: f64, v: f64) -> f64 {
 /// with `x`, so the root is unique and lies where `tanh = ±1` bound it; a
 /// safeguarded Newton iteration (at most 60 steps, no allocation). Returns
 /// `s` unchanged for `h ≤ 0` or a non-finite input.
-pub(crate) fn implicit_velocity(h: f64, ts: f64, s: f64, viscous: f64, coulomb: f64, v_s: f64) -> f64 {
+pub(crate) fn implicit_velocity(
+    h: f64,
+    ts: f64,
+    s: f64,
+    viscous: f64,
+    coulomb: f64,
+    v_s: f64,
+) -> f64 {
     let k = h / ts;
     if !(k > 0.0 && k.is_finite() && s.is_finite() && v_s > 0.0) {
         return s;
@@ -97,7 +104,10 @@ mod tests {
             for s in [-1.0, -0.05, -1e-3, -1e-5, 0.0, 2e-6, 4e-4, 0.02, 0.7] {
                 let x = implicit_velocity(h, ts, s, fv, fc, vs);
                 let r = h * (x - s) / ts + fv * x + fc * (x / vs).tanh();
-                assert!(r.abs() <= 1e-9 * (h / ts) * s.abs().max(vs), "h {h} s {s}: {r}");
+                assert!(
+                    r.abs() <= 1e-9 * (h / ts) * s.abs().max(vs),
+                    "h {h} s {s}: {r}"
+                );
                 // Friction only slows the joint: same sign, smaller speed.
                 assert!(x * s >= 0.0 && x.abs() <= s.abs(), "h {h} s {s}: {x}");
             }
