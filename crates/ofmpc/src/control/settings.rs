@@ -343,8 +343,9 @@ pub struct MpcSettings {
     pub friction_creep: bool,
     /// Bound on the distance of an identified payload's centre of mass from
     /// the flange (m) for the adaptive kinds on a real arm (and, with it, the
-    /// model's payload moves to the estimate with a time constant of
-    /// [`crate::control::REAL_ARM_MODEL_TIME_S`] instead of a few samples):
+    /// model's payload moves to the estimate with the time constant
+    /// [`RealArmIdentification::model_time_s`](crate::control::RealArmIdentification::model_time_s),
+    /// 0.5 s, instead of within a few samples):
     /// the first moment identified from delayed, quantized data is noise while
     /// the mass is small, and `h/m` then puts the mass metres away.
     /// A bound (`> 0`) also selects the real arm's identification when no

@@ -74,7 +74,8 @@ pub struct RealArmIdentification {
     /// Largest distance of the payload's centre of mass from the flange (m)
     /// the model is given: a point mass further out is moved in along its
     /// direction (its mass kept). `0`: no bound (and the model's payload
-    /// follows the estimate at the ideal plant's [`MODEL_RATE`]).
+    /// follows the estimate at the ideal plant's rate, 0.35 of the way per
+    /// sample).
     pub max_com_m: f64,
     /// With `max_com_m > 0`: the time constant (s) with which the model's
     /// payload follows the estimate (a first-order filter on the samples
