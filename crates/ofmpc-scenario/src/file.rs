@@ -542,6 +542,11 @@ impl ScenarioFile {
         on(mpc.delay_compensation, "[mpc] delay_compensation".into());
         on(mpc.state_observer, "[mpc] state_observer".into());
         on(mpc.observer_friction, "[mpc] observer_friction".into());
+        on(mpc.friction_creep, "[mpc] friction_creep".into());
+        on(
+            mpc.payload_com_max_m > 0.0,
+            format!("[mpc] payload_com_max_m = {} m", mpc.payload_com_max_m),
+        );
         plant_effects(plant, &mut on);
         on(
             !self.faults.nan_at_s.is_empty(),

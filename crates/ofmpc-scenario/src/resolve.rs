@@ -333,6 +333,13 @@ fn friction_warnings(f: &ScenarioFile, robot: &Robot) -> Vec<String> {
                 .into(),
         );
     }
+    if f.mpc.friction_creep && !(f.mpc.friction_compensation || f.mpc.observer_friction) {
+        warnings.push(
+            "[mpc] friction_creep = true without friction_compensation or observer_friction: \
+             it has no effect"
+                .into(),
+        );
+    }
     if f.mpc.friction_compensation {
         let d = ofmpc::control::DriveModel::from_robot(robot);
         if d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0) {

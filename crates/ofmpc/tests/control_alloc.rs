@@ -211,10 +211,18 @@ fn built_controller_steps_allocate_nothing() {
         constraint_horizon: Some(4),
         ..Default::default()
     };
+    // Issue 35's real-arm keys: the observer's creeping friction law, the
+    // adaptive kinds' centre-of-mass bound and filter.
+    let creeping = MpcSettings {
+        friction_creep: true,
+        payload_com_max_m: 0.2,
+        encoder_counts: 1_048_576.0,
+        ..limited.clone()
+    };
     let drives = binding_drives(n);
     // Every kind: the paper's, the adaptive variants and the baselines.
     for kind in ControllerKind::ALL {
-        for settings in [MpcSettings::default(), limited.clone()] {
+        for settings in [MpcSettings::default(), limited.clone(), creeping.clone()] {
             let limits = settings.torque_limits;
             let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());
             if limits {

@@ -2,24 +2,27 @@
 //! one sample of measurement delay, 20-bit encoders with the velocity from
 //! their difference, Coulomb [5, 5, 3, 1, 1, 0.5] N·m and viscous
 //! [8, 8, 4, 1, 1, 0.5] N·m·s/rad friction known 20 % low, 1e-6 rad position
-//! noise, torque limits — on the paper's path at 0, 2 and 6 kg (the IRB 140's
-//! rated payload), with the real-arm settings: delay and friction
-//! compensation, the observer's friction model, the payload bound
-//! (`mpc.max_payload_kg = 9`, 1.5 × rated) and the hold dead zone
-//! (`mpc.encoder_counts`).
+//! noise, torque limits, every link's inertial parameters 10 % off — on the
+//! paper's path at 0, 2 and 6 kg (the IRB 140's rated payload), with the
+//! controller keys of `examples/real-arm.toml`: delay and friction
+//! compensation, the observer's friction model as the creeping law
+//! (`friction_creep`), the payload bound (`max_payload_kg = 9`, 1.5 × rated)
+//! and its centre-of-mass bound (`payload_com_max_m = 0.2`), the hold dead
+//! zone (`encoder_counts`), `q_du = 1e-4`, `q_u = 1e-5`.
 //!
-//! Measured (the same set-up as `ofmpc run` of the probe with these keys,
-//! Cartesian RMS / steady mm at 0/2/6 kg; docs/guide/real-arm.md): every run
-//! "ok", payload estimates within 0.01 kg; steady first 0.020/0.022/0.028,
-//! second 0.18/0.14/0.15, first-adaptive 0.018/0.032/0.050, second-adaptive
-//! 0.18/0.22/0.14, ctc-adaptive 0.015/0.014/0.012, dob-mpc 0.050/0.044/0.046;
-//! RMS at most 0.75 mm (dob-mpc at 6 kg). Each effect alone, the adaptive
-//! kinds at 2 kg: steady ≤ 0.009 mm, estimates within 0.04 kg. Before (main):
-//! the three adaptive kinds diverged at every payload.
+//! Measured (`ofmpc run examples/real-arm.toml`, Cartesian RMS / steady mm at
+//! 0/2/6 kg; docs/guide/real-arm.md): every run "ok", steady 0.003–0.0065 mm
+//! for every controller at every payload; RMS first-adaptive
+//! 0.062/0.088/0.17, second-adaptive 0.066/0.076/0.15, ctc-adaptive
+//! 0.062/0.081/0.17, dob-mpc 0.099/0.20/0.57, first 0.065/0.15/0.48, second
+//! 0.062/0.11/0.31 (at 6 kg the start under the unknown load dominates the
+//! non-adaptive kinds' RMS); estimates within 0.4 kg. Before (the same
+//! plant, the keys of the previous round): steady 0.006–0.21 mm, RMS up to
+//! 1.8 mm (the adaptive kinds' estimate bursts).
 
 mod common;
 
-use ofmpc::control::{ControllerKind, MpcSettings};
+use ofmpc::control::{ControllerKind, MpcSettings, Weight};
 use ofmpc::robot::{Drives, Payload, Robot};
 use ofmpc::sim::{Experiment, LoopSettings, PlantSettings, RunMetrics, RunStatus};
 
@@ -33,6 +36,8 @@ struct Effects {
     encoder: bool,
     friction: bool,
     noise: bool,
+    /// Every link's inertial parameters 10 % off (`plant.inertia_error`).
+    model_error: bool,
 }
 
 const ALL: Effects = Effects {
@@ -40,6 +45,7 @@ const ALL: Effects = Effects {
     encoder: true,
     friction: true,
     noise: true,
+    model_error: true,
 };
 
 fn run(kind: ControllerKind, mass: f64, fx: Effects) -> RunMetrics {
@@ -70,8 +76,12 @@ fn run(kind: ControllerKind, mass: f64, fx: Effects) -> RunMetrics {
             delay_compensation: fx.delay,
             state_observer: observed,
             observer_friction: fx.friction && observed,
+            friction_creep: fx.friction && observed,
             max_payload_kg: 9.0,
+            payload_com_max_m: 0.2,
             encoder_counts: if fx.encoder { 1_048_576.0 } else { 0.0 },
+            q_du: Weight::Scalar(1e-4),
+            q_u: Weight::Scalar(1e-5),
             ..Default::default()
         },
         plant: PlantSettings {
@@ -90,6 +100,13 @@ fn run(kind: ControllerKind, mass: f64, fx: Effects) -> RunMetrics {
             velocity_from_encoder: fx.encoder,
             position_noise: if fx.noise { 1e-6 } else { 0.0 },
             delay_samples: usize::from(fx.delay),
+            inertia_error: if fx.model_error { 0.1 } else { 0.0 },
+            // As the preset: resolves the friction's sticking.
+            substep: if fx.friction {
+                2e-4
+            } else {
+                PlantSettings::default().substep
+            },
             ..Default::default()
         },
         loop_settings: LoopSettings::default(),
@@ -136,32 +153,56 @@ fn check(m: &RunMetrics, mass: f64, steady_mm: f64, rms_mm: f64) {
     }
 }
 
-#[test]
-fn every_offset_free_controller_holds_with_all_effects_at_0_2_6_kg() {
-    for kind in [
-        ControllerKind::First,
-        ControllerKind::Second,
-        ControllerKind::FirstAdaptive,
-        ControllerKind::SecondAdaptive,
-        ControllerKind::CtcAdaptive,
-        ControllerKind::DobMpc,
-    ] {
-        for mass in [0.0, 2.0, 6.0] {
-            let m = run(kind, mass, ALL);
-            eprintln!(
-                "all {}: {:?} RMS {:.4} steady {:.4} est {:?}",
-                m.name,
-                m.status,
-                m.cartesian_error_rms_mm,
-                m.steady_cartesian_error_mm,
-                m.payload_estimate_kg
-            );
-            check(&m, mass, 0.3, 1.0);
-            if kind.is_adaptive() {
-                assert!(m.payload_estimate_kg.is_some(), "{}", m.name);
-            }
+/// `kind` with every effect at 0, 2 and 6 kg: status "ok", steady error at
+/// most 0.01 mm (about two encoder counts at the flange), RMS at most
+/// `rms_mm[i]` at payload `i`, an adaptive estimate within 10 % of the rated
+/// payload.
+fn holds_with_all_effects(kind: ControllerKind, rms_mm: [f64; 3]) {
+    for (mass, rms) in [0.0, 2.0, 6.0].into_iter().zip(rms_mm) {
+        let m = run(kind, mass, ALL);
+        eprintln!(
+            "all {}: {:?} RMS {:.4} steady {:.4} est {:?}",
+            m.name,
+            m.status,
+            m.cartesian_error_rms_mm,
+            m.steady_cartesian_error_mm,
+            m.payload_estimate_kg
+        );
+        check(&m, mass, 0.01, rms);
+        if kind.is_adaptive() {
+            assert!(m.payload_estimate_kg.is_some(), "{}", m.name);
         }
     }
+}
+
+// The targets (RMS ≤ 0.25 mm) for the adaptive kinds at every
+// payload and for every kind within 2 kg; at 6 kg the non-adaptive kinds'
+// RMS is the start under the unknown load (bounds ≤ 2× the measured).
+
+#[test]
+fn first_adaptive_holds_with_all_effects() {
+    holds_with_all_effects(ControllerKind::FirstAdaptive, [0.25, 0.25, 0.25]);
+}
+
+#[test]
+fn second_adaptive_holds_with_all_effects() {
+    holds_with_all_effects(ControllerKind::SecondAdaptive, [0.25, 0.25, 0.25]);
+}
+
+#[test]
+fn ctc_adaptive_holds_with_all_effects() {
+    holds_with_all_effects(ControllerKind::CtcAdaptive, [0.25, 0.25, 0.25]);
+}
+
+#[test]
+fn dob_mpc_holds_with_all_effects() {
+    holds_with_all_effects(ControllerKind::DobMpc, [0.25, 0.25, 1.0]);
+}
+
+#[test]
+fn first_and_second_hold_with_all_effects() {
+    holds_with_all_effects(ControllerKind::First, [0.25, 0.25, 0.9]);
+    holds_with_all_effects(ControllerKind::Second, [0.25, 0.25, 0.6]);
 }
 
 #[test]
@@ -172,24 +213,35 @@ fn the_adaptive_kinds_identify_under_each_effect_alone() {
             encoder: false,
             friction: false,
             noise: false,
+            model_error: false,
         },
         Effects {
             delay: false,
             encoder: true,
             friction: false,
             noise: false,
+            model_error: false,
         },
         Effects {
             delay: false,
             encoder: false,
             friction: true,
             noise: false,
+            model_error: false,
         },
         Effects {
             delay: false,
             encoder: false,
             friction: false,
             noise: true,
+            model_error: false,
+        },
+        Effects {
+            delay: false,
+            encoder: false,
+            friction: false,
+            noise: false,
+            model_error: true,
         },
     ];
     let mut failed = Vec::new();
@@ -204,9 +256,9 @@ fn the_adaptive_kinds_identify_under_each_effect_alone() {
                 m.steady_cartesian_error_mm,
                 m.payload_estimate_kg
             );
-            if !matches!(m.status, RunStatus::Ok | RunStatus::Hunting)
-                || m.steady_cartesian_error_mm > 0.25
-                || m.cartesian_error_rms_mm > 1.5
+            if m.status != RunStatus::Ok
+                || m.steady_cartesian_error_mm > 0.01
+                || m.cartesian_error_rms_mm > 0.75
                 || m.payload_estimate_kg.is_none_or(|e| (e - 2.0).abs() > 0.6)
             {
                 failed.push(format!("{fx:?} {}", m.name));
@@ -232,6 +284,13 @@ fn the_real_arm_keys_are_validated() {
                 ..Default::default()
             },
             "encoder_counts",
+        ),
+        (
+            MpcSettings {
+                payload_com_max_m: -0.1,
+                ..Default::default()
+            },
+            "centre of mass",
         ),
     ] {
         let e = s.validate().unwrap_err();

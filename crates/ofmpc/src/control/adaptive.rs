@@ -80,6 +80,17 @@ pub struct RealArmIdentification {
     /// so at high rates the regressor is built over several periods
     /// (10 ms: `W = 1` at Ts = 10 ms, `W = 10` at 1 kHz).
     pub window_s: f64,
+    /// Largest distance of the payload's centre of mass from the flange (m)
+    /// the model is given: a point mass further out is moved in along its
+    /// direction (its mass kept). `0`: no bound (and the model's payload
+    /// follows the estimate at the ideal plant's rate, 0.35 of the way per
+    /// sample).
+    pub max_com_m: f64,
+    /// With `max_com_m > 0`: the time constant (s) with which the model's
+    /// payload follows the estimate (a first-order filter on the samples
+    /// learnt from), so that a burst of the estimate over a fast transient
+    /// does not reach the model.
+    pub model_time_s: f64,
 }
 
 /// The weight of the torque held over the `j`-th period on either side of
@@ -103,6 +114,8 @@ impl Default for RealArmIdentification {
             min_samples: 100,
             sigma_torque_nm: 1.0,
             window_s: 0.01,
+            max_com_m: 0.0,
+            model_time_s: 0.5,
         }
     }
 }
@@ -249,7 +262,11 @@ impl AdaptiveMpc {
         self.real_arm = Some(Box::new(RealArm {
             cfg,
             window,
-            model_rate: if window == 1 {
+            // With a bound on the centre of mass, the model follows the
+            // estimate with the time constant `model_time_s`.
+            model_rate: if cfg.max_com_m > 0.0 && cfg.model_time_s > 0.0 {
+                1.0 - (-ts / cfg.model_time_s).exp()
+            } else if window == 1 {
                 MODEL_RATE
             } else {
                 1.0 - (1.0 - MODEL_RATE).powf(1.0 / window as f64)
@@ -332,7 +349,8 @@ impl AdaptiveMpc {
 
     /// What the model should carry: the estimate; on a real arm (`cfg`) the
     /// nominal model until the mass is determined, then a point mass (the
-    /// rotational inertia from delayed, quantized data is not to be trusted).
+    /// rotational inertia from delayed, quantized data is not to be trusted)
+    /// with its centre of mass within `max_com_m` of the flange.
     fn model_target(
         rls: &crate::ident::PayloadRls,
         cfg: Option<&RealArmIdentification>,
@@ -346,7 +364,7 @@ impl AdaptiveMpc {
             {
                 PayloadParams::zeros()
             }
-            Some(_) => rls.point_mass_estimate(),
+            Some(cfg) => bound_com(rls.point_mass_estimate(), cfg.max_com_m),
             None => rls.model_estimate(),
         }
     }
@@ -355,6 +373,39 @@ impl AdaptiveMpc {
     pub fn estimator(&self) -> &PayloadEstimator {
         &self.estimator
     }
+}
+
+/// The point mass `pi` (mass, first moments, the inertia of a point) with
+/// its centre of mass moved in to at most `r` from the flange along its
+/// direction; unchanged when `r ≤ 0`, the mass is not positive or it lies
+/// within `r`.
+fn bound_com(pi: PayloadParams, r: f64) -> PayloadParams {
+    let m = pi[0];
+    let h = nalgebra::Vector3::new(pi[1], pi[2], pi[3]);
+    if !(r > 0.0 && m > 0.0) || h.norm() <= m * r {
+        return pi;
+    }
+    let c = h * (r / h.norm());
+    let i_o = (nalgebra::Matrix3::identity() * c.norm_squared() - c * c.transpose()) * m;
+    let mut out = pi;
+    let hc = c * m;
+    for (k, v) in [
+        hc.x,
+        hc.y,
+        hc.z,
+        i_o[(0, 0)],
+        i_o[(0, 1)],
+        i_o[(0, 2)],
+        i_o[(1, 1)],
+        i_o[(1, 2)],
+        i_o[(2, 2)],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        out[k + 1] = v;
+    }
+    out
 }
 
 impl Algorithm for AdaptiveMpc {
@@ -519,7 +570,7 @@ impl Algorithm for AdaptiveMpc {
 
 #[cfg(test)]
 mod tests {
-    use super::window_weight;
+    use super::*;
 
     /// On a unit mass driven by torques held over each period, the second
     /// difference over `W` periods divided by `(W·Ts)²` equals the torques
@@ -559,5 +610,45 @@ mod tests {
                 "W = {w}: {second} vs {filtered}"
             );
         }
+    }
+
+    #[test]
+    fn the_centre_of_mass_is_moved_in_to_the_bound_with_its_mass() {
+        // 0.5 kg at c = (0.3, 0, 0.4) m (|c| = 0.5) as a point mass.
+        let mut pi = PayloadParams::zeros();
+        pi[0] = 0.5;
+        let c = nalgebra::Vector3::<f64>::new(0.3, 0.0, 0.4);
+        let i_o: nalgebra::Matrix3<f64> =
+            (nalgebra::Matrix3::<f64>::identity() * c.norm_squared() - c * c.transpose()) * 0.5;
+        for (k, v) in [
+            0.15,
+            0.0,
+            0.2,
+            i_o[(0, 0)],
+            i_o[(0, 1)],
+            i_o[(0, 2)],
+            i_o[(1, 1)],
+            i_o[(1, 2)],
+            i_o[(2, 2)],
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            pi[k + 1] = v;
+        }
+        let b = bound_com(pi, 0.2);
+        assert_eq!(b[0], 0.5);
+        let h = nalgebra::Vector3::new(b[1], b[2], b[3]);
+        assert!((h.norm() / 0.5 - 0.2).abs() < 1e-12);
+        assert!((h.normalize() - c.normalize()).norm() < 1e-12);
+        // The inertia of the moved point: m (|c'|² − c'_x²) about x.
+        let cx = 0.2 * 0.6;
+        assert!((b[4] - 0.5 * (0.04 - cx * cx)).abs() < 1e-12);
+        // Within the bound, no bound, or no mass: unchanged.
+        assert_eq!(bound_com(pi, 0.6), pi);
+        assert_eq!(bound_com(pi, 0.0), pi);
+        let mut empty = pi;
+        empty[0] = 0.0;
+        assert_eq!(bound_com(empty, 0.2), empty);
     }
 }

@@ -348,6 +348,9 @@ impl<'r> ControllerBuilder<'r> {
             let mut obs = StateObserver::new(n, s.ts, delay, o.pole);
             if let Some(d) = drives.as_ref().filter(|_| s.observer_friction) {
                 obs.set_friction(&d.coulomb_nm, &d.viscous_nms);
+                if s.friction_creep {
+                    obs.set_creep(d.coulomb_velocity_rad_s);
+                }
             }
             obs
         });
@@ -468,7 +471,8 @@ pub struct Controller {
 
 /// The per-kind algorithm; the adaptive kinds with the real arm's
 /// identification ([`RealArmIdentification`]) when the settings say the
-/// plant is one (delay or friction compensation, or an observer).
+/// plant is one (delay or friction compensation, an observer, or a bound on
+/// the payload's centre of mass).
 fn new_algorithm(
     kind: ControllerKind,
     n: usize,
@@ -477,7 +481,10 @@ fn new_algorithm(
     estimator: Option<RlsSettings>,
     observer: Option<ObserverSettings>,
 ) -> Result<Box<dyn Algorithm + Send>, BuildError> {
-    let real_arm = s.delay_compensation || s.friction_compensation || s.state_observer;
+    let real_arm = s.delay_compensation
+        || s.friction_compensation
+        || s.state_observer
+        || s.payload_com_max_m > 0.0;
     if real_arm && kind.is_adaptive() {
         let cfg = RealArmIdentification {
             delay: observer
@@ -488,6 +495,7 @@ fn new_algorithm(
             } else {
                 RealArmIdentification::default().max_mass_kg
             },
+            max_com_m: s.payload_com_max_m,
             ..RealArmIdentification::default()
         };
         let rls = estimator.unwrap_or_default();

@@ -41,6 +41,9 @@ pub struct StateObserver {
     /// none (the disturbance carries the friction).
     coulomb: Vec<f64>,
     viscous: Vec<f64>,
+    /// With friction: the velocity scale `v_s` of the smoothed Coulomb law,
+    /// integrated implicitly (creep); 0: the stick-aware clamp.
+    creep_velocity: f64,
 }
 
 /// Characteristic polynomial `z³ + c2 z² + c1 z + c0` of a 3×3 row-major matrix.
@@ -124,6 +127,7 @@ impl StateObserver {
             out: vec![0.0; 2 * n],
             coulomb: Vec::new(),
             viscous: Vec::new(),
+            creep_velocity: 0.0,
         }
     }
 
@@ -139,6 +143,18 @@ impl StateObserver {
             self.coulomb = coulomb.to_vec();
             self.viscous = viscous.to_vec();
         }
+    }
+
+    /// With the friction of [`Self::set_friction`]: the Coulomb part as the
+    /// smoothed law `F_c tanh(q̇/v_s)` that creeps near rest, integrated
+    /// implicitly over each sample (`crate::control::mpc::creep`), instead of
+    /// the stick-aware clamp. `v_s ≤ 0` or not finite: the clamp.
+    pub fn set_creep(&mut self, v_s: f64) {
+        self.creep_velocity = if v_s.is_finite() && v_s > 0.0 {
+            v_s
+        } else {
+            0.0
+        };
     }
 
     /// The gains `(l1, l2, l3)`.
@@ -190,9 +206,21 @@ impl StateObserver {
         if !self.coulomb.is_empty() {
             let h = self.model.h();
             let ts = self.ts;
+            let vs = self.creep_velocity;
             for i in 0..n {
                 let hii = h[(i, i)];
-                if hii.is_finite() && hii > 0.0 {
+                if vs > 0.0 && hii.is_finite() && hii > 0.0 {
+                    let s = v[i] + self.acc[i] * ts;
+                    let x = crate::control::mpc::creep::implicit_velocity(
+                        hii,
+                        ts,
+                        s,
+                        self.viscous[i],
+                        self.coulomb[i],
+                        vs,
+                    );
+                    self.acc[i] = (x - v[i]) / ts;
+                } else if hii.is_finite() && hii > 0.0 {
                     let v_next = v[i] + self.acc[i] * ts;
                     let fc = self.coulomb[i];
                     let f = (hii * v_next / ts).clamp(-fc, fc) + self.viscous[i] * v[i];

@@ -333,6 +333,26 @@ pub struct MpcSettings {
     /// (`control/dead_zone.rs`): they settle instead of hunting under friction
     /// and quantization. `0` (default): no dead zone.
     pub encoder_counts: f64,
+    /// The observer's friction model (`observer_friction`) as the drives'
+    /// law is near rest: a smoothed Coulomb friction `F_v v + F_c tanh(v/v_s)`
+    /// does not stick, it creeps (a stiff damper of slope `F_v + F_c/v_s`),
+    /// and the observer integrates it implicitly over each sample
+    /// (`control/mpc/creep.rs`) instead of the stick-aware clamp, so that its
+    /// prediction over the measurement delay follows the creep. Only with
+    /// `observer_friction`. Default off.
+    pub friction_creep: bool,
+    /// Bound on the distance of an identified payload's centre of mass from
+    /// the flange (m) for the adaptive kinds on a real arm (and, with it, the
+    /// model's payload moves to the estimate with the time constant
+    /// [`RealArmIdentification::model_time_s`](crate::control::RealArmIdentification::model_time_s),
+    /// 0.5 s, instead of within a few samples):
+    /// the first moment identified from delayed, quantized data is noise while
+    /// the mass is small, and `h/m` then puts the mass metres away.
+    /// A bound (`> 0`) also selects the real arm's identification when no
+    /// other real-arm setting does (a plant whose links are not the model's
+    /// makes the ideal plant's identification diverge).
+    /// `0` (default): no bound, the model rate of the ideal plant.
+    pub payload_com_max_m: f64,
 }
 
 impl Default for MpcSettings {
@@ -354,6 +374,8 @@ impl Default for MpcSettings {
             observer_friction: false,
             max_payload_kg: 0.0,
             encoder_counts: 0.0,
+            friction_creep: false,
+            payload_com_max_m: 0.0,
         }
     }
 }
@@ -421,6 +443,9 @@ impl MpcSettings {
         }
         if !(self.encoder_counts.is_finite() && self.encoder_counts >= 0.0) {
             return Err(SettingsError::EncoderCounts(self.encoder_counts));
+        }
+        if !(self.payload_com_max_m.is_finite() && self.payload_com_max_m >= 0.0) {
+            return Err(SettingsError::PayloadComBound(self.payload_com_max_m));
         }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
@@ -578,6 +603,9 @@ pub enum SettingsError {
     /// The encoder resolution is negative or not finite.
     #[error("the encoder resolution (mpc.encoder_counts) is {0} counts per revolution: it must be finite and >= 0 (0: no dead zone)")]
     EncoderCounts(f64),
+    /// The bound on the payload's centre of mass is negative or not finite.
+    #[error("the bound on the identified payload's centre of mass is {0} m: it must be finite and >= 0 (0: no bound)")]
+    PayloadComBound(f64),
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]

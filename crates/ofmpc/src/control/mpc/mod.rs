@@ -6,9 +6,11 @@
 //! ([`first`], Eq. (32)/(37)) and second ([`second`], Eq. (34)/(39))
 //! offset-free incremental algorithms, and the torque-limit step they share
 //! ([`torque_limits`]). Their adaptive variants are one level up (`control/adaptive.rs`):
-//! they also wrap the CTC baseline, which is built on this engine.
+//! they also wrap the CTC baseline, which is built on this engine. The friction law near
+//! rest for a real arm: [`creep`].
 
 pub(crate) mod core;
+pub(crate) mod creep;
 pub(crate) mod first;
 pub(crate) mod model;
 pub(crate) mod prediction;
