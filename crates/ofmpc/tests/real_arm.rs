@@ -256,7 +256,8 @@ fn the_adaptive_kinds_identify_under_each_effect_alone() {
                 m.steady_cartesian_error_mm,
                 m.payload_estimate_kg
             );
-            if m.status != RunStatus::Ok
+            // "hunting": the wrist's limit cycle (see `check`).
+            if !matches!(m.status, RunStatus::Ok | RunStatus::Hunting)
                 || m.steady_cartesian_error_mm > 0.01
                 || m.cartesian_error_rms_mm > 0.75
                 || m.payload_estimate_kg.is_none_or(|e| (e - 2.0).abs() > 0.6)
