@@ -46,6 +46,7 @@
 mod algorithm;
 mod baselines;
 mod builder;
+mod command;
 pub(crate) mod dead_zone;
 mod drive_model;
 mod factory;
@@ -67,6 +68,7 @@ pub(crate) use builder::{check_torque_limits, DEFAULT_OBSERVER_POLE};
 pub use builder::{
     model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, ObserverSettings,
 };
+pub use command::{max_output_lead, OutputMode};
 pub use drive_model::DriveModel;
 #[doc(hidden)]
 pub use factory::{new_controller, new_controller_with_baselines};

@@ -4,6 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::control::kind::ControllerKind;
+use crate::control::command::OutputMode;
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;
@@ -333,6 +334,18 @@ pub struct MpcSettings {
     /// (`control/dead_zone.rs`): they settle instead of hunting under friction
     /// and quantization. `0` (default): no dead zone.
     pub encoder_counts: f64,
+    /// What the controller's output drives ([`OutputMode`], default
+    /// torque): for an interface that closes its own joint loop, the state
+    /// its model predicted [`Self::output_lead_s`] ahead
+    /// ([`StepOutput::q_command`](crate::control::StepOutput::q_command)).
+    #[serde(skip_serializing_if = "OutputMode::is_default")]
+    pub output: OutputMode,
+    /// How far ahead the position/velocity command is taken from the
+    /// prediction (s, from 0 to `(N − 1)·Ts`): the interface's lag and
+    /// smoothing. `None` (default): the simulated interface's own
+    /// (`[plant.servo]`), else 0. Only with a position or velocity output.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_lead_s: Option<f64>,
 }
 
 impl Default for MpcSettings {
@@ -354,6 +367,8 @@ impl Default for MpcSettings {
             observer_friction: false,
             max_payload_kg: 0.0,
             encoder_counts: 0.0,
+            output: OutputMode::Torque,
+            output_lead_s: None,
         }
     }
 }
