@@ -8,10 +8,11 @@ use super::closed_loop::{
 use super::conditions::RunConditions;
 use super::metrics::{compute, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::{Plant, PlantSettings};
+use super::plant::{Plant, PlantSettings, PlantSettingsError};
+use super::servo::ServoSettingsError;
 use crate::control::{
     BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, Mpc, MpcSettings,
-    ObserverSettings,
+    ObserverSettings, OutputMode,
 };
 
 /// Poles of the state observer's error dynamics (per sample). Measured on
@@ -112,6 +113,7 @@ impl Experiment {
         self.loop_settings.validate()?;
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
+        check_servo_output(&self.plant, self.mpc.output)?;
         if let Some(m) = &self.plant.model {
             super::plant::check_plant_model(m, &self.robot)?;
         }
@@ -219,8 +221,17 @@ impl Experiment {
     /// for one (with the plant's measurement delay).
     fn controller(&self, kind: ControllerKind) -> Result<Mpc, ExperimentError> {
         let observed = self.mpc.state_observer || self.mpc.delay_compensation;
+        let mut settings = self.mpc.clone();
+        if let (false, None, Some(servo)) = (
+            settings.output.is_torque(),
+            settings.output_lead_s,
+            &self.plant.servo,
+        ) {
+            // Lead the interface by its own lag and smoothing.
+            settings.output_lead_s = Some(servo.params().command_lead_s());
+        }
         let mut builder = ControllerBuilder::new(kind, &self.robot)
-            .settings(self.mpc.clone())
+            .settings(settings)
             .accept_ineffective_settings();
         if kind.is_baseline() {
             builder = builder.baselines(self.baselines.clone());
@@ -238,6 +249,26 @@ impl Experiment {
             e => ExperimentError::Build(e),
         })
     }
+}
+
+/// The controller's `output` is what the plant's servo interface takes
+/// (torque without one).
+fn check_servo_output(plant: &PlantSettings, output: OutputMode) -> Result<(), PlantSettingsError> {
+    let interface = plant
+        .servo
+        .as_ref()
+        .map_or(OutputMode::Torque, |s| s.params().kind);
+    if interface == output {
+        return Ok(());
+    }
+    Err(match plant.servo {
+        Some(_) => ServoSettingsError::OutputMismatch {
+            interface,
+            controller: output,
+        },
+        None => ServoSettingsError::NoInterface { output },
+    }
+    .into())
 }
 
 #[cfg(test)]

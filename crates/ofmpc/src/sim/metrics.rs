@@ -96,6 +96,11 @@ pub struct RunMetrics {
     /// Largest change of the applied torque between two samples,
     /// `max_{k,i} |τ_{k,i} − τ_{k−1,i}|` (N·m; NaN with fewer than two samples).
     pub torque_step_max_nm: f64,
+    /// What the servo interface saw (`[plant.servo]`: cycles, missed
+    /// cycles, the longest run of them, `"ok"` or `"watchdog_trip"`);
+    /// absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo: Option<super::servo::ServoReport>,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -229,6 +234,7 @@ pub fn compute(
         saturated_samples: rec.saturated_samples,
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
+        servo: rec.servo,
     }
 }
 
