@@ -667,7 +667,7 @@ impl<'a> ClosedLoop<'a> {
 
 impl ClosedLoop<'_> {
     /// Checks the servo interface against the controller's output and
-    /// starts it at the plant's state, holding the controller's torque.
+    /// starts it at the plant's state ([`Servo::start`]).
     fn start_servo(&mut self) -> Result<(), RunFailure> {
         let Some(servo) = self.servo.as_mut() else {
             return Ok(());
@@ -676,8 +676,9 @@ impl ClosedLoop<'_> {
         servo
             .check_output(output)
             .map_err(|e| RunFailure::Plant(PlantSettingsError::from(e).into()))?;
-        servo.start(self.plant.q(), self.controller.torque());
-        Ok(())
+        servo
+            .start(self.plant.q())
+            .map_err(|e| RunFailure::Plant(e.into()))
     }
 
     /// The controller's command through the servo interface

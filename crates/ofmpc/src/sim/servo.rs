@@ -645,10 +645,16 @@ impl Servo {
         }
     }
 
-    /// Starts at rest at `q` with the torque `tau` in flight (n each):
-    /// every setpoint, the drive's state and the counters. Allocation-free.
-    pub fn start(&mut self, q: &[f64], tau: &[f64]) {
+    /// Starts at rest at `q` (n): every setpoint is `q` at rest with the
+    /// torque that holds the arm there on the vendor's model (`g(q)`: the
+    /// drives hold the arm as the brakes release), the drive's state and the
+    /// counters are reset. Allocation-free.
+    pub fn start(&mut self, q: &[f64]) -> Result<(), ModelError> {
         let n = self.n;
+        self.accel.fill(0.0);
+        let zero = &self.accel;
+        let g = rnea(&self.model, &mut self.ws, q, zero, zero)?;
+        let tau = g.as_slice();
         for slot in self
             .ring
             .chunks_mut(SLOT * n)
@@ -664,6 +670,7 @@ impl Servo {
         self.substep = 0;
         (self.cycles, self.misses, self.consecutive, self.max_consecutive) = (0, 0, 0, 0);
         self.tripped = false;
+        Ok(())
     }
 
     /// Whether the controller's step of path sample `path_sample` (`None`
@@ -688,6 +695,11 @@ impl Servo {
         for (i, src) in [q, qd, qdd, tau].into_iter().enumerate() {
             self.command[i * n..(i + 1) * n].copy_from_slice(src);
         }
+    }
+
+    /// The last setpoint sent: `q`, `q̇`, `q̈`, `τ` (n each).
+    pub fn setpoint(&self) -> &[f64] {
+        &self.last
     }
 
     /// Whether the watchdog tripped.
