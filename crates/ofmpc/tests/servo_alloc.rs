@@ -11,9 +11,7 @@ use common::alloc_counter;
 use alloc_counter::allocations_during;
 use ofmpc::control::{ControllerKind, MpcSettings, OutputMode, Weight};
 use ofmpc::robot::{Payload, Robot};
-use ofmpc::sim::{
-    Experiment, LateSteps, LoopSettings, OnLate, ServoProfile, ServoSettings,
-};
+use ofmpc::sim::{Experiment, LateSteps, LoopSettings, OnLate, ServoProfile, ServoSettings};
 
 #[global_allocator]
 static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
@@ -73,9 +71,19 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
             let exp = experiment(hold_s, servo.clone());
             let n = allocations_during(|| {
                 let (_, m) = exp
-                    .run(ControllerKind::Second, &Payload::point_mass(0.25), &mut |_, _| {})
+                    .run(
+                        ControllerKind::Second,
+                        &Payload::point_mass(0.25),
+                        &mut |_, _| {},
+                    )
                     .unwrap();
-                assert_eq!(m.status.to_string(), "ok", "{:?}: {}", servo.profile, m.reason);
+                assert_eq!(
+                    m.status.to_string(),
+                    "ok",
+                    "{:?}: {}",
+                    servo.profile,
+                    m.reason
+                );
                 let report = m.servo.unwrap();
                 assert!(report.cycles > 1000, "{report:?}");
             });

@@ -6,7 +6,9 @@
 
 mod common;
 
-use ofmpc::control::{BuildError, ControllerBuilder, ControllerKind, MpcSettings, OutputMode, Weight};
+use ofmpc::control::{
+    BuildError, ControllerBuilder, ControllerKind, MpcSettings, OutputMode, Weight,
+};
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
     Experiment, ExperimentError, LateSteps, OnLate, PlantError, PlantSettingsError, RunFailure,
@@ -69,9 +71,27 @@ fn each_profile_tracks_an_unknown_payload() {
         ..ServoSettings::profile(ServoProfile::UrServoj)
     };
     let cases = [
-        (ServoSettings::profile(ServoProfile::FrankaTorque), 1e-3, 2.0, 1e-9, [1.5, 1.5]),
-        (ServoSettings::profile(ServoProfile::KukaRsi), 1e-5, 0.25, 1e-9, [50.0, 350.0]),
-        (ServoSettings::profile(ServoProfile::AbbEgm), 1e-3, 2.0, 1e-9, [1.6, 32.0]),
+        (
+            ServoSettings::profile(ServoProfile::FrankaTorque),
+            1e-3,
+            2.0,
+            1e-9,
+            [1.5, 1.5],
+        ),
+        (
+            ServoSettings::profile(ServoProfile::KukaRsi),
+            1e-5,
+            0.25,
+            1e-9,
+            [50.0, 350.0],
+        ),
+        (
+            ServoSettings::profile(ServoProfile::AbbEgm),
+            1e-3,
+            2.0,
+            1e-9,
+            [1.6, 32.0],
+        ),
         (ur, 1e-3, 2.0, 1e-8, [3.0, 55.0]),
     ];
     for (servo, q_du, mass, steady_max, ratio_max) in cases {
@@ -82,7 +102,10 @@ fn each_profile_tracks_an_unknown_payload() {
             let (outcome, m) = run(&experiment(q_du, Some(servo.clone())), kind, mass);
             assert!(outcome.is_completed(), "{profile} {kind:?}: {outcome}");
             let steady = common::experiment::steady(&m);
-            assert!(steady <= steady_max, "{profile} {kind:?}: steady {steady:e}");
+            assert!(
+                steady <= steady_max,
+                "{profile} {kind:?}: steady {steady:e}"
+            );
             let ratio = m.cartesian_error_rms_mm / torque.cartesian_error_rms_mm;
             assert!(ratio <= ratio_max, "{profile} {kind:?}: RMS ratio {ratio}");
             let report = m.servo.unwrap();
@@ -228,7 +251,10 @@ fn settings_that_cannot_work_are_refused() {
             period_s: Some(-1.0),
             ..kuka.clone()
         }),
-        ServoSettingsError::Value { key: "period_s", .. }
+        ServoSettingsError::Value {
+            key: "period_s",
+            ..
+        }
     ));
     assert!(matches!(
         refused(ServoSettings {
@@ -282,7 +308,11 @@ fn settings_that_cannot_work_are_refused() {
         build(ControllerKind::Second, torque_with_lead).unwrap_err(),
         BuildError::OutputLead { .. }
     ));
-    for kind in [ControllerKind::Usual, ControllerKind::First, ControllerKind::Second] {
+    for kind in [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+    ] {
         assert!(build(kind, pv(Some(0.09))).is_ok(), "{kind:?}");
     }
 }

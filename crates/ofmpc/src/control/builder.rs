@@ -54,8 +54,8 @@
 
 use std::time::{Duration, Instant};
 
-use crate::control::command::{lead_point, max_output_lead, OutputMode};
 use crate::control::algorithm::Algorithm;
+use crate::control::command::{lead_point, max_output_lead, OutputMode};
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
@@ -628,7 +628,11 @@ impl Controller {
             &self.predicted,
             lead_s,
             ts,
-            [&mut out.q_command, &mut out.qd_command, &mut out.qdd_command],
+            [
+                &mut out.q_command,
+                &mut out.qd_command,
+                &mut out.qdd_command,
+            ],
         );
     }
 

@@ -109,7 +109,10 @@ pub(crate) fn lead_point(
         if i == 0 {
             now[joint]
         } else {
-            predicted.get((i - 1) * n + joint).copied().unwrap_or(now[joint])
+            predicted
+                .get((i - 1) * n + joint)
+                .copied()
+                .unwrap_or(now[joint])
         }
     };
     let [q, qd, qdd] = cmd;
@@ -139,7 +142,12 @@ mod tests {
         for lead in [0.0, 0.002, 0.0137, 0.04, 0.065, 0.09] {
             let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
             lead_point(&now, &predicted, lead, ts, [&mut q, &mut qd, &mut qdd]);
-            assert!((q[0] - f(lead)).abs() < 1e-12, "lead {lead}: {} vs {}", q[0], f(lead));
+            assert!(
+                (q[0] - f(lead)).abs() < 1e-12,
+                "lead {lead}: {} vs {}",
+                q[0],
+                f(lead)
+            );
             assert!((qd[0] - (1.5 - 8.0 * lead)).abs() < 1e-9, "lead {lead}");
             assert!((qdd[0] + 8.0).abs() < 1e-6, "lead {lead}");
         }

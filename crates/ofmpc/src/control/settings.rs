@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::control::kind::ControllerKind;
 use crate::control::command::OutputMode;
+use crate::control::kind::ControllerKind;
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
 pub const MAX_HORIZON: usize = 1000;

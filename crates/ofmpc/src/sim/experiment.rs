@@ -11,8 +11,8 @@ use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES}
 use super::plant::{Plant, PlantSettings, PlantSettingsError};
 use super::servo::ServoSettingsError;
 use crate::control::{
-    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, Mpc, MpcSettings,
-    ObserverSettings, OutputMode,
+    max_output_lead, BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel,
+    Mpc, MpcSettings, ObserverSettings, OutputMode,
 };
 
 /// Poles of the state observer's error dynamics (per sample). Measured on
@@ -114,6 +114,16 @@ impl Experiment {
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
         check_servo_output(&self.plant, self.mpc.output)?;
+        if let Some(lead_s) = self
+            .output_lead_s()
+            .filter(|l| !(*l >= 0.0 && *l <= max_output_lead(self.mpc.horizon, ts) * (1.0 + 1e-12)))
+        {
+            let max_s = max_output_lead(self.mpc.horizon, ts);
+            return Err(ExperimentError::Build(BuildError::OutputLead {
+                lead_s,
+                max_s,
+            }));
+        }
         if let Some(m) = &self.plant.model {
             super::plant::check_plant_model(m, &self.robot)?;
         }
@@ -216,20 +226,25 @@ impl Experiment {
         )?)
     }
 
+    /// The controller's lead time: the tuning's, else — with a position or
+    /// velocity output — the servo interface's lag and smoothing
+    /// ([`super::ServoParams::command_lead_s`]).
+    fn output_lead_s(&self) -> Option<f64> {
+        match (&self.plant.servo, self.mpc.output_lead_s) {
+            (Some(servo), None) if !self.mpc.output.is_torque() => {
+                Some(servo.params().command_lead_s())
+            }
+            (_, lead) => lead,
+        }
+    }
+
     /// The controller `kind` of this experiment, built: the experiment's
     /// tuning, its baselines' gains, and an observer when the settings ask
     /// for one (with the plant's measurement delay).
     fn controller(&self, kind: ControllerKind) -> Result<Mpc, ExperimentError> {
         let observed = self.mpc.state_observer || self.mpc.delay_compensation;
         let mut settings = self.mpc.clone();
-        if let (false, None, Some(servo)) = (
-            settings.output.is_torque(),
-            settings.output_lead_s,
-            &self.plant.servo,
-        ) {
-            // Lead the interface by its own lag and smoothing.
-            settings.output_lead_s = Some(servo.params().command_lead_s());
-        }
+        settings.output_lead_s = self.output_lead_s();
         let mut builder = ControllerBuilder::new(kind, &self.robot)
             .settings(settings)
             .accept_ineffective_settings();

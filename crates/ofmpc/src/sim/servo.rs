@@ -288,8 +288,7 @@ impl ServoSettings {
             }
         }
         for (index, l) in self.late.iter().enumerate() {
-            if !(l.t.is_finite() && l.t >= 0.0 && l.duration_s.is_finite() && l.duration_s >= 0.0)
-            {
+            if !(l.t.is_finite() && l.t >= 0.0 && l.duration_s.is_finite() && l.duration_s >= 0.0) {
                 return Err(ServoSettingsError::Late {
                     index,
                     t: l.t,
@@ -477,7 +476,7 @@ pub enum ServoSettingsError {
         kind: OutputMode,
     },
     /// `on_late = "fault"` without a watchdog.
-    #[error("on_late = fault needs a watchdog: set watchdog_misses to 1 or more")]
+    #[error("an interface that faults on late commands needs a watchdog: give it a number of consecutive missed cycles of 1 or more")]
     FaultWithoutWatchdog,
     /// An injected late span is not a time.
     #[error("late step {} is at t = {t} s for {duration_s} s: both must be finite and >= 0", index + 1)]
@@ -655,11 +654,11 @@ impl Servo {
         let zero = &self.accel;
         let g = rnea(&self.model, &mut self.ws, q, zero, zero)?;
         let tau = g.as_slice();
-        for slot in self
-            .ring
-            .chunks_mut(SLOT * n)
-            .chain([&mut self.last[..], &mut self.command[..], &mut self.filtered[..]])
-        {
+        for slot in self.ring.chunks_mut(SLOT * n).chain([
+            &mut self.last[..],
+            &mut self.command[..],
+            &mut self.filtered[..],
+        ]) {
             slot.fill(0.0);
             slot[..n].copy_from_slice(q);
             slot[3 * n..].copy_from_slice(tau);
@@ -668,7 +667,12 @@ impl Servo {
         self.fresh = false;
         self.head = 0;
         self.substep = 0;
-        (self.cycles, self.misses, self.consecutive, self.max_consecutive) = (0, 0, 0, 0);
+        (
+            self.cycles,
+            self.misses,
+            self.consecutive,
+            self.max_consecutive,
+        ) = (0, 0, 0, 0);
         self.tripped = false;
         Ok(())
     }
@@ -677,8 +681,8 @@ impl Servo {
     /// before the path) that took `step_s` seconds is late: injected
     /// ([`ServoSettings::late`]) or slower than the deadline.
     pub fn is_late(&self, path_sample: Option<usize>, step_s: f64) -> bool {
-        let injected = path_sample
-            .is_some_and(|k| self.late.iter().any(|(a, b)| (*a..*b).contains(&k)));
+        let injected =
+            path_sample.is_some_and(|k| self.late.iter().any(|(a, b)| (*a..*b).contains(&k)));
         injected || self.deadline_s.is_some_and(|d| step_s > d)
     }
 
@@ -746,7 +750,8 @@ impl Servo {
         let setpoint = &self.ring[at..at + SLOT * n];
         match self.p.kind {
             OutputMode::Torque => {
-                let alpha = 1.0 - (-2.0 * std::f64::consts::PI * self.p.bandwidth_hz * substep).exp();
+                let alpha =
+                    1.0 - (-2.0 * std::f64::consts::PI * self.p.bandwidth_hz * substep).exp();
                 let f = &mut self.filtered[3 * n..];
                 for ((f, s), t) in f.iter_mut().zip(&setpoint[3 * n..]).zip(tau.iter_mut()) {
                     *f += alpha * (s - *f);
