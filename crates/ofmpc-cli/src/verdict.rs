@@ -315,6 +315,7 @@ mod tests {
             steady_cartesian_error_mm: steady,
             torque_max_nm: vec![0.0; 6],
             torque_step_max_nm: 0.0,
+            servo: None,
             step_time_us: StepTime {
                 median: 1.0,
                 p99: 1.0,

@@ -24,7 +24,7 @@ fn experiment(hold_s: f64, servo: ServoSettings) -> Experiment {
         reference,
         mpc: MpcSettings {
             q_du: Weight::Scalar(1e-3),
-            output: servo.params().kind,
+            output: servo.kind(),
             ..Default::default()
         },
         plant: Default::default(),

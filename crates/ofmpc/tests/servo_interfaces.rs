@@ -22,9 +22,7 @@ use ofmpc::sim::{
 fn experiment(q_du: f64, servo: Option<ServoSettings>) -> Experiment {
     let robot = Robot::irb140();
     let reference = common::paper_reference(&robot);
-    let output = servo
-        .as_ref()
-        .map_or(OutputMode::Torque, |s| s.params().kind);
+    let output = servo.as_ref().map_or(OutputMode::Torque, |s| s.kind());
     let mut e = Experiment {
         robot,
         reference,

@@ -85,7 +85,7 @@ impl fmt::Display for OutputMode {
 
 /// The largest lead time for a horizon of `horizon` samples of `ts` (s):
 /// `(N − 1)·Ts` (the quadratic needs the sample after the lead point).
-pub fn max_output_lead(horizon: usize, ts: f64) -> f64 {
+pub(crate) fn max_output_lead(horizon: usize, ts: f64) -> f64 {
     horizon.saturating_sub(1) as f64 * ts
 }
 

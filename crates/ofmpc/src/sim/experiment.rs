@@ -228,12 +228,10 @@ impl Experiment {
 
     /// The controller's lead time: the tuning's, else — with a position or
     /// velocity output — the servo interface's lag and smoothing
-    /// ([`super::ServoParams::command_lead_s`]).
+    /// ([`super::ServoSettings::command_lead_s`]).
     fn output_lead_s(&self) -> Option<f64> {
         match (&self.plant.servo, self.mpc.output_lead_s) {
-            (Some(servo), None) if !self.mpc.output.is_torque() => {
-                Some(servo.params().command_lead_s())
-            }
+            (Some(servo), None) if !self.mpc.output.is_torque() => Some(servo.command_lead_s()),
             (_, lead) => lead,
         }
     }
@@ -272,7 +270,7 @@ fn check_servo_output(plant: &PlantSettings, output: OutputMode) -> Result<(), P
     let interface = plant
         .servo
         .as_ref()
-        .map_or(OutputMode::Torque, |s| s.params().kind);
+        .map_or(OutputMode::Torque, |s| s.kind());
     if interface == output {
         return Ok(());
     }

@@ -41,8 +41,8 @@ pub use horizon::{HorizonSampling, PredictedHorizons};
 pub use recorder::{Record, Recorder, Sample};
 pub use sensor::Sensor;
 pub use servo::{
-    LateSteps, OnLate, Servo, ServoParams, ServoProfile, ServoReport, ServoSettings,
-    ServoSettingsError, ServoStatus, ServoTiming,
+    LateSteps, OnLate, Servo, ServoProfile, ServoReport, ServoSettings, ServoSettingsError,
+    ServoStatus,
 };
 pub use settings_error::LoopSettingsError;
 pub use state::JointState;

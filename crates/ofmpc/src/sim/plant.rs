@@ -509,6 +509,9 @@ fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
     }
 }
 
+/// The torque law of [`Plant::advance_with`]: `(substep, q, q̇, τ out)`.
+type SubstepDrive<'a> = dyn FnMut(usize, &[f64], &[f64], &mut [f64]) -> Result<(), PlantError> + 'a;
+
 /// The plant: state, model and effects. No allocation after construction.
 #[derive(Debug, Clone)]
 pub struct Plant {
@@ -744,10 +747,7 @@ impl Plant {
     /// substep. [`Self::applied_torque`] is then the period's mean torque.
     /// An error (of `drive`, or a state that stops being finite) leaves the
     /// state as it was. Allocation-free.
-    pub fn advance_with(
-        &mut self,
-        drive: &mut dyn FnMut(usize, &[f64], &[f64], &mut [f64]) -> Result<(), PlantError>,
-    ) -> Result<(), PlantError> {
+    pub fn advance_with(&mut self, drive: &mut SubstepDrive<'_>) -> Result<(), PlantError> {
         let n = self.q.len();
         let steps = self.substeps;
         let h = self.ts / steps as f64;
@@ -769,7 +769,7 @@ impl Plant {
     /// The substeps of [`Self::advance_with`].
     fn drive_substeps(
         &mut self,
-        drive: &mut dyn FnMut(usize, &[f64], &[f64], &mut [f64]) -> Result<(), PlantError>,
+        drive: &mut SubstepDrive<'_>,
         steps: usize,
         h: f64,
     ) -> Result<(), PlantError> {

@@ -50,7 +50,7 @@ use std::fmt;
 
 /// The vendor interfaces the stage models (`[plant.servo] profile`); every
 /// value is a default that the table's keys override
-/// ([`ServoSettings::params`]).
+/// (`ServoSettings::params`).
 ///
 /// | profile | kind | period | lag | bandwidth | lookahead | gain | on_late | watchdog |
 /// |---|---|---|---|---|---|---|---|---|
@@ -100,7 +100,7 @@ impl ServoProfile {
     }
 
     /// The profile's values (the table of [`ServoProfile`]).
-    pub fn params(self) -> ServoParams {
+    pub(crate) fn params(self) -> ServoParams {
         let position = |period_s, lag_s, on_late, watchdog_misses| ServoParams {
             kind: OutputMode::PositionVelocity,
             period_s,
@@ -252,7 +252,7 @@ impl ServoSettings {
     /// The profile's values with the overrides: `gain` before
     /// `bandwidth_hz` (which sets `gain = 3 (2π f)²` on a position or
     /// velocity interface) before the profile's.
-    pub fn params(&self) -> ServoParams {
+    pub(crate) fn params(&self) -> ServoParams {
         let d = self.profile.params();
         let bandwidth_hz = self.bandwidth_hz.unwrap_or(d.bandwidth_hz);
         let gain = match (self.gain, self.bandwidth_hz) {
@@ -272,8 +272,20 @@ impl ServoSettings {
         }
     }
 
+    /// What the interface takes: the `kind` given, else the profile's.
+    pub fn kind(&self) -> OutputMode {
+        self.params().kind
+    }
+
+    /// How far ahead a controller should command this interface (s): its
+    /// lag plus its smoothing's delay of a ramp (`lookahead_s`); 0 for a
+    /// torque interface.
+    pub fn command_lead_s(&self) -> f64 {
+        self.params().command_lead_s()
+    }
+
     /// Checks the settings for a control period `ts` and an integration
-    /// substep `substep` ([`ServoParams::timing`], the injected late
+    /// substep `substep` (the interface's timing, the injected late
     /// steps, the deadline, the keys that do nothing for the kind).
     pub fn validate_for(&self, ts: f64, substep: f64) -> Result<(), ServoSettingsError> {
         let p = self.params();
@@ -313,9 +325,9 @@ pub const MAX_LAG_CYCLES: usize = 1000;
 /// The largest `ω·substep` of a joint loop (its discrete stability).
 pub const MAX_LOOP_RATE: f64 = 0.2;
 
-/// An interface's values, every one given ([`ServoSettings::params`]).
+/// An interface's values, every one given (`ServoSettings::params`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ServoParams {
+pub(crate) struct ServoParams {
     /// What the interface takes.
     pub kind: OutputMode,
     /// Its cycle (s).
@@ -334,9 +346,9 @@ pub struct ServoParams {
     pub watchdog_misses: u32,
 }
 
-/// How an interface's cycles fit the loop ([`ServoParams::timing`]).
+/// How an interface's cycles fit the loop (`ServoParams::timing`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ServoTiming {
+pub(crate) struct ServoTiming {
     /// Interface cycles per control period, at most (the interface runs
     /// on its own clock: with a period that does not divide the control
     /// period, some control periods have one cycle fewer).
@@ -351,7 +363,7 @@ impl ServoParams {
     /// How far ahead a controller should command this interface (s): its
     /// lag plus its smoothing's delay of a ramp (`lookahead_s`); 0 for a
     /// torque interface (no lead).
-    pub fn command_lead_s(&self) -> f64 {
+    pub(crate) fn command_lead_s(&self) -> f64 {
         if self.kind.is_torque() {
             0.0
         } else {
@@ -369,7 +381,7 @@ impl ServoParams {
 
     /// Checks every value and how the interface's cycle fits a control
     /// period `ts` and a substep `substep`.
-    pub fn timing(&self, ts: f64, substep: f64) -> Result<ServoTiming, ServoSettingsError> {
+    pub(crate) fn timing(&self, ts: f64, substep: f64) -> Result<ServoTiming, ServoSettingsError> {
         let positive = |key, value: f64| {
             if value.is_finite() && value > 0.0 {
                 Ok(())
@@ -627,11 +639,6 @@ impl Servo {
         })
     }
 
-    /// The interface's values.
-    pub fn params(&self) -> &ServoParams {
-        &self.p
-    }
-
     /// Checks that the controller's `output` is what the interface takes.
     pub fn check_output(&self, output: OutputMode) -> Result<(), ServoSettingsError> {
         if output == self.p.kind {
@@ -737,7 +744,10 @@ impl Servo {
         tau: &mut [f64],
         substep: f64,
     ) -> Result<(), ModelError> {
-        if self.substep % self.timing.substeps_per_cycle as u64 == 0 {
+        if self
+            .substep
+            .is_multiple_of(self.timing.substeps_per_cycle as u64)
+        {
             // The interface's own clock: a cycle begins; `i` substeps into
             // the control period.
             self.send(i as f64 * substep);
