@@ -22,7 +22,10 @@ use std::path::{Path, PathBuf};
 
 /// Most items rustdoc's "all items" page may list: a ratchet at today's count (312 before
 /// issue 34's curation; its target, 160, is not reached yet: lower this as items go).
-const MAX_ITEMS: usize = 187;
+/// Issue 37's command modes added 9: `control::OutputMode` and the servo stage's
+/// `sim::{Servo, ServoSettings, ServoProfile, OnLate, LateSteps, ServoReport, ServoStatus,
+/// ServoSettingsError}`.
+const MAX_ITEMS: usize = 196;
 
 /// Names that two distinct items carry at two public paths (reviewed: not one item twice).
 const DISTINCT_SAME_NAME: &[&str] = &[];

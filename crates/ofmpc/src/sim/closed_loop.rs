@@ -593,10 +593,7 @@ impl<'a> ClosedLoop<'a> {
         }
         rec.loading(self.actuator.account(self.controller.torque()));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
-        self.late = self
-            .servo
-            .as_ref()
-            .is_some_and(|s| s.is_late(self.plant.state().path_sample, step_us * 1e-6));
+        self.late = self.step_is_late(step_us);
         let status = status.map_err(|e| failed(RunFailure::Controller(step_failure(e))))?;
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         self.controller.watch(self.plant.q(), self.plant.qd(), t);
@@ -611,11 +608,7 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
-        if let Some(servo) = self.servo.as_ref().filter(|s| s.tripped()) {
-            return Err(failed(RunFailure::ServoWatchdog {
-                misses: servo.report().max_consecutive_misses,
-            }));
-        }
+        self.servo_watchdog().map_err(failed)?;
         match status {
             SupervisedStatus::NonFiniteError { joint } => {
                 Err(failed(RunFailure::NonFiniteError { joint }))
@@ -679,6 +672,23 @@ impl ClosedLoop<'_> {
         servo
             .start(self.plant.q())
             .map_err(|e| RunFailure::Plant(e.into()))
+    }
+
+    /// Whether this sample's step, which took `step_us`, is late for the
+    /// servo interface ([`Servo::is_late`]; never without one).
+    fn step_is_late(&self, step_us: f64) -> bool {
+        let path_sample = self.plant.state().path_sample;
+        (self.servo.as_ref()).is_some_and(|s| s.is_late(path_sample, step_us * 1e-6))
+    }
+
+    /// The servo interface's watchdog: `Err` once it tripped.
+    fn servo_watchdog(&self) -> Result<(), RunFailure> {
+        match self.servo.as_ref().filter(|s| s.tripped()) {
+            Some(servo) => Err(RunFailure::ServoWatchdog {
+                misses: servo.report().max_consecutive_misses,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// The controller's command through the servo interface

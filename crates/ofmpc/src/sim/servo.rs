@@ -382,31 +382,7 @@ impl ServoParams {
     /// Checks every value and how the interface's cycle fits a control
     /// period `ts` and a substep `substep`.
     pub(crate) fn timing(&self, ts: f64, substep: f64) -> Result<ServoTiming, ServoSettingsError> {
-        let positive = |key, value: f64| {
-            if value.is_finite() && value > 0.0 {
-                Ok(())
-            } else {
-                Err(ServoSettingsError::Value {
-                    key,
-                    value,
-                    requirement: "a finite value > 0",
-                })
-            }
-        };
-        positive("period_s", self.period_s)?;
-        positive("bandwidth_hz", self.bandwidth_hz)?;
-        if !self.kind.is_torque() {
-            positive("gain", self.gain)?;
-        }
-        for (key, value) in [("lag_s", self.lag_s), ("lookahead_s", self.lookahead_s)] {
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(ServoSettingsError::Value {
-                    key,
-                    value,
-                    requirement: "a finite time >= 0 s",
-                });
-            }
-        }
+        self.check_values()?;
         let whole = |what, a: f64, b: f64| {
             let r = a / b;
             let k = r.round();
@@ -437,9 +413,6 @@ impl ServoParams {
                 requirement: "at most 1000 interface cycles",
             });
         }
-        if self.on_late == OnLate::Fault && self.watchdog_misses == 0 {
-            return Err(ServoSettingsError::FaultWithoutWatchdog);
-        }
         let rate = self.omega() * substep;
         if !self.kind.is_torque() && rate > MAX_LOOP_RATE {
             return Err(ServoSettingsError::LoopTooFast {
@@ -452,6 +425,39 @@ impl ServoParams {
             substeps_per_cycle,
             lag_cycles,
         })
+    }
+
+    /// Each value in its range, and a watchdog for `on_late = fault`.
+    fn check_values(&self) -> Result<(), ServoSettingsError> {
+        let positive = |key, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(ServoSettingsError::Value {
+                    key,
+                    value,
+                    requirement: "a finite value > 0",
+                })
+            }
+        };
+        positive("period_s", self.period_s)?;
+        positive("bandwidth_hz", self.bandwidth_hz)?;
+        if !self.kind.is_torque() {
+            positive("gain", self.gain)?;
+        }
+        for (key, value) in [("lag_s", self.lag_s), ("lookahead_s", self.lookahead_s)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(ServoSettingsError::Value {
+                    key,
+                    value,
+                    requirement: "a finite time >= 0 s",
+                });
+            }
+        }
+        if self.on_late == OnLate::Fault && self.watchdog_misses == 0 {
+            return Err(ServoSettingsError::FaultWithoutWatchdog);
+        }
+        Ok(())
     }
 }
 
