@@ -226,6 +226,28 @@ typedef struct {
    * Doublings of the ZOH discretization.
    */
   uint32_t zoh_squarings;
+  /**
+   * With a position or velocity output (`[mpc] output`): the joint
+   * positions the controller's model predicted one lead time ahead (n
+   * values; rad). Written when `size` covers the command fields and the
+   * pointer is not NULL (NULL: not asked for); zeros with a torque output.
+   */
+  double *q_command;
+  /**
+   * The predicted joint velocities one lead time ahead (n values; rad/s),
+   * as `q_command`.
+   */
+  double *qd_command;
+  /**
+   * The predicted joint accelerations one lead time ahead (n values;
+   * rad/s²: the feed-forward of the interface's joint loop), as
+   * `q_command`.
+   */
+  double *qdd_command;
+  /**
+   * Length of each non-NULL command array (n).
+   */
+  size_t command_len;
 } ofmpc_step_output;
 
 /**

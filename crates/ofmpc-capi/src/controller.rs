@@ -67,11 +67,27 @@ pub struct ofmpc_step_output {
     pub solve_time_ns: u64,
     /// Doublings of the ZOH discretization.
     pub zoh_squarings: u32,
+    /// With a position or velocity output (`[mpc] output`): the joint
+    /// positions the controller's model predicted one lead time ahead (n
+    /// values; rad). Written when `size` covers the command fields and the
+    /// pointer is not NULL (NULL: not asked for); zeros with a torque output.
+    pub q_command: *mut f64,
+    /// The predicted joint velocities one lead time ahead (n values; rad/s),
+    /// as `q_command`.
+    pub qd_command: *mut f64,
+    /// The predicted joint accelerations one lead time ahead (n values;
+    /// rad/s²: the feed-forward of the interface's joint loop), as
+    /// `q_command`.
+    pub qdd_command: *mut f64,
+    /// Length of each non-NULL command array (n).
+    pub command_len: usize,
 }
 
 /// The size of the first version of [`ofmpc_step_output`]: fields appended
 /// later are written only when the caller's `size` covers them.
-pub(crate) const STEP_OUTPUT_V1: usize = size_of::<ofmpc_step_output>();
+pub(crate) const STEP_OUTPUT_V1: usize = std::mem::offset_of!(ofmpc_step_output, q_command);
+/// The size with the predicted command (issue 37): `q_command` … `command_len`.
+pub(crate) const STEP_OUTPUT_V2: usize = size_of::<ofmpc_step_output>();
 /// The size of the first version of [`ofmpc_step_input`].
 pub(crate) const STEP_INPUT_V1: usize = size_of::<ofmpc_step_input>();
 
@@ -135,14 +151,57 @@ pub unsafe extern "C" fn ofmpc_controller_step(
         let n = c.dof();
         check_record(out.size, STEP_OUTPUT_V1, "ofmpc_step_output")?;
         let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
+        check_command(out, n)?;
         let result = {
             let (x, w, preview) = unsafe { step_slices(input, n, c.horizon()) }?;
             c.step(&StepInput { x, w_k: w, preview })
                 .map_err(step_failure)?
         };
         write_output(result, tau, out);
+        unsafe { write_command(result, out) };
         Ok(())
     })
+}
+
+/// The record's command arrays, checked before the step (nothing is
+/// written on a refusal): when its `size` covers them, every non-NULL one
+/// has `command_len = n`.
+fn check_command(out: &ofmpc_step_output, n: usize) -> Result<(), Failure> {
+    if out.size < STEP_OUTPUT_V2 {
+        // An older record: the command fields are not there to read.
+        return Ok(());
+    }
+    let asked = [out.q_command, out.qd_command, out.qdd_command]
+        .iter()
+        .any(|p| !p.is_null());
+    if asked && out.command_len != n {
+        return Err(Failure::new(
+            ofmpc_status::OFMPC_SIZE_MISMATCH,
+            format!(
+                "out->command_len is {} but the robot has {n} joints",
+                out.command_len
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The predicted command into the record's non-NULL command arrays, when
+/// its `size` covers them ([`check_command`] checked their length).
+unsafe fn write_command(o: &StepOutput, out: &mut ofmpc_step_output) {
+    if out.size < STEP_OUTPUT_V2 {
+        return;
+    }
+    for (p, src) in [
+        (out.q_command, &o.q_command),
+        (out.qd_command, &o.qd_command),
+        (out.qdd_command, &o.qdd_command),
+    ] {
+        if !p.is_null() {
+            // SAFETY: the caller gave `command_len = n` writable values.
+            unsafe { std::slice::from_raw_parts_mut(p, src.len()) }.copy_from_slice(src);
+        }
+    }
 }
 
 /// The state, the reference and the preview of a step.

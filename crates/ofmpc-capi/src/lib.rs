@@ -70,6 +70,10 @@ mod tests {
                 payload_estimate_kg: 0.0,
                 solve_time_ns: 0,
                 zoh_squarings: 0,
+                q_command: std::ptr::null_mut(),
+                qd_command: std::ptr::null_mut(),
+                qdd_command: std::ptr::null_mut(),
+                command_len: 0,
             };
             let input = ofmpc_step_input {
                 size: std::mem::size_of::<ofmpc_step_input>(),

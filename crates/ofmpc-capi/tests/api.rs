@@ -120,6 +120,10 @@ fn output(tau: &mut [f64]) -> ofmpc_step_output {
         payload_estimate_kg: 0.0,
         solve_time_ns: 0,
         zoh_squarings: 0,
+        q_command: null_mut(),
+        qd_command: null_mut(),
+        qdd_command: null_mut(),
+        command_len: 0,
     }
 }
 
@@ -358,5 +362,91 @@ fn a_robot_from_urdf_text_or_file_with_its_drives() {
         );
         ofmpc_robot_free(a);
         ofmpc_robot_free(b);
+    }
+}
+
+/// The output mode through the C API (issue 37): `[mpc] output` in the
+/// settings TOML just works, and the step's record carries the predicted
+/// command, equal to the Rust controller's for the same input; a record
+/// of the first version (its `size`) is written as before, a wrong
+/// `command_len` is refused with nothing written.
+#[test]
+fn the_predicted_command_through_the_c_api() {
+    let toml = c"[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n";
+    let robot = ofmpc::robot::Robot::irb140();
+    let settings = ofmpc::control::MpcSettings {
+        output: ofmpc::control::OutputMode::PositionVelocity,
+        output_lead_s: Some(0.04),
+        ..Default::default()
+    };
+    let mut rust = ofmpc::ControllerBuilder::new(ofmpc::ControllerKind::Second, &robot)
+        .settings(settings)
+        .build()
+        .unwrap();
+    let (mut r, mut c) = (null_mut(), null_mut());
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
+        ok(ofmpc_controller_new(
+            r,
+            c"second".as_ptr(),
+            toml.as_ptr(),
+            &mut c,
+        ));
+    }
+    let x0 = [0.1, 0.4, -0.2, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let w = [0.12, 0.41, -0.19, 0.01, 0.5, 0.0];
+    let preview: Vec<f64> = (0..10).flat_map(|_| w).collect();
+    rust.reset(&x0).unwrap();
+    unsafe { ok(ofmpc_controller_reset(c, x0.as_ptr(), x0.len())) };
+    let expected = rust
+        .step(&ofmpc::StepInput {
+            x: &x0,
+            w_k: &w,
+            preview: &preview,
+        })
+        .unwrap()
+        .clone();
+    assert!(expected.q_command.iter().any(|q| *q != 0.0));
+    let mut tau = [0.0; 6];
+    let (mut q, mut qd, mut qdd) = ([9.0; 6], [9.0; 6], [9.0; 6]);
+    let mut out = output(&mut tau);
+    // A wrong length: refused, nothing written.
+    out.q_command = q.as_mut_ptr();
+    out.command_len = 5;
+    let st = unsafe { ofmpc_controller_step(c, &input(&x0, &w, &preview), &mut out) };
+    assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH, "{}", last_error());
+    assert_eq!((tau, q), ([0.0; 6], [9.0; 6]));
+    out.command_len = 6;
+    out.qd_command = qd.as_mut_ptr();
+    out.qdd_command = qdd.as_mut_ptr();
+    unsafe {
+        ok(ofmpc_controller_step(
+            c,
+            &input(&x0, &w, &preview),
+            &mut out,
+        ))
+    };
+    assert_eq!(&q[..], &expected.q_command[..]);
+    assert_eq!(&qd[..], &expected.qd_command[..]);
+    assert_eq!(&qdd[..], &expected.qdd_command[..]);
+    assert_eq!(&tau[..], &expected.tau[..]);
+    // A first-version record (its size ends before the command): the command
+    // fields are neither read nor written.
+    let mut q1 = [9.0; 6];
+    let mut out = output(&mut tau);
+    out.size = std::mem::offset_of!(ofmpc_step_output, q_command);
+    out.q_command = q1.as_mut_ptr();
+    out.command_len = 1;
+    unsafe {
+        ok(ofmpc_controller_step(
+            c,
+            &input(&x0, &w, &preview),
+            &mut out,
+        ))
+    };
+    assert_eq!(q1, [9.0; 6]);
+    unsafe {
+        ofmpc_controller_free(c);
+        ofmpc_robot_free(r);
     }
 }

@@ -334,6 +334,7 @@ mod tests {
             torque_max_nm: vec![0.0; 6],
             torque_step_max_nm: 0.0,
             hold_error_pp_counts: None,
+            servo: None,
             step_time_us: StepTime {
                 median: 1.0,
                 p99: 1.0,

@@ -22,8 +22,10 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// Most items rustdoc's "all items" page may list: a ratchet at today's count (312 before
-/// issue 34's curation; its target is 160: lower this as items go).
-const MAX_ITEMS: usize = 148;
+/// issue 34's curation brought it to 148; issue 37's command modes added 9:
+/// `control::OutputMode` and the servo stage's `sim::{Servo, ServoSettings, ServoProfile,
+/// OnLate, LateSteps, ServoReport, ServoStatus, ServoSettingsError}`; its telemetry 2).
+const MAX_ITEMS: usize = 160;
 
 /// Names that two distinct items carry at two public paths (reviewed: not one item twice).
 const DISTINCT_SAME_NAME: &[&str] = &[];

@@ -4,11 +4,12 @@
 //! command-line flag, a Python argument); this crate never names one.
 
 use ofmpc::analysis::StabilityError;
-use ofmpc::control::{ControllerKind, DriveQuantity, SettingsError};
+use ofmpc::control::{BuildError, ControllerKind, DriveQuantity, SettingsError};
 use ofmpc::motion::PlanError;
 use ofmpc::robot::{ModelError, PayloadError};
 use ofmpc::sim::{
     ExperimentError, FrictionKind, LoopSettingsError, NoiseKind, PlantError, PlantSettingsError,
+    ServoSettingsError,
 };
 use std::path::PathBuf;
 
@@ -361,6 +362,12 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
             "[mpc] torque_limits / friction_compensation".into()
         }
         ExperimentError::Mpc(_) => "[mpc]".into(),
+        ExperimentError::Build(BuildError::OutputLead { lead_s, .. }) => {
+            format!("[mpc] output_lead_s = {lead_s} (default: [plant.servo] lag_s + lookahead_s)")
+        }
+        ExperimentError::Build(BuildError::OutputWithoutPrediction { output, .. }) => {
+            format!("[mpc] output = \"{output}\"")
+        }
         ExperimentError::Build(_) => {
             "[mpc] torque_limits = true with no finite max_torque_nm (robot effort limits or \
              [robot] drives)"
@@ -430,7 +437,30 @@ fn plant_key(p: &PlantSettingsError) -> String {
                 _ => "velocity_noise",
             }
         ),
+        PlantSettingsError::Servo(e) => servo_key(e),
         _ => "[plant]".into(),
+    }
+}
+
+/// Where in `[plant.servo]` (or `[mpc] output`) a servo interface's error is.
+fn servo_key(e: &ServoSettingsError) -> String {
+    match e {
+        ServoSettingsError::Value { key, value, .. } => format!("[plant.servo] {key} = {value}"),
+        ServoSettingsError::Multiple { .. } => {
+            "[plant.servo] period_s / lag_s with [plant] substep".into()
+        }
+        ServoSettingsError::Unused { key, .. } => format!("[plant.servo] {key}"),
+        ServoSettingsError::FaultWithoutWatchdog => {
+            "[plant.servo] on_late = \"fault\" with watchdog_misses = 0".into()
+        }
+        ServoSettingsError::Late { index, .. } => format!("[plant.servo] late[{index}]"),
+        ServoSettingsError::LoopTooFast { .. } => {
+            "[plant.servo] gain / bandwidth_hz with [plant] substep".into()
+        }
+        ServoSettingsError::OutputMismatch { .. } | ServoSettingsError::NoInterface { .. } => {
+            "[mpc] output".into()
+        }
+        _ => "[plant.servo]".into(),
     }
 }
 

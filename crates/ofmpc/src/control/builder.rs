@@ -56,6 +56,7 @@ use std::time::{Duration, Instant};
 
 use crate::control::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::algorithm::Algorithm;
+use crate::control::command::{lead_point, max_output_lead, OutputMode};
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
@@ -172,6 +173,25 @@ pub enum BuildError {
         kind: ControllerKind,
         /// The payload mass the model would carry (kg).
         mass: f64,
+    },
+    /// A position or velocity output ([`MpcSettings::output`]) for a kind
+    /// whose step predicts nothing (the baselines `pid`, `ctc`,
+    /// `ctc-adaptive`): there is no predicted state to command.
+    #[error("the {kind} controller predicts no trajectory, so it cannot output a {output} command: use torque output or a predictive kind (usual, first, second, their adaptive variants, dob-mpc)")]
+    OutputWithoutPrediction {
+        /// The kind.
+        kind: ControllerKind,
+        /// The output asked for.
+        output: OutputMode,
+    },
+    /// The output's lead time is not within `[0, (N − 1)·Ts]` (or was given
+    /// with a torque output, which has none).
+    #[error("the output lead time is {lead_s} s: it must be from 0 to {max_s} s ((N − 1)·Ts) and needs a position or velocity output; lengthen the horizon or shorten the lead")]
+    OutputLead {
+        /// The lead time asked for (s).
+        lead_s: f64,
+        /// `(N − 1)·Ts` (s; 0 with a torque output).
+        max_s: f64,
     },
     /// The robot already carries a payload and the tuning assumes another:
     /// one would silently replace the other.
@@ -336,6 +356,7 @@ impl<'r> ControllerBuilder<'r> {
         }
         let model_robot = model_robot(robot, &s)?;
         let mut controller = new_algorithm(kind, n, &s, &baselines, estimator, observer)?;
+        let predicted = check_output(kind, &s, n, controller.as_mut())?;
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
         }
@@ -371,10 +392,44 @@ impl<'r> ControllerBuilder<'r> {
                 payload_estimate: None,
                 solve_time: Duration::ZERO,
                 status: StepStatus::Solved,
+                q_command: vec![0.0; n].into_boxed_slice(),
+                qd_command: vec![0.0; n].into_boxed_slice(),
+                qdd_command: vec![0.0; n].into_boxed_slice(),
             },
+            predicted,
             started: false,
         })
     }
+}
+
+/// The output mode's checks ([`BuildError::OutputWithoutPrediction`],
+/// [`BuildError::OutputLead`]) and the buffer of the predicted positions it
+/// reads (N·n; empty with a torque output).
+fn check_output(
+    kind: ControllerKind,
+    s: &MpcSettings,
+    n: usize,
+    algorithm: &mut (dyn Algorithm + Send),
+) -> Result<Vec<f64>, BuildError> {
+    let max_s = max_output_lead(s.horizon, s.ts);
+    if s.output.is_torque() {
+        return match s.output_lead_s {
+            Some(lead_s) => Err(BuildError::OutputLead { lead_s, max_s: 0.0 }),
+            None => Ok(Vec::new()),
+        };
+    }
+    let lead_s = s.output_lead_s.unwrap_or(0.0);
+    if !(lead_s.is_finite() && lead_s >= 0.0 && lead_s <= max_s * (1.0 + 1e-12)) || s.horizon < 2 {
+        return Err(BuildError::OutputLead { lead_s, max_s });
+    }
+    let mut predicted = vec![0.0; s.horizon * n];
+    if !algorithm.predicted_outputs(&mut predicted) {
+        return Err(BuildError::OutputWithoutPrediction {
+            kind,
+            output: s.output,
+        });
+    }
+    Ok(predicted)
 }
 
 /// The controller's model of the robot: `robot` as given, with the payload
@@ -465,6 +520,9 @@ pub struct Controller {
     observer: Option<StateObserver>,
     x_est: Vec<f64>,
     output: StepOutput,
+    /// The positions the last step predicted (N·n), read by a position or
+    /// velocity output (empty with a torque output).
+    predicted: Vec<f64>,
     /// Reset at a measured state since build.
     started: bool,
 }
@@ -549,11 +607,41 @@ impl Controller {
                     },
                     _ => StepStatus::Solved,
                 };
+                self.command(input.x);
             }
             Err(failure) => self.output.status = StepStatus::HeldLastTorque(failure),
         }
         self.output.solve_time = start.elapsed();
         Ok(&self.output)
+    }
+
+    /// The position/velocity command of a successful step one lead time
+    /// ahead (`control/command.rs`), from the positions the step predicted
+    /// and the state it acted on; nothing with a torque output.
+    fn command(&mut self, x: &[f64]) {
+        let s = self.controller.settings();
+        if s.output.is_torque() || !self.controller.predicted_outputs(&mut self.predicted) {
+            return;
+        }
+        let s = self.controller.settings();
+        let (lead_s, ts) = (s.output_lead_s.unwrap_or(0.0), s.ts);
+        let n = self.x_est.len() / 2;
+        let now = match self.observer {
+            Some(_) => &self.x_est[..n],
+            None => &x[..n],
+        };
+        let out = &mut self.output;
+        lead_point(
+            now,
+            &self.predicted,
+            lead_s,
+            ts,
+            [
+                &mut out.q_command,
+                &mut out.qd_command,
+                &mut out.qdd_command,
+            ],
+        );
     }
 
     /// The input checks of [`Self::step`]: reset first, every slice its

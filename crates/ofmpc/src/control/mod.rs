@@ -52,6 +52,7 @@ mod adaptive;
 mod algorithm;
 mod baselines;
 mod builder;
+mod command;
 pub(crate) mod dead_zone;
 mod drive_model;
 mod factory;
@@ -73,6 +74,8 @@ pub(crate) use builder::{check_torque_limits, DEFAULT_OBSERVER_POLE};
 pub use builder::{
     model_robot, BuildError, Controller, ControllerBuilder, FrictionUse, ObserverSettings,
 };
+pub(crate) use command::max_output_lead;
+pub use command::OutputMode;
 pub use drive_model::DriveModel;
 #[doc(hidden)]
 pub use factory::{new_controller, new_controller_with_baselines};

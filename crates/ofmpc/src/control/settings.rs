@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::control::command::OutputMode;
 use crate::control::kind::ControllerKind;
 
 /// Largest prediction horizon accepted by [`MpcSettings::validate`].
@@ -353,6 +354,18 @@ pub struct MpcSettings {
     /// makes the ideal plant's identification diverge).
     /// `0` (default): no bound, the model rate of the ideal plant.
     pub payload_com_max_m: f64,
+    /// What the controller's output drives ([`OutputMode`], default
+    /// torque): for an interface that closes its own joint loop, the state
+    /// its model predicted [`Self::output_lead_s`] ahead
+    /// ([`StepOutput::q_command`](crate::control::StepOutput::q_command)).
+    #[serde(skip_serializing_if = "OutputMode::is_default")]
+    pub output: OutputMode,
+    /// How far ahead the position/velocity command is taken from the
+    /// prediction (s, from 0 to `(N − 1)·Ts`): the interface's lag and
+    /// smoothing. `None` (default): the simulated interface's own
+    /// (`[plant.servo]`), else 0. Only with a position or velocity output.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_lead_s: Option<f64>,
 }
 
 impl Default for MpcSettings {
@@ -376,6 +389,8 @@ impl Default for MpcSettings {
             encoder_counts: 0.0,
             friction_creep: false,
             payload_com_max_m: 0.0,
+            output: OutputMode::Torque,
+            output_lead_s: None,
         }
     }
 }

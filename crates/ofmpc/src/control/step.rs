@@ -216,4 +216,18 @@ pub struct StepOutput {
     /// The numerical outcome of the step: solved, QP at its iteration cap,
     /// or failed with the last torque held ([`StepStatus`]).
     pub status: StepStatus,
+    /// With a position or velocity output
+    /// ([`MpcSettings::output`](crate::control::MpcSettings::output)): the
+    /// joint positions the controller's model predicted one lead time
+    /// ahead ([`MpcSettings::output_lead_s`](crate::control::MpcSettings::output_lead_s);
+    /// `control/command.rs`), n values (rad). Zeros with a torque output;
+    /// held with the torque on a failed step.
+    pub q_command: Box<[f64]>,
+    /// The joint velocities predicted one lead time ahead (rad/s), as
+    /// [`Self::q_command`].
+    pub qd_command: Box<[f64]>,
+    /// The joint accelerations predicted one lead time ahead (rad/s²), the
+    /// feed-forward of the interface's own joint loop, as
+    /// [`Self::q_command`].
+    pub qdd_command: Box<[f64]>,
 }

@@ -5,9 +5,10 @@ use super::conditions::{RunConditions, SafetySettings};
 use super::faults::{sample_at, LossSchedule, MeasurementFaults};
 use super::horizon::HorizonRecorder;
 use super::outcome::{RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::{Plant, PlantError, PlantSettings};
+use super::plant::{Plant, PlantError, PlantSettings, PlantSettingsError};
 use super::recorder::{Record, Recorder, Sample};
 use super::sensor::Sensor;
+use super::servo::Servo;
 use super::settings_error::LoopSettingsError;
 use super::supervised::{SupervisedController, SupervisedError, SupervisedInput, SupervisedStatus};
 use super::supervisor::{DivergenceRule, SupervisorSettings};
@@ -287,6 +288,10 @@ pub struct ClosedLoop<'a> {
     horizon: Option<HorizonRecorder>,
     /// Set by another thread to end the run ([`ClosedLoop::cancel_on`]).
     cancel: Option<&'a AtomicBool>,
+    /// The robot's servo interface (`[plant.servo]`), and whether this
+    /// period's command is late for it.
+    servo: Option<Servo>,
+    late: bool,
 }
 
 /// How a run ends early: the outcome, recorded up to there.
@@ -341,6 +346,7 @@ impl<'a> ClosedLoop<'a> {
         );
         // The plant checked its settings when it was built.
         let actuator = plant.settings().actuator(plant.robot(), ts);
+        let servo = servo_stage(&controller, plant, ts);
         Self {
             controller,
             plant,
@@ -356,6 +362,8 @@ impl<'a> ClosedLoop<'a> {
             pick_up: None,
             horizon: predicted,
             cancel: None,
+            servo,
+            late: false,
         }
     }
 
@@ -430,6 +438,7 @@ impl<'a> ClosedLoop<'a> {
         progress(total, total);
         let mut record = rec.into_record();
         record.horizons = self.horizon.map(HorizonRecorder::into_horizons);
+        record.servo = self.servo.as_ref().map(Servo::report);
         RunResult {
             record,
             outcome,
@@ -453,6 +462,7 @@ impl<'a> ClosedLoop<'a> {
         self.controller
             .reset(&self.x)
             .map_err(|e| failed(0.0, RunFailure::Reset(step_failure(e))))?;
+        self.start_servo().map_err(|e| failed(0.0, e))?;
         let pre_roll = self.events.pre_roll;
         for j in 0..pre_roll {
             let t = -((pre_roll - j) as f64) * self.reference.ts();
@@ -583,6 +593,7 @@ impl<'a> ClosedLoop<'a> {
         }
         rec.loading(self.actuator.account(self.controller.torque()));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
+        self.late = self.step_is_late(step_us);
         let status = status.map_err(|e| failed(RunFailure::Controller(step_failure(e))))?;
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
         self.controller.watch(self.plant.q(), self.plant.qd(), t);
@@ -597,6 +608,7 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
+        self.servo_watchdog().map_err(failed)?;
         match status {
             SupervisedStatus::NonFiniteError { joint } => {
                 Err(failed(RunFailure::NonFiniteError { joint }))
@@ -636,11 +648,86 @@ impl<'a> ClosedLoop<'a> {
     /// The controller's torque through the drives ([`Actuator::apply`])
     /// onto the plant over one period.
     fn actuate(&mut self) -> Result<(), PlantError> {
+        if self.servo.is_some() {
+            return self.actuate_servo();
+        }
         let applied = self
             .actuator
             .apply(self.controller.torque(), self.plant.state().path_sample)?;
         self.plant.advance(applied)
     }
+}
+
+impl ClosedLoop<'_> {
+    /// Checks the servo interface against the controller's output and
+    /// starts it at the plant's state ([`Servo::start`]).
+    fn start_servo(&mut self) -> Result<(), RunFailure> {
+        let Some(servo) = self.servo.as_mut() else {
+            return Ok(());
+        };
+        let output = self.controller.controller().settings().output;
+        servo
+            .check_output(output)
+            .map_err(|e| RunFailure::Plant(PlantSettingsError::from(e).into()))?;
+        servo
+            .start(self.plant.q())
+            .map_err(|e| RunFailure::Plant(e.into()))
+    }
+
+    /// Whether this sample's step, which took `step_us`, is late for the
+    /// servo interface ([`Servo::is_late`]; never without one).
+    fn step_is_late(&self, step_us: f64) -> bool {
+        let path_sample = self.plant.state().path_sample;
+        (self.servo.as_ref()).is_some_and(|s| s.is_late(path_sample, step_us * 1e-6))
+    }
+
+    /// The servo interface's watchdog: `Err` once it tripped.
+    fn servo_watchdog(&self) -> Result<(), RunFailure> {
+        match self.servo.as_ref().filter(|s| s.tripped()) {
+            Some(servo) => Err(RunFailure::ServoWatchdog {
+                misses: servo.report().max_consecutive_misses,
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The controller's command through the servo interface
+    /// ([`Servo::receive`], late or not) and its drives, substep by substep
+    /// ([`Servo::drive`]), through the drives' clamp ([`Actuator::apply`])
+    /// onto the plant ([`Plant::advance_with`]).
+    fn actuate_servo(&mut self) -> Result<(), PlantError> {
+        let Some(servo) = self.servo.as_mut() else {
+            return Ok(());
+        };
+        let out = self.controller.diagnostics();
+        servo.receive(
+            self.controller.torque(),
+            &out.q_command,
+            &out.qd_command,
+            &out.qdd_command,
+            self.late,
+        );
+        self.late = false;
+        let path_sample = self.plant.state().path_sample;
+        let substep = self.plant.period() / self.plant.substeps() as f64;
+        let actuator = &mut self.actuator;
+        self.plant.advance_with(&mut |i, q, qd, tau| {
+            servo.drive(i, q, qd, tau, substep)?;
+            let applied = actuator.apply(tau, path_sample)?;
+            tau.copy_from_slice(applied);
+            Ok(())
+        })
+    }
+}
+
+/// The servo stage of the plant's `[plant.servo]` for `controller`'s model
+/// at the period `ts`; `None` without one, or when its settings do not fit
+/// (the plant checked them when it was built, and again at the loop's
+/// period).
+fn servo_stage(controller: &SupervisedController, plant: &Plant, ts: f64) -> Option<Servo> {
+    let settings = plant.settings().servo.as_ref()?;
+    let model = controller.controller().model().robot();
+    Servo::new(settings, model, ts, plant.settings().substep).ok()
 }
 
 /// The step failure behind a supervised controller's error (the loop sizes

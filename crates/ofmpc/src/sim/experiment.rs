@@ -8,10 +8,11 @@ use super::closed_loop::{
 use super::conditions::RunConditions;
 use super::metrics::{compute, judge_hold, RunMetrics};
 use super::outcome::{ExperimentError, RunFailure, RunOutcome, MAX_RECORD_VALUES};
-use super::plant::{Plant, PlantSettings};
+use super::plant::{Plant, PlantSettings, PlantSettingsError};
+use super::servo::ServoSettingsError;
 use crate::control::{
-    BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel, Mpc, MpcSettings,
-    ObserverSettings,
+    max_output_lead, BaselineSettings, BuildError, ControllerBuilder, ControllerKind, DriveModel,
+    Mpc, MpcSettings, ObserverSettings, OutputMode,
 };
 
 /// Poles of the state observer's error dynamics (per sample). Measured on
@@ -112,6 +113,17 @@ impl Experiment {
         self.loop_settings.validate()?;
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
+        check_servo_output(&self.plant, self.mpc.output)?;
+        if let Some(lead_s) = self
+            .output_lead_s()
+            .filter(|l| !(*l >= 0.0 && *l <= max_output_lead(self.mpc.horizon, ts) * (1.0 + 1e-12)))
+        {
+            let max_s = max_output_lead(self.mpc.horizon, ts);
+            return Err(ExperimentError::Build(BuildError::OutputLead {
+                lead_s,
+                max_s,
+            }));
+        }
         if let Some(m) = &self.plant.model {
             super::plant::check_plant_model(m, &self.robot)?;
         }
@@ -220,13 +232,25 @@ impl Experiment {
         )?)
     }
 
+    /// The controller's lead time: the tuning's, else — with a position or
+    /// velocity output — the servo interface's lag and smoothing
+    /// ([`super::ServoSettings::command_lead_s`]).
+    fn output_lead_s(&self) -> Option<f64> {
+        match (&self.plant.servo, self.mpc.output_lead_s) {
+            (Some(servo), None) if !self.mpc.output.is_torque() => Some(servo.command_lead_s()),
+            (_, lead) => lead,
+        }
+    }
+
     /// The controller `kind` of this experiment, built: the experiment's
     /// tuning, its baselines' gains, and an observer when the settings ask
     /// for one (with the plant's measurement delay).
     fn controller(&self, kind: ControllerKind) -> Result<Mpc, ExperimentError> {
         let observed = self.mpc.state_observer || self.mpc.delay_compensation;
+        let mut settings = self.mpc.clone();
+        settings.output_lead_s = self.output_lead_s();
         let mut builder = ControllerBuilder::new(kind, &self.robot)
-            .settings(self.mpc.clone())
+            .settings(settings)
             .accept_ineffective_settings();
         if kind.is_baseline() {
             builder = builder.baselines(self.baselines.clone());
@@ -244,6 +268,26 @@ impl Experiment {
             e => ExperimentError::Build(e),
         })
     }
+}
+
+/// The controller's `output` is what the plant's servo interface takes
+/// (torque without one).
+fn check_servo_output(plant: &PlantSettings, output: OutputMode) -> Result<(), PlantSettingsError> {
+    let interface = plant
+        .servo
+        .as_ref()
+        .map_or(OutputMode::Torque, |s| s.kind());
+    if interface == output {
+        return Ok(());
+    }
+    Err(match plant.servo {
+        Some(_) => ServoSettingsError::OutputMismatch {
+            interface,
+            controller: output,
+        },
+        None => ServoSettingsError::NoInterface { output },
+    }
+    .into())
 }
 
 #[cfg(test)]

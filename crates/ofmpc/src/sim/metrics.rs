@@ -180,6 +180,11 @@ pub(crate) fn judge_hold(
             m.reason
         );
     }
+    /// What the servo interface saw (`[plant.servo]`: cycles, missed
+    /// cycles, the longest run of them, `"ok"` or `"watchdog_trip"`);
+    /// absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo: Option<super::servo::ServoReport>,
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -314,6 +319,7 @@ pub fn compute(
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
         hold_error_pp_counts: None,
+        servo: rec.servo,
     }
 }
 

@@ -25,6 +25,7 @@ mod plant;
 mod recorder;
 mod repair;
 mod sensor;
+mod servo;
 mod settings_error;
 mod state;
 mod supervised;
@@ -39,6 +40,10 @@ pub use horizon::HorizonRecorder;
 pub use horizon::{HorizonSampling, PredictedHorizons};
 pub use recorder::{Record, Recorder, Sample};
 pub use sensor::Sensor;
+pub use servo::{
+    LateSteps, OnLate, Servo, ServoProfile, ServoReport, ServoSettings, ServoSettingsError,
+    ServoStatus,
+};
 pub use settings_error::LoopSettingsError;
 pub use state::JointState;
 pub use supervised::{

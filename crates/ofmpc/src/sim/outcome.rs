@@ -92,6 +92,14 @@ pub enum RunFailure {
         /// 0-based joint.
         joint: usize,
     },
+    /// The robot's servo interface tripped its watchdog: `misses`
+    /// consecutive interface cycles without a command
+    /// ([`super::ServoSettings`]'s `watchdog_misses`); the robot stops.
+    #[error("the robot's servo interface tripped its watchdog after {misses} consecutive missed cycles: the controller's commands came late")]
+    ServoWatchdog {
+        /// Consecutive missed cycles.
+        misses: u32,
+    },
     /// The caller asked the loop to stop ([`super::ClosedLoop::cancel_on`]): a user's
     /// Ctrl-C, not a fault of the run.
     #[error("interrupted")]

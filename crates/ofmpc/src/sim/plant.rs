@@ -3,6 +3,7 @@
 
 use super::actuator::Actuator;
 use super::faults::{Fault, FaultSchedule};
+use super::servo::{ServoSettings, ServoSettingsError};
 use super::state::JointState;
 use crate::dynamics::{forward_dynamics, forward_kinematics, Workspace};
 use crate::linalg::{rk4_second_order_step, RK4_WORK_PER_DOF};
@@ -63,6 +64,12 @@ pub struct PlantSettings {
     /// The plant's own drives file, likewise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub drives: Option<std::path::PathBuf>,
+    /// The robot's servo interface between the controller's command and
+    /// the drives' torque (`[plant.servo]`, [`super::ServoSettings`]);
+    /// `None` (default): the controller's torque reaches the drives as it
+    /// is, held over the period.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo: Option<ServoSettings>,
     /// The plant's own robot (joints matching the controllers' robot,
     /// [`check_plant_model`]); `None` = the controllers' robot.
     #[serde(skip)]
@@ -106,6 +113,7 @@ impl Default for PlantSettings {
             stribeck_velocity: DEFAULT_STRIBECK_VELOCITY,
             robot: None,
             drives: None,
+            servo: None,
             model: None,
         }
     }
@@ -230,6 +238,10 @@ pub enum PlantSettingsError {
         /// The controllers' robot's value.
         model: String,
     },
+    /// The servo interface's settings do not fit
+    /// ([`super::ServoSettings::validate_for`]).
+    #[error(transparent)]
+    Servo(#[from] ServoSettingsError),
     /// A noise level is negative or not finite.
     #[error("the {kind} is {value}: it must be finite and ≥ 0")]
     Noise {
@@ -369,7 +381,11 @@ impl PlantSettings {
     /// [`super::MAX_SUBSTEPS`]. Returns the number of substeps.
     pub fn validate_for(&self, n: usize, ts: f64) -> Result<usize, PlantSettingsError> {
         self.validate(n)?;
-        substeps(ts, self.substep)
+        let k = substeps(ts, self.substep)?;
+        if let Some(servo) = &self.servo {
+            servo.validate_for(ts, self.substep)?;
+        }
+        Ok(k)
     }
 
     /// The plant's robot for a controller whose model is `nominal`: its own
@@ -493,6 +509,9 @@ fn per_joint(v: &[f64], n: usize) -> Vec<f64> {
     }
 }
 
+/// The torque law of [`Plant::advance_with`]: `(substep, q, q̇, τ out)`.
+type SubstepDrive<'a> = dyn FnMut(usize, &[f64], &[f64], &mut [f64]) -> Result<(), PlantError> + 'a;
+
 /// The plant: state, model and effects. No allocation after construction.
 #[derive(Debug, Clone)]
 pub struct Plant {
@@ -508,6 +527,8 @@ pub struct Plant {
     t: f64,
     // The applied torque, the net torque (applied minus friction) and the RK4 scratch.
     tau: Vec<f64>,
+    /// The period's mean torque of [`Plant::advance_with`].
+    mean: Vec<f64>,
     net: Vec<f64>,
     rk4: Vec<f64>,
     backup: Vec<f64>,
@@ -556,6 +577,7 @@ impl Plant {
             qd: z.clone(),
             t: 0.0,
             tau: z.clone(),
+            mean: z.clone(),
             net: z.clone(),
             rk4: vec![0.0; RK4_WORK_PER_DOF * n],
             backup: vec![0.0; 2 * n],
@@ -576,6 +598,11 @@ impl Plant {
         &self.settings
     }
 
+    /// The integration substeps per control period.
+    pub fn substeps(&self) -> usize {
+        self.substeps
+    }
+
     /// The control period (s): how far [`Self::advance`] goes.
     pub fn period(&self) -> f64 {
         self.ts
@@ -589,7 +616,13 @@ impl Plant {
         if ts.to_bits() == self.ts.to_bits() {
             return Ok(());
         }
-        self.substeps = substeps(ts, self.settings.substep)?;
+        let k = substeps(ts, self.settings.substep)?;
+        if let Some(servo) = &self.settings.servo {
+            servo
+                .validate_for(ts, self.settings.substep)
+                .map_err(PlantSettingsError::from)?;
+        }
+        self.substeps = k;
         self.ts = ts;
         self.schedule.reschedule(&self.settings.faults, ts);
         Ok(())
@@ -704,6 +737,50 @@ impl Plant {
         }
         self.t += ts;
         self.steps += 1;
+        Ok(())
+    }
+
+    /// Advances the plant by one control period with the torque of each
+    /// substep given by `drive(i, q, q̇, τ)` (substep `i` of the period, the
+    /// true state at its start; `τ` held over the substep): a servo
+    /// interface's joint loop ([`super::Servo`]) running at the integration
+    /// substep. [`Self::applied_torque`] is then the period's mean torque.
+    /// An error (of `drive`, or a state that stops being finite) leaves the
+    /// state as it was. Allocation-free.
+    pub fn advance_with(&mut self, drive: &mut SubstepDrive<'_>) -> Result<(), PlantError> {
+        let n = self.q.len();
+        let steps = self.substeps;
+        let h = self.ts / steps as f64;
+        self.backup[..n].copy_from_slice(&self.q);
+        self.backup[n..].copy_from_slice(&self.qd);
+        self.mean.fill(0.0);
+        let r = self.drive_substeps(drive, steps, h);
+        if r.is_err() {
+            self.q.copy_from_slice(&self.backup[..n]);
+            self.qd.copy_from_slice(&self.backup[n..]);
+            return r;
+        }
+        self.tau.copy_from_slice(&self.mean);
+        self.t += self.ts;
+        self.steps += 1;
+        Ok(())
+    }
+
+    /// The substeps of [`Self::advance_with`].
+    fn drive_substeps(
+        &mut self,
+        drive: &mut SubstepDrive<'_>,
+        steps: usize,
+        h: f64,
+    ) -> Result<(), PlantError> {
+        for i in 0..steps {
+            drive(i, &self.q, &self.qd, &mut self.tau)?;
+            self.robot.check_vector("tau", &self.tau)?;
+            for (m, t) in self.mean.iter_mut().zip(&self.tau) {
+                *m += t / steps as f64;
+            }
+            self.integrate(1, h)?;
+        }
         Ok(())
     }
 

@@ -49,6 +49,8 @@ pub struct Record {
     /// What the controller predicted over its horizon at some samples, when the loop was
     /// asked to record it ([`super::RunConditions::horizons`]); `None` otherwise.
     pub horizons: Option<super::horizon::PredictedHorizons>,
+    /// What the servo interface saw (`[plant.servo]`); `None` without one.
+    pub servo: Option<super::servo::ServoReport>,
 }
 
 impl Record {
@@ -71,6 +73,7 @@ impl Record {
             saturated_samples: 0,
             max_torque_ratio: 0.0,
             horizons: None,
+            servo: None,
         }
     }
 

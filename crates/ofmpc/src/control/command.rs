@@ -1,0 +1,166 @@
+//! Command modes: what the controller hands to the robot's interface.
+//!
+//! Most arms do not take joint torque from outside. A torque interface
+//! (Franka's, KUKA's FRI torque overlay) takes [`OutputMode::Torque`]: the
+//! controller's `τ_k`. Interfaces that close their own joint loop (UR's
+//! `servoj`, ABB's EGM, KUKA's RSI) take a joint position and velocity
+//! ([`OutputMode::PositionVelocity`]) or a velocity
+//! ([`OutputMode::Velocity`]), and act on it some time later (their lag). For
+//! them the controller outputs the state **its own model predicted** one
+//! lead time `L` ahead (`[mpc] output_lead_s`, by default the interface's
+//! lag and smoothing): the interface's drive then reaches at `t_k + L` the
+//! point the controller planned for `t_k + L`, which compensates the lag
+//! from the prediction the step already made (`ŷ(k+i|k)`, `i = 1..N`, of
+//! [`Algorithm::predicted_outputs`](crate::control::Algorithm::predicted_outputs)):
+//! no second model, no allocation.
+//!
+//! The lead point is read off the predicted positions `ŷ_0 = q_k` (the
+//! state the step acted on), `ŷ_1, …, ŷ_N` by the quadratic through the
+//! three samples nearest `s = L/Ts` (`j = clamp(round(s), 1, N − 1)`,
+//! `u = s − j`):
+//!
+//! ```text
+//! q_cmd   = ŷ_j + u (ŷ_{j+1} − ŷ_{j−1})/2 + u²/2 (ŷ_{j+1} − 2ŷ_j + ŷ_{j−1})
+//! q̇_cmd   = [(ŷ_{j+1} − ŷ_{j−1})/2 + u (ŷ_{j+1} − 2ŷ_j + ŷ_{j−1})] / Ts
+//! q̈_cmd   = (ŷ_{j+1} − 2ŷ_j + ŷ_{j−1}) / Ts²
+//! ```
+//!
+//! so `L` may be any time from 0 to `(N − 1)·Ts` (refused beyond:
+//! [`BuildError::OutputLead`](crate::control::BuildError::OutputLead)). The
+//! acceleration is the feed-forward a drive's own loop adds; the torque
+//! `τ_k` stays in the output for interfaces that take it as feed-forward.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// What the controller's output drives (`[mpc] output`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum OutputMode {
+    /// Joint torque `τ_k` (the paper's, the default).
+    #[default]
+    Torque,
+    /// Joint position and velocity, one lead time ahead, with the
+    /// acceleration and the torque as feed-forward.
+    PositionVelocity,
+    /// Joint velocity one lead time ahead, with the acceleration and the
+    /// torque as feed-forward.
+    Velocity,
+}
+
+impl OutputMode {
+    /// Every mode, in the order of the documentation.
+    pub const ALL: [OutputMode; 3] = [
+        OutputMode::Torque,
+        OutputMode::PositionVelocity,
+        OutputMode::Velocity,
+    ];
+
+    /// `"torque"`, `"position_velocity"` or `"velocity"` (as in a scenario).
+    pub fn name(self) -> &'static str {
+        match self {
+            OutputMode::Torque => "torque",
+            OutputMode::PositionVelocity => "position_velocity",
+            OutputMode::Velocity => "velocity",
+        }
+    }
+
+    /// True for [`OutputMode::Torque`].
+    pub fn is_torque(self) -> bool {
+        self == OutputMode::Torque
+    }
+
+    /// Whether `self` is the default (for `skip_serializing_if`).
+    pub(crate) fn is_default(&self) -> bool {
+        self.is_torque()
+    }
+}
+
+impl fmt::Display for OutputMode {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The largest lead time for a horizon of `horizon` samples of `ts` (s):
+/// `(N − 1)·Ts` (the quadratic needs the sample after the lead point).
+pub(crate) fn max_output_lead(horizon: usize, ts: f64) -> f64 {
+    horizon.saturating_sub(1) as f64 * ts
+}
+
+/// The command one lead time ahead from the predicted positions: fills
+/// `q`, `qd`, `qdd` (n each) from `now` (`ŷ_0`, n values) and `predicted`
+/// (`ŷ_1..ŷ_N`, N·n values), `lead_s` ahead at the period `ts`. Allocation
+/// free; `N ≥ 2` (the builder checks it through the lead's bound).
+pub(crate) fn lead_point(
+    now: &[f64],
+    predicted: &[f64],
+    lead_s: f64,
+    ts: f64,
+    cmd: [&mut [f64]; 3],
+) {
+    let n = now.len();
+    let horizon = predicted.len() / n.max(1);
+    let s = lead_s / ts;
+    let j = (s.round() as usize).clamp(1, horizon.saturating_sub(1).max(1));
+    let u = s - j as f64;
+    let y = |i: usize, joint: usize| {
+        if i == 0 {
+            now[joint]
+        } else {
+            predicted
+                .get((i - 1) * n + joint)
+                .copied()
+                .unwrap_or(now[joint])
+        }
+    };
+    let [q, qd, qdd] = cmd;
+    for i in 0..n {
+        let (ym, y0, yp) = (y(j - 1, i), y(j, i), y(j + 1, i));
+        let slope = 0.5 * (yp - ym);
+        let curve = yp - 2.0 * y0 + ym;
+        q[i] = y0 + u * slope + 0.5 * u * u * curve;
+        qd[i] = (slope + u * curve) / ts;
+        qdd[i] = curve / (ts * ts);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// On a predicted parabola `y(t) = a + b t + c t²` the lead point is
+    /// exact at any lead (on the grid and between), for position, velocity
+    /// and acceleration.
+    #[test]
+    fn lead_point_is_exact_on_a_parabola() {
+        let (ts, horizon) = (0.01, 10);
+        let f = |t: f64| 0.3 + 1.5 * t - 4.0 * t * t;
+        let now = [f(0.0)];
+        let predicted: Vec<f64> = (1..=horizon).map(|i| f(i as f64 * ts)).collect();
+        for lead in [0.0, 0.002, 0.0137, 0.04, 0.065, 0.09] {
+            let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
+            lead_point(&now, &predicted, lead, ts, [&mut q, &mut qd, &mut qdd]);
+            assert!(
+                (q[0] - f(lead)).abs() < 1e-12,
+                "lead {lead}: {} vs {}",
+                q[0],
+                f(lead)
+            );
+            assert!((qd[0] - (1.5 - 8.0 * lead)).abs() < 1e-9, "lead {lead}");
+            assert!((qdd[0] + 8.0).abs() < 1e-6, "lead {lead}");
+        }
+        assert!((max_output_lead(horizon, ts) - 0.09).abs() < 1e-15);
+    }
+
+    #[test]
+    fn names_round_trip() {
+        for m in OutputMode::ALL {
+            let toml = format!("\"{}\"", m.name());
+            let back: OutputMode = serde_json::from_str(&toml).unwrap();
+            assert_eq!(back, m);
+        }
+        assert_eq!(OutputMode::default(), OutputMode::Torque);
+    }
+}

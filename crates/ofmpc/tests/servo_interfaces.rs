@@ -1,0 +1,316 @@
+//! The command modes against the simulated servo interfaces (issue 37):
+//! each vendor profile in closed loop against a payload the controller does
+//! not know (offset-free hold, RMS against the torque mode's), the missed
+//! deadlines (hold, extrapolate, the watchdog's trip), and the settings
+//! refused with typed errors.
+
+mod common;
+
+use ofmpc::control::{
+    BuildError, ControllerBuilder, ControllerKind, MpcSettings, OutputMode, Weight,
+};
+use ofmpc::robot::{Payload, Robot};
+use ofmpc::sim::{
+    Experiment, ExperimentError, LateSteps, OnLate, PlantError, PlantSettingsError, RunFailure,
+    RunMetrics, RunOutcome, RunStatus, Servo, ServoProfile, ServoSettings, ServoSettingsError,
+    ServoStatus,
+};
+
+/// The paper's path on the IRB 140 with `q_du` (the paper's 1e-5 is too
+/// aggressive for a 40 ms lag or a 100 Hz torque low-pass at Ts = 10 ms),
+/// the interface `servo` (`None`: torque straight to the plant).
+fn experiment(q_du: f64, servo: Option<ServoSettings>) -> Experiment {
+    let robot = Robot::irb140();
+    let reference = common::paper_reference(&robot);
+    let output = servo.as_ref().map_or(OutputMode::Torque, |s| s.kind());
+    let mut e = Experiment {
+        robot,
+        reference,
+        mpc: MpcSettings {
+            q_du: Weight::Scalar(q_du),
+            output,
+            ..Default::default()
+        },
+        plant: Default::default(),
+        loop_settings: Default::default(),
+        conditions: Default::default(),
+        baselines: Default::default(),
+    };
+    e.plant.servo = servo;
+    e
+}
+
+fn run(e: &Experiment, kind: ControllerKind, mass: f64) -> (RunOutcome, RunMetrics) {
+    let (r, m) = e
+        .run(kind, &Payload::point_mass(mass), &mut |_, _| {})
+        .unwrap();
+    (r.outcome, m)
+}
+
+/// Each profile against a payload the controller does not know, the
+/// second algorithm and its adaptive variant: the run completes, the hold
+/// is offset-free (the vendor's joint loop has integral action and the
+/// controller's command converges to the reference), every cycle was on
+/// time, and the Cartesian RMS is within a bound of the torque mode's with
+/// the same tuning — measured (docs/guide/tutorials/command-modes.md):
+/// against the second algorithm franka-torque 1.2×, abb-egm 1.25×,
+/// ur-servoj 2.3× (kuka-rsi 37× at 0.25 kg and Q_Δu = 1e-5); against the
+/// adaptive variant, whose torque mode tracks to 2 µm, the position
+/// interfaces' own joint loop (unaware of the payload) stays at 0.04–0.1 mm:
+/// 24–270×.
+/// The paper's `Q_Δu = 1e-5` diverges at 2 kg in torque mode and against a
+/// 40 ms lag: the cases use 1e-3 except kuka-rsi (1e-5 at 0.25 kg; at
+/// 1e-3 its hold settles only to 4e-6 rad in 2 s). ur-servoj's hold
+/// settles to ≈ 5e-9 rad in the 2 s hold (bound 1e-8).
+#[test]
+fn each_profile_tracks_an_unknown_payload() {
+    let ur = ServoSettings {
+        gain: Some(2000.0),
+        ..ServoSettings::profile(ServoProfile::UrServoj)
+    };
+    let cases = [
+        (
+            ServoSettings::profile(ServoProfile::FrankaTorque),
+            1e-3,
+            2.0,
+            1e-9,
+            [1.5, 1.5],
+        ),
+        (
+            ServoSettings::profile(ServoProfile::KukaRsi),
+            1e-5,
+            0.25,
+            1e-9,
+            [50.0, 350.0],
+        ),
+        (
+            ServoSettings::profile(ServoProfile::AbbEgm),
+            1e-3,
+            2.0,
+            1e-9,
+            [1.6, 32.0],
+        ),
+        (ur, 1e-3, 2.0, 1e-8, [3.0, 55.0]),
+    ];
+    for (servo, q_du, mass, steady_max, ratio_max) in cases {
+        let kinds = [ControllerKind::Second, ControllerKind::SecondAdaptive];
+        for (kind, ratio_max) in kinds.into_iter().zip(ratio_max) {
+            let (_, torque) = run(&experiment(q_du, None), kind, mass);
+            let profile = servo.profile;
+            let (outcome, m) = run(&experiment(q_du, Some(servo.clone())), kind, mass);
+            assert!(outcome.is_completed(), "{profile} {kind:?}: {outcome}");
+            let steady = common::experiment::steady(&m);
+            assert!(
+                steady <= steady_max,
+                "{profile} {kind:?}: steady {steady:e}"
+            );
+            let ratio = m.cartesian_error_rms_mm / torque.cartesian_error_rms_mm;
+            assert!(ratio <= ratio_max, "{profile} {kind:?}: RMS ratio {ratio}");
+            let report = m.servo.unwrap();
+            assert_eq!((report.misses, report.status), (0, ServoStatus::Ok));
+            assert!(report.cycles > 0);
+        }
+    }
+}
+
+/// The stage itself on missed cycles: a fresh command is streamed along
+/// its prediction; a late period holds the last setpoint (at rest) or
+/// extrapolates it, and the watchdog trips at exactly `watchdog_misses`
+/// consecutive misses.
+#[test]
+fn hold_extrapolate_and_fault_on_missed_cycles() {
+    let robot = Robot::irb140();
+    let (ts, h) = (0.01, 1e-3);
+    let q0 = [0.1, 0.2, -0.1, 0.0, 0.3, 0.0];
+    let qd = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let zero = [0.0; 6];
+    let mut tau = [0.0; 6];
+    let period = |servo: &mut Servo, late: bool, tau: &mut [f64]| {
+        servo.receive(&zero, &q0, &qd, &zero, late);
+        for i in 0..10 {
+            servo.drive(i, &q0, &zero, tau, h).unwrap();
+        }
+        servo.setpoint()[0]
+    };
+    for on_late in [OnLate::Hold, OnLate::Extrapolate, OnLate::Fault] {
+        let settings = ServoSettings {
+            period_s: Some(0.002),
+            on_late: Some(on_late),
+            watchdog_misses: Some(7),
+            ..ServoSettings::profile(ServoProfile::KukaRsi)
+        };
+        let mut servo = Servo::new(&settings, &robot, ts, h).unwrap();
+        servo.start(&q0).unwrap();
+        // On time: cycles at 0, 2, …, 8 ms along q̇ = 1 rad/s.
+        let on_time = period(&mut servo, false, &mut tau);
+        assert!((on_time - (0.1 + 0.008)).abs() < 1e-15, "{on_time}");
+        // Late: five missed cycles.
+        let late = period(&mut servo, true, &mut tau);
+        let expected = match on_late {
+            OnLate::Extrapolate => 0.108 + 5.0 * 0.002,
+            _ => 0.108,
+        };
+        assert!((late - expected).abs() < 1e-15, "{on_late:?}: {late}");
+        assert_eq!(servo.report().misses, 5);
+        assert!(!servo.tripped());
+        // Two more misses: seven in a row trip the watchdog.
+        servo.receive(&zero, &q0, &qd, &zero, true);
+        servo.drive(0, &q0, &zero, &mut tau, h).unwrap();
+        assert!(!servo.tripped());
+        for i in 1..3 {
+            servo.drive(i, &q0, &zero, &mut tau, h).unwrap();
+        }
+        assert!(servo.tripped(), "{on_late:?}");
+        assert_eq!(servo.report().status, ServoStatus::WatchdogTrip);
+        assert_eq!(servo.report().max_consecutive_misses, 7);
+    }
+}
+
+/// Injected late steps in closed loop: with `hold` and no watchdog the run
+/// completes and counts the missed cycles (5 late steps of 10 ms at 4 ms:
+/// 12 or 13 cycles); with the watchdog at 10 cycles it ends the run as a
+/// typed watchdog failure, recorded in the metrics.
+#[test]
+fn injected_late_steps_hold_or_trip_the_watchdog() {
+    let late = vec![LateSteps {
+        t: 1.0,
+        duration_s: 0.05,
+    }];
+    let hold = ServoSettings {
+        on_late: Some(OnLate::Hold),
+        watchdog_misses: Some(0),
+        late: late.clone(),
+        ..ServoSettings::profile(ServoProfile::KukaRsi)
+    };
+    let (outcome, m) = run(&experiment(1e-5, Some(hold)), ControllerKind::Second, 0.25);
+    assert!(outcome.is_completed(), "{outcome}");
+    let report = m.servo.unwrap();
+    assert!((12..=13).contains(&report.misses), "{report:?}");
+    assert_eq!(report.status, ServoStatus::Ok);
+    let fault = ServoSettings {
+        on_late: Some(OnLate::Fault),
+        watchdog_misses: Some(10),
+        late,
+        ..ServoSettings::profile(ServoProfile::KukaRsi)
+    };
+    let (outcome, m) = run(&experiment(1e-5, Some(fault)), ControllerKind::Second, 0.25);
+    match outcome {
+        RunOutcome::Failed {
+            t,
+            cause: RunFailure::ServoWatchdog { misses },
+        } => {
+            assert_eq!(misses, 10);
+            assert!((1.0..1.06).contains(&t), "{t}");
+        }
+        o => panic!("{o}"),
+    }
+    assert_eq!(m.status, RunStatus::Failed);
+    assert_eq!(m.servo.unwrap().status, ServoStatus::WatchdogTrip);
+    let json = serde_json::to_value(&m).unwrap();
+    assert_eq!(json["servo"]["status"], "watchdog_trip");
+}
+
+/// Settings that cannot work are refused, each with its typed error.
+#[test]
+fn settings_that_cannot_work_are_refused() {
+    let refused = |s: ServoSettings| s.validate_for(0.01, 1e-3).unwrap_err();
+    let kuka = ServoSettings::profile(ServoProfile::KukaRsi);
+    assert_eq!(
+        refused(ServoSettings {
+            on_late: Some(OnLate::Fault),
+            watchdog_misses: Some(0),
+            ..kuka.clone()
+        }),
+        ServoSettingsError::FaultWithoutWatchdog
+    );
+    assert!(matches!(
+        refused(ServoSettings {
+            period_s: Some(0.0025),
+            ..kuka.clone()
+        }),
+        ServoSettingsError::Multiple { .. }
+    ));
+    assert!(matches!(
+        refused(ServoSettings {
+            lag_s: Some(0.005),
+            ..kuka.clone()
+        }),
+        ServoSettingsError::Multiple { .. }
+    ));
+    assert!(matches!(
+        refused(ServoSettings {
+            gain: Some(1e6),
+            ..kuka.clone()
+        }),
+        ServoSettingsError::LoopTooFast { .. }
+    ));
+    assert!(matches!(
+        refused(ServoSettings {
+            period_s: Some(-1.0),
+            ..kuka.clone()
+        }),
+        ServoSettingsError::Value {
+            key: "period_s",
+            ..
+        }
+    ));
+    assert!(matches!(
+        refused(ServoSettings {
+            gain: Some(300.0),
+            ..ServoSettings::profile(ServoProfile::FrankaTorque)
+        }),
+        ServoSettingsError::Unused { key: "gain", .. }
+    ));
+    // The controller's output must be what the interface takes.
+    let mut e = experiment(1e-3, Some(kuka));
+    e.mpc.output = OutputMode::Torque;
+    let err = e.validate().unwrap_err();
+    assert!(
+        matches!(
+            err,
+            ExperimentError::Plant(PlantError::Settings(PlantSettingsError::Servo(
+                ServoSettingsError::OutputMismatch { .. }
+            )))
+        ),
+        "{err:?}"
+    );
+    let mut e = experiment(1e-3, None);
+    e.mpc.output = OutputMode::PositionVelocity;
+    assert!(matches!(
+        e.validate().unwrap_err(),
+        ExperimentError::Plant(PlantError::Settings(PlantSettingsError::Servo(
+            ServoSettingsError::NoInterface { .. }
+        )))
+    ));
+    // The builder: a baseline predicts nothing; the lead must fit the horizon.
+    let robot = Robot::irb140();
+    let pv = |lead: Option<f64>| MpcSettings {
+        output: OutputMode::PositionVelocity,
+        output_lead_s: lead,
+        ..Default::default()
+    };
+    let build = |kind, s| ControllerBuilder::new(kind, &robot).settings(s).build();
+    assert!(matches!(
+        build(ControllerKind::Pid, pv(None)).unwrap_err(),
+        BuildError::OutputWithoutPrediction { .. }
+    ));
+    assert!(matches!(
+        build(ControllerKind::Second, pv(Some(0.2))).unwrap_err(),
+        BuildError::OutputLead { .. }
+    ));
+    let torque_with_lead = MpcSettings {
+        output_lead_s: Some(0.01),
+        ..Default::default()
+    };
+    assert!(matches!(
+        build(ControllerKind::Second, torque_with_lead).unwrap_err(),
+        BuildError::OutputLead { .. }
+    ));
+    for kind in [
+        ControllerKind::Usual,
+        ControllerKind::First,
+        ControllerKind::Second,
+    ] {
+        assert!(build(kind, pv(Some(0.09))).is_ok(), "{kind:?}");
+    }
+}
