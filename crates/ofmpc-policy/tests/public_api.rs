@@ -21,8 +21,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 /// Most items rustdoc's "all items" page may list: a ratchet at today's count (312 before
-/// issue 34's curation; its target, 160, is not reached yet: lower this as items go).
-const MAX_ITEMS: usize = 187;
+/// issue 34's curation; its target, 160, is not reached yet: lower this as items go;
+/// issue 37 added the step telemetry, `FallbackLevel` and `StepTelemetry`).
+const MAX_ITEMS: usize = 189;
 
 /// Names that two distinct items carry at two public paths (reviewed: not one item twice).
 const DISTINCT_SAME_NAME: &[&str] = &[];

@@ -8,6 +8,7 @@ use crate::control::mpc::model::TermsError;
 use crate::control::mpc::zoh::ZohError;
 use crate::control::solvers::constrained::QpStatus;
 use crate::control::solvers::lsq::LsqError;
+use crate::control::telemetry::StepTelemetry;
 
 /// Diagnostics of one successful control step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -217,4 +218,7 @@ pub struct StepOutput {
     /// The numerical outcome of the step: solved, QP at its iteration cap,
     /// or failed with the last torque held ([`StepStatus`]).
     pub status: StepStatus,
+    /// Where the step's time went, what the QP did and which fallback the
+    /// step took ([`StepTelemetry`]).
+    pub telemetry: StepTelemetry,
 }

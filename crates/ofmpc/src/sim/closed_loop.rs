@@ -11,6 +11,7 @@ use super::sensor::Sensor;
 use super::settings_error::LoopSettingsError;
 use super::supervised::{SupervisedController, SupervisedError, SupervisedInput, SupervisedStatus};
 use super::supervisor::{DivergenceRule, SupervisorSettings};
+use super::telemetry::TelemetrySample;
 use crate::control::{Controller, StepFailure};
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
@@ -552,6 +553,7 @@ impl<'a> ClosedLoop<'a> {
     /// One sample `k` of the path or the hold. `Ok(Some(j))`: a safe stop
     /// began, counted from sample `j`; `Err`: the run ends.
     fn sample(&mut self, k: usize, rec: &mut Recorder) -> Result<Option<usize>, Ended> {
+        let loop_start = Instant::now();
         let ts = self.reference.ts();
         let t = k as f64 * ts;
         let n = self.reference.dof();
@@ -581,6 +583,7 @@ impl<'a> ClosedLoop<'a> {
                 h.observe(k, |y| controller.predicted_outputs(y));
             }
         }
+        rec.telemetry(&TelemetrySample::of(self.controller.step_output()));
         rec.loading(self.actuator.account(self.controller.torque()));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
         let status = status.map_err(|e| failed(RunFailure::Controller(step_failure(e))))?;
@@ -597,6 +600,7 @@ impl<'a> ClosedLoop<'a> {
             step_us,
             payload_mass_est: self.controller.payload_estimate(),
         });
+        rec.loop_time(loop_start.elapsed().as_secs_f64() * 1e6);
         match status {
             SupervisedStatus::NonFiniteError { joint } => {
                 Err(failed(RunFailure::NonFiniteError { joint }))

@@ -3,6 +3,7 @@
 
 use super::outcome::{RunOutcome, RunStatus};
 use super::recorder::Record;
+use super::telemetry::{FallbackCounts, LoopTelemetry, Percentiles, TelemetryMetrics};
 use serde::Serialize;
 
 /// Median, 99th percentile and maximum of the controller's step time (µs),
@@ -96,6 +97,37 @@ pub struct RunMetrics {
     /// Largest change of the applied torque between two samples,
     /// `max_{k,i} |τ_{k,i} − τ_{k−1,i}|` (N·m; NaN with fewer than two samples).
     pub torque_step_max_nm: f64,
+    /// The loop's telemetry: QP iterations, model and loop times (p50,
+    /// p99, max), loop deadline misses, steps per fallback level, budget
+    /// hits.
+    pub telemetry: TelemetryMetrics,
+}
+
+/// Median, 99th percentile and maximum of `v` (NaN when empty).
+pub fn percentiles(v: &[f64]) -> Percentiles {
+    Percentiles {
+        p50: quantile(v, 0.5),
+        p99: quantile(v, 0.99),
+        max: v.iter().copied().fold(f64::NAN, f64::max),
+    }
+}
+
+/// The telemetry summary of `t` for a loop of sampling period `ts` (s).
+pub fn telemetry_metrics(t: &LoopTelemetry, ts: f64) -> TelemetryMetrics {
+    let f = t.fallback_steps;
+    TelemetryMetrics {
+        qp_iterations: percentiles(&t.qp_iterations),
+        model_time_us: percentiles(&t.model_us),
+        loop_time_us: percentiles(&t.loop_us),
+        loop_deadline_misses: deadline_misses(&t.loop_us, ts),
+        fallback_steps: FallbackCounts {
+            none: f[0],
+            best_feasible: f[1],
+            shifted_plan: f[2],
+            hold: f[3],
+        },
+        budget_hits: t.budget_hits,
+    }
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -229,6 +261,7 @@ pub fn compute(
         saturated_samples: rec.saturated_samples,
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
+        telemetry: telemetry_metrics(&rec.telemetry, sample_period(&rec.t)),
     }
 }
 

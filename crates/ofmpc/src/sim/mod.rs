@@ -29,6 +29,7 @@ mod settings_error;
 mod state;
 mod supervised;
 mod supervisor;
+mod telemetry;
 
 pub use actuator::Actuator;
 #[doc(hidden)]
@@ -62,3 +63,5 @@ pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, Plant
 pub use supervisor::{DivergenceRule, StopReason, SupervisorSettings};
 #[doc(hidden)]
 pub use supervisor::{Stopping, Supervisor, MAX_REJECTED};
+#[doc(hidden)]
+pub use telemetry::{FallbackCounts, LoopTelemetry, Percentiles, TelemetryMetrics};

@@ -1,6 +1,7 @@
 //! The recorder stage: what a run keeps of each sample.
 
 use super::actuator::Loading;
+use super::telemetry::{LoopTelemetry, TelemetrySample};
 
 /// The recorded time series of one run. Row `k` holds the plant's true state
 /// at `t_k`, what the controller was given as its measurement when that
@@ -49,6 +50,8 @@ pub struct Record {
     /// What the controller predicted over its horizon at some samples, when the loop was
     /// asked to record it ([`super::RunConditions::horizons`]); `None` otherwise.
     pub horizons: Option<super::horizon::PredictedHorizons>,
+    /// The loop's per-sample telemetry ([`LoopTelemetry`]).
+    pub telemetry: LoopTelemetry,
 }
 
 impl Record {
@@ -71,6 +74,7 @@ impl Record {
             saturated_samples: 0,
             max_torque_ratio: 0.0,
             horizons: None,
+            telemetry: LoopTelemetry::with_capacity(capacity),
         }
     }
 
@@ -183,6 +187,16 @@ impl Recorder {
         if let Some(m) = s.payload_mass_est {
             r.payload_mass_est.push(m);
         }
+    }
+
+    /// Appends one controller step's telemetry.
+    pub(crate) fn telemetry(&mut self, s: &TelemetrySample) {
+        self.record.telemetry.push(s);
+    }
+
+    /// Appends one loop iteration's wall time (µs).
+    pub fn loop_time(&mut self, us: f64) {
+        self.record.telemetry.push_loop(us);
     }
 
     /// What was recorded so far.

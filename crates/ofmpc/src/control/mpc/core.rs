@@ -74,6 +74,12 @@ pub(crate) trait ControllerCore {
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
+    /// Time the last step spent on the model (`None`: not timed).
+    fn model_time(&self) -> Option<std::time::Duration> {
+        None
+    }
+    /// [`crate::control::Algorithm::set_check_budget`] (no QP: nothing).
+    fn set_check_budget(&mut self, _checks: Option<u32>) {}
     /// [`Algorithm::predicted_outputs`](crate::control::Algorithm::predicted_outputs)
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
@@ -141,6 +147,17 @@ macro_rules! impl_controller {
                 <$core as $crate::control::mpc::core::ControllerCore>::qp_status(&self.core)
             }
 
+            fn model_time(&self) -> Option<std::time::Duration> {
+                <$core as $crate::control::mpc::core::ControllerCore>::model_time(&self.core)
+            }
+
+            fn set_check_budget(&mut self, checks: Option<u32>) {
+                <$core as $crate::control::mpc::core::ControllerCore>::set_check_budget(
+                    &mut self.core,
+                    checks,
+                )
+            }
+
             fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
                 <$core as $crate::control::mpc::core::ControllerCore>::predicted_outputs(
                     &mut self.core,
@@ -186,6 +203,12 @@ impl ControllerCore for Core {
     }
     fn qp_status(&self) -> Option<QpStatus> {
         Core::qp_status(self)
+    }
+    fn model_time(&self) -> Option<std::time::Duration> {
+        Some(Core::model_time(self))
+    }
+    fn set_check_budget(&mut self, checks: Option<u32>) {
+        Core::set_check_budget(self, checks)
     }
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         Core::predicted_outputs(self, out).is_ok()
@@ -318,6 +341,8 @@ pub(crate) struct Core {
     pub(super) y_err: Vec<f64>,
     /// Work of [`Core::predicted_outputs`].
     predicted_work: Vec<f64>,
+    /// Time the last step spent in [`Core::prepare`].
+    model_time: std::time::Duration,
 }
 
 /// The per-algorithm part of one step of a paper controller: what it
@@ -357,7 +382,12 @@ impl Core {
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
         let (x, w_k, preview) = input;
+        let start = std::time::Instant::now();
+        if let Some(qp) = self.qp.as_mut() {
+            qp.arm(start, self.settings.step_budget_us);
+        }
         self.prepare(model, x, w_k, preview, tau.len())?;
+        self.model_time = start.elapsed();
         targets.begin(self, x, w_k, preview);
         let info = if self.backend.stage_mut().is_some() {
             targets.stage_targets(self, x, preview)?;
@@ -464,6 +494,7 @@ impl Core {
             y_err: vec![0.0; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             predicted_work: vec![0.0; predicted_outputs_work(n)],
+            model_time: std::time::Duration::ZERO,
         })
     }
 
@@ -495,6 +526,19 @@ impl Core {
     /// What the torque-limit QP did at the last step (`None` without limits).
     pub fn qp_status(&self) -> Option<QpStatus> {
         self.qp.as_ref().map(|q| q.status)
+    }
+
+    /// Time the last step spent on the model (terms, ZOH, predictions).
+    pub fn model_time(&self) -> std::time::Duration {
+        self.model_time
+    }
+
+    /// The torque-limit QP's budget in deadline checks (tests;
+    /// `TorqueLimitQp::set_check_budget`); no effect without torque limits.
+    pub fn set_check_budget(&mut self, checks: Option<u32>) {
+        if let Some(qp) = self.qp.as_mut() {
+            qp.set_check_budget(checks);
+        }
     }
 
     /// The outputs the controller predicted at its last successful step,

@@ -42,7 +42,9 @@
 use crate::control::mpc::model::LinearLikeModel;
 use crate::control::solvers::dense::dot;
 use crate::control::solvers::lsq::LsqWorkspace;
+use crate::control::telemetry::FallbackLevel;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
+use std::time::Instant;
 
 /// Relative margin kept inside the limits so that rounding in `τ = H u + g`
 /// never crosses them.
@@ -58,6 +60,19 @@ pub struct QpStatus {
     /// The iteration bound was reached (or a factorization failed): the
     /// returned input is feasible but not optimal.
     pub fallback: bool,
+    /// Box constraints active at the returned answer.
+    pub active_constraints: u32,
+    /// The step budget ran out before the QP converged: the answer is its
+    /// best feasible point so far (`fallback` is set too).
+    pub budget_hit: bool,
+    /// Which answer the QP returned: [`FallbackLevel::None`] (its optimum,
+    /// or the unconstrained plan when it did not run),
+    /// [`FallbackLevel::BestFeasible`] (stopped at its iteration cap or the
+    /// deadline), [`FallbackLevel::ShiftedPlan`] (the deadline passed before
+    /// its first iteration: the previous step's torque plan, one sample on,
+    /// within the limits) or [`FallbackLevel::Hold`] (no plan left: its last
+    /// torque held, within the limits).
+    pub fallback_level: FallbackLevel,
 }
 
 /// Preallocated workspace of the constrained step for `n` joints, horizon `N`,
@@ -86,6 +101,17 @@ pub(crate) struct TorqueLimitQp {
     pub saturated: Vec<bool>,
     /// What the last step did.
     pub status: QpStatus,
+    /// The step's deadline ([`Self::arm`] before each step).
+    deadline: Deadline,
+    /// A budget counted in deadline checks instead of µs, for tests
+    /// ([`Self::arm`]).
+    check_budget: Option<u32>,
+    /// With a deadline: the torque plan `τ_{k+j}` of the last step that
+    /// made one (natural order, block `j`), for the shifted-plan fallback.
+    plan: Vec<f64>,
+    /// Samples since `plan` was made (its block `plan_age` is the torque
+    /// last returned); `None`: no plan yet.
+    plan_age: Option<usize>,
 }
 
 impl TorqueLimitQp {
@@ -112,7 +138,81 @@ impl TorqueLimitQp {
             u_seq: vec![0.0; p],
             saturated: vec![false; n],
             status: QpStatus::default(),
+            deadline: Deadline::Never,
+            check_budget: None,
+            plan: vec![0.0; p],
+            plan_age: None,
         }
+    }
+
+    /// Sets the deadline of a step that began at `start` with a budget of
+    /// `budget_us` (`None`: none), or the check budget when one is set.
+    pub fn arm(&mut self, start: Instant, budget_us: Option<f64>) {
+        self.deadline = match (self.check_budget, budget_us) {
+            (Some(checks), _) => Deadline::Checks(checks),
+            (None, Some(b)) => Deadline::At(start + std::time::Duration::from_secs_f64(b * 1e-6)),
+            (None, None) => Deadline::Never,
+        };
+    }
+
+    /// Counts the budget in deadline checks (`None`: in µs again): each
+    /// check before a horizon block of the QP's build, a column of its
+    /// Hessian or an iteration spends one; deterministic, for tests.
+    pub fn set_check_budget(&mut self, checks: Option<u32>) {
+        self.check_budget = checks;
+    }
+
+    /// Whether the step's deadline has passed (never without one).
+    #[inline]
+    fn spent(&mut self) -> bool {
+        self.deadline.spent()
+    }
+
+    /// With a deadline, keeps the plan `τ_{k+j} = z_j + g` (the `z` of
+    /// [`Self::plan_torques`] when `permuted` is false, of the QP's layout
+    /// otherwise) for a later shifted-plan fallback.
+    fn keep_plan(&mut self, g: &[f64], permuted: bool) {
+        if matches!(self.deadline, Deadline::Never) {
+            return;
+        }
+        let (n, nh) = (self.n, self.nh);
+        for j in 0..nh {
+            for i in 0..n {
+                let k = if permuted { self.col(j, i) } else { j * n + i };
+                self.plan[j * n + i] = self.z[k] + g[i];
+            }
+        }
+        self.plan_age = Some(0);
+    }
+
+    /// The budget fallback when the deadline passed before the QP's first
+    /// iteration: the kept plan one sample on
+    /// ([`FallbackLevel::ShiftedPlan`]) or, at its end or without one, its
+    /// last torque ([`FallbackLevel::Hold`]; gravity compensation before
+    /// any plan), clamped into the limits, as `u_k` into `u_new`.
+    fn fall_back(&mut self, model: &LinearLikeModel, u_new: &mut [f64]) {
+        let n = self.n;
+        let g = model.g().as_slice();
+        let (level, age) = match self.plan_age {
+            Some(a) if a + 1 < self.nh => (FallbackLevel::ShiftedPlan, Some(a + 1)),
+            a => (FallbackLevel::Hold, a),
+        };
+        self.plan_age = age;
+        for i in 0..n {
+            let lim = self.tau_max[i] * (1.0 - MARGIN);
+            let tau = age.map_or(g[i], |a| self.plan[a * n + i]);
+            let tau = if lim.is_finite() {
+                tau.clamp(-lim, lim)
+            } else {
+                tau
+            };
+            u_new[i] = tau - g[i];
+            self.saturated[i] = lim.is_finite() && tau.abs() >= lim;
+        }
+        model.solve_h_in_place(u_new);
+        self.status.fallback = true;
+        self.status.budget_hit = true;
+        self.status.fallback_level = level;
     }
 
     /// The limits `τmax` (n values).
@@ -182,31 +282,14 @@ impl TorqueLimitQp {
         self.saturated.fill(false);
     }
 
-    /// Checks the unconstrained solution of the solved least-squares system
-    /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
-    /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`
-    /// and writes the constrained `u_k` into `u_new`. `u_prev` is `u_{k−1}`
-    /// (incremental algorithms). Allocation-free.
-    pub fn enforce(
-        &mut self,
-        model: &LinearLikeModel,
-        lsq: &LsqWorkspace,
-        u_prev: &[f64],
-        u_new: &mut [f64],
-    ) {
+    /// The QP of [`Self::enforce`] from `lsq`'s factor: `B = R1 T`,
+    /// `b' = c1 − R1 e`, `P = BᵀB`, `c = Bᵀb'`. `false` (and the QP not
+    /// built) when the step's deadline passes on the way (checked per
+    /// horizon block and per column of `P`).
+    fn build(&mut self, model: &LinearLikeModel, lsq: &LsqWorkspace, u_prev: &[f64]) -> bool {
         let (n, nh) = (self.n, self.nh);
         let p = n * nh;
         let m = p;
-        let sol = lsq.solution();
-        self.status = QpStatus::default();
-        self.saturated.fill(false);
-        // u_{k+j} and H u_{k+j} over the horizon from the unconstrained solution.
-        let violated = self.plan_torques(model, u_prev, |j, i| sol[(nh - 1 - j) * n + i]);
-        let g = model.g().as_slice();
-        if !violated {
-            return;
-        }
-        self.status.active = true;
         // H⁻¹ column by column.
         self.hinv.fill(0.0);
         for c in 0..n {
@@ -219,6 +302,9 @@ impl TorqueLimitQp {
         // non-zero in rows 0..=d only.
         let col = |j: usize, i: usize| (nh - 1 - j) * n + i;
         for j in 0..nh {
+            if self.spent() {
+                return false;
+            }
             for c in 0..n {
                 let bc = col(j, c);
                 let out = &mut self.bz[bc * m..bc * m + m];
@@ -250,6 +336,9 @@ impl TorqueLimitQp {
         // below row n·t' (upper triangular).
         let end = |c: usize| n * (c / n + 1);
         for c1 in 0..p {
+            if self.spent() {
+                return false;
+            }
             let b1 = &self.bz[c1 * m..c1 * m + end(c1)];
             for c2 in c1..p {
                 let len = end(c1).min(end(c2));
@@ -259,6 +348,38 @@ impl TorqueLimitQp {
                 self.hess[c1 * p + c2] = s;
             }
             self.lin[c1] = dot(b1, &self.b);
+        }
+        true
+    }
+
+    /// Checks the unconstrained solution of the solved least-squares system
+    /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
+    /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`
+    /// and writes the constrained `u_k` into `u_new`. `u_prev` is `u_{k−1}`
+    /// (incremental algorithms). Allocation-free.
+    pub fn enforce(
+        &mut self,
+        model: &LinearLikeModel,
+        lsq: &LsqWorkspace,
+        u_prev: &[f64],
+        u_new: &mut [f64],
+    ) {
+        let (n, nh) = (self.n, self.nh);
+        let p = n * nh;
+        let sol = lsq.solution();
+        self.status = QpStatus::default();
+        self.saturated.fill(false);
+        // u_{k+j} and H u_{k+j} over the horizon from the unconstrained solution.
+        let violated = self.plan_torques(model, u_prev, |j, i| sol[(nh - 1 - j) * n + i]);
+        let g = model.g().as_slice();
+        if !violated {
+            self.keep_plan(g, false);
+            return;
+        }
+        self.status.active = true;
+        if !self.build(model, lsq, u_prev) {
+            self.fall_back(model, u_new);
+            return;
         }
         // The box and the warm start (the unconstrained z, clipped).
         for j in 0..nh {
@@ -277,19 +398,27 @@ impl TorqueLimitQp {
             }
         }
         self.z.copy_from_slice(&self.work.z0);
-        let info = solve_box_qp(
-            p,
-            &self.hess,
-            &self.lin,
-            &self.lo,
-            &self.hi,
+        let info = solve_box_qp_until(
+            BoxQp {
+                p,
+                hess: &self.hess,
+                lin: &self.lin,
+                lo: &self.lo,
+                hi: &self.hi,
+            },
             &mut self.z,
             &mut self.state,
             &mut self.work,
-            (4 * p) as u32,
+            ((4 * p) as u32, &mut self.deadline),
         );
         self.status.iterations = info.0;
         self.status.fallback = !info.1;
+        self.status.budget_hit = info.2;
+        self.status.active_constraints = self.state.iter().filter(|&&s| s != 0).count() as u32;
+        if !info.1 {
+            self.status.fallback_level = FallbackLevel::BestFeasible;
+        }
+        self.keep_plan(g, true);
         // u_k = H⁻¹ z_0.
         for i in 0..n {
             let k = self.col(0, i);
@@ -297,6 +426,34 @@ impl TorqueLimitQp {
             self.saturated[i] = self.state[k] != 0;
         }
         model.solve_h_in_place(u_new);
+    }
+}
+
+/// When a step's budget is spent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Deadline {
+    /// No budget.
+    #[default]
+    Never,
+    /// The clock passes this instant.
+    At(Instant),
+    /// After this many more checks (a deterministic budget for tests).
+    Checks(u32),
+}
+
+impl Deadline {
+    /// Whether the budget is spent; a check budget spends one check.
+    #[inline]
+    pub fn spent(&mut self) -> bool {
+        match self {
+            Deadline::Never => false,
+            Deadline::At(d) => Instant::now() >= *d,
+            Deadline::Checks(0) => true,
+            Deadline::Checks(n) => {
+                *n -= 1;
+                false
+            }
+        }
     }
 }
 
@@ -338,6 +495,7 @@ impl BoxQpWork {
 /// Every iterate is feasible and none increases the cost, so when the
 /// iteration bound `max_iter` is reached `z` is a feasible point no worse than
 /// the clipped start. Returns (iterations, converged). Allocation-free.
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_box_qp(
     p: usize,
@@ -350,6 +508,51 @@ pub fn solve_box_qp(
     w: &mut BoxQpWork,
     max_iter: u32,
 ) -> (u32, bool) {
+    let qp = BoxQp {
+        p,
+        hess,
+        lin,
+        lo,
+        hi,
+    };
+    let (it, ok, _) = solve_box_qp_until(qp, z, state, w, (max_iter, &mut Deadline::Never));
+    (it, ok)
+}
+
+/// The problem of [`solve_box_qp`]: `p` unknowns, `P`, `c` and the box.
+#[derive(Debug, Clone, Copy)]
+pub struct BoxQp<'a> {
+    /// Number of unknowns.
+    pub p: usize,
+    /// `P`, `p × p` column-major.
+    pub hess: &'a [f64],
+    /// `c`.
+    pub lin: &'a [f64],
+    /// Lower bounds.
+    pub lo: &'a [f64],
+    /// Upper bounds.
+    pub hi: &'a [f64],
+}
+
+/// [`solve_box_qp`] with a deadline: before each iteration, when the clock
+/// has passed `limits.1` the solve stops with its current (feasible) point.
+/// Returns (iterations, converged, deadline hit). `limits.0` bounds the
+/// iterations (the worst case of the QP the controller runs: `4·N·n`).
+pub fn solve_box_qp_until(
+    qp: BoxQp<'_>,
+    z: &mut [f64],
+    state: &mut [i8],
+    w: &mut BoxQpWork,
+    limits: (u32, &mut Deadline),
+) -> (u32, bool, bool) {
+    let BoxQp {
+        p,
+        hess,
+        lin,
+        lo,
+        hi,
+    } = qp;
+    let (max_iter, deadline) = limits;
     for i in 0..p {
         state[i] = 0;
         if z[i] <= lo[i] {
@@ -376,10 +579,13 @@ pub fn solve_box_qp(
         }
     }
     if !factor_free(p, hess, &w.free[..nf], &mut w.l) {
-        return (1, false);
+        return (1, false, false);
     }
     let mut it = 0u32;
     while it < max_iter {
+        if deadline.spent() {
+            return (it, false, true);
+        }
         it += 1;
         // The reduced system P_FF z_F = c_F − P_FA z_A; P is symmetric, so
         // (P_FA z_A)_a is the contiguous column f_a of P against z_A (z with
@@ -391,25 +597,7 @@ pub fn solve_box_qp(
             w.rhs[a] = lin[fa] - dot(&hess[fa * p..fa * p + p], &w.za[..p]);
         }
         cholesky_solve_in_place_dot(nf, p, &w.l, &mut w.rhs[..nf]);
-        // Largest step towards the subproblem's optimum that stays in the box.
-        let mut alpha = 1.0f64;
-        let mut block: Option<(usize, usize, i8)> = None;
-        for (a, &fa) in w.free[..nf].iter().enumerate() {
-            let d = w.rhs[a] - z[fa];
-            if d < 0.0 && w.rhs[a] < lo[fa] {
-                let s = (lo[fa] - z[fa]) / d;
-                if s < alpha {
-                    alpha = s.max(0.0);
-                    block = Some((a, fa, -1));
-                }
-            } else if d > 0.0 && w.rhs[a] > hi[fa] {
-                let s = (hi[fa] - z[fa]) / d;
-                if s < alpha {
-                    alpha = s.max(0.0);
-                    block = Some((a, fa, 1));
-                }
-            }
-        }
+        let (alpha, block) = step_length(&w.free[..nf], &w.rhs[..nf], z, (lo, hi));
         for (a, &fa) in w.free[..nf].iter().enumerate() {
             z[fa] = if block.is_none() {
                 w.rhs[a]
@@ -425,25 +613,8 @@ pub fn solve_box_qp(
             nf -= 1;
             continue;
         }
-        // Optimal on this active set: check the multipliers (gradient signs).
-        let mut worst = tol;
-        let mut release = None;
-        for i in 0..p {
-            if state[i] == 0 {
-                continue;
-            }
-            let gi = dot(&hess[i * p..i * p + p], &z[..p]) - lin[i];
-            w.grad[i] = gi;
-            // At the lower bound the cost must not decrease upwards (g ≥ 0),
-            // at the upper bound not downwards (g ≤ 0).
-            let v = if state[i] < 0 { -gi } else { gi };
-            if v > worst {
-                worst = v;
-                release = Some(i);
-            }
-        }
-        let Some(i) = release else {
-            return (it, true);
+        let Some(i) = worst_multiplier((p, hess, lin), z, state, &mut w.grad, tol) else {
+            return (it, true, false);
         };
         state[i] = 0;
         for (a, &fa) in w.free[..nf].iter().enumerate() {
@@ -454,10 +625,71 @@ pub fn solve_box_qp(
         if !append_to_factor(nf - 1, p, &mut w.l, &mut w.k[..nf - 1], hess[i * p + i])
             && !factor_free(p, hess, &w.free[..nf], &mut w.l)
         {
-            return (it, false);
+            return (it, false, false);
         }
     }
-    (it, false)
+    (it, false, false)
+}
+
+/// Largest step of [`solve_box_qp_until`] from `z` towards the free
+/// subproblem's optimum `target` (entry `a` is that of `free[a]`) that stays
+/// in the box: `α ≤ 1` and the bound that blocks it (position in `free`,
+/// variable, `−1`/`+1` for lower/upper).
+#[allow(clippy::type_complexity)]
+fn step_length(
+    free: &[usize],
+    target: &[f64],
+    z: &[f64],
+    (lo, hi): (&[f64], &[f64]),
+) -> (f64, Option<(usize, usize, i8)>) {
+    let mut alpha = 1.0f64;
+    let mut block: Option<(usize, usize, i8)> = None;
+    for (a, &fa) in free.iter().enumerate() {
+        let d = target[a] - z[fa];
+        if d < 0.0 && target[a] < lo[fa] {
+            let s = (lo[fa] - z[fa]) / d;
+            if s < alpha {
+                alpha = s.max(0.0);
+                block = Some((a, fa, -1));
+            }
+        } else if d > 0.0 && target[a] > hi[fa] {
+            let s = (hi[fa] - z[fa]) / d;
+            if s < alpha {
+                alpha = s.max(0.0);
+                block = Some((a, fa, 1));
+            }
+        }
+    }
+    (alpha, block)
+}
+
+/// Optimal on the active set: the bound variable whose multiplier (gradient
+/// sign) is the most wrong, beyond `tol` (`None`: optimal); the gradient of
+/// the bound variables into `grad`.
+fn worst_multiplier(
+    (p, hess, lin): (usize, &[f64], &[f64]),
+    z: &[f64],
+    state: &[i8],
+    grad: &mut [f64],
+    tol: f64,
+) -> Option<usize> {
+    let mut worst = tol;
+    let mut release = None;
+    for i in 0..p {
+        if state[i] == 0 {
+            continue;
+        }
+        let gi = dot(&hess[i * p..i * p + p], &z[..p]) - lin[i];
+        grad[i] = gi;
+        // At the lower bound the cost must not decrease upwards (g ≥ 0),
+        // at the upper bound not downwards (g ≤ 0).
+        let v = if state[i] < 0 { -gi } else { gi };
+        if v > worst {
+            worst = v;
+            release = Some(i);
+        }
+    }
+    release
 }
 
 /// Cholesky factor of `P_FF` (rows and columns `free` of the p×p
