@@ -582,6 +582,7 @@ impl Controller {
                 StepStatus::HeldLastTorque(_) => FallbackLevel::Hold,
                 _ => qp.fallback_level,
             },
+            budget_hit: !held && qp.budget_hit,
         };
     }
 

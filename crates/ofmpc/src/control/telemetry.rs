@@ -15,11 +15,15 @@ pub enum FallbackLevel {
     #[default]
     None,
     /// The torque-limit QP stopped early (its iteration cap or the step
-    /// budget): the best feasible answer found so far.
+    /// budget): the best feasible answer found so far (with no iteration:
+    /// the unconstrained torque clamped into the limits).
     BestFeasible,
-    /// The previous step's plan, shifted by one sample.
+    /// The step budget ran out before the QP could iterate: the last
+    /// complete plan, one sample on per such step (at most `N − 1`), within
+    /// the limits.
     ShiftedPlan,
-    /// The last torque held (a numerical failure).
+    /// The safe hold: the last torque held, on a numerical failure of the
+    /// step ([`crate::control::StepStatus::HeldLastTorque`]).
     Hold,
 }
 
@@ -75,4 +79,8 @@ pub struct StepTelemetry {
     pub budget_slack_us: Option<f64>,
     /// Which answer the step returned.
     pub fallback: FallbackLevel,
+    /// The step budget ran out in the torque-limit QP (the answer is a
+    /// fallback: [`FallbackLevel::BestFeasible`] or
+    /// [`FallbackLevel::ShiftedPlan`]).
+    pub budget_hit: bool,
 }

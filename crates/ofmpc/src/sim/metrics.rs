@@ -118,6 +118,7 @@ pub fn telemetry_metrics(t: &LoopTelemetry, ts: f64) -> TelemetryMetrics {
     TelemetryMetrics {
         qp_iterations: percentiles(&t.qp_iterations),
         model_time_us: percentiles(&t.model_us),
+        controller_time_us: percentiles(&t.controller_us),
         loop_time_us: percentiles(&t.loop_us),
         loop_deadline_misses: deadline_misses(&t.loop_us, ts),
         fallback_steps: FallbackCounts {

@@ -21,6 +21,10 @@ pub struct LoopTelemetry {
     /// actuator, plant and record. In a real-time loop this is the time it
     /// needs of its period.
     pub loop_us: Vec<f64>,
+    /// Wall time of the controller's own step per sample
+    /// ([`crate::control::StepTelemetry::total_time`], µs; 0 when the loop
+    /// did not step it).
+    pub controller_us: Vec<f64>,
     /// Steps per [`FallbackLevel`] (indexed by [`FallbackLevel::index`]).
     pub fallback_steps: [usize; 4],
     /// Steps that ran out of their step budget.
@@ -32,8 +36,12 @@ pub struct LoopTelemetry {
 pub(crate) struct TelemetrySample {
     /// What the QP did (`None`: no QP).
     pub qp: Option<QpStatus>,
+    /// The step budget ran out.
+    pub budget_hit: bool,
     /// The controller's model time (µs).
     pub model_us: f64,
+    /// The controller's whole step (µs).
+    pub total_us: f64,
     /// Which answer the step returned.
     pub fallback: FallbackLevel,
 }
@@ -46,7 +54,9 @@ impl TelemetrySample {
         let Some(out) = step else {
             return Self {
                 qp: None,
+                budget_hit: false,
                 model_us: 0.0,
+                total_us: 0.0,
                 fallback: FallbackLevel::None,
             };
         };
@@ -54,7 +64,9 @@ impl TelemetrySample {
         let held = t.fallback == FallbackLevel::Hold;
         Self {
             qp: out.qp_status.filter(|_| !held),
+            budget_hit: t.budget_hit,
             model_us: t.model_time.as_secs_f64() * 1e6,
+            total_us: t.total_time.as_secs_f64() * 1e6,
             fallback: t.fallback,
         }
     }
@@ -67,16 +79,18 @@ impl LoopTelemetry {
             qp_iterations: Vec::with_capacity(capacity),
             model_us: Vec::with_capacity(capacity),
             loop_us: Vec::with_capacity(capacity),
+            controller_us: Vec::with_capacity(capacity),
             ..Self::default()
         }
     }
 
     /// Appends one controller step.
     pub(crate) fn push(&mut self, s: &TelemetrySample) {
-        self.budget_hits += usize::from(s.qp.is_some_and(|q| q.budget_hit));
+        self.budget_hits += usize::from(s.budget_hit);
         self.qp_iterations
             .push(s.qp.map_or(0.0, |q| f64::from(q.iterations)));
         self.model_us.push(s.model_us);
+        self.controller_us.push(s.total_us);
         self.fallback_steps[s.fallback.index()] += 1;
     }
 
@@ -128,6 +142,9 @@ pub struct TelemetryMetrics {
     pub qp_iterations: Percentiles,
     /// The controller's model time per step (µs).
     pub model_time_us: Percentiles,
+    /// The controller's own step time (µs; without the loop's guard and
+    /// recording, which `step_time_us` includes).
+    pub controller_time_us: Percentiles,
     /// Wall time of one whole loop iteration (µs).
     pub loop_time_us: Percentiles,
     /// Loop iterations longer than the sampling period.
@@ -152,6 +169,8 @@ mod tests {
                     ..QpStatus::default()
                 }),
                 model_us: 1.0,
+                total_us: 2.0,
+                budget_hit: false,
                 fallback: *level,
             });
             t.push_loop(if i == 3 { 2000.0 } else { 10.0 });

@@ -343,6 +343,11 @@ pub(crate) struct Core {
     predicted_work: Vec<f64>,
     /// Time the last step spent in [`Core::prepare`].
     model_time: std::time::Duration,
+    /// With a step budget: when the last step's torque-limit QP returned.
+    qp_end: Option<std::time::Instant>,
+    /// With a step budget: the longest time a step took after its QP (µs),
+    /// kept back from the QP's deadline.
+    tail_us: f64,
 }
 
 /// The per-algorithm part of one step of a paper controller: what it
@@ -384,7 +389,10 @@ impl Core {
         let (x, w_k, preview) = input;
         let start = std::time::Instant::now();
         if let Some(qp) = self.qp.as_mut() {
-            qp.arm(start, self.settings.step_budget_us);
+            // The QP's deadline keeps back the longest tail seen after it
+            // (torque, checks, commit), so the step ends within the budget.
+            let budget = self.settings.step_budget_us.map(|b| b - self.tail_us);
+            qp.arm(start, budget);
         }
         self.prepare(model, x, w_k, preview, tau.len())?;
         self.model_time = start.elapsed();
@@ -407,6 +415,9 @@ impl Core {
         };
         let out = self.finish(x, T::INCREMENTAL, info, tau)?;
         targets.commit(self);
+        if let Some(qp_end) = self.qp_end.take() {
+            self.tail_us = self.tail_us.max(qp_end.elapsed().as_secs_f64() * 1e6);
+        }
         Ok(out)
     }
 }
@@ -495,6 +506,8 @@ impl Core {
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             predicted_work: vec![0.0; predicted_outputs_work(n)],
             model_time: std::time::Duration::ZERO,
+            qp_end: None,
+            tail_us: 0.0,
         })
     }
 
@@ -887,6 +900,9 @@ impl Core {
             match source {
                 Some(lsq) => qp.enforce(&self.model, lsq, &self.u_prev, &mut self.u_new),
                 None => qp.clear(),
+            }
+            if self.settings.step_budget_us.is_some() {
+                self.qp_end = Some(std::time::Instant::now());
             }
         }
         self.model.torque(&self.u_new, &mut self.tau_new)?;

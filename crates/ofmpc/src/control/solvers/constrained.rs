@@ -70,8 +70,8 @@ pub struct QpStatus {
     /// [`FallbackLevel::BestFeasible`] (stopped at its iteration cap or the
     /// deadline), [`FallbackLevel::ShiftedPlan`] (the deadline passed before
     /// its first iteration: the previous step's torque plan, one sample on,
-    /// within the limits) or [`FallbackLevel::Hold`] (no plan left: its last
-    /// torque held, within the limits).
+    /// within the limits); never [`FallbackLevel::Hold`] (the controller's
+    /// numerical failure).
     pub fallback_level: FallbackLevel,
 }
 
@@ -150,7 +150,11 @@ impl TorqueLimitQp {
     pub fn arm(&mut self, start: Instant, budget_us: Option<f64>) {
         self.deadline = match (self.check_budget, budget_us) {
             (Some(checks), _) => Deadline::Checks(checks),
-            (None, Some(b)) => Deadline::At(start + std::time::Duration::from_secs_f64(b * 1e-6)),
+            // A budget beyond the clock's range is no deadline.
+            (None, Some(b)) => std::time::Duration::try_from_secs_f64(b.max(0.0) * 1e-6)
+                .ok()
+                .and_then(|d| start.checked_add(d))
+                .map_or(Deadline::Never, Deadline::At),
             (None, None) => Deadline::Never,
         };
     }
@@ -186,21 +190,22 @@ impl TorqueLimitQp {
     }
 
     /// The budget fallback when the deadline passed before the QP's first
-    /// iteration: the kept plan one sample on
-    /// ([`FallbackLevel::ShiftedPlan`]) or, at its end or without one, its
-    /// last torque ([`FallbackLevel::Hold`]; gravity compensation before
-    /// any plan), clamped into the limits, as `u_k` into `u_new`.
+    /// iteration (its build unfinished): the kept plan one sample on
+    /// ([`FallbackLevel::ShiftedPlan`], at most `N − 1` samples after it was
+    /// made) or, without one, the QP's feasible start, the unconstrained
+    /// torque clamped into the limits ([`FallbackLevel::BestFeasible`] with
+    /// no iteration: a saturated feedback), as `u_k` into `u_new`.
     fn fall_back(&mut self, model: &LinearLikeModel, u_new: &mut [f64]) {
         let n = self.n;
         let g = model.g().as_slice();
-        let (level, age) = match self.plan_age {
-            Some(a) if a + 1 < self.nh => (FallbackLevel::ShiftedPlan, Some(a + 1)),
-            a => (FallbackLevel::Hold, a),
-        };
-        self.plan_age = age;
+        let age = self.plan_age.filter(|a| a + 1 < self.nh).map(|a| a + 1);
+        if age.is_some() {
+            self.plan_age = age;
+        }
         for i in 0..n {
             let lim = self.tau_max[i] * (1.0 - MARGIN);
-            let tau = age.map_or(g[i], |a| self.plan[a * n + i]);
+            // Without a plan: z_0 = H u_k of the unconstrained solution.
+            let tau = age.map_or(self.z[i] + g[i], |a| self.plan[a * n + i]);
             let tau = if lim.is_finite() {
                 tau.clamp(-lim, lim)
             } else {
@@ -212,7 +217,10 @@ impl TorqueLimitQp {
         model.solve_h_in_place(u_new);
         self.status.fallback = true;
         self.status.budget_hit = true;
-        self.status.fallback_level = level;
+        self.status.fallback_level = match age {
+            Some(_) => FallbackLevel::ShiftedPlan,
+            None => FallbackLevel::BestFeasible,
+        };
     }
 
     /// The limits `τmax` (n values).
@@ -577,6 +585,11 @@ pub fn solve_box_qp_until(
             w.free[nf] = i;
             nf += 1;
         }
+    }
+    // The first iteration's factorization (O(n_F³)) is the costliest
+    // unit of work: checked before it too.
+    if deadline.spent() {
+        return (0, false, true);
     }
     if !factor_free(p, hess, &w.free[..nf], &mut w.l) {
         return (1, false, false);
