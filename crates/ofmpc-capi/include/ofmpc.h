@@ -397,9 +397,9 @@ typedef struct {
    */
   ofmpc_fallback_level fallback;
   /**
-   * The step budget ran out in the QP.
+   * 1 when the step budget ran out in the QP, else 0.
    */
-  bool budget_hit;
+  uint8_t budget_hit;
 } ofmpc_step_telemetry;
 
 #ifdef __cplusplus

@@ -45,8 +45,8 @@ pub struct ofmpc_step_telemetry {
     pub budget_slack_us: f64,
     /// Which answer the step returned.
     pub fallback: ofmpc_fallback_level,
-    /// The step budget ran out in the QP.
-    pub budget_hit: bool,
+    /// 1 when the step budget ran out in the QP, else 0.
+    pub budget_hit: u8,
 }
 
 /// The size of the first version of [`ofmpc_step_telemetry`].
@@ -71,7 +71,7 @@ fn write(t: &StepTelemetry, out: &mut ofmpc_step_telemetry) -> Res {
         FallbackLevel::ShiftedPlan => ofmpc_fallback_level::OFMPC_FALLBACK_SHIFTED_PLAN,
         _ => ofmpc_fallback_level::OFMPC_FALLBACK_HOLD,
     };
-    out.budget_hit = t.budget_hit;
+    out.budget_hit = u8::from(t.budget_hit);
     Ok(())
 }
 

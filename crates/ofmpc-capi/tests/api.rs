@@ -133,7 +133,7 @@ fn telemetry() -> ofmpc_step_telemetry {
         active_constraints: 7,
         budget_slack_us: 0.0,
         fallback: ofmpc_fallback_level::OFMPC_FALLBACK_HOLD,
-        budget_hit: true,
+        budget_hit: 1,
     }
 }
 
@@ -205,7 +205,7 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
             assert!(t.model_time_ns > 0 && t.model_time_ns <= t.solve_time_ns);
             assert!(t.solve_time_ns <= t.total_time_ns);
             assert_eq!((t.qp_iterations, t.active_constraints), (0, 0));
-            assert!(t.budget_slack_us.is_nan() && !t.budget_hit);
+            assert!(t.budget_slack_us.is_nan() && t.budget_hit == 0);
             assert_eq!(t.fallback, ofmpc_fallback_level::OFMPC_FALLBACK_NONE);
         }
         assert_eq!(tel.total_time_ns as u128, out.solve_time_ns as u128);
@@ -310,7 +310,7 @@ fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
         assert!(last_error().contains("sizeof(ofmpc_step_telemetry)"));
         assert_eq!(
             (t.qp_iterations, t.budget_hit),
-            (7, true),
+            (7, 1),
             "written on error"
         );
     }
