@@ -308,11 +308,7 @@ fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
         let st = ofmpc_controller_telemetry(s.ctrl, &mut t);
         assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
         assert!(last_error().contains("sizeof(ofmpc_step_telemetry)"));
-        assert_eq!(
-            (t.qp_iterations, t.budget_hit),
-            (7, 1),
-            "written on error"
-        );
+        assert_eq!((t.qp_iterations, t.budget_hit), (7, 1), "written on error");
     }
     assert!(
         tau.iter().all(|t| *t == 5.0),
