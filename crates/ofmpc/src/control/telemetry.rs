@@ -19,8 +19,8 @@ pub enum FallbackLevel {
     /// the unconstrained torque clamped into the limits).
     BestFeasible,
     /// The step budget ran out before the QP could iterate: the last
-    /// complete plan, one sample on per such step (at most `N − 1`), within
-    /// the limits.
+    /// complete plan, one sample on (at most one such step in a row; the
+    /// next solves the QP past its budget), within the limits.
     ShiftedPlan,
     /// The safe hold: the last torque held, on a numerical failure of the
     /// step ([`crate::control::StepStatus::HeldLastTorque`]).
