@@ -123,6 +123,30 @@ typedef enum {
 } ofmpc_supervised_status;
 
 /**
+ * Which answer a step returned (the library's `FallbackLevel`).
+ */
+typedef enum {
+  /**
+   * The algorithm's optimum.
+   */
+  OFMPC_FALLBACK_NONE = 0,
+  /**
+   * The torque-limit QP stopped early (iteration cap or step budget): its
+   * best feasible answer so far.
+   */
+  OFMPC_FALLBACK_BEST_FEASIBLE = 1,
+  /**
+   * The step budget ran out before the QP could iterate: the last plan,
+   * one sample on.
+   */
+  OFMPC_FALLBACK_SHIFTED_PLAN = 2,
+  /**
+   * A numerical failure: the last torque held.
+   */
+  OFMPC_FALLBACK_HOLD = 3,
+} ofmpc_fallback_level;
+
+/**
  * A built controller (any kind: the paper's three, the adaptive variants,
  * the baselines). Opaque; `Send`: one thread at a time.
  */
@@ -355,6 +379,50 @@ typedef struct {
    */
   ofmpc_step_status step_status;
 } ofmpc_supervised_output;
+
+/**
+ * Telemetry of the last step. The caller sets `size`.
+ */
+typedef struct {
+  /**
+   * `sizeof(ofmpc_step_telemetry)`: fields past it are not written.
+   */
+  size_t size;
+  /**
+   * Time on the model: terms, ZOH, prediction matrices (ns; 0 for the
+   * baselines).
+   */
+  uint64_t model_time_ns;
+  /**
+   * Time of the algorithm's step (ns).
+   */
+  uint64_t solve_time_ns;
+  /**
+   * Wall time of the whole step call (ns).
+   */
+  uint64_t total_time_ns;
+  /**
+   * Active-set iterations of the torque-limit QP (0 when it did not run).
+   */
+  uint32_t qp_iterations;
+  /**
+   * Box constraints active at the QP's answer.
+   */
+  uint32_t active_constraints;
+  /**
+   * Budget left at the end of the step (µs; negative: over); NaN without
+   * `[mpc] step_budget_us`.
+   */
+  double budget_slack_us;
+  /**
+   * Which answer the step returned.
+   */
+  ofmpc_fallback_level fallback;
+  /**
+   * 1 when the step budget ran out in the QP, else 0.
+   */
+  uint8_t budget_hit;
+} ofmpc_step_telemetry;
 
 #ifdef __cplusplus
 extern "C" {
@@ -612,6 +680,23 @@ double ofmpc_supervised_ts(const ofmpc_supervised *s);
  * Frees a supervised controller (NULL: nothing).
  */
 void ofmpc_supervised_free(ofmpc_supervised *s);
+
+/**
+ * The telemetry of the controller's last step (zeros before the first).
+ * Allocates nothing; `OFMPC_NULL_ARG` / `OFMPC_INVALID_ARG` (size) and
+ * nothing written otherwise.
+ */
+OFMPC_MUST_USE
+ofmpc_status ofmpc_controller_telemetry(const ofmpc_controller *c,
+                                        ofmpc_step_telemetry *out);
+
+/**
+ * The telemetry of the guarded controller's last step (its last call of
+ * the controller: during a safe stop the stop law runs instead).
+ */
+OFMPC_MUST_USE
+ofmpc_status ofmpc_supervised_telemetry(const ofmpc_supervised *s,
+                                        ofmpc_step_telemetry *out);
 
 #ifdef __cplusplus
 }  // extern "C"

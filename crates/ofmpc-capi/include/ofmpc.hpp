@@ -194,6 +194,12 @@ class Controller {
     }
     return detail::status(s);
   }
+  /// The last step's telemetry (times, QP iterations, fallback level) into `t`.
+  [[nodiscard]] Status telemetry(ofmpc_step_telemetry &t) const {
+    t = ofmpc_step_telemetry{};
+    t.size = sizeof t;
+    return detail::status(ofmpc_controller_telemetry(h_.get(), &t));
+  }
 
  private:
   explicit Controller(ofmpc_controller *c) : h_(c) {}
@@ -231,6 +237,12 @@ class SupervisedController {
     ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
     if (s == OFMPC_OK) status = out.status;
     return detail::status(s);
+  }
+  /// The telemetry of the controller's last step (its last call; not the stop law's).
+  [[nodiscard]] Status telemetry(ofmpc_step_telemetry &t) const {
+    t = ofmpc_step_telemetry{};
+    t.size = sizeof t;
+    return detail::status(ofmpc_supervised_telemetry(h_.get(), &t));
   }
 
  private:

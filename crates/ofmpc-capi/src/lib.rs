@@ -33,6 +33,7 @@ mod robot;
 mod settings;
 mod sim;
 mod supervised;
+mod telemetry;
 
 pub use controller::*;
 pub use ffi::*;
@@ -40,6 +41,7 @@ pub use plan::*;
 pub use robot::*;
 pub use sim::*;
 pub use supervised::*;
+pub use telemetry::*;
 
 #[cfg(test)]
 mod tests {

@@ -12,7 +12,7 @@ use std::ffi::c_char;
 use std::mem::size_of;
 
 /// The controller behind its guard, for a real loop. Opaque.
-pub struct ofmpc_supervised(SupervisedController);
+pub struct ofmpc_supervised(pub(crate) SupervisedController);
 
 /// One sample's raw reading and reference (borrowed by the call).
 #[repr(C)]

@@ -127,6 +127,20 @@ fn output(tau: &mut [f64]) -> ofmpc_step_output {
     }
 }
 
+fn telemetry() -> ofmpc_step_telemetry {
+    ofmpc_step_telemetry {
+        size: size_of::<ofmpc_step_telemetry>(),
+        model_time_ns: 0,
+        solve_time_ns: 0,
+        total_time_ns: 0,
+        qp_iterations: 7,
+        active_constraints: 7,
+        budget_slack_us: 0.0,
+        fallback: ofmpc_fallback_level::OFMPC_FALLBACK_HOLD,
+        budget_hit: 1,
+    }
+}
+
 fn input(x: &[f64], w: &[f64], p: &[f64]) -> ofmpc_step_input {
     ofmpc_step_input {
         size: size_of::<ofmpc_step_input>(),
@@ -165,6 +179,7 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
         ok(ofmpc_controller_reset(s.ctrl, x.as_ptr(), 2 * n));
         ok(ofmpc_supervised_reset(s.sup, x.as_ptr(), 2 * n));
     }
+    let (mut tel, mut stel) = (telemetry(), telemetry());
     let before = allocations();
     let mut max_diff = 0.0_f64;
     for k in 0..samples {
@@ -185,8 +200,19 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
                 preview_len: p.len(),
             };
             ok(ofmpc_supervised_step(s.sup, &sin, &mut sout));
+            ok(ofmpc_controller_telemetry(s.ctrl, &mut tel));
+            ok(ofmpc_supervised_telemetry(s.sup, &mut stel));
             ok(ofmpc_sim_apply(s.sim, tau.as_ptr(), n, 1.0));
         }
+        // The step's telemetry: no limits, no budget, the optimum.
+        for t in [&tel, &stel] {
+            assert!(t.model_time_ns > 0 && t.model_time_ns <= t.solve_time_ns);
+            assert!(t.solve_time_ns <= t.total_time_ns);
+            assert_eq!((t.qp_iterations, t.active_constraints), (0, 0));
+            assert!(t.budget_slack_us.is_nan() && t.budget_hit == 0);
+            assert_eq!(t.fallback, ofmpc_fallback_level::OFMPC_FALLBACK_NONE);
+        }
+        assert_eq!(tel.total_time_ns as u128, out.solve_time_ns as u128);
         assert_eq!(out.status, ofmpc_step_status::OFMPC_STEP_SOLVED);
         assert_eq!(
             sout.status,
@@ -276,6 +302,17 @@ fn bad_input_gets_a_status_and_a_message_and_writes_nothing() {
             "{}",
             last_error()
         );
+        // The telemetry getter: NULL handle or record, a record too small.
+        let mut t = telemetry();
+        let st = ofmpc_controller_telemetry(std::ptr::null(), &mut t);
+        assert_eq!(st, ofmpc_status::OFMPC_NULL_ARG);
+        let st = ofmpc_controller_telemetry(s.ctrl, null_mut());
+        assert_eq!(st, ofmpc_status::OFMPC_NULL_ARG);
+        t.size = 8;
+        let st = ofmpc_controller_telemetry(s.ctrl, &mut t);
+        assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
+        assert!(last_error().contains("sizeof(ofmpc_step_telemetry)"));
+        assert_eq!((t.qp_iterations, t.budget_hit), (7, 1), "written on error");
     }
     assert!(
         tau.iter().all(|t| *t == 5.0),

@@ -147,7 +147,7 @@ fn fmt_opt(v: f64, prec: usize) -> String {
 }
 
 /// Header of the summary table.
-pub const SUMMARY_HEADER: [&str; 9] = [
+pub const SUMMARY_HEADER: [&str; 11] = [
     "run",
     "controller",
     "payload (kg)",
@@ -156,6 +156,8 @@ pub const SUMMARY_HEADER: [&str; 9] = [
     "steady Cart. (mm)",
     "steady joint max (rad)",
     "step median (µs)",
+    "step p99 (µs)",
+    "deadline misses",
     "status",
 ];
 
@@ -178,6 +180,8 @@ pub fn summary_rows(runs: &[RunMetrics]) -> Vec<Vec<String>> {
                 fmt_opt(m.steady_cartesian_error_mm, 4),
                 fmt_opt(steady_joint, 4),
                 fmt_opt(m.step_time_us.median, 1),
+                fmt_opt(m.step_time_us.p99, 1),
+                m.step_time_us.deadline_misses.to_string(),
                 match (m.status, m.stopped_at_s) {
                     (RunStatus::Ok, _) => "ok".into(),
                     (RunStatus::Diverged, Some(t)) => format!("DIVERGED at {t:.2} s"),

@@ -332,6 +332,7 @@ mod tests {
             cartesian_error_max_to_stop_mm: rms * 3.0,
             steady_cartesian_error_mm: steady,
             torque_max_nm: vec![0.0; 6],
+            telemetry: Default::default(),
             torque_step_max_nm: 0.0,
             hold_error_pp_counts: None,
             servo: None,

@@ -9,7 +9,7 @@ use crate::robot::PyRobot;
 use numpy::PyArray1;
 use ofmpc::control::{
     BaselineSettings, Controller, ControllerBuilder, ControllerKind, MpcSettings, Solver,
-    StepError, StepInput, StepStatus, Weight,
+    StepError, StepInput, StepStatus, StepTelemetry, Weight,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -30,6 +30,8 @@ pub struct PyController {
     preview: Vec<f64>,
     /// Cost, `max|R_ii|/min|R_ii|` and ZOH doublings of the last successful step.
     info: Option<(f64, f64, u32)>,
+    /// The telemetry of the last step (also a failed one's).
+    telemetry: Option<StepTelemetry>,
 }
 
 /// The keyword arguments of `Controller()` that are weights.
@@ -182,6 +184,7 @@ impl PyController {
             w: vec![0.0; n],
             preview: vec![0.0; horizon * n],
             info: None,
+            telemetry: None,
         })
     }
 
@@ -227,6 +230,29 @@ impl PyController {
             .transpose()
     }
 
+    /// Telemetry of the last step as a dict, or None before the first: "model_time_us",
+    /// "solve_time_us", "total_time_us" (µs), "qp_iterations", "active_constraints",
+    /// "budget_slack_us" (None without a step budget), "fallback" ("none", "best_feasible",
+    /// "shifted_plan", "hold") and "budget_hit".
+    #[getter]
+    fn last_telemetry<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.telemetry
+            .map(|t| {
+                let us = |d: std::time::Duration| d.as_secs_f64() * 1e6;
+                let d = PyDict::new(py);
+                d.set_item("model_time_us", us(t.model_time))?;
+                d.set_item("solve_time_us", us(t.solve_time))?;
+                d.set_item("total_time_us", us(t.total_time))?;
+                d.set_item("qp_iterations", t.qp_iterations)?;
+                d.set_item("active_constraints", t.active_constraints)?;
+                d.set_item("budget_slack_us", t.budget_slack_us)?;
+                d.set_item("fallback", t.fallback.name())?;
+                d.set_item("budget_hit", t.budget_hit)?;
+                Ok(d)
+            })
+            .transpose()
+    }
+
     /// Starts a run at the measured state x0 = [q; q̇] (2n,). Required before the first
     /// `step` (a step before it raises `OfmpcError`: the controller's memory of the last input
     /// and output would otherwise be zeros, not the robot's state).
@@ -234,6 +260,7 @@ impl PyController {
         let n2 = 2 * self.dof;
         fill_shaped("x0", x0, &[("(2·dof,)", &[n2])], &mut self.x)?;
         self.info = None;
+        self.telemetry = None;
         self.controller
             .get_mut()
             .unwrap_or_else(|e| e.into_inner())
@@ -279,6 +306,7 @@ impl PyController {
             }
             Err(e) => return Err(to_py(e)),
         };
+        self.telemetry = Some(out.telemetry);
         // A numerical failure raises (the controller holds its last torque and state).
         if let StepStatus::HeldLastTorque(failure) = out.status {
             return Err(to_py(failure));

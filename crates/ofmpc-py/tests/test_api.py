@@ -121,6 +121,10 @@ def test_controller_holds_a_rest_state_and_validates_its_inputs(robot, ref):
         tau = c.step(x, w, np.tile(w, (8, 1)))
         assert rel_err(tau, robot.gravity(w)) < 1e-9, kind
         assert c.last_info["cost"] >= 0.0
+        t = c.last_telemetry
+        assert 0.0 <= t["model_time_us"] <= t["solve_time_us"] <= t["total_time_us"], t
+        assert (t["qp_iterations"], t["active_constraints"], t["budget_slack_us"]) == (0, 0, None)
+        assert (t["fallback"], t["budget_hit"]) == ("none", False)
         # (N, n) and flat previews are the same input.
         c.reset(x)
         np.testing.assert_array_equal(c.step(x, w, np.tile(w, 8)), tau)
@@ -199,6 +203,11 @@ def test_run_from_a_dict_and_from_a_file_agree(tmp_path):
     for ra, rb in zip(a["runs"], b["runs"]):
         for key in ("wall_s", "step_time_us"):
             ra.pop(key), rb.pop(key)
+        # The telemetry's times are the machine's; its counts are the run's.
+        ta, tb = ra.pop("telemetry"), rb.pop("telemetry")
+        for key in ("qp_iterations", "fallback_steps", "budget_hits"):
+            assert ta[key] == tb[key], key
+        assert ta["fallback_steps"]["none"] > 0
         assert ra == rb
         assert ra["steady_cartesian_error_mm"] < 1e-6 and not ra["diverged"]
 

@@ -15,7 +15,7 @@ distributed = pytest.importorskip("dask.distributed")
 import sweep_dask  # noqa: E402  (examples/python, on sys.path by conftest)
 
 # Measurements, not results: they differ from run to run.
-TIMINGS = {"wall_s", "step_time_us"}
+TIMINGS = {"wall_s", "step_time_us", "telemetry"}  # telemetry: machine times
 
 
 def test_a_4_point_sweep_on_2_workers_equals_the_cli(tmp_path):

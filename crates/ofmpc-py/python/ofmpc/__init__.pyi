@@ -140,6 +140,11 @@ class Controller:
     @property
     def last_info(self) -> Optional[dict]:
         """{"cost", "r_diag_ratio", "zoh_squarings"} of the last step."""
+    @property
+    def last_telemetry(self) -> Optional[dict]:
+        """{"model_time_us", "solve_time_us", "total_time_us", "qp_iterations",
+        "active_constraints", "budget_slack_us", "fallback", "budget_hit"} of the last step
+        (fallback: "none", "best_feasible", "shifted_plan" or "hold")."""
     def reset(self, x0: ArrayLike) -> None:
         """Starts a run at the measured state x0 = [q; q̇] (2n,); required before the first step."""
     def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:

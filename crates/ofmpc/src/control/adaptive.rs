@@ -470,6 +470,12 @@ impl Algorithm for AdaptiveMpc {
     fn qp_status(&self) -> Option<crate::control::solvers::constrained::QpStatus> {
         self.inner.qp_status()
     }
+    fn model_time(&self) -> Option<std::time::Duration> {
+        self.inner.model_time()
+    }
+    fn set_check_budget(&mut self, checks: Option<u32>) {
+        self.inner.set_check_budget(checks)
+    }
     fn payload_estimate(&self) -> Option<f64> {
         Some(self.model_pi[0])
     }

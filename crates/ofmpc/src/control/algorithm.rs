@@ -43,6 +43,15 @@ pub trait Algorithm {
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
+    /// Time the last step spent on the model (terms, ZOH, predictions);
+    /// `None` for the controllers that do not time it.
+    fn model_time(&self) -> Option<std::time::Duration> {
+        None
+    }
+    /// Counts the step budget of the torque-limit QP in deadline checks
+    /// instead of µs (`None`: µs again; no effect without torque limits):
+    /// a deterministic budget for tests of the fallback levels.
+    fn set_check_budget(&mut self, _checks: Option<u32>) {}
     /// The outputs (joint positions) the controller's model predicted at its
     /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
     /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal

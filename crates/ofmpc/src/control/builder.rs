@@ -64,6 +64,7 @@ use crate::control::mpc::core::{check_finite, check_len};
 use crate::control::observer::StateObserver;
 use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};
 use crate::control::step::{StepError, StepFailure, StepInfo, StepInput, StepOutput, StepStatus};
+use crate::control::telemetry::{FallbackLevel, StepTelemetry};
 use crate::dynamics::RobotDynamics;
 use crate::ident::RlsSettings;
 use crate::robot::{ModelError, Payload, Robot};
@@ -395,6 +396,7 @@ impl<'r> ControllerBuilder<'r> {
                 q_command: vec![0.0; n].into_boxed_slice(),
                 qd_command: vec![0.0; n].into_boxed_slice(),
                 qdd_command: vec![0.0; n].into_boxed_slice(),
+                telemetry: StepTelemetry::default(),
             },
             predicted,
             started: false,
@@ -593,7 +595,9 @@ impl Controller {
     pub fn step(&mut self, input: &StepInput<'_>) -> Result<&StepOutput, StepError> {
         let start = Instant::now();
         self.check_input(input)?;
-        match self.solve(input) {
+        let result = self.solve(input);
+        let solve_time = start.elapsed();
+        match result {
             Ok(info) => {
                 let out = &mut self.output;
                 out.cost = info.cost;
@@ -612,6 +616,7 @@ impl Controller {
             Err(failure) => self.output.status = StepStatus::HeldLastTorque(failure),
         }
         self.output.solve_time = start.elapsed();
+        self.fill_telemetry(solve_time);
         Ok(&self.output)
     }
 
@@ -642,6 +647,39 @@ impl Controller {
                 &mut out.qdd_command,
             ],
         );
+    }
+
+    /// Counts the step budget of the torque-limit QP in deadline checks
+    /// instead of µs (one per horizon block and Hessian column of its build
+    /// and per active-set iteration; `None`: µs again): a deterministic
+    /// budget, for tests of the fallback levels without a clock.
+    #[doc(hidden)]
+    pub fn set_check_budget(&mut self, checks: Option<u32>) {
+        self.controller.set_check_budget(checks);
+    }
+
+    /// The step's [`StepTelemetry`] from its status, its QP and its times.
+    fn fill_telemetry(&mut self, solve_time: Duration) {
+        let out = &mut self.output;
+        let qp = out.qp_status.unwrap_or_default();
+        let held = matches!(out.status, StepStatus::HeldLastTorque(_));
+        out.telemetry = StepTelemetry {
+            model_time: self.controller.model_time().unwrap_or(Duration::ZERO),
+            solve_time,
+            total_time: out.solve_time,
+            qp_iterations: if held { 0 } else { qp.iterations },
+            active_constraints: if held { 0 } else { qp.active_constraints },
+            budget_slack_us: self
+                .controller
+                .settings()
+                .step_budget_us
+                .map(|b| b - out.solve_time.as_secs_f64() * 1e6),
+            fallback: match out.status {
+                StepStatus::HeldLastTorque(_) => FallbackLevel::Hold,
+                _ => qp.fallback_level,
+            },
+            budget_hit: !held && qp.budget_hit,
+        };
     }
 
     /// The input checks of [`Self::step`]: reset first, every slice its

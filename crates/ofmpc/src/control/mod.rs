@@ -63,6 +63,7 @@ mod observer;
 mod settings;
 mod solvers;
 mod step;
+mod telemetry;
 
 #[doc(hidden)]
 pub use adaptive::AdaptiveMpc;
@@ -101,6 +102,7 @@ pub use solvers::lsq::LsqError;
 #[doc(hidden)]
 pub use solvers::lsq::{lsq_flops, LsqWorkspace};
 pub use step::{StepError, StepFailure, StepInfo, StepInput, StepOutput, StepStatus};
+pub use telemetry::{FallbackLevel, StepTelemetry};
 
 /// The former name of [`Controller`], kept crate-private only until the
 /// simulator's rename (issue 34, branch B2) is merged.

@@ -295,6 +295,15 @@ pub struct MpcSettings {
     /// (see the README's table).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub constraint_horizon: Option<usize>,
+    /// Time budget of one step in µs (`None`, default: no budget). With
+    /// torque limits, the QP checks the budget before each of its
+    /// active-set iterations (at most `4·N·n` of them) and, when it is
+    /// spent, returns its best feasible answer so far
+    /// ([`crate::control::FallbackLevel::BestFeasible`]): a step exceeds the
+    /// budget by at most one QP iteration's cost. Counted per step in
+    /// [`crate::control::StepTelemetry`]. Finite and `≥ 0`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_budget_us: Option<f64>,
     /// Use the drives' friction estimates (Coulomb, viscous) of the
     /// [`crate::control::DriveModel`]: the estimated friction at the reference's
     /// velocity is added to the torque (`τ = H u + g + F̂(v_ref)`). With it,
@@ -381,6 +390,7 @@ impl Default for MpcSettings {
             model_payload_kg: 0.0,
             torque_limits: false,
             constraint_horizon: None,
+            step_budget_us: None,
             friction_compensation: false,
             delay_compensation: false,
             state_observer: false,
@@ -462,6 +472,12 @@ impl MpcSettings {
         if !(self.payload_com_max_m.is_finite() && self.payload_com_max_m >= 0.0) {
             return Err(SettingsError::PayloadComBound(self.payload_com_max_m));
         }
+        if let Some(b) = self
+            .step_budget_us
+            .filter(|b| !(b.is_finite() && *b >= 0.0))
+        {
+            return Err(SettingsError::StepBudget(b));
+        }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
         }
@@ -512,6 +528,9 @@ pub enum SettingsError {
     /// `horizon` is 0 or too large.
     #[error("prediction horizon {0} is invalid: it must be between 1 and {MAX_HORIZON} samples (the paper uses 10)")]
     BadHorizon(usize),
+    /// The step budget is not a finite number of µs `≥ 0`.
+    #[error("the step budget {0} µs is invalid: it must be a finite number of microseconds ≥ 0")]
+    StepBudget(f64),
     /// The constraint horizon is 0 or longer than the prediction horizon.
     #[error("the constraint horizon is {value} samples: it must be between 1 and the prediction horizon ({horizon})")]
     ConstraintHorizon {

@@ -7,6 +7,7 @@ use std::time::Duration;
 use crate::control::model_errors::{TermsError, ZohError};
 use crate::control::solvers::constrained::QpStatus;
 use crate::control::solvers::lsq::LsqError;
+use crate::control::telemetry::StepTelemetry;
 
 /// Diagnostics of one successful control step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -230,4 +231,7 @@ pub struct StepOutput {
     /// feed-forward of the interface's own joint loop, as
     /// [`Self::q_command`].
     pub qdd_command: Box<[f64]>,
+    /// Where the step's time went, what the QP did and which fallback the
+    /// step took ([`StepTelemetry`]).
+    pub telemetry: StepTelemetry,
 }

@@ -12,6 +12,7 @@ use super::servo::Servo;
 use super::settings_error::LoopSettingsError;
 use super::supervised::{SupervisedController, SupervisedError, SupervisedInput, SupervisedStatus};
 use super::supervisor::{DivergenceRule, SupervisorSettings};
+use super::telemetry::TelemetrySample;
 use crate::control::{Controller, StepFailure};
 use crate::motion::JointReference;
 use serde::{Deserialize, Serialize};
@@ -562,6 +563,7 @@ impl<'a> ClosedLoop<'a> {
     /// One sample `k` of the path or the hold. `Ok(Some(j))`: a safe stop
     /// began, counted from sample `j`; `Err`: the run ends.
     fn sample(&mut self, k: usize, rec: &mut Recorder) -> Result<Option<usize>, Ended> {
+        let loop_start = Instant::now();
         let ts = self.reference.ts();
         let t = k as f64 * ts;
         let n = self.reference.dof();
@@ -591,6 +593,7 @@ impl<'a> ClosedLoop<'a> {
                 h.observe(k, |y| controller.predicted_outputs(y));
             }
         }
+        rec.telemetry(&TelemetrySample::of(self.controller.step_output()));
         rec.loading(self.actuator.account(self.controller.torque()));
         let step_us = t0.elapsed().as_secs_f64() * 1e6;
         self.late = self.step_is_late(step_us);
@@ -609,6 +612,7 @@ impl<'a> ClosedLoop<'a> {
             payload_mass_est: self.controller.payload_estimate(),
         });
         self.servo_watchdog().map_err(failed)?;
+        rec.loop_time(loop_start.elapsed().as_secs_f64() * 1e6);
         match status {
             SupervisedStatus::NonFiniteError { joint } => {
                 Err(failed(RunFailure::NonFiniteError { joint }))

@@ -3,6 +3,7 @@
 
 use super::outcome::{RunOutcome, RunStatus};
 use super::recorder::Record;
+use super::telemetry::{FallbackCounts, LoopTelemetry, Percentiles, TelemetryMetrics};
 use serde::Serialize;
 
 /// Median, 99th percentile and maximum of the controller's step time (µs),
@@ -102,6 +103,15 @@ pub struct RunMetrics {
     /// [`RunStatus::Hunting`] instead of `"ok"`. `None` (`null`) when not
     /// judged: no encoder quantization, or a run that did not complete.
     pub hold_error_pp_counts: Option<f64>,
+    /// What the servo interface saw (`[plant.servo]`: cycles, missed
+    /// cycles, the longest run of them, `"ok"` or `"watchdog_trip"`);
+    /// absent without one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub servo: Option<super::servo::ServoReport>,
+    /// The loop's telemetry: QP iterations, model and loop times (p50,
+    /// p99, max), loop deadline misses, steps per fallback level, budget
+    /// hits.
+    pub telemetry: TelemetryMetrics,
 }
 
 /// A hold whose measured joint error moves by more than this many encoder
@@ -180,11 +190,34 @@ pub(crate) fn judge_hold(
             m.reason
         );
     }
-    /// What the servo interface saw (`[plant.servo]`: cycles, missed
-    /// cycles, the longest run of them, `"ok"` or `"watchdog_trip"`);
-    /// absent without one.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub servo: Option<super::servo::ServoReport>,
+}
+
+/// Median, 99th percentile and maximum of `v` (NaN when empty).
+pub fn percentiles(v: &[f64]) -> Percentiles {
+    Percentiles {
+        p50: quantile(v, 0.5),
+        p99: quantile(v, 0.99),
+        max: v.iter().copied().fold(f64::NAN, f64::max),
+    }
+}
+
+/// The telemetry summary of `t` for a loop of sampling period `ts` (s).
+pub fn telemetry_metrics(t: &LoopTelemetry, ts: f64) -> TelemetryMetrics {
+    let f = t.fallback_steps;
+    TelemetryMetrics {
+        qp_iterations: percentiles(&t.qp_iterations),
+        model_time_us: percentiles(&t.model_us),
+        controller_time_us: percentiles(&t.controller_us),
+        loop_time_us: percentiles(&t.loop_us),
+        loop_deadline_misses: deadline_misses(&t.loop_us, ts),
+        fallback_steps: FallbackCounts {
+            none: f[0],
+            best_feasible: f[1],
+            shifted_plan: f[2],
+            hold: f[3],
+        },
+        budget_hits: t.budget_hits,
+    }
 }
 
 /// The `p`-quantile (0..1) of `v` by linear interpolation (NaN when empty).
@@ -320,6 +353,7 @@ pub fn compute(
         torque_step_max_nm: torque_step,
         hold_error_pp_counts: None,
         servo: rec.servo,
+        telemetry: telemetry_metrics(&rec.telemetry, sample_period(&rec.t)),
     }
 }
 

@@ -30,6 +30,7 @@ mod settings_error;
 mod state;
 mod supervised;
 mod supervisor;
+mod telemetry;
 
 pub use actuator::Actuator;
 #[doc(hidden)]
@@ -67,3 +68,5 @@ pub use plant::{FrictionKind, NoiseKind, Plant, PlantError, PlantSettings, Plant
 pub use supervisor::{DivergenceRule, StopReason, SupervisorSettings};
 #[doc(hidden)]
 pub use supervisor::{Stopping, Supervisor, MAX_REJECTED};
+#[doc(hidden)]
+pub use telemetry::{FallbackCounts, LoopTelemetry, Percentiles, TelemetryMetrics};

@@ -1,6 +1,7 @@
 //! The recorder stage: what a run keeps of each sample.
 
 use super::actuator::Loading;
+use super::telemetry::{LoopTelemetry, TelemetrySample};
 
 /// The recorded time series of one run. Row `k` holds the plant's true state
 /// at `t_k`, what the controller was given as its measurement when that
@@ -51,6 +52,8 @@ pub struct Record {
     pub horizons: Option<super::horizon::PredictedHorizons>,
     /// What the servo interface saw (`[plant.servo]`); `None` without one.
     pub servo: Option<super::servo::ServoReport>,
+    /// The loop's per-sample telemetry ([`LoopTelemetry`]).
+    pub telemetry: LoopTelemetry,
 }
 
 impl Record {
@@ -74,6 +77,7 @@ impl Record {
             max_torque_ratio: 0.0,
             horizons: None,
             servo: None,
+            telemetry: LoopTelemetry::with_capacity(capacity),
         }
     }
 
@@ -186,6 +190,16 @@ impl Recorder {
         if let Some(m) = s.payload_mass_est {
             r.payload_mass_est.push(m);
         }
+    }
+
+    /// Appends one controller step's telemetry.
+    pub(crate) fn telemetry(&mut self, s: &TelemetrySample) {
+        self.record.telemetry.push(s);
+    }
+
+    /// Appends one loop iteration's wall time (µs).
+    pub fn loop_time(&mut self, us: f64) {
+        self.record.telemetry.push_loop(us);
     }
 
     /// What was recorded so far.

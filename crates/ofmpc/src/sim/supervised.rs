@@ -125,6 +125,8 @@ pub struct SupervisedController {
     repaired: bool,
     /// The last step's torque is the controller's, from a successful step.
     stepped: bool,
+    /// The last step called the controller's step (no stop in progress).
+    called: bool,
     /// The last step's judgement began a stop (watched from the next sample).
     judged_stop: bool,
     /// The divergence the last step's judgement found.
@@ -189,6 +191,7 @@ impl SupervisedController {
             mpc,
             repaired: false,
             stepped: false,
+            called: false,
             judged_stop: false,
             diverged: None,
         }
@@ -214,7 +217,7 @@ impl SupervisedController {
         let n = self.output.tau.len();
         self.check_input(input)?;
         self.x.copy_from_slice(input.x);
-        (self.stepped, self.judged_stop, self.diverged) = (false, false, None);
+        (self.stepped, self.called, self.judged_stop, self.diverged) = (false, false, false, None);
         let repaired = self.repair.check(self.mpc.parts_mut().model, &mut self.x);
         let inspection = self.supervisor.inspect(&mut self.x, input.w_k);
         self.repaired = repaired || inspection.rejected;
@@ -269,7 +272,7 @@ impl SupervisedController {
         };
         self.check_input(&input)?;
         self.x.copy_from_slice(x);
-        (self.stepped, self.judged_stop, self.diverged) = (false, false, None);
+        (self.stepped, self.called, self.judged_stop, self.diverged) = (false, false, false, None);
         self.repaired = false;
         self.output.status = SupervisedStatus::Controlled;
         if let Err(e) = self.control(&input) {
@@ -374,6 +377,13 @@ impl SupervisedController {
         self.mpc.output()
     }
 
+    /// The controller's output of this sample, with its
+    /// [`crate::control::StepTelemetry`], when the last step called the
+    /// controller (`None` during a stop, whose torque is the stop law's).
+    pub fn step_output(&self) -> Option<&StepOutput> {
+        self.called.then(|| self.mpc.output())
+    }
+
     /// The guarded controller.
     pub fn controller(&self) -> &Mpc {
         &self.mpc
@@ -390,6 +400,7 @@ impl SupervisedController {
             };
             // Refused input and a numerical failure hold the last torque
             // (the output says so): the guard treats them as a failed step.
+            self.called = true;
             let out = self.mpc.step(&step).map_err(StepFailure::from)?;
             self.output.tau.copy_from_slice(&out.tau);
             return match out.status.failure() {

@@ -75,6 +75,12 @@ pub(crate) trait ControllerCore {
     fn qp_status(&self) -> Option<QpStatus> {
         None
     }
+    /// Time the last step spent on the model (`None`: not timed).
+    fn model_time(&self) -> Option<std::time::Duration> {
+        None
+    }
+    /// [`crate::control::Algorithm::set_check_budget`] (no QP: nothing).
+    fn set_check_budget(&mut self, _checks: Option<u32>) {}
     /// [`Algorithm::predicted_outputs`](crate::control::Algorithm::predicted_outputs)
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
@@ -142,6 +148,17 @@ macro_rules! impl_controller {
                 <$core as $crate::control::mpc::core::ControllerCore>::qp_status(&self.core)
             }
 
+            fn model_time(&self) -> Option<std::time::Duration> {
+                <$core as $crate::control::mpc::core::ControllerCore>::model_time(&self.core)
+            }
+
+            fn set_check_budget(&mut self, checks: Option<u32>) {
+                <$core as $crate::control::mpc::core::ControllerCore>::set_check_budget(
+                    &mut self.core,
+                    checks,
+                )
+            }
+
             fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
                 <$core as $crate::control::mpc::core::ControllerCore>::predicted_outputs(
                     &mut self.core,
@@ -187,6 +204,12 @@ impl ControllerCore for Core {
     }
     fn qp_status(&self) -> Option<QpStatus> {
         Core::qp_status(self)
+    }
+    fn model_time(&self) -> Option<std::time::Duration> {
+        Some(Core::model_time(self))
+    }
+    fn set_check_budget(&mut self, checks: Option<u32>) {
+        Core::set_check_budget(self, checks)
     }
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         Core::predicted_outputs(self, out).is_ok()
@@ -319,6 +342,13 @@ pub(crate) struct Core {
     pub(super) y_err: Vec<f64>,
     /// Work of [`Core::predicted_outputs`].
     predicted_work: Vec<f64>,
+    /// Time the last step spent in [`Core::prepare`].
+    model_time: std::time::Duration,
+    /// With a step budget: when the last step's torque-limit QP returned.
+    qp_end: Option<std::time::Instant>,
+    /// With a step budget: the longest time a step took after its QP (µs),
+    /// kept back from the QP's deadline.
+    tail_us: f64,
 }
 
 /// The per-algorithm part of one step of a paper controller: what it
@@ -358,7 +388,15 @@ impl Core {
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
         let (x, w_k, preview) = input;
+        let start = std::time::Instant::now();
+        if let Some(qp) = self.qp.as_mut() {
+            // The QP's deadline keeps back the longest tail seen after it
+            // (torque, checks, commit), so the step ends within the budget.
+            let budget = self.settings.step_budget_us.map(|b| b - self.tail_us);
+            qp.arm(start, budget);
+        }
         self.prepare(model, x, w_k, preview, tau.len())?;
+        self.model_time = start.elapsed();
         targets.begin(self, x, w_k, preview);
         let info = if self.backend.stage_mut().is_some() {
             targets.stage_targets(self, x, preview)?;
@@ -378,6 +416,9 @@ impl Core {
         };
         let out = self.finish(x, T::INCREMENTAL, info, tau)?;
         targets.commit(self);
+        if let Some(qp_end) = self.qp_end.take() {
+            self.tail_us = self.tail_us.max(qp_end.elapsed().as_secs_f64() * 1e6);
+        }
         Ok(out)
     }
 }
@@ -465,6 +506,9 @@ impl Core {
             y_err: vec![0.0; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             predicted_work: vec![0.0; predicted_outputs_work(n)],
+            model_time: std::time::Duration::ZERO,
+            qp_end: None,
+            tail_us: 0.0,
         })
     }
 
@@ -496,6 +540,19 @@ impl Core {
     /// What the torque-limit QP did at the last step (`None` without limits).
     pub fn qp_status(&self) -> Option<QpStatus> {
         self.qp.as_ref().map(|q| q.status)
+    }
+
+    /// Time the last step spent on the model (terms, ZOH, predictions).
+    pub fn model_time(&self) -> std::time::Duration {
+        self.model_time
+    }
+
+    /// The torque-limit QP's budget in deadline checks (tests;
+    /// `TorqueLimitQp::set_check_budget`); no effect without torque limits.
+    pub fn set_check_budget(&mut self, checks: Option<u32>) {
+        if let Some(qp) = self.qp.as_mut() {
+            qp.set_check_budget(checks);
+        }
     }
 
     /// The outputs the controller predicted at its last successful step,
@@ -844,6 +901,9 @@ impl Core {
             match source {
                 Some(lsq) => qp.enforce(&self.model, lsq, &self.u_prev, &mut self.u_new),
                 None => qp.clear(),
+            }
+            if self.settings.step_budget_us.is_some() {
+                self.qp_end = Some(std::time::Instant::now());
             }
         }
         self.model.torque(&self.u_new, &mut self.tau_new)?;

@@ -3,13 +3,22 @@
 //! it) with the model's `H` and `g` (`τ = H u + g`, Eq. (15)).
 
 use crate::control::mpc::model::LinearLikeModel;
-use crate::control::solvers::constrained::{solve_box_qp, BoxQpWork, QpStatus};
+use crate::control::solvers::constrained::{
+    solve_box_qp_until, BoxQp, BoxQpWork, Deadline, QpStatus,
+};
 use crate::control::solvers::dense::dot;
 use crate::control::solvers::lsq::LsqWorkspace;
+use crate::control::telemetry::FallbackLevel;
+use std::time::Instant;
 
 /// Relative margin kept inside the limits so that rounding in `τ = H u + g`
 /// never crosses them.
 const MARGIN: f64 = 1e-9;
+
+/// Most samples in a row a plan is shifted on (open loop) before a step
+/// solves the QP past its budget: measured on the saturation example at
+/// `Ts` = 10 ms, 9 shifts (`N − 1`) diverge.
+const MAX_SHIFTS: usize = 1;
 
 /// Preallocated workspace of the constrained step for `n` joints, horizon `N`,
 /// and `m` rows of `𝒜`.
@@ -37,6 +46,21 @@ pub(crate) struct TorqueLimitQp {
     pub saturated: Vec<bool>,
     /// What the last step did.
     pub status: QpStatus,
+    /// The step's deadline ([`Self::arm`] before each step).
+    deadline: Deadline,
+    /// A budget counted in deadline checks instead of µs, for tests
+    /// ([`Self::arm`]).
+    check_budget: Option<u32>,
+    /// This step has a budget (armed with a deadline).
+    budgeted: bool,
+    /// This step's QP ran past its budget (no plan left to shift).
+    overrun: bool,
+    /// With a deadline: the torque plan `τ_{k+j}` of the last step that
+    /// made one (natural order, block `j`), for the shifted-plan fallback.
+    plan: Vec<f64>,
+    /// Samples since `plan` was made (its block `plan_age` is the torque
+    /// last returned); `None`: no plan yet.
+    plan_age: Option<usize>,
 }
 
 impl TorqueLimitQp {
@@ -63,7 +87,99 @@ impl TorqueLimitQp {
             u_seq: vec![0.0; p],
             saturated: vec![false; n],
             status: QpStatus::default(),
+            deadline: Deadline::Never,
+            check_budget: None,
+            budgeted: false,
+            overrun: false,
+            plan: vec![0.0; p],
+            plan_age: None,
         }
+    }
+
+    /// Sets the deadline of a step that began at `start` with a budget of
+    /// `budget_us` (`None`: none), or the check budget when one is set.
+    pub fn arm(&mut self, start: Instant, budget_us: Option<f64>) {
+        self.deadline = match (self.check_budget, budget_us) {
+            (Some(checks), _) => Deadline::Checks(checks),
+            // A budget beyond the clock's range is no deadline.
+            (None, Some(b)) => std::time::Duration::try_from_secs_f64(b.max(0.0) * 1e-6)
+                .ok()
+                .and_then(|d| start.checked_add(d))
+                .map_or(Deadline::Never, Deadline::At),
+            (None, None) => Deadline::Never,
+        };
+        self.budgeted = self.deadline != Deadline::Never;
+        self.overrun = false;
+    }
+
+    /// Counts the budget in deadline checks (`None`: in µs again): each
+    /// check before a horizon block of the QP's build, a column of its
+    /// Hessian or an iteration spends one; deterministic, for tests.
+    pub fn set_check_budget(&mut self, checks: Option<u32>) {
+        self.check_budget = checks;
+    }
+
+    /// Whether the step's deadline has passed (never without one).
+    #[inline]
+    fn spent(&mut self) -> bool {
+        self.deadline.spent()
+    }
+
+    /// With a deadline, keeps the plan `τ_{k+j} = z_j + g` (the `z` of
+    /// [`Self::plan_torques`] when `permuted` is false, of the QP's layout
+    /// otherwise) for a later shifted-plan fallback.
+    fn keep_plan(&mut self, g: &[f64], permuted: bool) {
+        if !self.budgeted {
+            return;
+        }
+        let (n, nh) = (self.n, self.nh);
+        for j in 0..nh {
+            for i in 0..n {
+                let k = if permuted { self.col(j, i) } else { j * n + i };
+                self.plan[j * n + i] = self.z[k] + g[i];
+            }
+        }
+        self.plan_age = Some(0);
+    }
+
+    /// The budget fallback when the deadline passed before the QP's first
+    /// iteration (its build unfinished) and a plan is left
+    /// ([`Self::plan_left`]): the kept plan one sample on
+    /// ([`FallbackLevel::ShiftedPlan`]), clamped into the limits, as `u_k`
+    /// into `u_new` (without a plan, defensively, the unconstrained torque
+    /// clamped: [`FallbackLevel::BestFeasible`]).
+    /// Whether the kept plan has a block left to shift to.
+    fn plan_left(&self) -> bool {
+        self.plan_age
+            .is_some_and(|a| a + 1 < self.nh && a < MAX_SHIFTS)
+    }
+
+    fn fall_back(&mut self, model: &LinearLikeModel, u_new: &mut [f64]) {
+        let n = self.n;
+        let g = model.g().as_slice();
+        let age = self.plan_age.filter(|_| self.plan_left()).map(|a| a + 1);
+        if age.is_some() {
+            self.plan_age = age;
+        }
+        for i in 0..n {
+            let lim = self.tau_max[i] * (1.0 - MARGIN);
+            // Without a plan: z_0 = H u_k of the unconstrained solution.
+            let tau = age.map_or(self.z[i] + g[i], |a| self.plan[a * n + i]);
+            let tau = if lim.is_finite() {
+                tau.clamp(-lim, lim)
+            } else {
+                tau
+            };
+            u_new[i] = tau - g[i];
+            self.saturated[i] = lim.is_finite() && tau.abs() >= lim;
+        }
+        model.solve_h_in_place(u_new);
+        self.status.fallback = true;
+        self.status.budget_hit = true;
+        self.status.fallback_level = match age {
+            Some(_) => FallbackLevel::ShiftedPlan,
+            None => FallbackLevel::BestFeasible,
+        };
     }
 
     /// The limits `τmax` (n values).
@@ -133,31 +249,14 @@ impl TorqueLimitQp {
         self.saturated.fill(false);
     }
 
-    /// Checks the unconstrained solution of the solved least-squares system
-    /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
-    /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`
-    /// and writes the constrained `u_k` into `u_new`. `u_prev` is `u_{k−1}`
-    /// (incremental algorithms). Allocation-free.
-    pub fn enforce(
-        &mut self,
-        model: &LinearLikeModel,
-        lsq: &LsqWorkspace,
-        u_prev: &[f64],
-        u_new: &mut [f64],
-    ) {
+    /// The QP of [`Self::enforce`] from `lsq`'s factor: `B = R1 T`,
+    /// `b' = c1 − R1 e`, `P = BᵀB`, `c = Bᵀb'`. `false` (and the QP not
+    /// built) when the step's deadline passes on the way (checked per
+    /// horizon block and per column of `P`).
+    fn build(&mut self, model: &LinearLikeModel, lsq: &LsqWorkspace, u_prev: &[f64]) -> bool {
         let (n, nh) = (self.n, self.nh);
         let p = n * nh;
         let m = p;
-        let sol = lsq.solution();
-        self.status = QpStatus::default();
-        self.saturated.fill(false);
-        // u_{k+j} and H u_{k+j} over the horizon from the unconstrained solution.
-        let violated = self.plan_torques(model, u_prev, |j, i| sol[(nh - 1 - j) * n + i]);
-        let g = model.g().as_slice();
-        if !violated {
-            return;
-        }
-        self.status.active = true;
         // H⁻¹ column by column.
         self.hinv.fill(0.0);
         for c in 0..n {
@@ -170,6 +269,9 @@ impl TorqueLimitQp {
         // non-zero in rows 0..=d only.
         let col = |j: usize, i: usize| (nh - 1 - j) * n + i;
         for j in 0..nh {
+            if self.spent() {
+                return false;
+            }
             for c in 0..n {
                 let bc = col(j, c);
                 let out = &mut self.bz[bc * m..bc * m + m];
@@ -201,6 +303,9 @@ impl TorqueLimitQp {
         // below row n·t' (upper triangular).
         let end = |c: usize| n * (c / n + 1);
         for c1 in 0..p {
+            if self.spent() {
+                return false;
+            }
             let b1 = &self.bz[c1 * m..c1 * m + end(c1)];
             for c2 in c1..p {
                 let len = end(c1).min(end(c2));
@@ -210,6 +315,45 @@ impl TorqueLimitQp {
                 self.hess[c1 * p + c2] = s;
             }
             self.lin[c1] = dot(b1, &self.b);
+        }
+        true
+    }
+
+    /// Checks the unconstrained solution of the solved least-squares system
+    /// `lsq` (layout of `𝒜`'s columns) against the limits over the horizon;
+    /// when it violates one, solves the QP from `lsq`'s factor `R1`, `c1`
+    /// and writes the constrained `u_k` into `u_new`. `u_prev` is `u_{k−1}`
+    /// (incremental algorithms). Allocation-free.
+    pub fn enforce(
+        &mut self,
+        model: &LinearLikeModel,
+        lsq: &LsqWorkspace,
+        u_prev: &[f64],
+        u_new: &mut [f64],
+    ) {
+        let (n, nh) = (self.n, self.nh);
+        let p = n * nh;
+        let sol = lsq.solution();
+        self.status = QpStatus::default();
+        self.saturated.fill(false);
+        // u_{k+j} and H u_{k+j} over the horizon from the unconstrained solution.
+        let violated = self.plan_torques(model, u_prev, |j, i| sol[(nh - 1 - j) * n + i]);
+        let g = model.g().as_slice();
+        if !violated {
+            self.keep_plan(g, false);
+            return;
+        }
+        self.status.active = true;
+        if !self.build(model, lsq, u_prev) {
+            if self.plan_left() {
+                self.fall_back(model, u_new);
+                return;
+            }
+            // No plan left to shift: this step solves the QP past its
+            // budget (a fresh plan for the next ones), counted as a hit.
+            self.deadline = Deadline::Never;
+            self.overrun = true;
+            self.build(model, lsq, u_prev);
         }
         // The box and the warm start (the unconstrained z, clipped).
         for j in 0..nh {
@@ -228,19 +372,27 @@ impl TorqueLimitQp {
             }
         }
         self.z.copy_from_slice(&self.work.z0);
-        let info = solve_box_qp(
-            p,
-            &self.hess,
-            &self.lin,
-            &self.lo,
-            &self.hi,
+        let info = solve_box_qp_until(
+            BoxQp {
+                p,
+                hess: &self.hess,
+                lin: &self.lin,
+                lo: &self.lo,
+                hi: &self.hi,
+            },
             &mut self.z,
             &mut self.state,
             &mut self.work,
-            (4 * p) as u32,
+            ((4 * p) as u32, &mut self.deadline),
         );
         self.status.iterations = info.0;
         self.status.fallback = !info.1;
+        self.status.budget_hit = info.2 || self.overrun;
+        self.status.active_constraints = self.state.iter().filter(|&&s| s != 0).count() as u32;
+        if !info.1 {
+            self.status.fallback_level = FallbackLevel::BestFeasible;
+        }
+        self.keep_plan(g, true);
         // u_k = H⁻¹ z_0.
         for i in 0..n {
             let k = self.col(0, i);

@@ -40,7 +40,9 @@
 //! preallocated (`p = N·n = 60` unknowns for the IRB 140 at `N = 10`).
 
 use crate::control::solvers::dense::dot;
+use crate::control::telemetry::FallbackLevel;
 use crate::linalg::{cholesky_in_place, cholesky_solve_in_place_dot};
+use std::time::Instant;
 
 /// What the constrained step did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -52,6 +54,47 @@ pub struct QpStatus {
     /// The iteration bound was reached (or a factorization failed): the
     /// returned input is feasible but not optimal.
     pub fallback: bool,
+    /// Box constraints active at the returned answer.
+    pub active_constraints: u32,
+    /// The step budget ran out before the QP converged: the answer is its
+    /// best feasible point so far (`fallback` is set too).
+    pub budget_hit: bool,
+    /// Which answer the QP returned: [`FallbackLevel::None`] (its optimum,
+    /// or the unconstrained plan when it did not run),
+    /// [`FallbackLevel::BestFeasible`] (stopped at its iteration cap or the
+    /// deadline), [`FallbackLevel::ShiftedPlan`] (the deadline passed before
+    /// its first iteration: the previous step's torque plan, one sample on,
+    /// within the limits); never [`FallbackLevel::Hold`] (the controller's
+    /// numerical failure).
+    pub fallback_level: FallbackLevel,
+}
+
+/// When a step's budget is spent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Deadline {
+    /// No budget.
+    #[default]
+    Never,
+    /// The clock passes this instant.
+    At(Instant),
+    /// After this many more checks (a deterministic budget for tests).
+    Checks(u32),
+}
+
+impl Deadline {
+    /// Whether the budget is spent; a check budget spends one check.
+    #[inline]
+    pub fn spent(&mut self) -> bool {
+        match self {
+            Deadline::Never => false,
+            Deadline::At(d) => Instant::now() >= *d,
+            Deadline::Checks(0) => true,
+            Deadline::Checks(n) => {
+                *n -= 1;
+                false
+            }
+        }
+    }
 }
 
 /// Preallocated work of [`solve_box_qp`] for up to `p` unknowns.
@@ -92,6 +135,7 @@ impl BoxQpWork {
 /// Every iterate is feasible and none increases the cost, so when the
 /// iteration bound `max_iter` is reached `z` is a feasible point no worse than
 /// the clipped start. Returns (iterations, converged). Allocation-free.
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 pub fn solve_box_qp(
     p: usize,
@@ -104,6 +148,51 @@ pub fn solve_box_qp(
     w: &mut BoxQpWork,
     max_iter: u32,
 ) -> (u32, bool) {
+    let qp = BoxQp {
+        p,
+        hess,
+        lin,
+        lo,
+        hi,
+    };
+    let (it, ok, _) = solve_box_qp_until(qp, z, state, w, (max_iter, &mut Deadline::Never));
+    (it, ok)
+}
+
+/// The problem of [`solve_box_qp`]: `p` unknowns, `P`, `c` and the box.
+#[derive(Debug, Clone, Copy)]
+pub struct BoxQp<'a> {
+    /// Number of unknowns.
+    pub p: usize,
+    /// `P`, `p × p` column-major.
+    pub hess: &'a [f64],
+    /// `c`.
+    pub lin: &'a [f64],
+    /// Lower bounds.
+    pub lo: &'a [f64],
+    /// Upper bounds.
+    pub hi: &'a [f64],
+}
+
+/// [`solve_box_qp`] with a deadline: before each iteration, when the clock
+/// has passed `limits.1` the solve stops with its current (feasible) point.
+/// Returns (iterations, converged, deadline hit). `limits.0` bounds the
+/// iterations (the worst case of the QP the controller runs: `4·N·n`).
+pub fn solve_box_qp_until(
+    qp: BoxQp<'_>,
+    z: &mut [f64],
+    state: &mut [i8],
+    w: &mut BoxQpWork,
+    limits: (u32, &mut Deadline),
+) -> (u32, bool, bool) {
+    let BoxQp {
+        p,
+        hess,
+        lin,
+        lo,
+        hi,
+    } = qp;
+    let (max_iter, deadline) = limits;
     for i in 0..p {
         state[i] = 0;
         if z[i] <= lo[i] {
@@ -129,11 +218,19 @@ pub fn solve_box_qp(
             nf += 1;
         }
     }
+    // The first iteration's factorization (O(n_F³)) is the costliest
+    // unit of work: checked before it too.
+    if deadline.spent() {
+        return (0, false, true);
+    }
     if !factor_free(p, hess, &w.free[..nf], &mut w.l) {
-        return (1, false);
+        return (1, false, false);
     }
     let mut it = 0u32;
     while it < max_iter {
+        if deadline.spent() {
+            return (it, false, true);
+        }
         it += 1;
         // The reduced system P_FF z_F = c_F − P_FA z_A; P is symmetric, so
         // (P_FA z_A)_a is the contiguous column f_a of P against z_A (z with
@@ -145,25 +242,7 @@ pub fn solve_box_qp(
             w.rhs[a] = lin[fa] - dot(&hess[fa * p..fa * p + p], &w.za[..p]);
         }
         cholesky_solve_in_place_dot(nf, p, &w.l, &mut w.rhs[..nf]);
-        // Largest step towards the subproblem's optimum that stays in the box.
-        let mut alpha = 1.0f64;
-        let mut block: Option<(usize, usize, i8)> = None;
-        for (a, &fa) in w.free[..nf].iter().enumerate() {
-            let d = w.rhs[a] - z[fa];
-            if d < 0.0 && w.rhs[a] < lo[fa] {
-                let s = (lo[fa] - z[fa]) / d;
-                if s < alpha {
-                    alpha = s.max(0.0);
-                    block = Some((a, fa, -1));
-                }
-            } else if d > 0.0 && w.rhs[a] > hi[fa] {
-                let s = (hi[fa] - z[fa]) / d;
-                if s < alpha {
-                    alpha = s.max(0.0);
-                    block = Some((a, fa, 1));
-                }
-            }
-        }
+        let (alpha, block) = step_length(&w.free[..nf], &w.rhs[..nf], z, (lo, hi));
         for (a, &fa) in w.free[..nf].iter().enumerate() {
             z[fa] = if block.is_none() {
                 w.rhs[a]
@@ -179,25 +258,8 @@ pub fn solve_box_qp(
             nf -= 1;
             continue;
         }
-        // Optimal on this active set: check the multipliers (gradient signs).
-        let mut worst = tol;
-        let mut release = None;
-        for i in 0..p {
-            if state[i] == 0 {
-                continue;
-            }
-            let gi = dot(&hess[i * p..i * p + p], &z[..p]) - lin[i];
-            w.grad[i] = gi;
-            // At the lower bound the cost must not decrease upwards (g ≥ 0),
-            // at the upper bound not downwards (g ≤ 0).
-            let v = if state[i] < 0 { -gi } else { gi };
-            if v > worst {
-                worst = v;
-                release = Some(i);
-            }
-        }
-        let Some(i) = release else {
-            return (it, true);
+        let Some(i) = worst_multiplier((p, hess, lin), z, state, &mut w.grad, tol) else {
+            return (it, true, false);
         };
         state[i] = 0;
         for (a, &fa) in w.free[..nf].iter().enumerate() {
@@ -208,10 +270,71 @@ pub fn solve_box_qp(
         if !append_to_factor(nf - 1, p, &mut w.l, &mut w.k[..nf - 1], hess[i * p + i])
             && !factor_free(p, hess, &w.free[..nf], &mut w.l)
         {
-            return (it, false);
+            return (it, false, false);
         }
     }
-    (it, false)
+    (it, false, false)
+}
+
+/// Largest step of [`solve_box_qp_until`] from `z` towards the free
+/// subproblem's optimum `target` (entry `a` is that of `free[a]`) that stays
+/// in the box: `α ≤ 1` and the bound that blocks it (position in `free`,
+/// variable, `−1`/`+1` for lower/upper).
+#[allow(clippy::type_complexity)]
+fn step_length(
+    free: &[usize],
+    target: &[f64],
+    z: &[f64],
+    (lo, hi): (&[f64], &[f64]),
+) -> (f64, Option<(usize, usize, i8)>) {
+    let mut alpha = 1.0f64;
+    let mut block: Option<(usize, usize, i8)> = None;
+    for (a, &fa) in free.iter().enumerate() {
+        let d = target[a] - z[fa];
+        if d < 0.0 && target[a] < lo[fa] {
+            let s = (lo[fa] - z[fa]) / d;
+            if s < alpha {
+                alpha = s.max(0.0);
+                block = Some((a, fa, -1));
+            }
+        } else if d > 0.0 && target[a] > hi[fa] {
+            let s = (hi[fa] - z[fa]) / d;
+            if s < alpha {
+                alpha = s.max(0.0);
+                block = Some((a, fa, 1));
+            }
+        }
+    }
+    (alpha, block)
+}
+
+/// Optimal on the active set: the bound variable whose multiplier (gradient
+/// sign) is the most wrong, beyond `tol` (`None`: optimal); the gradient of
+/// the bound variables into `grad`.
+fn worst_multiplier(
+    (p, hess, lin): (usize, &[f64], &[f64]),
+    z: &[f64],
+    state: &[i8],
+    grad: &mut [f64],
+    tol: f64,
+) -> Option<usize> {
+    let mut worst = tol;
+    let mut release = None;
+    for i in 0..p {
+        if state[i] == 0 {
+            continue;
+        }
+        let gi = dot(&hess[i * p..i * p + p], &z[..p]) - lin[i];
+        grad[i] = gi;
+        // At the lower bound the cost must not decrease upwards (g ≥ 0),
+        // at the upper bound not downwards (g ≤ 0).
+        let v = if state[i] < 0 { -gi } else { gi };
+        if v > worst {
+            worst = v;
+            release = Some(i);
+        }
+    }
+    release
 }
 
 /// Cholesky factor of `P_FF` (rows and columns `free` of the p×p
