@@ -174,8 +174,15 @@ fn stop_is_faster(curve: &QuinticBlend, f1: f64, f2: f64, max_accel: f64, max_je
     let feed = f1.min(f2);
     let v_c = feed.min(turn_speed(curve, max_accel, max_jerk));
     let t_j = 2.0 * max_accel / max_jerk;
-    v_c < MIN_BLEND_SPEED_SHARE * feed && 2.2 * t_j * (1.0 - v_c / feed) > t_j + v_c / max_accel
+    let extra = 2.2 * t_j * (1.0 - v_c / feed) - (t_j + v_c / max_accel);
+    extra > 0.0 && (v_c < MIN_BLEND_SPEED_SHARE * feed || extra > MAX_BLEND_EXTRA_S)
 }
+
+/// Most time (s) a kept `G64` blend of at least [`MIN_BLEND_SPEED_SHARE`] of the feed may
+/// cost over a stop at its corner (estimated as in [`blend_timed`]): a CNC keeps moving
+/// through a corner it can pass within the tolerance, but a blend much slower than a stop
+/// is traded for one, so that a blended program stays near time-optimal.
+pub const MAX_BLEND_EXTRA_S: f64 = 0.06;
 
 /// Share of the jerk setting that the turning of the path's curvature vector may take,
 /// `ṡ³ |dk/ds|` (the rest of the Cartesian jerk `s⃛ t + 3 ṡ s̈ κ n + ṡ³ dk/ds` is the
