@@ -354,7 +354,7 @@ pub struct MpcSettings {
     /// Bound on the distance of an identified payload's centre of mass from
     /// the flange (m) for the adaptive kinds on a real arm (and, with it, the
     /// model's payload moves to the estimate with the time constant
-    /// [`RealArmIdentification::model_time_s`](crate::control::RealArmIdentification::model_time_s),
+    /// `RealArmIdentification::model_time_s`,
     /// 0.5 s, instead of within a few samples):
     /// the first moment identified from delayed, quantized data is noise while
     /// the mass is small, and `h/m` then puts the mass metres away.
