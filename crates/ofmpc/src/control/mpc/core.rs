@@ -314,6 +314,9 @@ pub(crate) struct Core {
     hold: Vec<bool>,
     /// Half-width of the hold dead zone (rad; 0: none).
     hold_band: f64,
+    /// Per joint: `Q_Δu`'s entry while the reference moves and the factor
+    /// on it at rest (`hold_q_du_scale`); `None` when every factor is 1.
+    hold_q_du: Option<(Vec<f64>, Vec<f64>)>,
     /// The measured output as the tracking rows see it: `y_k`, with `w_k` on
     /// the joints in the hold dead zone.
     pub(super) y_err: Vec<f64>,
@@ -420,6 +423,14 @@ impl Core {
             }),
             Solver::Structured => Backend::Structured(structured_backend(n, settings, kind)?),
         };
+        let hold_scale: Vec<f64> = (0..n)
+            .map(|i| settings.hold_q_du_scale.get(i).unwrap_or(1.0))
+            .collect();
+        let hold_q_du = (incremental && hold_scale.iter().any(|&f| f != 1.0))
+            .then(|| (diag(&settings.q_du), hold_scale));
+        if hold_q_du.is_some() && matches!(backend, Backend::Structured(_)) {
+            return Err(SettingsError::HoldQduScaleStructured);
+        }
         Ok(Self {
             n,
             nh,
@@ -464,6 +475,7 @@ impl Core {
             hold: vec![false; n],
             y_err: vec![0.0; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            hold_q_du,
             predicted_work: vec![0.0; predicted_outputs_work(n)],
         })
     }
@@ -625,6 +637,7 @@ impl Core {
         for (((ye, h), w), y) in self.y_err.iter_mut().zip(&self.hold).zip(w_k).zip(x) {
             *ye = if *h { *w } else { *y };
         }
+        self.hold_weights(w_k, preview);
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if matches!(self.backend, Backend::Dense(_)) {
             self.pred
@@ -635,6 +648,18 @@ impl Core {
             *d = a - b;
         }
         Ok(())
+    }
+
+    /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints whose
+    /// reference rests over the horizon (settings.rs says why).
+    fn hold_weights(&mut self, w_k: &[f64], preview: &[f64]) {
+        let n = self.n;
+        if let Some((moving, scale)) = &self.hold_q_du {
+            for (i, w) in self.w_bot.iter_mut().enumerate() {
+                let rests = preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
+                *w = if rests { moving[i] * scale[i] } else { moving[i] };
+            }
+        }
     }
 
     /// Writes `𝒜` of the usual controller, `[Q_YW G1; Q_U]`, in the permuted
