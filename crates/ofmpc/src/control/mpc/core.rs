@@ -42,6 +42,12 @@ use crate::control::mpc::prediction::{
     predicted_outputs, predicted_outputs_work, PredictionError, Predictions,
 };
 use crate::control::mpc::torque_limits::TorqueLimitQp;
+
+/// A joint creeps while `|q̇| < CREEP_FACTOR·v_s` ([`Core::hold_weights`]):
+/// the friction's slope there is still a fifth of its slope at rest or more
+/// (`F_c tanh(3)/(3 v_s)`), and one encoder count per sample (6e-4 rad/s at
+/// 20 bits and 10 ms) does not leave it.
+const CREEP_FACTOR: f64 = 3.0;
 use crate::control::mpc::zoh::Zoh;
 use crate::control::settings::{MpcSettings, SettingsError, Solver};
 use crate::control::solvers::constrained::QpStatus;
@@ -637,7 +643,7 @@ impl Core {
         for (((ye, h), w), y) in self.y_err.iter_mut().zip(&self.hold).zip(w_k).zip(x) {
             *ye = if *h { *w } else { *y };
         }
-        self.hold_weights(w_k, preview);
+        self.hold_weights(x, w_k, preview);
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if matches!(self.backend, Backend::Dense(_)) {
             self.pred
@@ -651,13 +657,28 @@ impl Core {
     }
 
     /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints whose
-    /// reference rests over the horizon (settings.rs says why).
-    fn hold_weights(&mut self, w_k: &[f64], preview: &[f64]) {
+    /// reference rests over the horizon and which creep (`|q̇| < v_s`, the
+    /// drives' Coulomb velocity scale, where the friction is the stiff damper
+    /// the factor is for; settings.rs says why). Beyond it — a joint broken
+    /// away — the weight of the motion: the stiffer gain on the bare inertia
+    /// would cycle through the delay.
+    fn hold_weights(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
         let n = self.n;
+        let v_s = self
+            .drives
+            .as_ref()
+            .map_or(crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY, |d| {
+                d.coulomb_velocity_rad_s
+            });
         if let Some((moving, scale)) = &self.hold_q_du {
             for (i, w) in self.w_bot.iter_mut().enumerate() {
-                let rests = preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
-                *w = if rests { moving[i] * scale[i] } else { moving[i] };
+                let creeps = x[n + i].abs() < CREEP_FACTOR * v_s
+                    && preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
+                *w = if creeps {
+                    moving[i] * scale[i]
+                } else {
+                    moving[i]
+                };
             }
         }
     }
