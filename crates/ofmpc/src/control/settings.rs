@@ -358,12 +358,15 @@ pub struct MpcSettings {
     /// whose reference rests over the horizon: a stiffer hold. Near rest the
     /// smoothed Coulomb friction `F_c tanh(v/v_s)` is a stiff damper
     /// `b = F_c/v_s` (500–1000 N·m·s/rad on the wrist of the real-arm preset)
-    /// against which the light wrist joints' gains, tuned for their inertia,
-    /// are far too soft: the hold rings at about 1 Hz by 5–13 encoder counts
-    /// (`control/dead_zone.rs` gives the loop). The damper also makes the
-    /// stiffer hold stable through the delay. While the reference moves
-    /// nothing changes. The dense solver only (the structured one refuses a
-    /// factor other than 1). `1` (default): unchanged.
+    /// against which the light wrist joints' gains, tuned for their inertia
+    /// `M`, are far too soft: the loop `b s² + M k_p s + M k_i = 0` is damped
+    /// by `M k_p / (2 √(M k_i b))`, about 0.1, and the hold rings at about
+    /// 1 Hz by 4–13 encoder counts. The damper also keeps the stiffer hold
+    /// stable through the delay, so the factor applies only where it is:
+    /// with `friction_compensation`, on a joint with a Coulomb estimate, while
+    /// `|q̇| < 3 v_s`. While the reference moves nothing changes. The dense
+    /// solver only (the structured one refuses a factor other than 1).
+    /// `1` (default): unchanged.
     pub hold_q_du_scale: Weight,
 }
 

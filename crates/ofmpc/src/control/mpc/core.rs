@@ -656,30 +656,34 @@ impl Core {
         Ok(())
     }
 
-    /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints whose
-    /// reference rests over the horizon and which creep (`|q̇| < v_s`, the
+    /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints with
+    /// a compensated Coulomb friction (`friction_compensation`, `F_c > 0`)
+    /// whose reference rests over the horizon and which creep (`|q̇| < v_s`, the
     /// drives' Coulomb velocity scale, where the friction is the stiff damper
     /// the factor is for; settings.rs says why). Beyond it — a joint broken
     /// away — the weight of the motion: the stiffer gain on the bare inertia
     /// would cycle through the delay.
     fn hold_weights(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
         let n = self.n;
-        let v_s = self
+        let Some((moving, scale)) = &self.hold_q_du else {
+            return;
+        };
+        // The damper is the compensated friction's: none without it.
+        let drives = self
             .drives
             .as_ref()
-            .map_or(crate::dynamics::friction::DEFAULT_COULOMB_VELOCITY, |d| {
-                d.coulomb_velocity_rad_s
+            .filter(|_| self.settings.friction_compensation);
+        for (i, w) in self.w_bot.iter_mut().enumerate() {
+            let creeps = drives.is_some_and(|d| {
+                d.coulomb_nm[i] > 0.0
+                    && x[n + i].abs() < CREEP_FACTOR * d.coulomb_velocity_rad_s
+                    && preview.chunks_exact(n).all(|p| p[i] == w_k[i])
             });
-        if let Some((moving, scale)) = &self.hold_q_du {
-            for (i, w) in self.w_bot.iter_mut().enumerate() {
-                let creeps = x[n + i].abs() < CREEP_FACTOR * v_s
-                    && preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
-                *w = if creeps {
-                    moving[i] * scale[i]
-                } else {
-                    moving[i]
-                };
-            }
+            *w = if creeps {
+                moving[i] * scale[i]
+            } else {
+                moving[i]
+            };
         }
     }
 
