@@ -7,18 +7,18 @@
 //! controller keys of `examples/real-arm.toml`: delay and friction
 //! compensation, the observer's friction model as the creeping law
 //! (`friction_creep`), the payload bound (`max_payload_kg = 9`, 1.5 × rated)
-//! and its centre-of-mass bound (`payload_com_max_m = 0.2`), the hold dead
-//! zone (`encoder_counts`), `q_du = 1e-4`, `q_u = 1e-5`.
+//! and its centre-of-mass bound (`payload_com_max_m = 0.2`), the wrist's
+//! stiff hold (`hold_q_du_scale = [1, 1, 1, 0.01, 0.01, 0.01]`, no dead
+//! zone), `q_du = 1e-4`, `q_u = 1e-5`.
 //!
 //! Measured (`ofmpc run examples/real-arm.toml`, Cartesian RMS / steady mm at
-//! 0/2/6 kg; docs/guide/real-arm.md): every run "ok", steady 0.003–0.0065 mm
-//! for every controller at every payload; RMS first-adaptive
-//! 0.062/0.088/0.17, second-adaptive 0.066/0.076/0.15, ctc-adaptive
-//! 0.062/0.081/0.17, dob-mpc 0.099/0.20/0.57, first 0.065/0.15/0.48, second
-//! 0.062/0.11/0.31 (at 6 kg the start under the unknown load dominates the
-//! non-adaptive kinds' RMS); estimates within 0.4 kg. Before (the same
-//! plant, the keys of the previous round): steady 0.006–0.21 mm, RMS up to
-//! 1.8 mm (the adaptive kinds' estimate bursts).
+//! 0/2/6 kg; docs/guide/real-arm.md): steady 0.0024–0.0052 mm for every
+//! controller at every payload; RMS first-adaptive 0.063/0.086/0.17,
+//! second-adaptive 0.061/0.077/0.16, ctc-adaptive 0.063/0.079/0.17, dob-mpc
+//! 0.099/0.20/0.57, first 0.065/0.15/0.48, second 0.062/0.12/0.31; the hold
+//! within 2 encoder counts ("ok") for first, first-adaptive, second-adaptive
+//! at every payload and second at 0 kg, 3 counts for second at 2 and 6 kg,
+//! 4–8 for ctc-adaptive and dob-mpc ("hunting"); estimates within 0.41 kg.
 
 mod common;
 
@@ -330,4 +330,28 @@ fn the_real_arm_keys_are_validated() {
         let e = s.validate().unwrap_err();
         assert!(e.to_string().contains(what), "{e}");
     }
+}
+
+#[test]
+fn the_stiff_hold_needs_the_dense_solver() {
+    use ofmpc::control::{new_controller, Solver};
+    let s = MpcSettings {
+        hold_q_du_scale: Weight::Scalar(0.5),
+        solver: Solver::Structured,
+        ..Default::default()
+    };
+    let e = new_controller(ControllerKind::First, 6, &s).err().unwrap();
+    assert!(e.to_string().contains("dense solver"), "{e}");
+    // A factor of 1 is no factor: the structured solver builds.
+    let one = MpcSettings {
+        hold_q_du_scale: Weight::Scalar(1.0),
+        ..s.clone()
+    };
+    assert!(new_controller(ControllerKind::First, 6, &one).is_ok());
+    // The dense solver takes it.
+    let dense = MpcSettings {
+        solver: Solver::DenseQr,
+        ..s
+    };
+    assert!(new_controller(ControllerKind::Second, 6, &dense).is_ok());
 }
