@@ -217,6 +217,7 @@ fn built_controller_steps_allocate_nothing() {
         friction_creep: true,
         payload_com_max_m: 0.2,
         encoder_counts: 1_048_576.0,
+        hold_q_du_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01]),
         ..limited.clone()
     };
     let drives = binding_drives(n);

@@ -375,6 +375,21 @@ pub struct MpcSettings {
     /// (`[plant.servo]`), else 0. Only with a position or velocity output.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output_lead_s: Option<f64>,
+    /// The factor (in `(0, 1]`, one for every joint or one per joint) on the
+    /// input-increment weight `q_du` of the incremental algorithms on a joint
+    /// whose reference rests over the horizon: a stiffer hold. Near rest the
+    /// smoothed Coulomb friction `F_c tanh(v/v_s)` is a stiff damper
+    /// `b = F_c/v_s` (500–1000 N·m·s/rad on the wrist of the real-arm preset)
+    /// against which the light wrist joints' gains, tuned for their inertia
+    /// `M`, are far too soft: the loop `b s² + M k_p s + M k_i = 0` is damped
+    /// by `M k_p / (2 √(M k_i b))`, about 0.1, and the hold rings at about
+    /// 1 Hz by 4–13 encoder counts. The damper also keeps the stiffer hold
+    /// stable through the delay, so the factor applies only where it is:
+    /// with `friction_compensation`, on a joint with a Coulomb estimate, while
+    /// `|q̇| < 3 v_s`. While the reference moves nothing changes. The dense
+    /// solver only (the structured one refuses a factor other than 1).
+    /// `1` (default): unchanged.
+    pub hold_q_du_scale: Weight,
 }
 
 impl Default for MpcSettings {
@@ -401,6 +416,7 @@ impl Default for MpcSettings {
             payload_com_max_m: 0.0,
             output: OutputMode::Torque,
             output_lead_s: None,
+            hold_q_du_scale: Weight::Scalar(1.0),
         }
     }
 }
@@ -478,6 +494,17 @@ impl MpcSettings {
         {
             return Err(SettingsError::StepBudget(b));
         }
+        let scales: &[f64] = match &self.hold_q_du_scale {
+            Weight::Scalar(v) => std::slice::from_ref(v),
+            Weight::Diagonal(d) => d,
+        };
+        if let Some((index, &value)) = scales
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(**v > 0.0 && **v <= 1.0))
+        {
+            return Err(SettingsError::HoldQduScale { index, value });
+        }
         if self.horizon == 0 || self.horizon > MAX_HORIZON {
             return Err(SettingsError::BadHorizon(self.horizon));
         }
@@ -496,6 +523,7 @@ impl MpcSettings {
             ("q_dy", &self.q_dy, false),
             ("q_du", &self.q_du, true),
             ("q_u", &self.q_u, true),
+            ("hold_q_du_scale", &self.hold_q_du_scale, true),
         ] {
             w.check(name, positive, dof)?;
             if let Weight::Diagonal(d) = w {
@@ -640,6 +668,18 @@ pub enum SettingsError {
     /// The bound on the payload's centre of mass is negative or not finite.
     #[error("the bound on the identified payload's centre of mass is {0} m: it must be finite and >= 0 (0: no bound)")]
     PayloadComBound(f64),
+    /// A factor of the input-increment weight at rest is not in `(0, 1]`.
+    #[error("the factor of the input-increment weight at rest (hold_q_du_scale) is {value} at entry {index}: it must be within (0, 1] (1: unchanged)")]
+    HoldQduScale {
+        /// Entry (joint) of the setting.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
+    /// A factor of the input-increment weight at rest other than 1 with the
+    /// structured solver, which builds its weights once.
+    #[error("the factor of the input-increment weight at rest (hold_q_du_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]
+    HoldQduScaleStructured,
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]

@@ -118,6 +118,12 @@ pub struct RunMetrics {
 /// counts peak-to-peak over the steady window hunts ([`RunStatus::Hunting`]).
 pub(crate) const HOLD_HUNTING_COUNTS: f64 = 2.0;
 
+/// Rounding allowance of the judgement: a quantized measurement moves by a
+/// whole number of counts, but `q_ref − q_meas` over radians carries the
+/// rounding of the subtraction (2 counts came out 2.0000000000153, judged
+/// "more than 2").
+const HOLD_COUNTS_ROUNDING: f64 = 1e-6;
+
 /// The largest peak-to-peak over the joints of the measured joint error
 /// (`q_ref − q_meas`, the true `q` when no measurement was recorded) over the
 /// record's last `steady_window` s, in counts of an encoder with
@@ -180,7 +186,7 @@ pub(crate) fn judge_hold(
     m.hold_error_pp_counts = hold_error_pp_counts(rec, steady_window, encoder_counts);
     if let Some(pp) = m
         .hold_error_pp_counts
-        .filter(|&pp| pp > HOLD_HUNTING_COUNTS)
+        .filter(|&pp| pp > HOLD_HUNTING_COUNTS + HOLD_COUNTS_ROUNDING)
     {
         m.status = RunStatus::Hunting;
         m.reason = format!(
@@ -522,6 +528,20 @@ mod tests {
         // Exactly 2 counts is the limit, still ok.
         let two = hold(|t| count * 2.0 * f64::from(u8::from(t > 0.9)), 1 << 20);
         assert_eq!(two.status, RunStatus::Ok);
+        // ... also where the subtraction rounds (2 counts came out 2 + 1.5e-11).
+        let off = hold(
+            |t| 0.3 + count * 2.0 * f64::from(u8::from(t > 0.9)),
+            1 << 20,
+        );
+        let pp = off.hold_error_pp_counts.unwrap();
+        assert!((pp - 2.0).abs() < 1e-9, "{pp}");
+        assert_eq!(off.status, RunStatus::Ok, "{}", off.reason);
+        // Three counts still hunt.
+        let three = hold(
+            |t| 0.3 + count * 3.0 * f64::from(u8::from(t > 0.9)),
+            1 << 20,
+        );
+        assert_eq!(three.status, RunStatus::Hunting);
         // No encoder (an ideal plant): not judged, whatever the hold does.
         let ideal = hold(|t| 1e-3 * (t * 40.0).sin(), 0);
         assert_eq!(

@@ -42,6 +42,12 @@ use crate::control::mpc::prediction::{
     predicted_outputs, predicted_outputs_work, PredictionError, Predictions,
 };
 use crate::control::mpc::torque_limits::TorqueLimitQp;
+
+/// A joint creeps while `|q̇| < CREEP_FACTOR·v_s` ([`Core::hold_weights`]):
+/// the friction's slope there is still a fifth of its slope at rest or more
+/// (`F_c tanh(3)/(3 v_s)`), and one encoder count per sample (6e-4 rad/s at
+/// 20 bits and 10 ms) does not leave it.
+const CREEP_FACTOR: f64 = 3.0;
 use crate::control::mpc::zoh::Zoh;
 use crate::control::settings::{MpcSettings, SettingsError, Solver};
 use crate::control::solvers::constrained::QpStatus;
@@ -337,6 +343,9 @@ pub(crate) struct Core {
     hold: Vec<bool>,
     /// Half-width of the hold dead zone (rad; 0: none).
     hold_band: f64,
+    /// Per joint: `Q_Δu`'s entry while the reference moves and the factor
+    /// on it at rest (`hold_q_du_scale`); `None` when every factor is 1.
+    hold_q_du: Option<(Vec<f64>, Vec<f64>)>,
     /// The measured output as the tracking rows see it: `y_k`, with `w_k` on
     /// the joints in the hold dead zone.
     pub(super) y_err: Vec<f64>,
@@ -461,6 +470,14 @@ impl Core {
             }),
             Solver::Structured => Backend::Structured(structured_backend(n, settings, kind)?),
         };
+        let hold_scale: Vec<f64> = (0..n)
+            .map(|i| settings.hold_q_du_scale.get(i).unwrap_or(1.0))
+            .collect();
+        let hold_q_du = (incremental && hold_scale.iter().any(|&f| f != 1.0))
+            .then(|| (diag(&settings.q_du), hold_scale));
+        if hold_q_du.is_some() && matches!(backend, Backend::Structured(_)) {
+            return Err(SettingsError::HoldQduScaleStructured);
+        }
         Ok(Self {
             n,
             nh,
@@ -505,6 +522,7 @@ impl Core {
             hold: vec![false; n],
             y_err: vec![0.0; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            hold_q_du,
             predicted_work: vec![0.0; predicted_outputs_work(n)],
             model_time: std::time::Duration::ZERO,
             qp_end: None,
@@ -682,6 +700,7 @@ impl Core {
         for (((ye, h), w), y) in self.y_err.iter_mut().zip(&self.hold).zip(w_k).zip(x) {
             *ye = if *h { *w } else { *y };
         }
+        self.hold_weights(x, w_k, preview);
         self.zoh.discretize(self.model.f0(), self.ts)?;
         if matches!(self.backend, Backend::Dense(_)) {
             self.pred
@@ -692,6 +711,37 @@ impl Core {
             *d = a - b;
         }
         Ok(())
+    }
+
+    /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints with
+    /// a compensated Coulomb friction (`friction_compensation`, `F_c > 0`)
+    /// whose reference rests over the horizon and which creep (`|q̇| < v_s`, the
+    /// drives' Coulomb velocity scale, where the friction is the stiff damper
+    /// the factor is for; settings.rs says why). Beyond it — a joint broken
+    /// away — the weight of the motion: the stiffer gain on the bare inertia
+    /// would cycle through the delay.
+    fn hold_weights(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
+        let n = self.n;
+        let Some((moving, scale)) = &self.hold_q_du else {
+            return;
+        };
+        // The damper is the compensated friction's: none without it.
+        let drives = self
+            .drives
+            .as_ref()
+            .filter(|_| self.settings.friction_compensation);
+        for (i, w) in self.w_bot.iter_mut().enumerate() {
+            let creeps = drives.is_some_and(|d| {
+                d.coulomb_nm[i] > 0.0
+                    && x[n + i].abs() < CREEP_FACTOR * d.coulomb_velocity_rad_s
+                    && preview.chunks_exact(n).all(|p| p[i] == w_k[i])
+            });
+            *w = if creeps {
+                moving[i] * scale[i]
+            } else {
+                moving[i]
+            };
+        }
     }
 
     /// Writes `𝒜` of the usual controller, `[Q_YW G1; Q_U]`, in the permuted
