@@ -375,6 +375,13 @@ pub struct MpcSettings {
     /// (`[plant.servo]`), else 0. Only with a position or velocity output.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output_lead_s: Option<f64>,
+    /// Hand out the first stage's feedback gain with every step
+    /// ([`StepOutput::gain`](crate::control::StepOutput::gain),
+    /// `tau_ff`, `x_lin`), for a faster linear feedback between MPC samples
+    /// (default off: nothing computed). Structured solver, a predictive
+    /// kind, no torque limits and no observer only: else the build refuses.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub gains: bool,
 }
 
 impl Default for MpcSettings {
@@ -401,6 +408,7 @@ impl Default for MpcSettings {
             payload_com_max_m: 0.0,
             output: OutputMode::Torque,
             output_lead_s: None,
+            gains: false,
         }
     }
 }
