@@ -3,7 +3,7 @@
 //! [`ControllerBuilder`]; it owns its model of the robot, its buffers and its
 //! output).
 
-use crate::arrays::{array1, fill_shaped};
+use crate::arrays::{array1, array2, fill_shaped};
 use crate::errors::to_py;
 use crate::robot::PyRobot;
 use numpy::PyArray1;
@@ -32,6 +32,11 @@ pub struct PyController {
     info: Option<(f64, f64, u32)>,
     /// The telemetry of the last step (also a failed one's).
     telemetry: Option<StepTelemetry>,
+    /// With `gains=True`: the first-stage gain law of the last successful step
+    /// (`K` n×2n row-major, `tau_ff`, `x_lin`), copied into buffers sized at construction.
+    gains: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// Whether `gains` holds a step's law (false before the first successful step).
+    gains_set: bool,
 }
 
 /// The keyword arguments of `Controller()` that are weights.
@@ -149,18 +154,20 @@ fn apply_keywords(
 #[pymethods]
 impl PyController {
     #[new]
-    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, **weights))]
+    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, **weights))]
     fn new(
         kind: &str,
         robot: &PyRobot,
         ts: f64,
         horizon: usize,
+        gains: bool,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
         let mut settings = MpcSettings {
             ts,
             horizon,
+            gains,
             ..MpcSettings::default()
         };
         let mut baselines = BaselineSettings::default();
@@ -185,6 +192,8 @@ impl PyController {
             preview: vec![0.0; horizon * n],
             info: None,
             telemetry: None,
+            gains: gains.then(|| (vec![0.0; 2 * n * n], vec![0.0; n], vec![0.0; 2 * n])),
+            gains_set: false,
         })
     }
 
@@ -253,6 +262,24 @@ impl PyController {
             .transpose()
     }
 
+    /// With `gains=True`: the first-stage feedback law of the last successful step as a dict
+    /// {"gain": K (n, 2n), "tau_ff": τ_k (n,), "x_lin": x_k (2n,)}, so that between MPC samples
+    /// τ ≈ tau_ff + K (x − x_lin); None before the first step or with `gains=False`.
+    #[getter]
+    fn last_gains<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let n = self.dof;
+        match &self.gains {
+            Some((k, tau_ff, x_lin)) if self.gains_set => {
+                let d = PyDict::new(py);
+                d.set_item("gain", array2(py, n, 2 * n, k.clone()))?;
+                d.set_item("tau_ff", array1(py, tau_ff))?;
+                d.set_item("x_lin", array1(py, x_lin))?;
+                Ok(Some(d))
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// Starts a run at the measured state x0 = [q; q̇] (2n,). Required before the first
     /// `step` (a step before it raises `OfmpcError`: the controller's memory of the last input
     /// and output would otherwise be zeros, not the robot's state).
@@ -261,6 +288,7 @@ impl PyController {
         fill_shaped("x0", x0, &[("(2·dof,)", &[n2])], &mut self.x)?;
         self.info = None;
         self.telemetry = None;
+        self.gains_set = false;
         self.controller
             .get_mut()
             .unwrap_or_else(|e| e.into_inner())
@@ -312,6 +340,12 @@ impl PyController {
             return Err(to_py(failure));
         }
         self.info = Some((out.cost, out.r_diag_ratio, out.zoh_squarings));
+        if let Some((k, tau_ff, x_lin)) = self.gains.as_mut() {
+            k.copy_from_slice(&out.gain);
+            tau_ff.copy_from_slice(&out.tau_ff);
+            x_lin.copy_from_slice(&out.x_lin);
+            self.gains_set = true;
+        }
         Ok(array1(py, &out.tau))
     }
 
