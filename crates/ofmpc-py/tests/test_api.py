@@ -298,3 +298,27 @@ def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
         ofmpc.plan(str(latin), robot)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         ofmpc.plan("prog.gcode2", robot)
+
+
+def test_first_stage_gains_reproduce_the_next_torque(robot, ref):
+    """gains=True: last_gains holds K (n, 2n), tau_ff = τ_k and x_lin = x_k; a second controller
+    stepped at x_k + δx gives τ ≈ tau_ff + K δx (to a few 1e-4 of |K δx|, issue 37 item 5)."""
+    w = ref.q[0]
+    x = np.concatenate([w + 1e-3, np.full(6, 0.05)])
+    dx = 1e-5 * np.arange(1.0, 13.0)
+    taus = []
+    for xi in (x, x + dx):
+        c = ofmpc.Controller("second", robot, horizon=20, gains=True)
+        assert c.last_gains is None
+        c.reset(np.concatenate([w, np.zeros(6)]))
+        taus.append(c.step(xi, w, ref.preview(0, 20)))
+        if xi is x:
+            g = c.last_gains
+    assert g["gain"].shape == (6, 12)
+    np.testing.assert_array_equal(g["tau_ff"], taus[0])
+    np.testing.assert_array_equal(g["x_lin"], x)
+    lin = g["gain"] @ dx
+    assert np.max(np.abs(taus[1] - taus[0] - lin)) <= 1e-3 * np.max(np.abs(lin))
+    assert ofmpc.Controller("second", robot).last_gains is None
+    with pytest.raises(ofmpc.OfmpcError, match="first-stage gains"):
+        ofmpc.Controller("pid", robot, gains=True)
