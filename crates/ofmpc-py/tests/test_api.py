@@ -322,3 +322,24 @@ def test_first_stage_gains_reproduce_the_next_torque(robot, ref):
     assert ofmpc.Controller("second", robot).last_gains is None
     with pytest.raises(ofmpc.OfmpcError, match="first-stage gains"):
         ofmpc.Controller("pid", robot, gains=True)
+
+
+def test_the_predicted_command_of_a_position_velocity_output(robot, ref):
+    """output="position_velocity": last_command holds the predicted q, q̇, q̈ one lead time
+    ahead (issue 37), None with a torque output; an unknown output is refused."""
+    w = ref.q[0]
+    x = np.concatenate([w + 1e-3, np.zeros(6)])
+    c = ofmpc.Controller("second", robot, output="position_velocity", output_lead_s=0.04)
+    c.reset(x)
+    assert c.last_command is None
+    c.step(x, w, ref.preview(0, 10))
+    cmd = c.last_command
+    assert set(cmd) == {"q_command", "qd_command", "qdd_command"}
+    assert cmd["q_command"].shape == (6,) and np.all(np.isfinite(cmd["qdd_command"]))
+    assert np.max(np.abs(cmd["q_command"] - w)) < 0.01
+    t = ofmpc.Controller("second", robot)
+    t.reset(x)
+    t.step(x, w, ref.preview(0, 10))
+    assert t.last_command is None
+    with pytest.raises(ofmpc.OfmpcError, match="output="):
+        ofmpc.Controller("second", robot, output="torq")
