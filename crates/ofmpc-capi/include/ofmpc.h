@@ -460,6 +460,23 @@ ofmpc_status ofmpc_controller_step(ofmpc_controller *c,
                                    ofmpc_step_output *out);
 
 /**
+ * The first-stage feedback law of the last successful step (issue 37,
+ * `[mpc] gains = true`): `gain` = K (n × 2n doubles, row-major), `tau_ff`
+ * = τ_k (n), `x_lin` = x_k (2n), so that between MPC samples a faster loop
+ * can apply τ = tau_ff + K (x − x_lin); zeros before the first step.
+ * `OFMPC_INVALID_ARG` when the controller was built without gains (nothing
+ * written); allocates nothing.
+ */
+OFMPC_MUST_USE
+ofmpc_status ofmpc_controller_gains(const ofmpc_controller *c,
+                                    double *gain,
+                                    size_t gain_len,
+                                    double *tau_ff,
+                                    size_t tau_ff_len,
+                                    double *x_lin,
+                                    size_t x_lin_len);
+
+/**
  * Number of joints n (0 for NULL).
  */
 size_t ofmpc_controller_dof(const ofmpc_controller *c);

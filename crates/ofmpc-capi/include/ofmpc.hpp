@@ -194,11 +194,44 @@ class Controller {
     }
     return detail::status(s);
   }
+  /// One step with a position or velocity output ([mpc] output): as `step`, and the
+  /// positions, velocities and accelerations its model predicted one lead time ahead into
+  /// `q_command`, `qd_command`, `qdd_command` (n each; an empty view: not asked for).
+  [[nodiscard]] Status step(ConstView x, ConstView w, ConstView preview, View tau,
+                            StepInfo &info, View q_command, View qd_command,
+                            View qdd_command) {
+    ofmpc_step_input in{sizeof in, x.data, x.size, w.data, w.size, preview.data, preview.size};
+    ofmpc_step_output out{};
+    out.size = sizeof out;
+    out.tau = tau.data;
+    out.tau_len = tau.size;
+    out.q_command = q_command.size ? q_command.data : nullptr;
+    out.qd_command = qd_command.size ? qd_command.data : nullptr;
+    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
+    out.command_len = q_command.size ? q_command.size
+                                     : (qd_command.size ? qd_command.size : qdd_command.size);
+    ofmpc_status s = ofmpc_controller_step(h_.get(), &in, &out);
+    if (s == OFMPC_OK) {
+      info.status = out.status;
+      info.qp_iterations = out.qp_iterations;
+      info.cost = out.cost;
+      info.payload_estimate_kg = out.payload_estimate_kg;
+      info.solve_time_ns = out.solve_time_ns;
+    }
+    return detail::status(s);
+  }
   /// The last step's telemetry (times, QP iterations, fallback level) into `t`.
   [[nodiscard]] Status telemetry(ofmpc_step_telemetry &t) const {
     t = ofmpc_step_telemetry{};
     t.size = sizeof t;
     return detail::status(ofmpc_controller_telemetry(h_.get(), &t));
+  }
+  /// With [mpc] gains = true: the last step's first-stage feedback law, K (n × 2n,
+  /// row-major) into `gain`, τ_k into `tau_ff`, x_k into `x_lin`, so that between MPC
+  /// samples τ = tau_ff + K (x − x_lin). Allocates nothing.
+  [[nodiscard]] Status gains(View gain, View tau_ff, View x_lin) const {
+    return detail::status(ofmpc_controller_gains(h_.get(), gain.data, gain.size, tau_ff.data,
+                                                 tau_ff.size, x_lin.data, x_lin.size));
   }
 
  private:

@@ -254,6 +254,43 @@ pub(crate) fn step_failure(e: StepError) -> Failure {
     Failure::new(status, e.to_string())
 }
 
+/// The first-stage feedback law of the last successful step (issue 37,
+/// `[mpc] gains = true`): `gain` = K (n × 2n doubles, row-major), `tau_ff`
+/// = τ_k (n), `x_lin` = x_k (2n), so that between MPC samples a faster loop
+/// can apply τ = tau_ff + K (x − x_lin); zeros before the first step.
+/// `OFMPC_INVALID_ARG` when the controller was built without gains (nothing
+/// written); allocates nothing.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_gains(
+    c: *const ofmpc_controller,
+    gain: *mut f64,
+    gain_len: usize,
+    tau_ff: *mut f64,
+    tau_ff_len: usize,
+    x_lin: *mut f64,
+    x_lin_len: usize,
+) -> ofmpc_status {
+    boundary(|| {
+        let c = &unsafe { arg(c, "controller") }?.0;
+        let n = c.dof();
+        let o = c.output();
+        if o.gain.is_empty() {
+            return Err(Failure::new(
+                ofmpc_status::OFMPC_INVALID_ARG,
+                "no gains: build the controller with [mpc] gains = true".to_string(),
+            ));
+        }
+        let k = unsafe { slice_mut(gain, gain_len, 2 * n * n, "gain") }?;
+        let t = unsafe { slice_mut(tau_ff, tau_ff_len, n, "tau_ff") }?;
+        let x = unsafe { slice_mut(x_lin, x_lin_len, 2 * n, "x_lin") }?;
+        k.copy_from_slice(&o.gain);
+        t.copy_from_slice(&o.tau_ff);
+        x.copy_from_slice(&o.x_lin);
+        Ok(())
+    })
+}
+
 /// Number of joints n (0 for NULL).
 #[no_mangle]
 pub unsafe extern "C" fn ofmpc_controller_dof(c: *const ofmpc_controller) -> usize {

@@ -487,3 +487,107 @@ fn the_predicted_command_through_the_c_api() {
         ofmpc_robot_free(r);
     }
 }
+
+/// The first-stage gains through the C API (issue 37 item 5): `[mpc] gains =
+/// true` in the settings TOML, `ofmpc_controller_gains` returns the Rust
+/// controller's law for the same input (no allocation); without gains, and
+/// for a kind that cannot have them, a status and a message.
+#[test]
+fn the_first_stage_gains_through_the_c_api() {
+    let robot = ofmpc::robot::Robot::irb140();
+    let settings = ofmpc::control::MpcSettings {
+        gains: true,
+        ..Default::default()
+    };
+    let mut rust = ofmpc::ControllerBuilder::new(ofmpc::ControllerKind::Second, &robot)
+        .settings(settings)
+        .build()
+        .unwrap();
+    let (mut r, mut c, mut plain, mut pid) = (null_mut(), null_mut(), null_mut(), null_mut());
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
+        let gains = c"[mpc]\ngains = true\n";
+        ok(ofmpc_controller_new(
+            r,
+            c"second".as_ptr(),
+            gains.as_ptr(),
+            &mut c,
+        ));
+        ok(ofmpc_controller_new(
+            r,
+            c"second".as_ptr(),
+            null(),
+            &mut plain,
+        ));
+        let st = ofmpc_controller_new(r, c"pid".as_ptr(), gains.as_ptr(), &mut pid);
+        assert_eq!(st, ofmpc_status::OFMPC_BUILD);
+        assert!(
+            last_error().contains("first-stage gains"),
+            "{}",
+            last_error()
+        );
+    }
+    let x0 = [0.1, 0.4, -0.2, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let w = [0.12, 0.41, -0.19, 0.01, 0.5, 0.0];
+    let preview: Vec<f64> = (0..10).flat_map(|_| w).collect();
+    rust.reset(&x0).unwrap();
+    let expected = rust
+        .step(&ofmpc::StepInput {
+            x: &x0,
+            w_k: &w,
+            preview: &preview,
+        })
+        .unwrap()
+        .clone();
+    let mut tau = [0.0; 6];
+    let (mut k, mut tff, mut xl) = ([0.0; 72], [0.0; 6], [0.0; 12]);
+    unsafe {
+        ok(ofmpc_controller_reset(c, x0.as_ptr(), x0.len()));
+        ok(ofmpc_controller_step(
+            c,
+            &input(&x0, &w, &preview),
+            &mut output(&mut tau),
+        ));
+        let before = allocations();
+        ok(ofmpc_controller_gains(
+            c,
+            k.as_mut_ptr(),
+            72,
+            tff.as_mut_ptr(),
+            6,
+            xl.as_mut_ptr(),
+            12,
+        ));
+        assert_eq!(allocations(), before);
+        let st = ofmpc_controller_gains(
+            plain,
+            k.as_mut_ptr(),
+            72,
+            tff.as_mut_ptr(),
+            6,
+            xl.as_mut_ptr(),
+            12,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_INVALID_ARG);
+        assert!(last_error().contains("gains = true"), "{}", last_error());
+        let st = ofmpc_controller_gains(
+            c,
+            k.as_mut_ptr(),
+            71,
+            tff.as_mut_ptr(),
+            6,
+            xl.as_mut_ptr(),
+            12,
+        );
+        assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
+    }
+    assert_eq!(&k[..], &expected.gain[..]);
+    assert!(k.iter().any(|v| *v != 0.0));
+    assert_eq!(&tff[..], &expected.tau[..]);
+    assert_eq!(&xl[..], &x0[..]);
+    unsafe {
+        ofmpc_controller_free(c);
+        ofmpc_controller_free(plain);
+        ofmpc_robot_free(r);
+    }
+}

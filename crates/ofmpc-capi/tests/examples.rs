@@ -140,3 +140,28 @@ fn the_c_and_cpp_examples_reproduce_ofmpc_run_under_asan() {
     compare("ros2 ", &out, &m);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The C++ wrapper's gains getter and its step with the predicted command
+/// (issue 37; `examples/gains_and_command.cpp`), under ASAN.
+#[test]
+fn the_cpp_wrapper_gives_the_gains_and_the_command() {
+    let dir = std::env::temp_dir().join(format!("ofmpc-gains-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = dir.join("gains_and_command");
+    compile("g++", "-std=c++17", "gains_and_command.cpp", &exe);
+    let out = Command::new(&exe)
+        .env(
+            "ASAN_OPTIONS",
+            "detect_leaks=1:abort_on_error=0:exitcode=23",
+        )
+        .output()
+        .expect("the example runs");
+    assert!(
+        out.status.success(),
+        "{} failed ({}):\n{}\n{}",
+        exe.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -3,13 +3,13 @@
 //! [`ControllerBuilder`]; it owns its model of the robot, its buffers and its
 //! output).
 
-use crate::arrays::{array1, fill_shaped};
+use crate::arrays::{array1, array2, fill_shaped};
 use crate::errors::to_py;
 use crate::robot::PyRobot;
 use numpy::PyArray1;
 use ofmpc::control::{
-    BaselineSettings, Controller, ControllerBuilder, ControllerKind, MpcSettings, Solver,
-    StepError, StepInput, StepStatus, StepTelemetry, Weight,
+    BaselineSettings, Controller, ControllerBuilder, ControllerKind, MpcSettings, OutputMode,
+    Solver, StepError, StepInput, StepStatus, StepTelemetry, Weight,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -32,6 +32,17 @@ pub struct PyController {
     info: Option<(f64, f64, u32)>,
     /// The telemetry of the last step (also a failed one's).
     telemetry: Option<StepTelemetry>,
+    /// With `gains=True`: the first-stage gain law of the last successful step
+    /// (`K` n×2n row-major, `tau_ff`, `x_lin`), copied into buffers sized at construction.
+    gains: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// Whether `gains` holds a step's law (false before the first successful step).
+    gains_set: bool,
+    /// With a position or velocity `output`: the last successful step's predicted command
+    /// (q, q̇, q̈ one lead time ahead), n values each, in buffers sized at construction; None
+    /// with a torque output.
+    command: Option<[Vec<f64>; 3]>,
+    /// Whether `command` holds a step's command (false before the first successful step).
+    command_set: bool,
 }
 
 /// The keyword arguments of `Controller()` that are weights.
@@ -149,18 +160,33 @@ fn apply_keywords(
 #[pymethods]
 impl PyController {
     #[new]
-    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, **weights))]
+    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, output="torque", output_lead_s=None, **weights))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
         robot: &PyRobot,
         ts: f64,
         horizon: usize,
+        gains: bool,
+        output: &str,
+        output_lead_s: Option<f64>,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
+        let output = OutputMode::ALL
+            .into_iter()
+            .find(|m| m.name() == output)
+            .ok_or_else(|| {
+                to_py(format!(
+                    "output={output:?}: give \"torque\", \"position_velocity\" or \"velocity\""
+                ))
+            })?;
         let mut settings = MpcSettings {
             ts,
             horizon,
+            gains,
+            output,
+            output_lead_s,
             ..MpcSettings::default()
         };
         let mut baselines = BaselineSettings::default();
@@ -185,6 +211,10 @@ impl PyController {
             preview: vec![0.0; horizon * n],
             info: None,
             telemetry: None,
+            gains: gains.then(|| (vec![0.0; 2 * n * n], vec![0.0; n], vec![0.0; 2 * n])),
+            gains_set: false,
+            command: (!output.is_torque()).then(|| [vec![0.0; n], vec![0.0; n], vec![0.0; n]]),
+            command_set: false,
         })
     }
 
@@ -253,6 +283,43 @@ impl PyController {
             .transpose()
     }
 
+    /// With `gains=True`: the first-stage feedback law of the last successful step as a dict
+    /// {"gain": K (n, 2n), "tau_ff": τ_k (n,), "x_lin": x_k (2n,)}, so that between MPC samples
+    /// τ ≈ tau_ff + K (x − x_lin); None before the first step or with `gains=False`.
+    #[getter]
+    fn last_gains<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let n = self.dof;
+        match &self.gains {
+            Some((k, tau_ff, x_lin)) if self.gains_set => {
+                let d = PyDict::new(py);
+                d.set_item("gain", array2(py, n, 2 * n, k.clone()))?;
+                d.set_item("tau_ff", array1(py, tau_ff))?;
+                d.set_item("x_lin", array1(py, x_lin))?;
+                Ok(Some(d))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// With output="position_velocity" or "velocity": the last successful step's command as a
+    /// dict {"q_command", "qd_command", "qdd_command"} (n,) each: the positions, velocities
+    /// and accelerations its model predicted output_lead_s ahead; None before the first step
+    /// or with a torque output.
+    #[getter]
+    fn last_command<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        self.command
+            .as_ref()
+            .filter(|_| self.command_set)
+            .map(|[q, qd, qdd]| {
+                let d = PyDict::new(py);
+                d.set_item("q_command", array1(py, q))?;
+                d.set_item("qd_command", array1(py, qd))?;
+                d.set_item("qdd_command", array1(py, qdd))?;
+                Ok(d)
+            })
+            .transpose()
+    }
+
     /// Starts a run at the measured state x0 = [q; q̇] (2n,). Required before the first
     /// `step` (a step before it raises `OfmpcError`: the controller's memory of the last input
     /// and output would otherwise be zeros, not the robot's state).
@@ -261,6 +328,8 @@ impl PyController {
         fill_shaped("x0", x0, &[("(2·dof,)", &[n2])], &mut self.x)?;
         self.info = None;
         self.telemetry = None;
+        self.gains_set = false;
+        self.command_set = false;
         self.controller
             .get_mut()
             .unwrap_or_else(|e| e.into_inner())
@@ -312,6 +381,18 @@ impl PyController {
             return Err(to_py(failure));
         }
         self.info = Some((out.cost, out.r_diag_ratio, out.zoh_squarings));
+        if let Some((k, tau_ff, x_lin)) = self.gains.as_mut() {
+            k.copy_from_slice(&out.gain);
+            tau_ff.copy_from_slice(&out.tau_ff);
+            x_lin.copy_from_slice(&out.x_lin);
+            self.gains_set = true;
+        }
+        if let Some([q, qd, qdd]) = self.command.as_mut() {
+            q.copy_from_slice(&out.q_command);
+            qd.copy_from_slice(&out.qd_command);
+            qdd.copy_from_slice(&out.qdd_command);
+            self.command_set = true;
+        }
         Ok(array1(py, &out.tau))
     }
 

@@ -298,3 +298,48 @@ def test_program_files_are_read_with_a_limit_and_named(robot, tmp_path):
         ofmpc.plan(str(latin), robot)
     with pytest.raises(FileNotFoundError, match="does not exist"):
         ofmpc.plan("prog.gcode2", robot)
+
+
+def test_first_stage_gains_reproduce_the_next_torque(robot, ref):
+    """gains=True: last_gains holds K (n, 2n), tau_ff = τ_k and x_lin = x_k; a second controller
+    stepped at x_k + δx gives τ ≈ tau_ff + K δx (to a few 1e-4 of |K δx|, issue 37 item 5)."""
+    w = ref.q[0]
+    x = np.concatenate([w + 1e-3, np.full(6, 0.05)])
+    dx = 1e-5 * np.arange(1.0, 13.0)
+    taus = []
+    for xi in (x, x + dx):
+        c = ofmpc.Controller("second", robot, horizon=20, gains=True)
+        assert c.last_gains is None
+        c.reset(np.concatenate([w, np.zeros(6)]))
+        taus.append(c.step(xi, w, ref.preview(0, 20)))
+        if xi is x:
+            g = c.last_gains
+    assert g["gain"].shape == (6, 12)
+    np.testing.assert_array_equal(g["tau_ff"], taus[0])
+    np.testing.assert_array_equal(g["x_lin"], x)
+    lin = g["gain"] @ dx
+    assert np.max(np.abs(taus[1] - taus[0] - lin)) <= 1e-3 * np.max(np.abs(lin))
+    assert ofmpc.Controller("second", robot).last_gains is None
+    with pytest.raises(ofmpc.OfmpcError, match="first-stage gains"):
+        ofmpc.Controller("pid", robot, gains=True)
+
+
+def test_the_predicted_command_of_a_position_velocity_output(robot, ref):
+    """output="position_velocity": last_command holds the predicted q, q̇, q̈ one lead time
+    ahead (issue 37), None with a torque output; an unknown output is refused."""
+    w = ref.q[0]
+    x = np.concatenate([w + 1e-3, np.zeros(6)])
+    c = ofmpc.Controller("second", robot, output="position_velocity", output_lead_s=0.04)
+    c.reset(x)
+    assert c.last_command is None
+    c.step(x, w, ref.preview(0, 10))
+    cmd = c.last_command
+    assert set(cmd) == {"q_command", "qd_command", "qdd_command"}
+    assert cmd["q_command"].shape == (6,) and np.all(np.isfinite(cmd["qdd_command"]))
+    assert np.max(np.abs(cmd["q_command"] - w)) < 0.01
+    t = ofmpc.Controller("second", robot)
+    t.reset(x)
+    t.step(x, w, ref.preview(0, 10))
+    assert t.last_command is None
+    with pytest.raises(ofmpc.OfmpcError, match="output="):
+        ofmpc.Controller("second", robot, output="torq")

@@ -368,6 +368,7 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
         ExperimentError::Build(BuildError::OutputWithoutPrediction { output, .. }) => {
             format!("[mpc] output = \"{output}\"")
         }
+        ExperimentError::Build(BuildError::GainsUnavailable { .. }) => "[mpc] gains = true".into(),
         ExperimentError::Build(_) => {
             "[mpc] torque_limits = true with no finite max_torque_nm (robot effort limits or \
              [robot] drives)"

@@ -1,7 +1,8 @@
 //! A fixed number of controller steps for instruction counts under
 //! callgrind (`valgrind --tool=callgrind`): the second algorithm on the IRB 140,
 //! N = 10, from rest toward a target, 220 steps (`limits`: with torque limits and a far
-//! target, the QP binding). Compare `Controller::step`'s inclusive count between two
+//! target, the QP binding; `structured`: the structured solver; `gains`: the structured
+//! solver with the first-stage gains). Compare `Controller::step`'s inclusive count between two
 //! builds (issue 37: the telemetry's cost):
 //!
 //! ```sh
@@ -13,10 +14,20 @@ use ofmpc::control::{ControllerBuilder, ControllerKind, MpcSettings, StepInput};
 use ofmpc::robot::Robot;
 
 fn main() {
-    let limits = std::env::args().nth(1).as_deref() == Some("limits");
+    let mode = std::env::args().nth(1);
+    let limits = mode.as_deref() == Some("limits");
     let robot = Robot::irb140();
+    // `structured`: the structured solver; `gains`: with the first-stage gains (issue 37).
+    let gains = mode.as_deref() == Some("gains");
+    let solver = if gains || mode.as_deref() == Some("structured") {
+        ofmpc::control::Solver::Structured
+    } else {
+        ofmpc::control::Solver::Auto
+    };
     let settings = MpcSettings {
         torque_limits: limits,
+        gains,
+        solver,
         ..MpcSettings::default()
     };
     let mut mpc = ControllerBuilder::new(ControllerKind::Second, &robot)

@@ -196,8 +196,8 @@ fn observer_updates_allocate_nothing() {
 }
 
 /// The built controller's step (`Controller::step`: observer, model, solve,
-/// torque-limit QP with friction compensation, output) allocates nothing,
-/// for every kind, failed steps included.
+/// torque-limit QP with friction compensation, output, first-stage gains)
+/// allocates nothing, for every kind, failed steps included.
 #[test]
 fn built_controller_steps_allocate_nothing() {
     use ofmpc::control::{ControllerBuilder, ObserverSettings, StepInput};
@@ -220,10 +220,27 @@ fn built_controller_steps_allocate_nothing() {
         hold_q_du_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01]),
         ..limited.clone()
     };
+    // Issue 37's first-stage gains (structured solver, no limits/observer).
+    let gains = MpcSettings {
+        gains: true,
+        friction_compensation: true,
+        encoder_counts: 1_048_576.0,
+        ..Default::default()
+    };
     let drives = binding_drives(n);
+    let mut gained = 0;
     // Every kind: the paper's, the adaptive variants and the baselines.
     for kind in ControllerKind::ALL {
-        for settings in [MpcSettings::default(), limited.clone(), creeping.clone()] {
+        let with_gains = ControllerBuilder::new(kind, &robot)
+            .settings(gains.clone())
+            .build()
+            .is_ok();
+        gained += usize::from(with_gains);
+        let extra = with_gains.then(|| gains.clone());
+        for settings in [MpcSettings::default(), limited.clone(), creeping.clone()]
+            .into_iter()
+            .chain(extra)
+        {
             let limits = settings.torque_limits;
             let mut builder = ControllerBuilder::new(kind, &robot).settings(settings.clone());
             if limits {
@@ -249,6 +266,10 @@ fn built_controller_steps_allocate_nothing() {
                 };
                 let out = mpc.step(&input).unwrap();
                 assert!(out.tau.iter().all(|t| t.is_finite()));
+                if settings.gains {
+                    assert!(out.gain.iter().all(|g| g.is_finite()));
+                    assert!(out.gain.iter().any(|g| *g != 0.0));
+                }
                 let bad = StepInput { x: &bad_x, ..input };
                 assert!(mpc.step(&bad).is_err());
             }
@@ -256,9 +277,12 @@ fn built_controller_steps_allocate_nothing() {
             assert_eq!(
                 after - before,
                 0,
-                "{kind}, limits {limits}: {} allocations",
+                "{kind}, limits {limits}, gains {}: {} allocations",
+                settings.gains,
                 after - before
             );
         }
     }
+    // The paper's three and the two adaptive variants hand out gains.
+    assert_eq!(gained, 5);
 }

@@ -116,6 +116,10 @@ class Controller:
     one per joint) the same way: ``pid_bandwidth`` (default 60), ``ctc_bandwidth`` (150),
     ``dob_observer_bandwidth`` (100). ``solver="dense-qr"``, ``"structured"`` or ``"auto"``
     (the default) chooses the least-squares solver, as ``[mpc] solver`` does.
+    ``gains=True`` (``[mpc] gains``) hands out the first-stage feedback law of every step
+    (``last_gains``; structured solver, the paper's kinds and their adaptive variants).
+    ``output="position_velocity"`` or ``"velocity"`` (``[mpc] output``, with
+    ``output_lead_s``) hands out the predicted command (``last_command``).
     """
 
     def __init__(
@@ -124,6 +128,9 @@ class Controller:
         robot: Robot,
         ts: float = 0.01,
         horizon: int = 10,
+        gains: bool = False,
+        output: str = "torque",
+        output_lead_s: Optional[float] = None,
         **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property
@@ -145,6 +152,15 @@ class Controller:
         """{"model_time_us", "solve_time_us", "total_time_us", "qp_iterations",
         "active_constraints", "budget_slack_us", "fallback", "budget_hit"} of the last step
         (fallback: "none", "best_feasible", "shifted_plan" or "hold")."""
+    @property
+    def last_gains(self) -> Optional[dict]:
+        """With gains=True: {"gain": K (n, 2n), "tau_ff": τ_k (n,), "x_lin": x_k (2n,)} of the
+        last step, so that between MPC samples τ ≈ tau_ff + K (x − x_lin); else None."""
+    @property
+    def last_command(self) -> Optional[dict]:
+        """With output="position_velocity" or "velocity": {"q_command", "qd_command",
+        "qdd_command"} (n,) each, the state its model predicted output_lead_s ahead, of the
+        last step; else None."""
     def reset(self, x0: ArrayLike) -> None:
         """Starts a run at the measured state x0 = [q; q̇] (2n,); required before the first step."""
     def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:

@@ -453,6 +453,9 @@ impl Algorithm for AdaptiveMpc {
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         self.inner.predicted_outputs(out)
     }
+    fn first_stage_gain(&mut self, gain: &mut [f64]) -> bool {
+        self.inner.first_stage_gain(gain)
+    }
     fn set_drive_model(
         &mut self,
         drives: &crate::control::drive_model::DriveModel,

@@ -64,6 +64,18 @@ pub trait Algorithm {
         let _ = out;
         false
     }
+    /// The first-stage feedback gain of the last successful step,
+    /// `K = ∂τ_k/∂x_k` with the step's model held (n × 2n, row-major, into
+    /// `gain`): `τ ≈ τ_k + K (x − x_k)` near the state `x_k` the step acted
+    /// on, for a faster linear feedback between samples. `false` (and `gain`
+    /// unspecified) for a controller without it (the baselines, the
+    /// disturbance-observer MPC, the dense solver, torque limits, or
+    /// [`MpcSettings::gains`](crate::control::MpcSettings::gains) off) or a
+    /// `gain` not 2n² long. Allocates nothing.
+    fn first_stage_gain(&mut self, gain: &mut [f64]) -> bool {
+        let _ = gain;
+        false
+    }
     /// One control step at sample `k`.
     ///
     /// * `model`: the controller's robot model (its `dof()` must be `n`);

@@ -62,7 +62,7 @@ use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
 use crate::control::mpc::core::{check_finite, check_len};
 use crate::control::observer::StateObserver;
-use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError};
+use crate::control::settings::{BaselineSettings, MpcSettings, SettingsError, Solver};
 use crate::control::step::{StepError, StepFailure, StepInfo, StepInput, StepOutput, StepStatus};
 use crate::control::telemetry::{FallbackLevel, StepTelemetry};
 use crate::dynamics::RobotDynamics;
@@ -185,6 +185,16 @@ pub enum BuildError {
         /// The output asked for.
         output: OutputMode,
     },
+    /// First-stage gains ([`MpcSettings::gains`]) asked for where the
+    /// torque is not an affine function of the measured state through one
+    /// stage-wise solve.
+    #[error("the {kind} controller cannot hand out first-stage gains: {reason}")]
+    GainsUnavailable {
+        /// The kind.
+        kind: ControllerKind,
+        /// Why, and what to do.
+        reason: &'static str,
+    },
     /// The output's lead time is not within `[0, (N − 1)·Ts]` (or was given
     /// with a torque output, which has none).
     #[error("the output lead time is {lead_s} s: it must be from 0 to {max_s} s ((N − 1)·Ts) and needs a position or velocity output; lengthen the horizon or shorten the lead")]
@@ -298,7 +308,7 @@ impl<'r> ControllerBuilder<'r> {
         let Self {
             kind,
             robot,
-            settings: s,
+            settings: mut s,
             drives,
             observer,
             estimator,
@@ -307,6 +317,10 @@ impl<'r> ControllerBuilder<'r> {
         } = self;
         let n = robot.dof();
         s.validate_for_dof(n)?;
+        if s.gains && s.solver == Solver::Auto {
+            // The gain is the structured solver's: `auto` picks it.
+            s.solver = Solver::Structured;
+        }
         let baselines = baselines_for(kind, baselines, n)?;
         if let Some(nc) = s
             .constraint_horizon
@@ -358,6 +372,7 @@ impl<'r> ControllerBuilder<'r> {
         let model_robot = model_robot(robot, &s)?;
         let mut controller = new_algorithm(kind, n, &s, &baselines, estimator, observer)?;
         let predicted = check_output(kind, &s, n, controller.as_mut())?;
+        check_gains(kind, &s, n, controller.as_mut())?;
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
         }
@@ -396,6 +411,9 @@ impl<'r> ControllerBuilder<'r> {
                 q_command: vec![0.0; n].into_boxed_slice(),
                 qd_command: vec![0.0; n].into_boxed_slice(),
                 qdd_command: vec![0.0; n].into_boxed_slice(),
+                gain: vec![0.0; if s.gains { 2 * n * n } else { 0 }].into_boxed_slice(),
+                tau_ff: vec![0.0; if s.gains { n } else { 0 }].into_boxed_slice(),
+                x_lin: vec![0.0; if s.gains { 2 * n } else { 0 }].into_boxed_slice(),
                 telemetry: StepTelemetry::default(),
             },
             predicted,
@@ -432,6 +450,33 @@ fn check_output(
         });
     }
     Ok(predicted)
+}
+
+/// The first-stage gains' checks ([`BuildError::GainsUnavailable`]): with
+/// [`MpcSettings::gains`] on, no observer between the measurement and the
+/// controller, no torque limits (the first input is then a QP's), the
+/// structured solver and a kind whose step is one stage-wise solve.
+fn check_gains(
+    kind: ControllerKind,
+    s: &MpcSettings,
+    n: usize,
+    algorithm: &mut (dyn Algorithm + Send),
+) -> Result<(), BuildError> {
+    if !s.gains {
+        return Ok(());
+    }
+    let reason = if s.state_observer || s.delay_compensation {
+        "an observer stands between the measured state and the controller; turn the observer and delay compensation off"
+    } else if s.torque_limits {
+        "with torque limits the first torque is a QP's, not an affine function of the state; turn torque limits off"
+    } else if s.solver != Solver::Structured {
+        "the gain is the structured solver's; use the structured (or auto) solver"
+    } else if !algorithm.first_stage_gain(&mut vec![0.0; 2 * n * n]) {
+        "its step is not one stage-wise solve; use usual, first, second or their adaptive variants"
+    } else {
+        return Ok(());
+    };
+    Err(BuildError::GainsUnavailable { kind, reason })
 }
 
 /// The controller's model of the robot: `robot` as given, with the payload
@@ -612,6 +657,7 @@ impl Controller {
                     _ => StepStatus::Solved,
                 };
                 self.command(input.x);
+                self.gains(input.x);
             }
             Err(failure) => self.output.status = StepStatus::HeldLastTorque(failure),
         }
@@ -647,6 +693,20 @@ impl Controller {
                 &mut out.qdd_command,
             ],
         );
+    }
+
+    /// With [`MpcSettings::gains`]: the first-stage gain of a successful
+    /// step, its torque as the feed-forward and the state it acted on as
+    /// the linearization point; nothing otherwise (empty fields).
+    fn gains(&mut self, x: &[f64]) {
+        let out = &mut self.output;
+        if out.gain.is_empty() {
+            return;
+        }
+        if self.controller.first_stage_gain(&mut out.gain) {
+            out.tau_ff.copy_from_slice(&out.tau);
+            out.x_lin.copy_from_slice(x);
+        }
     }
 
     /// Counts the step budget of the torque-limit QP in deadline checks

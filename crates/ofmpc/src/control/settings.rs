@@ -390,6 +390,13 @@ pub struct MpcSettings {
     /// solver only (the structured one refuses a factor other than 1).
     /// `1` (default): unchanged.
     pub hold_q_du_scale: Weight,
+    /// Hand out the first stage's feedback gain with every step
+    /// ([`StepOutput::gain`](crate::control::StepOutput::gain),
+    /// `tau_ff`, `x_lin`), for a faster linear feedback between MPC samples
+    /// (default off: nothing computed). Structured solver, a predictive
+    /// kind, no torque limits and no observer only: else the build refuses.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub gains: bool,
 }
 
 impl Default for MpcSettings {
@@ -417,6 +424,7 @@ impl Default for MpcSettings {
             output: OutputMode::Torque,
             output_lead_s: None,
             hold_q_du_scale: Weight::Scalar(1.0),
+            gains: false,
         }
     }
 }

@@ -231,6 +231,21 @@ pub struct StepOutput {
     /// feed-forward of the interface's own joint loop, as
     /// [`Self::q_command`].
     pub qdd_command: Box<[f64]>,
+    /// With [`MpcSettings::gains`](crate::control::MpcSettings::gains): the
+    /// first-stage feedback gain `K = ∂τ_k/∂x_k` (n × 2n, row-major, N·m
+    /// per rad and per rad/s) with the step's model (`H`, `g`, ZOH) held,
+    /// so that between MPC samples a faster loop can apply
+    /// `τ = tau_ff + K (x − x_lin)`; for the incremental algorithms
+    /// (`u_k = u_{k−1} + Δu_k`) the state enters through `Δx_k` and `y_k`,
+    /// and `u_{k−1}` is held. Empty when off; held with the torque on a
+    /// failed step.
+    pub gain: Box<[f64]>,
+    /// The feed-forward of [`Self::gain`]'s law: the step's torque `τ_k`
+    /// (n values; empty when off).
+    pub tau_ff: Box<[f64]>,
+    /// The linearization point of [`Self::gain`]'s law: the state `x_k`
+    /// the step acted on (2n values; empty when off).
+    pub x_lin: Box<[f64]>,
     /// Where the step's time went, what the QP did and which fallback the
     /// step took ([`StepTelemetry`]).
     pub telemetry: StepTelemetry,

@@ -37,6 +37,7 @@
 
 use crate::control::drive_model::DriveModel;
 use crate::control::kind::ControllerKind;
+use crate::control::mpc::gains::GainWork;
 use crate::control::mpc::model::LinearLikeModel;
 use crate::control::mpc::prediction::{
     predicted_outputs, predicted_outputs_work, PredictionError, Predictions,
@@ -91,6 +92,12 @@ pub(crate) trait ControllerCore {
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         let _ = out;
+        false
+    }
+    /// [`Algorithm::first_stage_gain`](crate::control::Algorithm::first_stage_gain)
+    /// (`false`: no gain).
+    fn first_stage_gain(&mut self, gain: &mut [f64]) -> bool {
+        let _ = gain;
         false
     }
 }
@@ -172,6 +179,13 @@ macro_rules! impl_controller {
                 )
             }
 
+            fn first_stage_gain(&mut self, gain: &mut [f64]) -> bool {
+                <$core as $crate::control::mpc::core::ControllerCore>::first_stage_gain(
+                    &mut self.core,
+                    gain,
+                )
+            }
+
             fn step(
                 &mut self,
                 model: &mut dyn $crate::dynamics::JointSpaceDynamics,
@@ -219,6 +233,9 @@ impl ControllerCore for Core {
     }
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         Core::predicted_outputs(self, out).is_ok()
+    }
+    fn first_stage_gain(&mut self, gain: &mut [f64]) -> bool {
+        Core::first_stage_gain(self, gain)
     }
 }
 
@@ -351,6 +368,9 @@ pub(crate) struct Core {
     pub(super) y_err: Vec<f64>,
     /// Work of [`Core::predicted_outputs`].
     predicted_work: Vec<f64>,
+    /// With [`MpcSettings::gains`]: the first-stage gain's buffers
+    /// ([`crate::control::mpc::gains`]).
+    gains: Option<Box<GainWork>>,
     /// Time the last step spent in [`Core::prepare`].
     model_time: std::time::Duration,
     /// With a step budget: when the last step's torque-limit QP returned.
@@ -424,6 +444,7 @@ impl Core {
             self.solve()?
         };
         let out = self.finish(x, T::INCREMENTAL, info, tau)?;
+        self.form_gain(model, x);
         targets.commit(self);
         if let Some(qp_end) = self.qp_end.take() {
             self.tail_us = self.tail_us.max(qp_end.elapsed().as_secs_f64() * 1e6);
@@ -468,7 +489,13 @@ impl Core {
                 },
                 tracking_residual: 0.0,
             }),
-            Solver::Structured => Backend::Structured(structured_backend(n, settings, kind)?),
+            Solver::Structured => {
+                let mut b = structured_backend(n, settings, kind)?;
+                if settings.gains {
+                    b.stage.enable_gain();
+                }
+                Backend::Structured(b)
+            }
         };
         let hold_scale: Vec<f64> = (0..n)
             .map(|i| settings.hold_q_du_scale.get(i).unwrap_or(1.0))
@@ -524,6 +551,7 @@ impl Core {
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             hold_q_du,
             predicted_work: vec![0.0; predicted_outputs_work(n)],
+            gains: settings.gains.then(|| Box::new(GainWork::new(n))),
             model_time: std::time::Duration::ZERO,
             qp_end: None,
             tail_us: 0.0,
@@ -659,6 +687,40 @@ impl Core {
             return Err(StepFailure::NoDriveModel);
         }
         Ok(())
+    }
+
+    /// The torque's first-stage feedback gain of the last successful step
+    /// ([`crate::control::mpc::gains`]) into `gain` (n × 2n, row-major).
+    /// `false` without it (other solver, torque limits,
+    /// [`MpcSettings::gains`] off) or a `gain` not 2n² long. Allocates
+    /// nothing.
+    pub fn first_stage_gain(&self, gain: &mut [f64]) -> bool {
+        match (&self.gains, &self.backend) {
+            (Some(w), Backend::Structured(_))
+                if self.qp.is_none() && gain.len() == w.gain().len() =>
+            {
+                gain.copy_from_slice(w.gain());
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Forms the first-stage gain of this step (after [`Core::finish`]), at
+    /// the state `x` the step acted on; nothing without it. The step has
+    /// succeeded: model terms that are not finite next to `x` leave a NaN
+    /// gain rather than fail it.
+    fn form_gain(&mut self, model: &mut dyn JointSpaceDynamics, x: &[f64]) {
+        let (Some(w), Backend::Structured(b)) = (self.gains.as_mut(), &self.backend) else {
+            return;
+        };
+        let kz = b.stage.first_stage_gain();
+        if !kz.is_empty()
+            && w.form((kz, &self.hold), self.model.h(), &self.u_new, model, x)
+                .is_err()
+        {
+            w.invalidate();
+        }
     }
 
     /// Input checks, model terms, `f0`, ZOH, predictions and `Δx_k`.

@@ -12,6 +12,7 @@
 pub(crate) mod core;
 pub(crate) mod creep;
 pub(crate) mod first;
+pub(crate) mod gains;
 pub(crate) mod model;
 pub(crate) mod prediction;
 pub(crate) mod second;

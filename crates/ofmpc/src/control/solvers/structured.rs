@@ -149,6 +149,10 @@ pub(crate) struct StageLq {
     /// input `[D r_j; l_{j+1} − L c_j]`.
     mmap: AlignedBuf,
     bin: Vec<f64>,
+    /// With [`StageLq::enable_gain`]: the first stage's feedback gain
+    /// `K = ∂v_0/∂z_0` (nu × nz, row-major) of the last solve; empty
+    /// otherwise (the first stage then carries no extra columns).
+    gain: Vec<f64>,
 }
 
 /// Outcome of one structured solve.
@@ -216,7 +220,26 @@ impl StageLq {
             bvec: AlignedBuf::zeros(ld.next_multiple_of(8)),
             mmap: AlignedBuf::zeros(ld.next_multiple_of(8) * (nq + nz)),
             bin: vec![0.0; nq + nz],
+            gain: Vec::new(),
         }
+    }
+
+    /// Makes every solve also form the first stage's feedback gain
+    /// [`StageLq::first_stage_gain`] (nu·nz values, sized here once). The
+    /// first stage then carries the `nz` columns `L_1 A` through its
+    /// reflections (`R_vz`, which the stage otherwise folds into its
+    /// right-hand side with `z_0`); the solution is unchanged.
+    pub fn enable_gain(&mut self) {
+        self.gain = vec![0.0; self.nu * self.nz];
+    }
+
+    /// `K = ∂v_0/∂z_0 = −R_vv⁻¹ R_vz` of the last solve (nu × nz, row-major):
+    /// the stage-0 input is `v_0 = R_vv⁻¹(ρ_0 − R_vz z_0)`, so for a change
+    /// `δz_0` of the initial state alone (same `A`, `B`, `c_j`, targets)
+    /// `v_0` changes by exactly `K δz_0`. Empty unless
+    /// [`StageLq::enable_gain`] was called.
+    pub fn first_stage_gain(&self) -> &[f64] {
+        &self.gain
     }
 
     /// The solution `v_0, …, v_{N−1}` of the last successful solve.
@@ -625,7 +648,10 @@ impl StageLq {
         let (nu, nz) = (self.nu, self.nz);
         let cols = nu + nz + 1;
         let (cs, ms) = (self.cs, self.ms);
-        let width = (nu + 1).next_multiple_of(8);
+        // With the gain: the columns L_1 A (R_vz after the reflections) right
+        // of the right-hand side.
+        let gz = if self.gain.is_empty() { 0 } else { nz };
+        let width = (nu + 1 + gz).next_multiple_of(8);
         // t = A z_0 + c_0 (z_next as work).
         if self.c_rows == 0 {
             self.z_next.fill(0.0);
@@ -647,11 +673,13 @@ impl StageLq {
         {
             let li = &lrow[i..];
             // [B A] rows hold B in their first nu columns.
-            let prod = &mut self.hw[..width];
+            let pw = if gz == 0 { width } else { cs };
+            let prod = &mut self.hw[..pw];
             prod.fill(0.0);
             accumulate_rows(prod, li, &self.ba[i * cs..], cs, 0);
             row[..nu].copy_from_slice(&prod[..nu]);
             row[nu] = self.l_vec[i] - dot(li, &self.z_next[i..]);
+            row[nu + 1..nu + 1 + gz].copy_from_slice(&prod[nu..nu + gz]);
         }
         for k in 0..nu {
             householder_rows(
@@ -672,6 +700,9 @@ impl StageLq {
             d[..nu].copy_from_slice(&row[..nu]);
             d[nu..nu + nz].fill(0.0);
             d[nu + nz] = row[nu];
+        }
+        if gz > 0 {
+            gain_from_rows(&mut self.gain, &self.m[..nu * ms], ms, nu, nz);
         }
         acc
     }
@@ -757,6 +788,29 @@ impl StageLq {
             .chunks_exact(nu * cols)
             .rev()
             .flat_map(move |v| (0..nu).map(move |i| v[i * cols + i].abs()))
+    }
+}
+
+/// `K = −R_vv⁻¹ G` (nu × nz, row-major, into `k`) from the first stage's
+/// reflected rows `m` (row stride `ms`): `R_vv` (upper triangular) in
+/// columns `0..nu`, `G = R_vz` in columns `nu + 1..nu + 1 + nz`.
+fn gain_from_rows(k: &mut [f64], m: &[f64], ms: usize, nu: usize, nz: usize) {
+    for i in (0..nu).rev() {
+        let (done, rest) = k.split_at_mut((i + 1) * nz);
+        let ki = &mut done[i * nz..];
+        let row = &m[i * ms..(i + 1) * ms];
+        for (kc, g) in ki.iter_mut().zip(&row[nu + 1..nu + 1 + nz]) {
+            *kc = -g;
+        }
+        for (r, kr) in row[i + 1..nu].iter().zip(rest.chunks_exact(nz)) {
+            for (kc, x) in ki.iter_mut().zip(kr) {
+                *kc -= r * x;
+            }
+        }
+        let d = row[i];
+        for kc in ki.iter_mut() {
+            *kc /= d;
+        }
     }
 }
 
@@ -981,6 +1035,56 @@ mod tests {
         let x = m.clone().svd(true, true).solve(&rhs, 1e-14).unwrap();
         let res = (&m * &x - &rhs).norm_squared();
         (x.as_slice().to_vec(), res)
+    }
+
+    /// The first stage's gain is `∂v_0/∂z_0` of the brute-force minimizer
+    /// (the solution is linear in `z_0`: compared column by column against
+    /// `(v_0(z_0 + e_c) − v_0(z_0))`), and enabling it leaves the solution
+    /// bit-identical, with and without the reuse of converged stages.
+    #[test]
+    fn first_stage_gain_is_the_derivative_of_the_first_input() {
+        let mut seed = 11;
+        for (nu, nz, nq, nh) in [(1, 1, 1, 1), (2, 3, 2, 4), (3, 5, 2, 6), (2, 8, 4, 30)] {
+            let plain = random_problem(nu, nz, nq, nh, &mut seed);
+            for reuse in [false, true] {
+                let mut a = plain.clone();
+                a.reuse_converged = reuse;
+                let mut g = a.clone();
+                g.enable_gain();
+                a.solve_portable().unwrap();
+                g.solve_portable().unwrap();
+                assert_eq!(a.solution(), g.solution(), "solution changed");
+                let k = g.first_stage_gain().to_vec();
+                assert_eq!(k.len(), nu * nz);
+                // Brute force on the short horizons; the solver itself (whose
+                // solution is checked against brute force above) on the
+                // long one, where the SVD of A^30 loses digits.
+                let first = |p: &StageLq| {
+                    if nh <= 6 {
+                        brute(p).0
+                    } else {
+                        let mut p = p.clone();
+                        p.solve_portable().unwrap();
+                        p.solution().to_vec()
+                    }
+                };
+                let v0 = first(&plain);
+                for c in 0..nz {
+                    let mut p = plain.clone();
+                    p.z0[c] += 1.0;
+                    let v1 = first(&p);
+                    for i in 0..nu {
+                        let want = v1[i] - v0[i];
+                        let got = k[i * nz + c];
+                        let scale = want.abs().max(1e-3);
+                        assert!(
+                            (got - want).abs() <= 1e-8 * scale,
+                            "{nu} {nz} {i} {c}: {got} vs {want}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
