@@ -385,10 +385,16 @@ fn bound_com(pi: PayloadParams, r: f64) -> PayloadParams {
     if !(r > 0.0 && m > 0.0) || h.norm() <= m * r {
         return pi;
     }
-    let c = h * (r / h.norm());
+    point_mass(m, h * (r / h.norm()))
+}
+
+/// The parameters of a point mass `m` at `c` from the flange: first moments `m c`, inertia
+/// about the flange `m (|c|² 1 − c cᵀ)` (xx, xy, xz, yy, yz, zz).
+fn point_mass(m: f64, c: nalgebra::Vector3<f64>) -> PayloadParams {
     let i_o = (nalgebra::Matrix3::identity() * c.norm_squared() - c * c.transpose()) * m;
-    let mut out = pi;
     let hc = c * m;
+    let mut out = PayloadParams::zeros();
+    out[0] = m;
     for (k, v) in [
         hc.x,
         hc.y,
@@ -624,27 +630,9 @@ mod tests {
     #[test]
     fn the_centre_of_mass_is_moved_in_to_the_bound_with_its_mass() {
         // 0.5 kg at c = (0.3, 0, 0.4) m (|c| = 0.5) as a point mass.
-        let mut pi = PayloadParams::zeros();
-        pi[0] = 0.5;
         let c = nalgebra::Vector3::<f64>::new(0.3, 0.0, 0.4);
-        let i_o: nalgebra::Matrix3<f64> =
-            (nalgebra::Matrix3::<f64>::identity() * c.norm_squared() - c * c.transpose()) * 0.5;
-        for (k, v) in [
-            0.15,
-            0.0,
-            0.2,
-            i_o[(0, 0)],
-            i_o[(0, 1)],
-            i_o[(0, 2)],
-            i_o[(1, 1)],
-            i_o[(1, 2)],
-            i_o[(2, 2)],
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            pi[k + 1] = v;
-        }
+        let pi = point_mass(0.5, c);
+        assert_eq!([pi[1], pi[2], pi[3]], [0.15, 0.0, 0.2]);
         let b = bound_com(pi, 0.2);
         assert_eq!(b[0], 0.5);
         let h = nalgebra::Vector3::new(b[1], b[2], b[3]);
