@@ -671,11 +671,10 @@ impl Controller {
     /// and the state it acted on; nothing with a torque output.
     fn command(&mut self, x: &[f64]) {
         let s = self.controller.settings();
-        if s.output.is_torque() || !self.controller.predicted_outputs(&mut self.predicted) {
+        let (torque, lead_s, ts) = (s.output.is_torque(), s.output_lead_s.unwrap_or(0.0), s.ts);
+        if torque || !self.controller.predicted_outputs(&mut self.predicted) {
             return;
         }
-        let s = self.controller.settings();
-        let (lead_s, ts) = (s.output_lead_s.unwrap_or(0.0), s.ts);
         let n = self.x_est.len() / 2;
         let now = match self.observer {
             Some(_) => &self.x_est[..n],

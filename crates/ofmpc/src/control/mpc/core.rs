@@ -777,8 +777,8 @@ impl Core {
 
     /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints with
     /// a compensated Coulomb friction (`friction_compensation`, `F_c > 0`)
-    /// whose reference rests over the horizon and which creep (`|q̇| < v_s`, the
-    /// drives' Coulomb velocity scale, where the friction is the stiff damper
+    /// whose reference rests over the horizon and which creep (`|q̇| < CREEP_FACTOR · v_s`,
+    /// `v_s` the drives' Coulomb velocity scale, where the friction is the stiff damper
     /// the factor is for; settings.rs says why). Beyond it — a joint broken
     /// away — the weight of the motion: the stiffer gain on the bare inertia
     /// would cycle through the delay.
