@@ -132,6 +132,10 @@ struct RealArm {
     model_rate: f64,
     /// The model's target at the last learnt sample.
     target: Option<PayloadParams>,
+    /// The payload the tuning assumes ([`MpcSettings::model_payload_kg`], a
+    /// point mass at the flange centre): the model's until the estimate is
+    /// trusted, and its fallback.
+    nominal: PayloadParams,
     /// The last `2W + 1` measured positions, ring.
     q_ring: Vec<f64>,
     measured: usize,
@@ -259,6 +263,13 @@ impl AdaptiveMpc {
         };
         self.estimator = PayloadEstimator::new(n, rls, PayloadParams::zeros())
             .map_err(SettingsError::Estimator)?;
+        // The nominal model is the one built (zero unless the tuning centres
+        // the model in a payload range).
+        let nominal = point_mass(
+            self.inner.settings().model_payload_kg,
+            nalgebra::Vector3::zeros(),
+        );
+        self.model_pi = nominal;
         self.real_arm = Some(Box::new(RealArm {
             cfg,
             window,
@@ -272,6 +283,7 @@ impl AdaptiveMpc {
                 1.0 - (1.0 - MODEL_RATE).powf(1.0 / window as f64)
             },
             target: None,
+            nominal,
             q_ring: vec![0.0; (2 * window + 1) * n],
             measured: 0,
             tau_ring: vec![0.0; (cfg.delay + 2 * window) * n],
@@ -348,23 +360,24 @@ impl AdaptiveMpc {
     }
 
     /// What the model should carry: the estimate; on a real arm (`cfg`) the
-    /// nominal model until the mass is determined, then a point mass (the
-    /// rotational inertia from delayed, quantized data is not to be trusted)
-    /// with its centre of mass within `max_com_m` of the flange.
+    /// nominal model (the payload the tuning assumes) until the mass is
+    /// determined, then a point mass (the rotational inertia from delayed,
+    /// quantized data is not to be trusted) with its centre of mass within
+    /// `max_com_m` of the flange.
     fn model_target(
         rls: &crate::ident::PayloadRls,
-        cfg: Option<&RealArmIdentification>,
+        cfg: Option<(&RealArmIdentification, PayloadParams)>,
     ) -> PayloadParams {
         let p00 = rls.covariance()[(0, 0)];
         match cfg {
-            Some(cfg)
+            Some((cfg, nominal))
                 if p00.is_nan()
                     || p00.max(0.0).sqrt() >= cfg.trust_mass_sigma_kg
                     || rls.updates() < cfg.min_samples =>
             {
-                PayloadParams::zeros()
+                nominal
             }
-            Some(cfg) => bound_com(rls.point_mass_estimate(), cfg.max_com_m),
+            Some((cfg, _)) => bound_com(rls.point_mass_estimate(), cfg.max_com_m),
             None => rls.model_estimate(),
         }
     }
@@ -520,7 +533,10 @@ impl Algorithm for AdaptiveMpc {
                     // (the same time constant as per learnt sample at W = 1,
                     // without a step every W samples).
                     if learnt {
-                        ra.target = Some(Self::model_target(self.estimator.rls(), Some(&ra.cfg)));
+                        ra.target = Some(Self::model_target(
+                            self.estimator.rls(),
+                            Some((&ra.cfg, ra.nominal)),
+                        ));
                     }
                     ra.target.filter(|_| learnt || ra.window > 1)
                 }

@@ -502,9 +502,6 @@ impl Core {
             .collect();
         let hold_q_du = (incremental && hold_scale.iter().any(|&f| f != 1.0))
             .then(|| (diag(&settings.q_du), hold_scale));
-        if hold_q_du.is_some() && matches!(backend, Backend::Structured(_)) {
-            return Err(SettingsError::HoldQduScaleStructured);
-        }
         Ok(Self {
             n,
             nh,
@@ -803,6 +800,10 @@ impl Core {
             } else {
                 moving[i]
             };
+        }
+        // The structured solver reads the weight from its stage rows.
+        if let Some(st) = self.backend.stage_mut() {
+            st.rd.copy_from_slice(&self.w_bot);
         }
     }
 
