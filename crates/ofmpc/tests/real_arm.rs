@@ -331,27 +331,3 @@ fn the_real_arm_keys_are_validated() {
         assert!(e.to_string().contains(what), "{e}");
     }
 }
-
-#[test]
-fn the_stiff_hold_needs_the_dense_solver() {
-    use ofmpc::control::{new_controller, Solver};
-    let s = MpcSettings {
-        hold_q_du_scale: Weight::Scalar(0.5),
-        solver: Solver::Structured,
-        ..Default::default()
-    };
-    let e = new_controller(ControllerKind::First, 6, &s).err().unwrap();
-    assert!(e.to_string().contains("dense solver"), "{e}");
-    // A factor of 1 is no factor: the structured solver builds.
-    let one = MpcSettings {
-        hold_q_du_scale: Weight::Scalar(1.0),
-        ..s.clone()
-    };
-    assert!(new_controller(ControllerKind::First, 6, &one).is_ok());
-    // The dense solver takes it.
-    let dense = MpcSettings {
-        solver: Solver::DenseQr,
-        ..s
-    };
-    assert!(new_controller(ControllerKind::Second, 6, &dense).is_ok());
-}

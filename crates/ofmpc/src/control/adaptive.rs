@@ -446,6 +446,8 @@ impl Algorithm for AdaptiveMpc {
         self.has_prev = false;
         self.model_pi = PayloadParams::zeros();
         if let Some(ra) = self.real_arm.as_deref_mut() {
+            // The model the run starts with: the nominal one (built so).
+            self.model_pi = ra.nominal;
             ra.measured = 0;
             ra.steps = 0;
             ra.tau_ring.fill(0.0);
