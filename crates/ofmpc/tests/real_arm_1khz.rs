@@ -9,9 +9,11 @@
 //!
 //! Measured on this short path (release): every run "ok" (the hold within 2
 //! encoder counts); RMS / steady (mm) at 0 / 6 kg: first-adaptive
-//! 0.0092 / 0.0015, 0.0059 / 0.0017; second-adaptive 0.0038 / 0.0018,
-//! 0.0044 / 0.0025; ctc-adaptive 0.0033 / 0.0017, 0.0050 / 0.0022; dob-mpc
-//! 0.0114 / 0.0014, 0.0123 / 0.0017; estimates 0.04–0.06 and 5.46–5.55 kg.
+//! 0.0133 / 0.0016, 0.0108 / 0.0025; second-adaptive 0.0029 / 0.0023,
+//! 0.0070 / 0.0024; ctc-adaptive 0.0051 / 0.0018, 0.0021 / 0.0023; dob-mpc
+//! 0.0153 / 0.0015, 0.0188 / 0.0016; estimates 0.03–0.13 and 5.47–5.55 kg.
+//! The stiff hold's peers (`first`, 2 kg, 10 ms): dense and structured RMS
+//! 0.0285 mm, steady 0.0011 mm; without the factor 0.0014 mm.
 //! The whole preset's numbers are in docs/guide/real-arm.md.
 
 mod common;
@@ -120,9 +122,9 @@ fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
     m
 }
 
-/// Issue 35's targets at 1 kHz: "ok" (the hold within 2 encoder counts),
-/// steady ≤ 0.01 mm, RMS ≤ 0.1 mm (the short path's measured ≤ 0.013 mm),
-/// the estimate within 10 % of the rated 6 kg.
+/// Issue 35's targets at 1 kHz, as reached: "ok" (the hold within 2 encoder
+/// counts), steady ≤ 0.005 mm (target 0.01; measured ≤ 0.0025), RMS ≤ 0.05 mm
+/// (target 0.1; measured ≤ 0.019), the estimate within 10 % of the rated 6 kg.
 #[test]
 fn the_offset_free_kinds_hold_at_1_khz_at_0_and_rated_payload() {
     let exp = preset();
@@ -136,8 +138,8 @@ fn the_offset_free_kinds_hold_at_1_khz_at_0_and_rated_payload() {
             let m = run(&exp, kind, mass);
             assert_eq!(m.status, RunStatus::Ok, "{}: {}", m.name, m.reason);
             assert!(m.hold_error_pp_counts.unwrap() <= 2.0, "{}", m.name);
-            assert!(m.steady_cartesian_error_mm <= 0.01, "{}", m.name);
-            assert!(m.cartesian_error_rms_mm <= 0.1, "{}", m.name);
+            assert!(m.steady_cartesian_error_mm <= 0.005, "{}", m.name);
+            assert!(m.cartesian_error_rms_mm <= 0.05, "{}", m.name);
             if kind.is_adaptive() {
                 let est = m.payload_estimate_kg.unwrap();
                 assert!((est - mass).abs() <= 0.6, "{}: estimate {est} kg", m.name);
