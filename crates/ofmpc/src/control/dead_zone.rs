@@ -94,4 +94,22 @@ mod tests {
         in_dead_zone(0.0, &w, &w, &[1.0, 2.0, 3.0], &mut hold);
         assert_eq!(hold, [false; 3]);
     }
+
+    #[test]
+    fn only_creeping_joints_at_a_resting_reference_hold_on_the_damper() {
+        let mut d = DriveModel::from_robot(&crate::robot::Robot::irb140());
+        d.coulomb_nm = vec![1.0, 0.0];
+        d.coulomb_velocity_rad_s = 1e-3;
+        let w = [1.0, 2.0];
+        let rest = [1.0, 2.0, 1.0, 2.0];
+        // Creeping (below 3 v_s) at a resting reference: holds.
+        assert!(creeps_at_rest(Some(&d), 0, 2.9e-3, &w, &rest));
+        assert!(creeps_at_rest(Some(&d), 0, -2.9e-3, &w, &rest));
+        // Broken away, no Coulomb estimate, no drives (no compensation).
+        assert!(!creeps_at_rest(Some(&d), 0, 3.1e-3, &w, &rest));
+        assert!(!creeps_at_rest(Some(&d), 1, 0.0, &w, &rest));
+        assert!(!creeps_at_rest(None, 0, 0.0, &w, &rest));
+        // The reference moves anywhere over the horizon.
+        assert!(!creeps_at_rest(Some(&d), 0, 0.0, &w, &[1.0, 2.0, 1.0 + 1e-12, 2.0]));
+    }
 }

@@ -243,7 +243,7 @@ impl BaselineSettings {
 /// The per-joint factors of a baseline's stiffer hold (`name`, e.g.
 /// `ctc_hold_gain_scale`) for `n` joints, checked: finite and `≥ 1`, one per
 /// joint for a diagonal; `None` when every one is 1 (nothing to gate).
-pub fn hold_gain_scales(
+pub(crate) fn hold_gain_scales(
     name: &'static str,
     w: &Weight,
     n: usize,
