@@ -218,7 +218,11 @@ fn dob_mpc_holds_with_all_effects() {
     // The wrist's stiffer hold (q_u ÷ 10, observer × 10): within 2 counts at
     // 0 and 2 kg (4 without); 3 at 6 kg, still creeping in from the path's
     // end (RMS 0.57 mm there, the start transient).
-    holds_with_all_effects(ControllerKind::DobMpc, [0.25, 0.25, 1.0], [true, true, false]);
+    holds_with_all_effects(
+        ControllerKind::DobMpc,
+        [0.25, 0.25, 1.0],
+        [true, true, false],
+    );
 }
 
 #[test]

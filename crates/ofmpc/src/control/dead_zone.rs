@@ -110,6 +110,12 @@ mod tests {
         assert!(!creeps_at_rest(Some(&d), 1, 0.0, &w, &rest));
         assert!(!creeps_at_rest(None, 0, 0.0, &w, &rest));
         // The reference moves anywhere over the horizon.
-        assert!(!creeps_at_rest(Some(&d), 0, 0.0, &w, &[1.0, 2.0, 1.0 + 1e-12, 2.0]));
+        assert!(!creeps_at_rest(
+            Some(&d),
+            0,
+            0.0,
+            &w,
+            &[1.0, 2.0, 1.0 + 1e-12, 2.0]
+        ));
     }
 }

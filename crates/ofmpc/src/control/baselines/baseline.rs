@@ -410,7 +410,8 @@ impl JointLawCore {
         self.model.update(model, &x[..n], &x[n..])?;
         self.refd.update(w_k, preview);
         self.hold_gains(x, w_k, preview);
-        self.pid.law(x, w_k, &self.refd.v, &self.kp_scale, &mut self.fb);
+        self.pid
+            .law(x, w_k, &self.refd.v, &self.kp_scale, &mut self.fb);
         match self.law {
             Law::Pid => {
                 self.u.copy_from_slice(&self.fb);

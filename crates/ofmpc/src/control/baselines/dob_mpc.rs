@@ -40,12 +40,12 @@
 //! input actually applied, so the disturbance estimate does not wind up.
 
 use crate::control::algorithm::Algorithm;
+use crate::control::dead_zone::creeps_at_rest;
 use crate::control::drive_model::DriveModel;
 use crate::control::kind::ControllerKind;
 use crate::control::mpc::core::{check_finite, check_len, check_result};
 use crate::control::mpc::model::LinearLikeModel;
 use crate::control::mpc::usual::UsualMpc;
-use crate::control::dead_zone::creeps_at_rest;
 use crate::control::settings::{
     bandwidths, hold_gain_scales, BaselineSettings, MpcSettings, SettingsError,
 };
@@ -113,7 +113,12 @@ impl DobMpc {
             n,
             model: LinearLikeModel::new(n),
             gain: wo.iter().map(|w| observer_gain(*w)).collect(),
-            hold_gain: hold.map(|s| wo.iter().zip(&s).map(|(w, f)| observer_gain(w * f)).collect()),
+            hold_gain: hold.map(|s| {
+                wo.iter()
+                    .zip(&s)
+                    .map(|(w, f)| observer_gain(w * f))
+                    .collect()
+            }),
             d_hat: vec![0.0; n],
             d_new: vec![0.0; n],
             x_prev: vec![0.0; 2 * n],
