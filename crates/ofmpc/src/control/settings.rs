@@ -195,7 +195,7 @@ pub struct BaselineSettings {
     pub dob_observer_bandwidth: Weight,
     /// The factor (`≥ 1`) on the computed-torque baselines' `kp` on a joint
     /// that holds on the friction's stiff damper (`ctc`, `ctc-adaptive`;
-    /// [`crate::control::dead_zone::creeps_at_rest`]: with
+    /// `control/dead_zone.rs`, `creeps_at_rest`: with
     /// `friction_compensation`, a Coulomb estimate, a resting reference,
     /// `|q̇| < 3 v_s`). Against the damper `b` the PID loop
     /// `b s² + M kp s + M ki = 0` is damped by `M kp / (2 √(M ki b))`: the
