@@ -286,3 +286,79 @@ fn built_controller_steps_allocate_nothing() {
     // The paper's three and the two adaptive variants hand out gains.
     assert_eq!(gained, 5);
 }
+
+/// The baselines' stiffer hold (`ctc_hold_gain_scale`, `dob_hold_gain_scale`,
+/// issue 35) allocates nothing at a creeping hold, where it acts: a resting
+/// reference, joints within a count of it and slower than `3 v_s`, the
+/// friction compensated — and it does act there (the torque differs from
+/// the same controller without it).
+#[test]
+fn baselines_stiff_hold_steps_allocate_nothing() {
+    use ofmpc::control::{BaselineSettings, ControllerBuilder, ObserverSettings, StepInput};
+    let robot = ofmpc::robot::Robot::irb140();
+    let n = robot.dof();
+    let settings = MpcSettings {
+        torque_limits: true,
+        friction_compensation: true,
+        delay_compensation: true,
+        observer_friction: true,
+        friction_creep: true,
+        ..Default::default()
+    };
+    let stiff = BaselineSettings {
+        ctc_hold_gain_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 3.0, 3.0, 3.0]),
+        dob_hold_gain_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 10.0, 10.0, 10.0]),
+        ..Default::default()
+    };
+    let drives = binding_drives(n);
+    for kind in [
+        ControllerKind::Ctc,
+        ControllerKind::CtcAdaptive,
+        ControllerKind::DobMpc,
+    ] {
+        let mut taus = Vec::new();
+        for baselines in [BaselineSettings::default(), stiff.clone()] {
+            let mut mpc = ControllerBuilder::new(kind, &robot)
+                .settings(settings.clone())
+                .baselines(baselines)
+                .drives(drives.clone())
+                .observer(ObserverSettings {
+                    pole: 0.7,
+                    measurement_delay: 1,
+                })
+                .build()
+                .unwrap();
+            let wk = vec![0.3; n];
+            let preview = wk.repeat(settings.horizon);
+            let mut x: Vec<f64> = wk.iter().copied().chain(vec![0.0; n]).collect();
+            mpc.reset(&x).unwrap();
+            let mut last = vec![0.0; n];
+            let before = allocations();
+            for k in 0..100 {
+                // Within a few counts of the reference, creeping (1e-4 rad/s).
+                for i in 0..n {
+                    x[i] = 0.3 + 2e-5 * ((k + i) % 3) as f64;
+                    x[n + i] = 1e-4 * (((k + i) % 3) as f64 - 1.0);
+                }
+                let out = mpc
+                    .step(&StepInput {
+                        x: &x,
+                        w_k: &wk,
+                        preview: &preview,
+                    })
+                    .unwrap();
+                assert!(out.tau.iter().all(|t| t.is_finite()));
+                last.copy_from_slice(&out.tau);
+            }
+            assert_eq!(allocations() - before, 0, "{kind}");
+            taus.push(last);
+        }
+        // The wrist's torque changes with the stiffer hold (the arm's only
+        // through the observer's coupled prediction).
+        assert!(
+            taus[0][3..].iter().zip(&taus[1][3..]).any(|(a, b)| a != b),
+            "{kind}: {:?}",
+            taus
+        );
+    }
+}

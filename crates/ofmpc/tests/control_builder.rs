@@ -558,6 +558,7 @@ fn baselines_are_refused_for_the_paper_kinds_checked_and_used() {
         pid_bandwidth: Weight::Scalar(40.0),
         ctc_bandwidth: Weight::Diagonal(vec![100.0, 100.0, 100.0, 120.0, 120.0, 120.0]),
         dob_observer_bandwidth: Weight::Scalar(66.0),
+        ..Default::default()
     };
     for kind in ControllerKind::BASELINES {
         let built = |b: &BaselineSettings| {

@@ -17,6 +17,8 @@
 //! band, or while the reference moves, nothing changes (the controller stays
 //! offset-free to the band). Off (`encoder_counts = 0`) by default.
 
+use crate::control::drive_model::DriveModel;
+
 /// Half-width of the dead zone in encoder counts.
 pub const DEAD_ZONE_COUNTS: f64 = 1.0;
 
@@ -43,6 +45,38 @@ pub fn in_dead_zone(band: f64, w_k: &[f64], y: &[f64], preview: &[f64], hold: &m
     }
 }
 
+/// A joint creeps while `|q̇| < CREEP_FACTOR·v_s` ([`creeps_at_rest`]): the
+/// friction's slope there is still a fifth of its slope at rest or more
+/// (`F_c tanh(3)/(3 v_s)`), and one encoder count per sample (6e-4 rad/s at
+/// 20 bits and 10 ms) does not leave it.
+pub const CREEP_FACTOR: f64 = 3.0;
+
+/// Whether joint `i` holds on the friction's stiff damper: a drive model
+/// with a Coulomb estimate (`drives`, given only with friction
+/// compensation; `None`: never), a reference that rests over the horizon
+/// (`preview`, N·n values, equal to `w_k` exactly) and a creeping joint
+/// (`|q̇_i| < CREEP_FACTOR · v_s`). Near rest the smoothed Coulomb friction
+/// `F_c tanh(v/v_s)` is a damper `b = F_c/v_s` far stiffer than a light
+/// joint's gains are tuned for; the stiffer holds of the incremental
+/// algorithms (`hold_q_du_scale`) and of the baselines (`hold_gain_scale`)
+/// apply there and only there: beyond it — a joint broken away — the
+/// stiffer gain on the bare inertia would cycle through the delay. One
+/// home for the condition. Allocates nothing.
+pub fn creeps_at_rest(
+    drives: Option<&DriveModel>,
+    i: usize,
+    qd: f64,
+    w_k: &[f64],
+    preview: &[f64],
+) -> bool {
+    let n = w_k.len();
+    drives.is_some_and(|d| {
+        d.coulomb_nm[i] > 0.0
+            && qd.abs() < CREEP_FACTOR * d.coulomb_velocity_rad_s
+            && preview.chunks_exact(n).all(|p| p[i] == w_k[i])
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -59,5 +93,29 @@ mod tests {
         assert_eq!(hold, [true, false, false]);
         in_dead_zone(0.0, &w, &w, &[1.0, 2.0, 3.0], &mut hold);
         assert_eq!(hold, [false; 3]);
+    }
+
+    #[test]
+    fn only_creeping_joints_at_a_resting_reference_hold_on_the_damper() {
+        let mut d = DriveModel::from_robot(&crate::robot::Robot::irb140());
+        d.coulomb_nm = vec![1.0, 0.0];
+        d.coulomb_velocity_rad_s = 1e-3;
+        let w = [1.0, 2.0];
+        let rest = [1.0, 2.0, 1.0, 2.0];
+        // Creeping (below 3 v_s) at a resting reference: holds.
+        assert!(creeps_at_rest(Some(&d), 0, 2.9e-3, &w, &rest));
+        assert!(creeps_at_rest(Some(&d), 0, -2.9e-3, &w, &rest));
+        // Broken away, no Coulomb estimate, no drives (no compensation).
+        assert!(!creeps_at_rest(Some(&d), 0, 3.1e-3, &w, &rest));
+        assert!(!creeps_at_rest(Some(&d), 1, 0.0, &w, &rest));
+        assert!(!creeps_at_rest(None, 0, 0.0, &w, &rest));
+        // The reference moves anywhere over the horizon.
+        assert!(!creeps_at_rest(
+            Some(&d),
+            0,
+            0.0,
+            &w,
+            &[1.0, 2.0, 1.0 + 1e-12, 2.0]
+        ));
     }
 }

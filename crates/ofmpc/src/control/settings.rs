@@ -193,6 +193,19 @@ pub struct BaselineSettings {
     /// `ω_o` of the disturbance observer of `dob-mpc` (default
     /// `DEFAULT_DOB_OBSERVER_BANDWIDTH`).
     pub dob_observer_bandwidth: Weight,
+    /// The factor (`≥ 1`) on the computed-torque baselines' `kp` on a joint
+    /// that holds on the friction's stiff damper (`ctc`, `ctc-adaptive`;
+    /// `control/dead_zone.rs`, `creeps_at_rest`: with
+    /// `friction_compensation`, a Coulomb estimate, a resting reference,
+    /// `|q̇| < 3 v_s`). Against the damper `b` the PID loop
+    /// `b s² + M kp s + M ki = 0` is damped by `M kp / (2 √(M ki b))`: the
+    /// factor raises that damping in proportion. Default 1: unchanged.
+    pub ctc_hold_gain_scale: Weight,
+    /// The factor (`≥ 1`) by which `dob-mpc` is stiffer on a joint that
+    /// holds on the friction's stiff damper (the same condition): its inner
+    /// usual MPC's `q_u` ÷ the factor and its observer's bandwidth × the
+    /// factor. Default 1: unchanged.
+    pub dob_hold_gain_scale: Weight,
 }
 
 impl Default for BaselineSettings {
@@ -201,6 +214,8 @@ impl Default for BaselineSettings {
             pid_bandwidth: Weight::Scalar(DEFAULT_PID_BANDWIDTH),
             ctc_bandwidth: Weight::Scalar(DEFAULT_CTC_BANDWIDTH),
             dob_observer_bandwidth: Weight::Scalar(DEFAULT_DOB_OBSERVER_BANDWIDTH),
+            ctc_hold_gain_scale: Weight::Scalar(1.0),
+            dob_hold_gain_scale: Weight::Scalar(1.0),
         }
     }
 }
@@ -215,8 +230,42 @@ impl BaselineSettings {
         ] {
             bandwidths(name, w, n)?;
         }
+        for (name, w) in [
+            ("ctc_hold_gain_scale", &self.ctc_hold_gain_scale),
+            ("dob_hold_gain_scale", &self.dob_hold_gain_scale),
+        ] {
+            hold_gain_scales(name, w, n)?;
+        }
         Ok(())
     }
+}
+
+/// The per-joint factors of a baseline's stiffer hold (`name`, e.g.
+/// `ctc_hold_gain_scale`) for `n` joints, checked: finite and `≥ 1`, one per
+/// joint for a diagonal; `None` when every one is 1 (nothing to gate).
+pub(crate) fn hold_gain_scales(
+    name: &'static str,
+    w: &Weight,
+    n: usize,
+) -> Result<Option<Vec<f64>>, SettingsError> {
+    if let Weight::Diagonal(d) = w {
+        if d.len() != n {
+            return Err(SettingsError::WeightLength {
+                name,
+                expected: n,
+                got: d.len(),
+            });
+        }
+    }
+    let scale: Vec<f64> = (0..n).map(|i| w.get(i).unwrap_or(1.0)).collect();
+    if let Some((index, &value)) = scale
+        .iter()
+        .enumerate()
+        .find(|(_, v)| !(v.is_finite() && **v >= 1.0))
+    {
+        return Err(SettingsError::HoldGainScale { name, index, value });
+    }
+    Ok(scale.iter().any(|&f| f != 1.0).then_some(scale))
 }
 
 /// The per-joint bandwidths of `w` (setting `name`) for `n` joints, checked:
@@ -687,11 +736,25 @@ pub enum SettingsError {
         /// The value given.
         value: f64,
     },
+    /// A factor of a baseline's stiffer hold is not a finite number `≥ 1`.
+    #[error("the factor of a baseline's stiffer hold ({name}) is {value} at entry {index}: it must be a finite number >= 1 (1: unchanged)")]
+    HoldGainScale {
+        /// The setting.
+        name: &'static str,
+        /// Entry (joint) of the setting.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
     /// A factor of the input-increment weight at rest other than 1 with the
     /// structured solver. No longer returned: the structured solver takes
     /// the factor (kept so that code matching on it still builds).
     #[error("the factor of the input-increment weight at rest (hold_q_du_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]
     HoldQduScaleStructured,
+    /// A factor of `dob-mpc`'s stiffer hold other than 1 with the structured
+    /// solver, which builds its weights once.
+    #[error("the factor of dob-mpc's stiffer hold (dob_hold_gain_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]
+    HoldGainScaleStructured,
     /// An adaptive variant of the usual MPC was requested: it has none (no
     /// integrator to remove what the identification leaves).
     #[error("the usual MPC has no adaptive variant: use the first or the second algorithm")]

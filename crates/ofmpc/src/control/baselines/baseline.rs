@@ -233,15 +233,24 @@ impl JointPid {
         self.z.fill(0.0);
     }
 
-    /// `v_i = kp e_i + kd ė_i + ki z_i` with `e = w_k − q`, `ė = v_ref − q̇`
-    /// (writes `out`; the integral is not changed until [`Self::commit`]).
-    pub fn law(&mut self, x: &[f64], w_k: &[f64], v_ref: &[f64], out: &mut [f64]) {
+    /// `v_i = s_i kp e_i + kd ė_i + ki z_i` with `e = w_k − q`, `ė = v_ref − q̇`
+    /// and `s = kp_scale` (1: the triple pole; the stiffer hold of
+    /// [`JointLawCore`]) (writes `out`; the integral is not changed until
+    /// [`Self::commit`]).
+    pub fn law(
+        &mut self,
+        x: &[f64],
+        w_k: &[f64],
+        v_ref: &[f64],
+        kp_scale: &[f64],
+        out: &mut [f64],
+    ) {
         let n = w_k.len();
         for i in 0..n {
             let e = w_k[i] - x[i];
             let ed = v_ref[i] - x[n + i];
             self.e[i] = e;
-            out[i] = self.kp[i] * e + self.kd[i] * ed + self.ki[i] * self.z[i];
+            out[i] = kp_scale[i] * self.kp[i] * e + self.kd[i] * ed + self.ki[i] * self.z[i];
         }
     }
 
@@ -299,6 +308,11 @@ pub(crate) struct JointLawCore {
     /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
     hold: Vec<bool>,
     hold_band: f64,
+    /// Per joint: the factor on `kp` while the joint holds on the
+    /// friction's damper (`ctc_hold_gain_scale`); `None` when every factor is 1.
+    hold_gain: Option<Vec<f64>>,
+    /// The factor on `kp` of this sample (1 but at a creeping hold).
+    kp_scale: Vec<f64>,
     drives: Option<DriveModel>,
 }
 
@@ -328,6 +342,8 @@ impl JointLawCore {
             clipped: vec![false; n],
             hold: vec![false; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            hold_gain: None,
+            kp_scale: vec![1.0; n],
             drives: None,
         })
     }
@@ -393,7 +409,9 @@ impl JointLawCore {
         }
         self.model.update(model, &x[..n], &x[n..])?;
         self.refd.update(w_k, preview);
-        self.pid.law(x, w_k, &self.refd.v, &mut self.fb);
+        self.hold_gains(x, w_k, preview);
+        self.pid
+            .law(x, w_k, &self.refd.v, &self.kp_scale, &mut self.fb);
         match self.law {
             Law::Pid => {
                 self.u.copy_from_slice(&self.fb);
@@ -453,6 +471,36 @@ impl JointLawCore {
             r_diag_ratio: 1.0,
             zoh_squarings: 0,
         })
+    }
+}
+
+impl JointLawCore {
+    /// The factor on `kp` per joint at a creeping hold (`None`: none), the
+    /// computed-torque baselines' `ctc_hold_gain_scale`.
+    pub fn set_hold_gain(&mut self, scale: Option<Vec<f64>>) {
+        self.hold_gain = scale;
+    }
+
+    /// `kp`'s factor of this sample: `ctc_hold_gain_scale` on the joints that
+    /// hold on the compensated friction's stiff damper
+    /// ([`crate::control::dead_zone::creeps_at_rest`]), 1 elsewhere. Against
+    /// the damper `b` the PID's integral rings (`b s² + M kp s + M ki`,
+    /// damped by `M kp / (2 √(M ki b))`); a stiffer proportional action damps
+    /// it, and the damper keeps it stable through the delay.
+    fn hold_gains(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
+        let Some(scale) = &self.hold_gain else {
+            return;
+        };
+        let n = self.n;
+        let drives = self
+            .drives
+            .as_ref()
+            .filter(|_| self.settings.friction_compensation);
+        for (i, s) in self.kp_scale.iter_mut().enumerate() {
+            let creeps =
+                crate::control::dead_zone::creeps_at_rest(drives, i, x[n + i], w_k, preview);
+            *s = if creeps { scale[i] } else { 1.0 };
+        }
     }
 }
 

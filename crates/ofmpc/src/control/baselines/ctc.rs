@@ -15,11 +15,20 @@
 //! model leaves out acts as an input disturbance that the integrator
 //! removes at rest. With torque limits the torque is clipped and the clipped
 //! joint's integral frozen (anti-windup).
+//!
+//! The stiffer hold (`ctc_hold_gain_scale`, issue 35): on a joint that holds
+//! on the friction's stiff damper `b = F_c/v_s`
+//! ([`crate::control::dead_zone::creeps_at_rest`]) the loop is
+//! `b s² + M kp s + M ki = 0`, damped by `M kp / (2 √(M ki b))` (about 0.1 on
+//! the real-arm preset's wrist, which then rings by 4–8 encoder counts);
+//! `kp` × the factor there raises that damping in proportion.
 
 use crate::control::baselines::baseline::{JointLawCore, Law};
 use crate::control::kind::ControllerKind;
 use crate::control::mpc::core::impl_controller;
-use crate::control::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
+use crate::control::settings::{
+    bandwidths, hold_gain_scales, BaselineSettings, MpcSettings, SettingsError,
+};
 
 /// The computed-torque baseline. Allocation-free [`Algorithm::step`](crate::control::Algorithm::step).
 #[derive(Debug, Clone)]
@@ -30,15 +39,20 @@ pub struct CtcController {
 impl_controller!(CtcController, ControllerKind::Ctc, JointLawCore);
 
 impl CtcController {
-    /// A controller for `n` joints with `baselines.ctc_bandwidth`.
+    /// A controller for `n` joints with `baselines.ctc_bandwidth` and
+    /// `baselines.ctc_hold_gain_scale`.
     pub fn new(
         n: usize,
         settings: &MpcSettings,
         baselines: &BaselineSettings,
     ) -> Result<Self, SettingsError> {
         let wn = bandwidths("ctc_bandwidth", &baselines.ctc_bandwidth, n)?;
-        Ok(Self {
-            core: JointLawCore::new(Law::Ctc, n, settings, &wn)?,
-        })
+        let mut core = JointLawCore::new(Law::Ctc, n, settings, &wn)?;
+        core.set_hold_gain(hold_gain_scales(
+            "ctc_hold_gain_scale",
+            &baselines.ctc_hold_gain_scale,
+            n,
+        )?);
+        Ok(Self { core })
     }
 }

@@ -28,17 +28,27 @@
 //! At rest `ε = 0` forces `u = −d̂` exactly, i.e. `ũ = 0`: the usual
 //! problem's optimum at `q = w` — no steady offset.
 //!
+//! The stiffer hold (`dob_hold_gain_scale`, issue 35): on a joint that holds
+//! on the friction's stiff damper `F_c/v_s`
+//! ([`crate::control::dead_zone::creeps_at_rest`]) the inner MPC's `Q_U` is
+//! divided by the factor and the observer's bandwidth multiplied by it (its
+//! pole `p^s`): the damper's force enters `d̂` within a sample or two
+//! instead of ringing with the integrating estimate at about 1 Hz.
+//!
 //! Torque limits: the torque is clipped to the drives' limits (the usual
 //! QP would bound `τ̃`, not the applied torque) and the observer is given the
 //! input actually applied, so the disturbance estimate does not wind up.
 
 use crate::control::algorithm::Algorithm;
+use crate::control::dead_zone::creeps_at_rest;
 use crate::control::drive_model::DriveModel;
 use crate::control::kind::ControllerKind;
 use crate::control::mpc::core::{check_finite, check_len, check_result};
 use crate::control::mpc::model::LinearLikeModel;
 use crate::control::mpc::usual::UsualMpc;
-use crate::control::settings::{bandwidths, BaselineSettings, MpcSettings, SettingsError};
+use crate::control::settings::{
+    bandwidths, hold_gain_scales, BaselineSettings, MpcSettings, SettingsError,
+};
 use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
@@ -51,6 +61,9 @@ pub struct DobMpc {
     model: LinearLikeModel,
     /// `(1 − p_i)/Ts` per joint.
     gain: Vec<f64>,
+    /// The observer's gain at a creeping hold, `(1 − p_i^s_i)/Ts` with
+    /// `s = dob_hold_gain_scale` (bandwidth × s); `None` when every `s` is 1.
+    hold_gain: Option<Vec<f64>>,
     d_hat: Vec<f64>,
     d_new: Vec<f64>,
     x_prev: Vec<f64>,
@@ -88,12 +101,24 @@ impl DobMpc {
             ..settings.clone()
         };
         let ts = settings.ts;
+        let hold = hold_gain_scales("dob_hold_gain_scale", &baselines.dob_hold_gain_scale, n)?;
+        let mut inner = UsualMpc::new(n, &inner_settings)?;
+        if let Some(s) = &hold {
+            inner.set_hold_input_scale(s.iter().map(|f| 1.0 / f).collect())?;
+        }
+        let observer_gain = |w: f64| (1.0 - (-w * ts).exp()) / ts;
         Ok(Self {
-            inner: UsualMpc::new(n, &inner_settings)?,
+            inner,
             settings: settings.clone(),
             n,
             model: LinearLikeModel::new(n),
-            gain: wo.iter().map(|w| (1.0 - (-w * ts).exp()) / ts).collect(),
+            gain: wo.iter().map(|w| observer_gain(*w)).collect(),
+            hold_gain: hold.map(|s| {
+                wo.iter()
+                    .zip(&s)
+                    .map(|(w, f)| observer_gain(w * f))
+                    .collect()
+            }),
             d_hat: vec![0.0; n],
             d_new: vec![0.0; n],
             x_prev: vec![0.0; 2 * n],
@@ -113,7 +138,11 @@ impl DobMpc {
     }
 
     /// `d̂_k` into `d_new` from the velocity prediction error (module docs).
-    fn observe(&mut self, x: &[f64]) {
+    fn observe(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
+        let drives = self
+            .drives
+            .as_ref()
+            .filter(|_| self.settings.friction_compensation);
         let n = self.n;
         let ts = self.settings.ts;
         let f0 = self.model.f0().as_slice();
@@ -126,7 +155,11 @@ impl DobMpc {
             if self.has_prev {
                 let acc = 0.5 * (self.f0qd_prev[i] + self.f0qd[i]) + self.u_prev[i] + self.d_hat[i];
                 let eps = x[n + i] - self.x_prev[n + i] - ts * acc;
-                self.d_new[i] += self.gain[i] * eps;
+                let gain = match &self.hold_gain {
+                    Some(g) if creeps_at_rest(drives, i, x[n + i], w_k, preview) => g[i],
+                    _ => self.gain[i],
+                };
+                self.d_new[i] += gain * eps;
             }
         }
     }
@@ -225,7 +258,7 @@ impl Algorithm for DobMpc {
             &crate::control::step::StepInput { x, w_k, preview },
             &mut self.tau_tilde,
         )?;
-        self.observe(x);
+        self.observe(x, w_k, preview);
         // The hold dead zone (dead_zone.rs): the disturbance estimate, the
         // integrating action here, rests within the encoder's resolution.
         crate::control::dead_zone::in_dead_zone(

@@ -44,11 +44,6 @@ use crate::control::mpc::prediction::{
 };
 use crate::control::mpc::torque_limits::TorqueLimitQp;
 
-/// A joint creeps while `|q̇| < CREEP_FACTOR·v_s` ([`Core::hold_weights`]):
-/// the friction's slope there is still a fifth of its slope at rest or more
-/// (`F_c tanh(3)/(3 v_s)`), and one encoder count per sample (6e-4 rad/s at
-/// 20 bits and 10 ms) does not leave it.
-const CREEP_FACTOR: f64 = 3.0;
 use crate::control::mpc::zoh::Zoh;
 use crate::control::settings::{MpcSettings, SettingsError, Solver};
 use crate::control::solvers::constrained::QpStatus;
@@ -772,11 +767,23 @@ impl Core {
         Ok(())
     }
 
+    /// The usual (positional) algorithm's stiffer hold: `Q_u` × `scale[i]`
+    /// (in `(0, 1]`) on the joints that hold on the friction's damper, as
+    /// [`Core::hold_weights`] does with `Q_Δu` (`dob-mpc`'s inner MPC, its
+    /// `dob_hold_gain_scale`). The dense solver only.
+    pub(crate) fn set_hold_input_scale(&mut self, scale: Vec<f64>) -> Result<(), SettingsError> {
+        if matches!(self.backend, Backend::Structured(_)) {
+            return Err(SettingsError::HoldGainScaleStructured);
+        }
+        self.hold_q_du = Some((self.w_bot.clone(), scale));
+        Ok(())
+    }
+
     /// `Q_Δu` of this sample: the factor `hold_q_du_scale` on the joints with
     /// a compensated Coulomb friction (`friction_compensation`, `F_c > 0`)
-    /// whose reference rests over the horizon and which creep (`|q̇| < CREEP_FACTOR · v_s`,
-    /// `v_s` the drives' Coulomb velocity scale, where the friction is the stiff damper
-    /// the factor is for; settings.rs says why). Beyond it — a joint broken
+    /// whose reference rests over the horizon and which creep
+    /// ([`crate::control::dead_zone::creeps_at_rest`]: `|q̇| < CREEP_FACTOR · v_s`, where
+    /// the friction is the stiff damper the factor is for; settings.rs says why). Beyond it — a joint broken
     /// away — the weight of the motion: the stiffer gain on the bare inertia
     /// would cycle through the delay.
     fn hold_weights(&mut self, x: &[f64], w_k: &[f64], preview: &[f64]) {
@@ -790,11 +797,8 @@ impl Core {
             .as_ref()
             .filter(|_| self.settings.friction_compensation);
         for (i, w) in self.w_bot.iter_mut().enumerate() {
-            let creeps = drives.is_some_and(|d| {
-                d.coulomb_nm[i] > 0.0
-                    && x[n + i].abs() < CREEP_FACTOR * d.coulomb_velocity_rad_s
-                    && preview.chunks_exact(n).all(|p| p[i] == w_k[i])
-            });
+            let creeps =
+                crate::control::dead_zone::creeps_at_rest(drives, i, x[n + i], w_k, preview);
             *w = if creeps {
                 moving[i] * scale[i]
             } else {

@@ -26,6 +26,12 @@ impl UsualMpc {
         })
     }
 
+    /// `Q_u` × `scale[i]` on the joints that hold on the friction's stiff
+    /// damper ([`Core::set_hold_input_scale`]; `dob-mpc`'s stiffer hold).
+    pub(crate) fn set_hold_input_scale(&mut self, scale: Vec<f64>) -> Result<(), SettingsError> {
+        self.core.set_hold_input_scale(scale)
+    }
+
     /// [`Algorithm::step`](crate::control::Algorithm::step) of the usual algorithm:
     /// [`Core::step_with`] with its targets ([`UsualTargets`]).
     fn run_step(
