@@ -601,6 +601,12 @@ fn new_algorithm(
                 RealArmIdentification::default().max_mass_kg
             },
             max_com_m: s.payload_com_max_m,
+            at_rest: s.identify_at_rest,
+            min_samples: if s.identification_min_samples > 0 {
+                s.identification_min_samples
+            } else {
+                RealArmIdentification::default().min_samples
+            },
             ..RealArmIdentification::default()
         };
         let rls = estimator.unwrap_or_default();

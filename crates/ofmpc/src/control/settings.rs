@@ -397,6 +397,28 @@ pub struct MpcSettings {
     /// kind, no torque limits and no observer only: else the build refuses.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub gains: bool,
+    /// The adaptive kinds on a real arm also learn while the reference
+    /// rests, from the joints that slide
+    /// (`RealArmIdentification::min_joint_speed`, 0.02 rad/s, as on the
+    /// path), not only while it moves. A settled hold never reaches that
+    /// speed, so nothing is learnt from quantization, noise or stiction; an
+    /// unknown heavy payload that sets the arm swinging before the path
+    /// (three samples of delay on a light arm) is identified from that
+    /// motion before the path starts. Default off: only while the reference
+    /// moves.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub identify_at_rest: bool,
+    /// The adaptive kinds on a real arm: the model carries the identified
+    /// payload only after this many samples were learnt from (and the
+    /// mass's standard deviation is below 0.5 kg). `0` (default): the
+    /// library's 100 (1 s at 10 ms). Fewer let a heavy unknown payload
+    /// reach the model before the loop it destabilizes swings far.
+    #[serde(skip_serializing_if = "is_zero_u64")]
+    pub identification_min_samples: u64,
+}
+
+fn is_zero_u64(v: &u64) -> bool {
+    *v == 0
 }
 
 impl Default for MpcSettings {
@@ -425,6 +447,8 @@ impl Default for MpcSettings {
             output_lead_s: None,
             hold_q_du_scale: Weight::Scalar(1.0),
             gains: false,
+            identify_at_rest: false,
+            identification_min_samples: 0,
         }
     }
 }
