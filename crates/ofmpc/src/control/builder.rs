@@ -387,7 +387,7 @@ impl<'r> ControllerBuilder<'r> {
                 obs.set_friction(&d.coulomb_nm, &d.viscous_nms);
                 if s.friction_creep {
                     obs.set_creep(d.coulomb_velocity_rad_s);
-                    obs.set_creep_coupled(true);
+                    obs.set_creep_coupled(s.friction_coupled);
                 }
             }
             obs
