@@ -45,11 +45,13 @@ pub struct StateObserver {
     /// integrated implicitly (creep); 0: the stick-aware clamp.
     creep_velocity: f64,
     /// With creep: the joints' friction solved together through the whole
-    /// inertia matrix (nonlinear Gauss–Seidel) instead of joint by joint
+    /// inertia matrix (Newton on the convex potential) instead of joint by joint
     /// through its diagonal ([`Self::set_creep_coupled`]).
     creep_coupled: bool,
-    /// The free velocity `s` of the coupled solve (n values).
+    /// The free velocity `s` of the coupled solve (n values) and its
+    /// workspace (`n² + 2n`).
     free_v: Vec<f64>,
+    creep_work: Vec<f64>,
 }
 
 /// Characteristic polynomial `z³ + c2 z² + c1 z + c0` of a 3×3 row-major matrix.
@@ -136,6 +138,7 @@ impl StateObserver {
             creep_velocity: 0.0,
             creep_coupled: false,
             free_v: vec![0.0; n],
+            creep_work: vec![0.0; n * n + 2 * n],
         }
     }
 
@@ -252,10 +255,8 @@ impl StateObserver {
     /// The coupled implicit friction step ([`Self::set_creep_coupled`]):
     /// from `acc` (without friction) at velocity `v` (the state or its
     /// forward copy), the end velocity `x` of `H (x − s)/Ts + F(x) = 0`,
-    /// `s = v + acc·Ts`, by sweeps of the scalar solve with the other joints'
-    /// coupling on the right side (`H/Ts + diag F'` is positive definite, so
-    /// the sweeps converge); `acc = (x − v)/Ts`. At most 50 sweeps, no
-    /// allocation.
+    /// `s = v + acc·Ts` (`crate::control::mpc::creep::implicit_velocities`,
+    /// Newton on the convex potential); `acc = (x − v)/Ts`. No allocation.
     fn coupled_creep(&mut self, from_tmp: bool) {
         let (n, ts, vs) = (self.n, self.ts, self.creep_velocity);
         let v = if from_tmp { &self.tmp_v } else { &self.v };
@@ -266,33 +267,15 @@ impl StateObserver {
         for i in 0..n {
             self.free_v[i] = v[i] + self.acc[i] * ts;
         }
-        // x starts at s (in acc's storage as a velocity until the end).
         let x = &mut self.acc;
-        x.copy_from_slice(&self.free_v);
-        for _ in 0..50 {
-            let mut change = 0.0_f64;
-            for i in 0..n {
-                let hii = h[(i, i)];
-                let mut off = 0.0;
-                for j in (0..n).filter(|&j| j != i) {
-                    off += h[(i, j)] * (x[j] - self.free_v[j]);
-                }
-                let si = self.free_v[i] - off / hii;
-                let xi = crate::control::mpc::creep::implicit_velocity(
-                    hii,
-                    ts,
-                    si,
-                    self.viscous[i],
-                    self.coulomb[i],
-                    vs,
-                );
-                change = change.max((xi - x[i]).abs());
-                x[i] = xi;
-            }
-            if change <= 1e-12 * vs {
-                break;
-            }
-        }
+        crate::control::mpc::creep::implicit_velocities(
+            h,
+            ts,
+            &self.free_v,
+            (&self.viscous, &self.coulomb, vs),
+            x,
+            &mut self.creep_work,
+        );
         for i in 0..n {
             x[i] = (x[i] - v[i]) / ts;
         }
