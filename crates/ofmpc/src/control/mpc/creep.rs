@@ -224,12 +224,10 @@ mod tests {
         }
         let d = nalgebra::DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![0.9, 0.8, 0.3]));
         let s = [0.02, -1e-3, 3e-4];
-        implicit_velocities(&d, ts, &s, (&fv, &fc, vs), &mut x);
+        implicit_velocities(&d, ts, &s, (&fv, &fc, vs), &mut x, &mut work);
         for i in 0..3 {
-            assert_eq!(
-                x[i],
-                implicit_velocity(d[(i, i)], ts, s[i], fv[i], fc[i], vs)
-            );
+            let one = implicit_velocity(d[(i, i)], ts, s[i], fv[i], fc[i], vs);
+            assert!((x[i] - one).abs() <= 1e-12 * one.abs().max(vs), "joint {i}");
         }
     }
 
