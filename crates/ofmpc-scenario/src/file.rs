@@ -543,6 +543,8 @@ impl ScenarioFile {
         on(mpc.state_observer, "[mpc] state_observer".into());
         on(mpc.observer_friction, "[mpc] observer_friction".into());
         on(mpc.friction_creep, "[mpc] friction_creep".into());
+        on(mpc.identify_at_rest, "[mpc] identify_at_rest".into());
+        on(mpc.friction_coupled, "[mpc] friction_coupled".into());
         on(
             mpc.payload_com_max_m > 0.0,
             format!("[mpc] payload_com_max_m = {} m", mpc.payload_com_max_m),

@@ -340,6 +340,10 @@ fn friction_warnings(f: &ScenarioFile, robot: &Robot) -> Vec<String> {
                 .into(),
         );
     }
+    if f.mpc.friction_coupled && !f.mpc.friction_creep {
+        warnings
+            .push("[mpc] friction_coupled = true without friction_creep: it has no effect".into());
+    }
     if f.mpc.friction_compensation {
         let d = ofmpc::control::DriveModel::from_robot(robot);
         if d.coulomb_nm.iter().chain(&d.viscous_nms).all(|v| *v == 0.0) {

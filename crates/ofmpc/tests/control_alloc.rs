@@ -211,10 +211,14 @@ fn built_controller_steps_allocate_nothing() {
         constraint_horizon: Some(4),
         ..Default::default()
     };
-    // Issue 35's real-arm keys: the observer's creeping friction law, the
-    // adaptive kinds' centre-of-mass bound and filter.
+    // Issue 35's real-arm keys: the observer's creeping friction law (solved
+    // through the whole inertia matrix), the adaptive kinds' centre-of-mass
+    // bound and filter, their identification at rest.
     let creeping = MpcSettings {
         friction_creep: true,
+        friction_coupled: true,
+        identify_at_rest: true,
+        identification_min_samples: 30,
         payload_com_max_m: 0.2,
         encoder_counts: 1_048_576.0,
         hold_q_du_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01]),

@@ -221,7 +221,8 @@ fn test_arm() -> Experiment {
         (&ARM6_COULOMB, &ARM6_VISCOUS),
         7.5,
     );
-    // As examples/test-arm.toml.
+    // As examples/test-arm.toml before its tuning (the preset as shipped is
+    // checked in crates/ofmpc-scenario/tests/test_arm.rs).
     exp.mpc.observer_friction = true;
     exp.mpc.encoder_counts = 1_048_576.0;
     exp

@@ -33,7 +33,8 @@
 //!   Ts = 10 ms `W = 1`: the differences over one period; no acceleration
 //!   over 1 ms at 1 kHz, where one encoder count would be 6 rad/s²);
 //! * only while the reference moves (excitation gating: at rest the data are
-//!   quantization, noise and an unknown stiction) and, per joint, only while
+//!   quantization, noise and an unknown stiction; with
+//!   [`RealArmIdentification::at_rest`] also at rest) and, per joint, only while
 //!   the joint slides (`|q̇_i| ≥` [`RealArmIdentification::min_joint_speed`]:
 //!   there the friction is the estimate's ±20 %, at rest anything up to `F_c`);
 //! * bounds the mass to [`RealArmIdentification::max_mass_kg`] (a multiple of
@@ -91,6 +92,10 @@ pub struct RealArmIdentification {
     /// learnt from), so that a burst of the estimate over a fast transient
     /// does not reach the model.
     pub model_time_s: f64,
+    /// Also learn while the reference rests, from the joints whose speed is
+    /// at least [`Self::min_joint_speed`] (default off: only while the
+    /// reference moves).
+    pub at_rest: bool,
 }
 
 /// The weight of the torque held over the `j`-th period on either side of
@@ -116,6 +121,7 @@ impl Default for RealArmIdentification {
             window_s: 0.01,
             max_com_m: 0.0,
             model_time_s: 0.5,
+            at_rest: false,
         }
     }
 }
@@ -313,7 +319,7 @@ impl AdaptiveMpc {
         let n = ra.q.len();
         let (d, w) = (ra.cfg.delay, ra.window);
         let moving = preview.chunks_exact(n).any(|b| b != w_k);
-        if !moving
+        if !(moving || ra.cfg.at_rest)
             || ra.measured < 2 * w + 1
             || ra.steps < d + 2 * w
             || !ra.measured.is_multiple_of(w)

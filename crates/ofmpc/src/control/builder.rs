@@ -387,6 +387,7 @@ impl<'r> ControllerBuilder<'r> {
                 obs.set_friction(&d.coulomb_nm, &d.viscous_nms);
                 if s.friction_creep {
                     obs.set_creep(d.coulomb_velocity_rad_s);
+                    obs.set_creep_coupled(s.friction_coupled);
                 }
             }
             obs
@@ -601,6 +602,12 @@ fn new_algorithm(
                 RealArmIdentification::default().max_mass_kg
             },
             max_com_m: s.payload_com_max_m,
+            at_rest: s.identify_at_rest,
+            min_samples: if s.identification_min_samples > 0 {
+                s.identification_min_samples
+            } else {
+                RealArmIdentification::default().min_samples
+            },
             ..RealArmIdentification::default()
         };
         let rls = estimator.unwrap_or_default();

@@ -44,6 +44,14 @@ pub struct StateObserver {
     /// With friction: the velocity scale `v_s` of the smoothed Coulomb law,
     /// integrated implicitly (creep); 0: the stick-aware clamp.
     creep_velocity: f64,
+    /// With creep: the joints' friction solved together through the whole
+    /// inertia matrix (Newton on the convex potential) instead of joint by joint
+    /// through its diagonal ([`Self::set_creep_coupled`]).
+    creep_coupled: bool,
+    /// The free velocity `s` of the coupled solve (n values) and its
+    /// workspace (`n² + 2n`).
+    free_v: Vec<f64>,
+    creep_work: Vec<f64>,
 }
 
 /// Characteristic polynomial `z³ + c2 z² + c1 z + c0` of a 3×3 row-major matrix.
@@ -128,6 +136,9 @@ impl StateObserver {
             coulomb: Vec::new(),
             viscous: Vec::new(),
             creep_velocity: 0.0,
+            creep_coupled: false,
+            free_v: vec![0.0; n],
+            creep_work: vec![0.0; n * n + 2 * n],
         }
     }
 
@@ -155,6 +166,14 @@ impl StateObserver {
         } else {
             0.0
         };
+    }
+
+    /// With creep ([`Self::set_creep`]): solve the implicit friction step of
+    /// all joints together, `H (x − s)/Ts + F(x) = 0` (the plant's friction
+    /// acts through `H⁻¹`, and a heavy payload couples the joints whose axes
+    /// are parallel), instead of each joint through `H_ii` alone.
+    pub fn set_creep_coupled(&mut self, on: bool) {
+        self.creep_coupled = on;
     }
 
     /// The gains `(l1, l2, l3)`.
@@ -203,7 +222,9 @@ impl StateObserver {
         for (a, d) in self.acc.iter_mut().zip(&self.dist) {
             *a += d;
         }
-        if !self.coulomb.is_empty() {
+        if !self.coulomb.is_empty() && self.creep_coupled && self.creep_velocity > 0.0 {
+            self.coupled_creep(from_tmp);
+        } else if !self.coulomb.is_empty() {
             let h = self.model.h();
             let ts = self.ts;
             let vs = self.creep_velocity;
@@ -229,6 +250,35 @@ impl StateObserver {
             }
         }
         Ok(())
+    }
+
+    /// The coupled implicit friction step ([`Self::set_creep_coupled`]):
+    /// from `acc` (without friction) at velocity `v` (the state or its
+    /// forward copy), the end velocity `x` of `H (x − s)/Ts + F(x) = 0`,
+    /// `s = v + acc·Ts` (`crate::control::mpc::creep::implicit_velocities`,
+    /// Newton on the convex potential); `acc = (x − v)/Ts`. No allocation.
+    fn coupled_creep(&mut self, from_tmp: bool) {
+        let (n, ts, vs) = (self.n, self.ts, self.creep_velocity);
+        let v = if from_tmp { &self.tmp_v } else { &self.v };
+        let h = self.model.h();
+        if (0..n).any(|i| !(h[(i, i)].is_finite() && h[(i, i)] > 0.0)) {
+            return;
+        }
+        for i in 0..n {
+            self.free_v[i] = v[i] + self.acc[i] * ts;
+        }
+        let x = &mut self.acc;
+        crate::control::mpc::creep::implicit_velocities(
+            h,
+            ts,
+            &self.free_v,
+            (&self.viscous, &self.coulomb, vs),
+            x,
+            &mut self.creep_work,
+        );
+        for i in 0..n {
+            x[i] = (x[i] - v[i]) / ts;
+        }
     }
 
     /// One sample: `y` is the (delayed) measurement (2n values; only the
