@@ -485,6 +485,12 @@ impl Algorithm for AdaptiveMpc {
     fn set_check_budget(&mut self, checks: Option<u32>) {
         self.inner.set_check_budget(checks)
     }
+    fn set_step_clock(&mut self, start: std::time::Instant, reserve_us: f64) {
+        self.inner.set_step_clock(start, reserve_us)
+    }
+    fn qp_end(&self) -> Option<std::time::Instant> {
+        self.inner.qp_end()
+    }
     fn payload_estimate(&self) -> Option<f64> {
         Some(self.model_pi[0])
     }
