@@ -370,3 +370,37 @@ fn a_safe_stop_through_a_position_interface_commands_a_braking_position() {
         assert_eq!((report.misses, report.status), (0, ServoStatus::Ok));
     }
 }
+
+/// Through an interface that closes its own joint loop the adaptive kinds
+/// do not identify (`control/adaptive.rs`): the torque the arm receives is
+/// the drive's, not the controller's `τ_k`, and fed `τ_k` the estimate ran
+/// to the 1000 kg bound (measured through abb-egm and ur-servoj before this
+/// rule). They then run as their base algorithm — the same run as
+/// `second`, to the bit — and report no estimate; with a torque output
+/// (franka-torque) they identify the payload.
+#[test]
+fn the_adaptive_kinds_do_not_identify_through_a_position_interface() {
+    for profile in [ServoProfile::AbbEgm, ServoProfile::UrServoj] {
+        let e = experiment(1e-3, Some(ServoSettings::profile(profile)));
+        let (_, base) = run(&e, ControllerKind::Second, 2.0);
+        let (outcome, adaptive) = run(&e, ControllerKind::SecondAdaptive, 2.0);
+        assert!(outcome.is_completed(), "{profile}: {outcome}");
+        assert_eq!(adaptive.payload_estimate_kg, None, "{profile}");
+        assert_eq!(
+            adaptive.cartesian_error_rms_mm.to_bits(),
+            base.cartesian_error_rms_mm.to_bits(),
+            "{profile}"
+        );
+        assert_eq!(
+            adaptive.steady_joint_error_max_rad,
+            base.steady_joint_error_max_rad
+        );
+    }
+    let e = experiment(
+        1e-3,
+        Some(ServoSettings::profile(ServoProfile::FrankaTorque)),
+    );
+    let (_, m) = run(&e, ControllerKind::SecondAdaptive, 2.0);
+    let mass = m.payload_estimate_kg.expect("a torque output identifies");
+    assert!((mass - 2.0).abs() < 0.2, "franka-torque: {mass} kg");
+}
