@@ -56,8 +56,9 @@ fn run(e: &Experiment, kind: ControllerKind, mass: f64) -> (RunOutcome, RunMetri
 /// against the second algorithm franka-torque 1.2×, abb-egm 1.25×,
 /// ur-servoj 2.3× (kuka-rsi 37× at 0.25 kg and Q_Δu = 1e-5); against the
 /// adaptive variant, whose torque mode tracks to 2 µm, the position
-/// interfaces' own joint loop (unaware of the payload) stays at 0.04–0.1 mm:
-/// 24–270×.
+/// interfaces' own joint loop (unaware of the payload) stays at 0.06–0.11 mm
+/// (the adaptive kind does not identify through them and runs as the
+/// second: 26× on abb-egm, 49× on ur-servoj; kuka-rsi 270×).
 /// The paper's `Q_Δu = 1e-5` diverges at 2 kg in torque mode and against a
 /// 40 ms lag: the cases use 1e-3 except kuka-rsi (1e-5 at 0.25 kg; at
 /// 1e-3 its hold settles only to 4e-6 rad in 2 s). ur-servoj's hold
