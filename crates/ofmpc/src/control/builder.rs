@@ -684,7 +684,7 @@ impl Controller {
     /// deadline for the step's work after it (µs): the longest such tail
     /// seen so far (measured from the QP's return to the end of
     /// [`Self::step`], on every budgeted step, with or without an active
-    /// QP), at most [`MAX_RESERVE_FRACTION`] of the budget. `None` without
+    /// QP), at most a quarter of the budget. `None` without
     /// a budget.
     pub fn budget_reserve_us(&self) -> Option<f64> {
         let budget = self.controller.settings().step_budget_us?;
