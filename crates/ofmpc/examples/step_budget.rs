@@ -92,7 +92,9 @@ fn iteration_cost(
         w_k: &w_k,
         preview: &preview,
     };
-    let build_checks = (nh + n * nh + 1) as u32;
+    // The build's checks, the one before the factorization and the one
+    // kept back for the work after the QP.
+    let build_checks = (nh + n * nh + 2) as u32;
     let mut median_us = |iterations: i64| -> Result<(f64, u32), Box<dyn std::error::Error>> {
         mpc.set_check_budget(Some((i64::from(build_checks) + iterations) as u32));
         let mut times = Vec::with_capacity(400);

@@ -8,6 +8,10 @@ use ofmpc::control::{ControllerKind, FallbackLevel, MpcSettings, StepInput};
 use ofmpc::robot::Robot;
 use ofmpc::ControllerBuilder;
 
+/// Deadline checks of a check budget the controller keeps back for the
+/// step's work after the QP (`TAIL_CHECKS` in `control/mpc/torque_limits.rs`).
+const TAIL_CHECKS: u32 = 1;
+
 #[global_allocator]
 static GLOBAL: alloc_counter::Counting = alloc_counter::Counting;
 
@@ -162,8 +166,9 @@ fn the_fallback_levels_follow_the_budget_in_order() {
     }
     let (n, nh) = (reference.dof(), reference.horizon());
     // Checks before the QP iterates: per horizon block and Hessian column of
-    // its build, and before its factorization.
-    let build_checks = (nh + n * nh + 1) as u32;
+    // its build, before its factorization, and the one kept back for the
+    // step's work after the QP (TAIL_CHECKS).
+    let build_checks = (nh + n * nh + 1) as u32 + TAIL_CHECKS;
     assert!(free_iters.iter().all(|&i| i as usize <= 4 * n * nh));
     let tau_max = reference.drives().unwrap().max_torque_nm.clone();
     let mut seen = [false; 4];
@@ -229,6 +234,58 @@ fn the_fallback_levels_follow_the_budget_in_order() {
         seen[..3].iter().all(|s| *s) && !seen[3],
         "levels seen {seen:?}"
     );
+}
+
+/// The work after the QP (the torque, the command, the telemetry) is
+/// accounted inside the budget: counted in deadline checks, one check
+/// ([`TAIL_CHECKS`]) is kept back from the QP's, so a budget of exactly
+/// the build's checks plus `k` runs `k − 1` iterations, never `k`; on the
+/// clock, the controller keeps back the longest tail it measured (from the
+/// QP's return to the end of its step), at most a quarter of the budget.
+#[test]
+fn the_work_after_the_qp_is_kept_back_from_the_budget() {
+    let robot = Robot::irb140();
+    let (probe, ..) = limited(ControllerKind::Second, &robot, None);
+    let (n, nh) = (probe.dof(), probe.horizon());
+    // The build's checks and the one before the factorization.
+    let before_iterating = (nh + n * nh + 1) as u32;
+    for k in 1..4u32 {
+        let (mut mpc, x, w_k, preview) = limited(ControllerKind::Second, &robot, Some(1e9));
+        mpc.set_check_budget(Some(before_iterating + k));
+        let out = mpc
+            .step(&StepInput {
+                x: &x,
+                w_k: &w_k,
+                preview: &preview,
+            })
+            .unwrap();
+        let qp = out.qp_status.unwrap();
+        assert!(qp.active && qp.budget_hit, "{k}: {qp:?}");
+        assert_eq!(qp.iterations, k - TAIL_CHECKS, "{k} checks after the build");
+        assert_eq!(out.telemetry.fallback, FallbackLevel::BestFeasible);
+    }
+    // On the clock: no reserve without a budget; with one, a measured tail
+    // (positive) kept back, within a quarter of the budget.
+    let (mut free, x, w_k, preview) = limited(ControllerKind::Second, &robot, None);
+    let input = StepInput {
+        x: &x,
+        w_k: &w_k,
+        preview: &preview,
+    };
+    free.step(&input).unwrap();
+    assert_eq!(free.budget_reserve_us(), None);
+    for budget in [1e9, 40.0, 0.0] {
+        let (mut mpc, ..) = limited(ControllerKind::Second, &robot, Some(budget));
+        assert_eq!(mpc.budget_reserve_us(), Some(0.0), "none measured yet");
+        for _ in 0..5 {
+            mpc.step(&input).unwrap();
+        }
+        let r = mpc.budget_reserve_us().unwrap();
+        assert!(r <= 0.25 * budget, "{budget}: {r}");
+        if budget > 0.0 {
+            assert!(r > 0.0, "{budget}: the tail was not measured");
+        }
+    }
 }
 
 /// A budget beyond the clock's range is no deadline (never a panic).

@@ -19,6 +19,19 @@
 //! Assumes the torque the controller computes is the torque applied (no
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 //!
+//! **With a position or velocity output** (`MpcSettings::output`, an
+//! interface that closes its own joint loop) the identification is off and
+//! the model keeps its nominal payload: the torque the arm receives is the
+//! drive's own (its loop on the vendor's model), not `τ_k`, so the
+//! regression `τ_k = Y π` has no valid left-hand side — fed `τ_k`, the
+//! estimate ran to the mass bound (1000 kg) through the simulated ABB EGM
+//! and UR servoj interfaces. Nor would a right payload reach the arm: the
+//! command is the predicted *motion* (`control/command.rs`), which the
+//! payload changes only through the linearization, and the drive's own
+//! loop, not the controller, carries the load. The adaptive kind then runs
+//! as its base algorithm and reports no estimate
+//! ([`Algorithm::payload_estimate`] is `None`).
+//!
 //! **On a real arm** ([`RealArmIdentification`], on with the plant-facing
 //! settings `delay_compensation`, `friction_compensation` or
 //! `state_observer`, issue 35) the identification instead:
@@ -169,6 +182,9 @@ pub struct AdaptiveMpc {
     /// What the model carries, approaching the estimate (see [`MODEL_RATE`]).
     model_pi: PayloadParams,
     real_arm: Option<Box<RealArm>>,
+    /// The identification runs (a torque output); off with a position or
+    /// velocity output (module docs).
+    identify: bool,
 }
 
 /// Per sample, the model's payload moves this fraction of the way to the
@@ -241,6 +257,7 @@ impl AdaptiveMpc {
             has_prev: false,
             model_pi: PayloadParams::zeros(),
             real_arm: None,
+            identify: settings.output.is_torque(),
         })
     }
 
@@ -506,8 +523,14 @@ impl Algorithm for AdaptiveMpc {
     fn set_check_budget(&mut self, checks: Option<u32>) {
         self.inner.set_check_budget(checks)
     }
+    fn set_step_clock(&mut self, start: std::time::Instant, reserve_us: f64) {
+        self.inner.set_step_clock(start, reserve_us)
+    }
+    fn qp_end(&self) -> Option<std::time::Instant> {
+        self.inner.qp_end()
+    }
     fn payload_estimate(&self) -> Option<f64> {
-        Some(self.model_pi[0])
+        self.identify.then_some(self.model_pi[0])
     }
     fn step(
         &mut self,
@@ -515,6 +538,9 @@ impl Algorithm for AdaptiveMpc {
         input: &crate::control::step::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
+        if !self.identify {
+            return self.inner.step(model, input, tau);
+        }
         let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();

@@ -52,6 +52,19 @@ pub trait Algorithm {
     /// instead of µs (`None`: µs again; no effect without torque limits):
     /// a deterministic budget for tests of the fallback levels.
     fn set_check_budget(&mut self, _checks: Option<u32>) {}
+    /// The clock of the next step's budget: the instant the caller's step
+    /// began (so the work before the algorithm's, input checks and the
+    /// observer, counts) and the time (µs) kept back from the torque-limit
+    /// QP's deadline for the work after it (the torque, the command, the
+    /// telemetry). Without it the algorithm times its own step and keeps
+    /// back the longest tail it saw itself. Consumed by the next step.
+    fn set_step_clock(&mut self, _start: std::time::Instant, _reserve_us: f64) {}
+    /// With a step budget: when the last step's torque-limit QP returned
+    /// (its work after the QP began), `None` without a budget or when the
+    /// last step did not reach it.
+    fn qp_end(&self) -> Option<std::time::Instant> {
+        None
+    }
     /// The outputs (joint positions) the controller's model predicted at its
     /// last successful step, `ŷ(k+i|k)` for `i = 1..N`, into `out` (N·n values,
     /// block `i − 1` is `ŷ_{k+i}`), from the very ZOH model and optimal

@@ -419,6 +419,7 @@ impl<'r> ControllerBuilder<'r> {
             },
             predicted,
             started: false,
+            tail_us: 0.0,
         })
     }
 }
@@ -573,7 +574,16 @@ pub struct Controller {
     predicted: Vec<f64>,
     /// Reset at a measured state since build.
     started: bool,
+    /// With a step budget: the longest work after the torque-limit QP seen
+    /// in a step (µs, up to the end of [`Controller::step`]), kept back
+    /// from the next QP's deadline ([`Controller::budget_reserve_us`]).
+    tail_us: f64,
 }
+
+/// At most this fraction of the step budget is kept back for the work
+/// after the QP, whatever the longest tail seen: one tail stretched by a
+/// preemption must not leave every later QP without time.
+const MAX_RESERVE_FRACTION: f64 = 0.25;
 
 /// The per-kind algorithm; the adaptive kinds with the real arm's
 /// identification ([`RealArmIdentification`]) when the settings say the
@@ -647,6 +657,9 @@ impl Controller {
     pub fn step(&mut self, input: &StepInput<'_>) -> Result<&StepOutput, StepError> {
         let start = Instant::now();
         self.check_input(input)?;
+        if let Some(reserve) = self.budget_reserve_us() {
+            self.controller.set_step_clock(start, reserve);
+        }
         let result = self.solve(input);
         let solve_time = start.elapsed();
         match result {
@@ -670,7 +683,30 @@ impl Controller {
         }
         self.output.solve_time = start.elapsed();
         self.fill_telemetry(solve_time);
+        self.learn_tail();
         Ok(&self.output)
+    }
+
+    /// With a step budget: the time kept back from the torque-limit QP's
+    /// deadline for the step's work after it (µs): the longest such tail
+    /// seen so far (measured from the QP's return to the end of
+    /// [`Self::step`], on every budgeted step, with or without an active
+    /// QP), at most a quarter of the budget. `None` without
+    /// a budget.
+    pub fn budget_reserve_us(&self) -> Option<f64> {
+        let budget = self.controller.settings().step_budget_us?;
+        Some(self.tail_us.min(MAX_RESERVE_FRACTION * budget))
+    }
+
+    /// With a step budget, after a step that reached its QP: the tail from
+    /// the QP's return to now, into the reserve's maximum.
+    fn learn_tail(&mut self) {
+        if self.controller.settings().step_budget_us.is_none() {
+            return;
+        }
+        if let Some(qp_end) = self.controller.qp_end() {
+            self.tail_us = self.tail_us.max(qp_end.elapsed().as_secs_f64() * 1e6);
+        }
     }
 
     /// The position/velocity command of a successful step one lead time

@@ -703,14 +703,9 @@ impl ClosedLoop<'_> {
         let Some(servo) = self.servo.as_mut() else {
             return Ok(());
         };
-        let out = self.controller.diagnostics();
-        servo.receive(
-            self.controller.torque(),
-            &out.q_command,
-            &out.qd_command,
-            &out.qdd_command,
-            self.late,
-        );
+        // The controller's command, or the stop law's during a stop.
+        let (q, qd, qdd) = self.controller.command();
+        servo.receive(self.controller.torque(), q, qd, qdd, self.late);
         self.late = false;
         let path_sample = self.plant.state().path_sample;
         let substep = self.plant.period() / self.plant.substeps() as f64;

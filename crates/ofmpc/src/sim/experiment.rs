@@ -177,7 +177,10 @@ impl Experiment {
         payload.validate().map_err(ModelError::from)?;
         let ls = &self.loop_settings;
         let events = RunEvents {
-            pre_roll: if kind.is_adaptive() {
+            // The pre-roll at rest lets an adaptive kind identify its load;
+            // through a position or velocity output it identifies nothing
+            // (`control/adaptive.rs`).
+            pre_roll: if kind.is_adaptive() && self.mpc.output.is_torque() {
                 ls.identification_samples(self.reference.ts())
             } else {
                 0

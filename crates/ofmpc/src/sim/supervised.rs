@@ -131,6 +131,10 @@ pub struct SupervisedController {
     judged_stop: bool,
     /// The divergence the last step's judgement found.
     diverged: Option<(usize, f64)>,
+    /// During a stop, with a position or velocity output: the stop law's
+    /// position, velocity and acceleration command (3n,
+    /// [`Self::command`]).
+    stop_command: Vec<f64>,
 }
 
 impl SupervisedController {
@@ -194,6 +198,7 @@ impl SupervisedController {
             called: false,
             judged_stop: false,
             diverged: None,
+            stop_command: vec![0.0; 3 * n],
         }
     }
 
@@ -384,6 +389,35 @@ impl SupervisedController {
         self.called.then(|| self.mpc.output())
     }
 
+    /// The position, velocity and acceleration command of this sample for
+    /// an interface that takes positions (n each; `[mpc] output`,
+    /// `control/command.rs`): the controller's
+    /// ([`StepOutput::q_command`] and the rest), or, during a stop, the
+    /// stop law's braking trajectory one lead time ahead
+    /// (`SafeStop::command`) — a position the drive's own loop
+    /// brings to rest, where the controller's last command would leave it
+    /// following a stale, moving target. With a torque output, the
+    /// controller's (zeros).
+    pub fn command(&self) -> (&[f64], &[f64], &[f64]) {
+        let out = self.mpc.output();
+        if self.stop_commanded() {
+            let n = out.q_command.len();
+            let (q, rest) = self.stop_command.split_at(n);
+            let (qd, qdd) = rest.split_at(n);
+            return (q, qd, qdd);
+        }
+        (&out.q_command, &out.qd_command, &out.qdd_command)
+    }
+
+    /// Whether this sample's command is the stop law's: a stop under way
+    /// whose law gave this sample's torque, with a position or velocity
+    /// output.
+    fn stop_commanded(&self) -> bool {
+        !self.called
+            && self.supervisor.stopping().is_some()
+            && !self.mpc.settings().output.is_torque()
+    }
+
     /// The guarded controller.
     pub fn controller(&self) -> &Mpc {
         &self.mpc
@@ -421,6 +455,13 @@ impl SupervisedController {
                 o.record_torque(tau);
             }
             None => self.supervisor.stop_torque(model, &self.x, &self.x, tau)?,
+        }
+        let s = self.mpc.settings();
+        if !s.output.is_torque() {
+            let lead = s.output_lead_s.unwrap_or(0.0);
+            let (q, rest) = self.stop_command.split_at_mut(self.x.len() / 2);
+            let (qd, qdd) = rest.split_at_mut(q.len());
+            self.supervisor.stop_command(lead, [q, qd, qdd]);
         }
         Ok(())
     }

@@ -331,6 +331,28 @@ pub struct SafeStop {
     /// Position and velocity of the replay of a frozen joint ([`SafeStop::begin`]).
     replay_q: Vec<f64>,
     replay_v: Vec<f64>,
+    /// The stop's own braking trajectory for a position or velocity
+    /// interface ([`SafeStop::command`]): its position and velocity at the
+    /// current sample.
+    path_q: Vec<f64>,
+    path_v: Vec<f64>,
+    /// The trajectory was started at this stop's first state and not yet
+    /// advanced.
+    path_fresh: bool,
+}
+
+/// The critically damped braking law `ë = −ω²e − 2ωė` from `e(0) = e0`,
+/// `ė(0) = v0` at time `t`: `e = (A + Bt)e^{−ωt}` with `A = e0`,
+/// `B = v0 + ωe0`; returns `(e, ė, ë)`.
+fn critically_damped(e0: f64, v0: f64, w: f64, t: f64) -> (f64, f64, f64) {
+    let (a, b) = (e0, v0 + w * e0);
+    let decay = (-w * t).exp();
+    let e = a + b * t;
+    (
+        e * decay,
+        (b - w * e) * decay,
+        (w * w * e - 2.0 * w * b) * decay,
+    )
 }
 
 impl SafeStop {
@@ -353,6 +375,54 @@ impl SafeStop {
             tau_prev: vec![0.0; n],
             replay_q: vec![0.0; n],
             replay_v: vec![0.0; n],
+            path_q: vec![0.0; n],
+            path_v: vec![0.0; n],
+            path_fresh: true,
+        }
+    }
+
+    /// For an interface that takes positions (`[mpc] output =
+    /// "position_velocity"` or `"velocity"`): the stop's braking trajectory
+    /// `lead_s` after the current sample, into `q`, `qd`, `qdd` (n each) —
+    /// the law of [`Self::step`] (critically damped, time constant
+    /// [`BRAKE_TIME`], to where the braking started plus its run-out) run on
+    /// the stop's own trajectory from the state the stop began at, not on
+    /// the measurement: a decelerating, then holding, position the drive's
+    /// own loop follows (a torque it would ignore stops nothing). Allocates
+    /// nothing.
+    pub fn command(&self, lead_s: f64, cmd: [&mut [f64]; 3]) {
+        let w = 1.0 / BRAKE_TIME;
+        let [q, qd, qdd] = cmd;
+        for i in 0..self.n {
+            let hold = self.hold_of(i);
+            let (e, v, a) = critically_damped(self.path_q[i] - hold, self.path_v[i], w, lead_s);
+            q[i] = hold + e;
+            qd[i] = v;
+            qdd[i] = a;
+        }
+    }
+
+    /// Where joint `i` is held: the hold once the stop has taken its first
+    /// sample, before it the trajectory's own run-out.
+    fn hold_of(&self, i: usize) -> f64 {
+        match self.hold.get(i) {
+            Some(h) => *h,
+            None => self.path_q[i] + self.path_v[i] * BRAKE_TIME,
+        }
+    }
+
+    /// Moves the braking trajectory of [`Self::command`] one period on
+    /// (not at the stop's first sample, which is the state it began at).
+    fn advance_path(&mut self) {
+        if std::mem::take(&mut self.path_fresh) {
+            return;
+        }
+        let w = 1.0 / BRAKE_TIME;
+        for i in 0..self.n {
+            let hold = self.hold_of(i);
+            let (e, v, _) = critically_damped(self.path_q[i] - hold, self.path_v[i], w, self.ts);
+            self.path_q[i] = hold + e;
+            self.path_v[i] = v;
         }
     }
 
@@ -394,6 +464,9 @@ impl SafeStop {
             self.v[j] = rv[j];
             self.a.fill(0.0);
         }
+        self.path_q.copy_from_slice(&self.q);
+        self.path_v.copy_from_slice(&self.v);
+        self.path_fresh = true;
     }
 
     /// One sample of the stop: `raw` is the measurement (frozen encoders are
@@ -417,6 +490,7 @@ impl SafeStop {
             self.hold
                 .extend(q.iter().zip(v).map(|(q, v)| q + v * BRAKE_TIME));
         }
+        self.advance_path();
         let w = 1.0 / BRAKE_TIME;
         for i in 0..n {
             self.a[i] = -w * w * (self.q[i] - self.hold[i]) - 2.0 * w * self.v[i];
@@ -726,6 +800,18 @@ impl Supervisor {
         match self.law.as_mut() {
             Some(law) => law.step(model, raw, x, tau),
             None => Err(StepFailure::Internal("stop torque without a stop law")),
+        }
+    }
+
+    /// The stop law's position command `lead_s` ahead during a stop
+    /// ([`SafeStop::command`]); `false` (nothing written) without a stop law.
+    pub fn stop_command(&self, lead_s: f64, cmd: [&mut [f64]; 3]) -> bool {
+        match self.law.as_ref() {
+            Some(law) => {
+                law.command(lead_s, cmd);
+                true
+            }
+            None => false,
         }
     }
 

@@ -83,6 +83,12 @@ pub(crate) trait ControllerCore {
     }
     /// [`crate::control::Algorithm::set_check_budget`] (no QP: nothing).
     fn set_check_budget(&mut self, _checks: Option<u32>) {}
+    /// [`crate::control::Algorithm::set_step_clock`] (no QP: nothing).
+    fn set_step_clock(&mut self, _start: std::time::Instant, _reserve_us: f64) {}
+    /// [`crate::control::Algorithm::qp_end`] (no QP: `None`).
+    fn qp_end(&self) -> Option<std::time::Instant> {
+        None
+    }
     /// [`Algorithm::predicted_outputs`](crate::control::Algorithm::predicted_outputs)
     /// (`false`: no prediction horizon).
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
@@ -167,6 +173,18 @@ macro_rules! impl_controller {
                 )
             }
 
+            fn set_step_clock(&mut self, start: std::time::Instant, reserve_us: f64) {
+                <$core as $crate::control::mpc::core::ControllerCore>::set_step_clock(
+                    &mut self.core,
+                    start,
+                    reserve_us,
+                )
+            }
+
+            fn qp_end(&self) -> Option<std::time::Instant> {
+                <$core as $crate::control::mpc::core::ControllerCore>::qp_end(&self.core)
+            }
+
             fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
                 <$core as $crate::control::mpc::core::ControllerCore>::predicted_outputs(
                     &mut self.core,
@@ -225,6 +243,12 @@ impl ControllerCore for Core {
     }
     fn set_check_budget(&mut self, checks: Option<u32>) {
         Core::set_check_budget(self, checks)
+    }
+    fn set_step_clock(&mut self, start: std::time::Instant, reserve_us: f64) {
+        self.step_clock = Some((start, reserve_us));
+    }
+    fn qp_end(&self) -> Option<std::time::Instant> {
+        self.qp_end
     }
     fn predicted_outputs(&mut self, out: &mut [f64]) -> bool {
         Core::predicted_outputs(self, out).is_ok()
@@ -371,8 +395,12 @@ pub(crate) struct Core {
     /// With a step budget: when the last step's torque-limit QP returned.
     qp_end: Option<std::time::Instant>,
     /// With a step budget: the longest time a step took after its QP (µs),
-    /// kept back from the QP's deadline.
+    /// kept back from the QP's deadline (when the caller gives no clock).
     tail_us: f64,
+    /// The caller's clock for the next step's budget: its start and the
+    /// time kept back for the work after the QP (µs);
+    /// [`crate::control::Algorithm::set_step_clock`].
+    step_clock: Option<(std::time::Instant, f64)>,
 }
 
 /// The per-algorithm part of one step of a paper controller: what it
@@ -413,11 +441,15 @@ impl Core {
     ) -> Result<StepInfo, StepFailure> {
         let (x, w_k, preview) = input;
         let start = std::time::Instant::now();
+        // The caller's clock (its step's start and the time it keeps back
+        // for its work after the QP), else this step's own and the longest
+        // tail seen after the QP here (torque, checks, commit): the QP's
+        // deadline keeps that back, so the step ends within the budget.
+        let (origin, reserve_us) = self.step_clock.take().unwrap_or((start, self.tail_us));
+        self.qp_end = None;
         if let Some(qp) = self.qp.as_mut() {
-            // The QP's deadline keeps back the longest tail seen after it
-            // (torque, checks, commit), so the step ends within the budget.
-            let budget = self.settings.step_budget_us.map(|b| b - self.tail_us);
-            qp.arm(start, budget);
+            let budget = self.settings.step_budget_us.map(|b| b - reserve_us);
+            qp.arm(origin, budget);
         }
         self.prepare(model, x, w_k, preview, tau.len())?;
         self.model_time = start.elapsed();
@@ -441,7 +473,7 @@ impl Core {
         let out = self.finish(x, T::INCREMENTAL, info, tau)?;
         self.form_gain(model, x);
         targets.commit(self);
-        if let Some(qp_end) = self.qp_end.take() {
+        if let Some(qp_end) = self.qp_end {
             self.tail_us = self.tail_us.max(qp_end.elapsed().as_secs_f64() * 1e6);
         }
         Ok(out)
@@ -547,6 +579,7 @@ impl Core {
             model_time: std::time::Duration::ZERO,
             qp_end: None,
             tail_us: 0.0,
+            step_clock: None,
         })
     }
 

@@ -20,6 +20,11 @@ const MARGIN: f64 = 1e-9;
 /// `Ts` = 10 ms, 9 shifts (`N − 1`) diverge.
 const MAX_SHIFTS: usize = 1;
 
+/// Deadline checks of a check budget kept back for the step's work after
+/// the QP (the torque, the command, the telemetry), which the wall-clock
+/// budget keeps back as its measured time: the QP gets the rest.
+pub(crate) const TAIL_CHECKS: u32 = 1;
+
 /// Preallocated workspace of the constrained step for `n` joints, horizon `N`,
 /// and `m` rows of `𝒜`.
 #[derive(Debug, Clone)]
@@ -97,10 +102,12 @@ impl TorqueLimitQp {
     }
 
     /// Sets the deadline of a step that began at `start` with a budget of
-    /// `budget_us` (`None`: none), or the check budget when one is set.
+    /// `budget_us` (`None`: none; the caller has already kept back the time
+    /// of its work after the QP), or the check budget when one is set: of
+    /// that, [`TAIL_CHECKS`] are kept back for the work after the QP.
     pub fn arm(&mut self, start: Instant, budget_us: Option<f64>) {
         self.deadline = match (self.check_budget, budget_us) {
-            (Some(checks), _) => Deadline::Checks(checks),
+            (Some(checks), _) => Deadline::Checks(checks.saturating_sub(TAIL_CHECKS)),
             // A budget beyond the clock's range is no deadline.
             (None, Some(b)) => std::time::Duration::try_from_secs_f64(b.max(0.0) * 1e-6)
                 .ok()
