@@ -215,6 +215,7 @@ impl Sampled {
                 | ReferenceFailure::ReachEdge { .. }
                 | ReferenceFailure::BranchJump { .. }
                 | ReferenceFailure::StartSingular { .. }
+                | ReferenceFailure::StartStretched { .. }
                 | ReferenceFailure::BranchLimit { .. }
                 | ReferenceFailure::SingularPass { .. }
         );

@@ -18,8 +18,8 @@ use crate::robot::Robot;
 use nalgebra::Vector3;
 
 use super::limits::{
-    values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_REACH, LEAVING_START,
-    MAX_PLAN_VALUES, REACH_EDGE_RATIO, START_POSE_TOLERANCE,
+    values_per_sample, Orientation, ReferenceError, ReferenceFailure, ARM_STRETCHED_RATIO,
+    LEAVING_REACH, LEAVING_START, MAX_PLAN_VALUES, REACH_EDGE_RATIO, START_POSE_TOLERANCE,
 };
 use crate::ik::IkError;
 
@@ -386,7 +386,8 @@ fn step_within_speed_limits(
 
 /// The cause of a joint's speed over its limit on the step from `prev` (at `from`) to `sol`
 /// (at `to`), in this order: the edge of the reach (the position rows of the Jacobian near
-/// rank-deficient, [`REACH_EDGE_RATIO`]), a singular start pose (`leaving_start`), a jump to
+/// rank-deficient, [`REACH_EDGE_RATIO`]), a singular start pose (`leaving_start`: the arm
+/// stretched out, [`ARM_STRETCHED_RATIO`], or else the wrist), a jump to
 /// another arm configuration ([`JointMap::jumps`]), or the speed itself.
 fn speed_failure(
     map: &mut JointMap,
@@ -397,6 +398,14 @@ fn speed_failure(
 ) -> ReferenceFailure {
     if map.position_ratio(prev) < REACH_EDGE_RATIO {
         return ReferenceFailure::ReachEdge {
+            joint,
+            name,
+            speed,
+            limit,
+        };
+    }
+    if leaving_start && map.arm_ratio(prev) < ARM_STRETCHED_RATIO {
+        return ReferenceFailure::StartStretched {
             joint,
             name,
             speed,
