@@ -39,6 +39,15 @@
 //! mix accelerations of neighbouring positions: the caller checks the joint accelerations of
 //! the sampled reference and, if needed, replans with scaled limits ([`crate::motion::plan`]).
 //!
+//! A section that passes corners without stopping (a `G64` run) is filtered over `a / j`
+//! instead where that keeps the jerk within `j_max` (the raw acceleration never changes by
+//! more than `a` within one window, and the path's jerk stays within [`NARROW_PATH_JERK`]
+//! `j_max`), with the limits eroded over half a window ([`NARROW_EROSION`]): the slow-downs
+//! into a blend and the speed-ups out of it then take half as long, and the blend's speed is
+//! held over half the distance around it (issue 38: a 200 mm square at F12000, `G64 P0.5`,
+//! 5.118 s → 4.727 s against TOPP-RA's 4.217 s without a jerk limit). Single moves between
+//! stops (every move under `G61`) keep `2 a / j`.
+//!
 //! The joint derivatives `q'`, `q''` of a node come from the nodes of its own piece (the
 //! path is smooth inside a piece); a node that joins two pieces keeps both one-sided values,
 //! and both constrain it.
