@@ -2202,11 +2202,12 @@ pub fn cap_indices<const D: usize>(pts: &[[f64; D]], max: usize) -> Vec<usize> {
         }
         let mut group = Vec::with_capacity(per_bucket);
         group.extend([lo, hi - 1]);
-        for d in 0..D {
-            let by = |i: &usize, j: &usize| pts[*i][d].total_cmp(&pts[*j][d]);
-            group.extend((lo..hi).min_by(by));
-            group.extend((lo..hi).max_by(by));
-        }
+        let by = |d: usize| move |i: &usize, j: &usize| pts[*i][d].total_cmp(&pts[*j][d]);
+        group.extend(
+            (0..D)
+                .flat_map(|d| [(lo..hi).min_by(by(d)), (lo..hi).max_by(by(d))])
+                .flatten(),
+        );
         group.sort_unstable();
         group.dedup();
         keep.extend(group);

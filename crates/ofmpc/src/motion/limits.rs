@@ -141,7 +141,7 @@ pub enum ReferenceFailure {
     /// A joint would move faster than its speed limit while the tool is still at its start
     /// point (within `LEAVING_START`), the run started at the robot's start pose, and that
     /// pose holds the arm almost stretched out (the position rows of its arm joints' Jacobian
-    /// near rank-deficient, [`ARM_STRETCHED_RATIO`]): the elbow is the straight joint, not the
+    /// near rank-deficient, `ARM_STRETCHED_RATIO`): the elbow is the straight joint, not the
     /// wrist, and the path leaves the reach the joints can follow smoothly.
     #[error(
         "the tool leaves the reach of the start pose as it leaves its start point: the robot's start pose \
