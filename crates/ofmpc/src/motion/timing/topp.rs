@@ -45,7 +45,8 @@
 //! `j_max`), with the limits eroded over half a window ([`NARROW_EROSION`]): the slow-downs
 //! into a blend and the speed-ups out of it then take half as long, and the blend's speed is
 //! held over half the distance around it (issue 38: a 200 mm square at F12000, `G64 P0.5`,
-//! 5.118 s → 4.727 s against TOPP-RA's 4.217 s without a jerk limit). Single moves between
+//! 5.118 s → 4.703 s against TOPP-RA's 4.217 s without a jerk limit, with the finer grid of
+//! [`near_blend_step`]). Single moves between
 //! stops (every move under `G61`) keep `2 a / j`.
 //!
 //! The joint derivatives `q'`, `q''` of a node come from the nodes of its own piece (the
@@ -439,6 +440,56 @@ fn piece_step(p: &Piece, step: f64, limits: PathLimits) -> f64 {
     }
 }
 
+/// Share of a blend's filter reach (`a/j` times its speed bound) that the grid spacing of the
+/// lines next to it keeps within ([`near_blend_step`]).
+const NEAR_BLEND_SHARE: f64 = 0.1;
+
+/// The grid spacing of piece `k` where it is a line next to a corner blend: a tenth of the
+/// distance the narrow filter window covers at the blend's speed bound
+/// ([`NEAR_BLEND_SHARE`]), so that the erosion around the blend, which reaches one node
+/// spacing past its own reach (`eroded_limits`), holds the blend's speed only a little beyond
+/// it (issue 38: a 1 mm spacing held the 44 mm/s of a square's corners up to 1 mm longer on
+/// each side; the square 4.727 s → 4.703 s). Infinite elsewhere (finer grids on blends and arcs
+/// resolve their limits more sharply and raised the torture program's path jerk to 103 m/s³,
+/// over issue 26's bound of 100), and when the run's spacing is already coarser than
+/// [`GRID_STEP`].
+fn near_blend_step(
+    pieces: &[Piece],
+    bounds: &[(f64, f64)],
+    k: usize,
+    step: f64,
+    limits: PathLimits,
+) -> f64 {
+    let line = matches!(
+        &pieces[k].geometry,
+        Geometry::Segment(crate::geometry::Segment::Line { .. })
+    );
+    if step > GRID_STEP || !line {
+        return f64::INFINITY;
+    }
+    let speed = |i: usize| {
+        let p = &pieces[i];
+        if !matches!(p.geometry, Geometry::Curve(_) | Geometry::Corner(_)) {
+            return f64::INFINITY;
+        }
+        let (x_turn, kappa) = bounds[i];
+        let centripetal = if kappa > 0.0 {
+            limits.max_accel / kappa
+        } else {
+            f64::INFINITY
+        };
+        p.feed.min(x_turn.min(centripetal).sqrt())
+    };
+    let v = (k.saturating_sub(1)..(k + 2).min(pieces.len()))
+        .map(speed)
+        .fold(f64::INFINITY, f64::min);
+    if v.is_finite() {
+        (NEAR_BLEND_SHARE * limits.max_accel / limits.max_jerk * v).max(4.0 * MIN_NODE_SPACING)
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Grid nodes: piece boundaries and interior points at most `step` apart, with the path part
 /// of the velocity limit, `x̄ = min(F², a_max / κ)` (feed and curvature of both pieces at a
 /// boundary), and rest at the ends and after stopping pieces.
@@ -453,7 +504,8 @@ fn grid_nodes(pieces: &[Piece], step: f64, limits: PathLimits) -> Vec<Node> {
         if tiny && !(p.stop_after || last_piece || k == 0) {
             continue;
         }
-        let piece_step = piece_step(p, step, limits);
+        let piece_step =
+            piece_step(p, step, limits).min(near_blend_step(pieces, &bounds, k, step, limits));
         let m = if tiny {
             1
         } else {
