@@ -64,7 +64,7 @@ pub use tool::tool_axis;
 
 use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};
 use crate::robot::Robot;
-use limits::JointMap;
+use limits::{JointMap, ARM_STRETCHED_RATIO};
 use reference::{build_turning_reference, first_unreachable, sample_count};
 use timing::topp::JointConstraints;
 use timing::trajectory::LongCause;
@@ -171,6 +171,7 @@ fn reference_turning_if_singular(
         Err(error) => error,
     };
     let Some(turn) = StartTurn::curing(robot, &trajectory, orientation, ts, &error) else {
+        let error = stretched_start(robot, orientation, error);
         return Sampled::failed(robot, &trajectory, orientation, ts, error);
     };
     let delayed = trajectory.delayed(turn.duration);
@@ -180,25 +181,43 @@ fn reference_turning_if_singular(
     }
 }
 
+/// A singular start pose that no turn in place cures ([`StartTurn::curing`]) blamed on the
+/// elbow when the start pose holds the arm almost stretched out (the position rows of its arm
+/// joints' Jacobian near rank-deficient, `ARM_STRETCHED_RATIO`):
+/// [`ReferenceFailure::StartStretched`], the tool leaving the reach; other errors unchanged.
+fn stretched_start(
+    robot: &Robot,
+    orientation: Orientation,
+    mut error: ReferenceError,
+) -> ReferenceError {
+    let ReferenceFailure::StartSingular {
+        joint,
+        name,
+        speed,
+        limit,
+    } = &error.failure
+    else {
+        return error;
+    };
+    let stretched = JointMap::new(robot, orientation)
+        .map(|mut map| map.arm_ratio(robot.start_q()) < ARM_STRETCHED_RATIO)
+        .unwrap_or(false);
+    if stretched {
+        error.failure = ReferenceFailure::StartStretched {
+            joint: *joint,
+            name: name.clone(),
+            speed: *speed,
+            limit: *limit,
+        };
+    }
+    error
+}
+
 /// Largest ratio of a sampled joint speed to its limit in an exact-stop (`G61`) move that is
 /// cured by timing the program again under scaled limits: a peak between the time scaling's
 /// grid points (issue 38: 2.200 rad/s against 2.175 on a 7-axis arm). A larger excess is a
 /// jump or a singularity, reported as such.
 const EXACT_STOP_RETIME_RATIO: f64 = 1.2;
-
-/// The share of the limit a run or move timed again for a joint speed over it aims at
-/// ([`plan_lines`]): 0.995 at the first retime, 0.97 at later ones. The numeric inverse
-/// kinematics of a redundant arm drifts a little from sample to sample, and that part of the
-/// sampled joint speed does not shrink with the scale (issue 38: a Panda's `G61` moves at
-/// F15000 stayed 0.5 % over 2.175 rad/s through five retimes at 0.995, from scale 1 to 0.954);
-/// a retime that still fails takes the wider margin, which cures it at the next attempt.
-fn retime_margin(attempts: usize) -> f64 {
-    if attempts <= 1 {
-        0.995
-    } else {
-        0.97
-    }
-}
 
 /// What sampling a timed path in joint space gave.
 #[allow(clippy::large_enum_variant)]
@@ -335,7 +354,7 @@ fn plan_lines(program: Program, robot: &Robot, options: &PlanOptions) -> Result<
                 // A blended run's timing grid can miss a joint's peak speed near a
                 // singularity, which the reference's samples show: timed again slower.
                 Sampled::RunTooFast(ratio, _) if attempts < MAX_TIMING_ATTEMPTS => {
-                    scale[0] *= retime_margin(attempts) / ratio;
+                    scale[0] *= 0.995 / ratio;
                     continue;
                 }
                 Sampled::RunTooFast(_, e) | Sampled::Failed(e) => return Err(e),

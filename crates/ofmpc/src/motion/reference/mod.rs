@@ -386,8 +386,7 @@ fn step_within_speed_limits(
 
 /// The cause of a joint's speed over its limit on the step from `prev` (at `from`) to `sol`
 /// (at `to`), in this order: the edge of the reach (the position rows of the Jacobian near
-/// rank-deficient, [`REACH_EDGE_RATIO`]), a singular start pose (`leaving_start`: the arm
-/// stretched out, [`ARM_STRETCHED_RATIO`], or else the wrist), a jump to
+/// rank-deficient, [`REACH_EDGE_RATIO`]), a singular start pose (`leaving_start`), a jump to
 /// another arm configuration ([`JointMap::jumps`]), or the speed itself.
 fn speed_failure(
     map: &mut JointMap,
@@ -398,14 +397,6 @@ fn speed_failure(
 ) -> ReferenceFailure {
     if map.position_ratio(prev) < REACH_EDGE_RATIO {
         return ReferenceFailure::ReachEdge {
-            joint,
-            name,
-            speed,
-            limit,
-        };
-    }
-    if leaving_start && map.arm_ratio(prev) < ARM_STRETCHED_RATIO {
-        return ReferenceFailure::StartStretched {
             joint,
             name,
             speed,
