@@ -18,8 +18,8 @@ use crate::robot::Robot;
 use nalgebra::Vector3;
 
 use super::limits::{
-    values_per_sample, Orientation, ReferenceError, ReferenceFailure, ARM_STRETCHED_RATIO,
-    LEAVING_REACH, LEAVING_START, MAX_PLAN_VALUES, REACH_EDGE_RATIO, START_POSE_TOLERANCE,
+    values_per_sample, Orientation, ReferenceError, ReferenceFailure, LEAVING_REACH, LEAVING_START,
+    MAX_PLAN_VALUES, REACH_EDGE_RATIO, START_POSE_TOLERANCE,
 };
 use crate::ik::IkError;
 
