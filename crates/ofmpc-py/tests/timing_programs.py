@@ -102,6 +102,8 @@ CASES = {
     "out_and_back_f30000": "G21 G90 G64 P0.1\nG0 X450 Y0 Z400\nG1 X550 F30000\nX450\n",
     "short_segment_between_lines": "G21 G90 G64 P0.1\nG0 X400 Y0 Z400\nG1 X500 F6000\nX500.05\nX600 Y10\n",
     "arc_10um_between_lines": "G21 G90 G17 G64 P0.1\nG0 X400 Y0 Z400\nG1 X500 F6000\nG2 X500.01 Y0 I0.005 J0.1\nG1 X600 Y20\n",
+    # Issue 38: a 200 mm square at F12000 whose 90° corners are blended (44 mm/s), not stopped.
+    "square_200_f12000_p05": "G21 G90 G64 P0.5\nG0 X400 Y-100 Z400\nG1 X600 F12000\nY100\nX400\nY-100\n",
 }
 
 

@@ -328,9 +328,9 @@ pub fn plan_error_message(e: &PlanError, names: &SettingNames) -> String {
             | ReferenceFailure::ReachEdge { .. }
             | ReferenceFailure::BranchJump { .. } => Some(names.origin),
             ReferenceFailure::JointSpeed { .. } => Some(names.speed),
-            ReferenceFailure::StartSingular { .. } | ReferenceFailure::StartAtReach { .. } => {
-                Some(names.start_q)
-            }
+            ReferenceFailure::StartSingular { .. }
+            | ReferenceFailure::StartStretched { .. }
+            | ReferenceFailure::StartAtReach { .. } => Some(names.start_q),
             ReferenceFailure::SamplePeriod(_) => Some(names.ts),
             _ => None,
         },

@@ -83,6 +83,39 @@ fn square_corners_at_f12000_p05_blend_at_a_tenth_of_the_feed_or_faster() {
         d64 / bound
     );
     assert!(d64 >= bound, "{d64} s beats the lower bound {bound} s");
-    // Measured 1.254 (issue 38): the jerk filter holds each corner's speed over ±1.1 T_j v.
-    assert!(d64 <= 1.26 * bound, "{d64} s against the bound {bound} s");
+    // Measured 1.254 (5.118 s) with the filter window 2a/j over the whole run, which held each
+    // corner's speed over ±1.1 T_j v around its blend; 1.153 (4.703 s; TOPP-RA's optimum
+    // without a jerk limit is 4.217 s, the Python timing test's bound 4.739 s) with the window
+    // a/j, the erosion of half a window and a finer grid on the lines next to the blends
+    // (`timing/topp.rs`: `choose_windows`, `near_blend_step`).
+    assert!(d64 <= 1.16 * bound, "{d64} s against the bound {bound} s");
+}
+
+/// The square's speed changes (filtered over `a/j` since issue 38) keep the jerk setting: the
+/// path jerk `|Δa| / Δt` over 1 ms samples stays within 50 m/s³ (5 % for the sampling) where
+/// the path is straight (farther than 3 mm from every corner, outside the blends), and within
+/// twice it everywhere (issue 26's bound, `tests/motion_jerk.rs`).
+#[test]
+fn the_squares_speed_changes_keep_the_jerk_setting() {
+    let robot = Robot::irb140();
+    let opts = PlanOptions::default();
+    let jerk = opts.timing.max_jerk;
+    let tr = plan(&square("G64 P0.5"), &robot, &opts).unwrap().trajectory;
+    let c = corners();
+    let h = 1e-3;
+    let n = (tr.duration() / h).ceil() as usize;
+    let mut prev = tr.sample(0.0).acceleration;
+    let (mut straight, mut anywhere) = (0.0f64, 0.0f64);
+    for k in 1..=n {
+        let s = tr.sample(k as f64 * h);
+        let j = (s.acceleration - prev).norm() / h;
+        prev = s.acceleration;
+        anywhere = anywhere.max(j);
+        if c.iter().all(|p| (s.position - p).norm() > 3e-3) {
+            straight = straight.max(j);
+        }
+    }
+    eprintln!("square jerk: {straight:.1} m/s³ on the lines, {anywhere:.1} m/s³ anywhere");
+    assert!(straight <= 1.05 * jerk, "{straight} m/s³ on the lines");
+    assert!(anywhere <= 2.0 * jerk, "{anywhere} m/s³");
 }

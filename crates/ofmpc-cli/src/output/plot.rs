@@ -2019,7 +2019,14 @@ fn draw_panel_3d<'a, DB: DrawingBackend + 'a>(
         };
         let coord = chart.as_coord_spec().clone();
         let px = |pt: &(f64, f64, f64)| coord.translate(pt);
-        let thin = |run: &[(f64, f64, f64)]| thin_run(run, px);
+        let thin = |run: &[(f64, f64, f64)]| {
+            let thinned = thin_run(run, px);
+            let pts: Vec<[f64; 3]> = thinned.iter().map(|p| [p.0, p.1, p.2]).collect();
+            cap_indices(&pts, MAX_TRACE_POINTS)
+                .into_iter()
+                .map(|i| thinned[i])
+                .collect::<Vec<_>>()
+        };
         let mut labelled = false;
         let mut annotate = |anno: &mut SeriesAnno<'a, DB>| {
             if !labelled && !s.label.is_empty() {
@@ -2138,8 +2145,9 @@ fn prepare_3d(axes3d: &Axes3d) -> ([LinearAxis; 3], Vec<Prepared3d<'_>>) {
     (axes, prepared)
 }
 
-/// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs are
-/// returned unchanged.
+/// M4-reduces a run whose x is non-decreasing, using the chart's pixel columns; other runs
+/// (a path in the plane) keep the points that land on another pixel than their predecessor.
+/// Either is then capped at [`MAX_TRACE_POINTS`] ([`cap_indices`]).
 fn reduce_run<DB, Y>(
     chart: &ChartContext<'_, DB, Cartesian2d<RangedCoordf64, Y>>,
     run: &[(f64, f64)],
@@ -2150,12 +2158,61 @@ where
 {
     let monotone = run.windows(2).all(|w| w[0].0 <= w[1].0);
     let (w, _) = chart.plotting_area().dim_in_pixel();
-    if !monotone || run.len() <= 4 * w as usize {
-        return run.to_vec();
+    let reduced: Vec<(f64, f64)> = if !monotone {
+        let px: Vec<(i32, i32)> = run.iter().map(|pt| chart.backend_coord(pt)).collect();
+        (0..run.len())
+            .filter(|&i| i == 0 || i + 1 == run.len() || px[i] != px[i - 1])
+            .map(|i| run[i])
+            .collect()
+    } else if run.len() <= 4 * w as usize {
+        run.to_vec()
+    } else {
+        let cols: Vec<i32> = run.iter().map(|pt| chart.backend_coord(pt).0).collect();
+        let ys: Vec<f64> = run.iter().map(|pt| pt.1).collect();
+        m4_indices(&cols, &ys).into_iter().map(|i| run[i]).collect()
+    };
+    let pts: Vec<[f64; 2]> = reduced.iter().map(|p| [p.0, p.1]).collect();
+    cap_indices(&pts, MAX_TRACE_POINTS)
+        .into_iter()
+        .map(|i| reduced[i])
+        .collect()
+}
+
+/// Most points a line of a figure keeps ([`cap_indices`]): a long path (a 26-minute run at
+/// 1 kHz, retracing its loop) drawn through every pixel it visits would otherwise write
+/// megabytes of SVG per trace.
+pub const MAX_TRACE_POINTS: usize = 2000;
+
+/// Indices of at most `max` of `pts` (at least the two ends), in order: all of them if they
+/// are few enough, else the points cut into consecutive buckets of equal count, each keeping
+/// its first and last point and its lowest and highest point in every coordinate (so the
+/// line keeps every extreme: its bounding box and its peaks per bucket).
+pub fn cap_indices<const D: usize>(pts: &[[f64; D]], max: usize) -> Vec<usize> {
+    let n = pts.len();
+    let per_bucket = 2 + 2 * D;
+    if n <= max.max(per_bucket) {
+        return (0..n).collect();
     }
-    let cols: Vec<i32> = run.iter().map(|pt| chart.backend_coord(pt).0).collect();
-    let ys: Vec<f64> = run.iter().map(|pt| pt.1).collect();
-    m4_indices(&cols, &ys).into_iter().map(|i| run[i]).collect()
+    let buckets = (max / per_bucket).max(1);
+    let mut keep = Vec::with_capacity(buckets * per_bucket);
+    for b in 0..buckets {
+        let (lo, hi) = (b * n / buckets, (b + 1) * n / buckets);
+        if lo >= hi {
+            continue;
+        }
+        let mut group = Vec::with_capacity(per_bucket);
+        group.extend([lo, hi - 1]);
+        let by = |d: usize| move |i: &usize, j: &usize| pts[*i][d].total_cmp(&pts[*j][d]);
+        group.extend(
+            (0..D)
+                .flat_map(|d| [(lo..hi).min_by(by(d)), (lo..hi).max_by(by(d))])
+                .flatten(),
+        );
+        group.sort_unstable();
+        group.dedup();
+        keep.extend(group);
+    }
+    keep
 }
 
 #[cfg(test)]
@@ -2522,6 +2579,61 @@ mod tests {
         assert!(q.three_d.is_none());
         q.series_3d();
         assert_eq!(q.three_d.map(|a| a.view), Some(View3d::default()));
+    }
+
+    #[test]
+    fn capping_keeps_the_ends_and_every_extreme_within_the_bound() {
+        let mut state = 777u64;
+        let mut rnd = || ofmpc::random::uniform(&mut state);
+        let n = 100_000;
+        let pts: Vec<[f64; 2]> = (0..n).map(|_| [rnd(), rnd() * 3.0 - 1.0]).collect();
+        let keep = cap_indices(&pts, MAX_TRACE_POINTS);
+        assert!(keep.len() <= MAX_TRACE_POINTS, "{}", keep.len());
+        assert!(keep.windows(2).all(|w| w[0] < w[1]), "sorted, unique");
+        assert_eq!((keep[0], *keep.last().unwrap()), (0, n - 1));
+        for d in 0..2 {
+            let all = min_max(pts.iter().map(|p| p[d])).unwrap();
+            let kept = min_max(keep.iter().map(|&i| pts[i][d])).unwrap();
+            assert_eq!(all, kept, "coordinate {d}");
+        }
+        // Few points: all kept.
+        assert_eq!(
+            cap_indices(&pts[..10], MAX_TRACE_POINTS),
+            (0..10).collect::<Vec<_>>()
+        );
+    }
+
+    /// A 26-minute path at 1 kHz (1.56 million points: a loop retraced 140 times with a
+    /// drift, so that nearly every point lands on a new pixel), as a path in the plane, as a
+    /// time series and in 3-D: each line of the SVG has at most [`MAX_TRACE_POINTS`] points and
+    /// the document stays under 400 kB (without the cap the path alone wrote megabytes).
+    #[test]
+    fn long_paths_write_a_bounded_svg() {
+        let n = 1_560_000;
+        let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+        let phase = |k: usize| k as f64 * 2.0 * std::f64::consts::PI / 11_000.0;
+        let drift = |k: usize| 1.0 + 0.3 * k as f64 / n as f64;
+        let x: Vec<f64> = (0..n).map(|k| drift(k) * phase(k).cos()).collect();
+        let y: Vec<f64> = (0..n).map(|k| drift(k) * phase(k).sin()).collect();
+        let mut fig = Figure::new("long", 3);
+        let mut plane = Panel::new("path", "x", "y");
+        plane.equal_aspect = true;
+        plane
+            .series
+            .push(Series::line("p", x.clone(), y.clone(), 1));
+        let mut time = Panel::new("x(t)", "t", "x");
+        time.series.push(Series::line("x", t, x.clone(), 2));
+        let mut space = Panel::new_3d("3-D", "x", "y", "z");
+        space
+            .series_3d()
+            .push(Series3d::line("p", x.clone(), y, x, 3));
+        fig.panels = vec![plane, time, space];
+        let svg = render_svg(&fig).unwrap();
+        assert!(svg.len() < 400_000, "{} bytes", svg.len());
+        for line in svg.lines().filter(|l| l.contains("<polyline")) {
+            let points = line.matches(',').count();
+            assert!(points <= MAX_TRACE_POINTS, "{points} points");
+        }
     }
 
     #[test]

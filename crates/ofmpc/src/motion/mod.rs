@@ -64,7 +64,7 @@ pub use tool::tool_axis;
 
 use crate::gcode::{parse, MoveKind, ParseOptions, PathMode, Program};
 use crate::robot::Robot;
-use limits::JointMap;
+use limits::{JointMap, ARM_STRETCHED_RATIO};
 use reference::{build_turning_reference, first_unreachable, sample_count};
 use timing::topp::JointConstraints;
 use timing::trajectory::LongCause;
@@ -171,6 +171,7 @@ fn reference_turning_if_singular(
         Err(error) => error,
     };
     let Some(turn) = StartTurn::curing(robot, &trajectory, orientation, ts, &error) else {
+        let error = stretched_start(robot, orientation, error);
         return Sampled::failed(robot, &trajectory, orientation, ts, error);
     };
     let delayed = trajectory.delayed(turn.duration);
@@ -178,6 +179,38 @@ fn reference_turning_if_singular(
         Ok(reference) => Sampled::Reference(delayed, reference, Some(turn)),
         Err(error) => Sampled::failed(robot, &delayed, orientation, ts, error),
     }
+}
+
+/// A singular start pose that no turn in place cures ([`StartTurn::curing`]) blamed on the
+/// elbow when the start pose holds the arm almost stretched out (the position rows of its arm
+/// joints' Jacobian near rank-deficient, `ARM_STRETCHED_RATIO`):
+/// [`ReferenceFailure::StartStretched`], the tool leaving the reach; other errors unchanged.
+fn stretched_start(
+    robot: &Robot,
+    orientation: Orientation,
+    mut error: ReferenceError,
+) -> ReferenceError {
+    let ReferenceFailure::StartSingular {
+        joint,
+        name,
+        speed,
+        limit,
+    } = &error.failure
+    else {
+        return error;
+    };
+    let stretched = JointMap::new(robot, orientation)
+        .map(|mut map| map.arm_ratio(robot.start_q()) < ARM_STRETCHED_RATIO)
+        .unwrap_or(false);
+    if stretched {
+        error.failure = ReferenceFailure::StartStretched {
+            joint: *joint,
+            name: name.clone(),
+            speed: *speed,
+            limit: *limit,
+        };
+    }
+    error
 }
 
 /// Largest ratio of a sampled joint speed to its limit in an exact-stop (`G61`) move that is
@@ -215,6 +248,7 @@ impl Sampled {
                 | ReferenceFailure::ReachEdge { .. }
                 | ReferenceFailure::BranchJump { .. }
                 | ReferenceFailure::StartSingular { .. }
+                | ReferenceFailure::StartStretched { .. }
                 | ReferenceFailure::BranchLimit { .. }
                 | ReferenceFailure::SingularPass { .. }
         );

@@ -158,7 +158,9 @@ pub fn blend(moves: &[RunMove]) -> Vec<Piece> {
 /// `v_c / a`. Only a blend below [`MIN_BLEND_SPEED_SHARE`] of the feed is traded for a stop
 /// when that is cheaper: above it the path keeps moving, as a CNC's `G64` does (issue 38: the
 /// 90° corners of a square at F12000, P0.5 stopped, their 44 mm/s blends estimated 45 ms slower
-/// each than a stop).
+/// each than a stop). The estimate takes the filter's wide window `2a/j`; where the timing
+/// filters a run over `a/j` (`timing/topp.rs`) a kept blend costs about half as much, so the
+/// estimate errs towards keeping the stop, as before.
 pub fn blend_timed(moves: &[RunMove], max_accel: f64, max_jerk: f64) -> Vec<Piece> {
     blend_within(moves, Some((max_accel, max_jerk)))
 }
