@@ -210,6 +210,7 @@ impl Experiment {
             result.wall_s,
             &result.outcome,
         );
+        metrics.pre_roll_peak_joint_rad = result.pre_roll_peak_rad;
         judge_hold(
             &mut metrics,
             &result.record,
