@@ -278,8 +278,14 @@ fn the_settling_at_rest_carries_the_start() {
     }
     let adaptive = |settle_s| run_settled(ControllerKind::FirstAdaptive, 6.0, ALL, settle_s);
     let (a, b) = (adaptive(0.0), adaptive(SETTLE_S));
-    assert_eq!(a.cartesian_error_rms_mm.to_bits(), b.cartesian_error_rms_mm.to_bits());
-    assert!(a.pre_roll_peak_joint_rad > 0.0, "the identification's peak is reported too");
+    assert_eq!(
+        a.cartesian_error_rms_mm.to_bits(),
+        b.cartesian_error_rms_mm.to_bits()
+    );
+    assert!(
+        a.pre_roll_peak_joint_rad > 0.0,
+        "the identification's peak is reported too"
+    );
 }
 
 #[test]
@@ -462,4 +468,3 @@ fn the_baselines_hold_keys_are_validated() {
     assert!(e.to_string().contains("dense solver"), "{e}");
     assert!(new_controller_with_baselines(ControllerKind::DobMpc, 6, &mpc, &b).is_ok());
 }
-
