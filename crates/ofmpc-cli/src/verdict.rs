@@ -335,6 +335,7 @@ mod tests {
             telemetry: Default::default(),
             torque_step_max_nm: 0.0,
             hold_error_pp_counts: None,
+            pre_roll_peak_joint_rad: 0.0,
             servo: None,
             step_time_us: StepTime {
                 median: 1.0,

@@ -113,6 +113,15 @@ fn pick_up_and_bad_keys() {
         out.to_str().unwrap(),
     ]);
     assert!(err.contains("identification_s = 2"), "{err}");
+    std::fs::write(&scenario, "[simulation]\nsettle_s = 2.0\n").unwrap();
+    let err = fails(&[
+        "run",
+        scenario.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(err.contains("settle_s = 2"), "{err}");
+    assert!(err.contains("settling at rest"), "{err}");
     std::fs::write(&scenario, "[payload]\npick_up_at_s = -1.0\n").unwrap();
     let err = fails(&[
         "run",

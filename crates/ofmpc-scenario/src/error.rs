@@ -395,6 +395,9 @@ fn loop_key(l: &LoopSettingsError) -> String {
         LoopSettingsError::IdentificationTime { value, .. } => {
             format!("[simulation] identification_s = {value}")
         }
+        LoopSettingsError::SettleTime { value, .. } => {
+            format!("[simulation] settle_s = {value}")
+        }
         LoopSettingsError::PickUpTime(v) => format!("[payload] pick_up_at_s = {v}"),
         LoopSettingsError::FaultTime { index, value } => {
             format!("[faults] nan_at_s[{index}] = {value}")

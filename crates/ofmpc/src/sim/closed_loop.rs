@@ -45,6 +45,13 @@ pub struct LoopSettings {
     /// load at rest. Not recorded (the record starts with the path at
     /// t = 0); ignored by the other controllers.
     pub identification_s: f64,
+    /// Settling at rest of the controllers that do not identify the
+    /// payload (s, at most `MAX_IDENTIFICATION_S`; 0, the default, none): as
+    /// a real controller is engaged at rest before a path starts, they hold
+    /// the path's first point this long first, under the payload they do
+    /// not know. Not recorded, as the identification; its largest joint
+    /// error is [`RunResult::pre_roll_peak_rad`].
+    pub settle_s: f64,
     /// Check each measurement for plausibility (jumps, frozen encoders;
     /// `supervisor` module) and replace rejected values by predictions.
     pub plausibility_check: bool,
@@ -65,6 +72,7 @@ struct LoopSettingsFile {
     divergence: Option<DivergenceRule>,
     steady_window_s: f64,
     identification_s: f64,
+    settle_s: f64,
     plausibility_check: bool,
     safe_stop: bool,
 }
@@ -78,6 +86,7 @@ impl Default for LoopSettingsFile {
             divergence: None,
             steady_window_s: d.steady_window_s,
             identification_s: d.identification_s,
+            settle_s: d.settle_s,
             plausibility_check: d.plausibility_check,
             safe_stop: d.safe_stop,
         }
@@ -99,6 +108,7 @@ impl From<LoopSettingsFile> for LoopSettings {
             divergence,
             steady_window_s: f.steady_window_s,
             identification_s: f.identification_s,
+            settle_s: f.settle_s,
             plausibility_check: f.plausibility_check,
             safe_stop: f.safe_stop,
         }
@@ -119,6 +129,7 @@ impl Default for LoopSettings {
             divergence: DivergenceRule::Growth,
             steady_window_s: 0.5,
             identification_s: 0.5,
+            settle_s: 0.0,
             plausibility_check: false,
             safe_stop: false,
         }
@@ -153,6 +164,12 @@ impl LoopSettings {
                 max: MAX_IDENTIFICATION_S,
             });
         }
+        if !(self.settle_s.is_finite() && (0.0..=MAX_IDENTIFICATION_S).contains(&self.settle_s)) {
+            return Err(LoopSettingsError::SettleTime {
+                value: self.settle_s,
+                max: MAX_IDENTIFICATION_S,
+            });
+        }
         Ok(())
     }
 
@@ -171,6 +188,11 @@ impl LoopSettings {
     /// Samples of the identification phase at the control period `ts`.
     pub fn identification_samples(&self, ts: f64) -> usize {
         (self.identification_s / ts).round() as usize
+    }
+
+    /// Samples of the settling at rest ([`Self::settle_s`]) at the control period `ts`.
+    pub fn settle_samples(&self, ts: f64) -> usize {
+        (self.settle_s / ts).round() as usize
     }
 
     /// Samples of the hold at the control period `ts`, saturating.
@@ -203,6 +225,11 @@ pub struct RunResult {
     pub outcome: RunOutcome,
     /// Wall time of the whole run (s).
     pub wall_s: f64,
+    /// The largest joint error over the pre-roll at rest (rad, true state
+    /// against the path's first point; 0 without a pre-roll): what the
+    /// identification or the settling ([`LoopSettings::settle_s`]) carried
+    /// before the record starts.
+    pub pre_roll_peak_rad: f64,
 }
 
 /// Runs `controller` (built by [`crate::control::ControllerBuilder`], with
@@ -293,6 +320,8 @@ pub struct ClosedLoop<'a> {
     /// period's command is late for it.
     servo: Option<Servo>,
     late: bool,
+    /// The largest joint error over the pre-roll ([`RunResult::pre_roll_peak_rad`]).
+    pre_roll_peak: f64,
 }
 
 /// How a run ends early: the outcome, recorded up to there.
@@ -365,6 +394,7 @@ impl<'a> ClosedLoop<'a> {
             cancel: None,
             servo,
             late: false,
+            pre_roll_peak: 0.0,
         }
     }
 
@@ -444,6 +474,7 @@ impl<'a> ClosedLoop<'a> {
             record,
             outcome,
             wall_s: start.elapsed().as_secs_f64(),
+            pre_roll_peak_rad: self.pre_roll_peak,
         }
     }
 
@@ -508,6 +539,9 @@ impl<'a> ClosedLoop<'a> {
             return Ok(true);
         }
         self.actuate().map_err(|e| failed(RunFailure::Plant(e)))?;
+        for (w, q) in w0.iter().zip(self.plant.q()) {
+            self.pre_roll_peak = self.pre_roll_peak.max((w - q).abs());
+        }
         // The one divergence rule ([`super::Supervisor::divergence`]): at
         // rest on the first point, the threshold alone under either rule (no
         // offset is expected there).

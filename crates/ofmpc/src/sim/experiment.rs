@@ -179,11 +179,12 @@ impl Experiment {
         let events = RunEvents {
             // The pre-roll at rest lets an adaptive kind identify its load;
             // through a position or velocity output it identifies nothing
-            // (`control/adaptive.rs`).
+            // (`control/adaptive.rs`), and settles as every other kind
+            // (`LoopSettings::settle_s`, none by default).
             pre_roll: if kind.is_adaptive() && self.mpc.output.is_torque() {
                 ls.identification_samples(self.reference.ts())
             } else {
-                0
+                ls.settle_samples(self.reference.ts())
             },
             pick_up: self.conditions.pick_up_at_s.map(|t| (t, *payload)),
         };
@@ -209,6 +210,7 @@ impl Experiment {
             result.wall_s,
             &result.outcome,
         );
+        metrics.pre_roll_peak_joint_rad = result.pre_roll_peak_rad;
         judge_hold(
             &mut metrics,
             &result.record,

@@ -103,6 +103,11 @@ pub struct RunMetrics {
     /// [`RunStatus::Hunting`] instead of `"ok"`. `None` (`null`) when not
     /// judged: no encoder quantization, or a run that did not complete.
     pub hold_error_pp_counts: Option<f64>,
+    /// The largest joint error over the pre-roll at rest before the record
+    /// starts (rad, over joints and samples at `t < 0`): an adaptive
+    /// kind's identification or another kind's settling
+    /// (`LoopSettings::settle_s`); 0 without a pre-roll.
+    pub pre_roll_peak_joint_rad: f64,
     /// What the servo interface saw (`[plant.servo]`: cycles, missed
     /// cycles, the longest run of them, `"ok"` or `"watchdog_trip"`);
     /// absent without one.
@@ -358,6 +363,7 @@ pub fn compute(
         max_torque_ratio: rec.max_torque_ratio,
         torque_step_max_nm: torque_step,
         hold_error_pp_counts: None,
+        pre_roll_peak_joint_rad: 0.0,
         servo: rec.servo,
         telemetry: telemetry_metrics(&rec.telemetry, sample_period(&rec.t)),
     }

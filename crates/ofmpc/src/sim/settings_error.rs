@@ -29,6 +29,14 @@ pub enum LoopSettingsError {
         /// The longest allowed (s).
         max: f64,
     },
+    /// The settling at rest is negative, not finite or too long.
+    #[error("the settling at rest is {value} s: it must be a time from 0 to {max} s")]
+    SettleTime {
+        /// The settling (s).
+        value: f64,
+        /// The longest allowed (s).
+        max: f64,
+    },
     /// The pick-up time is negative or not finite.
     #[error("the payload pick-up time is {0} s: it must be a finite time ≥ 0 s")]
     PickUpTime(f64),
