@@ -58,7 +58,7 @@ fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
             let est = m.payload_estimate_kg.unwrap();
             assert!((est - mass).abs() <= 0.1, "{}: estimate {est} kg", m.name);
             let hold = if kind == ControllerKind::FirstAdaptive {
-                5.0
+                6.0
             } else {
                 12.0
             };
