@@ -425,7 +425,7 @@ impl AdaptiveMpc {
 fn raw_point_mass(rls: &crate::ident::PayloadRls, max_mass: f64) -> PayloadParams {
     let raw = rls.raw_estimate();
     let m = raw[0].clamp(0.0, max_mass);
-    if !(m > 0.0) {
+    if m.is_nan() || m <= 0.0 {
         return PayloadParams::zeros();
     }
     point_mass(m, nalgebra::Vector3::new(raw[1], raw[2], raw[3]) / raw[0])
