@@ -544,6 +544,10 @@ impl ScenarioFile {
         on(mpc.observer_friction, "[mpc] observer_friction".into());
         on(mpc.friction_creep, "[mpc] friction_creep".into());
         on(mpc.identify_at_rest, "[mpc] identify_at_rest".into());
+        on(
+            mpc.identification_raw_mass,
+            "[mpc] identification_raw_mass".into(),
+        );
         on(mpc.friction_coupled, "[mpc] friction_coupled".into());
         on(
             mpc.payload_com_max_m > 0.0,

@@ -1,7 +1,8 @@
 //! Issue 35 on the test arm: `examples/test-arm.toml` as shipped (three
 //! samples of delay, its own friction known 20 % low, 20-bit encoders, noise,
 //! torque limits; `friction_coupled`, `identify_at_rest`,
-//! `identification_min_samples`, the wrist's hold at `× 0.1`), read and run
+//! `identification_min_samples`, `identification_raw_mass`, the wrist's hold
+//! at `× 0.1`), read and run
 //! as `ofmpc run` does, so the numbers are the CLI's (docs/guide/real-arm.md,
 //! "The test arm"). About 10 s in release.
 
@@ -35,16 +36,16 @@ fn run(s: &Scenario, kind: ControllerKind, mass: f64) -> RunMetrics {
 }
 
 /// The issue's targets where the preset meets them: first-adaptive and
-/// ctc-adaptive at half and rated payload, RMS ≤ 0.25 mm, steady ≤ 0.01 mm,
-/// the estimate within 10 % of the rated 5 kg (measured 0.178 / 0.172 and
-/// 0.197 / 0.182 mm, ≤ 0.0064 mm, 2.53 / 4.99 kg; before the round 20 / 59
-/// and 6.6 / 70 mm RMS); the holds within 3–4 and 5–6 counts ("hunting" by
-/// the 2-count rule); at 0 kg both hold to 0.007 mm with RMS 0.38 / 0.34 mm
-/// (the target, 0.25 mm, not met there).
+/// ctc-adaptive at 0, half and rated payload, RMS ≤ 0.25 mm, steady ≤ 0.01 mm,
+/// the estimate within 10 % of the rated 5 kg (measured 0.208 / 0.206 / 0.171
+/// and 0.194 / 0.200 / 0.188 mm, ≤ 0.008 mm, estimates within 0.03 kg; before
+/// the round 20 / 59 and 6.6 / 70 mm RMS under a payload, and 0.38 / 0.34 mm
+/// at 0 kg before `identification_raw_mass`); the holds within 2–5 and 5–10
+/// counts ("hunting" by the 2-count rule but first-adaptive at 5 kg).
 #[test]
-fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds_under_a_payload() {
+fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
     let s = preset();
-    for (mass, rms) in [(0.0, 0.45), (2.5, 0.25), (5.0, 0.25)] {
+    for mass in [0.0, 2.5, 5.0] {
         for kind in [ControllerKind::FirstAdaptive, ControllerKind::CtcAdaptive] {
             let m = run(&s, kind, mass);
             assert!(
@@ -52,12 +53,12 @@ fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds_under_a_payload(
                 "{}",
                 m.reason
             );
-            assert!(m.cartesian_error_rms_mm <= rms, "{}: RMS", m.name);
+            assert!(m.cartesian_error_rms_mm <= 0.25, "{}: RMS", m.name);
             assert!(m.steady_cartesian_error_mm <= 0.01, "{}: steady", m.name);
             let est = m.payload_estimate_kg.unwrap();
-            assert!((est - mass).abs() <= 0.5, "{}: estimate {est} kg", m.name);
+            assert!((est - mass).abs() <= 0.1, "{}: estimate {est} kg", m.name);
             let hold = if kind == ControllerKind::FirstAdaptive {
-                5.0
+                6.0
             } else {
                 12.0
             };
@@ -81,4 +82,17 @@ fn without_the_coupled_creep_or_the_identification_at_rest_the_test_arm_is_off()
     s.experiment.mpc.identify_at_rest = false;
     let m = run(&s, ControllerKind::FirstAdaptive, 2.5);
     assert!(m.cartesian_error_rms_mm > 1.0, "{}: RMS", m.name);
+}
+
+/// `identification_raw_mass` at 0 kg (first-adaptive, measured): the
+/// estimate projected onto the physically consistent set carries 0.30 kg of
+/// nothing into the model and the RMS is 0.38 mm; the raw point mass 0.03 kg
+/// and 0.21 mm (the test above).
+#[test]
+fn without_the_raw_mass_the_test_arm_identifies_a_payload_at_0_kg() {
+    let mut s = preset();
+    s.experiment.mpc.identification_raw_mass = false;
+    let m = run(&s, ControllerKind::FirstAdaptive, 0.0);
+    assert!(m.payload_estimate_kg.unwrap() > 0.2, "{}: estimate", m.name);
+    assert!(m.cartesian_error_rms_mm > 0.3, "{}: RMS", m.name);
 }

@@ -213,12 +213,13 @@ fn built_controller_steps_allocate_nothing() {
     };
     // Issue 35's real-arm keys: the observer's creeping friction law (solved
     // through the whole inertia matrix), the adaptive kinds' centre-of-mass
-    // bound and filter, their identification at rest.
+    // bound and filter, their identification at rest and raw point mass.
     let creeping = MpcSettings {
         friction_creep: true,
         friction_coupled: true,
         identify_at_rest: true,
         identification_min_samples: 30,
+        identification_raw_mass: true,
         payload_com_max_m: 0.2,
         encoder_counts: 1_048_576.0,
         hold_q_du_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01]),

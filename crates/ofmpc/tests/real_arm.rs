@@ -403,6 +403,13 @@ fn the_real_arm_keys_are_validated() {
             },
             "within (0, 1]",
         ),
+        (
+            MpcSettings {
+                identification_raw_mass: true,
+                ..Default::default()
+            },
+            "payload_com_max_m > 0",
+        ),
     ] {
         let e = s.validate().unwrap_err();
         assert!(e.to_string().contains(what), "{e}");

@@ -109,6 +109,10 @@ pub struct RealArmIdentification {
     /// at least [`Self::min_joint_speed`] (default off: only while the
     /// reference moves).
     pub at_rest: bool,
+    /// The model's point mass from the recursion's unconstrained estimate
+    /// (mass clipped to `[0, max_mass_kg]`, first moments) instead of the
+    /// projected one (default off; `MpcSettings::identification_raw_mass`).
+    pub raw_mass: bool,
 }
 
 /// The weight of the torque held over the `j`-th period on either side of
@@ -135,6 +139,7 @@ impl Default for RealArmIdentification {
             max_com_m: 0.0,
             model_time_s: 0.5,
             at_rest: false,
+            raw_mass: false,
         }
     }
 }
@@ -400,6 +405,9 @@ impl AdaptiveMpc {
             {
                 nominal
             }
+            Some((cfg, _)) if cfg.raw_mass => {
+                bound_com(raw_point_mass(rls, cfg.max_mass_kg), cfg.max_com_m)
+            }
             Some((cfg, _)) => bound_com(rls.point_mass_estimate(), cfg.max_com_m),
             None => rls.model_estimate(),
         }
@@ -409,6 +417,18 @@ impl AdaptiveMpc {
     pub fn estimator(&self) -> &PayloadEstimator {
         &self.estimator
     }
+}
+
+/// The point mass of the recursion's unconstrained estimate: its mass
+/// clipped to `[0, max_mass]`, its centre of mass `h/m` (first moments `h`);
+/// nothing when the mass is not positive.
+fn raw_point_mass(rls: &crate::ident::PayloadRls, max_mass: f64) -> PayloadParams {
+    let raw = rls.raw_estimate();
+    let m = raw[0].clamp(0.0, max_mass);
+    if m.is_nan() || m <= 0.0 {
+        return PayloadParams::zeros();
+    }
+    point_mass(m, nalgebra::Vector3::new(raw[1], raw[2], raw[3]) / raw[0])
 }
 
 /// The point mass `pi` (mass, first moments, the inertia of a point) with

@@ -613,6 +613,7 @@ fn new_algorithm(
             },
             max_com_m: s.payload_com_max_m,
             at_rest: s.identify_at_rest,
+            raw_mass: s.identification_raw_mass,
             min_samples: if s.identification_min_samples > 0 {
                 s.identification_min_samples
             } else {
