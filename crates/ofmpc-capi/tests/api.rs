@@ -627,7 +627,12 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
     let (mut robot, mut sup, mut plan) = (null_mut(), null_mut(), null_mut());
     unsafe {
         ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut robot));
-        ok(ofmpc_supervised_new(robot, c"second".as_ptr(), toml.as_ptr(), &mut sup));
+        ok(ofmpc_supervised_new(
+            robot,
+            c"second".as_ptr(),
+            toml.as_ptr(),
+            &mut sup,
+        ));
         ok(ofmpc_plan_new(robot, gcode.as_ptr(), ts, &mut plan));
     }
     let (n, h) = unsafe { (ofmpc_supervised_dof(sup), ofmpc_supervised_horizon(sup)) };
@@ -710,7 +715,10 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
         .position(|(s, ..)| *s == ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPING)
         .expect("the safety limit brought no stop");
     assert!(k0 > pick_up, "stopped at sample {k0}, before the load");
-    assert!(stale_speed > 0.1, "the controller's last command moved at {stale_speed} rad/s");
+    assert!(
+        stale_speed > 0.1,
+        "the controller's last command moved at {stale_speed} rad/s"
+    );
     let speeds: Vec<f64> = log[k0..].iter().map(|(_, v)| *v).collect();
     for (j, pair) in speeds.windows(2).enumerate().skip(1) {
         assert!(pair[1] <= pair[0] + 1e-9, "sample {}: {pair:?}", k0 + j);
@@ -718,8 +726,15 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
     assert!(speeds[0] < stale_speed, "{} vs {stale_speed}", speeds[0]);
     let last = *speeds.last().unwrap();
     assert!(last < 1e-6, "the command still moves at {last} rad/s");
-    assert_eq!(log.last().unwrap().0, ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPED);
-    assert!(max_abs(plant.qd()) < 1e-3, "the arm moves at {:?}", plant.qd());
+    assert_eq!(
+        log.last().unwrap().0,
+        ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPED
+    );
+    assert!(
+        max_abs(plant.qd()) < 1e-3,
+        "the arm moves at {:?}",
+        plant.qd()
+    );
     // One more sample with a first-version record (its size ends before
     // the command): served, the command arrays untouched; then a wrong
     // `command_len`: refused, nothing written.
@@ -742,7 +757,11 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
     tau.fill(-7.0);
     let st = unsafe { ofmpc_supervised_step(sup, &sin, &mut out) };
     assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
-    assert!(last_error().contains("out->command_len"), "{}", last_error());
+    assert!(
+        last_error().contains("out->command_len"),
+        "{}",
+        last_error()
+    );
     assert!(tau.iter().chain(&q).all(|v| *v == -7.0));
     unsafe {
         ofmpc_plan_free(plan);

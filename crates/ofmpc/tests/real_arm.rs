@@ -403,4 +403,3 @@ fn the_baselines_hold_keys_are_validated() {
     assert!(e.to_string().contains("dense solver"), "{e}");
     assert!(new_controller_with_baselines(ControllerKind::DobMpc, 6, &mpc, &b).is_ok());
 }
-
