@@ -403,3 +403,4 @@ fn the_baselines_hold_keys_are_validated() {
     assert!(e.to_string().contains("dense solver"), "{e}");
     assert!(new_controller_with_baselines(ControllerKind::DobMpc, 6, &mpc, &b).is_ok());
 }
+
