@@ -80,7 +80,6 @@ impl PySupervised {
         }
         .supervisor(&SafetySettings {
             max_joint_error_rad,
-            ..SafetySettings::default()
         });
         let inner =
             SupervisedController::new(controller, robot.robot(), rules, delay_samples, true)
