@@ -710,37 +710,36 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
         log.push((out.status, max_abs(&qd)));
     }
     assert_eq!(allocated, 0, "allocations in {samples} steps");
-    let k0 = log
-        .iter()
-        .position(|(s, ..)| *s == ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPING)
-        .expect("the safety limit brought no stop");
-    assert!(k0 > pick_up, "stopped at sample {k0}, before the load");
-    assert!(
-        stale_speed > 0.1,
-        "the controller's last command moved at {stale_speed} rad/s"
-    );
-    let speeds: Vec<f64> = log[k0..].iter().map(|(_, v)| *v).collect();
-    for (j, pair) in speeds.windows(2).enumerate().skip(1) {
-        assert!(pair[1] <= pair[0] + 1e-9, "sample {}: {pair:?}", k0 + j);
-    }
-    assert!(speeds[0] < stale_speed, "{} vs {stale_speed}", speeds[0]);
-    let last = *speeds.last().unwrap();
-    assert!(last < 1e-6, "the command still moves at {last} rad/s");
-    assert_eq!(
-        log.last().unwrap().0,
-        ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPED
-    );
+    assert_braked_to_rest(&log, pick_up, stale_speed);
     assert!(
         max_abs(plant.qd()) < 1e-3,
         "the arm moves at {:?}",
         plant.qd()
     );
-    // One more sample with a first-version record (its size ends before
-    // the command): served, the command arrays untouched; then a wrong
-    // `command_len`: refused, nothing written.
+    check_command_record_versions(sup, &x, &w, &p, samples as f64 * ts);
+    unsafe {
+        ofmpc_plan_free(plan);
+        ofmpc_supervised_free(sup);
+        ofmpc_robot_free(robot);
+    }
+}
+
+/// One more sample of `sup` (a position output) with a first-version
+/// record (its size ends before the command): served, the command arrays
+/// untouched; then a wrong `command_len`: refused, nothing written.
+fn check_command_record_versions(
+    sup: *mut ofmpc_supervised,
+    x: &[f64],
+    w: &[f64],
+    p: &[f64],
+    t: f64,
+) {
+    let n = w.len();
+    let (mut tau, mut q, mut qd, mut qdd) =
+        (vec![-7.0; n], vec![-7.0; n], vec![0.0; n], vec![0.0; n]);
     let sin = ofmpc_supervised_input {
         size: size_of::<ofmpc_supervised_input>(),
-        t: samples as f64 * ts,
+        t,
         x: x.as_ptr(),
         x_len: x.len(),
         w: w.as_ptr(),
@@ -748,8 +747,17 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
         preview: p.as_ptr(),
         preview_len: p.len(),
     };
-    q.fill(-7.0);
-    out.size = std::mem::offset_of!(ofmpc_supervised_output, q_command);
+    let mut out = ofmpc_supervised_output {
+        size: std::mem::offset_of!(ofmpc_supervised_output, q_command),
+        tau: tau.as_mut_ptr(),
+        tau_len: n,
+        status: ofmpc_supervised_status::OFMPC_SUPERVISED_DIVERGED,
+        step_status: ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+        q_command: q.as_mut_ptr(),
+        qd_command: qd.as_mut_ptr(),
+        qdd_command: qdd.as_mut_ptr(),
+        command_len: n,
+    };
     unsafe { ok(ofmpc_supervised_step(sup, &sin, &mut out)) };
     assert!(q.iter().all(|v| *v == -7.0), "{q:?}");
     out.size = size_of::<ofmpc_supervised_output>();
@@ -763,9 +771,34 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
         last_error()
     );
     assert!(tau.iter().chain(&q).all(|v| *v == -7.0));
-    unsafe {
-        ofmpc_plan_free(plan);
-        ofmpc_supervised_free(sup);
-        ofmpc_robot_free(robot);
+}
+
+/// The command's speed per sample of a run (`log`: status, speed) braked to
+/// rest in a safe stop that began after sample `after`: slower than the
+/// controller's last command (`stale`, which moved), never faster than the
+/// sample before (to 1e-9 rad/s), below 1e-6 rad/s at the end, `STOPPED`.
+fn assert_braked_to_rest(log: &[(ofmpc_supervised_status, f64)], after: usize, stale_speed: f64) {
+    let k0 = log
+        .iter()
+        .position(|(s, ..)| *s == ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPING)
+        .expect("the safety limit brought no stop");
+    assert!(
+        k0 > after,
+        "stopped at sample {k0}, before the load at {after}"
+    );
+    assert!(
+        stale_speed > 0.1,
+        "the controller's last command moved at {stale_speed} rad/s"
+    );
+    let speeds: Vec<f64> = log[k0..].iter().map(|(_, v)| *v).collect();
+    for (j, pair) in speeds.windows(2).enumerate() {
+        assert!(pair[1] <= pair[0] + 1e-9, "sample {}: {pair:?}", k0 + j);
     }
+    assert!(speeds[0] < stale_speed, "{} vs {stale_speed}", speeds[0]);
+    let last = *speeds.last().unwrap();
+    assert!(last < 1e-6, "the command still moves at {last} rad/s");
+    assert_eq!(
+        log.last().unwrap().0,
+        ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPED
+    );
 }
