@@ -378,6 +378,31 @@ typedef struct {
    * The outcome of the controller's last step.
    */
   ofmpc_step_status step_status;
+  /**
+   * With a position or velocity output (`[mpc] output`): the joint
+   * positions to command (n values; rad) — the controller's, predicted
+   * one lead time ahead, while it controls; during a safe stop
+   * (`OFMPC_SUPERVISED_STOPPING`, `OFMPC_SUPERVISED_STOPPED`) the stop
+   * law's braking trajectory one lead time ahead, decelerating to rest
+   * and then holding (send it: the controller's last command would leave
+   * the drive following a stale, moving target). Written when `size`
+   * covers the command fields and the pointer is not NULL (NULL: not
+   * asked for); zeros with a torque output.
+   */
+  double *q_command;
+  /**
+   * The velocities to command (n values; rad/s), as `q_command`.
+   */
+  double *qd_command;
+  /**
+   * The accelerations to command (n values; rad/s²: the feed-forward of
+   * the interface's joint loop), as `q_command`.
+   */
+  double *qdd_command;
+  /**
+   * Length of each non-NULL command array (n).
+   */
+  size_t command_len;
 } ofmpc_supervised_output;
 
 /**
@@ -669,7 +694,10 @@ ofmpc_status ofmpc_supervised_reset(ofmpc_supervised *s,
                                     size_t x0_len);
 
 /**
- * One supervised sample: allocates nothing, takes no lock. Not `OFMPC_OK`
+ * One supervised sample: the torque into `out->tau` and, when asked for,
+ * the position command into `out->q_command` … (the controller's, or the
+ * stop law's braking trajectory during a safe stop). Allocates nothing,
+ * takes no lock. Not `OFMPC_OK`
  * only for bad input or a failed step no stop law takes over
  * (`OFMPC_NUMERIC`: stop the robot).
  */

@@ -271,6 +271,29 @@ class SupervisedController {
     if (s == OFMPC_OK) status = out.status;
     return detail::status(s);
   }
+  /// One supervised sample with a position or velocity output ([mpc] output): as `step`,
+  /// and the command to send into `q_command`, `qd_command`, `qdd_command` (n each; an
+  /// empty view: not asked for): the controller's, predicted one lead time ahead, while it
+  /// controls; during a safe stop (status OFMPC_SUPERVISED_STOPPING / _STOPPED) the stop
+  /// law's braking trajectory one lead time ahead, decelerating to rest, then holding.
+  [[nodiscard]] Status step(double t, ConstView x, ConstView w, ConstView preview, View tau,
+                            ofmpc_supervised_status &status, View q_command, View qd_command,
+                            View qdd_command) {
+    ofmpc_supervised_input in{sizeof in, t, x.data, x.size, w.data, w.size, preview.data,
+                              preview.size};
+    ofmpc_supervised_output out{};
+    out.size = sizeof out;
+    out.tau = tau.data;
+    out.tau_len = tau.size;
+    out.q_command = q_command.size ? q_command.data : nullptr;
+    out.qd_command = qd_command.size ? qd_command.data : nullptr;
+    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
+    out.command_len = q_command.size ? q_command.size
+                                     : (qd_command.size ? qd_command.size : qdd_command.size);
+    ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
+    if (s == OFMPC_OK) status = out.status;
+    return detail::status(s);
+  }
   /// The telemetry of the controller's last step (its last call; not the stop law's).
   [[nodiscard]] Status telemetry(ofmpc_step_telemetry &t) const {
     t = ofmpc_step_telemetry{};

@@ -167,20 +167,27 @@ pub unsafe extern "C" fn ofmpc_controller_step(
 /// written on a refusal): when its `size` covers them, every non-NULL one
 /// has `command_len = n`.
 fn check_command(out: &ofmpc_step_output, n: usize) -> Result<(), Failure> {
-    if out.size < STEP_OUTPUT_V2 {
-        // An older record: the command fields are not there to read.
-        return Ok(());
-    }
-    let asked = [out.q_command, out.qd_command, out.qdd_command]
-        .iter()
-        .any(|p| !p.is_null());
-    if asked && out.command_len != n {
+    // An older record: the command fields are not there to read.
+    let covered = out.size >= STEP_OUTPUT_V2;
+    let arrays = [out.q_command, out.qd_command, out.qdd_command];
+    check_command_arrays(covered, arrays, out.command_len, n, "out->command_len")
+}
+
+/// Command arrays `arrays` of `len` values each: when the record covers
+/// them (`covered`), every non-NULL one must hold the robot's `n` joints
+/// (`what` names the length field in the refusal).
+pub(crate) fn check_command_arrays(
+    covered: bool,
+    arrays: [*mut f64; 3],
+    len: usize,
+    n: usize,
+    what: &str,
+) -> Result<(), Failure> {
+    let asked = covered && arrays.iter().any(|p| !p.is_null());
+    if asked && len != n {
         return Err(Failure::new(
             ofmpc_status::OFMPC_SIZE_MISMATCH,
-            format!(
-                "out->command_len is {} but the robot has {n} joints",
-                out.command_len
-            ),
+            format!("{what} is {len} but the robot has {n} joints"),
         ));
     }
     Ok(())
@@ -189,14 +196,27 @@ fn check_command(out: &ofmpc_step_output, n: usize) -> Result<(), Failure> {
 /// The predicted command into the record's non-NULL command arrays, when
 /// its `size` covers them ([`check_command`] checked their length).
 unsafe fn write_command(o: &StepOutput, out: &mut ofmpc_step_output) {
-    if out.size < STEP_OUTPUT_V2 {
+    let arrays = [out.q_command, out.qd_command, out.qdd_command];
+    let command = [&o.q_command[..], &o.qd_command, &o.qdd_command];
+    // SAFETY: checked by `check_command`.
+    unsafe { write_command_arrays(out.size >= STEP_OUTPUT_V2, arrays, command) };
+}
+
+/// `command` (position, velocity, acceleration) into the non-NULL ones of
+/// `arrays` when the record covers them.
+///
+/// # Safety
+/// Every non-NULL array holds `command[i].len()` writable values
+/// ([`check_command_arrays`]).
+pub(crate) unsafe fn write_command_arrays(
+    covered: bool,
+    arrays: [*mut f64; 3],
+    command: [&[f64]; 3],
+) {
+    if !covered {
         return;
     }
-    for (p, src) in [
-        (out.q_command, &o.q_command),
-        (out.qd_command, &o.qd_command),
-        (out.qdd_command, &o.qdd_command),
-    ] {
+    for (p, src) in arrays.into_iter().zip(command) {
         if !p.is_null() {
             // SAFETY: the caller gave `command_len = n` writable values.
             unsafe { std::slice::from_raw_parts_mut(p, src.len()) }.copy_from_slice(src);

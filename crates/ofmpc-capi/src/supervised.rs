@@ -2,7 +2,7 @@
 //! [`ofmpc::sim::SupervisedController`] (measurement repair, plausibility,
 //! safety limit, divergence rule and safe stop around the controller).
 
-use crate::controller::ofmpc_step_status;
+use crate::controller::{check_command_arrays, ofmpc_step_status, write_command_arrays};
 use crate::ffi::*;
 use crate::robot::ofmpc_robot;
 use crate::settings::{build_controller, kind, Settings};
@@ -66,10 +66,31 @@ pub struct ofmpc_supervised_output {
     pub status: ofmpc_supervised_status,
     /// The outcome of the controller's last step.
     pub step_status: ofmpc_step_status,
+    /// With a position or velocity output (`[mpc] output`): the joint
+    /// positions to command (n values; rad) — the controller's, predicted
+    /// one lead time ahead, while it controls; during a safe stop
+    /// (`OFMPC_SUPERVISED_STOPPING`, `OFMPC_SUPERVISED_STOPPED`) the stop
+    /// law's braking trajectory one lead time ahead, decelerating to rest
+    /// and then holding (send it: the controller's last command would leave
+    /// the drive following a stale, moving target). Written when `size`
+    /// covers the command fields and the pointer is not NULL (NULL: not
+    /// asked for); zeros with a torque output.
+    pub q_command: *mut f64,
+    /// The velocities to command (n values; rad/s), as `q_command`.
+    pub qd_command: *mut f64,
+    /// The accelerations to command (n values; rad/s²: the feed-forward of
+    /// the interface's joint loop), as `q_command`.
+    pub qdd_command: *mut f64,
+    /// Length of each non-NULL command array (n).
+    pub command_len: usize,
 }
 
 const INPUT_V1: usize = size_of::<ofmpc_supervised_input>();
-const OUTPUT_V1: usize = size_of::<ofmpc_supervised_output>();
+/// The size of the first version of [`ofmpc_supervised_output`]: fields
+/// appended later are written only when the caller's `size` covers them.
+const OUTPUT_V1: usize = std::mem::offset_of!(ofmpc_supervised_output, q_command);
+/// The size with the command (issue 37): `q_command` … `command_len`.
+const OUTPUT_V2: usize = size_of::<ofmpc_supervised_output>();
 
 /// Builds the controller `kind_name` for `robot` from `settings_toml` (as
 /// [`crate::ofmpc_controller_new`]) behind its guard, whose rules come from
@@ -114,7 +135,10 @@ pub unsafe extern "C" fn ofmpc_supervised_reset(
     })
 }
 
-/// One supervised sample: allocates nothing, takes no lock. Not `OFMPC_OK`
+/// One supervised sample: the torque into `out->tau` and, when asked for,
+/// the position command into `out->q_command` … (the controller's, or the
+/// stop law's braking trajectory during a safe stop). Allocates nothing,
+/// takes no lock. Not `OFMPC_OK`
 /// only for bad input or a failed step no stop law takes over
 /// (`OFMPC_NUMERIC`: stop the robot).
 #[must_use]
@@ -132,6 +156,9 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
         check_record(out.size, OUTPUT_V1, "ofmpc_supervised_output")?;
         let (n, horizon) = (s.controller().dof(), s.controller().horizon());
         let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
+        let commands = [out.q_command, out.qd_command, out.qdd_command];
+        let covered = out.size >= OUTPUT_V2;
+        check_command_arrays(covered, commands, out.command_len, n, "out->command_len")?;
         let x = unsafe { slice(input.x, input.x_len, 2 * n, "input->x") }?;
         let w = unsafe { slice(input.w, input.w_len, n, "input->w") }?;
         let p = unsafe {
@@ -157,6 +184,9 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
             StepStatus::QpIterationCap { .. } => ofmpc_step_status::OFMPC_STEP_QP_ITERATION_CAP,
             _ => ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
         };
+        let (q, qd, qdd) = s.command();
+        // SAFETY: `check_command_arrays` checked the arrays' length.
+        unsafe { write_command_arrays(covered, commands, [q, qd, qdd]) };
         Ok(())
     })
 }

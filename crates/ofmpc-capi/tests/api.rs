@@ -171,6 +171,10 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
         tau_len: n,
         status: ofmpc_supervised_status::OFMPC_SUPERVISED_DIVERGED,
         step_status: ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+        q_command: null_mut(),
+        qd_command: null_mut(),
+        qdd_command: null_mut(),
+        command_len: 0,
     };
     let samples = unsafe { ofmpc_sim_samples(s.sim) };
     assert!(samples > 1000, "{samples}");
@@ -590,4 +594,211 @@ fn the_first_stage_gains_through_the_c_api() {
         ofmpc_controller_free(plain);
         ofmpc_robot_free(r);
     }
+}
+
+/// The largest `|v_i|`.
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// The supervised controller's command through the C API (issue 37), in a
+/// position-interface run: the simulated `abb-egm` interface (4 ms cycle,
+/// 40 ms lag) takes `q_command`/`qd_command`/`qdd_command` from
+/// `ofmpc_supervised_step`, an 8 kg load picked up at 3 s passes the
+/// safety limit (1.5 mrad) at speed, and the safe stop's command — the stop
+/// law's braking trajectory one lead ahead — decelerates to rest and holds:
+/// its speed falls from the stop's first sample on, every later command
+/// moves less than the one before (to within 1e-9 rad/s), it ends below
+/// 1e-6 rad/s and the arm itself at rest (< 1e-3 rad/s). The controller's
+/// last command, which a position interface would otherwise keep
+/// streaming, was moving (> 0.1 rad/s). Measured: the stop begins at
+/// 3.02 s; the controller's last command moved at 0.61 rad/s, the stop's
+/// first at 0.14 rad/s (40 ms into a 30 ms braking law), its last at
+/// 2e-15 rad/s, the arm at 1e-13 rad/s. A record of the first version
+/// (size before `q_command`) is still served, and a wrong `command_len` is
+/// refused with nothing written. Allocation-free throughout.
+#[test]
+fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
+    use ofmpc::sim::{Plant, PlantSettings, Servo, ServoProfile, ServoSettings};
+    let toml = c"[mpc]\nq_du = 1e-3\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n\
+        [simulation]\nsafe_stop = true\n[safety]\nmax_joint_error_rad = 1.5e-3\n";
+    let gcode = std::ffi::CString::new(ofmpc::gcode::PAPER_TABLE1).unwrap();
+    let ts = 0.01;
+    let (mut robot, mut sup, mut plan) = (null_mut(), null_mut(), null_mut());
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut robot));
+        ok(ofmpc_supervised_new(
+            robot,
+            c"second".as_ptr(),
+            toml.as_ptr(),
+            &mut sup,
+        ));
+        ok(ofmpc_plan_new(robot, gcode.as_ptr(), ts, &mut plan));
+    }
+    let (n, h) = unsafe { (ofmpc_supervised_dof(sup), ofmpc_supervised_horizon(sup)) };
+    let model = ofmpc::Robot::irb140();
+    let servo_settings = ServoSettings::profile(ServoProfile::AbbEgm);
+    let settings = PlantSettings {
+        servo: Some(servo_settings.clone()),
+        ..Default::default()
+    };
+    let substep = settings.substep;
+    let mut w = vec![0.0; n];
+    unsafe { ok(ofmpc_plan_reference(plan, 0, w.as_mut_ptr(), n)) };
+    let mut plant = Plant::with_period(model.clone(), settings, &w, ts).unwrap();
+    let mut servo = Servo::new(&servo_settings, &model, ts, substep).unwrap();
+    servo.start(&w).unwrap();
+    let (mut x, mut p, mut tau) = (vec![0.0; 2 * n], vec![0.0; h * n], vec![0.0; n]);
+    let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut out = ofmpc_supervised_output {
+        size: size_of::<ofmpc_supervised_output>(),
+        tau: tau.as_mut_ptr(),
+        tau_len: n,
+        status: ofmpc_supervised_status::OFMPC_SUPERVISED_DIVERGED,
+        step_status: ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+        q_command: q.as_mut_ptr(),
+        qd_command: qd.as_mut_ptr(),
+        qdd_command: qdd.as_mut_ptr(),
+        command_len: n,
+    };
+    let read = |plant: &Plant, x: &mut [f64]| {
+        x[..n].copy_from_slice(plant.q());
+        x[n..].copy_from_slice(plant.qd());
+    };
+    read(&plant, &mut x);
+    unsafe { ok(ofmpc_supervised_reset(sup, x.as_ptr(), 2 * n)) };
+    let samples = unsafe { ofmpc_plan_len(plan) } + 200;
+    let pick_up = (3.0 / ts) as usize;
+    // Per sample: the status and the command's speed.
+    let mut log = Vec::with_capacity(samples);
+    let (mut stale_speed, mut allocated) = (f64::NAN, 0);
+    for k in 0..samples {
+        if k == pick_up {
+            let load = ofmpc::Payload::point_mass(8.0);
+            plant.set_payload(Some(load)).unwrap();
+        }
+        read(&plant, &mut x);
+        let kr = k.min(unsafe { ofmpc_plan_len(plan) } - 1);
+        unsafe {
+            ok(ofmpc_plan_reference(plan, kr, w.as_mut_ptr(), n));
+            ok(ofmpc_plan_preview(plan, kr, h, p.as_mut_ptr(), h * n));
+            let sin = ofmpc_supervised_input {
+                size: size_of::<ofmpc_supervised_input>(),
+                t: k as f64 * ts,
+                x: x.as_ptr(),
+                x_len: x.len(),
+                w: w.as_ptr(),
+                w_len: n,
+                preview: p.as_ptr(),
+                preview_len: p.len(),
+            };
+            let before = allocations();
+            ok(ofmpc_supervised_step(sup, &sin, &mut out));
+            allocated += allocations() - before;
+        }
+        let controlled = out.status == ofmpc_supervised_status::OFMPC_SUPERVISED_CONTROLLED;
+        if controlled {
+            stale_speed = max_abs(&qd);
+        }
+        servo.receive(&tau, &q, &qd, &qdd, false);
+        plant
+            .advance_with(&mut |i, q, qd, tau| {
+                servo.drive(i, q, qd, tau, substep).unwrap();
+                Ok(())
+            })
+            .unwrap();
+        log.push((out.status, max_abs(&qd)));
+    }
+    assert_eq!(allocated, 0, "allocations in {samples} steps");
+    assert_braked_to_rest(&log, pick_up, stale_speed);
+    assert!(
+        max_abs(plant.qd()) < 1e-3,
+        "the arm moves at {:?}",
+        plant.qd()
+    );
+    check_command_record_versions(sup, &x, &w, &p, samples as f64 * ts);
+    unsafe {
+        ofmpc_plan_free(plan);
+        ofmpc_supervised_free(sup);
+        ofmpc_robot_free(robot);
+    }
+}
+
+/// One more sample of `sup` (a position output) with a first-version
+/// record (its size ends before the command): served, the command arrays
+/// untouched; then a wrong `command_len`: refused, nothing written.
+fn check_command_record_versions(
+    sup: *mut ofmpc_supervised,
+    x: &[f64],
+    w: &[f64],
+    p: &[f64],
+    t: f64,
+) {
+    let n = w.len();
+    let (mut tau, mut q, mut qd, mut qdd) =
+        (vec![-7.0; n], vec![-7.0; n], vec![0.0; n], vec![0.0; n]);
+    let sin = ofmpc_supervised_input {
+        size: size_of::<ofmpc_supervised_input>(),
+        t,
+        x: x.as_ptr(),
+        x_len: x.len(),
+        w: w.as_ptr(),
+        w_len: n,
+        preview: p.as_ptr(),
+        preview_len: p.len(),
+    };
+    let mut out = ofmpc_supervised_output {
+        size: std::mem::offset_of!(ofmpc_supervised_output, q_command),
+        tau: tau.as_mut_ptr(),
+        tau_len: n,
+        status: ofmpc_supervised_status::OFMPC_SUPERVISED_DIVERGED,
+        step_status: ofmpc_step_status::OFMPC_STEP_HELD_LAST_TORQUE,
+        q_command: q.as_mut_ptr(),
+        qd_command: qd.as_mut_ptr(),
+        qdd_command: qdd.as_mut_ptr(),
+        command_len: n,
+    };
+    unsafe { ok(ofmpc_supervised_step(sup, &sin, &mut out)) };
+    assert!(q.iter().all(|v| *v == -7.0), "{q:?}");
+    out.size = size_of::<ofmpc_supervised_output>();
+    out.command_len = n - 1;
+    tau.fill(-7.0);
+    let st = unsafe { ofmpc_supervised_step(sup, &sin, &mut out) };
+    assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH);
+    assert!(
+        last_error().contains("out->command_len"),
+        "{}",
+        last_error()
+    );
+    assert!(tau.iter().chain(&q).all(|v| *v == -7.0));
+}
+
+/// The command's speed per sample of a run (`log`: status, speed) braked to
+/// rest in a safe stop that began after sample `after`: slower than the
+/// controller's last command (`stale`, which moved), never faster than the
+/// sample before (to 1e-9 rad/s), below 1e-6 rad/s at the end, `STOPPED`.
+fn assert_braked_to_rest(log: &[(ofmpc_supervised_status, f64)], after: usize, stale_speed: f64) {
+    let k0 = log
+        .iter()
+        .position(|(s, ..)| *s == ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPING)
+        .expect("the safety limit brought no stop");
+    assert!(
+        k0 > after,
+        "stopped at sample {k0}, before the load at {after}"
+    );
+    assert!(
+        stale_speed > 0.1,
+        "the controller's last command moved at {stale_speed} rad/s"
+    );
+    let speeds: Vec<f64> = log[k0..].iter().map(|(_, v)| *v).collect();
+    for (j, pair) in speeds.windows(2).enumerate() {
+        assert!(pair[1] <= pair[0] + 1e-9, "sample {}: {pair:?}", k0 + j);
+    }
+    assert!(speeds[0] < stale_speed, "{} vs {stale_speed}", speeds[0]);
+    let last = *speeds.last().unwrap();
+    assert!(last < 1e-6, "the command still moves at {last} rad/s");
+    assert_eq!(
+        log.last().unwrap().0,
+        ofmpc_supervised_status::OFMPC_SUPERVISED_STOPPED
+    );
 }

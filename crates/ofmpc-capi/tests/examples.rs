@@ -165,3 +165,35 @@ fn the_cpp_wrapper_gives_the_gains_and_the_command() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// The C++ wrapper's supervised step with the command (issue 37;
+/// `examples/supervised_stop.cpp`), under ASAN: an encoder slip at 3 s on
+/// the paper's path passes the safety limit, and the command through the
+/// wrapper is the stop law's braking trajectory — it never speeds up, ends
+/// below 1e-6 rad/s with the status `STOPPED`, where the controller's last
+/// command moved at over 0.1 rad/s.
+#[test]
+fn the_cpp_wrapper_commands_a_braking_position_during_a_safe_stop() {
+    let dir = std::env::temp_dir().join(format!("ofmpc-stop-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let exe = dir.join("supervised_stop");
+    compile("g++", "-std=c++17", "supervised_stop.cpp", &exe);
+    let out = Command::new(&exe)
+        .arg(crate_dir().join("../../examples/paper-table1.gcode"))
+        .env(
+            "ASAN_OPTIONS",
+            "detect_leaks=1:abort_on_error=0:exitcode=23",
+        )
+        .output()
+        .expect("the example runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{} failed ({}):\n{stdout}\n{}",
+        exe.display(),
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("stop at 3."), "{stdout}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -157,6 +157,38 @@ fn apply_keywords(
     Ok(())
 }
 
+/// The output mode named `output` ("torque", "position_velocity", "velocity").
+pub(crate) fn output_mode(output: &str) -> PyResult<OutputMode> {
+    OutputMode::ALL
+        .into_iter()
+        .find(|m| m.name() == output)
+        .ok_or_else(|| {
+            to_py(format!(
+                "output={output:?}: give \"torque\", \"position_velocity\" or \"velocity\""
+            ))
+        })
+}
+
+/// The controller `kind` for `robot` with `settings` and the keyword weights of
+/// `Controller()` (applied to `settings` and to the baselines' gains).
+pub(crate) fn build(
+    kind: ControllerKind,
+    robot: &PyRobot,
+    mut settings: MpcSettings,
+    weights: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Controller> {
+    let mut baselines = BaselineSettings::default();
+    if let Some(w) = weights {
+        apply_keywords(kind, w, &mut settings, &mut baselines)?;
+    }
+    let mut builder = ControllerBuilder::new(kind, robot.robot()).settings(settings);
+    if kind.is_baseline() {
+        builder = builder.baselines(baselines);
+    }
+    // A settings error keeps its own message (`BuildError::Settings` is transparent).
+    builder.build().map_err(to_py)
+}
+
 #[pymethods]
 impl PyController {
     #[new]
@@ -173,15 +205,8 @@ impl PyController {
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
-        let output = OutputMode::ALL
-            .into_iter()
-            .find(|m| m.name() == output)
-            .ok_or_else(|| {
-                to_py(format!(
-                    "output={output:?}: give \"torque\", \"position_velocity\" or \"velocity\""
-                ))
-            })?;
-        let mut settings = MpcSettings {
+        let output = output_mode(output)?;
+        let settings = MpcSettings {
             ts,
             horizon,
             gains,
@@ -189,17 +214,8 @@ impl PyController {
             output_lead_s,
             ..MpcSettings::default()
         };
-        let mut baselines = BaselineSettings::default();
-        if let Some(w) = weights {
-            apply_keywords(kind, w, &mut settings, &mut baselines)?;
-        }
         let n = robot.robot().dof();
-        let mut builder = ControllerBuilder::new(kind, robot.robot()).settings(settings);
-        if kind.is_baseline() {
-            builder = builder.baselines(baselines);
-        }
-        // A settings error keeps its own message (`BuildError::Settings` is transparent).
-        let controller = builder.build().map_err(to_py)?;
+        let controller = build(kind, robot, settings, weights)?;
         Ok(Self {
             kind: controller.kind(),
             dof: controller.dof(),

@@ -343,3 +343,53 @@ def test_the_predicted_command_of_a_position_velocity_output(robot, ref):
     assert t.last_command is None
     with pytest.raises(ofmpc.OfmpcError, match="output="):
         ofmpc.Controller("second", robot, output="torq")
+
+
+def test_a_safe_stop_commands_a_braking_position(robot, ref):
+    """SupervisedController (issue 37) in a position-interface run: the interface brings each
+    joint to the commanded [q, q̇] one lead (40 ms, abb-egm's lag) after it was sent (an ideal
+    drive behind a pure lag); an encoder slip of 5 mrad at 3 s passes the 1.5 mrad safety
+    limit at speed. During the safe stop last_command is the stop law's braking trajectory:
+    its speed never grows (to 1e-9 rad/s), it ends below 1e-6 rad/s with the status
+    "stopped" and the arm at rest, while the controller's last command moved at > 0.1 rad/s
+    (what the interface would otherwise keep receiving). With a torque output there is no
+    command."""
+    lead, ts, n = 0.04, 0.01, robot.dof
+    c = ofmpc.SupervisedController(
+        "second", robot, output="position_velocity", output_lead_s=lead,
+        max_joint_error_rad=1.5e-3, q_du=1e-3,
+    )
+    assert c.last_status is None and c.last_command is None
+    lag = round(lead / ts)
+    sent = [np.concatenate([ref.q[0], np.zeros(n)])] * lag  # the commands in flight
+    c.reset(sent[0])
+    slip, statuses, speeds, stale = round(3.0 / ts), [], [], None
+    samples = len(ref.q)
+    for k in range(samples):
+        x = sent.pop(0).copy()
+        if k >= slip:
+            x[0] += 5e-3  # the encoder slipped
+        c.step(k * ts, x, ref.q[k], ref.preview(k, c.horizon))
+        cmd = c.last_command
+        sent.append(np.concatenate([cmd["q_command"], cmd["qd_command"]]))
+        speed = float(np.max(np.abs(cmd["qd_command"])))
+        statuses.append(c.last_status)
+        speeds.append(speed)
+        if c.last_status == "controlled":
+            stale = speed
+    k0 = statuses.index("stopping")
+    assert k0 >= slip, f"stopped at sample {k0}, before the slip"
+    assert set(statuses[:k0]) == {"controlled"}
+    assert set(statuses[k0:]) <= {"stopping", "stopped"} and statuses[-1] == "stopped"
+    assert stale > 0.1, stale
+    stop = speeds[k0:]
+    assert stop[0] < stale
+    assert all(b <= a + 1e-9 for a, b in zip(stop, stop[1:])), "the stop's command sped up"
+    assert stop[-1] < 1e-6, stop[-1]
+    assert np.max(np.abs(sent[-1][n:])) < 1e-6  # the arm, one lead on, at rest too
+    t = ofmpc.SupervisedController("second", robot)
+    t.reset(sent[0])
+    t.step(0.0, sent[0], ref.q[0], ref.preview(0, 10))
+    assert t.last_status == "controlled" and t.last_command is None
+    with pytest.raises(ofmpc.OfmpcError, match="preview"):
+        t.step(0.0, sent[0], ref.q[0], np.zeros((10, 5)))

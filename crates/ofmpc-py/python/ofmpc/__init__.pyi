@@ -169,6 +169,50 @@ class Controller:
         Raises OfmpcError before the first reset, and for an argument of another shape (a
         transposed preview, a column x) or a complex, datetime or string dtype, naming it."""
 
+class SupervisedController:
+    """The controller behind its guard (``ofmpc::sim::SupervisedController``): measurement
+    repair, plausibility check, safety limit (``max_joint_error_rad``), divergence rule and
+    safe stop. With ``output="position_velocity"`` or ``"velocity"``, ``last_command`` is
+    what to send to the interface: the controller's predicted command while it controls, the
+    stop law's braking trajectory one lead ahead during a safe stop.
+    """
+
+    def __init__(
+        self,
+        kind: str,
+        robot: Robot,
+        ts: float = 0.01,
+        horizon: int = 10,
+        output: str = "torque",
+        output_lead_s: Optional[float] = None,
+        safe_stop: bool = True,
+        plausibility_check: bool = False,
+        max_joint_error_rad: Optional[float] = None,
+        delay_samples: int = 0,
+        **weights: Union[float, Sequence[float], str],
+    ) -> None: ...
+    @property
+    def dof(self) -> int: ...
+    @property
+    def horizon(self) -> int: ...
+    @property
+    def ts(self) -> float: ...
+    @property
+    def last_status(self) -> Optional[str]:
+        """"controlled", "repaired_measurement", "stopping", "stopped", "diverged" or
+        "non_finite_error" of the last step; None before the first."""
+    @property
+    def last_command(self) -> Optional[dict]:
+        """With output="position_velocity" or "velocity": {"q_command", "qd_command",
+        "qdd_command"} (n,) each of the last step — the controller's, or during a safe stop
+        the stop law's braking trajectory output_lead_s ahead (to rest, then holding); else
+        None."""
+    def reset(self, x0: ArrayLike) -> None:
+        """Starts a run at the reading x0 = [q; q̇] (2n,): no stop in progress."""
+    def step(self, t: float, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
+        """Time t (s), raw reading x (2n,; NaN where lost), reference w_k (n,), preview
+        (N, n) or (N·n,) → torque (n,): the controller's, or the stop law's during a stop."""
+
 def read_program(
     program: Union[str, os.PathLike[str]],
     origin: Optional[Sequence[float]] = None,
