@@ -183,15 +183,20 @@ pub fn next_steps(urdf: &Path, out: &Path, chain: &Chain, p: &Placement) -> Stri
         .map(|t| format!(" --tip {t}"))
         .unwrap_or_default();
     let at = tool_position_mm(p).map(|v| (v * 10.0).round() / 10.0);
-    if !p.as_published {
-        let (x, y, z) = (at[0], at[1], at[2]);
-        s.push_str(&format!(
-            "start pose {} (--start-q {}); the tool there is at [{x:.1}, {y:.1}, {z:.1}] mm: a \
-             program of yours placed with --origin {x:.1},{y:.1},{z:.1} starts where the tool is\n",
-            toml_list(&p.start_q),
-            flag_list(&p.start_q),
-        ));
-    }
+    // Printed whether init chose the pose or the robot's own default runs the paper's
+    // program as published: the README's next steps (a program of yours) take both values.
+    let (x, y, z) = (at[0], at[1], at[2]);
+    let whose = if p.as_published {
+        " (the robot's default)"
+    } else {
+        ""
+    };
+    s.push_str(&format!(
+        "start pose {}{whose} (--start-q {}); the tool there is at [{x:.1}, {y:.1}, {z:.1}] mm: a \
+         program of yours placed with --origin {x:.1},{y:.1},{z:.1} starts where the tool is\n",
+        toml_list(&p.start_q),
+        flag_list(&p.start_q),
+    ));
     s.push_str(&format!(
         "next:\n  ofmpc run {}\n  ofmpc inspect robot --robot {}{tip_flag} --drives {}",
         scenario.display(),

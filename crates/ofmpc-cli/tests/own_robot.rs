@@ -118,10 +118,21 @@ fn follow_the_readme(urdf: &str, name: &str, tip: Option<&str>) {
     let t = title(&cwd.join("rep/report.html"));
     assert!(t.contains(name) && t.contains("cam_pocket.ngc"), "{t}");
     let scenario = std::fs::read_to_string(cwd.join("rep/scenario.toml")).unwrap();
-    assert!(
-        scenario.contains(&format!("start_q = [{}", &q[..4])),
-        "{scenario}"
-    );
+    // The run's start pose is the one init printed (values as written: `0` printed, `0.0`
+    // in the scenario).
+    let line = scenario
+        .lines()
+        .find(|l| l.starts_with("start_q = ["))
+        .unwrap_or_else(|| panic!("no start_q: {scenario}"));
+    let written: Vec<f64> = line["start_q = [".len()..line.find(']').unwrap()]
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    let given: Vec<f64> = q.split(',').map(|v| v.parse().unwrap()).collect();
+    assert_eq!(written.len(), given.len(), "{scenario}");
+    for (w, g) in written.iter().zip(&given) {
+        assert!((w - g).abs() < 1e-9, "{line} against --start-q {q}");
+    }
 }
 
 #[test]
