@@ -363,7 +363,13 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
         }
         ExperimentError::Mpc(_) => "[mpc]".into(),
         ExperimentError::Build(BuildError::OutputLead { lead_s, .. }) => {
-            format!("[mpc] output_lead_s = {lead_s} (default: [plant.servo] lag_s + lookahead_s)")
+            format!(
+                "[mpc] output_lead_s = {lead_s} (default: [plant.servo] lag_s + half a period; \
+                 lookahead_s is pre-compensated, output_smoothing_s)"
+            )
+        }
+        ExperimentError::Build(BuildError::OutputSmoothing { smoothing_s }) => {
+            format!("[mpc] output_smoothing_s = {smoothing_s}")
         }
         ExperimentError::Build(BuildError::OutputWithoutPrediction { output, .. }) => {
             format!("[mpc] output = \"{output}\"")

@@ -204,6 +204,13 @@ pub enum BuildError {
         /// `(N − 1)·Ts` (s; 0 with a torque output).
         max_s: f64,
     },
+    /// The smoothing the output pre-compensates is not a finite time `≥ 0`
+    /// (or was given with a torque output, which has none).
+    #[error("the output's smoothing time constant is {smoothing_s} s: it must be finite and at least 0 and needs a position or velocity output")]
+    OutputSmoothing {
+        /// The time constant asked for (s).
+        smoothing_s: f64,
+    },
     /// The robot already carries a payload and the tuning assumes another:
     /// one would silently replace the other.
     #[error("the robot carries a {carried} kg payload and the tuning assumes another of {assumed} kg: give one of the two")]
@@ -434,6 +441,11 @@ fn check_output(
     algorithm: &mut (dyn Algorithm + Send),
 ) -> Result<Vec<f64>, BuildError> {
     let max_s = max_output_lead(s.horizon, s.ts);
+    if let Some(smoothing_s) = s.output_smoothing_s {
+        if s.output.is_torque() || !(smoothing_s.is_finite() && smoothing_s >= 0.0) {
+            return Err(BuildError::OutputSmoothing { smoothing_s });
+        }
+    }
     if s.output.is_torque() {
         return match s.output_lead_s {
             Some(lead_s) => Err(BuildError::OutputLead { lead_s, max_s: 0.0 }),
@@ -716,6 +728,7 @@ impl Controller {
     fn command(&mut self, x: &[f64]) {
         let s = self.controller.settings();
         let (torque, lead_s, ts) = (s.output.is_torque(), s.output_lead_s.unwrap_or(0.0), s.ts);
+        let smoothing_s = s.output_smoothing_s.unwrap_or(0.0);
         if torque || !self.controller.predicted_outputs(&mut self.predicted) {
             return;
         }
@@ -729,6 +742,7 @@ impl Controller {
             now,
             &self.predicted,
             lead_s,
+            smoothing_s,
             ts,
             [
                 &mut out.q_command,

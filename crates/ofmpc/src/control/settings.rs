@@ -424,6 +424,16 @@ pub struct MpcSettings {
     /// (`[plant.servo]`), else 0. Only with a position or velocity output.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output_lead_s: Option<f64>,
+    /// The time constant `T` (s, ≥ 0) of a first-order smoothing the
+    /// interface applies to the command (UR's `lookahead_time`), which the
+    /// command pre-compensates: `q + T q̇`, `q̇ + T q̈`, `q̈ + T q⃛` instead of
+    /// `q`, `q̇`, `q̈` one lead time ahead (`control/command.rs`), so that the
+    /// smoothed setpoint is the predicted one and [`Self::output_lead_s`]
+    /// covers the interface's lag alone. `None` (default): the simulated
+    /// interface's own when its lead is also left to it (`[plant.servo]`),
+    /// else 0 (none). Only with a position or velocity output.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_smoothing_s: Option<f64>,
     /// The factor (in `(0, 1]`, one for every joint or one per joint) on the
     /// input-increment weight `q_du` of the incremental algorithms on a joint
     /// whose reference rests over the horizon: a stiffer hold. Near rest the
@@ -516,6 +526,7 @@ impl Default for MpcSettings {
             payload_com_max_m: 0.0,
             output: OutputMode::Torque,
             output_lead_s: None,
+            output_smoothing_s: None,
             hold_q_du_scale: Weight::Scalar(1.0),
             gains: false,
             identify_at_rest: false,

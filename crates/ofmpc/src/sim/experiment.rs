@@ -114,6 +114,13 @@ impl Experiment {
         self.conditions.validate()?;
         self.plant.validate_for(n, ts)?;
         check_servo_output(&self.plant, self.mpc.output)?;
+        if let Some(smoothing_s) = self.mpc.output_smoothing_s {
+            if self.mpc.output.is_torque() || !(smoothing_s.is_finite() && smoothing_s >= 0.0) {
+                return Err(ExperimentError::Build(BuildError::OutputSmoothing {
+                    smoothing_s,
+                }));
+            }
+        }
         if let Some(lead_s) = self
             .output_lead_s()
             .filter(|l| !(*l >= 0.0 && *l <= max_output_lead(self.mpc.horizon, ts) * (1.0 + 1e-12)))
@@ -238,12 +245,31 @@ impl Experiment {
     }
 
     /// The controller's lead time: the tuning's, else — with a position or
-    /// velocity output — the servo interface's lag and smoothing
-    /// ([`super::ServoSettings::command_lead_s`]).
+    /// velocity output — the servo interface's lag and hold as the plant's
+    /// substep runs them ([`super::ServoSettings::command_lead_s_at`]) and
+    /// the part of its smoothing's delay the command does not
+    /// pre-compensate ([`Self::output_smoothing_s`]).
     fn output_lead_s(&self) -> Option<f64> {
         match (&self.plant.servo, self.mpc.output_lead_s) {
-            (Some(servo), None) if !self.mpc.output.is_torque() => Some(servo.command_lead_s()),
+            (Some(servo), None) if !self.mpc.output.is_torque() => {
+                let h = self.plant.substep;
+                let smoothing = servo.smoothing_s_at(h);
+                let compensated = self.output_smoothing_s().unwrap_or(0.0);
+                Some(servo.command_lead_s_at(h) + (smoothing - compensated).max(0.0))
+            }
             (_, lead) => lead,
+        }
+    }
+
+    /// The smoothing the command pre-compensates: the tuning's, else — the
+    /// lead also left to the servo interface — the interface's own
+    /// ([`super::ServoSettings::smoothing_s_at`]; `None` when it has none).
+    fn output_smoothing_s(&self) -> Option<f64> {
+        match (&self.plant.servo, self.mpc.output_smoothing_s) {
+            (Some(servo), None) if !self.mpc.output.is_torque() && self.mpc.output_lead_s.is_none() => {
+                Some(servo.smoothing_s_at(self.plant.substep)).filter(|t| *t > 0.0)
+            }
+            (_, smoothing) => smoothing,
         }
     }
 
@@ -254,6 +280,7 @@ impl Experiment {
         let observed = self.mpc.state_observer || self.mpc.delay_compensation;
         let mut settings = self.mpc.clone();
         settings.output_lead_s = self.output_lead_s();
+        settings.output_smoothing_s = self.output_smoothing_s();
         let mut builder = ControllerBuilder::new(kind, &self.robot)
             .settings(settings)
             .accept_ineffective_settings();

@@ -458,7 +458,9 @@ impl SupervisedController {
         }
         let s = self.mpc.settings();
         if !s.output.is_torque() {
-            let lead = s.output_lead_s.unwrap_or(0.0);
+            // The stop's braking law is not pre-compensated for a
+            // smoothing: its delay joins the lead.
+            let lead = s.output_lead_s.unwrap_or(0.0) + s.output_smoothing_s.unwrap_or(0.0);
             let (q, rest) = self.stop_command.split_at_mut(self.x.len() / 2);
             let (qd, qdd) = rest.split_at_mut(q.len());
             self.supervisor.stop_command(lead, [q, qd, qdd]);
