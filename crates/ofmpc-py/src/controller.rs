@@ -192,7 +192,7 @@ pub(crate) fn build(
 #[pymethods]
 impl PyController {
     #[new]
-    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, output="torque", output_lead_s=None, **weights))]
+    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, output="torque", output_lead_s=None, output_smoothing_s=None, **weights))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -202,6 +202,7 @@ impl PyController {
         gains: bool,
         output: &str,
         output_lead_s: Option<f64>,
+        output_smoothing_s: Option<f64>,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
@@ -212,6 +213,7 @@ impl PyController {
             gains,
             output,
             output_lead_s,
+            output_smoothing_s,
             ..MpcSettings::default()
         };
         let n = robot.robot().dof();

@@ -49,7 +49,7 @@ impl PySupervised {
     #[new]
     #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, output="torque", output_lead_s=None,
         safe_stop=true, plausibility_check=false, max_joint_error_rad=None, delay_samples=0,
-        **weights))]
+        output_smoothing_s=None, **weights))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -62,6 +62,7 @@ impl PySupervised {
         plausibility_check: bool,
         max_joint_error_rad: Option<f64>,
         delay_samples: usize,
+        output_smoothing_s: Option<f64>,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
@@ -70,6 +71,7 @@ impl PySupervised {
             horizon,
             output: output_mode(output)?,
             output_lead_s,
+            output_smoothing_s,
             ..MpcSettings::default()
         };
         let controller = build(kind, robot, settings, weights)?;

@@ -345,6 +345,33 @@ def test_the_predicted_command_of_a_position_velocity_output(robot, ref):
         ofmpc.Controller("second", robot, output="torq")
 
 
+def test_the_command_pre_compensates_an_interface_s_smoothing(robot, ref):
+    """output_smoothing_s=T: the command is the plan's q + T q̇, q̇ + T q̈ (the inverse of a
+    first-order smoothing of time constant T, [mpc] output_smoothing_s; issue 37); refused
+    when negative or with a torque output."""
+    w = ref.q[0]
+    x = np.concatenate([w + 1e-3, np.zeros(6)])
+    cmds = []
+    for t_s in (None, 0.03):
+        c = ofmpc.Controller(
+            "second", robot, output="position_velocity", output_lead_s=0.0045, output_smoothing_s=t_s
+        )
+        c.reset(x)
+        c.step(x, w, ref.preview(0, 10))
+        cmds.append(c.last_command)
+    plain, smoothed = cmds
+    assert np.max(np.abs(plain["qd_command"])) > 1e-3
+    np.testing.assert_allclose(
+        smoothed["q_command"], plain["q_command"] + 0.03 * plain["qd_command"], rtol=0, atol=1e-14
+    )
+    np.testing.assert_allclose(
+        smoothed["qd_command"], plain["qd_command"] + 0.03 * plain["qdd_command"], rtol=0, atol=1e-12
+    )
+    for bad in (dict(output="position_velocity", output_smoothing_s=-0.01), dict(output_smoothing_s=0.03)):
+        with pytest.raises(ofmpc.OfmpcError, match="smoothing time constant"):
+            ofmpc.Controller("second", robot, **bad)
+
+
 def test_a_safe_stop_commands_a_braking_position(robot, ref):
     """SupervisedController (issue 37) in a position-interface run: the interface brings each
     joint to the commanded [q, q̇] one lead (40 ms, abb-egm's lag) after it was sent (an ideal

@@ -110,11 +110,20 @@ fn each_profile_tracks_an_unknown_payload() {
             let (_, torque) = run(&held(None), kind, mass);
             let profile = servo.profile;
             let (outcome, m) = run(&held(Some(servo.clone())), kind, mass);
-            assert!(outcome.is_completed(), "{profile} {kind:?} {mass}: {outcome}");
+            assert!(
+                outcome.is_completed(),
+                "{profile} {kind:?} {mass}: {outcome}"
+            );
             let steady = common::experiment::steady(&m);
-            assert!(steady <= 1e-9, "{profile} {kind:?} {mass}: steady {steady:e}");
+            assert!(
+                steady <= 1e-9,
+                "{profile} {kind:?} {mass}: steady {steady:e}"
+            );
             let ratio = m.cartesian_error_rms_mm / torque.cartesian_error_rms_mm;
-            assert!(ratio <= ratio_max, "{profile} {kind:?} {mass}: RMS ratio {ratio}");
+            assert!(
+                ratio <= ratio_max,
+                "{profile} {kind:?} {mass}: RMS ratio {ratio}"
+            );
             let report = m.servo.unwrap();
             assert_eq!((report.misses, report.status), (0, ServoStatus::Ok));
             assert!(report.cycles > 0);

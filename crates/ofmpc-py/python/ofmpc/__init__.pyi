@@ -119,7 +119,9 @@ class Controller:
     ``gains=True`` (``[mpc] gains``) hands out the first-stage feedback law of every step
     (``last_gains``; structured solver, the paper's kinds and their adaptive variants).
     ``output="position_velocity"`` or ``"velocity"`` (``[mpc] output``, with
-    ``output_lead_s``) hands out the predicted command (``last_command``).
+    ``output_lead_s``) hands out the predicted command (``last_command``);
+    ``output_smoothing_s=T`` (``[mpc] output_smoothing_s``) pre-compensates an interface's
+    first-order smoothing of time constant T: q + T q̇, q̇ + T q̈, q̈ + T q⃛.
     """
 
     def __init__(
@@ -131,6 +133,7 @@ class Controller:
         gains: bool = False,
         output: str = "torque",
         output_lead_s: Optional[float] = None,
+        output_smoothing_s: Optional[float] = None,
         **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property
@@ -189,6 +192,7 @@ class SupervisedController:
         plausibility_check: bool = False,
         max_joint_error_rad: Optional[float] = None,
         delay_samples: int = 0,
+        output_smoothing_s: Optional[float] = None,
         **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property

@@ -200,7 +200,14 @@ mod tests {
         let predicted: Vec<f64> = (1..=horizon).map(|i| f(i as f64 * ts)).collect();
         for lead in [0.0, 0.0045, 0.01, 0.034, 0.06, 0.085] {
             let (mut q0, mut qd0, mut qdd0) = ([0.0], [0.0], [0.0]);
-            lead_point(&now, &predicted, lead, 0.0, ts, [&mut q0, &mut qd0, &mut qdd0]);
+            lead_point(
+                &now,
+                &predicted,
+                lead,
+                0.0,
+                ts,
+                [&mut q0, &mut qd0, &mut qdd0],
+            );
             let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
             lead_point(&now, &predicted, lead, t_s, ts, [&mut q, &mut qd, &mut qdd]);
             // The third difference of a cubic's samples is its third
@@ -208,8 +215,15 @@ mod tests {
             let j = ((lead / ts).round() as usize).clamp(1, horizon - 1);
             let jerk = if j + 2 <= horizon { dddf(lead) } else { 0.0 };
             assert!((q[0] - (q0[0] + t_s * qd0[0])).abs() < 1e-14, "lead {lead}");
-            assert!((qd[0] - (qd0[0] + t_s * qdd0[0])).abs() < 1e-12, "lead {lead}");
-            assert!((qdd[0] - (qdd0[0] + t_s * jerk)).abs() < 1e-6, "lead {lead}: {}", qdd[0]);
+            assert!(
+                (qd[0] - (qd0[0] + t_s * qdd0[0])).abs() < 1e-12,
+                "lead {lead}"
+            );
+            assert!(
+                (qdd[0] - (qdd0[0] + t_s * jerk)).abs() < 1e-6,
+                "lead {lead}: {}",
+                qdd[0]
+            );
             // Without the smoothing the channels are the plan's (the quadratic
             // through three samples of the cubic; exact at the middle one).
             if (lead / ts - j as f64).abs() < 1e-12 {

@@ -266,7 +266,9 @@ impl Experiment {
     /// ([`super::ServoSettings::smoothing_s_at`]; `None` when it has none).
     fn output_smoothing_s(&self) -> Option<f64> {
         match (&self.plant.servo, self.mpc.output_smoothing_s) {
-            (Some(servo), None) if !self.mpc.output.is_torque() && self.mpc.output_lead_s.is_none() => {
+            (Some(servo), None)
+                if !self.mpc.output.is_torque() && self.mpc.output_lead_s.is_none() =>
+            {
                 Some(servo.smoothing_s_at(self.plant.substep)).filter(|t| *t > 0.0)
             }
             (_, smoothing) => smoothing,
