@@ -50,6 +50,16 @@ pub const fn values_per_sample(n: usize) -> usize {
     3 * n + 4
 }
 
+/// A speed over its limit and the limit as a message shows them: to 3 decimals, more where
+/// 3 would print the two the same (issue 38: "2.175 rad/s, above its speed limit 2.175").
+fn shown(speed: f64, limit: f64) -> (String, String) {
+    let mut digits = 3;
+    while digits < 9 && format!("{speed:.digits$}") == format!("{limit:.digits$}") {
+        digits += 1;
+    }
+    (format!("{speed:.digits$}"), format!("{limit:.digits$}"))
+}
+
 /// What went wrong at one sample of the path.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[non_exhaustive]
@@ -103,9 +113,11 @@ pub enum ReferenceFailure {
     },
     /// A joint would move faster than its speed limit.
     #[error(
-        "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s; lower \
+        "joint {joint} ({name}) would move at {} rad/s, above its speed limit {} rad/s; lower \
          the path speed (F) or acceleration, or move the part away from the wrist singularity with a work \
-         offset"
+         offset",
+        shown(*speed, *limit).0,
+        shown(*speed, *limit).1
     )]
     JointSpeed {
         /// Joint number, 1-based.
@@ -123,10 +135,12 @@ pub enum ReferenceFailure {
     /// orientation needs the joints to jump (q = 0 of the IRB 140: the wrist straight, joints
     /// 4 and 6 on one axis).
     #[error(
-        "joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s, as the \
+        "joint {joint} ({name}) would move at {} rad/s, above its speed limit {} rad/s, as the \
          tool leaves its start point: the robot's start pose is at a singularity (for a 6-axis arm, \
          usually the wrist straight, joint 5 at 0), where the path needs the joints to jump; start from a \
-         pose away from it, e.g. with the wrist bent (joint 5 at 0.5 rad)"
+         pose away from it, e.g. with the wrist bent (joint 5 at 0.5 rad)",
+        shown(*speed, *limit).0,
+        shown(*speed, *limit).1
     )]
     StartSingular {
         /// Joint number, 1-based.
@@ -146,8 +160,10 @@ pub enum ReferenceFailure {
     #[error(
         "the tool leaves the reach of the start pose as it leaves its start point: the robot's start pose \
          holds the arm almost stretched out (its elbow nearly straight, at the edge of the reach), where a \
-         small move of the tool needs a jump of the joints (joint {joint} ({name}) would move at {speed:.3} \
-         rad/s, above its speed limit {limit:.3} rad/s); start from a pose with the elbow bent"
+         small move of the tool needs a jump of the joints (joint {joint} ({name}) would move at {} \
+         rad/s, above its speed limit {} rad/s); start from a pose with the elbow bent",
+        shown(*speed, *limit).0,
+        shown(*speed, *limit).1
     )]
     StartStretched {
         /// Joint number, 1-based.
@@ -188,9 +204,11 @@ pub enum ReferenceFailure {
     /// the joints.
     #[error(
         "the path reaches the edge of the arm's reach (the arm stretched out, its elbow almost straight): \
-         joint {joint} ({name}) would move at {speed:.3} rad/s, above its speed limit {limit:.3} rad/s, to \
+         joint {joint} ({name}) would move at {} rad/s, above its speed limit {} rad/s, to \
          follow it; move the part towards the robot with a work offset, or start from a pose with the elbow \
-         bent"
+         bent",
+        shown(*speed, *limit).0,
+        shown(*speed, *limit).1
     )]
     ReachEdge {
         /// Joint number, 1-based.
@@ -564,5 +582,18 @@ impl std::fmt::Display for JointQuantity {
             JointQuantity::Speed => "speed",
             JointQuantity::Acceleration => "acceleration",
         })
+    }
+}
+
+#[cfg(test)]
+mod shown_tests {
+    /// Three decimals, more only where three print a speed over its limit as the limit.
+    #[test]
+    fn a_speed_just_over_its_limit_shows_the_digits_that_differ() {
+        assert_eq!(super::shown(2.2, 2.175), ("2.200".into(), "2.175".into()));
+        assert_eq!(
+            super::shown(2.17531, 2.175),
+            ("2.1753".into(), "2.1750".into())
+        );
     }
 }
