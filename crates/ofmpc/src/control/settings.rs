@@ -486,10 +486,28 @@ pub struct MpcSettings {
     /// counts at 2.5 kg). Default off: joint by joint.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub friction_coupled: bool,
+    /// The second algorithm (and its adaptive variant) with
+    /// `friction_compensation`: on a joint whose reference rests over the
+    /// horizon the aggregated error restarts as `ē_k = s·(w_k − y_k)` with
+    /// this factor `s` in `[0, 1]` instead of carrying the past sum
+    /// (`control/mpc/second.rs`). The restart at `s = 1` still puts the
+    /// current error into the tracking rows a second time: at rest the
+    /// second algorithm pushes twice as hard as the first on the same error,
+    /// which through three samples of delay and the wrist's creeping friction
+    /// cycles by hundreds of encoder counts. `0`: at rest the second
+    /// algorithm is the first (its input increment keeps the hold
+    /// offset-free; ramps are unaffected, the reference moves there). `1`
+    /// (default): unchanged.
+    #[serde(skip_serializing_if = "is_one")]
+    pub hold_ebar_scale: f64,
 }
 
 fn is_zero_u64(v: &u64) -> bool {
     *v == 0
+}
+
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
 }
 
 impl Default for MpcSettings {
@@ -522,6 +540,7 @@ impl Default for MpcSettings {
             identification_min_samples: 0,
             identification_raw_mass: false,
             friction_coupled: false,
+            hold_ebar_scale: 1.0,
         }
     }
 }
@@ -601,6 +620,9 @@ impl MpcSettings {
             .filter(|b| !(b.is_finite() && *b >= 0.0))
         {
             return Err(SettingsError::StepBudget(b));
+        }
+        if !(0.0..=1.0).contains(&self.hold_ebar_scale) {
+            return Err(SettingsError::HoldEbarScale(self.hold_ebar_scale));
         }
         let scales: &[f64] = match &self.hold_q_du_scale {
             Weight::Scalar(v) => std::slice::from_ref(v),
@@ -789,6 +811,10 @@ pub enum SettingsError {
         /// The value given.
         value: f64,
     },
+    /// The factor of the second algorithm's aggregated error at rest is not
+    /// in `[0, 1]`.
+    #[error("the factor of the second algorithm's aggregated error at rest (hold_ebar_scale) is {0}: it must be within [0, 1] (1: unchanged, 0: the first algorithm's hold)")]
+    HoldEbarScale(f64),
     /// A factor of a baseline's stiffer hold is not a finite number `≥ 1`.
     #[error("the factor of a baseline's stiffer hold ({name}) is {value} at entry {index}: it must be a finite number >= 1 (1: unchanged)")]
     HoldGainScale {
