@@ -500,6 +500,16 @@ pub struct MpcSettings {
     /// (default): unchanged.
     #[serde(skip_serializing_if = "is_one")]
     pub hold_ebar_scale: f64,
+    /// The hold dead zone's half-width in encoder counts (with
+    /// `encoder_counts > 0`), one value for every joint or one per joint,
+    /// each finite and `> 0`: the incremental algorithms and the PID/CTC
+    /// baselines hold their integrating action on a resting joint whose
+    /// error is within it (`control/dead_zone.rs`; `dob-mpc` keeps one
+    /// count). Wider on the wrist, whose counts move the flange little: a
+    /// creeping wrist stops integrating before its last counts ring.
+    /// `1` (default): one count, unchanged.
+    #[serde(skip_serializing_if = "weight_is_one")]
+    pub dead_zone_counts: Weight,
 }
 
 fn is_zero_u64(v: &u64) -> bool {
@@ -508,6 +518,10 @@ fn is_zero_u64(v: &u64) -> bool {
 
 fn is_one(v: &f64) -> bool {
     *v == 1.0
+}
+
+fn weight_is_one(w: &Weight) -> bool {
+    *w == Weight::Scalar(1.0)
 }
 
 impl Default for MpcSettings {
@@ -541,6 +555,7 @@ impl Default for MpcSettings {
             identification_raw_mass: false,
             friction_coupled: false,
             hold_ebar_scale: 1.0,
+            dead_zone_counts: Weight::Scalar(1.0),
         }
     }
 }
@@ -624,6 +639,17 @@ impl MpcSettings {
         if !(0.0..=1.0).contains(&self.hold_ebar_scale) {
             return Err(SettingsError::HoldEbarScale(self.hold_ebar_scale));
         }
+        let widths: &[f64] = match &self.dead_zone_counts {
+            Weight::Scalar(v) => std::slice::from_ref(v),
+            Weight::Diagonal(d) => d,
+        };
+        if let Some((index, &value)) = widths
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+        {
+            return Err(SettingsError::DeadZoneCounts { index, value });
+        }
         let scales: &[f64] = match &self.hold_q_du_scale {
             Weight::Scalar(v) => std::slice::from_ref(v),
             Weight::Diagonal(d) => d,
@@ -654,6 +680,7 @@ impl MpcSettings {
             ("q_du", &self.q_du, true),
             ("q_u", &self.q_u, true),
             ("hold_q_du_scale", &self.hold_q_du_scale, true),
+            ("dead_zone_counts", &self.dead_zone_counts, true),
         ] {
             w.check(name, positive, dof)?;
             if let Weight::Diagonal(d) = w {
@@ -815,6 +842,14 @@ pub enum SettingsError {
     /// in `[0, 1]`.
     #[error("the factor of the second algorithm's aggregated error at rest (hold_ebar_scale) is {0}: it must be within [0, 1] (1: unchanged, 0: the first algorithm's hold)")]
     HoldEbarScale(f64),
+    /// A half-width of the hold dead zone is not a finite number `> 0`.
+    #[error("the hold dead zone's half-width (dead_zone_counts) is {value} encoder counts at entry {index}: it must be a finite number > 0 (1: one count)")]
+    DeadZoneCounts {
+        /// Entry (joint) of the setting.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
     /// A factor of a baseline's stiffer hold is not a finite number `≥ 1`.
     #[error("the factor of a baseline's stiffer hold ({name}) is {value} at entry {index}: it must be a finite number >= 1 (1: unchanged)")]
     HoldGainScale {
