@@ -176,7 +176,11 @@ fn restart_in_hold(
 ) {
     for (i, ((e, w), yi)) in ebar.iter_mut().zip(w_k).zip(y).enumerate() {
         if preview.chunks_exact(n).all(|p| p[i] == *w) {
-            *e = if scale == 1.0 { w - yi } else { scale * (w - yi) };
+            *e = if scale == 1.0 {
+                w - yi
+            } else {
+                scale * (w - yi)
+            };
         }
     }
 }
