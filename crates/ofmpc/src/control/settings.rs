@@ -505,9 +505,9 @@ pub struct MpcSettings {
     /// each finite and `> 0`: the incremental algorithms and the PID/CTC
     /// baselines hold their integrating action on a resting joint whose
     /// error is within it (`control/dead_zone.rs`; `dob-mpc` keeps one
-    /// count). Wider on the wrist, whose counts move the flange little: a
-    /// creeping wrist stops integrating before its last counts ring.
-    /// `1` (default): one count, unchanged.
+    /// count), e.g. wider on the wrist, whose counts move the flange little
+    /// (on the test arm it did not settle the creeping wrist's hold:
+    /// docs/guide/real-arm.md). `1` (default): one count, unchanged.
     #[serde(skip_serializing_if = "weight_is_one")]
     pub dead_zone_counts: Weight,
 }

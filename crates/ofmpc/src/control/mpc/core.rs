@@ -778,7 +778,6 @@ impl Core {
                 self.model.add_bias_torque(&self.damping)?;
             }
         }
-
         // The hold dead zone (dead_zone.rs): the output error the tracking
         // rows see is zero on a resting joint within the encoder's
         // resolution, so nothing integrates it (the Δx rows still damp).
