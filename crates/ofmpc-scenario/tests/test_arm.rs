@@ -2,9 +2,10 @@
 //! samples of delay, its own friction known 20 % low, 20-bit encoders, noise,
 //! torque limits; `friction_coupled`, `identify_at_rest`,
 //! `identification_min_samples`, `identification_raw_mass`, the wrist's hold
-//! at `× 0.1`), read and run
+//! at `× 0.1`, its `q_dy` × 1.5, `hold_ebar_scale = 0` and the CTC's wrist
+//! `kp` × 1.75 at the hold), read and run
 //! as `ofmpc run` does, so the numbers are the CLI's (docs/guide/real-arm.md,
-//! "The test arm"). About 10 s in release.
+//! "The test arm"). About 15 s in release.
 
 use ofmpc::control::ControllerKind;
 use ofmpc::robot::Payload;
@@ -35,18 +36,24 @@ fn run(s: &Scenario, kind: ControllerKind, mass: f64) -> RunMetrics {
     m
 }
 
-/// The targets where the preset meets them: first-adaptive and
-/// ctc-adaptive at 0, half and rated payload, RMS ≤ 0.25 mm, steady ≤ 0.01 mm,
-/// the estimate within 10 % of the rated 5 kg (measured 0.208 / 0.206 / 0.171
-/// and 0.194 / 0.200 / 0.188 mm, ≤ 0.008 mm, estimates within 0.03 kg; before
-/// the round 20 / 59 and 6.6 / 70 mm RMS under a payload, and 0.38 / 0.34 mm
-/// at 0 kg before `identification_raw_mass`); the holds within 2–5 and 5–10
-/// counts ("hunting" by the 2-count rule but first-adaptive at 5 kg).
+/// The targets where the preset meets them: first-adaptive,
+/// second-adaptive and ctc-adaptive at 0, half and rated payload, RMS ≤ 0.25
+/// mm, steady ≤ 0.01 mm, the estimate within 10 % of the rated 5 kg
+/// (measured 0.206 / 0.188 / 0.174, 0.178 / 0.178 / 0.217 and 0.196 / 0.191
+/// / 0.197 mm, ≤ 0.006 mm, estimates within 0.02 kg); the holds within 4 / 3
+/// / 2, 3 / 2 / 2 and 4 / 2 / 3 counts, "ok" (≤ 2) in four of the nine runs
+/// (before this round: 5 / 3 / 2, 1360 / 709 / 746 and 10 / 8 / 5 counts,
+/// one "ok").
 #[test]
 fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
     let s = preset();
+    let mut ok = 0;
     for mass in [0.0, 2.5, 5.0] {
-        for kind in [ControllerKind::FirstAdaptive, ControllerKind::CtcAdaptive] {
+        for kind in [
+            ControllerKind::FirstAdaptive,
+            ControllerKind::SecondAdaptive,
+            ControllerKind::CtcAdaptive,
+        ] {
             let m = run(&s, kind, mass);
             assert!(
                 matches!(m.status, RunStatus::Ok | RunStatus::Hunting),
@@ -57,13 +64,28 @@ fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
             assert!(m.steady_cartesian_error_mm <= 0.01, "{}: steady", m.name);
             let est = m.payload_estimate_kg.unwrap();
             assert!((est - mass).abs() <= 0.1, "{}: estimate {est} kg", m.name);
-            let hold = if kind == ControllerKind::FirstAdaptive {
-                6.0
-            } else {
-                12.0
-            };
-            assert!(m.hold_error_pp_counts.unwrap() <= hold, "{}", m.reason);
+            assert!(m.hold_error_pp_counts.unwrap() < 4.5, "{}", m.reason);
+            ok += usize::from(m.status == RunStatus::Ok);
         }
+    }
+    assert!(ok >= 4, "{ok} of 9 runs ok");
+}
+
+/// What is left of the hold is its settling, not a cycle: the same runs at
+/// 0 kg (the lightest wrist, the least damped hold) with a hold of 3 s
+/// instead of 2 are all "ok" (1–2 counts; the path and its errors are the
+/// same, the steady window opens 1 s later).
+#[test]
+fn the_test_arm_holds_within_two_counts_after_a_longer_hold() {
+    let mut s = preset();
+    s.experiment.loop_settings.hold_s = 3.0;
+    for kind in [
+        ControllerKind::FirstAdaptive,
+        ControllerKind::SecondAdaptive,
+        ControllerKind::CtcAdaptive,
+    ] {
+        let m = run(&s, kind, 0.0);
+        assert_eq!(m.status, RunStatus::Ok, "{}", m.reason);
     }
 }
 
@@ -84,15 +106,33 @@ fn without_the_coupled_creep_or_the_identification_at_rest_the_test_arm_is_off()
     assert!(m.cartesian_error_rms_mm > 1.0, "{}: RMS", m.name);
 }
 
+/// The hold's keys of this round, one removed at a time (measured): with the
+/// second algorithm's aggregated error restarting from the current error
+/// (`hold_ebar_scale = 1`) second-adaptive at 2.5 kg cycles on the wrist by
+/// 700 counts (2 with 0); with the CTC's wrist `kp` unscaled at the hold
+/// ctc-adaptive at 0 kg rings by 10 counts (4 with × 1.75).
+#[test]
+fn without_the_holds_of_this_round_the_test_arm_hunts() {
+    let mut s = preset();
+    s.experiment.mpc.hold_ebar_scale = 1.0;
+    let m = run(&s, ControllerKind::SecondAdaptive, 2.5);
+    assert!(m.hold_error_pp_counts.unwrap() > 100.0, "{}", m.reason);
+    let mut s = preset();
+    s.experiment.baselines.ctc_hold_gain_scale = ofmpc::control::Weight::Scalar(1.0);
+    let m = run(&s, ControllerKind::CtcAdaptive, 0.0);
+    assert!(m.hold_error_pp_counts.unwrap() > 6.0, "{}", m.reason);
+}
+
 /// `identification_raw_mass` at 0 kg (first-adaptive, measured): the
-/// estimate projected onto the physically consistent set carries 0.30 kg of
-/// nothing into the model and the RMS is 0.38 mm; the raw point mass 0.03 kg
-/// and 0.21 mm (the test above).
+/// estimate projected onto the physically consistent set carries 0.15 kg of
+/// nothing into the model and the RMS is 0.59 mm (0.30 kg and 0.38 mm before
+/// the wrist's `q_dy`); the raw point mass 0.03 kg and 0.21 mm (the test
+/// above).
 #[test]
 fn without_the_raw_mass_the_test_arm_identifies_a_payload_at_0_kg() {
     let mut s = preset();
     s.experiment.mpc.identification_raw_mass = false;
     let m = run(&s, ControllerKind::FirstAdaptive, 0.0);
-    assert!(m.payload_estimate_kg.unwrap() > 0.2, "{}: estimate", m.name);
+    assert!(m.payload_estimate_kg.unwrap() > 0.1, "{}: estimate", m.name);
     assert!(m.cartesian_error_rms_mm > 0.3, "{}: RMS", m.name);
 }

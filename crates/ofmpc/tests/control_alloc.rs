@@ -223,6 +223,8 @@ fn built_controller_steps_allocate_nothing() {
         payload_com_max_m: 0.2,
         encoder_counts: 1_048_576.0,
         hold_q_du_scale: Weight::Diagonal(vec![1.0, 1.0, 1.0, 0.01, 0.01, 0.01]),
+        hold_ebar_scale: 0.0,
+        dead_zone_counts: Weight::Diagonal(vec![1.0, 1.0, 1.0, 2.0, 2.0, 2.0]),
         ..limited.clone()
     };
     // Issue 37's first-stage gains (structured solver, no limits/observer).

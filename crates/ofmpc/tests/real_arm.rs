@@ -410,6 +410,34 @@ fn the_real_arm_keys_are_validated() {
             },
             "payload_com_max_m > 0",
         ),
+        (
+            MpcSettings {
+                hold_ebar_scale: 1.5,
+                ..Default::default()
+            },
+            "(hold_ebar_scale) is 1.5",
+        ),
+        (
+            MpcSettings {
+                hold_ebar_scale: f64::NAN,
+                ..Default::default()
+            },
+            "within [0, 1]",
+        ),
+        (
+            MpcSettings {
+                dead_zone_counts: Weight::Diagonal(vec![1.0, 2.0, 0.0]),
+                ..Default::default()
+            },
+            "(dead_zone_counts) is 0 encoder counts at entry 2",
+        ),
+        (
+            MpcSettings {
+                dead_zone_counts: Weight::Scalar(f64::INFINITY),
+                ..Default::default()
+            },
+            "finite number > 0",
+        ),
     ] {
         let e = s.validate().unwrap_err();
         assert!(e.to_string().contains(what), "{e}");

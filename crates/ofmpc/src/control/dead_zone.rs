@@ -32,6 +32,39 @@ pub fn band_rad(counts: f64) -> f64 {
     }
 }
 
+/// Half-widths of the dead zone (rad) per joint for `counts` encoder counts
+/// per revolution and `widths` counts each
+/// ([`MpcSettings::dead_zone_counts`](crate::control::MpcSettings::dead_zone_counts),
+/// one value for every joint or one per joint, [`DEAD_ZONE_COUNTS`] where
+/// missing); all 0 without encoders. A width of [`DEAD_ZONE_COUNTS`] gives
+/// [`band_rad`] exactly. Allocates (construction only).
+pub fn bands_rad(counts: f64, widths: &crate::control::Weight, n: usize) -> Vec<f64> {
+    let one = band_rad(counts);
+    (0..n)
+        .map(|i| match widths.get(i) {
+            Some(w) if w != DEAD_ZONE_COUNTS && one > 0.0 => w * std::f64::consts::TAU / counts,
+            _ => one,
+        })
+        .collect()
+}
+
+/// [`in_dead_zone`] with a half-width per joint (`bands`, n values, from
+/// [`bands_rad`]). Allocates nothing.
+pub fn in_dead_zone_bands(
+    bands: &[f64],
+    w_k: &[f64],
+    y: &[f64],
+    preview: &[f64],
+    hold: &mut [bool],
+) {
+    let n = hold.len();
+    for (i, (h, band)) in hold.iter_mut().zip(bands).enumerate() {
+        *h = *band > 0.0
+            && (w_k[i] - y[i]).abs() <= *band
+            && preview.chunks_exact(n).all(|p| p[i] == w_k[i]);
+    }
+}
+
 /// Marks in `hold[i]` the joints whose integrating action is held: the
 /// reference rests over the horizon (`w_{k+j} = w_k`, `j = 1..N`, exactly;
 /// `preview` is N·n values) and `|w_k − y| ≤ band`. All `false` when
@@ -93,6 +126,30 @@ mod tests {
         assert_eq!(hold, [true, false, false]);
         in_dead_zone(0.0, &w, &w, &[1.0, 2.0, 3.0], &mut hold);
         assert_eq!(hold, [false; 3]);
+    }
+
+    #[test]
+    fn per_joint_bands_widen_only_their_joints() {
+        use crate::control::Weight;
+        let counts = 1_048_576.0;
+        let one = band_rad(counts);
+        // One count: the scalar band exactly; two on the last joint.
+        let bands = bands_rad(counts, &Weight::Diagonal(vec![1.0, 1.0, 2.0]), 3);
+        assert_eq!(bands[..2], [one, one]);
+        assert!((bands[2] - 2.0 * one).abs() < 1e-18);
+        assert_eq!(bands_rad(counts, &Weight::Scalar(1.0), 2), vec![one; 2]);
+        assert_eq!(bands_rad(0.0, &Weight::Scalar(2.0), 2), vec![0.0; 2]);
+        let w = [1.0, 2.0, 3.0];
+        let y = [1.0 + 1.5 * one, 2.0 + 1.5 * one, 3.0 + 1.5 * one];
+        let preview = [1.0, 2.0, 3.0];
+        let mut hold = [false; 3];
+        in_dead_zone_bands(&bands, &w, &y, &preview, &mut hold);
+        assert_eq!(hold, [false, false, true]);
+        // The same as the scalar rule with equal bands.
+        let mut scalar = [false; 3];
+        in_dead_zone_bands(&[one; 3], &w, &y, &preview, &mut hold);
+        in_dead_zone(one, &w, &y, &preview, &mut scalar);
+        assert_eq!(hold, scalar);
     }
 
     #[test]

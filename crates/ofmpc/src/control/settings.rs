@@ -496,10 +496,42 @@ pub struct MpcSettings {
     /// counts at 2.5 kg). Default off: joint by joint.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub friction_coupled: bool,
+    /// The second algorithm (and its adaptive variant) with
+    /// `friction_compensation`: on a joint whose reference rests over the
+    /// horizon the aggregated error restarts as `ē_k = s·(w_k − y_k)` with
+    /// this factor `s` in `[0, 1]` instead of carrying the past sum
+    /// (`control/mpc/second.rs`). The restart at `s = 1` still puts the
+    /// current error into the tracking rows a second time: at rest the
+    /// second algorithm pushes twice as hard as the first on the same error,
+    /// which through three samples of delay and the wrist's creeping friction
+    /// cycles by hundreds of encoder counts. `0`: at rest the second
+    /// algorithm is the first (its input increment keeps the hold
+    /// offset-free; ramps are unaffected, the reference moves there). `1`
+    /// (default): unchanged.
+    #[serde(skip_serializing_if = "is_one")]
+    pub hold_ebar_scale: f64,
+    /// The hold dead zone's half-width in encoder counts (with
+    /// `encoder_counts > 0`), one value for every joint or one per joint,
+    /// each finite and `> 0`: the incremental algorithms and the PID/CTC
+    /// baselines hold their integrating action on a resting joint whose
+    /// error is within it (`control/dead_zone.rs`; `dob-mpc` keeps one
+    /// count), e.g. wider on the wrist, whose counts move the flange little
+    /// (on the test arm it did not settle the creeping wrist's hold:
+    /// docs/guide/real-arm.md). `1` (default): one count, unchanged.
+    #[serde(skip_serializing_if = "weight_is_one")]
+    pub dead_zone_counts: Weight,
 }
 
 fn is_zero_u64(v: &u64) -> bool {
     *v == 0
+}
+
+fn is_one(v: &f64) -> bool {
+    *v == 1.0
+}
+
+fn weight_is_one(w: &Weight) -> bool {
+    *w == Weight::Scalar(1.0)
 }
 
 impl Default for MpcSettings {
@@ -533,6 +565,8 @@ impl Default for MpcSettings {
             identification_min_samples: 0,
             identification_raw_mass: false,
             friction_coupled: false,
+            hold_ebar_scale: 1.0,
+            dead_zone_counts: Weight::Scalar(1.0),
         }
     }
 }
@@ -613,6 +647,20 @@ impl MpcSettings {
         {
             return Err(SettingsError::StepBudget(b));
         }
+        if !(0.0..=1.0).contains(&self.hold_ebar_scale) {
+            return Err(SettingsError::HoldEbarScale(self.hold_ebar_scale));
+        }
+        let widths: &[f64] = match &self.dead_zone_counts {
+            Weight::Scalar(v) => std::slice::from_ref(v),
+            Weight::Diagonal(d) => d,
+        };
+        if let Some((index, &value)) = widths
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v > 0.0))
+        {
+            return Err(SettingsError::DeadZoneCounts { index, value });
+        }
         let scales: &[f64] = match &self.hold_q_du_scale {
             Weight::Scalar(v) => std::slice::from_ref(v),
             Weight::Diagonal(d) => d,
@@ -643,6 +691,7 @@ impl MpcSettings {
             ("q_du", &self.q_du, true),
             ("q_u", &self.q_u, true),
             ("hold_q_du_scale", &self.hold_q_du_scale, true),
+            ("dead_zone_counts", &self.dead_zone_counts, true),
         ] {
             w.check(name, positive, dof)?;
             if let Weight::Diagonal(d) = w {
@@ -795,6 +844,18 @@ pub enum SettingsError {
     /// A factor of the input-increment weight at rest is not in `(0, 1]`.
     #[error("the factor of the input-increment weight at rest (hold_q_du_scale) is {value} at entry {index}: it must be within (0, 1] (1: unchanged)")]
     HoldQduScale {
+        /// Entry (joint) of the setting.
+        index: usize,
+        /// The value given.
+        value: f64,
+    },
+    /// The factor of the second algorithm's aggregated error at rest is not
+    /// in `[0, 1]`.
+    #[error("the factor of the second algorithm's aggregated error at rest (hold_ebar_scale) is {0}: it must be within [0, 1] (1: unchanged, 0: the first algorithm's hold)")]
+    HoldEbarScale(f64),
+    /// A half-width of the hold dead zone is not a finite number `> 0`.
+    #[error("the hold dead zone's half-width (dead_zone_counts) is {value} encoder counts at entry {index}: it must be a finite number > 0 (1: one count)")]
+    DeadZoneCounts {
         /// Entry (joint) of the setting.
         index: usize,
         /// The value given.

@@ -307,7 +307,7 @@ pub(crate) struct JointLawCore {
     clipped: Vec<bool>,
     /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
     hold: Vec<bool>,
-    hold_band: f64,
+    hold_band: Vec<f64>,
     /// Per joint: the factor on `kp` while the joint holds on the
     /// friction's damper (`ctc_hold_gain_scale`); `None` when every factor is 1.
     hold_gain: Option<Vec<f64>>,
@@ -341,7 +341,11 @@ impl JointLawCore {
             tau_new: vec![0.0; n],
             clipped: vec![false; n],
             hold: vec![false; n],
-            hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            hold_band: crate::control::dead_zone::bands_rad(
+                settings.encoder_counts,
+                &settings.dead_zone_counts,
+                n,
+            ),
             hold_gain: None,
             kp_scale: vec![1.0; n],
             drives: None,
@@ -451,8 +455,8 @@ impl JointLawCore {
         clip(&mut self.tau_new, limits, &mut self.clipped);
         // The hold dead zone (dead_zone.rs): no integration within the
         // encoder's resolution while the reference rests.
-        crate::control::dead_zone::in_dead_zone(
-            self.hold_band,
+        crate::control::dead_zone::in_dead_zone_bands(
+            &self.hold_band,
             w_k,
             &x[..n],
             preview,

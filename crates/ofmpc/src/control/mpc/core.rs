@@ -377,8 +377,8 @@ pub(crate) struct Core {
     damping: Vec<f64>,
     /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
     hold: Vec<bool>,
-    /// Half-width of the hold dead zone (rad; 0: none).
-    hold_band: f64,
+    /// Half-width of the hold dead zone per joint (rad; 0: none).
+    hold_band: Vec<f64>,
     /// Per joint: `Q_Δu`'s entry while the reference moves and the factor
     /// on it at rest (`hold_q_du_scale`); `None` when every factor is 1.
     hold_q_du: Option<(Vec<f64>, Vec<f64>)>,
@@ -572,7 +572,11 @@ impl Core {
             damping: vec![0.0; n],
             hold: vec![false; n],
             y_err: vec![0.0; n],
-            hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            hold_band: crate::control::dead_zone::bands_rad(
+                settings.encoder_counts,
+                &settings.dead_zone_counts,
+                n,
+            ),
             hold_q_du,
             predicted_work: vec![0.0; predicted_outputs_work(n)],
             gains: settings.gains.then(|| Box::new(GainWork::new(n))),
@@ -777,8 +781,8 @@ impl Core {
         // The hold dead zone (dead_zone.rs): the output error the tracking
         // rows see is zero on a resting joint within the encoder's
         // resolution, so nothing integrates it (the Δx rows still damp).
-        crate::control::dead_zone::in_dead_zone(
-            self.hold_band,
+        crate::control::dead_zone::in_dead_zone_bands(
+            &self.hold_band,
             w_k,
             &x[..n],
             preview,

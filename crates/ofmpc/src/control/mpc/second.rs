@@ -74,7 +74,12 @@ impl StepTargets for SecondTargets<'_> {
             *e = prev + (w - yi);
         }
         if c.settings.friction_compensation {
-            restart_in_hold(n, w_k, y, preview, &mut c.ebar_new);
+            restart_in_hold(
+                n,
+                (w_k, y, preview),
+                c.settings.hold_ebar_scale,
+                &mut c.ebar_new,
+            );
         }
     }
 
@@ -158,10 +163,24 @@ impl StepTargets for SecondTargets<'_> {
 /// keeps the hold offset-free (as in the first algorithm: at an equilibrium
 /// `ē_k = e_k` must vanish for `Δu_k = 0` to be optimal); while the reference
 /// moves, `ē` is the paper's, so ramps stay offset-free.
-fn restart_in_hold(n: usize, w_k: &[f64], y: &[f64], preview: &[f64], ebar: &mut [f64]) {
+///
+/// `scale` ([`MpcSettings::hold_ebar_scale`], in `[0, 1]`): the restart is
+/// `ē_k = scale·(w_k − y_k)`; 1 is the rule above exactly, 0 drops the
+/// current error's second entry into the tracking rows (at rest the second
+/// algorithm is then the first).
+fn restart_in_hold(
+    n: usize,
+    (w_k, y, preview): (&[f64], &[f64], &[f64]),
+    scale: f64,
+    ebar: &mut [f64],
+) {
     for (i, ((e, w), yi)) in ebar.iter_mut().zip(w_k).zip(y).enumerate() {
         if preview.chunks_exact(n).all(|p| p[i] == *w) {
-            *e = w - yi;
+            *e = if scale == 1.0 {
+                w - yi
+            } else {
+                scale * (w - yi)
+            };
         }
     }
 }
@@ -177,8 +196,16 @@ mod tests {
         let y = [0.9, 1.5];
         let preview = [1.0, 2.0, 1.0, 2.0, 1.0, 2.1];
         let mut ebar = [5.0, 7.0];
-        restart_in_hold(2, &w, &y, &preview, &mut ebar);
+        restart_in_hold(2, (&w, &y, &preview), 1.0, &mut ebar);
         assert!((ebar[0] - 0.1).abs() < 1e-15);
         assert_eq!(ebar[1], 7.0);
+        // A factor scales the restart on the resting joint only.
+        let mut ebar = [5.0, 7.0];
+        restart_in_hold(2, (&w, &y, &preview), 0.5, &mut ebar);
+        assert!((ebar[0] - 0.05).abs() < 1e-15);
+        assert_eq!(ebar[1], 7.0);
+        let mut ebar = [5.0, 7.0];
+        restart_in_hold(2, (&w, &y, &preview), 0.0, &mut ebar);
+        assert_eq!(ebar, [0.0, 7.0]);
     }
 }
