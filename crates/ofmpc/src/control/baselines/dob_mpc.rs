@@ -35,11 +35,21 @@
 //! pole `p^s`): the damper's force enters `d̂` within a sample or two
 //! instead of ringing with the integrating estimate at about 1 Hz.
 //!
+//! The payload at rest (`dob_identify_at_rest`, issue 35): before the
+//! reference first moves, the torque the controller held the arm with over
+//! the last part of the rest is fitted by a point mass at the flange
+//! ([`super::rest_identification`]); a trusted fit becomes the model's
+//! payload, and the observer's state is carried over to the new model (the
+//! torque-equivalent of `d̂` keeps only what the payload does not explain:
+//! `H' d̂' = H d̂ + g' − g`, and `u_{k−1}' = H'⁻¹(τ_{k−1} − g')`), so the
+//! applied torque does not jump.
+//!
 //! Torque limits: the torque is clipped to the drives' limits (the usual
 //! QP would bound `τ̃`, not the applied torque) and the observer is given the
 //! input actually applied, so the disturbance estimate does not wind up.
 
 use crate::control::algorithm::Algorithm;
+use crate::control::baselines::rest_identification::RestIdentification;
 use crate::control::dead_zone::creeps_at_rest;
 use crate::control::drive_model::DriveModel;
 use crate::control::kind::ControllerKind;
@@ -80,6 +90,14 @@ pub struct DobMpc {
     /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
     hold: Vec<bool>,
     hold_band: f64,
+    /// The payload fit at rest (`dob_identify_at_rest`, torque output).
+    rest_ident: Option<RestIdentification>,
+    /// `g − H d̂` before a fit changes the model (n).
+    tau_eq: Vec<f64>,
+    /// The payload mass at rest until the first trusted fit (kg).
+    start_kg: Option<f64>,
+    /// The model's payload changed at this sample ([`Algorithm::take_model_change`]).
+    model_changed: bool,
 }
 
 impl DobMpc {
@@ -107,6 +125,21 @@ impl DobMpc {
             inner.set_hold_input_scale(s.iter().map(|f| 1.0 / f).collect())?;
         }
         let observer_gain = |w: f64| (1.0 - (-w * ts).exp()) / ts;
+        let identify = baselines.dob_identify_at_rest && settings.output.is_torque();
+        if identify && !(settings.max_payload_kg > 0.0) {
+            return Err(SettingsError::IdentifyAtRestWithoutMassBound);
+        }
+        let start_kg = baselines.dob_identify_start_kg;
+        if let Some(value) = start_kg {
+            if !baselines.dob_identify_at_rest {
+                return Err(SettingsError::IdentifyStartWithoutIdentification);
+            }
+            let max = settings.max_payload_kg;
+            if !(value.is_finite() && value >= 0.0 && value <= max) {
+                return Err(SettingsError::IdentifyStart { value, max });
+            }
+        }
+        let start_kg = start_kg.filter(|_| identify);
         Ok(Self {
             inner,
             settings: settings.clone(),
@@ -134,6 +167,18 @@ impl DobMpc {
             drives: None,
             hold: vec![false; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            rest_ident: identify.then(|| {
+                RestIdentification::new(
+                    n,
+                    ts,
+                    settings.max_payload_kg,
+                    settings.model_payload_kg,
+                    start_kg,
+                )
+            }),
+            start_kg,
+            tau_eq: vec![0.0; n],
+            model_changed: false,
         })
     }
 
@@ -162,6 +207,50 @@ impl DobMpc {
                 self.d_new[i] += gain * eps;
             }
         }
+    }
+
+    /// Until the reference first moves: the fit of every full window at rest
+    /// (module docs); `true` when the model now carries the fitted payload
+    /// (`tau_eq` holds the torque-equivalent of `d̂` on the model before).
+    fn identify_at_rest(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        w_k: &[f64],
+        preview: &[f64],
+    ) -> bool {
+        let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) else {
+            return false;
+        };
+        self.model_changed |= ri.apply_start(model);
+        if !preview.chunks_exact(self.n).all(|p| p == w_k) {
+            ri.stop();
+            return false;
+        }
+        if !ri.window_full() {
+            return false;
+        }
+        if self.has_prev {
+            // g − H d̂ on the model of the last sample.
+            self.tau_eq.copy_from_slice(self.model.g().as_slice());
+            let h = self.model.h().as_slice();
+            for (j, col) in h.chunks_exact(self.n).enumerate() {
+                crate::control::solvers::dense::axpy(-self.d_hat[j], col, &mut self.tau_eq);
+            }
+        }
+        ri.decide(model) && self.has_prev
+    }
+
+    /// After a fit changed the model (updated at this sample): `d̂` and
+    /// `u_{k−1}` on the new model (module docs).
+    fn carry_observer(&mut self) -> Result<(), StepFailure> {
+        self.model
+            .input_from_torque(&self.tau_eq, &mut self.d_hat)?;
+        for d in &mut self.d_hat {
+            *d = -*d;
+        }
+        self.model
+            .input_from_torque(&self.tau_new, &mut self.u_prev)?;
+        Ok(())
     }
 
     /// `τ = τ̃ − H d̂`, clipped to the limits; `u` the input applied.
@@ -218,7 +307,19 @@ impl Algorithm for DobMpc {
         self.u_prev.fill(0.0);
         self.u.fill(0.0);
         self.has_prev = false;
+        let start_given = self.start_kg.is_some();
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.reset(start_given);
+        }
         Ok(())
+    }
+    /// With `dob_identify_at_rest`: the payload mass the model carries (the
+    /// nominal until the fit at rest is trusted).
+    fn payload_estimate(&self) -> Option<f64> {
+        self.rest_ident.as_ref().map(|r| r.mass())
+    }
+    fn take_model_change(&mut self) -> bool {
+        std::mem::take(&mut self.model_changed)
     }
     fn input(&self) -> &[f64] {
         &self.u
@@ -234,6 +335,9 @@ impl Algorithm for DobMpc {
         drives.validate(self.n)?;
         if self.settings.friction_compensation {
             self.inner.set_drive_model(drives)?;
+        }
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.set_coulomb(&drives.coulomb_nm);
         }
         self.drives = Some(drives.clone());
         Ok(())
@@ -252,7 +356,12 @@ impl Algorithm for DobMpc {
         if self.settings.torque_limits && self.drives.is_none() {
             return Err(StepFailure::NoDriveModel);
         }
+        let identified = self.identify_at_rest(model, w_k, preview);
         self.model.update(model, &x[..n], &x[n..])?;
+        if identified {
+            self.carry_observer()?;
+            self.model_changed = true;
+        }
         let info = self.inner.step(
             model,
             &crate::control::step::StepInput { x, w_k, preview },
@@ -281,6 +390,9 @@ impl Algorithm for DobMpc {
         self.u_prev.copy_from_slice(&self.u);
         self.f0qd_prev.copy_from_slice(&self.f0qd);
         self.has_prev = true;
+        if let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) {
+            ri.record(&x[..n], &self.tau_new);
+        }
         Ok(info)
     }
 }
