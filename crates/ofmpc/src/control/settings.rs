@@ -214,15 +214,6 @@ pub struct BaselineSettings {
     /// (`control/baselines/rest_identification.rs`). Only with a torque
     /// output. Default off: unchanged.
     pub dob_identify_at_rest: bool,
-    /// With `dob_identify_at_rest`: the payload mass (kg, within
-    /// `[0, MpcSettings::max_payload_kg]`) `dob-mpc`'s model carries at rest
-    /// until its first trusted fit, instead of the nominal
-    /// `MpcSettings::model_payload_kg` (which the other kinds share). On an
-    /// arm whose hold tolerates a model lighter than the load far better
-    /// than a heavier one, a start a little above 0 keeps every payload of
-    /// the range at rest long enough to be fitted. `None` (default): the
-    /// nominal.
-    pub dob_identify_start_kg: Option<f64>,
 }
 
 impl Default for BaselineSettings {
@@ -234,7 +225,6 @@ impl Default for BaselineSettings {
             ctc_hold_gain_scale: Weight::Scalar(1.0),
             dob_hold_gain_scale: Weight::Scalar(1.0),
             dob_identify_at_rest: false,
-            dob_identify_start_kg: None,
         }
     }
 }
@@ -826,17 +816,6 @@ pub enum SettingsError {
     /// `dob-mpc`'s payload at rest without a mass bound.
     #[error("dob-mpc's payload identification at rest (dob_identify_at_rest) needs a bound on the payload mass: set max_payload_kg > 0 (e.g. 1.5 × the rated payload)")]
     IdentifyAtRestWithoutMassBound,
-    /// `dob-mpc`'s start mass at rest without the identification at rest.
-    #[error("dob-mpc's start payload at rest (dob_identify_start_kg) is used only with its identification at rest: set dob_identify_at_rest = true or remove it")]
-    IdentifyStartWithoutIdentification,
-    /// `dob-mpc`'s start mass at rest is not within `[0, max]`.
-    #[error("dob-mpc's start payload at rest (dob_identify_start_kg) is {value} kg: it must be within [0, max_payload_kg = {max}] kg")]
-    IdentifyStart {
-        /// The value given (kg).
-        value: f64,
-        /// The mass bound (kg).
-        max: f64,
-    },
     /// A factor of `dob-mpc`'s stiffer hold other than 1 with the structured
     /// solver, which builds its weights once.
     #[error("the factor of dob-mpc's stiffer hold (dob_hold_gain_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]

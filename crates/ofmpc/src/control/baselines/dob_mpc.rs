@@ -94,8 +94,6 @@ pub struct DobMpc {
     rest_ident: Option<RestIdentification>,
     /// `g − H d̂` before a fit changes the model (n).
     tau_eq: Vec<f64>,
-    /// The payload mass at rest until the first trusted fit (kg).
-    start_kg: Option<f64>,
     /// The model's payload changed at this sample ([`Algorithm::take_model_change`]).
     model_changed: bool,
 }
@@ -129,17 +127,6 @@ impl DobMpc {
         if identify && !(settings.max_payload_kg > 0.0) {
             return Err(SettingsError::IdentifyAtRestWithoutMassBound);
         }
-        let start_kg = baselines.dob_identify_start_kg;
-        if let Some(value) = start_kg {
-            if !baselines.dob_identify_at_rest {
-                return Err(SettingsError::IdentifyStartWithoutIdentification);
-            }
-            let max = settings.max_payload_kg;
-            if !(value.is_finite() && value >= 0.0 && value <= max) {
-                return Err(SettingsError::IdentifyStart { value, max });
-            }
-        }
-        let start_kg = start_kg.filter(|_| identify);
         Ok(Self {
             inner,
             settings: settings.clone(),
@@ -168,15 +155,8 @@ impl DobMpc {
             hold: vec![false; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
             rest_ident: identify.then(|| {
-                RestIdentification::new(
-                    n,
-                    ts,
-                    settings.max_payload_kg,
-                    settings.model_payload_kg,
-                    start_kg,
-                )
+                RestIdentification::new(n, ts, settings.max_payload_kg, settings.model_payload_kg)
             }),
-            start_kg,
             tau_eq: vec![0.0; n],
             model_changed: false,
         })
@@ -221,7 +201,6 @@ impl DobMpc {
         let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) else {
             return false;
         };
-        self.model_changed |= ri.apply_start(model);
         if !preview.chunks_exact(self.n).all(|p| p == w_k) {
             ri.stop();
             return false;
@@ -307,9 +286,8 @@ impl Algorithm for DobMpc {
         self.u_prev.fill(0.0);
         self.u.fill(0.0);
         self.has_prev = false;
-        let start_given = self.start_kg.is_some();
         if let Some(ri) = self.rest_ident.as_mut() {
-            ri.reset(start_given);
+            ri.reset();
         }
         Ok(())
     }

@@ -138,13 +138,9 @@ pub struct RestIdentification {
     next: usize,
     filled: usize,
     decided: bool,
-    /// The model's payload mass (kg): the start's (else the nominal) until
-    /// a fit is trusted.
+    /// The model's payload mass (kg): the nominal until a fit is trusted.
     mass: f64,
-    /// The mass the model carries at rest until the first trusted fit.
-    start: f64,
-    /// The model is to be given the start mass at the next sample.
-    start_pending: bool,
+    nominal_kg: f64,
     q_mean: Vec<f64>,
     r: Vec<f64>,
     y: Vec<f64>,
@@ -152,10 +148,8 @@ pub struct RestIdentification {
 
 impl RestIdentification {
     /// For `n` joints at the period `ts` (s), the mass bound `max_mass`
-    /// (kg, > 0), the nominal model payload mass `nominal_kg` and the mass
-    /// the model carries at rest until the first trusted fit (`start_kg`;
-    /// `None`: the nominal).
-    pub fn new(n: usize, ts: f64, max_mass: f64, nominal_kg: f64, start_kg: Option<f64>) -> Self {
+    /// (kg, > 0) and the nominal model payload mass `nominal_kg`.
+    pub fn new(n: usize, ts: f64, max_mass: f64, nominal_kg: f64) -> Self {
         let w = ((WINDOW_S / ts).round() as usize).max(1);
         Self {
             n,
@@ -166,9 +160,8 @@ impl RestIdentification {
             next: 0,
             filled: 0,
             decided: false,
-            mass: start_kg.unwrap_or(nominal_kg),
-            start: start_kg.unwrap_or(nominal_kg),
-            start_pending: start_kg.is_some(),
+            mass: nominal_kg,
+            nominal_kg,
             q_mean: vec![0.0; n],
             r: vec![0.0; n],
             y: vec![0.0; n],
@@ -183,27 +176,12 @@ impl RestIdentification {
     }
 
     /// Forgets the window and the fit (the controller's reset puts the
-    /// model's nominal payload back; the start mass follows at the first
-    /// sample, [`Self::apply_start`]).
-    pub fn reset(&mut self, start_given: bool) {
+    /// model's nominal payload back).
+    pub fn reset(&mut self) {
         self.next = 0;
         self.filled = 0;
         self.decided = false;
-        self.mass = self.start;
-        self.start_pending = start_given;
-    }
-
-    /// At the first sample after a reset with a start mass: gives `model`
-    /// that point mass (`true` when it changed the model).
-    pub fn apply_start(&mut self, model: &mut dyn JointSpaceDynamics) -> bool {
-        if !std::mem::take(&mut self.start_pending) {
-            return false;
-        }
-        model.robot_dynamics_mut().is_some_and(|rd| {
-            rd.robot_mut()
-                .set_payload(Some(Payload::point_mass(self.start)))
-                .is_ok()
-        })
+        self.mass = self.nominal_kg;
     }
 
     /// The payload mass the model carries (kg).
@@ -395,7 +373,7 @@ mod tests {
         let q = [-0.27, 1.53, -0.93, -0.46, -0.66, 0.37];
         let w = (WINDOW_S / 0.01).round() as usize;
         for mass in [0.0, 2.0, 6.0] {
-            let mut ri = RestIdentification::new(6, 0.01, 9.0, 0.0, None);
+            let mut ri = RestIdentification::new(6, 0.01, 9.0, 0.0);
             ri.set_coulomb(&[4.0, 4.0, 2.4, 0.8, 0.8, 0.4]);
             let mut model = RobotDynamics::new(robot.clone());
             held(&robot, &q, mass, &mut ri, w - 1);
@@ -422,13 +400,13 @@ mod tests {
         let mut model_robot = robot.clone();
         model_robot.set_payload(Some(nominal)).unwrap();
         let mut model = RobotDynamics::new(model_robot);
-        let mut ri = RestIdentification::new(6, 0.01, 9.0, 3.0, None);
+        let mut ri = RestIdentification::new(6, 0.01, 9.0, 3.0);
         let q = [0.0, 0.5, -0.3, 0.0, 0.4, 0.0];
         held(&robot, &q, 6.0, &mut ri, 20);
         assert!(!ri.decide(&mut model));
         assert_eq!(ri.mass(), 3.0);
         assert_eq!(model.robot().payload(), Some(&nominal));
-        let mut ri = RestIdentification::new(6, 0.01, 9.0, 3.0, None);
+        let mut ri = RestIdentification::new(6, 0.01, 9.0, 3.0);
         assert_eq!(ri.fit(&mut model), Err(FitRefusal::NoData));
     }
 }
