@@ -10,18 +10,21 @@
 //! and its centre-of-mass bound (`payload_com_max_m = 0.2`), the wrist's
 //! stiff hold (`hold_q_du_scale = [1, 1, 1, 0.01, 0.01, 0.01]`, no dead
 //! zone) and the baselines' (`ctc_hold_gain_scale = [1, 1, 1, 3, 3, 3]`,
-//! `dob_hold_gain_scale = [1, 1, 1, 10, 10, 10]`), `q_du = 1e-4`, `q_u = 1e-5`.
+//! `dob_hold_gain_scale = [1, 1, 1, 10, 10, 10]`), `q_du = 1e-4`, `q_u = 1e-5`,
+//! and dob-mpc's payload fitted at rest (`dob_identify_at_rest`).
 //!
 //! The non-adaptive kinds settle 0.4 s at rest before the path
-//! (`simulation.settle_s`), as a real controller is engaged at rest.
+//! (`simulation.settle_s`), as a real controller is engaged at rest; dob-mpc
+//! with its fit rests the identification's 0.5 s.
 //!
 //! Measured (`ofmpc run examples/real-arm.toml`, Cartesian RMS / steady mm at
 //! 0/2/6 kg; docs/guide/real-arm.md): steady 0.0022–0.0057 mm for every
 //! controller at every payload; RMS first-adaptive 0.063/0.086/0.17,
 //! second-adaptive 0.061/0.077/0.16, ctc-adaptive 0.063/0.079/0.17, dob-mpc
-//! 0.094/0.12/0.22, first 0.059/0.075/0.14, second 0.057/0.068/0.12; the hold
-//! within 2 encoder counts ("ok") for every run but dob-mpc at 6 kg
-//! (4 counts, "hunting"); estimates within 0.42 kg.
+//! 0.096/0.106/0.117, first 0.059/0.075/0.14, second 0.057/0.068/0.12; the hold
+//! within 2 encoder counts ("ok") for every run (dob-mpc at 6 kg hunted by 4
+//! counts before its fit at rest); estimates within 0.42 kg (dob-mpc's fit
+//! 0.28/2.43/5.79 kg).
 
 mod common;
 

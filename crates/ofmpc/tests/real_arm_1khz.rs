@@ -11,7 +11,8 @@
 //! encoder counts); RMS / steady (mm) at 0 / 6 kg: first-adaptive
 //! 0.0133 / 0.0016, 0.0108 / 0.0025; second-adaptive 0.0029 / 0.0023,
 //! 0.0070 / 0.0024; ctc-adaptive 0.0051 / 0.0018, 0.0021 / 0.0023; dob-mpc
-//! 0.0153 / 0.0015, 0.0188 / 0.0016; estimates 0.03–0.13 and 5.47–5.55 kg.
+//! (its payload fitted at rest) 0.0098 / 0.0012, 0.0097 / 0.0019 (before the
+//! fit 0.0153 / 0.0015, 0.0188 / 0.0016); estimates 0.03–0.20 and 5.47–6.15 kg.
 //! The stiff hold's peers (`first`, 2 kg, 10 ms): dense and structured RMS
 //! 0.0285 mm, steady 0.0011 mm; without the factor 0.0014 mm.
 //! The whole preset's numbers are in docs/guide/real-arm.md.
