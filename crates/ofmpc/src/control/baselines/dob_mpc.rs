@@ -124,7 +124,7 @@ impl DobMpc {
         }
         let observer_gain = |w: f64| (1.0 - (-w * ts).exp()) / ts;
         let identify = baselines.dob_identify_at_rest && settings.output.is_torque();
-        if identify && !(settings.max_payload_kg > 0.0) {
+        if identify && !(settings.max_payload_kg.is_finite() && settings.max_payload_kg > 0.0) {
             return Err(SettingsError::IdentifyAtRestWithoutMassBound);
         }
         Ok(Self {

@@ -108,7 +108,7 @@ pub fn fit_point_mass(
         yr += yi * ri / (bi * bi);
     }
     let sigma_kg = 1.0 / (3.0 * yy).sqrt();
-    if !(sigma_kg <= MAX_SIGMA_FRACTION * max_mass) {
+    if !(sigma_kg.is_finite() && sigma_kg <= MAX_SIGMA_FRACTION * max_mass) {
         return Err(FitRefusal::Unobservable { sigma_kg });
     }
     let raw = yr / yy;
@@ -118,7 +118,7 @@ pub fn fit_point_mass(
     let mass_kg = raw.clamp(0.0, max_mass);
     for (joint, ((yi, ri), bi)) in y.iter().zip(r).zip(band).enumerate() {
         let residual_nm = ri - mass_kg * yi;
-        if !(residual_nm.abs() <= RESIDUAL_BANDS * bi) {
+        if !(residual_nm.is_finite() && residual_nm.abs() <= RESIDUAL_BANDS * bi) {
             return Err(FitRefusal::Inconsistent { joint, residual_nm });
         }
     }
