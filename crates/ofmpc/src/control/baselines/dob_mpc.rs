@@ -96,6 +96,9 @@ pub struct DobMpc {
     tau_eq: Vec<f64>,
     /// The model's payload changed at this sample ([`Algorithm::take_model_change`]).
     model_changed: bool,
+    /// `d̂` and `u_{k−1}` before a fit's carry (restored if the step fails).
+    d_saved: Vec<f64>,
+    u_saved: Vec<f64>,
 }
 
 impl DobMpc {
@@ -159,6 +162,8 @@ impl DobMpc {
             }),
             tau_eq: vec![0.0; n],
             model_changed: false,
+            d_saved: vec![0.0; n],
+            u_saved: vec![0.0; n],
         })
     }
 
@@ -222,6 +227,8 @@ impl DobMpc {
     /// After a fit changed the model (updated at this sample): `d̂` and
     /// `u_{k−1}` on the new model (module docs).
     fn carry_observer(&mut self) -> Result<(), StepFailure> {
+        self.d_saved.copy_from_slice(&self.d_hat);
+        self.u_saved.copy_from_slice(&self.u_prev);
         self.model
             .input_from_torque(&self.tau_eq, &mut self.d_hat)?;
         for d in &mut self.d_hat {
@@ -335,10 +342,43 @@ impl Algorithm for DobMpc {
             return Err(StepFailure::NoDriveModel);
         }
         let identified = self.identify_at_rest(model, w_k, preview);
+        let info = match self.solve(model, input, identified) {
+            Ok(info) => info,
+            Err(e) => {
+                if identified {
+                    self.undo_fit(model);
+                }
+                return Err(e);
+            }
+        };
+        tau.copy_from_slice(&self.tau_new);
+        self.d_hat.copy_from_slice(&self.d_new);
+        self.x_prev.copy_from_slice(x);
+        self.u_prev.copy_from_slice(&self.u);
+        self.f0qd_prev.copy_from_slice(&self.f0qd);
+        self.has_prev = true;
+        self.model_changed |= identified;
+        if let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) {
+            ri.record(&x[..n], &self.tau_new);
+        }
+        Ok(info)
+    }
+}
+
+impl DobMpc {
+    /// The step's computation into `tau_new`, `d_new`, `u`, on the model
+    /// (after a fit at this sample, the observer carried over to it first).
+    fn solve(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        input: &crate::control::step::StepInput<'_>,
+        identified: bool,
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
+        let n = self.n;
         self.model.update(model, &x[..n], &x[n..])?;
         if identified {
             self.carry_observer()?;
-            self.model_changed = true;
         }
         let info = self.inner.step(
             model,
@@ -362,15 +402,16 @@ impl Algorithm for DobMpc {
         }
         self.torque()?;
         check_result(&self.u, &self.tau_new)?;
-        tau.copy_from_slice(&self.tau_new);
-        self.d_hat.copy_from_slice(&self.d_new);
-        self.x_prev.copy_from_slice(x);
-        self.u_prev.copy_from_slice(&self.u);
-        self.f0qd_prev.copy_from_slice(&self.f0qd);
-        self.has_prev = true;
-        if let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) {
-            ri.record(&x[..n], &self.tau_new);
-        }
         Ok(info)
+    }
+
+    /// A step that failed after a fit: the model's payload, `d̂` and
+    /// `u_{k−1}` as before the call.
+    fn undo_fit(&mut self, model: &mut dyn JointSpaceDynamics) {
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.undo(model);
+        }
+        self.d_hat.copy_from_slice(&self.d_saved);
+        self.u_prev.copy_from_slice(&self.u_saved);
     }
 }

@@ -141,6 +141,8 @@ pub struct RestIdentification {
     /// The model's payload mass (kg): the nominal until a fit is trusted.
     mass: f64,
     nominal_kg: f64,
+    /// The model's payload and `mass` before the last trusted fit ([`Self::undo`]).
+    saved: (Option<Payload>, f64),
     q_mean: Vec<f64>,
     r: Vec<f64>,
     y: Vec<f64>,
@@ -162,6 +164,7 @@ impl RestIdentification {
             decided: false,
             mass: nominal_kg,
             nominal_kg,
+            saved: (None, nominal_kg),
             q_mean: vec![0.0; n],
             r: vec![0.0; n],
             y: vec![0.0; n],
@@ -225,6 +228,7 @@ impl RestIdentification {
         let Some(rd) = model.robot_dynamics_mut() else {
             return false;
         };
+        self.saved = (rd.robot().payload().copied(), self.mass);
         if rd
             .robot_mut()
             .set_payload(Some(Payload::point_mass(fit.mass_kg)))
@@ -234,6 +238,16 @@ impl RestIdentification {
         }
         self.mass = fit.mass_kg;
         true
+    }
+
+    /// The last trusted fit undone: the model's payload and the mass as
+    /// before it (a step that failed after it).
+    pub fn undo(&mut self, model: &mut dyn JointSpaceDynamics) {
+        if let Some(rd) = model.robot_dynamics_mut() {
+            // The payload was the model's own: it validates again.
+            let _ = rd.robot_mut().set_payload(self.saved.0);
+        }
+        self.mass = self.saved.1;
     }
 
     fn fit(&mut self, model: &mut dyn JointSpaceDynamics) -> Result<MassFit, FitRefusal> {
@@ -387,6 +401,10 @@ mod tests {
             assert!((carried - mass).abs() < 1e-9);
             // The window starts again after a fit.
             assert!(!ri.window_full());
+            // Undone (a step that failed after it): the nominal model again.
+            ri.undo(&mut model);
+            assert_eq!(model.robot().payload(), None);
+            assert_eq!(ri.mass(), 0.0);
         }
     }
 
