@@ -62,6 +62,24 @@ use crate::control::settings::{
 use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
 
+/// The fit at rest of `dob_identify_at_rest` (a torque output only), with
+/// its mass bound `max_payload_kg` (which must be `> 0`).
+fn rest_identification(
+    n: usize,
+    settings: &MpcSettings,
+    baselines: &BaselineSettings,
+) -> Result<Option<RestIdentification>, SettingsError> {
+    if !(baselines.dob_identify_at_rest && settings.output.is_torque()) {
+        return Ok(None);
+    }
+    let max = settings.max_payload_kg;
+    if !(max.is_finite() && max > 0.0) {
+        return Err(SettingsError::IdentifyAtRestWithoutMassBound);
+    }
+    let nominal = settings.model_payload_kg;
+    Ok(Some(RestIdentification::new(n, settings.ts, max, nominal)))
+}
+
 /// The disturbance-observer MPC baseline. Allocation-free [`Algorithm::step`].
 #[derive(Debug, Clone)]
 pub struct DobMpc {
@@ -126,10 +144,7 @@ impl DobMpc {
             inner.set_hold_input_scale(s.iter().map(|f| 1.0 / f).collect())?;
         }
         let observer_gain = |w: f64| (1.0 - (-w * ts).exp()) / ts;
-        let identify = baselines.dob_identify_at_rest && settings.output.is_torque();
-        if identify && !(settings.max_payload_kg.is_finite() && settings.max_payload_kg > 0.0) {
-            return Err(SettingsError::IdentifyAtRestWithoutMassBound);
-        }
+        let rest_ident = rest_identification(n, settings, baselines)?;
         Ok(Self {
             inner,
             settings: settings.clone(),
@@ -157,9 +172,7 @@ impl DobMpc {
             drives: None,
             hold: vec![false; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
-            rest_ident: identify.then(|| {
-                RestIdentification::new(n, ts, settings.max_payload_kg, settings.model_payload_kg)
-            }),
+            rest_ident,
             tau_eq: vec![0.0; n],
             model_changed: false,
             d_saved: vec![0.0; n],
