@@ -369,3 +369,65 @@ fn baselines_stiff_hold_steps_allocate_nothing() {
         );
     }
 }
+
+/// dob-mpc's payload fitted at rest (`dob_identify_at_rest`, issue 35)
+/// allocates nothing: the window, the fit, the model's new payload and the
+/// observers carried over to it, on a plant holding 4 kg at rest (ideal
+/// measurement, an observer with one sample of delay), then the reference
+/// moves. The fit is trusted (the model carries about 4 kg after the rest).
+#[test]
+fn dob_mpc_fit_at_rest_allocates_nothing() {
+    use ofmpc::control::{BaselineSettings, ControllerBuilder, ObserverSettings, StepInput};
+    use ofmpc::robot::Payload;
+    use ofmpc::sim::{Plant, PlantSettings};
+    let robot = ofmpc::robot::Robot::irb140();
+    let n = robot.dof();
+    let settings = MpcSettings {
+        delay_compensation: true,
+        max_payload_kg: 9.0,
+        ..Default::default()
+    };
+    let mut mpc = ControllerBuilder::new(ControllerKind::DobMpc, &robot)
+        .settings(settings.clone())
+        .baselines(BaselineSettings {
+            dob_identify_at_rest: true,
+            ..Default::default()
+        })
+        .observer(ObserverSettings {
+            pole: 0.7,
+            measurement_delay: 0,
+        })
+        .build()
+        .unwrap();
+    let q0 = [0.2, 0.6, -0.3, 0.1, 0.5, 0.0];
+    let mut plant_robot = robot.clone();
+    plant_robot
+        .set_payload(Some(Payload::point_mass(4.0)))
+        .unwrap();
+    let mut plant = Plant::with_period(plant_robot, PlantSettings::default(), &q0, 0.01).unwrap();
+    let rest = q0.repeat(settings.horizon);
+    let mut moving = rest.clone();
+    let last = moving.len() - n;
+    moving[last] += 1e-3;
+    let mut x: Vec<f64> = q0.iter().copied().chain(vec![0.0; n]).collect();
+    mpc.reset(&x).unwrap();
+    let mut tau = vec![0.0; n];
+    let before = allocations();
+    for k in 0..100 {
+        x[..n].copy_from_slice(plant.q());
+        x[n..].copy_from_slice(plant.qd());
+        let preview = if k < 90 { &rest } else { &moving };
+        let out = mpc
+            .step(&StepInput {
+                x: &x,
+                w_k: &q0,
+                preview,
+            })
+            .unwrap();
+        tau.copy_from_slice(&out.tau);
+        plant.advance(&tau).unwrap();
+    }
+    assert_eq!(allocations() - before, 0);
+    let est = mpc.output().payload_estimate.unwrap();
+    assert!((est - 4.0).abs() < 0.2, "{est} kg");
+}

@@ -11,14 +11,15 @@
 //! encoder counts); RMS / steady (mm) at 0 / 6 kg: first-adaptive
 //! 0.0133 / 0.0016, 0.0108 / 0.0025; second-adaptive 0.0029 / 0.0023,
 //! 0.0070 / 0.0024; ctc-adaptive 0.0051 / 0.0018, 0.0021 / 0.0023; dob-mpc
-//! 0.0153 / 0.0015, 0.0188 / 0.0016; estimates 0.03–0.13 and 5.47–5.55 kg.
+//! (its payload fitted at rest) 0.0098 / 0.0012, 0.0097 / 0.0019 (before the
+//! fit 0.0153 / 0.0015, 0.0188 / 0.0016); estimates 0.03–0.20 and 5.47–6.15 kg.
 //! The stiff hold's peers (`first`, 2 kg, 10 ms): dense and structured RMS
 //! 0.0285 mm, steady 0.0011 mm; without the factor 0.0014 mm.
 //! The whole preset's numbers are in docs/guide/real-arm.md.
 
 mod common;
 
-use ofmpc::control::{ControllerKind, MpcSettings, Solver, Weight};
+use ofmpc::control::{BaselineSettings, ControllerKind, MpcSettings, Solver, Weight};
 use ofmpc::gcode::{parse, ParseOptions};
 use ofmpc::motion::{build_reference, CartesianTrajectory, Orientation, TimingOptions};
 use ofmpc::robot::{Drives, Payload, Robot};
@@ -73,7 +74,12 @@ fn experiment(ts: f64, mpc: MpcSettings, plant: PlantSettings) -> Experiment {
             ..plant
         },
         loop_settings: LoopSettings::default(),
-        baselines: Default::default(),
+        // As the preset: dob-mpc identifies its payload at rest (the other
+        // kinds do not read it).
+        baselines: BaselineSettings {
+            dob_identify_at_rest: true,
+            ..Default::default()
+        },
     }
 }
 
@@ -124,7 +130,8 @@ fn run(exp: &Experiment, kind: ControllerKind, mass: f64) -> RunMetrics {
 
 /// Issue 35's targets at 1 kHz, as reached: "ok" (the hold within 2 encoder
 /// counts), steady ≤ 0.005 mm (target 0.01; measured ≤ 0.0025), RMS ≤ 0.05 mm
-/// (target 0.1; measured ≤ 0.019), the estimate within 10 % of the rated 6 kg.
+/// (target 0.1; measured ≤ 0.019), the estimate within 10 % of the rated 6 kg
+/// (dob-mpc's from its hold at rest, `dob_identify_at_rest`).
 #[test]
 fn the_offset_free_kinds_hold_at_1_khz_at_0_and_rated_payload() {
     let exp = preset();
@@ -137,10 +144,11 @@ fn the_offset_free_kinds_hold_at_1_khz_at_0_and_rated_payload() {
         ] {
             let m = run(&exp, kind, mass);
             assert_eq!(m.status, RunStatus::Ok, "{}: {}", m.name, m.reason);
-            assert!(m.hold_error_pp_counts.unwrap() <= 2.0, "{}", m.name);
+            // Counts as a ratio of the error to one count: 2 to rounding.
+            assert!(m.hold_error_pp_counts.unwrap() <= 2.0 + 1e-6, "{}", m.name);
             assert!(m.steady_cartesian_error_mm <= 0.005, "{}", m.name);
             assert!(m.cartesian_error_rms_mm <= 0.05, "{}", m.name);
-            if kind.is_adaptive() {
+            if kind.is_adaptive() || kind == ControllerKind::DobMpc {
                 let est = m.payload_estimate_kg.unwrap();
                 assert!((est - mass).abs() <= 0.6, "{}: estimate {est} kg", m.name);
             }

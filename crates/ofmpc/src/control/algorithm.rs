@@ -121,4 +121,12 @@ pub trait Algorithm {
     fn measurement(&mut self, y: &[f64]) {
         let _ = y;
     }
+    /// Whether the last [`Algorithm::step`] changed its model's payload at
+    /// once (`dob-mpc`'s fit at rest), so that the state observer carries
+    /// its disturbance over to the new model
+    /// ([`crate::control::StateObserver::carry_model_change`]); reading it
+    /// clears it. Default: never.
+    fn take_model_change(&mut self) -> bool {
+        false
+    }
 }

@@ -835,6 +835,9 @@ impl Controller {
             .controller
             .step(&mut self.model, &input, &mut self.output.tau)?;
         if let Some(o) = self.observer.as_mut() {
+            if self.controller.take_model_change() {
+                o.carry_model_change(&mut self.model, &self.output.tau)?;
+            }
             o.record_torque(&self.output.tau);
         }
         Ok(info)
@@ -861,7 +864,7 @@ impl Controller {
     /// ruled out by [`Self::reset`]'s checks).
     fn reset_algorithm(&mut self, x0: &[f64]) -> Result<(), StepFailure> {
         self.controller.reset(x0)?;
-        if self.kind.is_adaptive() {
+        if self.kind.is_adaptive() || self.controller.payload_estimate().is_some() {
             self.model
                 .robot_mut()
                 .set_payload(self.nominal_payload)

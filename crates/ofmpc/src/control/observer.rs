@@ -330,6 +330,34 @@ impl StateObserver {
         Ok(&self.out)
     }
 
+    /// The model's payload changed at once (`dob-mpc`'s fit at rest) since
+    /// the last [`Self::update`]: the disturbance `δ` takes over the change
+    /// of the model's acceleration under the torque `tau` (n values),
+    /// `δ += H⁻¹(τ − g) − H'⁻¹(τ − g')`, so that the prediction does not
+    /// jump (the primed terms on the changed `model`, at the observer's
+    /// state; the others as the last update evaluated them; nothing before
+    /// the first prediction). Allocates nothing.
+    pub fn carry_model_change(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        tau: &[f64],
+    ) -> Result<(), StepFailure> {
+        if self.k == 0 {
+            // Nothing predicted yet: the next update starts on the new model.
+            return Ok(());
+        }
+        self.model.input_from_torque(tau, &mut self.acc)?;
+        for (d, a) in self.dist.iter_mut().zip(&self.acc) {
+            *d += a;
+        }
+        self.model.update(model, &self.q, &self.v)?;
+        self.model.input_from_torque(tau, &mut self.acc)?;
+        for (d, a) in self.dist.iter_mut().zip(&self.acc) {
+            *d -= a;
+        }
+        Ok(())
+    }
+
     /// The torque commanded at the current sample (n values); advances the
     /// sample counter.
     pub fn record_torque(&mut self, tau: &[f64]) {

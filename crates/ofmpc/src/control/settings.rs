@@ -206,6 +206,14 @@ pub struct BaselineSettings {
     /// usual MPC's `q_u` ÷ the factor and its observer's bandwidth × the
     /// factor. Default 1: unchanged.
     pub dob_hold_gain_scale: Weight,
+    /// `dob-mpc` identifies its payload at rest before the path: the torque
+    /// it holds the arm with over the rest is fitted by a point mass at the
+    /// flange, bounded to `[0, MpcSettings::max_payload_kg]` (which must then
+    /// be `> 0`) and gated on the fit's conditioning and residual against the
+    /// drives' friction band; a trusted fit becomes the model's payload
+    /// (`control/baselines/rest_identification.rs`). Only with a torque
+    /// output. Default off: unchanged.
+    pub dob_identify_at_rest: bool,
 }
 
 impl Default for BaselineSettings {
@@ -216,6 +224,7 @@ impl Default for BaselineSettings {
             dob_observer_bandwidth: Weight::Scalar(DEFAULT_DOB_OBSERVER_BANDWIDTH),
             ctc_hold_gain_scale: Weight::Scalar(1.0),
             dob_hold_gain_scale: Weight::Scalar(1.0),
+            dob_identify_at_rest: false,
         }
     }
 }
@@ -876,6 +885,9 @@ pub enum SettingsError {
     /// the factor (kept so that code matching on it still builds).
     #[error("the factor of the input-increment weight at rest (hold_q_du_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]
     HoldQduScaleStructured,
+    /// `dob-mpc`'s payload at rest without a mass bound.
+    #[error("dob-mpc's payload identification at rest (dob_identify_at_rest) needs a bound on the payload mass: set max_payload_kg > 0 (e.g. 1.5 × the rated payload)")]
+    IdentifyAtRestWithoutMassBound,
     /// A factor of `dob-mpc`'s stiffer hold other than 1 with the structured
     /// solver, which builds its weights once.
     #[error("the factor of dob-mpc's stiffer hold (dob_hold_gain_scale) needs the dense solver: set solver = \"dense-qr\" or the factor to 1")]

@@ -187,8 +187,10 @@ impl Experiment {
             // The pre-roll at rest lets an adaptive kind identify its load;
             // through a position or velocity output it identifies nothing
             // (`control/adaptive.rs`), and settles as every other kind
-            // (`LoopSettings::settle_s`, none by default).
-            pre_roll: if kind.is_adaptive() && self.mpc.output.is_torque() {
+            // (`LoopSettings::settle_s`, none by default). `dob-mpc` that
+            // identifies its payload at rest (`dob_identify_at_rest`) rests
+            // as long as the adaptive kinds.
+            pre_roll: if self.identifies(kind) {
                 ls.identification_samples(self.reference.ts())
             } else {
                 ls.settle_samples(self.reference.ts())
@@ -225,6 +227,14 @@ impl Experiment {
             self.plant.encoder_counts,
         );
         Ok((result, metrics))
+    }
+
+    /// Whether `kind` identifies its payload in the pre-roll at rest (the
+    /// identification's length, not the settling's): the adaptive kinds and
+    /// `dob-mpc` with `dob_identify_at_rest`, through a torque output.
+    fn identifies(&self, kind: ControllerKind) -> bool {
+        let dob = kind == ControllerKind::DobMpc && self.baselines.dob_identify_at_rest;
+        (kind.is_adaptive() || dob) && self.mpc.output.is_torque()
     }
 
     /// The plant of a run with `payload`, at rest on the path's first point;

@@ -35,11 +35,21 @@
 //! pole `p^s`): the damper's force enters `d̂` within a sample or two
 //! instead of ringing with the integrating estimate at about 1 Hz.
 //!
+//! The payload at rest (`dob_identify_at_rest`, issue 35): before the
+//! reference first moves, the torque the controller held the arm with over
+//! the last part of the rest is fitted by a point mass at the flange
+//! ([`super::rest_identification`]); a trusted fit becomes the model's
+//! payload, and the observer's state is carried over to the new model (the
+//! torque-equivalent of `d̂` keeps only what the payload does not explain:
+//! `H' d̂' = H d̂ + g' − g`, and `u_{k−1}' = H'⁻¹(τ_{k−1} − g')`), so the
+//! applied torque does not jump.
+//!
 //! Torque limits: the torque is clipped to the drives' limits (the usual
 //! QP would bound `τ̃`, not the applied torque) and the observer is given the
 //! input actually applied, so the disturbance estimate does not wind up.
 
 use crate::control::algorithm::Algorithm;
+use crate::control::baselines::rest_identification::RestIdentification;
 use crate::control::dead_zone::creeps_at_rest;
 use crate::control::drive_model::DriveModel;
 use crate::control::kind::ControllerKind;
@@ -51,6 +61,24 @@ use crate::control::settings::{
 };
 use crate::control::step::{StepFailure, StepInfo};
 use crate::dynamics::JointSpaceDynamics;
+
+/// The fit at rest of `dob_identify_at_rest` (a torque output only), with
+/// its mass bound `max_payload_kg` (which must be `> 0`).
+fn rest_identification(
+    n: usize,
+    settings: &MpcSettings,
+    baselines: &BaselineSettings,
+) -> Result<Option<RestIdentification>, SettingsError> {
+    if !(baselines.dob_identify_at_rest && settings.output.is_torque()) {
+        return Ok(None);
+    }
+    let max = settings.max_payload_kg;
+    if !(max.is_finite() && max > 0.0) {
+        return Err(SettingsError::IdentifyAtRestWithoutMassBound);
+    }
+    let nominal = settings.model_payload_kg;
+    Ok(Some(RestIdentification::new(n, settings.ts, max, nominal)))
+}
 
 /// The disturbance-observer MPC baseline. Allocation-free [`Algorithm::step`].
 #[derive(Debug, Clone)]
@@ -80,6 +108,15 @@ pub struct DobMpc {
     /// Joints in the hold dead zone this sample ([`crate::control::dead_zone`]).
     hold: Vec<bool>,
     hold_band: f64,
+    /// The payload fit at rest (`dob_identify_at_rest`, torque output).
+    rest_ident: Option<RestIdentification>,
+    /// `g − H d̂` before a fit changes the model (n).
+    tau_eq: Vec<f64>,
+    /// The model's payload changed at this sample ([`Algorithm::take_model_change`]).
+    model_changed: bool,
+    /// `d̂` and `u_{k−1}` before a fit's carry (restored if the step fails).
+    d_saved: Vec<f64>,
+    u_saved: Vec<f64>,
 }
 
 impl DobMpc {
@@ -107,6 +144,7 @@ impl DobMpc {
             inner.set_hold_input_scale(s.iter().map(|f| 1.0 / f).collect())?;
         }
         let observer_gain = |w: f64| (1.0 - (-w * ts).exp()) / ts;
+        let rest_ident = rest_identification(n, settings, baselines)?;
         Ok(Self {
             inner,
             settings: settings.clone(),
@@ -134,6 +172,11 @@ impl DobMpc {
             drives: None,
             hold: vec![false; n],
             hold_band: crate::control::dead_zone::band_rad(settings.encoder_counts),
+            rest_ident,
+            tau_eq: vec![0.0; n],
+            model_changed: false,
+            d_saved: vec![0.0; n],
+            u_saved: vec![0.0; n],
         })
     }
 
@@ -162,6 +205,51 @@ impl DobMpc {
                 self.d_new[i] += gain * eps;
             }
         }
+    }
+
+    /// Until the reference first moves: the fit of every full window at rest
+    /// (module docs); `true` when the model now carries the fitted payload
+    /// (`tau_eq` holds the torque-equivalent of `d̂` on the model before).
+    fn identify_at_rest(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        w_k: &[f64],
+        preview: &[f64],
+    ) -> bool {
+        let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) else {
+            return false;
+        };
+        if !preview.chunks_exact(self.n).all(|p| p == w_k) {
+            ri.stop();
+            return false;
+        }
+        if !ri.window_full() {
+            return false;
+        }
+        if self.has_prev {
+            // g − H d̂ on the model of the last sample.
+            self.tau_eq.copy_from_slice(self.model.g().as_slice());
+            let h = self.model.h().as_slice();
+            for (j, col) in h.chunks_exact(self.n).enumerate() {
+                crate::control::solvers::dense::axpy(-self.d_hat[j], col, &mut self.tau_eq);
+            }
+        }
+        ri.decide(model) && self.has_prev
+    }
+
+    /// After a fit changed the model (updated at this sample): `d̂` and
+    /// `u_{k−1}` on the new model (module docs).
+    fn carry_observer(&mut self) -> Result<(), StepFailure> {
+        self.d_saved.copy_from_slice(&self.d_hat);
+        self.u_saved.copy_from_slice(&self.u_prev);
+        self.model
+            .input_from_torque(&self.tau_eq, &mut self.d_hat)?;
+        for d in &mut self.d_hat {
+            *d = -*d;
+        }
+        self.model
+            .input_from_torque(&self.tau_new, &mut self.u_prev)?;
+        Ok(())
     }
 
     /// `τ = τ̃ − H d̂`, clipped to the limits; `u` the input applied.
@@ -218,7 +306,18 @@ impl Algorithm for DobMpc {
         self.u_prev.fill(0.0);
         self.u.fill(0.0);
         self.has_prev = false;
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.reset();
+        }
         Ok(())
+    }
+    /// With `dob_identify_at_rest`: the payload mass the model carries (the
+    /// nominal until the fit at rest is trusted).
+    fn payload_estimate(&self) -> Option<f64> {
+        self.rest_ident.as_ref().map(|r| r.mass())
+    }
+    fn take_model_change(&mut self) -> bool {
+        std::mem::take(&mut self.model_changed)
     }
     fn input(&self) -> &[f64] {
         &self.u
@@ -234,6 +333,9 @@ impl Algorithm for DobMpc {
         drives.validate(self.n)?;
         if self.settings.friction_compensation {
             self.inner.set_drive_model(drives)?;
+        }
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.set_coulomb(&drives.coulomb_nm);
         }
         self.drives = Some(drives.clone());
         Ok(())
@@ -252,7 +354,45 @@ impl Algorithm for DobMpc {
         if self.settings.torque_limits && self.drives.is_none() {
             return Err(StepFailure::NoDriveModel);
         }
+        let identified = self.identify_at_rest(model, w_k, preview);
+        let info = match self.solve(model, input, identified) {
+            Ok(info) => info,
+            Err(e) => {
+                if identified {
+                    self.undo_fit(model);
+                }
+                return Err(e);
+            }
+        };
+        tau.copy_from_slice(&self.tau_new);
+        self.d_hat.copy_from_slice(&self.d_new);
+        self.x_prev.copy_from_slice(x);
+        self.u_prev.copy_from_slice(&self.u);
+        self.f0qd_prev.copy_from_slice(&self.f0qd);
+        self.has_prev = true;
+        self.model_changed |= identified;
+        if let Some(ri) = self.rest_ident.as_mut().filter(|r| r.pending()) {
+            ri.record(&x[..n], &self.tau_new);
+        }
+        Ok(info)
+    }
+}
+
+impl DobMpc {
+    /// The step's computation into `tau_new`, `d_new`, `u`, on the model
+    /// (after a fit at this sample, the observer carried over to it first).
+    fn solve(
+        &mut self,
+        model: &mut dyn JointSpaceDynamics,
+        input: &crate::control::step::StepInput<'_>,
+        identified: bool,
+    ) -> Result<StepInfo, StepFailure> {
+        let (x, w_k, preview) = (input.x, input.w_k, input.preview);
+        let n = self.n;
         self.model.update(model, &x[..n], &x[n..])?;
+        if identified {
+            self.carry_observer()?;
+        }
         let info = self.inner.step(
             model,
             &crate::control::step::StepInput { x, w_k, preview },
@@ -275,12 +415,16 @@ impl Algorithm for DobMpc {
         }
         self.torque()?;
         check_result(&self.u, &self.tau_new)?;
-        tau.copy_from_slice(&self.tau_new);
-        self.d_hat.copy_from_slice(&self.d_new);
-        self.x_prev.copy_from_slice(x);
-        self.u_prev.copy_from_slice(&self.u);
-        self.f0qd_prev.copy_from_slice(&self.f0qd);
-        self.has_prev = true;
         Ok(info)
+    }
+
+    /// A step that failed after a fit: the model's payload, `d̂` and
+    /// `u_{k−1}` as before the call.
+    fn undo_fit(&mut self, model: &mut dyn JointSpaceDynamics) {
+        if let Some(ri) = self.rest_ident.as_mut() {
+            ri.undo(model);
+        }
+        self.d_hat.copy_from_slice(&self.d_saved);
+        self.u_prev.copy_from_slice(&self.u_saved);
     }
 }

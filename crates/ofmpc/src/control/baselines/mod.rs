@@ -8,3 +8,4 @@ pub(crate) mod baseline;
 pub(crate) mod ctc;
 pub(crate) mod dob_mpc;
 pub(crate) mod pid;
+pub(crate) mod rest_identification;
