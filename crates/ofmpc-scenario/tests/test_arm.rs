@@ -36,17 +36,42 @@ fn run(s: &Scenario, kind: ControllerKind, mass: f64) -> RunMetrics {
     m
 }
 
-/// The targets where the preset meets them: first-adaptive,
-/// second-adaptive and ctc-adaptive at 0, half and rated payload, RMS ≤ 0.25
-/// mm, steady ≤ 0.01 mm, the estimate within 10 % of the rated 5 kg
-/// (measured 0.206 / 0.188 / 0.174, 0.178 / 0.178 / 0.217 and 0.196 / 0.191
-/// / 0.197 mm, ≤ 0.006 mm, estimates within 0.02 kg); the holds within 4 / 3
-/// / 2, 3 / 2 / 2 and 4 / 2 / 3 counts, "ok" (≤ 2) in four of the nine runs
-/// (before this round: 5 / 3 / 2, 1360 / 709 / 746 and 10 / 8 / 5 counts,
-/// one "ok").
+/// The preset as shipped (a 3 s hold): first-adaptive, second-adaptive and
+/// ctc-adaptive at 0, half and rated payload all "ok" (the hold within 2
+/// counts over its last 0.5 s), RMS ≤ 0.25 mm, steady ≤ 0.01 mm, the estimate
+/// within 10 % of the rated 5 kg (measured: holds 1–2 counts, RMS 0.156–0.195
+/// mm, steady ≤ 0.0045 mm, estimates within 0.02 kg; seeds 2 and 3 the same,
+/// 27 of 27 "ok").
 #[test]
-fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
+fn the_test_arm_meets_every_target_with_the_adaptive_kinds() {
     let s = preset();
+    assert_eq!(s.experiment.loop_settings.hold_s, 3.0);
+    for mass in [0.0, 2.5, 5.0] {
+        for kind in [
+            ControllerKind::FirstAdaptive,
+            ControllerKind::SecondAdaptive,
+            ControllerKind::CtcAdaptive,
+        ] {
+            let m = run(&s, kind, mass);
+            assert_eq!(m.status, RunStatus::Ok, "{}: {}", m.name, m.reason);
+            assert!(m.cartesian_error_rms_mm <= 0.25, "{}: RMS", m.name);
+            assert!(m.steady_cartesian_error_mm <= 0.01, "{}: steady", m.name);
+            let est = m.payload_estimate_kg.unwrap();
+            assert!((est - mass).abs() <= 0.1, "{}: estimate {est} kg", m.name);
+        }
+    }
+}
+
+/// Why the preset holds 3 s: with the paper's 2 s the wrist's creep ring
+/// (period 0.85 s, damping 0.13) has not settled — the same nine runs are
+/// within 4 counts, "ok" in four (measured 4 / 3 / 2, 3 / 2 / 2 and 4 / 2 / 3
+/// counts; before this round 5 / 3 / 2, 1360 / 709 / 746 and 10 / 8 / 5) —
+/// and their RMS along the path still within 0.25 mm (0.174–0.217 mm): a
+/// decay, not a cycle.
+#[test]
+fn with_a_two_second_hold_the_test_arm_is_still_settling() {
+    let mut s = preset();
+    s.experiment.loop_settings.hold_s = 2.0;
     let mut ok = 0;
     for mass in [0.0, 2.5, 5.0] {
         for kind in [
@@ -61,32 +86,11 @@ fn the_test_arm_meets_the_error_targets_with_the_adaptive_kinds() {
                 m.reason
             );
             assert!(m.cartesian_error_rms_mm <= 0.25, "{}: RMS", m.name);
-            assert!(m.steady_cartesian_error_mm <= 0.01, "{}: steady", m.name);
-            let est = m.payload_estimate_kg.unwrap();
-            assert!((est - mass).abs() <= 0.1, "{}: estimate {est} kg", m.name);
             assert!(m.hold_error_pp_counts.unwrap() < 4.5, "{}", m.reason);
             ok += usize::from(m.status == RunStatus::Ok);
         }
     }
-    assert!(ok >= 4, "{ok} of 9 runs ok");
-}
-
-/// What is left of the hold is its settling, not a cycle: the same runs at
-/// 0 kg (the lightest wrist, the least damped hold) with a hold of 3 s
-/// instead of 2 are all "ok" (1–2 counts; the path and its errors are the
-/// same, the steady window opens 1 s later).
-#[test]
-fn the_test_arm_holds_within_two_counts_after_a_longer_hold() {
-    let mut s = preset();
-    s.experiment.loop_settings.hold_s = 3.0;
-    for kind in [
-        ControllerKind::FirstAdaptive,
-        ControllerKind::SecondAdaptive,
-        ControllerKind::CtcAdaptive,
-    ] {
-        let m = run(&s, kind, 0.0);
-        assert_eq!(m.status, RunStatus::Ok, "{}", m.reason);
-    }
+    assert!((4..9).contains(&ok), "{ok} of 9 runs ok");
 }
 
 /// What each key of the round does, one removed at a time at 2.5 kg
@@ -109,8 +113,9 @@ fn without_the_coupled_creep_or_the_identification_at_rest_the_test_arm_is_off()
 /// The hold's keys of this round, one removed at a time (measured): with the
 /// second algorithm's aggregated error restarting from the current error
 /// (`hold_ebar_scale = 1`) second-adaptive at 2.5 kg cycles on the wrist by
-/// 700 counts (2 with 0); with the CTC's wrist `kp` unscaled at the hold
-/// ctc-adaptive at 0 kg rings by 10 counts (4 with × 1.75).
+/// 700 counts (1–2 with 0); with the CTC's wrist `kp` unscaled at the hold
+/// ctc-adaptive at 0 kg still rings by 4 counts at the end of the 3 s hold
+/// (10 at 2 s), "hunting" (1 count with × 1.75).
 #[test]
 fn without_the_holds_of_this_round_the_test_arm_hunts() {
     let mut s = preset();
@@ -120,7 +125,8 @@ fn without_the_holds_of_this_round_the_test_arm_hunts() {
     let mut s = preset();
     s.experiment.baselines.ctc_hold_gain_scale = ofmpc::control::Weight::Scalar(1.0);
     let m = run(&s, ControllerKind::CtcAdaptive, 0.0);
-    assert!(m.hold_error_pp_counts.unwrap() > 6.0, "{}", m.reason);
+    assert!(m.hold_error_pp_counts.unwrap() > 2.5, "{}", m.reason);
+    assert_eq!(m.status, RunStatus::Hunting, "{}", m.reason);
 }
 
 /// `identification_raw_mass` at 0 kg (first-adaptive, measured): the
