@@ -147,9 +147,9 @@ fn without_the_raw_mass_the_test_arm_identifies_a_payload_at_0_kg() {
 /// dob_identify_at_rest`) and the wrist's stiffer hold (`dob_hold_gain_scale
 /// = [1, 1, 1, 10, 10, 10]`) at 0, half and rated payload: "ok" (the hold
 /// within 2 counts), RMS ≤ 0.25 mm, steady ≤ 0.01 mm, the fit within 10 % of
-/// the rated 5 kg (measured RMS 0.225 / 0.137 / 0.104 mm, steady ≤ 0.007 mm,
-/// fits 0.00 / 2.58 / 5.02 kg; before: 0.227 / 10.3 / 94 mm, hunting by 5 /
-/// 43196 / 137969 counts).
+/// the rated 5 kg (measured RMS 0.203 / 0.126 / 0.094 mm, steady ≤ 0.0056
+/// mm, fits 0.00 / 2.54 / 4.99 kg; before the fit at rest: 0.227 / 10.3 /
+/// 94 mm, hunting by 5 / 43196 / 137969 counts).
 #[test]
 fn the_test_arm_meets_the_targets_with_dob_mpc_fitted_at_rest() {
     let s = preset();
