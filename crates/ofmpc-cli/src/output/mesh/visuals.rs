@@ -266,12 +266,22 @@ fn placed(
     Ok(mesh)
 }
 
+/// A file name as a warning quotes it: whole when at most `max` characters, else its last
+/// `max` characters after `…` and the length — the end of a path names the file, its start
+/// only where the URDF sits (a long checkout path cut the file's name off).
+fn path_tail(s: &str, max: usize) -> String {
+    let n = s.chars().count();
+    if n <= max {
+        return s.to_string();
+    }
+    let tail: String = s.chars().skip(n - max).collect();
+    format!("({n} characters) …{tail}")
+}
+
 /// The geometry named for a warning: the mesh's file (shortened), or the primitive.
 fn name_of(g: &urdf_rs::Geometry) -> String {
     match g {
-        urdf_rs::Geometry::Mesh { filename, .. } => {
-            format!("mesh {:?}", ofmpc::input::quote(filename, 80))
-        }
+        urdf_rs::Geometry::Mesh { filename, .. } => format!("mesh {:?}", path_tail(filename, 80)),
         urdf_rs::Geometry::Box { .. } => "<box>".into(),
         urdf_rs::Geometry::Cylinder { .. } => "<cylinder>".into(),
         urdf_rs::Geometry::Sphere { .. } => "<sphere>".into(),
@@ -508,6 +518,26 @@ mod tests {
         );
         assert_eq!(v.meshes.len(), 5);
         std::fs::remove_dir_all(&tmp).unwrap();
+    }
+
+    /// A mesh's long path is quoted by its end, where the file's name is (a checkout at a
+    /// long path cut it off).
+    #[test]
+    fn a_long_mesh_path_is_quoted_by_its_end() {
+        let long = format!("/{}/meshes/link3.obj", "deep/".repeat(40));
+        let q = super::path_tail(&long, 80);
+        assert!(
+            q.ends_with("/meshes/link3.obj")
+                && q.contains(&format!("({} characters)", long.chars().count())),
+            "{q}"
+        );
+        assert_eq!(
+            q.chars().count(),
+            80 + format!("({} characters) …", long.chars().count())
+                .chars()
+                .count()
+        );
+        assert_eq!(super::path_tail("a/b.stl", 80), "a/b.stl");
     }
 
     /// Coordinates that are not finite or absurd (a `<matrix>` of NaN, `<scale>` 1e308,
