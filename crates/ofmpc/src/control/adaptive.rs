@@ -20,17 +20,23 @@
 //! saturation, no friction the model leaves out): those would bias `π̂`.
 //!
 //! **With a position or velocity output** (`MpcSettings::output`, an
-//! interface that closes its own joint loop) the identification is off and
-//! the model keeps its nominal payload: the torque the arm receives is the
-//! drive's own (its loop on the vendor's model), not `τ_k`, so the
+//! interface that closes its own joint loop) the torque the arm receives is
+//! the drive's own (its loop on the vendor's model), not `τ_k`, so the
 //! regression `τ_k = Y π` has no valid left-hand side — fed `τ_k`, the
 //! estimate ran to the mass bound (1000 kg) through the simulated ABB EGM
-//! and UR servoj interfaces. Nor would a right payload reach the arm: the
-//! command is the predicted *motion* (`control/command.rs`), which the
-//! payload changes only through the linearization, and the drive's own
-//! loop, not the controller, carries the load. The adaptive kind then runs
-//! as its base algorithm and reports no estimate
-//! ([`Algorithm::payload_estimate`] is `None`).
+//! and UR servoj interfaces. So:
+//! * when the interface **reports the torque it applied** over each period
+//!   ([`Algorithm::applied_torque`], `Controller::set_applied_torque`; the
+//!   drives' joint torques or currents that UR RTDE, KUKA FRI or libfranka
+//!   stream) the regression uses it instead of `τ_{k−1}`, and the model
+//!   follows the estimate as with a torque output; the command then carries
+//!   the payload to the drive as an acceleration feed-forward
+//!   (`control/command.rs`, [`crate::control::Controller`]'s command: the
+//!   drive's loop on its nominal model would otherwise carry the load with
+//!   its following error);
+//! * without it, the identification is off, the model keeps its nominal
+//!   payload and the adaptive kind runs as its base algorithm, to the bit,
+//!   and reports no estimate ([`Algorithm::payload_estimate`] is `None`).
 //!
 //! **On a real arm** ([`RealArmIdentification`], on with the plant-facing
 //! settings `delay_compensation`, `friction_compensation` or
@@ -187,9 +193,17 @@ pub struct AdaptiveMpc {
     /// What the model carries, approaching the estimate (see [`MODEL_RATE`]).
     model_pi: PayloadParams,
     real_arm: Option<Box<RealArm>>,
-    /// The identification runs (a torque output); off with a position or
-    /// velocity output (module docs).
+    /// The identification runs on the controller's own torque (a torque
+    /// output); off with a position or velocity output (module docs).
     identify: bool,
+    /// The torque the drives applied over the last period
+    /// ([`Algorithm::applied_torque`], n), whether it came for this step,
+    /// and whether the interface has reported it since the reset: then the
+    /// identification runs on it, also through a position or velocity
+    /// output.
+    applied: Vec<f64>,
+    applied_fresh: bool,
+    reported: bool,
 }
 
 /// Per sample, the model's payload moves this fraction of the way to the
@@ -263,6 +277,9 @@ impl AdaptiveMpc {
             model_pi: PayloadParams::zeros(),
             real_arm: None,
             identify: settings.output.is_torque(),
+            applied: vec![0.0; n],
+            applied_fresh: false,
+            reported: false,
         })
     }
 
@@ -487,6 +504,8 @@ impl Algorithm for AdaptiveMpc {
         self.inner.reset(x0)?;
         self.estimator.rls_mut().reset();
         self.has_prev = false;
+        self.applied_fresh = false;
+        self.reported = false;
         self.model_pi = PayloadParams::zeros();
         if let Some(ra) = self.real_arm.as_deref_mut() {
             // The model the run starts with: the nominal one (built so).
@@ -550,7 +569,14 @@ impl Algorithm for AdaptiveMpc {
         self.inner.qp_end()
     }
     fn payload_estimate(&self) -> Option<f64> {
-        self.identify.then_some(self.model_pi[0])
+        (self.identify || self.reported).then_some(self.model_pi[0])
+    }
+    fn applied_torque(&mut self, tau: &[f64]) {
+        if tau.len() == self.applied.len() && tau.iter().all(|v| v.is_finite()) {
+            self.applied.copy_from_slice(tau);
+            self.applied_fresh = true;
+            self.reported = true;
+        }
     }
     fn step(
         &mut self,
@@ -558,9 +584,14 @@ impl Algorithm for AdaptiveMpc {
         input: &crate::control::step::StepInput<'_>,
         tau: &mut [f64],
     ) -> Result<StepInfo, StepFailure> {
-        if !self.identify {
+        // With the drives' applied torque for this period, the regression
+        // uses it (the torque the arm received); without it, only a torque
+        // output identifies (from its own `τ_{k−1}`).
+        let from_drive = std::mem::take(&mut self.applied_fresh);
+        if !(self.identify || self.reported) {
             return self.inner.step(model, input, tau);
         }
+        let learn = self.identify || from_drive;
         let (x, w_k, preview) = (input.x, input.w_k, input.preview);
         let ts = self.inner.settings().ts;
         let saved_rls = *self.estimator.rls();
@@ -572,15 +603,28 @@ impl Algorithm for AdaptiveMpc {
                 return Err(StepFailure::NoRigidBodyModel);
             };
             saved_payload = rd.robot().payload().copied();
-            let learnt = match self.real_arm.as_deref_mut() {
-                Some(ra) => Self::learn_real_arm(ra, &mut self.estimator, rd, w_k, preview, ts),
-                None => {
-                    self.has_prev
-                        && self
-                            .estimator
-                            .update(rd, &self.x_prev, x, &self.tau_prev, ts)
-                }
-            };
+            let learnt = learn
+                && match self.real_arm.as_deref_mut() {
+                    Some(ra) => {
+                        if from_drive && ra.steps > 0 {
+                            // The period [t_{k−1}, t_k] the ring's last slot
+                            // stands for: the torque the drives applied.
+                            let n = ra.q.len();
+                            let slots = ra.cfg.delay + 2 * ra.window;
+                            let s = ((ra.steps - 1) % slots) * n;
+                            ra.tau_ring[s..s + n].copy_from_slice(&self.applied);
+                        }
+                        Self::learn_real_arm(ra, &mut self.estimator, rd, w_k, preview, ts)
+                    }
+                    None => {
+                        let torque = if from_drive {
+                            &self.applied
+                        } else {
+                            &self.tau_prev
+                        };
+                        self.has_prev && self.estimator.update(rd, &self.x_prev, x, torque, ts)
+                    }
+                };
             let target = match self.real_arm.as_deref_mut() {
                 Some(ra) => {
                     // W > 1: the model follows the last target at every sample

@@ -121,6 +121,15 @@ pub trait Algorithm {
     fn measurement(&mut self, y: &[f64]) {
         let _ = y;
     }
+    /// The torque the drives applied over the period that just ended
+    /// (`[t_{k−1}, t_k]`, n values, N·m), as an interface that closes its own
+    /// joint loop reports it, before [`Algorithm::step`] at `t_k`: for the
+    /// controllers that identify from the applied torque (the adaptive kinds
+    /// through a position or velocity output, whose own `τ_k` the arm never
+    /// receives). Default: ignored. Allocates nothing.
+    fn applied_torque(&mut self, tau: &[f64]) {
+        let _ = tau;
+    }
     /// Whether the last [`Algorithm::step`] changed its model's payload at
     /// once (`dob-mpc`'s fit at rest), so that the state observer carries
     /// its disturbance over to the new model

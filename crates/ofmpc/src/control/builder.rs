@@ -56,7 +56,7 @@ use std::time::{Duration, Instant};
 
 use crate::control::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::algorithm::Algorithm;
-use crate::control::command::{lead_point, max_output_lead, OutputMode};
+use crate::control::command::{lead_point, max_output_lead, OutputMode, PayloadFeedForward};
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
@@ -399,8 +399,13 @@ impl<'r> ControllerBuilder<'r> {
             }
             obs
         });
+        // An adaptive kind through a drive's own loop: the identified
+        // payload reaches the drive as an acceleration feed-forward.
+        let payload_ff = (kind.is_adaptive() && !s.output.is_torque())
+            .then(|| Box::new(PayloadFeedForward::new(&model_robot)));
         Ok(Controller {
             kind,
+            payload_ff,
             nominal_payload: model_robot.payload().copied(),
             model: RobotDynamics::new(model_robot),
             controller,
@@ -419,6 +424,7 @@ impl<'r> ControllerBuilder<'r> {
                 q_command: vec![0.0; n].into_boxed_slice(),
                 qd_command: vec![0.0; n].into_boxed_slice(),
                 qdd_command: vec![0.0; n].into_boxed_slice(),
+                tau_command: vec![0.0; n].into_boxed_slice(),
                 gain: vec![0.0; if s.gains { 2 * n * n } else { 0 }].into_boxed_slice(),
                 tau_ff: vec![0.0; if s.gains { n } else { 0 }].into_boxed_slice(),
                 x_lin: vec![0.0; if s.gains { 2 * n } else { 0 }].into_boxed_slice(),
@@ -586,6 +592,9 @@ pub struct Controller {
     predicted: Vec<f64>,
     /// Reset at a measured state since build.
     started: bool,
+    /// An adaptive kind with a position or velocity output: the identified
+    /// payload's feed-forward in the command (`control/command.rs`).
+    payload_ff: Option<Box<PayloadFeedForward>>,
     /// With a step budget: the longest work after the torque-limit QP seen
     /// in a step (µs, up to the end of [`Controller::step`]), kept back
     /// from the next QP's deadline ([`Controller::budget_reserve_us`]).
@@ -750,6 +759,48 @@ impl Controller {
                 &mut out.qdd_command,
             ],
         );
+        // Only while the model carries an identified payload (otherwise
+        // the drive's model is the controller's: nothing to add). The
+        // dynamics accepted this model and state in this very step; should
+        // they refuse them here, the command goes without a feed-forward.
+        out.tau_command.fill(0.0);
+        if let Some(ff) = self
+            .payload_ff
+            .as_mut()
+            .filter(|_| out.payload_estimate.is_some())
+        {
+            let robot = self.model.robot();
+            if ff
+                .torque(
+                    robot,
+                    now,
+                    &self.predicted,
+                    lead_s,
+                    ts,
+                    &mut out.tau_command,
+                )
+                .is_err()
+            {
+                out.tau_command.fill(0.0);
+            }
+        }
+    }
+
+    /// The torque the drives applied over the period that just ended
+    /// (`[t_{k−1}, t_k]`, n values, N·m), for an interface that closes its
+    /// own joint loop and reports it (UR RTDE's joint torques, KUKA FRI's
+    /// measured torque, libfranka's `tau_J`): call it before
+    /// [`Self::step`] at `t_k`. The adaptive kinds then identify their
+    /// payload from it also through a position or velocity output, and
+    /// carry it to the drive as an acceleration feed-forward in the command
+    /// (`control/command.rs`); with a torque output it replaces the
+    /// controller's own `τ_{k−1}` in the identification. The other kinds
+    /// ignore it. Allocates nothing.
+    pub fn set_applied_torque(&mut self, tau: &[f64]) -> Result<(), StepError> {
+        check_len("applied torque", tau.len(), self.dof())?;
+        check_finite("applied torque", tau)?;
+        self.controller.applied_torque(tau);
+        Ok(())
     }
 
     /// With [`MpcSettings::gains`]: the first-stage gain of a successful

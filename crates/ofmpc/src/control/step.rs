@@ -231,6 +231,13 @@ pub struct StepOutput {
     /// feed-forward of the interface's own joint loop, as
     /// [`Self::q_command`].
     pub qdd_command: Box<[f64]>,
+    /// With a position or velocity output and an adaptive kind that
+    /// identifies its payload from the drives' applied torque
+    /// (`Controller::set_applied_torque`): the torque feed-forward for an
+    /// interface that adds one to its own joint loop, the identified
+    /// payload's torque along the command, `ID_model − ID_nominal` at the
+    /// lead point (`control/command.rs`), n values (N·m). Zeros otherwise.
+    pub tau_command: Box<[f64]>,
     /// With [`MpcSettings::gains`](crate::control::MpcSettings::gains): the
     /// first-stage feedback gain `K = ∂τ_k/∂x_k` (n × 2n, row-major, N·m
     /// per rad and per rad/s) with the step's model (`H`, `g`, ZOH) held,

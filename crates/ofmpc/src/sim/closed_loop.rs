@@ -320,6 +320,10 @@ pub struct ClosedLoop<'a> {
     /// period's command is late for it.
     servo: Option<Servo>,
     late: bool,
+    /// The interface reports the drives' applied torque to the controller
+    /// (`reports_torque`), and a period has been driven since the start.
+    reports_torque: bool,
+    driven: bool,
     /// The largest joint error over the pre-roll ([`RunResult::pre_roll_peak_rad`]).
     pre_roll_peak: f64,
 }
@@ -377,6 +381,8 @@ impl<'a> ClosedLoop<'a> {
         // The plant checked its settings when it was built.
         let actuator = plant.settings().actuator(plant.robot(), ts);
         let servo = servo_stage(&controller, plant, ts);
+        let reports_torque = servo.is_some()
+            && (plant.settings().servo.as_ref()).is_some_and(|s| s.reports_applied_torque());
         Self {
             controller,
             plant,
@@ -394,6 +400,8 @@ impl<'a> ClosedLoop<'a> {
             cancel: None,
             servo,
             late: false,
+            reports_torque,
+            driven: false,
             pre_roll_peak: 0.0,
         }
     }
@@ -531,6 +539,7 @@ impl<'a> ClosedLoop<'a> {
         for block in self.preview.chunks_mut(n.max(1)) {
             block.copy_from_slice(w0);
         }
+        self.report_torque().map_err(failed)?;
         let out = self
             .controller
             .step_at_rest(t, &self.x, w0, &self.preview)
@@ -610,6 +619,7 @@ impl<'a> ClosedLoop<'a> {
             .preview(k, self.controller.horizon(), &mut self.preview);
         let t0 = Instant::now();
         let stopping_before = self.controller.stopping().is_some();
+        self.report_torque().map_err(failed)?;
         // A missing or invalid reading: the controller runs on the model's
         // prediction; the divergence is judged on the true positions.
         let step = self.controller.step(&SupervisedInput {
@@ -719,6 +729,22 @@ impl ClosedLoop<'_> {
         (self.servo.as_ref()).is_some_and(|s| s.is_late(path_sample, step_us * 1e-6))
     }
 
+    /// The drives' torque applied over the last period
+    /// ([`Plant::applied_torque`]) to the controller, when the interface
+    /// reports it and a period was driven.
+    fn report_torque(&mut self) -> Result<(), RunFailure> {
+        if !(self.reports_torque && self.driven) {
+            return Ok(());
+        }
+        self.controller
+            .set_applied_torque(self.plant.applied_torque())
+            .map_err(|_| {
+                RunFailure::Controller(StepFailure::Internal(
+                    "the plant's applied torque is not n finite values",
+                ))
+            })
+    }
+
     /// The servo interface's watchdog: `Err` once it tripped.
     fn servo_watchdog(&self) -> Result<(), RunFailure> {
         match self.servo.as_ref().filter(|s| s.tripped()) {
@@ -738,8 +764,16 @@ impl ClosedLoop<'_> {
             return Ok(());
         };
         // The controller's command, or the stop law's during a stop.
+        // A torque interface takes the controller's torque; one that closes
+        // its own loop, the command's torque feed-forward (which it adds
+        // with `torque_feedforward`).
         let (q, qd, qdd) = self.controller.command();
-        servo.receive(self.controller.torque(), q, qd, qdd, self.late);
+        let tau = if self.controller.controller().settings().output.is_torque() {
+            self.controller.torque()
+        } else {
+            self.controller.command_torque()
+        };
+        servo.receive(tau, q, qd, qdd, self.late);
         self.late = false;
         let path_sample = self.plant.state().path_sample;
         let substep = self.plant.period() / self.plant.substeps() as f64;
@@ -749,7 +783,9 @@ impl ClosedLoop<'_> {
             let applied = actuator.apply(tau, path_sample)?;
             tau.copy_from_slice(applied);
             Ok(())
-        })
+        })?;
+        self.driven = true;
+        Ok(())
     }
 }
 

@@ -186,6 +186,7 @@ impl Experiment {
         let events = RunEvents {
             // The pre-roll at rest lets an adaptive kind identify its load;
             // through a position or velocity output it identifies nothing
+            // unless the interface reports the torque it applied
             // (`control/adaptive.rs`), and settles as every other kind
             // (`LoopSettings::settle_s`, none by default). `dob-mpc` that
             // identifies its payload at rest (`dob_identify_at_rest`) rests
@@ -230,11 +231,15 @@ impl Experiment {
     }
 
     /// Whether `kind` identifies its payload in the pre-roll at rest (the
-    /// identification's length, not the settling's): the adaptive kinds and
-    /// `dob-mpc` with `dob_identify_at_rest`, through a torque output.
+    /// identification's length, not the settling's): the adaptive kinds
+    /// through a torque output or an interface that reports its applied
+    /// torque, and `dob-mpc` with `dob_identify_at_rest` through a torque
+    /// output.
     fn identifies(&self, kind: ControllerKind) -> bool {
         let dob = kind == ControllerKind::DobMpc && self.baselines.dob_identify_at_rest;
-        (kind.is_adaptive() || dob) && self.mpc.output.is_torque()
+        let reported = (self.plant.servo.as_ref()).is_some_and(|s| s.reports_applied_torque());
+        (kind.is_adaptive() && (self.mpc.output.is_torque() || reported))
+            || (dob && self.mpc.output.is_torque())
     }
 
     /// The plant of a run with `payload`, at rest on the path's first point;

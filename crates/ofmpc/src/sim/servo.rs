@@ -229,6 +229,20 @@ pub struct ServoSettings {
     /// machine, so off in reproducible runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub deadline_s: Option<f64>,
+    /// The interface reports the torque its drives applied over each
+    /// control period to the controller (`None`, the default: it does not;
+    /// the drives' joint torques that UR RTDE, KUKA FRI or libfranka
+    /// stream): the adaptive kinds then identify their payload from it
+    /// (`Controller::set_applied_torque`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reports_torque: Option<bool>,
+    /// Position/velocity interface: the drives add the command's torque
+    /// feed-forward to their joint loop's torque (`None`, the default: they
+    /// do not; KUKA FRI's torque overlay, a joint-impedance mode with
+    /// feed-forward). The controller sends the identified payload's torque
+    /// there (`StepOutput::tau_command`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torque_feedforward: Option<bool>,
 }
 
 impl ServoSettings {
@@ -246,7 +260,15 @@ impl ServoSettings {
             watchdog_misses: None,
             late: Vec::new(),
             deadline_s: None,
+            reports_torque: None,
+            torque_feedforward: None,
         }
+    }
+
+    /// Whether the interface reports its applied torque
+    /// ([`Self::reports_torque`]; no by default).
+    pub fn reports_applied_torque(&self) -> bool {
+        self.reports_torque.unwrap_or(false)
     }
 
     /// The profile's values with the overrides: `gain` before
@@ -318,6 +340,7 @@ impl ServoSettings {
             for (key, given) in [
                 ("gain", self.gain.is_some()),
                 ("lookahead_s", self.lookahead_s.is_some()),
+                ("torque_feedforward", self.torque_feedforward.is_some()),
             ] {
                 if given {
                     return Err(ServoSettingsError::Unused { key, kind: p.kind });
@@ -622,6 +645,8 @@ pub struct Servo {
     /// written.
     ring: Vec<f64>,
     head: usize,
+    /// The joint loop adds the setpoint's torque (`torque_feedforward`).
+    torque_ff: bool,
     /// The drive's smoothed setpoint (4n) and its integral (n).
     filtered: Vec<f64>,
     integral: Vec<f64>,
@@ -664,6 +689,7 @@ impl Servo {
             .collect();
         Ok(Self {
             profile: settings.profile,
+            torque_ff: settings.torque_feedforward.unwrap_or(false),
             p,
             timing,
             n,
@@ -863,6 +889,11 @@ impl Servo {
         }
         let t = rnea(&self.model, &mut self.ws, q, qd, &self.accel)?;
         tau.copy_from_slice(t.as_slice());
+        if self.torque_ff {
+            for (t, f) in tau.iter_mut().zip(&self.ring[at + 3 * n..at + 4 * n]) {
+                *t += f;
+            }
+        }
         Ok(())
     }
 

@@ -135,6 +135,8 @@ pub struct SupervisedController {
     /// position, velocity and acceleration command (3n,
     /// [`Self::command`]).
     stop_command: Vec<f64>,
+    /// The stop's torque feed-forward: none (n zeros).
+    no_torque: Vec<f64>,
 }
 
 impl SupervisedController {
@@ -199,6 +201,7 @@ impl SupervisedController {
             judged_stop: false,
             diverged: None,
             stop_command: vec![0.0; 3 * n],
+            no_torque: vec![0.0; n],
         }
     }
 
@@ -409,6 +412,18 @@ impl SupervisedController {
         (&out.q_command, &out.qd_command, &out.qdd_command)
     }
 
+    /// The torque feed-forward of this sample's command for an interface
+    /// that adds one to its own joint loop (n): the controller's
+    /// ([`StepOutput::tau_command`]: the identified payload's torque), or
+    /// none during a stop (the drive's loop carries the load while it
+    /// brakes).
+    pub fn command_torque(&self) -> &[f64] {
+        if self.stop_commanded() {
+            return &self.no_torque;
+        }
+        &self.mpc.output().tau_command
+    }
+
     /// Whether this sample's command is the stop law's: a stop under way
     /// whose law gave this sample's torque, with a position or velocity
     /// output.
@@ -421,6 +436,13 @@ impl SupervisedController {
     /// The guarded controller.
     pub fn controller(&self) -> &Mpc {
         &self.mpc
+    }
+
+    /// The torque the drives applied over the period that just ended, for
+    /// the controller's identification through an interface that reports
+    /// it ([`Mpc::set_applied_torque`]); call before [`Self::step`].
+    pub fn set_applied_torque(&mut self, tau: &[f64]) -> Result<(), crate::control::StepError> {
+        self.mpc.set_applied_torque(tau)
     }
 
     /// The torque of this sample into the output: the controller's, or the
