@@ -1,8 +1,9 @@
 //! The servo interface stage allocates nothing per sample (issue 37): a run
 //! through each kind of interface (a torque low-pass, a position/velocity
 //! joint loop with a 40 ms lag line, a velocity loop), with injected late
-//! steps bridged by extrapolation, allocates the same number of times
-//! whatever its length. Counted per thread by a global allocator.
+//! steps bridged by extrapolation, and an adaptive kind identifying its
+//! payload from the drives' reported torque and sending it as a torque
+//! feed-forward, allocates the same number of times whatever its length. Counted per thread by a global allocator.
 
 mod common;
 
@@ -58,6 +59,11 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
             late,
             ..ServoSettings::profile(ServoProfile::KukaRsi)
         },
+        ServoSettings {
+            reports_torque: Some(true),
+            torque_feedforward: Some(true),
+            ..ServoSettings::profile(ServoProfile::AbbEgm)
+        },
     ];
     // Warm up lazily initialised statics.
     let _ = experiment(0.3, servos[0].clone()).run(
@@ -66,16 +72,17 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
         &mut |_, _| {},
     );
     for servo in servos {
+        let kind = if servo.reports_applied_torque() {
+            ControllerKind::SecondAdaptive
+        } else {
+            ControllerKind::Second
+        };
         let mut counts = Vec::new();
         for hold_s in [0.3, 2.0] {
             let exp = experiment(hold_s, servo.clone());
             let n = allocations_during(|| {
                 let (_, m) = exp
-                    .run(
-                        ControllerKind::Second,
-                        &Payload::point_mass(0.25),
-                        &mut |_, _| {},
-                    )
+                    .run(kind, &Payload::point_mass(0.25), &mut |_, _| {})
                     .unwrap();
                 assert_eq!(
                     m.status.to_string(),
@@ -84,6 +91,9 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
                     servo.profile,
                     m.reason
                 );
+                if servo.reports_applied_torque() {
+                    assert!(m.payload_estimate_kg.is_some());
+                }
                 let report = m.servo.unwrap();
                 assert!(report.cycles > 1000, "{report:?}");
             });

@@ -7,7 +7,8 @@
 mod common;
 
 use ofmpc::control::{
-    BuildError, ControllerBuilder, ControllerKind, MpcSettings, OutputMode, Weight,
+    BuildError, ControllerBuilder, ControllerKind, MpcSettings, OutputMode, StepError, StepInput,
+    Weight,
 };
 use ofmpc::robot::{Payload, Robot};
 use ofmpc::sim::{
@@ -438,8 +439,9 @@ fn a_safe_stop_through_a_position_interface_commands_a_braking_position() {
     }
 }
 
-/// Through an interface that closes its own joint loop the adaptive kinds
-/// do not identify (`control/adaptive.rs`): the torque the arm receives is
+/// Through an interface that closes its own joint loop and does not report
+/// its drives' torque (the default) the adaptive kinds do not identify
+/// (`control/adaptive.rs`): the torque the arm receives is
 /// the drive's, not the controller's `τ_k`, and fed `τ_k` the estimate ran
 /// to the 1000 kg bound (measured through abb-egm and ur-servoj before this
 /// rule). They then run as their base algorithm — the same run as
@@ -470,4 +472,134 @@ fn the_adaptive_kinds_do_not_identify_through_a_position_interface() {
     let (_, m) = run(&e, ControllerKind::SecondAdaptive, 2.0);
     let mass = m.payload_estimate_kg.expect("a torque output identifies");
     assert!((mass - 2.0).abs() < 0.2, "franka-torque: {mass} kg");
+}
+
+/// `torque_feedforward`: the joint loop adds the setpoint's torque to its
+/// own, exactly, once the setpoint has come through the lag line; a torque
+/// interface refuses the key (it takes the torque itself).
+#[test]
+fn the_drive_adds_the_commanded_torque_feed_forward() {
+    let robot = Robot::irb140();
+    let (ts, h) = (0.01, 1e-3);
+    let q0 = [0.1, 0.2, -0.1, 0.0, 0.3, 0.0];
+    let qd = [0.4, -0.2, 0.1, 0.0, 0.0, 0.3];
+    let ff = [1.5, -20.0, 3.25, 0.5, -0.75, 0.125];
+    let zero = [0.0; 6];
+    let torques = |feed: bool, sent: &[f64]| {
+        let settings = ServoSettings {
+            torque_feedforward: feed.then_some(true),
+            ..ServoSettings::profile(ServoProfile::AbbEgm)
+        };
+        let mut servo = Servo::new(&settings, &robot, ts, h).unwrap();
+        servo.start(&q0).unwrap();
+        let mut out = Vec::new();
+        let mut tau = [0.0; 6];
+        // 40 ms of lag: the fifth period's torques see the first command.
+        for _ in 0..6 {
+            servo.receive(sent, &q0, &qd, &zero, false);
+            for i in 0..10 {
+                servo.drive(i, &q0, &zero, &mut tau, h).unwrap();
+                out.push(tau);
+            }
+        }
+        out
+    };
+    let plain = torques(false, &ff);
+    let added = torques(true, &ff);
+    let without = torques(true, &zero);
+    assert_eq!(plain, without, "no feed-forward sent: nothing added");
+    let mut seen = 0;
+    for (a, p) in added.iter().zip(&plain) {
+        let d: Vec<f64> = a.iter().zip(p).map(|(a, p)| a - p).collect();
+        if d.iter().any(|v| *v != 0.0) {
+            for (d, f) in d.iter().zip(&ff) {
+                assert!((d - f).abs() < 1e-12 * (1.0 + f.abs()), "{d} vs {f}");
+            }
+            seen += 1;
+        }
+    }
+    assert!(seen >= 10, "the feed-forward arrived in {seen} substeps");
+    let franka = ServoSettings {
+        torque_feedforward: Some(true),
+        ..ServoSettings::profile(ServoProfile::FrankaTorque)
+    };
+    assert!(matches!(
+        franka.validate_for(0.01, 1e-3).unwrap_err(),
+        ServoSettingsError::Unused {
+            key: "torque_feedforward",
+            ..
+        }
+    ));
+}
+
+/// The identification's torque is the one the arm received: with a torque
+/// output the drives apply `τ_{k−1}` over `[t_{k−1}, t_k]`, so reporting it
+/// before step `k` leaves every torque and estimate unchanged, to the bit
+/// (and a report shifted by one period changes them); a report of the wrong
+/// size or not finite is refused with nothing changed.
+#[test]
+fn the_applied_torque_of_a_torque_output_is_its_own_last_torque() {
+    let robot = Robot::irb140();
+    let reference = common::paper_reference(&robot);
+    let build = || {
+        let mut c = ControllerBuilder::new(ControllerKind::SecondAdaptive, &robot)
+            .build()
+            .unwrap();
+        c.reset(&[reference.q(0), &[0.0; 6][..]].concat()).unwrap();
+        c
+    };
+    let n = 6;
+    let horizon = build().horizon();
+    // A made-up measured motion (the identification only needs data).
+    let x_at = |k: usize| -> Vec<f64> {
+        let t = k as f64 * 0.01;
+        let q: Vec<f64> = (0..n)
+            .map(|i| reference.q(k.min(reference.len() - 1))[i] + 1e-3 * (t * (i + 1) as f64).sin())
+            .collect();
+        let qd: Vec<f64> = (0..n)
+            .map(|i| 1e-3 * (i + 1) as f64 * (t * (i + 1) as f64).cos())
+            .collect();
+        [q, qd].concat()
+    };
+    let mut runs = Vec::new();
+    for report in [None, Some(1), Some(2)] {
+        let mut c = build();
+        let mut history: Vec<Vec<f64>> = Vec::new();
+        let mut out = Vec::new();
+        let mut preview = vec![0.0; horizon * n];
+        for k in 0..60 {
+            let x = x_at(k);
+            let w = reference.q(k);
+            reference.preview(k, horizon, &mut preview);
+            if let Some(back) = report.filter(|b| history.len() >= *b) {
+                c.set_applied_torque(&history[history.len() - back])
+                    .unwrap();
+            }
+            let o = c
+                .step(&StepInput {
+                    x: &x,
+                    w_k: w,
+                    preview: &preview,
+                })
+                .unwrap();
+            history.push(o.tau.to_vec());
+            out.push((o.tau.to_vec(), o.payload_estimate));
+        }
+        runs.push(out);
+    }
+    assert_eq!(runs[0], runs[1], "reporting τ_(k−1) changed the run");
+    assert_ne!(runs[0], runs[2], "a report one period off changed nothing");
+    let mut c = build();
+    assert!(matches!(
+        c.set_applied_torque(&[0.0; 5]),
+        Err(StepError::WrongLength {
+            expected: 6,
+            got: 5,
+            ..
+        })
+    ));
+    assert!(matches!(
+        c.set_applied_torque(&[0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0]),
+        Err(StepError::NonFiniteInput { index: 2, .. })
+    ));
 }

@@ -735,6 +735,9 @@ impl Servo {
         self.accel.fill(0.0);
         let zero = &self.accel;
         let g = rnea(&self.model, &mut self.ws, q, zero, zero)?;
+        // A torque interface starts holding the arm; the feed-forward of
+        // one that closes its own loop starts at none.
+        let torque = self.p.kind.is_torque();
         let tau = g.as_slice();
         for slot in self.ring.chunks_mut(SLOT * n).chain([
             &mut self.last[..],
@@ -743,7 +746,9 @@ impl Servo {
         ]) {
             slot.fill(0.0);
             slot[..n].copy_from_slice(q);
-            slot[3 * n..].copy_from_slice(tau);
+            if torque {
+                slot[3 * n..].copy_from_slice(tau);
+            }
         }
         self.integral.fill(0.0);
         self.fresh = false;
