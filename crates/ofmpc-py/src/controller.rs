@@ -38,9 +38,11 @@ pub struct PyController {
     /// Whether `gains` holds a step's law (false before the first successful step).
     gains_set: bool,
     /// With a position or velocity `output`: the last successful step's predicted command
-    /// (q, q̇, q̈ one lead time ahead), n values each, in buffers sized at construction; None
-    /// with a torque output.
-    command: Option<[Vec<f64>; 3]>,
+    /// (q, q̇, q̈ one lead time ahead, and the torque feed-forward), n values each, in buffers
+    /// sized at construction; None with a torque output.
+    command: Option<[Vec<f64>; 4]>,
+    /// The drives' applied torque given to `set_applied_torque` (n).
+    applied: Vec<f64>,
     /// Whether `command` holds a step's command (false before the first successful step).
     command_set: bool,
 }
@@ -231,7 +233,9 @@ impl PyController {
             telemetry: None,
             gains: gains.then(|| (vec![0.0; 2 * n * n], vec![0.0; n], vec![0.0; 2 * n])),
             gains_set: false,
-            command: (!output.is_torque()).then(|| [vec![0.0; n], vec![0.0; n], vec![0.0; n]]),
+            command: (!output.is_torque())
+                .then(|| [vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]]),
+            applied: vec![0.0; n],
             command_set: false,
         })
     }
@@ -320,22 +324,40 @@ impl PyController {
     }
 
     /// With output="position_velocity" or "velocity": the last successful step's command as a
-    /// dict {"q_command", "qd_command", "qdd_command"} (n,) each: the positions, velocities
-    /// and accelerations its model predicted output_lead_s ahead; None before the first step
-    /// or with a torque output.
+    /// dict {"q_command", "qd_command", "qdd_command", "tau_command"} (n,) each: the positions,
+    /// velocities and accelerations its model predicted output_lead_s ahead, and the torque
+    /// feed-forward of an identified payload (zeros unless an adaptive kind is given
+    /// `set_applied_torque`); None before the first step or with a torque output.
     #[getter]
     fn last_command<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         self.command
             .as_ref()
             .filter(|_| self.command_set)
-            .map(|[q, qd, qdd]| {
+            .map(|[q, qd, qdd, tau]| {
                 let d = PyDict::new(py);
                 d.set_item("q_command", array1(py, q))?;
                 d.set_item("qd_command", array1(py, qd))?;
                 d.set_item("qdd_command", array1(py, qdd))?;
+                d.set_item("tau_command", array1(py, tau))?;
                 Ok(d)
             })
             .transpose()
+    }
+
+    /// The torque the drives applied over the period that just ended (n,), for an interface
+    /// that closes its own joint loop and reports it (UR RTDE's joint torques, KUKA FRI's
+    /// measured torque): call it before `step`. The adaptive kinds then identify their payload
+    /// from it also with output="position_velocity" or "velocity", and `last_command`'s
+    /// "tau_command" carries it as a torque feed-forward; the other kinds ignore it. Raises
+    /// `OfmpcError` for another shape or a value that is not finite.
+    fn set_applied_torque(&mut self, tau: &Bound<'_, PyAny>) -> PyResult<()> {
+        let n = self.dof;
+        fill_shaped("tau", tau, &[("(dof,)", &[n])], &mut self.applied)?;
+        self.controller
+            .get_mut()
+            .unwrap_or_else(|e| e.into_inner())
+            .set_applied_torque(&self.applied)
+            .map_err(to_py)
     }
 
     /// Starts a run at the measured state x0 = [q; q̇] (2n,). Required before the first
@@ -405,10 +427,11 @@ impl PyController {
             x_lin.copy_from_slice(&out.x_lin);
             self.gains_set = true;
         }
-        if let Some([q, qd, qdd]) = self.command.as_mut() {
+        if let Some([q, qd, qdd, tau]) = self.command.as_mut() {
             q.copy_from_slice(&out.q_command);
             qd.copy_from_slice(&out.qd_command);
             qdd.copy_from_slice(&out.qdd_command);
+            tau.copy_from_slice(&out.tau_command);
             self.command_set = true;
         }
         Ok(array1(py, &out.tau))
