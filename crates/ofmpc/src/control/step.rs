@@ -257,3 +257,29 @@ pub struct StepOutput {
     /// step took ([`StepTelemetry`]).
     pub telemetry: StepTelemetry,
 }
+
+impl StepOutput {
+    /// The output of a controller with `n` joints, sized at build (the gain
+    /// law's fields with `gains`), before any step.
+    pub(crate) fn sized(n: usize, gains: bool) -> Self {
+        let buf = |len: usize| vec![0.0; len].into_boxed_slice();
+        Self {
+            tau: buf(n),
+            cost: 0.0,
+            r_diag_ratio: 0.0,
+            zoh_squarings: 0,
+            qp_status: None,
+            payload_estimate: None,
+            solve_time: Duration::ZERO,
+            status: StepStatus::Solved,
+            q_command: buf(n),
+            qd_command: buf(n),
+            qdd_command: buf(n),
+            tau_command: buf(n),
+            gain: buf(if gains { 2 * n * n } else { 0 }),
+            tau_ff: buf(if gains { n } else { 0 }),
+            x_lin: buf(if gains { 2 * n } else { 0 }),
+            telemetry: StepTelemetry::default(),
+        }
+    }
+}
