@@ -1,7 +1,9 @@
 // The C++ wrapper's first-stage gains ([mpc] gains = true) and predicted command
 // ([mpc] output = "position_velocity"), issue 37: a linear feedback between MPC samples,
-// τ = tau_ff + K (x − x_lin), and the position/velocity command one lead time ahead.
-// Exits 0 when both came through (run by tests/examples.rs under ASAN).
+// τ = tau_ff + K (x − x_lin), and the position/velocity command one lead time ahead; an
+// adaptive kind given the drives' applied torque (set_applied_torque) sends the identified
+// payload's torque feed-forward with its command.
+// Exits 0 when all came through (run by tests/examples.rs under ASAN).
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -36,5 +38,27 @@ int main() {
   if (!pv.value().reset(x) || !pv.value().step(x, w, preview, tau2, info, q, qd, qdd)) return 6;
   std::printf("q_command[0] %.6f qd_command[0] %.6f qdd_command[0] %.6f\n", q[0], qd[0], qdd[0]);
   if (q[0] == 0.0 || !std::isfinite(qdd[0])) return 7;
+  // second-adaptive through a position interface whose drives report holding the arm with
+  // 20 N·m more on joint 2 than the nominal model needs (a payload the controller does not
+  // know): the feed-forward grows towards it; a report of the wrong size is refused.
+  auto ad = ofmpc::Controller::create(
+      robot.value(), "second-adaptive",
+      "[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n");
+  if (!ad) return 8;
+  std::vector<double> x0(x.begin(), x.begin() + 6), still(12, 0.0), ff(6), held(6), none(6);
+  std::copy(x0.begin(), x0.end(), still.begin());
+  std::vector<double> w0(x0), preview0;
+  for (int j = 0; j < 10; ++j) preview0.insert(preview0.end(), w0.begin(), w0.end());
+  if (!ad.value().reset(still) || !ad.value().step(still, w0, preview0, tau2, info)) return 9;
+  // The nominal holding torque: the first step's torque at rest is the model's gravity.
+  held = tau2;
+  held[1] += 20.0;
+  if (ad.value().set_applied_torque(std::vector<double>(5))) return 10;
+  for (int k = 0; k < 50; ++k) {
+    if (!ad.value().set_applied_torque(held)) return 11;
+    if (!ad.value().step(still, w0, preview0, tau2, info, q, qd, qdd, ff)) return 12;
+  }
+  std::printf("tau_command[1] %.4f payload %.3f kg\n", ff[1], info.payload_estimate_kg);
+  if (!(std::fabs(ff[1]) > 1.0) || !(info.payload_estimate_kg > 0.0)) return 13;
   return 0;
 }

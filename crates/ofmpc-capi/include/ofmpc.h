@@ -272,6 +272,15 @@ typedef struct {
    * Length of each non-NULL command array (n).
    */
   size_t command_len;
+  /**
+   * With a position or velocity output and an adaptive kind given the
+   * drives' applied torque (`ofmpc_controller_set_applied_torque`):
+   * the torque feed-forward for an interface that adds one to its own
+   * joint loop, the identified payload's torque along the command (n
+   * values; N·m; zeros otherwise), as `q_command` (length
+   * `command_len`). Written when `size` covers it.
+   */
+  double *tau_command;
 } ofmpc_step_output;
 
 /**
@@ -403,6 +412,13 @@ typedef struct {
    * Length of each non-NULL command array (n).
    */
   size_t command_len;
+  /**
+   * The torque feed-forward to command (n values; N·m): the
+   * controller's (`ofmpc_step_output::tau_command`), zeros during a safe
+   * stop, as `q_command` (length `command_len`). Written when `size`
+   * covers it.
+   */
+  double *tau_command;
 } ofmpc_supervised_output;
 
 /**
@@ -483,6 +499,19 @@ OFMPC_MUST_USE
 ofmpc_status ofmpc_controller_step(ofmpc_controller *c,
                                    const ofmpc_step_input *input,
                                    ofmpc_step_output *out);
+
+/**
+ * The torque the drives applied over the period that just ended (`tau`,
+ * n values, N·m), for an interface that closes its own joint loop and
+ * reports it: call it before [`ofmpc_controller_step`]. The adaptive kinds
+ * then identify their payload from it also through a position or velocity
+ * output, and `out->tau_command` carries the payload as a torque
+ * feed-forward; the other kinds ignore it. Allocates nothing.
+ */
+OFMPC_MUST_USE
+ofmpc_status ofmpc_controller_set_applied_torque(ofmpc_controller *c,
+                                                 const double *tau,
+                                                 size_t tau_len);
 
 /**
  * The first-stage feedback law of the last successful step (issue 37,
@@ -684,6 +713,17 @@ ofmpc_status ofmpc_supervised_new(const ofmpc_robot *robot,
                                   const char *kind_name,
                                   const char *settings_toml,
                                   ofmpc_supervised **out);
+
+/**
+ * The torque the drives applied over the period that just ended (n
+ * values), for the controller's identification through an interface that
+ * reports it (as `ofmpc_controller_set_applied_torque`); call it
+ * before [`ofmpc_supervised_step`]. Allocates nothing.
+ */
+OFMPC_MUST_USE
+ofmpc_status ofmpc_supervised_set_applied_torque(ofmpc_supervised *s,
+                                                 const double *tau,
+                                                 size_t tau_len);
 
 /**
  * Starts a run at the reading `x0` (2n values): no stop in progress.

@@ -220,6 +220,37 @@ class Controller {
     }
     return detail::status(s);
   }
+  /// The torque the drives applied over the period that just ended (n), for an interface
+  /// that closes its own loop and reports it: call it before `step`. The adaptive kinds then
+  /// identify their payload from it (also through a position or velocity output).
+  [[nodiscard]] Status set_applied_torque(ConstView tau) {
+    return detail::status(ofmpc_controller_set_applied_torque(h_.get(), tau.data, tau.size));
+  }
+  /// As the command overload of `step`, and the command's torque feed-forward (the
+  /// identified payload's torque, for an interface that adds one) into `tau_command` (n).
+  [[nodiscard]] Status step(ConstView x, ConstView w, ConstView preview, View tau,
+                            StepInfo &info, View q_command, View qd_command, View qdd_command,
+                            View tau_command) {
+    ofmpc_step_input in{sizeof in, x.data, x.size, w.data, w.size, preview.data, preview.size};
+    ofmpc_step_output out{};
+    out.size = sizeof out;
+    out.tau = tau.data;
+    out.tau_len = tau.size;
+    out.q_command = q_command.size ? q_command.data : nullptr;
+    out.qd_command = qd_command.size ? qd_command.data : nullptr;
+    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
+    out.tau_command = tau_command.size ? tau_command.data : nullptr;
+    out.command_len = tau_command.size ? tau_command.size : q_command.size;
+    ofmpc_status s = ofmpc_controller_step(h_.get(), &in, &out);
+    if (s == OFMPC_OK) {
+      info.status = out.status;
+      info.qp_iterations = out.qp_iterations;
+      info.cost = out.cost;
+      info.payload_estimate_kg = out.payload_estimate_kg;
+      info.solve_time_ns = out.solve_time_ns;
+    }
+    return detail::status(s);
+  }
   /// The last step's telemetry (times, QP iterations, fallback level) into `t`.
   [[nodiscard]] Status telemetry(ofmpc_step_telemetry &t) const {
     t = ofmpc_step_telemetry{};
@@ -290,6 +321,31 @@ class SupervisedController {
     out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
     out.command_len = q_command.size ? q_command.size
                                      : (qd_command.size ? qd_command.size : qdd_command.size);
+    ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
+    if (s == OFMPC_OK) status = out.status;
+    return detail::status(s);
+  }
+  /// The torque the drives applied over the period that just ended (n), for the
+  /// controller's identification (Controller::set_applied_torque); call it before `step`.
+  [[nodiscard]] Status set_applied_torque(ConstView tau) {
+    return detail::status(ofmpc_supervised_set_applied_torque(h_.get(), tau.data, tau.size));
+  }
+  /// As the command overload of `step`, and the command's torque feed-forward into
+  /// `tau_command` (n; zeros during a safe stop).
+  [[nodiscard]] Status step(double t, ConstView x, ConstView w, ConstView preview, View tau,
+                            ofmpc_supervised_status &status, View q_command, View qd_command,
+                            View qdd_command, View tau_command) {
+    ofmpc_supervised_input in{sizeof in, t, x.data, x.size, w.data, w.size, preview.data,
+                              preview.size};
+    ofmpc_supervised_output out{};
+    out.size = sizeof out;
+    out.tau = tau.data;
+    out.tau_len = tau.size;
+    out.q_command = q_command.size ? q_command.data : nullptr;
+    out.qd_command = qd_command.size ? qd_command.data : nullptr;
+    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
+    out.tau_command = tau_command.size ? tau_command.data : nullptr;
+    out.command_len = tau_command.size ? tau_command.size : q_command.size;
     ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
     if (s == OFMPC_OK) status = out.status;
     return detail::status(s);

@@ -81,13 +81,22 @@ pub struct ofmpc_step_output {
     pub qdd_command: *mut f64,
     /// Length of each non-NULL command array (n).
     pub command_len: usize,
+    /// With a position or velocity output and an adaptive kind given the
+    /// drives' applied torque (`ofmpc_controller_set_applied_torque`):
+    /// the torque feed-forward for an interface that adds one to its own
+    /// joint loop, the identified payload's torque along the command (n
+    /// values; N·m; zeros otherwise), as `q_command` (length
+    /// `command_len`). Written when `size` covers it.
+    pub tau_command: *mut f64,
 }
 
 /// The size of the first version of [`ofmpc_step_output`]: fields appended
 /// later are written only when the caller's `size` covers them.
 pub(crate) const STEP_OUTPUT_V1: usize = std::mem::offset_of!(ofmpc_step_output, q_command);
 /// The size with the predicted command (issue 37): `q_command` … `command_len`.
-pub(crate) const STEP_OUTPUT_V2: usize = size_of::<ofmpc_step_output>();
+pub(crate) const STEP_OUTPUT_V2: usize = std::mem::offset_of!(ofmpc_step_output, tau_command);
+/// The size with the command's torque feed-forward: `tau_command`.
+pub(crate) const STEP_OUTPUT_V3: usize = size_of::<ofmpc_step_output>();
 /// The size of the first version of [`ofmpc_step_input`].
 pub(crate) const STEP_INPUT_V1: usize = size_of::<ofmpc_step_input>();
 
@@ -163,6 +172,26 @@ pub unsafe extern "C" fn ofmpc_controller_step(
     })
 }
 
+/// The torque the drives applied over the period that just ended (`tau`,
+/// n values, N·m), for an interface that closes its own joint loop and
+/// reports it: call it before [`ofmpc_controller_step`]. The adaptive kinds
+/// then identify their payload from it also through a position or velocity
+/// output, and `out->tau_command` carries the payload as a torque
+/// feed-forward; the other kinds ignore it. Allocates nothing.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_controller_set_applied_torque(
+    c: *mut ofmpc_controller,
+    tau: *const f64,
+    tau_len: usize,
+) -> ofmpc_status {
+    boundary(|| {
+        let c = &mut unsafe { arg_mut(c, "controller") }?.0;
+        let tau = unsafe { slice(tau, tau_len, c.dof(), "tau") }?;
+        c.set_applied_torque(tau).map_err(step_failure)
+    })
+}
+
 /// The record's command arrays, checked before the step (nothing is
 /// written on a refusal): when its `size` covers them, every non-NULL one
 /// has `command_len = n`.
@@ -170,7 +199,15 @@ fn check_command(out: &ofmpc_step_output, n: usize) -> Result<(), Failure> {
     // An older record: the command fields are not there to read.
     let covered = out.size >= STEP_OUTPUT_V2;
     let arrays = [out.q_command, out.qd_command, out.qdd_command];
-    check_command_arrays(covered, arrays, out.command_len, n, "out->command_len")
+    check_command_arrays(covered, &arrays, out.command_len, n, "out->command_len")?;
+    let covered = out.size >= STEP_OUTPUT_V3;
+    check_command_arrays(
+        covered,
+        &[out.tau_command],
+        out.command_len,
+        n,
+        "out->command_len",
+    )
 }
 
 /// Command arrays `arrays` of `len` values each: when the record covers
@@ -178,7 +215,7 @@ fn check_command(out: &ofmpc_step_output, n: usize) -> Result<(), Failure> {
 /// (`what` names the length field in the refusal).
 pub(crate) fn check_command_arrays(
     covered: bool,
-    arrays: [*mut f64; 3],
+    arrays: &[*mut f64],
     len: usize,
     n: usize,
     what: &str,
@@ -199,7 +236,10 @@ unsafe fn write_command(o: &StepOutput, out: &mut ofmpc_step_output) {
     let arrays = [out.q_command, out.qd_command, out.qdd_command];
     let command = [&o.q_command[..], &o.qd_command, &o.qdd_command];
     // SAFETY: checked by `check_command`.
-    unsafe { write_command_arrays(out.size >= STEP_OUTPUT_V2, arrays, command) };
+    unsafe { write_command_arrays(out.size >= STEP_OUTPUT_V2, &arrays, &command) };
+    let covered = out.size >= STEP_OUTPUT_V3;
+    // SAFETY: checked by `check_command`.
+    unsafe { write_command_arrays(covered, &[out.tau_command], &[&o.tau_command]) };
 }
 
 /// `command` (position, velocity, acceleration) into the non-NULL ones of
@@ -208,15 +248,11 @@ unsafe fn write_command(o: &StepOutput, out: &mut ofmpc_step_output) {
 /// # Safety
 /// Every non-NULL array holds `command[i].len()` writable values
 /// ([`check_command_arrays`]).
-pub(crate) unsafe fn write_command_arrays(
-    covered: bool,
-    arrays: [*mut f64; 3],
-    command: [&[f64]; 3],
-) {
+pub(crate) unsafe fn write_command_arrays(covered: bool, arrays: &[*mut f64], command: &[&[f64]]) {
     if !covered {
         return;
     }
-    for (p, src) in arrays.into_iter().zip(command) {
+    for (&p, src) in arrays.iter().zip(command) {
         if !p.is_null() {
             // SAFETY: the caller gave `command_len = n` writable values.
             unsafe { std::slice::from_raw_parts_mut(p, src.len()) }.copy_from_slice(src);

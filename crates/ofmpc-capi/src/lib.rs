@@ -76,6 +76,7 @@ mod tests {
                 qd_command: std::ptr::null_mut(),
                 qdd_command: std::ptr::null_mut(),
                 command_len: 0,
+                tau_command: std::ptr::null_mut(),
             };
             let input = ofmpc_step_input {
                 size: std::mem::size_of::<ofmpc_step_input>(),

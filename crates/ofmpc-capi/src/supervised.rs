@@ -6,6 +6,7 @@ use crate::controller::{check_command_arrays, ofmpc_step_status, write_command_a
 use crate::ffi::*;
 use crate::robot::ofmpc_robot;
 use crate::settings::{build_controller, kind, Settings};
+use crate::step_failure;
 use ofmpc::sim::{SupervisedController, SupervisedError, SupervisedInput, SupervisedStatus};
 use ofmpc::StepStatus;
 use std::ffi::c_char;
@@ -83,6 +84,11 @@ pub struct ofmpc_supervised_output {
     pub qdd_command: *mut f64,
     /// Length of each non-NULL command array (n).
     pub command_len: usize,
+    /// The torque feed-forward to command (n values; N·m): the
+    /// controller's (`ofmpc_step_output::tau_command`), zeros during a safe
+    /// stop, as `q_command` (length `command_len`). Written when `size`
+    /// covers it.
+    pub tau_command: *mut f64,
 }
 
 const INPUT_V1: usize = size_of::<ofmpc_supervised_input>();
@@ -90,7 +96,9 @@ const INPUT_V1: usize = size_of::<ofmpc_supervised_input>();
 /// appended later are written only when the caller's `size` covers them.
 const OUTPUT_V1: usize = std::mem::offset_of!(ofmpc_supervised_output, q_command);
 /// The size with the command (issue 37): `q_command` … `command_len`.
-const OUTPUT_V2: usize = size_of::<ofmpc_supervised_output>();
+const OUTPUT_V2: usize = std::mem::offset_of!(ofmpc_supervised_output, tau_command);
+/// The size with the command's torque feed-forward: `tau_command`.
+const OUTPUT_V3: usize = size_of::<ofmpc_supervised_output>();
 
 /// Builds the controller `kind_name` for `robot` from `settings_toml` (as
 /// [`crate::ofmpc_controller_new`]) behind its guard, whose rules come from
@@ -117,6 +125,24 @@ pub unsafe extern "C" fn ofmpc_supervised_new(
             .map_err(|e| Failure::new(ofmpc_status::OFMPC_BUILD, e.to_string()))?;
         unsafe { give(out, ofmpc_supervised(sc)) };
         Ok(())
+    })
+}
+
+/// The torque the drives applied over the period that just ended (n
+/// values), for the controller's identification through an interface that
+/// reports it (as `ofmpc_controller_set_applied_torque`); call it
+/// before [`ofmpc_supervised_step`]. Allocates nothing.
+#[must_use]
+#[no_mangle]
+pub unsafe extern "C" fn ofmpc_supervised_set_applied_torque(
+    s: *mut ofmpc_supervised,
+    tau: *const f64,
+    tau_len: usize,
+) -> ofmpc_status {
+    boundary(|| {
+        let s = &mut unsafe { arg_mut(s, "supervised") }?.0;
+        let tau = unsafe { slice(tau, tau_len, s.controller().dof(), "tau") }?;
+        s.set_applied_torque(tau).map_err(step_failure)
     })
 }
 
@@ -158,7 +184,16 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
         let tau = unsafe { slice_mut(out.tau, out.tau_len, n, "out->tau") }?;
         let commands = [out.q_command, out.qd_command, out.qdd_command];
         let covered = out.size >= OUTPUT_V2;
-        check_command_arrays(covered, commands, out.command_len, n, "out->command_len")?;
+        check_command_arrays(covered, &commands, out.command_len, n, "out->command_len")?;
+        let covered_tau = out.size >= OUTPUT_V3;
+        let tau_command = [out.tau_command];
+        check_command_arrays(
+            covered_tau,
+            &tau_command,
+            out.command_len,
+            n,
+            "out->command_len",
+        )?;
         let x = unsafe { slice(input.x, input.x_len, 2 * n, "input->x") }?;
         let w = unsafe { slice(input.w, input.w_len, n, "input->w") }?;
         let p = unsafe {
@@ -186,7 +221,9 @@ pub unsafe extern "C" fn ofmpc_supervised_step(
         };
         let (q, qd, qdd) = s.command();
         // SAFETY: `check_command_arrays` checked the arrays' length.
-        unsafe { write_command_arrays(covered, commands, [q, qd, qdd]) };
+        unsafe { write_command_arrays(covered, &commands, &[q, qd, qdd]) };
+        // SAFETY: as above.
+        unsafe { write_command_arrays(covered_tau, &tau_command, &[s.command_torque()]) };
         Ok(())
     })
 }

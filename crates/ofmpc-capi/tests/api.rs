@@ -124,6 +124,7 @@ fn output(tau: &mut [f64]) -> ofmpc_step_output {
         qd_command: null_mut(),
         qdd_command: null_mut(),
         command_len: 0,
+        tau_command: null_mut(),
     }
 }
 
@@ -175,6 +176,7 @@ fn a_closed_loop_through_the_c_api_allocates_nothing_per_sample() {
         qd_command: null_mut(),
         qdd_command: null_mut(),
         command_len: 0,
+        tau_command: null_mut(),
     };
     let samples = unsafe { ofmpc_sim_samples(s.sim) };
     assert!(samples > 1000, "{samples}");
@@ -492,6 +494,96 @@ fn the_predicted_command_through_the_c_api() {
     }
 }
 
+/// The drives' applied torque through the C API (issue 37): second-adaptive
+/// with a position output, given the torque a loaded arm at rest is held
+/// with, identifies the payload and writes the command's torque
+/// feed-forward, equal to the Rust controller's for the same inputs, bit for
+/// bit; a record that ends before `tau_command` is served without it; a
+/// report of the wrong length is refused.
+#[test]
+fn the_applied_torque_and_the_torque_feed_forward_through_the_c_api() {
+    let toml = c"[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n";
+    let robot = ofmpc::robot::Robot::irb140();
+    let settings = ofmpc::control::MpcSettings {
+        output: ofmpc::control::OutputMode::PositionVelocity,
+        output_lead_s: Some(0.04),
+        ..Default::default()
+    };
+    let mut rust = ofmpc::ControllerBuilder::new(ofmpc::ControllerKind::SecondAdaptive, &robot)
+        .settings(settings)
+        .build()
+        .unwrap();
+    let (mut r, mut c) = (null_mut(), null_mut());
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
+        ok(ofmpc_controller_new(
+            r,
+            c"second-adaptive".as_ptr(),
+            toml.as_ptr(),
+            &mut c,
+        ));
+    }
+    let w = [0.1, 0.4, -0.2, 0.0, 0.5, 0.0];
+    let x0: Vec<f64> = w.iter().copied().chain([0.0; 6]).collect();
+    let preview: Vec<f64> = (0..10).flat_map(|_| w).collect();
+    let mut loaded = robot.clone();
+    loaded
+        .set_payload(Some(ofmpc::robot::Payload::point_mass(2.0)))
+        .unwrap();
+    let mut ws = ofmpc::dynamics::Workspace::new(&loaded);
+    let held = ofmpc::dynamics::rnea(&loaded, &mut ws, &w, &[0.0; 6], &[0.0; 6])
+        .unwrap()
+        .as_slice()
+        .to_vec();
+    rust.reset(&x0).unwrap();
+    unsafe { ok(ofmpc_controller_reset(c, x0.as_ptr(), x0.len())) };
+    let st = unsafe { ofmpc_controller_set_applied_torque(c, held.as_ptr(), 5) };
+    assert_eq!(st, ofmpc_status::OFMPC_SIZE_MISMATCH, "{}", last_error());
+    let mut tau = [0.0; 6];
+    let mut ff = [9.0; 6];
+    for k in 0..30 {
+        rust.set_applied_torque(&held).unwrap();
+        let expected = rust
+            .step(&ofmpc::StepInput {
+                x: &x0,
+                w_k: &w,
+                preview: &preview,
+            })
+            .unwrap()
+            .clone();
+        let mut out = output(&mut tau);
+        out.tau_command = ff.as_mut_ptr();
+        out.command_len = 6;
+        if k == 29 {
+            // A record of the version before `tau_command`: not written.
+            out.size = std::mem::offset_of!(ofmpc_step_output, tau_command);
+            ff = [9.0; 6];
+        }
+        unsafe {
+            ok(ofmpc_controller_set_applied_torque(c, held.as_ptr(), 6));
+            ok(ofmpc_controller_step(
+                c,
+                &input(&x0, &w, &preview),
+                &mut out,
+            ));
+        }
+        assert_eq!(&tau[..], &expected.tau[..]);
+        if k == 29 {
+            assert_eq!(ff, [9.0; 6]);
+        } else {
+            assert_eq!(&ff[..], &expected.tau_command[..], "step {k}");
+        }
+        if k == 28 {
+            // The payload's gravity reaches the feed-forward.
+            assert!(ff[1].abs() > 1.0, "{ff:?}");
+        }
+    }
+    unsafe {
+        ofmpc_controller_free(c);
+        ofmpc_robot_free(r);
+    }
+}
+
 /// The first-stage gains through the C API (issue 37 item 5): `[mpc] gains =
 /// true` in the settings TOML, `ofmpc_controller_gains` returns the Rust
 /// controller's law for the same input (no allocation); without gains, and
@@ -660,6 +752,7 @@ fn a_safe_stop_commands_a_braking_position_through_the_c_api() {
         qd_command: qd.as_mut_ptr(),
         qdd_command: qdd.as_mut_ptr(),
         command_len: n,
+        tau_command: null_mut(),
     };
     let read = |plant: &Plant, x: &mut [f64]| {
         x[..n].copy_from_slice(plant.q());
@@ -757,6 +850,7 @@ fn check_command_record_versions(
         qd_command: qd.as_mut_ptr(),
         qdd_command: qdd.as_mut_ptr(),
         command_len: n,
+        tau_command: null_mut(),
     };
     unsafe { ok(ofmpc_supervised_step(sup, &sin, &mut out)) };
     assert!(q.iter().all(|v| *v == -7.0), "{q:?}");
