@@ -30,10 +30,10 @@
 //!   drives' joint torques or currents that UR RTDE, KUKA FRI or libfranka
 //!   stream) the regression uses it instead of `τ_{k−1}`, and the model
 //!   follows the estimate as with a torque output; the command then carries
-//!   the payload to the drive as an acceleration feed-forward
-//!   (`control/command.rs`, [`crate::control::Controller`]'s command: the
-//!   drive's loop on its nominal model would otherwise carry the load with
-//!   its following error);
+//!   the payload to the drive as a torque feed-forward
+//!   (`control/command.rs`, `StepOutput::tau_command`: the drive's loop on
+//!   its nominal model would otherwise carry the load with its following
+//!   error);
 //! * without it, the identification is off, the model keeps its nominal
 //!   payload and the adaptive kind runs as its base algorithm, to the bit,
 //!   and reports no estimate ([`Algorithm::payload_estimate`] is `None`).
