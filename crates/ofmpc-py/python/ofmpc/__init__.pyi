@@ -162,8 +162,13 @@ class Controller:
     @property
     def last_command(self) -> Optional[dict]:
         """With output="position_velocity" or "velocity": {"q_command", "qd_command",
-        "qdd_command"} (n,) each, the state its model predicted output_lead_s ahead, of the
-        last step; else None."""
+        "qdd_command", "tau_command"} (n,) each, the state its model predicted
+        output_lead_s ahead, of the last step, and the identified payload's torque
+        feed-forward (zeros unless an adaptive kind is given set_applied_torque); else None."""
+    def set_applied_torque(self, tau: ArrayLike) -> None:
+        """The torque the drives applied over the period that just ended (n,), for an
+        interface that reports it: call before step. The adaptive kinds then identify their
+        payload from it also through a position or velocity output; others ignore it."""
     def reset(self, x0: ArrayLike) -> None:
         """Starts a run at the measured state x0 = [q; q̇] (2n,); required before the first step."""
     def step(self, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
