@@ -30,6 +30,8 @@ pub struct PySupervised {
     preview: Vec<f64>,
     /// The last step's status; None before the first step.
     status: Option<SupervisedStatus>,
+    /// The drives' applied torque given to `set_applied_torque` (n).
+    applied: Vec<f64>,
 }
 
 /// The name of a status in Python.
@@ -96,6 +98,7 @@ impl PySupervised {
             w: vec![0.0; dof],
             preview: vec![0.0; horizon * dof],
             status: None,
+            applied: vec![0.0; dof],
         })
     }
 
@@ -123,7 +126,9 @@ impl PySupervised {
     }
 
     /// With output="position_velocity" or "velocity": the last step's command as a dict
-    /// {"q_command", "qd_command", "qdd_command"} (n,) each — the controller's, predicted
+    /// {"q_command", "qd_command", "qdd_command", "tau_command"} (n,) each — the controller's
+    /// (its torque feed-forward: the identified payload's torque, see
+    /// `Controller.set_applied_torque`; zeros during a stop), predicted
     /// output_lead_s ahead, while it controls; during a safe stop ("stopping", "stopped") the
     /// stop law's braking trajectory output_lead_s ahead, decelerating to rest and then
     /// holding (send it: the controller's last command is a moving target). None before the
@@ -139,7 +144,17 @@ impl PySupervised {
         d.set_item("q_command", array1(py, q))?;
         d.set_item("qd_command", array1(py, qd))?;
         d.set_item("qdd_command", array1(py, qdd))?;
+        d.set_item("tau_command", array1(py, inner.command_torque()))?;
         Ok(Some(d))
+    }
+
+    /// The torque the drives applied over the period that just ended (n,), for the
+    /// controller's identification through an interface that reports it (as
+    /// `Controller.set_applied_torque`); call it before `step`.
+    fn set_applied_torque(&mut self, tau: &Bound<'_, PyAny>) -> PyResult<()> {
+        fill_shaped("tau", tau, &[("(dof,)", &[self.dof])], &mut self.applied)?;
+        let inner = self.inner.get_mut().unwrap_or_else(|e| e.into_inner());
+        inner.set_applied_torque(&self.applied).map_err(to_py)
     }
 
     /// Starts a run at the reading x0 = [q; q̇] (2n,): no stop in progress.

@@ -376,6 +376,18 @@ def test_an_adaptive_kind_identifies_from_the_drives_reported_torque(robot, ref)
             assert np.all(ff == 0.0)
     with pytest.raises(ofmpc.OfmpcError, match="tau"):
         c.set_applied_torque(np.zeros(5))
+    # The same through the supervised controller, step for step.
+    s = ofmpc.SupervisedController("second-adaptive", robot, output="position_velocity", output_lead_s=0.04)
+    c = ofmpc.Controller("second-adaptive", robot, output="position_velocity", output_lead_s=0.04)
+    s.reset(x)
+    c.reset(x)
+    for k in range(20):
+        s.set_applied_torque(held)
+        c.set_applied_torque(held)
+        s.step(0.01 * k, x, w, preview)
+        c.step(x, w, preview)
+        np.testing.assert_array_equal(s.last_command["tau_command"], c.last_command["tau_command"])
+    assert np.max(np.abs(s.last_command["tau_command"])) > 1.0
 
 
 def test_the_command_pre_compensates_an_interface_s_smoothing(robot, ref):

@@ -213,9 +213,12 @@ class SupervisedController:
     @property
     def last_command(self) -> Optional[dict]:
         """With output="position_velocity" or "velocity": {"q_command", "qd_command",
-        "qdd_command"} (n,) each of the last step — the controller's, or during a safe stop
-        the stop law's braking trajectory output_lead_s ahead (to rest, then holding); else
-        None."""
+        "qdd_command", "tau_command"} (n,) each of the last step — the controller's, or during
+        a safe stop the stop law's braking trajectory output_lead_s ahead (to rest, then
+        holding; no torque feed-forward); else None."""
+    def set_applied_torque(self, tau: ArrayLike) -> None:
+        """The torque the drives applied over the period that just ended (n,), as
+        Controller.set_applied_torque; call before step."""
     def reset(self, x0: ArrayLike) -> None:
         """Starts a run at the reading x0 = [q; q̇] (2n,): no stop in progress."""
     def step(self, t: float, x: ArrayLike, w_k: ArrayLike, preview: ArrayLike) -> F64Array:
