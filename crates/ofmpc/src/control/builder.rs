@@ -56,7 +56,7 @@ use std::time::{Duration, Instant};
 
 use crate::control::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::algorithm::Algorithm;
-use crate::control::command::{lead_point, max_output_lead, OutputMode};
+use crate::control::command::{check_stream, lead_point, max_output_lead, OutputMode, Stream};
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
@@ -210,6 +210,17 @@ pub enum BuildError {
     OutputSmoothing {
         /// The time constant asked for (s).
         smoothing_s: f64,
+    },
+    /// The interface's stream the output models
+    /// ([`MpcSettings::output_cycle_s`]) cannot be modelled as given.
+    #[error("the output's stream model (interface cycle {cycle_s} s, smoothing step {step_s} s) cannot be used: {reason}")]
+    OutputStream {
+        /// The interface's cycle (s).
+        cycle_s: f64,
+        /// The smoothing's step (s).
+        step_s: f64,
+        /// Why, and what to do.
+        reason: &'static str,
     },
     /// The robot already carries a payload and the tuning assumes another:
     /// one would silently replace the other.
@@ -379,6 +390,7 @@ impl<'r> ControllerBuilder<'r> {
         let model_robot = model_robot(robot, &s)?;
         let mut controller = new_algorithm(kind, n, &s, &baselines, estimator, observer)?;
         let predicted = check_output(kind, &s, n, controller.as_mut())?;
+        let stream = output_stream(&s, n)?;
         check_gains(kind, &s, n, controller.as_mut())?;
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
@@ -425,6 +437,7 @@ impl<'r> ControllerBuilder<'r> {
                 telemetry: StepTelemetry::default(),
             },
             predicted,
+            stream,
             started: false,
             tail_us: 0.0,
         })
@@ -464,6 +477,32 @@ fn check_output(
         });
     }
     Ok(predicted)
+}
+
+/// The stream model of [`MpcSettings::output_cycle_s`]
+/// ([`BuildError::OutputStream`]); `None` without a cycle.
+fn output_stream(s: &MpcSettings, n: usize) -> Result<Option<Stream>, BuildError> {
+    let Some(cycle_s) = s.output_cycle_s else {
+        return match s.output_smoothing_step_s {
+            Some(step_s) => Err(BuildError::OutputStream {
+                cycle_s: f64::NAN,
+                step_s,
+                reason: "a smoothing step needs the interface's cycle: give output_cycle_s",
+            }),
+            None => Ok(None),
+        };
+    };
+    let step_s = s.output_smoothing_step_s.unwrap_or(cycle_s);
+    let smoothing = s.output_smoothing_s.filter(|_| !s.output.is_torque());
+    check_stream(s.ts, cycle_s, step_s, smoothing, s.horizon).map_err(|reason| {
+        BuildError::OutputStream {
+            cycle_s,
+            step_s,
+            reason,
+        }
+    })?;
+    let smoothing_s = smoothing.unwrap_or(0.0);
+    Ok(Some(Stream::new(n, s.ts, cycle_s, step_s, smoothing_s)))
 }
 
 /// The first-stage gains' checks ([`BuildError::GainsUnavailable`]): with
@@ -584,6 +623,9 @@ pub struct Controller {
     /// The positions the last step predicted (N·n), read by a position or
     /// velocity output (empty with a torque output).
     predicted: Vec<f64>,
+    /// The model of the interface's stream, with
+    /// [`MpcSettings::output_cycle_s`] (`control/command.rs`).
+    stream: Option<Stream>,
     /// Reset at a measured state since build.
     started: bool,
     /// With a step budget: the longest work after the torque-limit QP seen
@@ -738,17 +780,22 @@ impl Controller {
             None => &x[..n],
         };
         let out = &mut self.output;
+        let cmd = [
+            &mut out.q_command[..],
+            &mut out.qd_command[..],
+            &mut out.qdd_command[..],
+        ];
+        if let Some(stream) = self.stream.as_mut() {
+            stream.command(now, &self.predicted, lead_s, ts, cmd);
+            return;
+        }
         lead_point(
             now,
             &self.predicted,
             lead_s,
             smoothing_s,
             ts,
-            [
-                &mut out.q_command,
-                &mut out.qd_command,
-                &mut out.qdd_command,
-            ],
+            cmd,
         );
     }
 
@@ -856,6 +903,9 @@ impl Controller {
             o.reset(x0);
         }
         self.x_est.copy_from_slice(x0);
+        if let Some(stream) = self.stream.as_mut() {
+            stream.reset();
+        }
         self.started = true;
         Ok(())
     }
