@@ -789,14 +789,7 @@ impl Controller {
             stream.command(now, &self.predicted, lead_s, ts, cmd);
             return;
         }
-        lead_point(
-            now,
-            &self.predicted,
-            lead_s,
-            smoothing_s,
-            ts,
-            cmd,
-        );
+        lead_point(now, &self.predicted, lead_s, smoothing_s, ts, cmd);
     }
 
     /// With [`MpcSettings::gains`]: the first-stage gain of a successful

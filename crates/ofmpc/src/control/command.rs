@@ -50,37 +50,41 @@
 //!
 //! `q + T q̇` is the continuous filter's inverse on a smooth plan, but the
 //! interface runs its filter in discrete steps `h` on a setpoint it
-//! extrapolates from the command to each of its cycles, and the plan is
-//! re-made every period: on ur-servoj (gain 2000, payload known) that left
-//! 0.0099 mm where the same loop without the smoothing gives 0.0023. Three
-//! causes, measured one at a time on that run: the velocity and
-//! acceleration read off the quadratic through `ŷ_{j−1..j+1}` (the
-//! acceleration and jerk at `ŷ_j`, `ŷ_{j+½}`, not at the lead: 0.0062
-//! with them from a cubic at the lead), the continuous inverse of a
-//! discrete filter (`q + T q̇` misses its `−T h/2 q̈`: 0.0047 with the
-//! exact discrete inverse), the interface's quadratic extrapolation over
-//! the period (the acceleration it extrapolates with is best the plan's
-//! at the middle of the period: 0.0037) and the re-plans, which the
-//! filter follows only as `e^{−t/T}` (0.0027 with the copy below). With
-//! an interface cycle `P` ([`Stream`]) the command is:
+//! extrapolates from the command over its cycles, and the plan is re-made
+//! every period: on ur-servoj (gain 2000, payload known to the controller
+//! and the drive) that left 0.0099 mm where the same loop without the
+//! smoothing gives 0.0023. Measured one cause at a time on that run:
+//! the velocity channel's `T q̈` read at `ŷ_j` (10 ms) instead of the lead
+//! (4.5 ms; 0.0062 with a cubic at the lead), the continuous inverse of a
+//! discrete filter (`q + T q̇` misses its `−T h/2 q̈`: 0.0047 with the exact
+//! discrete inverse), the interface's quadratic extrapolation over the
+//! period (the acceleration it extrapolates with is best the plan's at
+//! the period's middle: 0.0037) and the re-plans, which the filtered
+//! acceleration follows only as `e^{−t/T}` (0.0025 with the copy below).
+//! With the interface's cycle `P` and filter step `h` ([`Stream`]) the
+//! command is:
 //!
 //! 1. the **plan** as the cubic `y(t)` through the four predicted samples
 //!    around the lead `L` (`ŷ_0 = q_k`, `ŷ_1, …`);
 //! 2. its **exact discrete inverse**: the filter `f_{i+1} = f_i + β (s_i −
 //!    f_i)` follows `y` step for step if its input is `g(t) = (y(t) − (1 −
 //!    β) y(t − h))/β`, on each channel: `q_cmd = g(L)`, `q̇_cmd = ġ(L)`,
-//!    `q̈_cmd = g̈(L + Ts/2)` (`β = h/(T + h)` with `T` the smoothing's
-//!    delay `output_smoothing_s`, `h` = `output_smoothing_step_s`);
-//! 3. plus `γ (y − f̂)` on each channel: `f̂` is the controller's copy of the
-//!    interface's filter, run on every command it sent exactly as the
-//!    interface streams and smooths it, compared with the plan at the step
-//!    before this command's first setpoint reaches the filter (`L − (P +
-//!    h)/2`); `γ = d/(1 − d)` with `d = (1 − β)^{Ts/h}` (the filter's decay
-//!    over a period) is the constant offset that closes that gap by the
-//!    period's end.
+//!    `q̈_cmd = g̈(L + Ts/2)`, with `β = h/(T + h)` (`T` the smoothing's
+//!    delay, `output_smoothing_s`; `h` = `output_smoothing_step_s`);
+//! 3. plus, on the acceleration, `γ (ÿ − f̂)`: `f̂` is the controller's copy
+//!    of the interface's filtered acceleration, run on every command it
+//!    sent as the interface smooths it, `ÿ` the plan's at the step before
+//!    this command's first setpoint reaches the filter (`L − (P + h)/2`);
+//!    `γ = d/(1 − d)`, `d = (1 − β)^{Ts/h}` the filter's decay over a
+//!    period: the offset that closes the gap by the period's end.
 //!
-//! The copy knows only what was sent: a command the interface missed (a
-//! late step) leaves it off by a gap that decays as the filter does.
+//! The same copy on position and velocity (0.0027 mm) pulls the setpoint
+//! towards the plan's start — the measured state — and so slows the hold's
+//! convergence to the reference (its slowest mode from 0.35 s to 2 s); on
+//! the acceleration alone it is 0.9 s (0.5 s without the copy, 0.35 s
+//! before any of this). The copy knows only what was sent: a command the
+//! interface missed (a late step) leaves it off by a gap that decays as
+//! the filter does.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -195,17 +199,14 @@ pub(crate) fn lead_point(
 /// docs, "The stream model"): sized at construction, allocation-free.
 #[derive(Debug, Clone)]
 pub(crate) struct Stream {
-    /// Interface cycles per control period and filter steps per cycle.
-    cycles: usize,
-    steps: usize,
     /// The cycle and the filter's step (s).
     cycle_s: f64,
     step_s: f64,
     /// `1 − β`: the filter's decay per step.
     decay: f64,
-    /// The gain on the copy's gap to the plan (`d/(1 − d)`).
-    gain: f64,
-    /// The copy of the filtered setpoint: q, q̇, q̈ (n each).
+    /// `d`: its decay over a control period.
+    period_decay: f64,
+    /// The copy of the filtered acceleration (n).
     filtered: Vec<f64>,
     /// No command sent since the last reset: the copy starts on the plan.
     fresh: bool,
@@ -222,7 +223,7 @@ pub(crate) fn check_stream(
 ) -> Result<(), &'static str> {
     let whole = |a: f64, b: f64| {
         let r = a / b;
-        (r - r.round()).abs() < 1e-6 && r.round() >= 1.0
+        r.round() >= 1.0 && (r - r.round()).abs() < 1e-6
     };
     if !(cycle_s.is_finite() && cycle_s > 0.0 && whole(ts, cycle_s)) {
         return Err("the interface's cycle must be a whole divisor of the control period");
@@ -231,10 +232,14 @@ pub(crate) fn check_stream(
         return Err("the smoothing's step must be a whole divisor of the interface's cycle");
     }
     if !smoothing_s.is_some_and(|t| t > 0.0) {
-        return Err("a stream model needs the smoothing it inverts: give output_smoothing_s > 0");
+        return Err(
+            "it inverts a smoothing: give a position or velocity output an output_smoothing_s > 0",
+        );
     }
     if horizon < 4 {
-        return Err("a stream model reads a cubic through four predicted samples: a horizon of at least 4");
+        return Err(
+            "it reads a cubic through four predicted samples: give a horizon of at least 4",
+        );
     }
     Ok(())
 }
@@ -244,18 +249,13 @@ impl Stream {
     /// period `ts`, smoothed every `step_s` by a filter of delay
     /// `smoothing_s` (checked by [`check_stream`]). Allocates.
     pub(crate) fn new(n: usize, ts: f64, cycle_s: f64, step_s: f64, smoothing_s: f64) -> Self {
-        let cycles = (ts / cycle_s).round() as usize;
-        let steps = (cycle_s / step_s).round() as usize;
         let decay = smoothing_s / (smoothing_s + step_s);
-        let d = decay.powi((cycles * steps) as i32);
         Self {
-            cycles,
-            steps,
             cycle_s,
             step_s,
             decay,
-            gain: d / (1.0 - d),
-            filtered: vec![0.0; 3 * n],
+            period_decay: decay.powi((ts / step_s).round() as i32),
+            filtered: vec![0.0; n],
             fresh: true,
         }
     }
@@ -267,7 +267,7 @@ impl Stream {
 
     /// The command from the predicted positions (as [`lead_point`]'s
     /// `now`, `predicted`, `lead_s`, `ts`), then the copy advanced over the
-    /// period's stream of it. Allocation-free.
+    /// period. Allocation-free.
     pub(crate) fn command(
         &mut self,
         now: &[f64],
@@ -279,66 +279,41 @@ impl Stream {
         let n = now.len();
         let horizon = predicted.len() / n.max(1);
         let s = lead_s / ts;
-        let j0 = ((s.round() as usize).saturating_sub(1)).min(horizon.saturating_sub(3));
+        let j0 = (s.round() as usize)
+            .saturating_sub(1)
+            .min(horizon.saturating_sub(3));
         let (h, decay) = (self.step_s / ts, self.decay);
-        let inverse = |a: f64, b: f64| (a - decay * b) / (1.0 - decay);
+        let inverse = |y: f64, before: f64| (y - decay * before) / (1.0 - decay);
         let gap_at = s - 0.5 * (self.cycle_s + self.step_s) / ts;
+        let d = self.period_decay;
         let [q, qd, qdd] = cmd;
         for i in 0..n {
-            let sample = |k: usize| {
+            let cubic = Cubic::through(j0, |k| {
                 if k == 0 {
                     now[i]
                 } else {
                     predicted[(k - 1) * n + i]
                 }
-            };
-            let cubic = Cubic::through(j0, sample);
-            let (y, ym) = (cubic.at(s), cubic.at(s - h));
-            let (a, am) = (cubic.at(s + 0.5), cubic.at(s + 0.5 - h));
-            q[i] = inverse(y[0], ym[0]);
-            qd[i] = inverse(y[1], ym[1]) / ts;
-            qdd[i] = inverse(a[2], am[2]) / (ts * ts);
-            let plan = cubic.at(gap_at);
-            let plan = [plan[0], plan[1] / ts, plan[2] / (ts * ts)];
-            let c = [&mut q[i], &mut qd[i], &mut qdd[i]];
-            self.correct(i, n, plan, c);
+            });
+            let (y, before) = (cubic.at(s), cubic.at(s - h));
+            let (mid, mid_before) = (cubic.at(s + 0.5), cubic.at(s + 0.5 - h));
+            q[i] = inverse(y[0], before[0]);
+            qd[i] = inverse(y[1], before[1]) / ts;
+            qdd[i] = inverse(mid[2], mid_before[2]) / (ts * ts);
+            let plan = cubic.at(gap_at)[2] / (ts * ts);
+            let f = &mut self.filtered[i];
+            if self.fresh {
+                *f = plan;
+            }
+            qdd[i] += d / (1.0 - d) * (plan - *f);
+            // The period's filter steps on the held acceleration.
+            *f = qdd[i] + d * (*f - qdd[i]);
         }
         self.fresh = false;
     }
-
-    /// Joint `i`'s command `c` plus the gain times the copy's gap to
-    /// `plan` (q, q̇, q̈); then the copy run over the period's stream of it:
-    /// at each cycle `τ = m P` the setpoint `c + ċ τ + ½ c̈ τ²` (and its
-    /// derivatives) for `P/h` filter steps.
-    fn correct(&mut self, i: usize, n: usize, plan: [f64; 3], c: [&mut f64; 3]) {
-        let mut sent = [0.0; 3];
-        for (ch, (p, c)) in plan.into_iter().zip(c).enumerate() {
-            let f = &mut self.filtered[ch * n + i];
-            if self.fresh {
-                *f = p;
-            }
-            *c += self.gain * (p - *f);
-            sent[ch] = *c;
-        }
-        let beta = 1.0 - self.decay;
-        for m in 0..self.cycles {
-            let tau = m as f64 * self.cycle_s;
-            let setpoint = [
-                sent[0] + sent[1] * tau + 0.5 * sent[2] * tau * tau,
-                sent[1] + sent[2] * tau,
-                sent[2],
-            ];
-            for _ in 0..self.steps {
-                for (ch, s) in setpoint.iter().enumerate() {
-                    let f = &mut self.filtered[ch * n + i];
-                    *f += beta * (s - *f);
-                }
-            }
-        }
-    }
 }
 
-/// A cubic through four samples `j0..j0 + 3` (unit spacing), in Newton's
+/// A cubic through the samples `j0..=j0 + 3` (unit spacing), in Newton's
 /// form.
 struct Cubic {
     j0: f64,
@@ -356,7 +331,7 @@ impl Cubic {
         Self { j0: j0 as f64, a }
     }
 
-    /// Value, first, second and third derivative at `x` (sample units).
+    /// Its value and first three derivatives at `x` (sample units).
     fn at(&self, x: f64) -> [f64; 4] {
         let (mut p, mut d1, mut d2, mut d3) = (self.a[3], 0.0, 0.0, 0.0);
         for k in (0..3).rev() {
