@@ -1,6 +1,7 @@
 //! The servo interface stage allocates nothing per sample (issue 37): a run
 //! through each kind of interface (a torque low-pass, a position/velocity
-//! joint loop with a 40 ms lag line, a velocity loop), with injected late
+//! joint loop with a 40 ms lag line, a velocity loop, ur-servoj's smoothing
+//! under the command's stream model), with injected late
 //! steps bridged by extrapolation, allocates the same number of times
 //! whatever its length. Counted per thread by a global allocator.
 
@@ -57,6 +58,16 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
             kind: Some(OutputMode::Velocity),
             late,
             ..ServoSettings::profile(ServoProfile::KukaRsi)
+        },
+        // The smoothing inverted by the command's stream model; one late
+        // step (five missed cycles: its watchdog trips at ten).
+        ServoSettings {
+            gain: Some(2000.0),
+            late: vec![LateSteps {
+                t: 1.0,
+                duration_s: 0.0,
+            }],
+            ..ServoSettings::profile(ServoProfile::UrServoj)
         },
     ];
     // Warm up lazily initialised statics.
