@@ -52,17 +52,19 @@ fn run(e: &Experiment, kind: ControllerKind, mass: f64) -> (RunOutcome, RunMetri
 /// completes, the hold is offset-free (the vendor's joint loop has
 /// integral action and the controller's command converges to the
 /// reference; to 1e-9 rad over the steady window of a hold long enough for
-/// the interface's slowest mode: 2 s, abb-egm 3 s, ur-servoj 5 s), every
+/// the interface's slowest mode: 2 s, abb-egm 3 s, ur-servoj 9 s: its
+/// stream model converges more slowly, 3.2e-8 rad after 5 s), every
 /// cycle was on time, and the Cartesian RMS is within a bound of the
 /// torque mode's with the same tuning and hold. The default lead covers
 /// the lag and the setpoint's hold over the interface cycle, and the
-/// command pre-compensates ur-servoj's smoothing (`control/command.rs`);
-/// measured (docs/guide/tutorials/command-modes.md), against the second
-/// algorithm: franka-torque 1.2×, kuka-rsi 1.8×, abb-egm 1.24× / 0.47×
-/// (0.25 / 2 kg), ur-servoj 2.6× / 1.3× (before: kuka-rsi 37×, abb-egm 12× at
-/// 0.25 kg, ur-servoj 21×); against the adaptive variant (torque mode
-/// 0.1–2 µm; it runs as the second through a position interface): kuka-rsi
-/// 13×, abb-egm 2.5× / 9.7×, ur-servoj 5.3× / 27×. The paper's `Q_Δu = 1e-5`
+/// command inverts ur-servoj's smoothing through its stream model
+/// (`control/command.rs`); measured (docs/guide/tutorials/command-modes.md),
+/// against the second algorithm: franka-torque 1.2×, kuka-rsi 1.8×, abb-egm
+/// 1.24× / 0.47× (0.25 / 2 kg), ur-servoj 1.00× / 0.82× (before: kuka-rsi
+/// 37×, abb-egm 12× at 0.25 kg, ur-servoj 21×, then 2.6× / 1.3× with
+/// `q + T q̇`); against the adaptive variant (torque mode 0.1–2 µm; it runs
+/// as the second through a position interface): kuka-rsi 13×, abb-egm
+/// 2.5× / 9.7×, ur-servoj 2.05× / 17× (5.3× / 27× with `q + T q̇`). The paper's `Q_Δu = 1e-5`
 /// diverges at 2 kg in torque mode and against a 40 ms lag: the cases use
 /// 1e-3 except kuka-rsi (1e-5 at 0.25 kg).
 #[test]
