@@ -213,10 +213,10 @@ pub enum BuildError {
     },
     /// The interface's stream the output models
     /// ([`MpcSettings::output_cycle_s`]) cannot be modelled as given.
-    #[error("the output's stream model (interface cycle {cycle_s} s, smoothing step {step_s} s) cannot be used: {reason}")]
+    #[error("the output's stream model (interface cycle {}, smoothing step {step_s} s) cannot be used: {reason}", cycle_s.map_or("unset".into(), |c| format!("{c} s")))]
     OutputStream {
-        /// The interface's cycle (s).
-        cycle_s: f64,
+        /// The interface's cycle (s; `None`: a step was given without it).
+        cycle_s: Option<f64>,
         /// The smoothing's step (s).
         step_s: f64,
         /// Why, and what to do.
@@ -485,7 +485,7 @@ fn output_stream(s: &MpcSettings, n: usize) -> Result<Option<Stream>, BuildError
     let Some(cycle_s) = s.output_cycle_s else {
         return match s.output_smoothing_step_s {
             Some(step_s) => Err(BuildError::OutputStream {
-                cycle_s: f64::NAN,
+                cycle_s: None,
                 step_s,
                 reason: "a smoothing step needs the interface's cycle: give output_cycle_s",
             }),
@@ -496,7 +496,7 @@ fn output_stream(s: &MpcSettings, n: usize) -> Result<Option<Stream>, BuildError
     let smoothing = s.output_smoothing_s.filter(|_| !s.output.is_torque());
     check_stream(s.ts, cycle_s, step_s, smoothing, s.horizon).map_err(|reason| {
         BuildError::OutputStream {
-            cycle_s,
+            cycle_s: Some(cycle_s),
             step_s,
             reason,
         }

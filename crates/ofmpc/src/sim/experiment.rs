@@ -294,11 +294,13 @@ impl Experiment {
         match &self.plant.servo {
             Some(servo)
                 if cycle.is_none()
-                    && step.is_none()
                     && self.mpc.output_smoothing_s.is_none()
                     && self.output_smoothing_s().is_some() =>
             {
-                (Some(servo.params().period_s), Some(self.plant.substep))
+                (
+                    Some(servo.params().period_s),
+                    step.or(Some(self.plant.substep)),
+                )
             }
             _ => (cycle, step),
         }
