@@ -445,7 +445,6 @@ mod tests {
     /// step `h` of the cycle, `β = 1 − e^{−h/T₀}`. Returns the largest
     /// error of the smoothed q, q̇, q̈ against the plan `y` (value and two
     /// derivatives) over the last half of `periods`.
-    #[allow(clippy::too_many_arguments)]
     fn smoothed_error(
         y: impl Fn(f64) -> [f64; 3],
         mut command: impl FnMut(&[f64], &[f64]) -> [f64; 3],
