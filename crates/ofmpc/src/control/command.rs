@@ -493,6 +493,13 @@ mod tests {
     /// 6.6e-6 against 3.7e-5 rad, most of both the ripple of the setpoint
     /// held over two steps; 4.0e-5 against 7.0e-4 rad/s; 2.2e-3 against
     /// 5.9e-3 rad/s²).
+    /// One joint's command from `command`, as `[q, q̇, q̈]`.
+    fn one_joint(command: impl FnOnce([&mut [f64]; 3])) -> [f64; 3] {
+        let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
+        command([&mut q, &mut qd, &mut qdd]);
+        [q[0], qd[0], qdd[0]]
+    }
+
     #[test]
     fn the_stream_model_inverts_the_interfaces_smoothing() {
         let (ts, horizon, t0, lag) = (0.01, 10, 0.03, 0.004);
@@ -502,11 +509,7 @@ mod tests {
         let mut stream = Stream::new(1, ts, h, h, delay(h));
         let worst = smoothed_error(
             quadratic,
-            |now, predicted| {
-                let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
-                stream.command(now, predicted, lag, ts, [&mut q, &mut qd, &mut qdd]);
-                [q[0], qd[0], qdd[0]]
-            },
+            |now, predicted| one_joint(|cmd| stream.command(now, predicted, lag, ts, cmd)),
             (ts, h, h, lag, t0),
             horizon,
             200,
@@ -526,11 +529,7 @@ mod tests {
         let timing = (ts, cycle, h, lag, t0);
         let new = smoothed_error(
             cubic,
-            |now, predicted| {
-                let (mut q, mut qd, mut qdd) = ([0.0], [0.0], [0.0]);
-                stream.command(now, predicted, lead, ts, [&mut q, &mut qd, &mut qdd]);
-                [q[0], qd[0], qdd[0]]
-            },
+            |now, predicted| one_joint(|cmd| stream.command(now, predicted, lead, ts, cmd)),
             timing,
             horizon,
             200,
