@@ -371,6 +371,17 @@ pub fn experiment_key(e: &ExperimentError) -> Option<String> {
         ExperimentError::Build(BuildError::OutputSmoothing { smoothing_s }) => {
             format!("[mpc] output_smoothing_s = {smoothing_s}")
         }
+        ExperimentError::Build(BuildError::OutputStream {
+            cycle_s: Some(cycle_s),
+            step_s,
+            ..
+        }) => format!(
+            "[mpc] output_cycle_s = {cycle_s}, output_smoothing_step_s = {step_s} \
+             (default with a [plant.servo] lookahead_s: its period_s and the substep)"
+        ),
+        ExperimentError::Build(BuildError::OutputStream { step_s, .. }) => {
+            format!("[mpc] output_smoothing_step_s = {step_s} without output_cycle_s")
+        }
         ExperimentError::Build(BuildError::OutputWithoutPrediction { output, .. }) => {
             format!("[mpc] output = \"{output}\"")
         }

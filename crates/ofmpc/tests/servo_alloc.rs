@@ -1,9 +1,11 @@
 //! The servo interface stage allocates nothing per sample (issue 37): a run
 //! through each kind of interface (a torque low-pass, a position/velocity
-//! joint loop with a 40 ms lag line, a velocity loop), with injected late
-//! steps bridged by extrapolation, and an adaptive kind identifying its
-//! payload from the drives' reported torque and sending it as a torque
-//! feed-forward, allocates the same number of times whatever its length. Counted per thread by a global allocator.
+//! joint loop with a 40 ms lag line, a velocity loop, ur-servoj's smoothing
+//! under the command's stream model), with injected late steps bridged by
+//! extrapolation, and an adaptive kind identifying its payload from the
+//! drives' reported torque and sending it as a torque feed-forward,
+//! allocates the same number of times whatever its length. Counted per
+//! thread by a global allocator.
 
 mod common;
 
@@ -63,6 +65,16 @@ fn a_longer_run_through_a_servo_allocates_no_more() {
             reports_torque: Some(true),
             torque_feedforward: Some(true),
             ..ServoSettings::profile(ServoProfile::AbbEgm)
+        },
+        // The smoothing inverted by the command's stream model; one late
+        // step (five missed cycles: its watchdog trips at ten).
+        ServoSettings {
+            gain: Some(2000.0),
+            late: vec![LateSteps {
+                t: 1.0,
+                duration_s: 0.0,
+            }],
+            ..ServoSettings::profile(ServoProfile::UrServoj)
         },
     ];
     // Warm up lazily initialised statics.

@@ -56,7 +56,9 @@ use std::time::{Duration, Instant};
 
 use crate::control::adaptive::{AdaptiveMpc, RealArmIdentification};
 use crate::control::algorithm::Algorithm;
-use crate::control::command::{lead_point, max_output_lead, OutputMode, PayloadFeedForward};
+use crate::control::command::{
+    check_stream, lead_point, max_output_lead, OutputMode, PayloadFeedForward, Stream,
+};
 use crate::control::drive_model::DriveModel;
 use crate::control::factory::new_controller_with_baselines;
 use crate::control::kind::ControllerKind;
@@ -210,6 +212,17 @@ pub enum BuildError {
     OutputSmoothing {
         /// The time constant asked for (s).
         smoothing_s: f64,
+    },
+    /// The interface's stream the output models
+    /// ([`MpcSettings::output_cycle_s`]) cannot be modelled as given.
+    #[error("the output's stream model (interface cycle {}, smoothing step {step_s} s) cannot be used: {reason}", cycle_s.map_or("unset".into(), |c| format!("{c} s")))]
+    OutputStream {
+        /// The interface's cycle (s; `None`: a step was given without it).
+        cycle_s: Option<f64>,
+        /// The smoothing's step (s).
+        step_s: f64,
+        /// Why, and what to do.
+        reason: &'static str,
     },
     /// The robot already carries a payload and the tuning assumes another:
     /// one would silently replace the other.
@@ -379,6 +392,7 @@ impl<'r> ControllerBuilder<'r> {
         let model_robot = model_robot(robot, &s)?;
         let mut controller = new_algorithm(kind, n, &s, &baselines, estimator, observer)?;
         let predicted = check_output(kind, &s, n, controller.as_mut())?;
+        let stream = output_stream(&s, n)?;
         check_gains(kind, &s, n, controller.as_mut())?;
         if let Some(d) = drives.as_ref().filter(|_| controller_drives) {
             controller.set_drive_model(d)?;
@@ -414,6 +428,7 @@ impl<'r> ControllerBuilder<'r> {
             x_est: vec![0.0; 2 * n],
             output: StepOutput::sized(n, s.gains),
             predicted,
+            stream,
             started: false,
             tail_us: 0.0,
         })
@@ -453,6 +468,32 @@ fn check_output(
         });
     }
     Ok(predicted)
+}
+
+/// The stream model of [`MpcSettings::output_cycle_s`]
+/// ([`BuildError::OutputStream`]); `None` without a cycle.
+fn output_stream(s: &MpcSettings, n: usize) -> Result<Option<Stream>, BuildError> {
+    let Some(cycle_s) = s.output_cycle_s else {
+        return match s.output_smoothing_step_s {
+            Some(step_s) => Err(BuildError::OutputStream {
+                cycle_s: None,
+                step_s,
+                reason: "a smoothing step needs the interface's cycle: give output_cycle_s",
+            }),
+            None => Ok(None),
+        };
+    };
+    let step_s = s.output_smoothing_step_s.unwrap_or(cycle_s);
+    let smoothing = s.output_smoothing_s.filter(|_| !s.output.is_torque());
+    check_stream(s.ts, cycle_s, step_s, smoothing, s.horizon).map_err(|reason| {
+        BuildError::OutputStream {
+            cycle_s: Some(cycle_s),
+            step_s,
+            reason,
+        }
+    })?;
+    let smoothing_s = smoothing.unwrap_or(0.0);
+    Ok(Some(Stream::new(n, s.ts, cycle_s, step_s, smoothing_s)))
 }
 
 /// The first-stage gains' checks ([`BuildError::GainsUnavailable`]): with
@@ -573,6 +614,9 @@ pub struct Controller {
     /// The positions the last step predicted (N·n), read by a position or
     /// velocity output (empty with a torque output).
     predicted: Vec<f64>,
+    /// The model of the interface's stream, with
+    /// [`MpcSettings::output_cycle_s`] (`control/command.rs`).
+    stream: Option<Stream>,
     /// Reset at a measured state since build.
     started: bool,
     /// An adaptive kind with a position or velocity output: the identified
@@ -730,18 +774,16 @@ impl Controller {
             None => &x[..n],
         };
         let out = &mut self.output;
-        lead_point(
-            now,
-            &self.predicted,
-            lead_s,
-            smoothing_s,
-            ts,
-            [
-                &mut out.q_command,
-                &mut out.qd_command,
-                &mut out.qdd_command,
-            ],
-        );
+        let cmd = [
+            &mut out.q_command[..],
+            &mut out.qd_command[..],
+            &mut out.qdd_command[..],
+        ];
+        if let Some(stream) = self.stream.as_mut() {
+            stream.command(now, &self.predicted, lead_s, ts, cmd);
+        } else {
+            lead_point(now, &self.predicted, lead_s, smoothing_s, ts, cmd);
+        }
         // Only while the model carries an identified payload (otherwise
         // the drive's model is the controller's: nothing to add). The
         // dynamics accepted this model and state in this very step; should
@@ -775,8 +817,9 @@ impl Controller {
     /// measured torque, libfranka's `tau_J`): call it before
     /// [`Self::step`] at `t_k`. The adaptive kinds then identify their
     /// payload from it also through a position or velocity output, and
-    /// carry it to the drive as an acceleration feed-forward in the command
-    /// (`control/command.rs`); with a torque output it replaces the
+    /// carry it to the drive as a torque feed-forward with the command
+    /// ([`StepOutput::tau_command`], `control/command.rs`); with a torque
+    /// output it replaces the
     /// controller's own `τ_{k−1}` in the identification. The other kinds
     /// ignore it. Allocates nothing.
     pub fn set_applied_torque(&mut self, tau: &[f64]) -> Result<(), StepError> {
@@ -890,6 +933,9 @@ impl Controller {
             o.reset(x0);
         }
         self.x_est.copy_from_slice(x0);
+        if let Some(stream) = self.stream.as_mut() {
+            stream.reset();
+        }
         self.started = true;
         Ok(())
     }

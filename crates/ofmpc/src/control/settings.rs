@@ -443,6 +443,24 @@ pub struct MpcSettings {
     /// else 0 (none). Only with a position or velocity output.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub output_smoothing_s: Option<f64>,
+    /// The interface's cycle (s; UR's 2 ms at 500 Hz): with
+    /// [`Self::output_smoothing_s`], the controller models the interface's
+    /// stream — the command extrapolated along its `q̇`, `q̈` at each cycle
+    /// of the period and smoothed every [`Self::output_smoothing_step_s`] —
+    /// and keeps its own copy of the smoothed setpoint: the command is the
+    /// smoothing's exact discrete inverse of the plan, corrected by what
+    /// the copy lags behind the plan (`control/command.rs`). A whole
+    /// divisor of `Ts`. `None` (default): the simulated interface's own
+    /// when its lead and smoothing are also left to it (`[plant.servo]`
+    /// with a smoothing), else no stream model (`q + T q̇` alone).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_cycle_s: Option<f64>,
+    /// The step (s) at which the interface runs its smoothing filter `f +=
+    /// β (s − f)`, a whole divisor of [`Self::output_cycle_s`]; `None`: the
+    /// simulated interface's integration substep when the cycle is its too,
+    /// else the cycle. Only with [`Self::output_cycle_s`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub output_smoothing_step_s: Option<f64>,
     /// The factor (in `(0, 1]`, one for every joint or one per joint) on the
     /// input-increment weight `q_du` of the incremental algorithms on a joint
     /// whose reference rests over the horizon: a stiffer hold. Near rest the
@@ -568,6 +586,8 @@ impl Default for MpcSettings {
             output: OutputMode::Torque,
             output_lead_s: None,
             output_smoothing_s: None,
+            output_cycle_s: None,
+            output_smoothing_step_s: None,
             hold_q_du_scale: Weight::Scalar(1.0),
             gains: false,
             identify_at_rest: false,

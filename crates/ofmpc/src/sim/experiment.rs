@@ -290,6 +290,27 @@ impl Experiment {
         }
     }
 
+    /// The interface cycle and smoothing step the command's stream model
+    /// runs at (`control/command.rs`): the tuning's, else — the smoothing
+    /// also left to the servo interface ([`Self::output_smoothing_s`]) —
+    /// the interface's cycle and the plant's substep (its filter's step).
+    fn output_stream(&self) -> (Option<f64>, Option<f64>) {
+        let (cycle, step) = (self.mpc.output_cycle_s, self.mpc.output_smoothing_step_s);
+        match &self.plant.servo {
+            Some(servo)
+                if cycle.is_none()
+                    && self.mpc.output_smoothing_s.is_none()
+                    && self.output_smoothing_s().is_some() =>
+            {
+                (
+                    Some(servo.params().period_s),
+                    step.or(Some(self.plant.substep)),
+                )
+            }
+            _ => (cycle, step),
+        }
+    }
+
     /// The controller `kind` of this experiment, built: the experiment's
     /// tuning, its baselines' gains, and an observer when the settings ask
     /// for one (with the plant's measurement delay).
@@ -298,6 +319,7 @@ impl Experiment {
         let mut settings = self.mpc.clone();
         settings.output_lead_s = self.output_lead_s();
         settings.output_smoothing_s = self.output_smoothing_s();
+        (settings.output_cycle_s, settings.output_smoothing_step_s) = self.output_stream();
         let mut builder = ControllerBuilder::new(kind, &self.robot)
             .settings(settings)
             .accept_ineffective_settings();
