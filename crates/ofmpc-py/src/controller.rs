@@ -194,7 +194,7 @@ pub(crate) fn build(
 #[pymethods]
 impl PyController {
     #[new]
-    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, output="torque", output_lead_s=None, output_smoothing_s=None, **weights))]
+    #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, gains=false, output="torque", output_lead_s=None, output_smoothing_s=None, output_cycle_s=None, output_smoothing_step_s=None, **weights))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -205,6 +205,8 @@ impl PyController {
         output: &str,
         output_lead_s: Option<f64>,
         output_smoothing_s: Option<f64>,
+        output_cycle_s: Option<f64>,
+        output_smoothing_step_s: Option<f64>,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
@@ -216,6 +218,8 @@ impl PyController {
             output,
             output_lead_s,
             output_smoothing_s,
+            output_cycle_s,
+            output_smoothing_step_s,
             ..MpcSettings::default()
         };
         let n = robot.robot().dof();

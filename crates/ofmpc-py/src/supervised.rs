@@ -51,7 +51,7 @@ impl PySupervised {
     #[new]
     #[pyo3(signature = (kind, robot, ts=0.01, horizon=10, output="torque", output_lead_s=None,
         safe_stop=true, plausibility_check=false, max_joint_error_rad=None, delay_samples=0,
-        output_smoothing_s=None, **weights))]
+        output_smoothing_s=None, output_cycle_s=None, output_smoothing_step_s=None, **weights))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         kind: &str,
@@ -65,6 +65,8 @@ impl PySupervised {
         max_joint_error_rad: Option<f64>,
         delay_samples: usize,
         output_smoothing_s: Option<f64>,
+        output_cycle_s: Option<f64>,
+        output_smoothing_step_s: Option<f64>,
         weights: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let kind: ControllerKind = kind.parse().map_err(to_py)?;
@@ -74,6 +76,8 @@ impl PySupervised {
             output: output_mode(output)?,
             output_lead_s,
             output_smoothing_s,
+            output_cycle_s,
+            output_smoothing_step_s,
             ..MpcSettings::default()
         };
         let controller = build(kind, robot, settings, weights)?;

@@ -412,6 +412,18 @@ def test_the_command_pre_compensates_an_interface_s_smoothing(robot, ref):
     np.testing.assert_allclose(
         smoothed["qd_command"], plain["qd_command"] + 0.03 * plain["qdd_command"], rtol=0, atol=1e-12
     )
+    # The stream model (output_cycle_s): the interface's own cycle and filter step; refused
+    # without a smoothing to invert.
+    c = ofmpc.Controller(
+        "second", robot, output="position_velocity", output_lead_s=0.0045, output_smoothing_s=0.03,
+        output_cycle_s=0.002, output_smoothing_step_s=0.001,
+    )
+    c.reset(x)
+    c.step(x, w, ref.preview(0, 10))
+    assert np.all(np.isfinite(c.last_command["q_command"]))
+    assert np.max(np.abs(c.last_command["q_command"] - smoothed["q_command"])) > 0.0
+    with pytest.raises(ofmpc.OfmpcError):
+        ofmpc.Controller("second", robot, output="position_velocity", output_cycle_s=0.002)
     for bad in (dict(output="position_velocity", output_smoothing_s=-0.01), dict(output_smoothing_s=0.03)):
         with pytest.raises(ofmpc.OfmpcError, match="smoothing time constant"):
             ofmpc.Controller("second", robot, **bad)

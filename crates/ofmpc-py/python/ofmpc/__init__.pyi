@@ -121,7 +121,11 @@ class Controller:
     ``output="position_velocity"`` or ``"velocity"`` (``[mpc] output``, with
     ``output_lead_s``) hands out the predicted command (``last_command``);
     ``output_smoothing_s=T`` (``[mpc] output_smoothing_s``) pre-compensates an interface's
-    first-order smoothing of time constant T: q + T q̇, q̇ + T q̈, q̈ + T q⃛.
+    first-order smoothing of time constant T: q + T q̇, q̇ + T q̈, q̈ + T q⃛; with
+    ``output_cycle_s`` (and ``output_smoothing_step_s``; ``[mpc]`` keys of the same names) the
+    command instead models the interface's stream: the smoothing's exact discrete inverse as
+    the interface runs it every step, the acceleration at the period's middle, and a copy of
+    the smoothed acceleration (docs: command modes, "The stream model").
     """
 
     def __init__(
@@ -134,6 +138,8 @@ class Controller:
         output: str = "torque",
         output_lead_s: Optional[float] = None,
         output_smoothing_s: Optional[float] = None,
+        output_cycle_s: Optional[float] = None,
+        output_smoothing_step_s: Optional[float] = None,
         **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property
@@ -198,6 +204,8 @@ class SupervisedController:
         max_joint_error_rad: Optional[float] = None,
         delay_samples: int = 0,
         output_smoothing_s: Optional[float] = None,
+        output_cycle_s: Optional[float] = None,
+        output_smoothing_step_s: Optional[float] = None,
         **weights: Union[float, Sequence[float], str],
     ) -> None: ...
     @property
