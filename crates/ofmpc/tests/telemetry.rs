@@ -265,7 +265,8 @@ fn the_work_after_the_qp_is_kept_back_from_the_budget() {
         assert_eq!(out.telemetry.fallback, FallbackLevel::BestFeasible);
     }
     // On the clock: no reserve without a budget; with one, a measured tail
-    // (positive) kept back, within a quarter of the budget.
+    // (positive) kept back, at least a tenth and at most a quarter of the
+    // budget.
     let (mut free, x, w_k, preview) = limited(ControllerKind::Second, &robot, None);
     let input = StepInput {
         x: &x,
@@ -276,15 +277,16 @@ fn the_work_after_the_qp_is_kept_back_from_the_budget() {
     assert_eq!(free.budget_reserve_us(), None);
     for budget in [1e9, 40.0, 0.0] {
         let (mut mpc, ..) = limited(ControllerKind::Second, &robot, Some(budget));
-        assert_eq!(mpc.budget_reserve_us(), Some(0.0), "none measured yet");
+        assert_eq!(
+            mpc.budget_reserve_us(),
+            Some(0.1 * budget),
+            "none measured yet: the floor"
+        );
         for _ in 0..5 {
             mpc.step(&input).unwrap();
         }
         let r = mpc.budget_reserve_us().unwrap();
-        assert!(r <= 0.25 * budget, "{budget}: {r}");
-        if budget > 0.0 {
-            assert!(r > 0.0, "{budget}: the tail was not measured");
-        }
+        assert!((0.1 * budget..=0.25 * budget).contains(&r), "{budget}: {r}");
     }
 }
 

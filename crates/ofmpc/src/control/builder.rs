@@ -633,6 +633,13 @@ pub struct Controller {
 /// preemption must not leave every later QP without time.
 const MAX_RESERVE_FRACTION: f64 = 0.25;
 
+/// At least this fraction of the step budget is kept back for the work
+/// after the QP, whatever the longest tail seen so far: the tail of a
+/// step whose QP stopped at its deadline (its best feasible point, or the
+/// shifted plan) is longer than that of the steps before the limits first
+/// bind, and is first seen only then.
+const MIN_RESERVE_FRACTION: f64 = 0.1;
+
 /// The per-kind algorithm; the adaptive kinds with the real arm's
 /// identification ([`RealArmIdentification`]) when the settings say the
 /// plant is one (delay or friction compensation, an observer, or a bound on
@@ -740,11 +747,15 @@ impl Controller {
     /// deadline for the step's work after it (µs): the longest such tail
     /// seen so far (measured from the QP's return to the end of
     /// [`Self::step`], on every budgeted step, with or without an active
-    /// QP), at most a quarter of the budget. `None` without
-    /// a budget.
+    /// QP), at least a tenth and at most a quarter of the budget. `None`
+    /// without a budget.
     pub fn budget_reserve_us(&self) -> Option<f64> {
         let budget = self.controller.settings().step_budget_us?;
-        Some(self.tail_us.min(MAX_RESERVE_FRACTION * budget))
+        Some(
+            self.tail_us
+                .max(MIN_RESERVE_FRACTION * budget)
+                .min(MAX_RESERVE_FRACTION * budget),
+        )
     }
 
     /// With a step budget, after a step that reached its QP: the tail from
