@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <utility>
@@ -85,6 +86,21 @@ struct Deleter {
 };
 template <typename H, void (*Free)(H *)>
 using Handle = std::unique_ptr<H, Deleter<H, Free>>;
+/// The command arrays of an output record (`ofmpc_step_output`,
+/// `ofmpc_supervised_output`): each non-empty view asked for (an empty one: NULL), their
+/// common length the first non-empty one's.
+template <typename Out>
+void ask_command(Out &out, View q, View qd, View qdd, View tau) {
+  std::size_t len = 0;
+  for (View v : {q, qd, qdd, tau}) {
+    if (len == 0) len = v.size;
+  }
+  out.q_command = q.size ? q.data : nullptr;
+  out.qd_command = qd.size ? qd.data : nullptr;
+  out.qdd_command = qdd.size ? qdd.data : nullptr;
+  out.tau_command = tau.size ? tau.data : nullptr;
+  out.command_len = len;
+}
 }  // namespace detail
 
 /// The robot model.
@@ -179,20 +195,7 @@ class Controller {
   /// One step: the torque into `tau`, the rest into `info`. Allocates nothing.
   [[nodiscard]] Status step(ConstView x, ConstView w, ConstView preview, View tau,
                             StepInfo &info) {
-    ofmpc_step_input in{sizeof in, x.data, x.size, w.data, w.size, preview.data, preview.size};
-    ofmpc_step_output out{};
-    out.size = sizeof out;
-    out.tau = tau.data;
-    out.tau_len = tau.size;
-    ofmpc_status s = ofmpc_controller_step(h_.get(), &in, &out);
-    if (s == OFMPC_OK) {
-      info.status = out.status;
-      info.qp_iterations = out.qp_iterations;
-      info.cost = out.cost;
-      info.payload_estimate_kg = out.payload_estimate_kg;
-      info.solve_time_ns = out.solve_time_ns;
-    }
-    return detail::status(s);
+    return step(x, w, preview, tau, info, View{}, View{}, View{}, View{});
   }
   /// One step with a position or velocity output ([mpc] output): as `step`, and the
   /// positions, velocities and accelerations its model predicted one lead time ahead into
@@ -200,25 +203,7 @@ class Controller {
   [[nodiscard]] Status step(ConstView x, ConstView w, ConstView preview, View tau,
                             StepInfo &info, View q_command, View qd_command,
                             View qdd_command) {
-    ofmpc_step_input in{sizeof in, x.data, x.size, w.data, w.size, preview.data, preview.size};
-    ofmpc_step_output out{};
-    out.size = sizeof out;
-    out.tau = tau.data;
-    out.tau_len = tau.size;
-    out.q_command = q_command.size ? q_command.data : nullptr;
-    out.qd_command = qd_command.size ? qd_command.data : nullptr;
-    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
-    out.command_len = q_command.size ? q_command.size
-                                     : (qd_command.size ? qd_command.size : qdd_command.size);
-    ofmpc_status s = ofmpc_controller_step(h_.get(), &in, &out);
-    if (s == OFMPC_OK) {
-      info.status = out.status;
-      info.qp_iterations = out.qp_iterations;
-      info.cost = out.cost;
-      info.payload_estimate_kg = out.payload_estimate_kg;
-      info.solve_time_ns = out.solve_time_ns;
-    }
-    return detail::status(s);
+    return step(x, w, preview, tau, info, q_command, qd_command, qdd_command, View{});
   }
   /// The torque the drives applied over the period that just ended (n), for an interface
   /// that closes its own loop and reports it: call it before `step`. The adaptive kinds then
@@ -236,11 +221,7 @@ class Controller {
     out.size = sizeof out;
     out.tau = tau.data;
     out.tau_len = tau.size;
-    out.q_command = q_command.size ? q_command.data : nullptr;
-    out.qd_command = qd_command.size ? qd_command.data : nullptr;
-    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
-    out.tau_command = tau_command.size ? tau_command.data : nullptr;
-    out.command_len = tau_command.size ? tau_command.size : q_command.size;
+    detail::ask_command(out, q_command, qd_command, qdd_command, tau_command);
     ofmpc_status s = ofmpc_controller_step(h_.get(), &in, &out);
     if (s == OFMPC_OK) {
       info.status = out.status;
@@ -292,15 +273,7 @@ class SupervisedController {
   /// One supervised sample at time `t`: the torque into `tau`. Allocates nothing.
   [[nodiscard]] Status step(double t, ConstView x, ConstView w, ConstView preview, View tau,
                             ofmpc_supervised_status &status) {
-    ofmpc_supervised_input in{sizeof in, t, x.data, x.size, w.data, w.size, preview.data,
-                              preview.size};
-    ofmpc_supervised_output out{};
-    out.size = sizeof out;
-    out.tau = tau.data;
-    out.tau_len = tau.size;
-    ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
-    if (s == OFMPC_OK) status = out.status;
-    return detail::status(s);
+    return step(t, x, w, preview, tau, status, View{}, View{}, View{}, View{});
   }
   /// One supervised sample with a position or velocity output ([mpc] output): as `step`,
   /// and the command to send into `q_command`, `qd_command`, `qdd_command` (n each; an
@@ -310,20 +283,7 @@ class SupervisedController {
   [[nodiscard]] Status step(double t, ConstView x, ConstView w, ConstView preview, View tau,
                             ofmpc_supervised_status &status, View q_command, View qd_command,
                             View qdd_command) {
-    ofmpc_supervised_input in{sizeof in, t, x.data, x.size, w.data, w.size, preview.data,
-                              preview.size};
-    ofmpc_supervised_output out{};
-    out.size = sizeof out;
-    out.tau = tau.data;
-    out.tau_len = tau.size;
-    out.q_command = q_command.size ? q_command.data : nullptr;
-    out.qd_command = qd_command.size ? qd_command.data : nullptr;
-    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
-    out.command_len = q_command.size ? q_command.size
-                                     : (qd_command.size ? qd_command.size : qdd_command.size);
-    ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
-    if (s == OFMPC_OK) status = out.status;
-    return detail::status(s);
+    return step(t, x, w, preview, tau, status, q_command, qd_command, qdd_command, View{});
   }
   /// The torque the drives applied over the period that just ended (n), for the
   /// controller's identification (Controller::set_applied_torque); call it before `step`.
@@ -341,11 +301,7 @@ class SupervisedController {
     out.size = sizeof out;
     out.tau = tau.data;
     out.tau_len = tau.size;
-    out.q_command = q_command.size ? q_command.data : nullptr;
-    out.qd_command = qd_command.size ? qd_command.data : nullptr;
-    out.qdd_command = qdd_command.size ? qdd_command.data : nullptr;
-    out.tau_command = tau_command.size ? tau_command.data : nullptr;
-    out.command_len = tau_command.size ? tau_command.size : q_command.size;
+    detail::ask_command(out, q_command, qd_command, qdd_command, tau_command);
     ofmpc_status s = ofmpc_supervised_step(h_.get(), &in, &out);
     if (s == OFMPC_OK) status = out.status;
     return detail::status(s);
