@@ -408,6 +408,37 @@ fn a_robot_from_urdf_text_or_file_with_its_drives() {
     }
 }
 
+/// `kind` with a position/velocity output 40 ms ahead, built twice: in Rust
+/// on `robot` (the IRB 140), and through the C API on the built-in IRB 140
+/// from the same settings as TOML (its robot and controller handles).
+fn position_output_pair(
+    robot: &ofmpc::robot::Robot,
+    kind: ofmpc::ControllerKind,
+) -> (ofmpc::Controller, *mut ofmpc_robot, *mut ofmpc_controller) {
+    let toml = c"[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n";
+    let settings = ofmpc::control::MpcSettings {
+        output: ofmpc::control::OutputMode::PositionVelocity,
+        output_lead_s: Some(0.04),
+        ..Default::default()
+    };
+    let rust = ofmpc::ControllerBuilder::new(kind, robot)
+        .settings(settings)
+        .build()
+        .unwrap();
+    let name = std::ffi::CString::new(kind.name()).unwrap();
+    let (mut r, mut c) = (null_mut(), null_mut());
+    unsafe {
+        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
+        ok(ofmpc_controller_new(
+            r,
+            name.as_ptr(),
+            toml.as_ptr(),
+            &mut c,
+        ));
+    }
+    (rust, r, c)
+}
+
 /// The output mode through the C API (issue 37): `[mpc] output` in the
 /// settings TOML just works, and the step's record carries the predicted
 /// command, equal to the Rust controller's for the same input; a record
@@ -415,27 +446,8 @@ fn a_robot_from_urdf_text_or_file_with_its_drives() {
 /// `command_len` is refused with nothing written.
 #[test]
 fn the_predicted_command_through_the_c_api() {
-    let toml = c"[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n";
     let robot = ofmpc::robot::Robot::irb140();
-    let settings = ofmpc::control::MpcSettings {
-        output: ofmpc::control::OutputMode::PositionVelocity,
-        output_lead_s: Some(0.04),
-        ..Default::default()
-    };
-    let mut rust = ofmpc::ControllerBuilder::new(ofmpc::ControllerKind::Second, &robot)
-        .settings(settings)
-        .build()
-        .unwrap();
-    let (mut r, mut c) = (null_mut(), null_mut());
-    unsafe {
-        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
-        ok(ofmpc_controller_new(
-            r,
-            c"second".as_ptr(),
-            toml.as_ptr(),
-            &mut c,
-        ));
-    }
+    let (mut rust, r, c) = position_output_pair(&robot, ofmpc::ControllerKind::Second);
     let x0 = [0.1, 0.4, -0.2, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
     let w = [0.12, 0.41, -0.19, 0.01, 0.5, 0.0];
     let preview: Vec<f64> = (0..10).flat_map(|_| w).collect();
@@ -502,27 +514,8 @@ fn the_predicted_command_through_the_c_api() {
 /// report of the wrong length is refused.
 #[test]
 fn the_applied_torque_and_the_torque_feed_forward_through_the_c_api() {
-    let toml = c"[mpc]\noutput = \"position_velocity\"\noutput_lead_s = 0.04\n";
     let robot = ofmpc::robot::Robot::irb140();
-    let settings = ofmpc::control::MpcSettings {
-        output: ofmpc::control::OutputMode::PositionVelocity,
-        output_lead_s: Some(0.04),
-        ..Default::default()
-    };
-    let mut rust = ofmpc::ControllerBuilder::new(ofmpc::ControllerKind::SecondAdaptive, &robot)
-        .settings(settings)
-        .build()
-        .unwrap();
-    let (mut r, mut c) = (null_mut(), null_mut());
-    unsafe {
-        ok(ofmpc_robot_new_builtin(c"irb140".as_ptr(), &mut r));
-        ok(ofmpc_controller_new(
-            r,
-            c"second-adaptive".as_ptr(),
-            toml.as_ptr(),
-            &mut c,
-        ));
-    }
+    let (mut rust, r, c) = position_output_pair(&robot, ofmpc::ControllerKind::SecondAdaptive);
     let w = [0.1, 0.4, -0.2, 0.0, 0.5, 0.0];
     let x0: Vec<f64> = w.iter().copied().chain([0.0; 6]).collect();
     let preview: Vec<f64> = (0..10).flat_map(|_| w).collect();

@@ -16,6 +16,9 @@
 //! Wall-clock numbers: on a loaded machine the operating system's preemptions
 //! show as steps over the bound whatever the budget; measure on an idle one.
 
+#[path = "common/realtime.rs"]
+mod realtime;
+
 use ofmpc::control::{ControllerBuilder, ControllerKind, MpcSettings, StepInput};
 use ofmpc::gcode::PAPER_TABLE1;
 use ofmpc::motion::{plan, PlanOptions};
@@ -53,7 +56,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let payload = Payload::point_mass(0.25);
     println!("step budget {budget} µs, N = 10, the QP's worst case 4·N·n = 240 iterations");
-    println!("{}", lock_memory());
+    // Pinned, memory locked and SCHED_FIFO when the process may, as a
+    // deployed loop is (`realtime_loop`'s requests; OFMPC_RT=0: none): the
+    // torque-limit QP's buffers are first written at the first constrained
+    // step, and a page faulted in there would show as a slow step.
+    for line in realtime::request() {
+        println!("real-time: {line}");
+    }
     for kind in [
         ControllerKind::Usual,
         ControllerKind::First,
@@ -66,29 +75,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         report(kind, budget, iteration_us, &r, &m);
     }
     Ok(())
-}
-
-/// Locks the process's memory (`mlockall`, current and future pages) when
-/// it has the rights: a deployed real-time loop does, so that no page is
-/// faulted in on its first touch inside a step (the torque-limit QP's
-/// buffers are first written at the first constrained step). Says what it
-/// got.
-#[cfg(target_os = "linux")]
-fn lock_memory() -> String {
-    // SAFETY: no pointers; affects this process only.
-    if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } == 0 {
-        "memory locked (mlockall)".into()
-    } else {
-        format!(
-            "memory not locked ({}): page faults may show as slow steps",
-            std::io::Error::last_os_error()
-        )
-    }
-}
-
-#[cfg(not(target_os = "linux"))]
-fn lock_memory() -> String {
-    "memory not locked (mlockall: Linux only)".into()
 }
 
 /// The QP's cost of its first iteration (with the factorization of its free

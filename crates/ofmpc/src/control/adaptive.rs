@@ -196,12 +196,11 @@ pub struct AdaptiveMpc {
     /// The identification runs on the controller's own torque (a torque
     /// output); off with a position or velocity output (module docs).
     identify: bool,
-    /// The torque the drives applied over the last period
-    /// ([`Algorithm::applied_torque`], n), whether it came for this step,
-    /// and whether the interface has reported it since the reset: then the
-    /// identification runs on it, also through a position or velocity
-    /// output.
-    applied: Vec<f64>,
+    /// Whether the drives' applied torque ([`Algorithm::applied_torque`],
+    /// written where the identification reads the last period's torque)
+    /// came for this step, and whether the interface has reported it since
+    /// the reset: then the identification runs on it, also through a
+    /// position or velocity output.
     applied_fresh: bool,
     reported: bool,
 }
@@ -277,7 +276,6 @@ impl AdaptiveMpc {
             model_pi: PayloadParams::zeros(),
             real_arm: None,
             identify: settings.output.is_torque(),
-            applied: vec![0.0; n],
             applied_fresh: false,
             reported: false,
         })
@@ -572,8 +570,17 @@ impl Algorithm for AdaptiveMpc {
         (self.identify || self.reported).then_some(self.model_pi[0])
     }
     fn applied_torque(&mut self, tau: &[f64]) {
-        if tau.len() == self.applied.len() && tau.iter().all(|v| v.is_finite()) {
-            self.applied.copy_from_slice(tau);
+        if tau.len() == self.tau_prev.len() && tau.iter().all(|v| v.is_finite()) {
+            // The torque of the period that just ended, `[t_{k−1}, t_k]`,
+            // in place of the controller's own `τ_{k−1}` where the
+            // identification reads it: `tau_prev`, and the real arm's ring
+            // slot of the last step.
+            self.tau_prev.copy_from_slice(tau);
+            if let Some(ra) = self.real_arm.as_deref_mut().filter(|ra| ra.steps > 0) {
+                let n = tau.len();
+                let s = ((ra.steps - 1) % (ra.cfg.delay + 2 * ra.window)) * n;
+                ra.tau_ring[s..s + n].copy_from_slice(tau);
+            }
             self.applied_fresh = true;
             self.reported = true;
         }
@@ -605,24 +612,12 @@ impl Algorithm for AdaptiveMpc {
             saved_payload = rd.robot().payload().copied();
             let learnt = learn
                 && match self.real_arm.as_deref_mut() {
-                    Some(ra) => {
-                        if from_drive && ra.steps > 0 {
-                            // The period [t_{k−1}, t_k] the ring's last slot
-                            // stands for: the torque the drives applied.
-                            let n = ra.q.len();
-                            let slots = ra.cfg.delay + 2 * ra.window;
-                            let s = ((ra.steps - 1) % slots) * n;
-                            ra.tau_ring[s..s + n].copy_from_slice(&self.applied);
-                        }
-                        Self::learn_real_arm(ra, &mut self.estimator, rd, w_k, preview, ts)
-                    }
+                    Some(ra) => Self::learn_real_arm(ra, &mut self.estimator, rd, w_k, preview, ts),
                     None => {
-                        let torque = if from_drive {
-                            &self.applied
-                        } else {
-                            &self.tau_prev
-                        };
-                        self.has_prev && self.estimator.update(rd, &self.x_prev, x, torque, ts)
+                        self.has_prev
+                            && self
+                                .estimator
+                                .update(rd, &self.x_prev, x, &self.tau_prev, ts)
                     }
                 };
             let target = match self.real_arm.as_deref_mut() {

@@ -414,7 +414,7 @@ impl<'r> ControllerBuilder<'r> {
             obs
         });
         // An adaptive kind through a drive's own loop: the identified
-        // payload reaches the drive as an acceleration feed-forward.
+        // payload reaches the drive as a torque feed-forward.
         let payload_ff = (kind.is_adaptive() && !s.output.is_torque())
             .then(|| Box::new(PayloadFeedForward::new(&model_robot)));
         Ok(Controller {
@@ -798,26 +798,20 @@ impl Controller {
         // Only while the model carries an identified payload (otherwise
         // the drive's model is the controller's: nothing to add). The
         // dynamics accepted this model and state in this very step; should
-        // they refuse them here, the command goes without a feed-forward.
+        // they refuse them here, `torque` writes nothing and the command
+        // goes without a feed-forward.
         out.tau_command.fill(0.0);
-        if let Some(ff) = self
-            .payload_ff
-            .as_mut()
-            .filter(|_| out.payload_estimate.is_some())
-        {
-            let robot = self.model.robot();
-            if ff
-                .torque(
-                    robot,
+        if let Some(ff) = self.payload_ff.as_mut() {
+            if out.payload_estimate.is_some() {
+                let model = self.model.robot();
+                let _ = ff.torque(
+                    model,
                     now,
                     &self.predicted,
                     lead_s,
                     ts,
                     &mut out.tau_command,
-                )
-                .is_err()
-            {
-                out.tau_command.fill(0.0);
+                );
             }
         }
     }

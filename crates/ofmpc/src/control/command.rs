@@ -147,6 +147,18 @@ pub(crate) fn max_output_lead(horizon: usize, ts: f64) -> f64 {
     horizon.saturating_sub(1) as f64 * ts
 }
 
+/// Sample `k` of joint `joint`'s predicted positions: `ŷ_0 = now`, `ŷ_k`
+/// (`k ≥ 1`) from `predicted` (N·n), past its end the current position.
+fn sample(now: &[f64], predicted: &[f64], k: usize, joint: usize) -> f64 {
+    match k.checked_sub(1) {
+        None => now[joint],
+        Some(i) => predicted
+            .get(i * now.len() + joint)
+            .copied()
+            .unwrap_or(now[joint]),
+    }
+}
+
 /// The command one lead time ahead from the predicted positions: fills
 /// `q`, `qd`, `qdd` (n each) from `now` (`ŷ_0`, n values) and `predicted`
 /// (`ŷ_1..ŷ_N`, N·n values), `lead_s` ahead at the period `ts`,
@@ -166,16 +178,7 @@ pub(crate) fn lead_point(
     let s = lead_s / ts;
     let j = (s.round() as usize).clamp(1, horizon.saturating_sub(1).max(1));
     let u = s - j as f64;
-    let y = |i: usize, joint: usize| {
-        if i == 0 {
-            now[joint]
-        } else {
-            predicted
-                .get((i - 1) * n + joint)
-                .copied()
-                .unwrap_or(now[joint])
-        }
-    };
+    let y = |i: usize, joint: usize| sample(now, predicted, i, joint);
     let [q, qd, qdd] = cmd;
     for i in 0..n {
         let (ym, y0, yp) = (y(j - 1, i), y(j, i), y(j + 1, i));
@@ -356,13 +359,7 @@ impl Stream {
         let d = self.period_decay;
         let [q, qd, qdd] = cmd;
         for i in 0..n {
-            let cubic = Cubic::through(j0, |k| {
-                if k == 0 {
-                    now[i]
-                } else {
-                    predicted[(k - 1) * n + i]
-                }
-            });
+            let cubic = Cubic::through(j0, |k| sample(now, predicted, k, i));
             let (y, before) = (cubic.at(s), cubic.at(s - h));
             let (mid, mid_before) = (cubic.at(s + 0.5), cubic.at(s + 0.5 - h));
             q[i] = inverse(y[0], before[0]);
